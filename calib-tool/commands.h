@@ -1,0 +1,47 @@
+// Sub-commands of pyrocam-calib; each registers its options and returns what to run.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <string>
+
+namespace pyrocam::cli {
+
+// Exit codes: 0 ok, 1 failed, 2 bad usage.
+inline constexpr int kExitOk = 0, kExitFailed = 1, kExitUsage = 2;
+
+struct GlobalOptions {
+  bool quiet = false;
+};
+
+// Progress on stderr with counts and elapsed time; silent with --quiet.
+class ProgressPrinter {
+ public:
+  ProgressPrinter(const GlobalOptions& g, std::string what)
+      : quiet_(g.quiet), what_(std::move(what)) {}
+  void operator()(std::size_t done, std::size_t total) {
+    if (quiet_) return;
+    const double s = elapsed_s();
+    if (done != total && s - last_ < 0.5) return;
+    last_ = s;
+    std::fprintf(stderr, "\r%s: %zu/%zu (%.1f s)%s", what_.c_str(), done, total, s,
+                 done == total ? "\n" : "");
+  }
+  double elapsed_s() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  bool quiet_;
+  std::string what_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  double last_ = -1;
+};
+
+using Command = std::function<int()>;
+
+void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& selected);
+
+}  // namespace pyrocam::cli

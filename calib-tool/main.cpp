@@ -1,0 +1,30 @@
+// pyrocam-calib: makes calibration data and model files for the pyrocam GStreamer elements.
+#include <iostream>
+
+#include "commands.h"
+#include "pyrocam/spectrum.h"
+
+int main(int argc, char** argv) {
+  using namespace pyrocam::cli;
+  CLI::App app{"pyrocam-calib: calibrate colour and 5x5 multispectral cameras as thermal imagers"};
+  app.footer(
+      "Exit codes: 0 ok, 1 failed, 2 bad usage.\n"
+      "Example:\n  pyrocam-calib simulate campaign --profile rgb-reference --out furnace");
+  app.require_subcommand(1);
+  GlobalOptions global;
+  app.add_flag("-q,--quiet", global.quiet, "Print nothing but errors");
+  Command selected;
+  add_simulate_command(app, global, selected);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitUsage;
+  }
+  try {
+    return selected ? selected() : kExitUsage;
+  } catch (const std::exception& e) {
+    std::cerr << "pyrocam-calib: error: " << e.what() << "\n";
+    return kExitFailed;
+  }
+}

@@ -1,0 +1,132 @@
+// `pyrocam-calib simulate`: furnace campaigns and test scenes from the simulated camera.
+#include <filesystem>
+#include <iostream>
+
+#include "commands.h"
+#include "pyrocam/scenes.h"
+#include "pyrocam/simulator.h"
+
+namespace pyrocam::cli {
+namespace {
+
+struct CameraOptions {
+  std::string profile = "rgb-reference";
+  std::string unit = "typical";
+  std::uint64_t unit_seed = 1;
+  std::uint64_t noise_seed = 7;
+};
+
+void add_camera_options(CLI::App* cmd, CameraOptions& o) {
+  cmd->add_option(
+         "--profile", o.profile,
+         "Camera profile: a shipped name (rgb-reference, nir5x5-reference) or a .json path")
+      ->capture_default_str();
+  cmd->add_option("--unit", o.unit,
+                  "How the simulated unit differs from its datasheet: datasheet or typical")
+      ->check(CLI::IsMember({"datasheet", "typical"}))
+      ->capture_default_str();
+  cmd->add_option("--unit-seed", o.unit_seed, "Seed of the unit's deviation")
+      ->capture_default_str();
+  cmd->add_option("--noise-seed", o.noise_seed, "Seed of the sensor noise")->capture_default_str();
+}
+
+Simulator make_camera(const CameraOptions& o) {
+  const CameraProfile profile = load_profile_by_name(o.profile);
+  return Simulator(profile, UnitPerturbation::parse(o.unit, o.unit_seed), o.noise_seed);
+}
+
+void parse_size(const std::string& text, int& w, int& h) {
+  if (std::sscanf(text.c_str(), "%dx%d", &w, &h) != 2 || w < 1 || h < 1)
+    throw CLI::ValidationError("--size", "expected WIDTHxHEIGHT, e.g. 128x128");
+}
+
+}  // namespace
+
+void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& selected) {
+  CLI::App* sim = app.add_subcommand("simulate", "Make data with the simulated camera");
+  sim->require_subcommand(1);
+
+  static CameraOptions campaign_camera;
+  static CampaignSettings campaign;
+  static std::string campaign_out, campaign_size = "128x128";
+  CLI::App* c = sim->add_subcommand(
+      "campaign", "Write a furnace calibration dataset like the paper's (METHOD.md section 3)");
+  c->footer(
+      "Example:\n  pyrocam-calib simulate campaign --profile rgb-reference --unit typical "
+      "--frames 10 --out furnace-rgb");
+  add_camera_options(c, campaign_camera);
+  c->add_option("--out", campaign_out, "Output folder (created)")->required();
+  c->add_option("--temperatures", campaign.temperatures_c,
+                "Plate temperatures, degC (default 700..1100 step 10 colour, 800..1100 for 5x5)");
+  c->add_option("--first-exposure", campaign.first_exposure_us,
+                "Shortest exposure, us (0: 100 colour, 10000 for 5x5)");
+  c->add_option("--exposure-factor", campaign.exposure_factor, "Exposure ratio between steps")
+      ->capture_default_str();
+  c->add_option("--exposures", campaign.exposure_count, "Number of exposures")
+      ->check(CLI::Range(1, 200))
+      ->capture_default_str();
+  c->add_option("--frames", campaign.frames_per_setting, "Frames per setting")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  c->add_option("--size", campaign_size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  c->add_option("--roi-area", campaign.roi_area_px, "Elliptical ROI area, pixels")
+      ->capture_default_str();
+  c->add_option("--format", campaign.image_extension, "Image file type")
+      ->check(CLI::IsMember({".pgm", ".png", ".tif"}))
+      ->capture_default_str();
+  c->callback([&global, &selected] {
+    parse_size(campaign_size, campaign.width, campaign.height);
+    selected = [&global] {
+      Simulator camera = make_camera(campaign_camera);
+      ProgressPrinter progress(global, "writing campaign");
+      write_furnace_campaign(campaign_out, camera, campaign, std::ref(progress));
+      if (!global.quiet)
+        std::cout << "furnace campaign (" << camera.profile().name << ", unit "
+                  << campaign_camera.unit << ") written to " << campaign_out << "/manifest.csv in "
+                  << progress.elapsed_s() << " s\n";
+      return kExitOk;
+    };
+  });
+
+  static CameraOptions scene_camera;
+  static SceneSequenceSettings scene;
+  static std::string scene_out, scene_kind = "melt-pool", scene_size = "256x256";
+  CLI::App* s =
+      sim->add_subcommand("scene", "Write a test scene sequence (plate, filament, melt pool)");
+  s->footer(
+      "Examples:\n  pyrocam-calib simulate scene --scene melt-pool --frames 30 --out pool\n"
+      "  pyrocam-calib simulate scene --scene filament --profile nir5x5-reference "
+      "--temperatures 1000 1800 2600 --out filament");
+  add_camera_options(s, scene_camera);
+  s->add_option("--out", scene_out, "Output folder (created)")->required();
+  s->add_option("--scene", scene_kind, "plate, filament or melt-pool")
+      ->check(CLI::IsMember({"plate", "filament", "melt-pool"}))
+      ->capture_default_str();
+  s->add_option("--frames", scene.frames, "Frames (melt pool)")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  s->add_option("--temperatures", scene.temperatures_c, "Temperatures, degC (plate, filament)");
+  s->add_option("--size", scene_size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  s->add_option("--exposure", scene.exposure_us, "Exposure, us (0: automatic)")
+      ->capture_default_str();
+  s->add_option("--emissivity", scene.emissivity, "Graybody emissivity (0: the scene's default)")
+      ->check(CLI::Range(0.0, 1.0));
+  s->add_option("--format", scene.image_extension, "Image file type")
+      ->check(CLI::IsMember({".pgm", ".png", ".tif"}))
+      ->capture_default_str();
+  s->callback([&global, &selected] {
+    parse_size(scene_size, scene.width, scene.height);
+    selected = [&global] {
+      scene.kind = parse_scene_kind(scene_kind);
+      Simulator camera = make_camera(scene_camera);
+      ProgressPrinter progress(global, "writing " + scene_kind);
+      write_scene_sequence(scene_out, camera, scene, std::ref(progress));
+      if (!global.quiet)
+        std::cout << scene_kind << " scene (" << camera.profile().name << ") written to "
+                  << scene_out << "/manifest.csv\n";
+      return kExitOk;
+    };
+  });
+}
+
+}  // namespace pyrocam::cli

@@ -1,0 +1,73 @@
+// The furnace calibration dataset: a folder with manifest.csv, raw mosaic images and an ROI
+// mask (format in docs/dataset-format.md). Frames are streamed, never all held in memory.
+#pragma once
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+namespace pyrocam {
+
+enum class FrameKind { kFrame, kDark };
+
+struct ManifestRow {
+  std::string file;  // relative to the dataset folder
+  FrameKind kind = FrameKind::kFrame;
+  double temperature_c = 0;
+  double exposure_us = 0;
+};
+
+// All rows that share one (kind, temperature, exposure) setting; their images are averaged.
+struct FrameGroup {
+  FrameKind kind = FrameKind::kFrame;
+  double temperature_c = 0;
+  double exposure_us = 0;
+  std::vector<std::filesystem::path> files;  // absolute
+};
+
+inline constexpr const char* kManifestHeader = "file,kind,temperature_c,exposure_us";
+
+class Dataset {
+ public:
+  // Reads and checks manifest.csv and the ROI; checks every listed file exists and every frame
+  // exposure has a dark. Image sizes are checked as images are loaded. Throws InputError.
+  static Dataset open(const std::filesystem::path& folder);
+
+  const std::filesystem::path& folder() const { return folder_; }
+  // Settings of kind frame, each averaging the rows that share it (calibration), sorted by
+  // temperature then exposure.
+  const std::vector<FrameGroup>& frames() const { return frames_; }
+  // Every row in manifest order (sequences, where each frame stands alone).
+  const std::vector<ManifestRow>& rows() const { return rows_; }
+  std::filesystem::path path_of(const ManifestRow& row) const { return folder_ / row.file; }
+  const std::vector<FrameGroup>& darks() const { return darks_; }  // by exposure
+  const FrameGroup& dark_for(double exposure_us) const;
+  std::vector<double> temperatures_c() const;
+  const cv::Mat& roi() const { return roi_; }  // CV_8U, 255 inside
+  int width() const { return roi_.cols; }
+  int height() const { return roi_.rows; }
+  int bit_depth() const { return bit_depth_; }  // of the first image loaded (0 before)
+
+  // Mean of a group's images as CV_64F. Throws InputError naming a file that is unreadable or
+  // whose size or sample type differs from the dataset's.
+  cv::Mat average(const FrameGroup& group) const;
+  // One image, checked as above.
+  cv::Mat load(const std::filesystem::path& file) const;
+
+ private:
+  std::filesystem::path folder_;
+  std::vector<ManifestRow> rows_;
+  std::vector<FrameGroup> frames_, darks_;
+  cv::Mat roi_;
+  mutable int bit_depth_ = 0;
+};
+
+std::vector<ManifestRow> read_manifest(const std::filesystem::path& manifest_csv);
+void write_manifest(const std::filesystem::path& manifest_csv,
+                    const std::vector<ManifestRow>& rows);
+
+// Equal within a relative tolerance: exposures written as text round-trip.
+bool same_exposure(double a_us, double b_us);
+
+}  // namespace pyrocam

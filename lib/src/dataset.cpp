@@ -1,0 +1,155 @@
+#include "pyrocam/dataset.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <sstream>
+
+#include "pyrocam/image_io.h"
+#include "pyrocam/spectrum.h"
+
+namespace pyrocam {
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return {};
+  return s.substr(b, s.find_last_not_of(" \t\r\n") - b + 1);
+}
+
+double parse_number(const std::string& text, const std::string& where) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v))
+    throw InputError(where + ": '" + text + "' is not a number");
+  return v;
+}
+
+}  // namespace
+
+bool same_exposure(double a_us, double b_us) {
+  return std::abs(a_us - b_us) <= 1e-6 * std::max(std::abs(a_us), std::abs(b_us));
+}
+
+std::vector<ManifestRow> read_manifest(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path.string() + ": manifest not found or unreadable");
+  std::string line;
+  if (!std::getline(in, line) || trim(line) != kManifestHeader)
+    throw InputError(path.string() + ": first line must be '" + kManifestHeader + "'");
+  std::vector<ManifestRow> rows;
+  int line_no = 1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (trim(line).empty()) continue;
+    const std::string where = path.string() + ":" + std::to_string(line_no);
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string field; std::getline(ss, field, ',');) f.push_back(trim(field));
+    if (f.size() != 4)
+      throw InputError(where + ": " + std::to_string(f.size()) + " fields, expected 4 (" +
+                       kManifestHeader + ")");
+    ManifestRow row;
+    row.file = f[0];
+    if (row.file.empty()) throw InputError(where + ": empty file name");
+    if (f[1] == "frame")
+      row.kind = FrameKind::kFrame;
+    else if (f[1] == "dark")
+      row.kind = FrameKind::kDark;
+    else
+      throw InputError(where + ": kind '" + f[1] + "' must be 'frame' or 'dark'");
+    row.temperature_c = parse_number(f[2], where + " temperature_c");
+    row.exposure_us = parse_number(f[3], where + " exposure_us");
+    if (!(row.exposure_us > 0)) throw InputError(where + ": exposure_us must be > 0");
+    rows.push_back(std::move(row));
+  }
+  if (rows.empty()) throw InputError(path.string() + ": no rows");
+  return rows;
+}
+
+void write_manifest(const std::filesystem::path& path, const std::vector<ManifestRow>& rows) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path.string() + ": cannot write manifest");
+  out << kManifestHeader << "\n" << std::setprecision(10);
+  for (const auto& r : rows)
+    out << r.file << "," << (r.kind == FrameKind::kDark ? "dark" : "frame") << ","
+        << r.temperature_c << "," << r.exposure_us << "\n";
+  if (!out) throw InputError(path.string() + ": write failed");
+}
+
+Dataset Dataset::open(const std::filesystem::path& folder) {
+  if (!std::filesystem::is_directory(folder))
+    throw InputError(folder.string() + ": dataset folder not found");
+  Dataset d;
+  d.folder_ = folder;
+  d.rows_ = read_manifest(folder / "manifest.csv");
+  const auto& rows = d.rows_;
+
+  std::filesystem::path roi_path;
+  for (const char* name : {"roi.png", "roi.pgm"})
+    if (std::filesystem::exists(folder / name)) roi_path = folder / name;
+  if (roi_path.empty()) throw InputError(folder.string() + ": no roi.png or roi.pgm");
+  const cv::Mat roi = read_raw_image(roi_path);
+  d.roi_ = roi != 0;
+  if (cv::countNonZero(d.roi_) == 0)
+    throw InputError(roi_path.string() + ": the ROI is empty (no nonzero pixel)");
+
+  std::map<std::tuple<int, double, double>, FrameGroup> groups;
+  for (const auto& r : rows) {
+    const auto file = folder / r.file;
+    if (!std::filesystem::is_regular_file(file))
+      throw InputError(file.string() + ": listed in manifest.csv but not found");
+    // Rounded keys merge rows whose numbers differ only by text formatting.
+    const double t_key = r.kind == FrameKind::kDark ? 0.0 : std::round(r.temperature_c * 1e6);
+    const auto key =
+        std::make_tuple(static_cast<int>(r.kind), t_key, std::round(r.exposure_us * 1e3));
+    FrameGroup& g = groups[key];
+    g.kind = r.kind;
+    g.temperature_c = r.temperature_c;
+    g.exposure_us = r.exposure_us;
+    g.files.push_back(file);
+  }
+  for (auto& [key, g] : groups) (g.kind == FrameKind::kDark ? d.darks_ : d.frames_).push_back(g);
+  if (d.frames_.empty()) throw InputError(folder.string() + ": manifest lists no frames");
+  for (const auto& f : d.frames_) d.dark_for(f.exposure_us);  // throws if missing
+  return d;
+}
+
+const FrameGroup& Dataset::dark_for(double exposure_us) const {
+  for (const auto& g : darks_)
+    if (same_exposure(g.exposure_us, exposure_us)) return g;
+  std::ostringstream msg;
+  msg << folder_.string() << ": no dark frame for exposure " << exposure_us << " us";
+  throw InputError(msg.str());
+}
+
+std::vector<double> Dataset::temperatures_c() const {
+  std::vector<double> t;
+  for (const auto& g : frames_)
+    if (t.empty() || std::abs(t.back() - g.temperature_c) > 1e-9) t.push_back(g.temperature_c);
+  return t;
+}
+
+cv::Mat Dataset::load(const std::filesystem::path& file) const {
+  cv::Mat img = read_raw_image(file);
+  if (img.cols != width() || img.rows != height())
+    throw InputError(file.string() + ": image is " + std::to_string(img.cols) + "x" +
+                     std::to_string(img.rows) + ", the dataset's (ROI) size is " +
+                     std::to_string(width()) + "x" + std::to_string(height()));
+  const int depth = img.depth() == CV_8U ? 8 : 16;
+  if (bit_depth_ == 0) bit_depth_ = depth;
+  if (depth != bit_depth_)
+    throw InputError(file.string() + ": " + std::to_string(depth) + "-bit image in a " +
+                     std::to_string(bit_depth_) + "-bit dataset");
+  return img;
+}
+
+cv::Mat Dataset::average(const FrameGroup& group) const {
+  cv::Mat sum = cv::Mat::zeros(height(), width(), CV_64F);
+  for (const auto& f : group.files) cv::add(sum, load(f), sum, cv::noArray(), CV_64F);
+  return sum / static_cast<double>(group.files.size());
+}
+
+}  // namespace pyrocam

@@ -1,0 +1,316 @@
+#include "pyrocam/profile.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+
+namespace pyrocam {
+namespace {
+
+using nlohmann::json;
+
+class ProfileReader {
+ public:
+  explicit ProfileReader(std::filesystem::path path) : path_(std::move(path)) {}
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw InputError(path_.string() + ": " + what);
+  }
+
+  const json& require(const json& j, const char* key, const std::string& where) const {
+    if (!j.is_object() || !j.contains(key)) fail(where + " needs '" + key + "'");
+    return j.at(key);
+  }
+
+  double number(const json& j, const char* key, const std::string& where, double fallback,
+                bool required = false) const {
+    if (!j.contains(key)) {
+      if (required) fail(where + " needs '" + key + "'");
+      return fallback;
+    }
+    if (!j.at(key).is_number()) fail(where + "." + key + " must be a number");
+    const double v = j.at(key).get<double>();
+    if (!std::isfinite(v)) fail(where + "." + key + " is not finite");
+    return v;
+  }
+
+  std::filesystem::path resolve(const std::string& rel) const {
+    std::filesystem::path p(rel);
+    if (p.is_relative()) p = path_.parent_path() / p;
+    if (!std::filesystem::exists(p))
+      fail("file '" + rel + "' not found (looked for " + p.string() + ")");
+    return p;
+  }
+
+  std::vector<Spectrum> imec_bands(const std::string& rel) {
+    const auto p = resolve(rel);
+    auto it = imec_cache_.find(p.string());
+    if (it == imec_cache_.end())
+      it = imec_cache_.emplace(p.string(), read_imec_band_responses(p)).first;
+    return it->second;
+  }
+
+  Eigen::VectorXd curve(const json& spec, const WavelengthGrid& grid, const std::string& where,
+                        double max_value) {
+    if (spec.is_string())
+      return read_spectrum_csv(resolve(spec.get<std::string>()), "", max_value).resample(grid);
+    if (!spec.is_object()) fail(where + " must be a file name or an object");
+    if (spec.contains("imec_xml")) {
+      const auto bands = imec_bands(spec.at("imec_xml").get<std::string>());
+      const int b = static_cast<int>(number(spec, "band", where, 0, true));
+      if (b < 0 || b >= static_cast<int>(bands.size()))
+        fail(where + ": band " + std::to_string(b) + " not in the IMEC file (" +
+             std::to_string(bands.size()) + " bands)");
+      return bands[b].resample(grid);
+    }
+    const std::string file = require(spec, "file", where).get<std::string>();
+    const std::string column = spec.value("column", std::string());
+    return read_spectrum_csv(resolve(file), column, max_value).resample(grid);
+  }
+
+  CameraProfile read() {
+    std::ifstream in(path_);
+    if (!in) fail("cannot open camera profile");
+    json j;
+    try {
+      j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
+    } catch (const json::exception& e) {
+      fail(std::string("not valid JSON: ") + e.what());
+    }
+    try {
+      return read(j);
+    } catch (const json::exception& e) {
+      fail(std::string("wrong value type: ") + e.what());
+    }
+  }
+
+  CameraProfile read(const json& j) {
+    if (j.value("format", std::string()) != "pyrocam-camera-profile")
+      fail("not a camera profile (\"format\" must be \"pyrocam-camera-profile\")");
+    const int version = static_cast<int>(number(j, "version", "profile", 0, true));
+    if (version != kProfileFormatVersion)
+      fail("profile format version " + std::to_string(version) + ", this build reads version " +
+           std::to_string(kProfileFormatVersion));
+
+    CameraProfile p;
+    p.source = path_;
+    p.name = require(j, "name", "profile").get<std::string>();
+    p.description = j.value("description", std::string());
+
+    const json& g = require(j, "wavelength_grid_nm", "profile");
+    try {
+      p.grid = WavelengthGrid(number(g, "start", "wavelength_grid_nm", 0, true),
+                              number(g, "stop", "wavelength_grid_nm", 0, true),
+                              number(g, "step", "wavelength_grid_nm", 0, true));
+    } catch (const std::invalid_argument& e) {
+      fail(e.what());
+    }
+
+    try {
+      p.mosaic = read_mosaic(require(j, "mosaic", "profile"));
+    } catch (const InputError& e) {
+      if (std::string(e.what()).rfind(path_.string(), 0) == 0) throw;
+      fail(e.what());
+    }
+
+    read_bands(require(j, "bands", "profile"), p);
+    if (p.band_count() != p.mosaic.band_count())
+      fail("mosaic uses " + std::to_string(p.mosaic.band_count()) + " bands, " +
+           std::to_string(p.band_count()) + " are described");
+
+    p.optics_transmission = Eigen::VectorXd::Ones(p.grid.size());
+    if (j.contains("optics")) {
+      for (const auto& o : j.at("optics"))
+        p.optics_transmission.array() *= curve(o, p.grid, "optics", 1.0).array();
+    }
+    if (j.contains("filter_pass_band_nm")) {
+      const auto& fb = j.at("filter_pass_band_nm");
+      if (!fb.is_array() || fb.size() != 2 || !(fb[0].get<double>() < fb[1].get<double>()))
+        fail("filter_pass_band_nm must be [start, stop] with start < stop");
+      p.filter_pass_band_nm = {fb[0].get<double>(), fb[1].get<double>()};
+    } else {
+      p.filter_pass_band_nm = {p.grid.start_nm(), p.grid.stop_nm()};
+    }
+
+    p.bit_depth = static_cast<int>(number(j, "bit_depth", "profile", 8));
+    if (p.bit_depth < 8 || p.bit_depth > 16) fail("bit_depth must be 8..16");
+    p.dark_offset_dn = number(j, "dark_offset_dn", "profile", 0);
+    if (p.dark_offset_dn < 0 || p.dark_offset_dn >= p.max_dn())
+      fail("dark_offset_dn must lie within 0.." + std::to_string(p.max_dn()));
+    p.etendue_m2_sr = number(j, "etendue_m2_sr", "profile", p.etendue_m2_sr);
+    if (!(p.etendue_m2_sr > 0)) fail("etendue_m2_sr must be > 0");
+
+    if (j.contains("noise")) {
+      const json& n = j.at("noise");
+      NoiseModel& nm = p.noise;
+      nm.system_gain_dn_per_e = number(n, "system_gain_dn_per_e", "noise", nm.system_gain_dn_per_e);
+      nm.read_noise_e = number(n, "read_noise_e", "noise", nm.read_noise_e);
+      nm.full_well_e = number(n, "full_well_e", "noise", nm.full_well_e);
+      nm.dark_current_e_per_s = number(n, "dark_current_e_per_s", "noise", nm.dark_current_e_per_s);
+      nm.dark_fpn_dn = number(n, "dark_fpn_dn", "noise", nm.dark_fpn_dn);
+      nm.prnu = number(n, "prnu", "noise", nm.prnu);
+      if (!(nm.system_gain_dn_per_e > 0) || !(nm.full_well_e > 0) || nm.read_noise_e < 0 ||
+          nm.dark_current_e_per_s < 0 || nm.dark_fpn_dn < 0 || nm.prnu < 0)
+        fail("noise: gain and full well must be > 0, the other terms >= 0");
+    }
+    if (j.contains("thresholds")) {
+      const json& t = j.at("thresholds");
+      Thresholds& th = p.thresholds;
+      th.calibration_dim_dn = number(t, "calibration_dim_dn", "thresholds", th.calibration_dim_dn);
+      th.calibration_saturation_dn =
+          number(t, "calibration_saturation_dn", "thresholds", th.calibration_saturation_dn);
+      th.inference_dim_dn = number(t, "inference_dim_dn", "thresholds", th.inference_dim_dn);
+      th.inference_saturation_dn =
+          number(t, "inference_saturation_dn", "thresholds", th.inference_saturation_dn);
+      if (!(th.calibration_dim_dn < th.calibration_saturation_dn) ||
+          !(th.inference_dim_dn < th.inference_saturation_dn))
+        fail("thresholds: each dim threshold must be below its saturation threshold");
+    }
+
+    const json& norm = require(j, "normalisation", "profile");
+    p.normalisation.numerators = band_list(require(norm, "numerators", "normalisation"), p);
+    p.normalisation.reference = band_list(require(norm, "reference", "normalisation"), p);
+    if (p.normalisation.numerators.empty() || p.normalisation.reference.empty())
+      fail("normalisation needs at least one numerator and one reference band");
+
+    if (j.contains("unit_variation")) {
+      const json& u = j.at("unit_variation");
+      UnitVariation& uv = p.unit_variation;
+      if (u.contains("leak_range_nm")) {
+        uv.leak_range_nm = {u.at("leak_range_nm").at(0).get<double>(),
+                            u.at("leak_range_nm").at(1).get<double>()};
+        if (!(uv.leak_range_nm[0] < uv.leak_range_nm[1]))
+          fail("unit_variation.leak_range_nm must be [start, stop] with start < stop");
+      }
+      uv.leak_system_qe = number(u, "leak_system_qe", "unit_variation", uv.leak_system_qe);
+      uv.scale_sigma = number(u, "scale_sigma", "unit_variation", uv.scale_sigma);
+      uv.tilt_sigma = number(u, "tilt_sigma", "unit_variation", uv.tilt_sigma);
+      uv.shift_sigma_nm = number(u, "shift_sigma_nm", "unit_variation", uv.shift_sigma_nm);
+    }
+    return p;
+  }
+
+ private:
+  MosaicLayout read_mosaic(const json& m) const {
+    const std::string type = require(m, "type", "mosaic").get<std::string>();
+    if (type == "bayer") {
+      return MosaicLayout::bayer(require(m, "pattern", "mosaic").get<std::string>());
+    } else if (type == "snapshot") {
+      const json& rows = require(m, "band_map", "mosaic");
+      if (!rows.is_array() || rows.empty()) fail("mosaic.band_map must be a list of rows");
+      std::vector<int> map;
+      const std::size_t width = rows[0].size();
+      for (const auto& row : rows) {
+        if (!row.is_array() || row.size() != width) fail("mosaic.band_map rows differ in length");
+        for (const auto& v : row) map.push_back(v.get<int>());
+      }
+      return MosaicLayout::snapshot(static_cast<int>(width), static_cast<int>(rows.size()),
+                                    std::move(map));
+    }
+    fail("unknown mosaic type '" + type + "' (use \"bayer\" or \"snapshot\")");
+  }
+
+  void read_bands(const json& bands, CameraProfile& p) {
+    std::vector<Eigen::VectorXd> qe;
+    std::vector<double> gains;
+    if (bands.is_object()) {
+      // Shorthand for snapshot sensors: every band of an IMEC calibration file, in its order.
+      const std::string file = require(bands, "imec_xml", "bands").get<std::string>();
+      const double gain = number(bands, "gain", "bands", 1.0);
+      const std::string prefix = bands.value("name_prefix", std::string("b"));
+      const auto responses = imec_bands(file);
+      for (std::size_t b = 0; b < responses.size(); ++b) {
+        p.band_names.push_back(prefix + std::to_string(b + 1));
+        qe.push_back(responses[b].resample(p.grid));
+        gains.push_back(gain);
+      }
+    } else if (bands.is_array() && !bands.empty()) {
+      for (std::size_t b = 0; b < bands.size(); ++b) {
+        const std::string where = "bands[" + std::to_string(b) + "]";
+        p.band_names.push_back(require(bands[b], "name", where).get<std::string>());
+        qe.push_back(curve(require(bands[b], "qe", where), p.grid, where + ".qe", 1.0));
+        gains.push_back(number(bands[b], "gain", where, 1.0));
+      }
+    } else {
+      fail("bands must be a non-empty list or an {\"imec_xml\": ...} object");
+    }
+    p.sensor_qe.resize(static_cast<Eigen::Index>(qe.size()), p.grid.size());
+    p.band_gain.resize(static_cast<Eigen::Index>(gains.size()));
+    for (std::size_t b = 0; b < qe.size(); ++b) {
+      p.sensor_qe.row(static_cast<Eigen::Index>(b)) = qe[b].transpose();
+      if (!(gains[b] > 0)) fail("band " + p.band_names[b] + " gain must be > 0");
+      p.band_gain[static_cast<Eigen::Index>(b)] = gains[b];
+    }
+  }
+
+  std::vector<int> band_list(const json& names, const CameraProfile& p) const {
+    std::vector<int> out;
+    if (!names.is_array()) fail("normalisation lists must be arrays of band names");
+    for (const auto& n : names) {
+      const int i = p.band_index(n.get<std::string>());
+      if (i < 0) fail("normalisation names unknown band '" + n.get<std::string>() + "'");
+      out.push_back(i);
+    }
+    return out;
+  }
+
+  std::filesystem::path path_;
+  std::map<std::string, std::vector<Spectrum>> imec_cache_;
+};
+
+}  // namespace
+
+int CameraProfile::band_index(const std::string& n) const {
+  for (std::size_t i = 0; i < band_names.size(); ++i)
+    if (band_names[i] == n) return static_cast<int>(i);
+  return -1;
+}
+
+Eigen::MatrixXd CameraProfile::system_qe() const {
+  return sensor_qe.array().rowwise() * optics_transmission.transpose().array();
+}
+
+CameraProfile load_profile(const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path))
+    throw InputError(path.string() + ": camera profile not found");
+  return ProfileReader(path).read();
+}
+
+std::filesystem::path builtin_profile_dir() {
+  if (const char* env = std::getenv("PYROCAM_PROFILE_DIR"); env && *env) return env;
+  const std::filesystem::path installed = PYROCAM_PROFILES_INSTALL_DIR;
+  if (std::filesystem::exists(installed / "rgb-reference.json")) return installed;
+  return PYROCAM_PROFILES_SRC_DIR;
+}
+
+CameraProfile load_profile_by_name(const std::string& name_or_path) {
+  std::filesystem::path p(name_or_path);
+  if (p.extension() != ".json") p = builtin_profile_dir() / (name_or_path + ".json");
+  return load_profile(p);
+}
+
+Eigen::VectorXd electron_rates(const CameraProfile& profile, const Eigen::MatrixXd& system_qe,
+                               double temperature_k, double emissivity) {
+  return profile.etendue_m2_sr *
+         band_photon_integrals(system_qe, profile.grid, temperature_k, emissivity);
+}
+
+Eigen::VectorXd signal_rates(const CameraProfile& profile, const Eigen::MatrixXd& system_qe,
+                             double temperature_k, double emissivity) {
+  return electron_rates(profile, system_qe, temperature_k, emissivity)
+      .cwiseProduct(profile.dn_per_electron());
+}
+
+Eigen::VectorXd normalised_ratios(const Normalisation& norm, const Eigen::VectorXd& signals) {
+  double ref = 0;
+  for (int b : norm.reference) ref += signals[b];
+  ref /= static_cast<double>(norm.reference.size());
+  Eigen::VectorXd x(static_cast<Eigen::Index>(norm.numerators.size()));
+  for (std::size_t i = 0; i < norm.numerators.size(); ++i)
+    x[static_cast<Eigen::Index>(i)] = signals[norm.numerators[i]] / ref;
+  return x;
+}
+
+}  // namespace pyrocam

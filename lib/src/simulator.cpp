@@ -1,0 +1,253 @@
+#include "pyrocam/simulator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <random>
+#include <sstream>
+
+#include "pyrocam/dataset.h"
+#include "pyrocam/image_io.h"
+
+namespace pyrocam {
+namespace {
+
+constexpr double kTableStartC = 100.0;  // below this nothing glows visibly to these cameras
+constexpr double kTableStopC = 4200.0;
+
+// SplitMix64: decorrelated seeds for frames and stripes from one user seed.
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+Eigen::VectorXd shift_curve(const Eigen::VectorXd& curve, const WavelengthGrid& grid,
+                            double shift_nm) {
+  Eigen::VectorXd out(curve.size());
+  for (Eigen::Index i = 0; i < curve.size(); ++i) {
+    const double pos = (grid.nm()[i] - shift_nm - grid.start_nm()) / grid.step_nm();
+    const double clamped = std::clamp(pos, 0.0, static_cast<double>(curve.size() - 1));
+    const auto i0 = static_cast<Eigen::Index>(std::floor(clamped));
+    const auto i1 = std::min<Eigen::Index>(i0 + 1, curve.size() - 1);
+    const double f = clamped - static_cast<double>(i0);
+    out[i] = curve[i0] * (1 - f) + curve[i1] * f;
+  }
+  return out;
+}
+
+}  // namespace
+
+UnitPerturbation UnitPerturbation::parse(const std::string& name, std::uint64_t seed) {
+  if (name != "datasheet" && name != "typical")
+    throw InputError("unknown unit perturbation '" + name + "' (use datasheet or typical)");
+  return UnitPerturbation{name, seed};
+}
+
+Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbation& unit) {
+  if (unit.name == "datasheet") return profile.system_qe();
+  const UnitVariation& v = profile.unit_variation;
+  std::mt19937_64 rng(mix(unit.seed));
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.7, 1.3);
+  const WavelengthGrid& grid = profile.grid;
+  const double centre_nm = 0.5 * (profile.filter_pass_band_nm[0] + profile.filter_pass_band_nm[1]);
+
+  // A filter leak adds transmission; what it adds to each band follows that band's sensor QE.
+  Eigen::VectorXd leak = Eigen::VectorXd::Zero(grid.size());
+  const double a = v.leak_range_nm[0], b = v.leak_range_nm[1];
+  for (Eigen::Index i = 0; i < grid.size(); ++i) {
+    const double x = grid.nm()[i];
+    if (x > a && x < b) leak[i] = 0.5 - 0.5 * std::cos(2 * M_PI * (x - a) / (b - a));
+  }
+  double peak_qe = 0;
+  for (Eigen::Index i = 0; i < grid.size(); ++i)
+    if (leak[i] > 0) peak_qe = std::max(peak_qe, profile.sensor_qe.col(i).maxCoeff());
+  const double leak_level = peak_qe > 0 ? v.leak_system_qe * uniform(rng) / peak_qe : 0.0;
+
+  Eigen::MatrixXd q(profile.band_count(), grid.size());
+  for (int band = 0; band < profile.band_count(); ++band) {
+    const double shift = v.shift_sigma_nm * normal(rng);
+    const double scale = 1.0 + v.scale_sigma * normal(rng);
+    const double tilt = v.tilt_sigma * normal(rng);
+    const Eigen::VectorXd sensor =
+        shift_curve(profile.sensor_qe.row(band).transpose(), grid, shift);
+    for (Eigen::Index i = 0; i < grid.size(); ++i) {
+      const double factor =
+          std::max(0.0, scale * (1.0 + tilt * (grid.nm()[i] - centre_nm) / 100.0));
+      const double value =
+          sensor[i] * profile.optics_transmission[i] * factor + leak_level * leak[i] * sensor[i];
+      q(band, i) = std::clamp(value, 0.0, 1.0);
+    }
+  }
+  return q;
+}
+
+Simulator::Simulator(CameraProfile profile, Eigen::MatrixXd system_qe, std::uint64_t noise_seed)
+    : profile_(std::move(profile)), system_qe_(std::move(system_qe)), seed_(noise_seed) {
+  if (system_qe_.rows() != profile_.band_count() || system_qe_.cols() != profile_.grid.size())
+    throw InputError("simulator: system QE shape does not match the profile " + profile_.name);
+  const int n = static_cast<int>(kTableStopC - kTableStartC) + 1;
+  rate_table_.resize(profile_.band_count(), n);
+  for (int i = 0; i < n; ++i)
+    rate_table_.col(i) = electron_rates(profile_, system_qe_, celsius_to_kelvin(kTableStartC + i));
+}
+
+double Simulator::electron_rate(int band, double temperature_c) const {
+  if (!(temperature_c >= kTableStartC)) return 0.0;
+  const double pos = std::min(temperature_c, kTableStopC) - kTableStartC;
+  const auto i0 = static_cast<Eigen::Index>(pos);
+  const auto i1 = std::min<Eigen::Index>(i0 + 1, rate_table_.cols() - 1);
+  const double f = pos - static_cast<double>(i0);
+  // Rates span many decades: interpolate the logarithm.
+  const double r0 = rate_table_(band, i0), r1 = rate_table_(band, i1);
+  if (r0 <= 0 || r1 <= 0) return r0 * (1 - f) + r1 * f;
+  return r0 * std::pow(r1 / r0, f);
+}
+
+Eigen::VectorXd Simulator::mean_signal_dn(double temperature_c, double exposure_us,
+                                          double emissivity) const {
+  Eigen::VectorXd s(profile_.band_count());
+  for (int b = 0; b < profile_.band_count(); ++b)
+    s[b] = electron_rate(b, temperature_c) * exposure_us * 1e-6 * emissivity *
+           profile_.dn_per_electron()[b];
+  return s;
+}
+
+double Simulator::exposure_for(double temperature_c, double target_dn, double emissivity) const {
+  const double per_us = mean_signal_dn(temperature_c, 1.0, emissivity).maxCoeff();
+  if (!(per_us > 0))
+    throw InputError("simulator: no signal at " + std::to_string(temperature_c) + " degC");
+  return target_dn / per_us;
+}
+
+void Simulator::ensure_pixel_maps(int width, int height) {
+  if (dark_fpn_.cols == width && dark_fpn_.rows == height) return;
+  std::mt19937_64 rng(mix(seed_ ^ 0xF1F0ull));
+  std::normal_distribution<float> normal(0.f, 1.f);
+  dark_fpn_.create(height, width, CV_32F);
+  prnu_.create(height, width, CV_32F);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      dark_fpn_.at<float>(y, x) = static_cast<float>(profile_.noise.dark_fpn_dn) * normal(rng);
+      prnu_.at<float>(y, x) = 1.f + static_cast<float>(profile_.noise.prnu) * normal(rng);
+    }
+}
+
+cv::Mat Simulator::render(const cv::Mat& temperature_c, double exposure_us, double emissivity) {
+  if (temperature_c.type() != CV_32F) throw InputError("simulator: temperature map must be CV_32F");
+  const int width = temperature_c.cols, height = temperature_c.rows;
+  ensure_pixel_maps(width, height);
+  const int type = profile_.bit_depth == 8 ? CV_8U : CV_16U;
+  cv::Mat out(height, width, type);
+  const NoiseModel& nm = profile_.noise;
+  const Eigen::VectorXd k = profile_.dn_per_electron();
+  const double t_s = exposure_us * 1e-6;
+  const double max_dn = profile_.max_dn();
+  const std::uint64_t frame_seed = mix(seed_ + 0x1000003ull * ++frame_counter_);
+  constexpr int kStripe = 16;  // fixed stripes keep the noise independent of thread count
+
+  cv::parallel_for_(cv::Range(0, (height + kStripe - 1) / kStripe), [&](const cv::Range& r) {
+    for (int s = r.start; s < r.end; ++s) {
+      std::mt19937_64 rng(mix(frame_seed ^ static_cast<std::uint64_t>(s)));
+      std::normal_distribution<double> normal(0.0, 1.0);
+      for (int y = s * kStripe; y < std::min(height, (s + 1) * kStripe); ++y) {
+        const float* t_row = temperature_c.ptr<float>(y);
+        const float* fpn_row = dark_fpn_.ptr<float>(y);
+        const float* prnu_row = prnu_.ptr<float>(y);
+        for (int x = 0; x < width; ++x) {
+          const int band = profile_.mosaic.band_at(x, y);
+          const double mean_e = electron_rate(band, t_row[x]) * t_s * emissivity * prnu_row[x] +
+                                nm.dark_current_e_per_s * t_s;
+          double e = mean_e;
+          if (noise_) {
+            if (mean_e < 30) {
+              e = std::poisson_distribution<long>(mean_e)(rng);
+            } else {
+              e = mean_e + std::sqrt(mean_e) * normal(rng);
+            }
+          }
+          e = std::clamp(e, 0.0, nm.full_well_e);
+          if (noise_) e += nm.read_noise_e * normal(rng);
+          const double dn = std::clamp(
+              std::round(k[band] * e + profile_.dark_offset_dn + fpn_row[x]), 0.0, max_dn);
+          if (type == CV_8U)
+            out.ptr<std::uint8_t>(y)[x] = static_cast<std::uint8_t>(dn);
+          else
+            out.ptr<std::uint16_t>(y)[x] = static_cast<std::uint16_t>(dn);
+        }
+      }
+    }
+  });
+  return out;
+}
+
+cv::Mat Simulator::render_dark(int width, int height, double exposure_us) {
+  return render(cv::Mat(height, width, CV_32F, cv::Scalar(0.f)), exposure_us);
+}
+
+void write_furnace_campaign(const std::filesystem::path& folder, Simulator& camera,
+                            CampaignSettings s, const Progress& progress) {
+  const bool colour = camera.profile().mosaic.kind == MosaicLayout::Kind::kBayer;
+  if (s.temperatures_c.empty())
+    for (double t = colour ? 700 : 800; t <= 1100 + 1e-9; t += 10) s.temperatures_c.push_back(t);
+  if (s.first_exposure_us <= 0) s.first_exposure_us = colour ? 100 : 10000;
+  if (s.exposure_count < 1 || s.frames_per_setting < 1 || s.width < 8 || s.height < 8)
+    throw InputError("campaign: needs at least one exposure and frame, and 8x8 pixels");
+  std::filesystem::create_directories(folder / "frames");
+  std::filesystem::create_directories(folder / "darks");
+
+  std::vector<double> exposures;
+  for (int k = 0; k < s.exposure_count; ++k)
+    exposures.push_back(std::round(s.first_exposure_us * std::pow(s.exposure_factor, k) * 1000) /
+                        1000);
+
+  cv::Mat roi = cv::Mat::zeros(s.height, s.width, CV_8U);
+  const double aspect = 1.2;  // a plate seen at an angle
+  const double ry = std::sqrt(s.roi_area_px / (M_PI * aspect)), rx = aspect * ry;
+  if (rx > 0.48 * s.width || ry > 0.48 * s.height)
+    throw InputError("campaign: an ROI of " + std::to_string(s.roi_area_px) +
+                     " px does not fit a " + std::to_string(s.width) + "x" +
+                     std::to_string(s.height) + " frame");
+  for (int y = 0; y < s.height; ++y)
+    for (int x = 0; x < s.width; ++x) {
+      const double dx = (x + 0.5 - s.width / 2.0) / rx, dy = (y + 0.5 - s.height / 2.0) / ry;
+      if (dx * dx + dy * dy <= 1) roi.at<std::uint8_t>(y, x) = 255;
+    }
+  write_raw_image(folder / "roi.png", roi);
+
+  std::vector<ManifestRow> rows;
+  const std::size_t total = (s.temperatures_c.size() + 1) * exposures.size() *
+                            static_cast<std::size_t>(s.frames_per_setting);
+  std::size_t done = 0;
+  auto emit = [&](const std::string& rel, const cv::Mat& img, FrameKind kind, double t, double e) {
+    write_raw_image(folder / rel, img);
+    rows.push_back({rel, kind, t, e});
+    if (progress) progress(++done, total);
+  };
+  auto name = [&](const char* dir, const std::string& stem, std::size_t k, int f) {
+    std::ostringstream n;
+    n << dir << "/" << stem << "e" << std::setw(2) << std::setfill('0') << k << "_f" << f
+      << s.image_extension;
+    return n.str();
+  };
+  for (std::size_t k = 0; k < exposures.size(); ++k)
+    for (int f = 0; f < s.frames_per_setting; ++f)
+      emit(name("darks", "", k, f),
+           camera.render(cv::Mat(s.height, s.width, CV_32F, cv::Scalar(s.dark_temperature_c)),
+                         exposures[k]),
+           FrameKind::kDark, s.dark_temperature_c, exposures[k]);
+  for (double t : s.temperatures_c) {
+    const cv::Mat plate(s.height, s.width, CV_32F, cv::Scalar(static_cast<float>(t)));
+    std::ostringstream stem;
+    stem << "T" << std::setw(4) << std::setfill('0') << std::lround(t) << "_";
+    for (std::size_t k = 0; k < exposures.size(); ++k)
+      for (int f = 0; f < s.frames_per_setting; ++f)
+        emit(name("frames", stem.str(), k, f), camera.render(plate, exposures[k]),
+             FrameKind::kFrame, t, exposures[k]);
+  }
+  write_manifest(folder / "manifest.csv", rows);
+}
+
+}  // namespace pyrocam

@@ -1,0 +1,24 @@
+// Helpers shared by the library tests: scratch folders and the reference data location.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace pyrocam::test {
+
+// ../shared/data (or $PYROCAM_SHARED_DATA).
+std::filesystem::path shared_data_dir();
+// A fresh, empty folder under the system temp dir, removed when the object goes.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& tag);
+  ~ScratchDir();
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& rel) const { return path_ / rel; }
+
+ private:
+  std::filesystem::path path_;
+};
+void write_text(const std::filesystem::path& path, const std::string& text);
+
+}  // namespace pyrocam::test
