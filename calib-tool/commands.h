@@ -24,7 +24,7 @@ class ProgressPrinter {
   void operator()(std::size_t done, std::size_t total) {
     if (quiet_) return;
     const double s = elapsed_s();
-    if (done != total && s - last_ < 0.5) return;
+    if (done != total && s - last_ < 0.25) return;
     last_ = s;
     std::fprintf(stderr, "\r%s: %zu/%zu (%.1f s)%s", what_.c_str(), done, total, s,
                  done == total ? "\n" : "");
@@ -43,5 +43,6 @@ class ProgressPrinter {
 using Command = std::function<int()>;
 
 void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& selected);
+void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& selected);
 
 }  // namespace pyrocam::cli

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", global.quiet, "Print nothing but errors");
   Command selected;
   add_simulate_command(app, global, selected);
+  add_calibrate_command(app, global, selected);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -57,6 +57,20 @@ class ProfileReader {
     if (spec.is_string())
       return read_spectrum_csv(resolve(spec.get<std::string>()), "", max_value).resample(grid);
     if (!spec.is_object()) fail(where + " must be a file name or an object");
+    if (spec.contains("values")) {  // inline, one value per grid wavelength
+      const auto& v = spec.at("values");
+      if (!v.is_array() || static_cast<Eigen::Index>(v.size()) != grid.size())
+        fail(where + ".values must hold " + std::to_string(grid.size()) +
+             " numbers, one per grid wavelength");
+      Eigen::VectorXd out(grid.size());
+      for (Eigen::Index i = 0; i < grid.size(); ++i) {
+        out[i] = v[static_cast<std::size_t>(i)].get<double>();
+        if (!std::isfinite(out[i]) || out[i] < 0 || out[i] > max_value)
+          fail(where + ".values[" + std::to_string(i) + "] is outside 0.." +
+               std::to_string(max_value));
+      }
+      return out;
+    }
     if (spec.contains("imec_xml")) {
       const auto bands = imec_bands(spec.at("imec_xml").get<std::string>());
       const int b = static_cast<int>(number(spec, "band", where, 0, true));
@@ -68,6 +82,14 @@ class ProfileReader {
     const std::string file = require(spec, "file", where).get<std::string>();
     const std::string column = spec.value("column", std::string());
     return read_spectrum_csv(resolve(file), column, max_value).resample(grid);
+  }
+
+  CameraProfile read_json(const json& j) {
+    try {
+      return read(j);
+    } catch (const json::exception& e) {
+      fail(std::string("wrong value type: ") + e.what());
+    }
   }
 
   CameraProfile read() {
@@ -270,6 +292,71 @@ int CameraProfile::band_index(const std::string& n) const {
 
 Eigen::MatrixXd CameraProfile::system_qe() const {
   return sensor_qe.array().rowwise() * optics_transmission.transpose().array();
+}
+
+CameraProfile profile_from_json(const nlohmann::json& j, const std::filesystem::path& origin) {
+  return ProfileReader(origin).read_json(j);
+}
+
+nlohmann::json profile_to_json(const CameraProfile& p) {
+  json j;
+  j["format"] = "pyrocam-camera-profile";
+  j["version"] = kProfileFormatVersion;
+  j["name"] = p.name;
+  j["description"] = p.description;
+  if (p.mosaic.kind == MosaicLayout::Kind::kBayer) {
+    j["mosaic"] = {{"type", "bayer"}, {"pattern", p.mosaic.pattern}};
+  } else {
+    json rows = json::array();
+    for (int y = 0; y < p.mosaic.period_height; ++y) {
+      json row = json::array();
+      for (int x = 0; x < p.mosaic.period_width; ++x) row.push_back(p.mosaic.band_at(x, y));
+      rows.push_back(row);
+    }
+    j["mosaic"] = {{"type", "snapshot"}, {"band_map", rows}};
+  }
+  j["wavelength_grid_nm"] = {
+      {"start", p.grid.start_nm()}, {"stop", p.grid.stop_nm()}, {"step", p.grid.step_nm()}};
+  auto values = [](const Eigen::VectorXd& v) {
+    return json{{"values", std::vector<double>(v.data(), v.data() + v.size())}};
+  };
+  json bands = json::array();
+  for (int b = 0; b < p.band_count(); ++b)
+    bands.push_back({{"name", p.band_names[b]},
+                     {"qe", values(p.sensor_qe.row(b).transpose())},
+                     {"gain", p.band_gain[b]}});
+  j["bands"] = bands;
+  j["optics"] = json::array({values(p.optics_transmission)});
+  j["filter_pass_band_nm"] = {p.filter_pass_band_nm[0], p.filter_pass_band_nm[1]};
+  j["bit_depth"] = p.bit_depth;
+  j["dark_offset_dn"] = p.dark_offset_dn;
+  j["etendue_m2_sr"] = p.etendue_m2_sr;
+  const NoiseModel& n = p.noise;
+  j["noise"] = {{"system_gain_dn_per_e", n.system_gain_dn_per_e},
+                {"read_noise_e", n.read_noise_e},
+                {"full_well_e", n.full_well_e},
+                {"dark_current_e_per_s", n.dark_current_e_per_s},
+                {"dark_fpn_dn", n.dark_fpn_dn},
+                {"prnu", n.prnu}};
+  const Thresholds& t = p.thresholds;
+  j["thresholds"] = {{"calibration_dim_dn", t.calibration_dim_dn},
+                     {"calibration_saturation_dn", t.calibration_saturation_dn},
+                     {"inference_dim_dn", t.inference_dim_dn},
+                     {"inference_saturation_dn", t.inference_saturation_dn}};
+  auto names = [&](const std::vector<int>& idx) {
+    json a = json::array();
+    for (int i : idx) a.push_back(p.band_names[i]);
+    return a;
+  };
+  j["normalisation"] = {{"numerators", names(p.normalisation.numerators)},
+                        {"reference", names(p.normalisation.reference)}};
+  const UnitVariation& u = p.unit_variation;
+  j["unit_variation"] = {{"leak_range_nm", {u.leak_range_nm[0], u.leak_range_nm[1]}},
+                         {"leak_system_qe", u.leak_system_qe},
+                         {"scale_sigma", u.scale_sigma},
+                         {"tilt_sigma", u.tilt_sigma},
+                         {"shift_sigma_nm", u.shift_sigma_nm}};
+  return j;
 }
 
 CameraProfile load_profile(const std::filesystem::path& path) {

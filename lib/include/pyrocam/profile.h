@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -78,6 +79,11 @@ struct CameraProfile {
 // Reads and validates a profile; relative paths inside resolve against its folder. Throws
 // InputError naming the file and the problem.
 CameraProfile load_profile(const std::filesystem::path& path);
+
+// The same from parsed JSON; `origin` names it in messages and anchors relative paths.
+CameraProfile profile_from_json(const nlohmann::json& j, const std::filesystem::path& origin);
+// A self-contained profile: every curve written inline on the grid (used inside model files).
+nlohmann::json profile_to_json(const CameraProfile& profile);
 
 // Folder of the shipped profiles: $PYROCAM_PROFILE_DIR, else the installed or source copy.
 std::filesystem::path builtin_profile_dir();

@@ -1,0 +1,105 @@
+// `pyrocam-calib calibrate`: furnace dataset + camera profile -> model file and report.
+#include "pyrocam/calibrate.h"
+
+#include <filesystem>
+#include <iostream>
+
+#include "commands.h"
+#include "report.h"
+
+namespace pyrocam::cli {
+namespace {
+
+struct CalibrateArgs {
+  std::string dataset, profile = "rgb-reference", out = "model.json", report;
+  CalibrationOptions options;
+};
+
+}  // namespace
+
+void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& selected) {
+  static CalibrateArgs a;
+  CLI::App* c = app.add_subcommand(
+      "calibrate", "Calibrate a camera from a furnace dataset: write a model file and a report");
+  c->footer(
+      "Examples:\n"
+      "  pyrocam-calib calibrate --dataset furnace --profile rgb-reference --out rgb-model.json\n"
+      "  pyrocam-calib calibrate --dataset furnace-nir --profile nir5x5-reference --solver "
+      "regularised --out nir-model.json\n"
+      "The report is written beside the model (<out>-report.html and .json) unless --report "
+      "names another prefix. Nothing is written when calibration fails.");
+  c->add_option("--dataset", a.dataset, "Dataset folder (manifest.csv, images, roi.png)")
+      ->required();
+  c->add_option("--profile", a.profile, "Camera profile: shipped name or .json path")
+      ->capture_default_str();
+  c->add_option("--out", a.out, "Model file to write")->capture_default_str();
+  c->add_option("--report", a.report, "Report path prefix (default: the model's, minus .json)");
+  c->add_option("--solver", a.options.qe_solver,
+                "QE solver: auto (lower held-out error), paper, regularised, datasheet")
+      ->check(CLI::IsMember({"auto", "paper", "regularised", "datasheet"}))
+      ->capture_default_str();
+  c->add_option("--min-temperature", a.options.min_temperature_c, "Locus start, degC")
+      ->capture_default_str();
+  c->add_option("--max-temperature", a.options.max_temperature_c, "Locus end, degC")
+      ->capture_default_str();
+  c->add_option("--locus-step", a.options.locus_step_c, "Locus step, degC")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  c->add_option("--epochs", a.options.mlp.epochs, "MLP training epochs")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  c->add_option("--mc-refits", a.options.monte_carlo_refits,
+                "Monte-Carlo QE refits for the thermocouple uncertainty")
+      ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
+  c->add_option("--seed", a.options.seed, "Seed (MLP training, Monte-Carlo)")
+      ->capture_default_str();
+  c->add_option("--threads", a.options.threads, "Threads for reading frames")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  c->callback([&global, &selected] {
+    if (!(a.options.min_temperature_c < a.options.max_temperature_c))
+      throw CLI::ValidationError("--min-temperature", "must be below --max-temperature");
+    selected = [&global] {
+      const Dataset dataset = Dataset::open(a.dataset);
+      const CameraProfile profile = load_profile_by_name(a.profile);
+      std::string current;
+      const auto t0 = std::chrono::steady_clock::now();
+      double last = -1;
+      // One line per stage, refreshed at most 4 times a second.
+      auto progress = [&](const std::string& stage, std::size_t done, std::size_t total) {
+        if (global.quiet) return;
+        const double s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const bool new_stage = stage != current;
+        if (!new_stage && done < total && s - last < 0.25) return;
+        if (new_stage && !current.empty()) std::fprintf(stderr, "\n");
+        current = stage;
+        last = s;
+        std::fprintf(stderr, "\r%-28s %zu/%zu  (%.1f s)", stage.c_str(), done, total, s);
+      };
+      const CalibrationOutcome o = calibrate(dataset, profile, a.options, progress);
+      if (!global.quiet) std::fprintf(stderr, "\n");
+      std::string prefix = a.report;
+      if (prefix.empty()) {
+        std::filesystem::path p(a.out);
+        prefix = (p.parent_path() / p.stem()).string() + "-report";
+      }
+      save_model(o.model, a.out);
+      write_report_html(o, prefix + ".html");
+      write_report_json(o, prefix + ".json");
+      if (!global.quiet) {
+        for (const auto& w : o.warnings) std::cerr << "warning: " << w << "\n";
+        std::cout << o.verdict << "\n";
+        for (const auto& s : o.table4)
+          std::printf("  %-22s rms %7.2f degC  mean %7.2f  std %7.2f  (%zu settings)\n",
+                      s.name.c_str(), s.rms, s.mean, s.std, s.true_c.size());
+        std::cout << "model:  " << a.out << "\nreport: " << prefix << ".html, " << prefix
+                  << ".json\n";
+      }
+      return kExitOk;
+    };
+  });
+}
+
+}  // namespace pyrocam::cli

@@ -1,0 +1,191 @@
+#include "report.h"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include "pyrocam/spectrum.h"
+#include "svg_plot.h"
+
+namespace pyrocam::cli {
+namespace {
+
+const char* kColours[] = {"#d62728", "#2ca02c", "#1f77b4", "#ff7f0e", "#9467bd",
+                          "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+
+std::string colour(std::size_t i) { return kColours[i % 10]; }
+
+std::vector<double> to_vec(const Eigen::VectorXd& v) {
+  return std::vector<double>(v.data(), v.data() + v.size());
+}
+
+std::string num(double v, int digits = 2) {
+  if (!std::isfinite(v)) return "–";
+  std::ostringstream o;
+  o << std::fixed << std::setprecision(digits) << v;
+  return o.str();
+}
+
+// Bands to plot: all for colour cameras, a handful spread over the range for 25 bands.
+std::vector<int> plotted_bands(int bands) {
+  std::vector<int> out;
+  const int step = bands > 6 ? bands / 5 : 1;
+  for (int b = 0; b < bands; b += step) out.push_back(b);
+  return out;
+}
+
+}  // namespace
+
+void write_report_json(const CalibrationOutcome& o, const std::filesystem::path& path) {
+  nlohmann::json j = outcome_summary(o);
+  j["profile"] = o.model.profile().name;
+  j["provenance"] = o.model.provenance;
+  nlohmann::json fits = nlohmann::json::array();
+  for (std::size_t t = 0; t < o.rates.temperatures_c.size(); ++t)
+    for (std::size_t b = 0; b < o.rates.band_names.size(); ++b) {
+      const SlopeFit& f = o.rates.fits[t][b];
+      fits.push_back({{"temperature_c", o.rates.temperatures_c[t]},
+                      {"band", o.rates.band_names[b]},
+                      {"rate_dn_per_s", std::isfinite(f.rate_dn_per_s) ? f.rate_dn_per_s : -1},
+                      {"r_squared", std::isfinite(f.r_squared) ? f.r_squared : -1},
+                      {"points", f.points}});
+    }
+  j["slope_fits"] = fits;
+  std::ofstream out(path);
+  out << j.dump(2) << "\n";
+  if (!out) throw InputError(path.string() + ": cannot write report");
+}
+
+void write_report_html(const CalibrationOutcome& o, const std::filesystem::path& path) {
+  const ThermalModel& m = o.model;
+  const CameraProfile& p = m.profile();
+  const auto& t_c = o.rates.temperatures_c;
+  const Eigen::MatrixXd measured = o.rates.rates();
+  std::ostringstream h;
+  h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>pyrocam calibration: "
+    << html_escape(p.name)
+    << "</title><style>body{font-family:sans-serif;max-width:1100px;"
+       "margin:auto;padding:1em}table{border-collapse:collapse}td,th{border:1px solid #ccc;"
+       "padding:3px 8px;text-align:right}th{background:#f4f4f4}.verdict{font-size:1.15em;"
+       "background:#eef6ee;padding:.6em;border-left:4px solid #2ca02c}svg{margin:.4em}</style>"
+       "</head><body>";
+  h << "<h1>Calibration of " << html_escape(p.name) << "</h1>";
+  h << "<p class='verdict'>" << html_escape(o.verdict) << "</p>";
+  h << "<p>QE solver chosen: <b>" << html_escape(m.qe_solver) << "</b>. Model range "
+    << num(m.min_temperature_c, 0) << "–" << num(m.max_temperature_c, 0) << " °C. Calibration took "
+    << num(o.seconds, 1) << " s. Created " << html_escape(m.provenance.value("created_utc", ""))
+    << " from <code>" << html_escape(m.provenance.value("dataset_path", "")) << "</code>.</p>";
+
+  // Table 4.
+  h << "<h2>Temperature error on the calibration data (paper Table 4)</h2><table><tr>"
+       "<th>estimator</th><th>settings</th><th>mean °C</th><th>std °C</th><th>rms °C</th>"
+       "<th>exposure spread °C</th></tr>";
+  for (const auto& s : o.table4)
+    h << "<tr><td style='text-align:left'>" << html_escape(s.name) << "</td><td>" << s.true_c.size()
+      << (s.missing ? " (+" + std::to_string(s.missing) + " no reading)" : "") << "</td><td>"
+      << num(s.mean) << "</td><td>" << num(s.std) << "</td><td>" << num(s.rms) << "</td><td>"
+      << num(s.exposure_spread) << "</td></tr>";
+  h << "</table><p>Paper (colour camera): MLP 3.7 °C rms, Ohno with optimised QE 6.0 °C, "
+       "two-colour 35.5 °C, Ohno with datasheet QE about 100× worse.</p>";
+
+  // QE solvers.
+  h << "<h2>QE optimisation</h2><table><tr><th>solver</th><th>calibration residual</th>"
+       "<th>held-out residual</th><th>rms(Q − Q<sub>datasheet</sub>)</th><th>time s</th></tr>";
+  for (const auto& s : o.solvers)
+    h << "<tr><td style='text-align:left'>" << html_escape(s.solver) << "</td><td>"
+      << num(100 * s.calibration_residual) << " %</td><td>" << num(100 * s.held_out_residual)
+      << " %</td><td>" << num(s.qe_change_rms, 5) << "</td><td>" << num(s.seconds, 1)
+      << "</td></tr>";
+  h << "</table>";
+  std::vector<Series> qe;
+  const auto bands = plotted_bands(p.band_count());
+  for (std::size_t i = 0; i < bands.size(); ++i) {
+    const int b = bands[i];
+    qe.push_back({p.band_names[b] + " datasheet", to_vec(p.grid.nm()),
+                  to_vec(m.datasheet_qe.row(b).transpose()), colour(i), false, true});
+    qe.push_back({p.band_names[b] + " optimised", to_vec(p.grid.nm()),
+                  to_vec(m.camera.system_qe.row(b).transpose()), colour(i)});
+  }
+  h << svg_plot({"System QE: datasheet (dashed) and optimised", "wavelength (nm)",
+                 "system QE (log)", true, 1000, 420},
+                qe);
+  if (o.qe_spread.size() > 0) {
+    std::vector<Series> spread;
+    for (std::size_t i = 0; i < bands.size(); ++i)
+      spread.push_back({p.band_names[bands[i]], to_vec(p.grid.nm()),
+                        to_vec(o.qe_spread.row(bands[i]).transpose()), colour(i)});
+    h << svg_plot({"Cross-validation spread of the optimised QE (5 temperature groups)",
+                   "wavelength (nm)", "std of system QE", false, 1000, 320},
+                  spread);
+  }
+
+  // Measured vs simulated rates.
+  std::vector<Series> rates, resid;
+  for (std::size_t i = 0; i < bands.size(); ++i) {
+    const int b = bands[i];
+    std::vector<double> sheet, opt;
+    for (std::size_t t = 0; t < t_c.size(); ++t) {
+      sheet.push_back(measured(t, b) * (1 + o.rate_residual_datasheet(t, b)));
+      opt.push_back(measured(t, b) * (1 + o.rate_residual_optimised(t, b)));
+    }
+    rates.push_back({p.band_names[b] + " measured", t_c, to_vec(measured.col(b)), colour(i), true});
+    rates.push_back({p.band_names[b] + " optimised", t_c, opt, colour(i)});
+    rates.push_back({p.band_names[b] + " datasheet", t_c, sheet, colour(i), false, true});
+    resid.push_back(
+        {p.band_names[b], t_c, to_vec(100 * o.rate_residual_optimised.col(b)), colour(i)});
+  }
+  h << "<h2>Signal rates</h2>"
+    << svg_plot({"Measured (points) vs simulated rates: optimised (line), datasheet (dashed)",
+                 "temperature (°C)", "signal rate (DN/s, log)", true, 1000, 420},
+                rates)
+    << svg_plot({"Residual of the optimised model", "temperature (°C)", "modelled/measured − 1 (%)",
+                 false, 1000, 300},
+                resid);
+
+  // Slope fits.
+  std::vector<Series> r2;
+  for (std::size_t i = 0; i < bands.size(); ++i) {
+    std::vector<double> v;
+    for (std::size_t t = 0; t < t_c.size(); ++t) v.push_back(o.rates.fits[t][bands[i]].r_squared);
+    r2.push_back({p.band_names[bands[i]], t_c, v, colour(i), true});
+  }
+  h << svg_plot(
+      {"Slope fits of ROI signal vs exposure: R²", "temperature (°C)", "R²", false, 1000, 280}, r2);
+
+  // MLP.
+  std::vector<double> epochs;
+  for (std::size_t e = 0; e < o.mlp_report.train_rmse.size(); ++e)
+    epochs.push_back(static_cast<double>(e + 1));
+  h << "<h2>Temperature network</h2><p>Max error over the noise-free locus: "
+    << num(o.mlp_locus_max_error_c, 3) << " °C; held-out rmse "
+    << num(o.mlp_report.final_test_rmse, 3) << " °C.</p>"
+    << svg_plot({"MLP training curve", "epoch", "rmse (°C, log)", true, 1000, 320},
+                {{"train", epochs, o.mlp_report.train_rmse, colour(2)},
+                 {"test", epochs, o.mlp_report.test_rmse, colour(0)}});
+
+  // Uncertainty.
+  const UncertaintyModel& u = m.uncertainty;
+  std::vector<double> total;
+  for (double t : u.temperature_c) total.push_back(u.coverage_factor * u.systematic_u_c(t));
+  h << "<h2>Uncertainty model (GUM)</h2><p>Systematic terms; each pixel adds its own signal-noise "
+       "term at inference. Thermocouple ±"
+    << num(u.thermocouple_tolerance_c, 1) << " °C (rectangular) by " << u.monte_carlo_refits
+    << " Monte-Carlo refits; emissivity slope u(α) = " << u.emissivity_slope_u << " per 100 nm.</p>"
+    << svg_plot({"Systematic uncertainty", "temperature (°C)", "°C", false, 1000, 300},
+                {{"u calibration (k=1)", u.temperature_c, u.u_calibration_c, colour(0)},
+                 {"u emissivity (k=1)", u.temperature_c, u.u_emissivity_c, colour(1)},
+                 {"expanded (k=2)", u.temperature_c, total, colour(2)}});
+
+  if (!o.warnings.empty()) {
+    h << "<h2>Warnings</h2><ul>";
+    for (const auto& w : o.warnings) h << "<li>" << html_escape(w) << "</li>";
+    h << "</ul>";
+  }
+  h << "</body></html>\n";
+  std::ofstream out(path);
+  out << h.str();
+  if (!out) throw InputError(path.string() + ": cannot write report");
+}
+
+}  // namespace pyrocam::cli

@@ -1,0 +1,133 @@
+#include "svg_plot.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+
+namespace pyrocam::cli {
+namespace {
+
+std::string fmt(double v) {
+  char buf[32];
+  if (v != 0 && (std::abs(v) >= 1e5 || std::abs(v) < 1e-3))
+    std::snprintf(buf, sizeof buf, "%.2g", v);
+  else
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+std::vector<double> nice_ticks(double lo, double hi, int target = 6) {
+  std::vector<double> t;
+  if (!(hi > lo)) return {lo};
+  const double raw = (hi - lo) / target;
+  const double mag = std::pow(10, std::floor(std::log10(raw)));
+  double step = mag;
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * mag >= raw) {
+      step = m * mag;
+      break;
+    }
+  for (double v = std::ceil(lo / step) * step; v <= hi + 1e-9 * step; v += step) t.push_back(v);
+  return t;
+}
+
+}  // namespace
+
+std::string html_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::string svg_plot(const PlotSpec& spec, const std::vector<Series>& series) {
+  const double inf = std::numeric_limits<double>::infinity();
+  double x0 = inf, x1 = -inf, y0 = inf, y1 = -inf;
+  auto ty = [&](double y) { return spec.log_y ? std::log10(y) : y; };
+  for (const auto& s : series)
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]) || (spec.log_y && s.y[i] <= 0)) continue;
+      x0 = std::min(x0, s.x[i]), x1 = std::max(x1, s.x[i]);
+      y0 = std::min(y0, ty(s.y[i])), y1 = std::max(y1, ty(s.y[i]));
+    }
+  if (!std::isfinite(x0)) x0 = 0, x1 = 1, y0 = 0, y1 = 1;
+  if (x1 == x0) x1 = x0 + 1;
+  if (y1 == y0) y1 = y0 + (y0 == 0 ? 1 : std::abs(y0) * 0.1);
+  const double pad = 0.05 * (y1 - y0);
+  y0 -= pad, y1 += pad;
+  const int l = 70, r = 20, t = 30, b = 45;
+  const int w = spec.width, h = spec.height;
+  auto px = [&](double x) { return l + (x - x0) / (x1 - x0) * (w - l - r); };
+  auto py = [&](double y) { return h - b - (y - y0) / (y1 - y0) * (h - t - b); };
+
+  std::ostringstream o;
+  o << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h
+    << "' font-family='sans-serif' font-size='11'>";
+  o << "<rect width='100%' height='100%' fill='white'/>";
+  o << "<text x='" << w / 2 << "' y='16' text-anchor='middle' font-size='13'>"
+    << html_escape(spec.title) << "</text>";
+  o << "<rect x='" << l << "' y='" << t << "' width='" << w - l - r << "' height='" << h - t - b
+    << "' fill='none' stroke='#333'/>";
+  for (double v : nice_ticks(x0, x1)) {
+    o << "<line x1='" << px(v) << "' x2='" << px(v) << "' y1='" << t << "' y2='" << h - b
+      << "' stroke='#eee'/><text x='" << px(v) << "' y='" << h - b + 14 << "' text-anchor='middle'>"
+      << fmt(v) << "</text>";
+  }
+  for (double v : nice_ticks(y0, y1)) {
+    o << "<line x1='" << l << "' x2='" << w - r << "' y1='" << py(v) << "' y2='" << py(v)
+      << "' stroke='#eee'/><text x='" << l - 4 << "' y='" << py(v) + 4 << "' text-anchor='end'>"
+      << (spec.log_y ? fmt(std::pow(10, v)) : fmt(v)) << "</text>";
+  }
+  o << "<text x='" << (l + w - r) / 2 << "' y='" << h - 8 << "' text-anchor='middle'>"
+    << html_escape(spec.x_label) << "</text>";
+  o << "<text transform='translate(14," << (t + h - b) / 2 << ") rotate(-90)' text-anchor='middle'>"
+    << html_escape(spec.y_label) << "</text>";
+  int legend_y = t + 14;
+  for (const auto& s : series) {
+    std::ostringstream path;
+    bool pen = false;
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      const bool ok = std::isfinite(s.x[i]) && std::isfinite(s.y[i]) && (!spec.log_y || s.y[i] > 0);
+      if (!ok) {
+        pen = false;
+        continue;
+      }
+      if (s.points) {
+        o << "<circle cx='" << px(s.x[i]) << "' cy='" << py(ty(s.y[i])) << "' r='2.5' fill='"
+          << s.colour << "'/>";
+      } else {
+        path << (pen ? " L" : " M") << px(s.x[i]) << "," << py(ty(s.y[i]));
+        pen = true;
+      }
+    }
+    if (!s.points)
+      o << "<path d='" << path.str() << "' fill='none' stroke='" << s.colour
+        << "' stroke-width='1.5'" << (s.dashed ? " stroke-dasharray='5,3'" : "") << "/>";
+    o << "<rect x='" << w - r - 150 << "' y='" << legend_y - 8 << "' width='10' height='10' fill='"
+      << s.colour << "'/><text x='" << w - r - 136 << "' y='" << legend_y << "'>"
+      << html_escape(s.label) << "</text>";
+    legend_y += 14;
+  }
+  o << "</svg>";
+  return o.str();
+}
+
+}  // namespace pyrocam::cli

@@ -1,0 +1,59 @@
+// Per-pixel temperature estimators over band signals (METHOD.md section 5), shared by the
+// ratiotemp element and `pyrocam-calib measure`.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "pyrocam/model.h"
+
+namespace pyrocam {
+
+enum class Method {
+  kMlp,         // the paper's network on normalised ratios (the reference)
+  kLut,         // a 2-D lookup table of the network (colour cameras: two ratios)
+  kLikelihood,  // maximum-likelihood fit of T and scale to the band signals
+};
+Method parse_method(const std::string& name);  // "mlp", "lut", "likelihood"
+std::string method_name(Method m);
+
+class TemperatureEstimator {
+ public:
+  explicit TemperatureEstimator(const ThermalModel& model);
+  virtual ~TemperatureEstimator() = default;
+
+  // signals: one value per band, DN after dark subtraction; +inf marks a saturated band, NaN
+  // an invalid one. Returns degC, or NaN for no reading (a band dim or saturated where the
+  // method needs it, or a result outside the model's temperature range).
+  virtual double temperature_c(const double* signals) const = 0;
+
+  // Band-planar batch: planes[b][i] for i < n. Writes degC or NaN.
+  virtual void estimate(const float* const* planes, std::size_t n, float* out_c) const;
+
+  const ThermalModel& model() const { return model_; }
+
+ protected:
+  // All bands finite and at least the dim threshold.
+  bool all_bands_valid(const double* signals) const;
+  double in_range(double t_c) const;
+
+  const ThermalModel& model_;
+  int bands_;
+  double dim_dn_;
+};
+
+// The model must outlive the estimator. Throws InputError when the method does not fit the
+// model (the lookup table needs exactly two ratios).
+std::unique_ptr<TemperatureEstimator> make_estimator(const ThermalModel& model, Method method);
+
+// Signal noise variance of one band reading (EMVA 1288), DN^2, averaged over `frames` frames;
+// the dark frame's noise is included.
+double signal_variance_dn2(const CameraProfile& profile, int band, double signal_dn,
+                           int frames = 1);
+
+// Expanded uncertainty (k from the model, 2 by default) of an estimate, degC: GUM with band
+// sensitivities by central differences (dS = 1 DN) and the model's systematic terms.
+double expanded_uncertainty_c(const TemperatureEstimator& estimator, const double* signals,
+                              double t_c, int frames = 1);
+
+}  // namespace pyrocam

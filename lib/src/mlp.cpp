@@ -1,0 +1,661 @@
+#include "pyrocam/mlp.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+#include <utility>
+
+namespace pyrocam {
+namespace {
+
+using json = nlohmann::json;
+
+// Training precision. Double keeps the 0.5 degC target (1.7e-4 of the span) well clear of
+// rounding in the late, tiny Adam steps.
+#ifdef EXP_FLOAT
+using TrainScalar = float;
+#else
+using TrainScalar = double;
+#endif
+
+// Samples per chunk in the batch inference path: activations of the widest layer stay in L2.
+constexpr Eigen::Index kInferenceChunk = 256;
+
+// The standard library's distributions are implementation-defined; these are not, so a seed
+// means the same model with any standard library.
+class Random {
+ public:
+  explicit Random(std::uint64_t seed) : engine_(seed) {}
+  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }  // [0, 1)
+  double normal() {  // Box-Muller, one value per pair
+    const double u1 = 1.0 - uniform();  // (0, 1]
+    const double u2 = uniform();
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+  }
+  // Uniform in [0, n); modulo bias is below 2^-40 for any n we shuffle.
+  std::size_t below(std::size_t n) { return static_cast<std::size_t>(engine_() % n); }
+  template <class T>
+  void shuffle(std::vector<T>& v) {
+    for (std::size_t i = v.size(); i > 1; --i) std::swap(v[i - 1], v[below(i)]);
+  }
+
+ private:
+  std::mt19937_64 engine_;
+};
+
+template <class S>
+struct Network {
+  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+  using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
+  std::vector<Matrix> weights;  // outputs x inputs
+  std::vector<Vector> bias;
+  std::size_t layer_count() const { return weights.size(); }
+};
+
+// Forward pass of columns of inputs into preallocated per-layer activations (acts[0] is the
+// input block); returns the output row. Hidden layers ReLU, output linear.
+template <class S>
+void forward(const Network<S>& net, std::vector<typename Network<S>::Matrix>& acts,
+             Eigen::Index cols) {
+  const std::size_t layers = net.layer_count();
+  for (std::size_t l = 0; l < layers; ++l) {
+    auto out = acts[l + 1].leftCols(cols);
+    out.noalias() = net.weights[l] * acts[l].leftCols(cols);
+    out.colwise() += net.bias[l];
+    if (l + 1 < layers) out = out.cwiseMax(S(0));
+  }
+}
+
+template <class S>
+std::vector<typename Network<S>::Matrix> make_activations(const Network<S>& net,
+                                                          Eigen::Index cols) {
+  std::vector<typename Network<S>::Matrix> acts;
+  acts.emplace_back(net.weights.front().cols(), cols);
+  for (const auto& w : net.weights) acts.emplace_back(w.rows(), cols);
+  return acts;
+}
+
+// Predictions (standardised units) for the columns of inputs.
+template <class S>
+Eigen::Matrix<S, 1, Eigen::Dynamic> evaluate(const Network<S>& net,
+                                             const typename Network<S>::Matrix& inputs,
+                                             std::vector<typename Network<S>::Matrix>& acts) {
+  const Eigen::Index chunk = acts[0].cols();
+  Eigen::Matrix<S, 1, Eigen::Dynamic> out(inputs.cols());
+  for (Eigen::Index start = 0; start < inputs.cols(); start += chunk) {
+    const Eigen::Index n = std::min(chunk, inputs.cols() - start);
+    acts[0].leftCols(n) = inputs.middleCols(start, n);
+    forward(net, acts, n);
+    out.segment(start, n) = acts.back().row(0).leftCols(n);
+  }
+  return out;
+}
+
+double learning_rate_at(const MlpTrainingOptions& o, long step, long total_steps) {
+  const long warmup = std::max(1L, std::lround(o.warmup_fraction * total_steps));
+  if (step < warmup) return o.learning_rate * static_cast<double>(step + 1) / warmup;
+  const long decay_steps = std::max(1L, total_steps - warmup);
+  const double progress = std::min(1.0, static_cast<double>(step - warmup) / decay_steps);
+  return o.final_learning_rate +
+         0.5 * (o.learning_rate - o.final_learning_rate) * (1.0 + std::cos(M_PI * progress));
+}
+
+void check_options(const MlpTrainingOptions& o) {
+  for (int width : o.hidden) {
+    if (width < 1 || width > kMlpMaxLayerWidth) {
+      throw MlpError("mlp: hidden layer width " + std::to_string(width) + " outside 1.." +
+                     std::to_string(kMlpMaxLayerWidth));
+    }
+  }
+  if (o.epochs < 1) throw MlpError("mlp: epochs must be at least 1");
+  if (o.batch_size < 1) throw MlpError("mlp: batch_size must be at least 1");
+  if (!(o.learning_rate > 0) || !(o.final_learning_rate >= 0) ||
+      !(o.final_learning_rate <= o.learning_rate)) {
+    throw MlpError("mlp: need 0 <= final_learning_rate <= learning_rate, learning_rate > 0");
+  }
+  if (!(o.warmup_fraction >= 0 && o.warmup_fraction < 1)) {
+    throw MlpError("mlp: warmup_fraction must be in [0, 1)");
+  }
+  if (!(o.l2_weight_decay >= 0)) throw MlpError("mlp: l2_weight_decay must be >= 0");
+  if (!(o.test_fraction >= 0 && o.test_fraction < 1)) {
+    throw MlpError("mlp: test_fraction must be in [0, 1)");
+  }
+}
+
+// Adam moments for one parameter block.
+template <class S>
+struct AdamState {
+  typename Network<S>::Matrix m, v;
+};
+
+template <class S, class Param, class Grad>
+void adam_step(Param& p, const Grad& g, typename Network<S>::Matrix& m,
+               typename Network<S>::Matrix& v, S lr, S bias1, S bias2, S decay) {
+  constexpr S kBeta1 = S(0.9), kBeta2 = S(0.999), kEpsilon = S(1e-8);
+  m.array() = kBeta1 * m.array() + (1 - kBeta1) * g.array();
+  v.array() = kBeta2 * v.array() + (1 - kBeta2) * g.array().square();
+  if (decay > 0) p.array() *= 1 - lr * decay;
+  p.array() -= lr * (m.array() / bias1) / ((v.array() / bias2).sqrt() + kEpsilon);
+}
+
+// ---- JSON reading with messages that say where the problem is ----
+
+const json& require(const json& j, const char* key, const std::string& where) {
+  if (!j.is_object()) throw MlpError("mlp json: " + where + " is not an object");
+  const auto it = j.find(key);
+  if (it == j.end()) {
+    throw MlpError("mlp json: missing key \"" + std::string(key) + "\" in " + where);
+  }
+  return *it;
+}
+
+double read_number(const json& j, const std::string& where) {
+  if (!j.is_number()) {
+    throw MlpError("mlp json: " + where + " is not a number (" + std::string(j.type_name()) +
+                   ")");
+  }
+  const double value = j.get<double>();
+  if (!std::isfinite(value)) throw MlpError("mlp json: " + where + " is not finite (NaN or inf)");
+  return value;
+}
+
+Eigen::VectorXd read_vector(const json& j, const std::string& where) {
+  if (!j.is_array()) throw MlpError("mlp json: " + where + " is not an array");
+  Eigen::VectorXd v(static_cast<Eigen::Index>(j.size()));
+  for (std::size_t i = 0; i < j.size(); ++i) {
+    v[static_cast<Eigen::Index>(i)] = read_number(j[i], where + "[" + std::to_string(i) + "]");
+  }
+  return v;
+}
+
+Eigen::MatrixXd read_matrix(const json& j, const std::string& where) {
+  if (!j.is_array() || j.empty()) throw MlpError("mlp json: " + where + " is not a non-empty array of rows");
+  const std::size_t cols = j[0].is_array() ? j[0].size() : 0;
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(j.size()), static_cast<Eigen::Index>(cols));
+  for (std::size_t r = 0; r < j.size(); ++r) {
+    const std::string row_where = where + "[" + std::to_string(r) + "]";
+    const Eigen::VectorXd row = read_vector(j[r], row_where);
+    if (static_cast<std::size_t>(row.size()) != cols || cols == 0) {
+      throw MlpError("mlp json: " + row_where + " has " + std::to_string(row.size()) +
+                     " columns where row 0 has " + std::to_string(cols));
+    }
+    m.row(static_cast<Eigen::Index>(r)) = row.transpose();
+  }
+  return m;
+}
+
+json to_json_array(const Eigen::VectorXd& v) { return json(std::vector<double>(v.data(), v.data() + v.size())); }
+
+}  // namespace
+
+// ---------------------------------------------------------------- Standardizer
+
+Standardizer Standardizer::fit(const Eigen::MatrixXd& samples) {
+  if (samples.rows() < 1) throw MlpError("mlp: cannot standardise zero samples");
+  Standardizer s;
+  s.mean = samples.colwise().mean().transpose();
+  s.scale.resize(samples.cols());
+  for (Eigen::Index c = 0; c < samples.cols(); ++c) {
+    const double sd = std::sqrt((samples.col(c).array() - s.mean[c]).square().mean());
+    s.scale[c] = sd > 1e-12 * std::max(1.0, std::abs(s.mean[c])) ? sd : 1.0;
+  }
+  return s;
+}
+
+Eigen::MatrixXd Standardizer::apply(const Eigen::MatrixXd& samples) const {
+  return (samples.rowwise() - mean.transpose()).array().rowwise() / scale.transpose().array();
+}
+
+Eigen::MatrixXd Standardizer::invert(const Eigen::MatrixXd& standardized) const {
+  return (standardized.array().rowwise() * scale.transpose().array()).matrix().rowwise() +
+         mean.transpose();
+}
+
+// ---------------------------------------------------------------- training
+
+Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
+               const MlpTrainingOptions& options, MlpTrainingReport* report) {
+  using S = TrainScalar;
+  using Matrix = Network<S>::Matrix;
+  const auto started = std::chrono::steady_clock::now();
+  check_options(options);
+  if (X.rows() != y.size()) {
+    throw MlpError("mlp: " + std::to_string(X.rows()) + " input rows but " +
+                   std::to_string(y.size()) + " targets");
+  }
+  if (X.cols() < 1 || X.cols() > kMlpMaxLayerWidth) {
+    throw MlpError("mlp: input size " + std::to_string(X.cols()) + " outside 1.." +
+                   std::to_string(kMlpMaxLayerWidth));
+  }
+  if (!X.allFinite() || !y.allFinite()) throw MlpError("mlp: training data has NaN or inf");
+  const Eigen::Index samples = X.rows();
+  const auto test_count =
+      static_cast<Eigen::Index>(std::lround(options.test_fraction * static_cast<double>(samples)));
+  const Eigen::Index train_count = samples - test_count;
+  if (train_count < 1) throw MlpError("mlp: no training samples left after the test split");
+
+  // Standardise on the training rows only, so that the test set stays unseen.
+  Random random(options.seed);
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(samples));
+  for (Eigen::Index i = 0; i < samples; ++i) order[static_cast<std::size_t>(i)] = i;
+  random.shuffle(order);
+  Eigen::MatrixXd x_train(train_count, X.cols()), x_test(test_count, X.cols());
+  Eigen::VectorXd y_train(train_count), y_test(test_count);
+  for (Eigen::Index i = 0; i < samples; ++i) {
+    const Eigen::Index src = order[static_cast<std::size_t>(i)];
+    if (i < test_count) {
+      x_test.row(i) = X.row(src);
+      y_test[i] = y[src];
+    } else {
+      x_train.row(i - test_count) = X.row(src);
+      y_train[i - test_count] = y[src];
+    }
+  }
+  const Standardizer input = Standardizer::fit(x_train);
+  const Standardizer output = Standardizer::fit(y_train);
+  const double y_mean = output.mean[0], y_scale = output.scale[0];
+  // Samples as columns: each layer is then one matrix product per batch.
+  const Matrix z_train = input.apply(x_train).transpose().cast<S>();
+  const Matrix z_test = input.apply(x_test).transpose().cast<S>();
+  const Eigen::Matrix<S, 1, Eigen::Dynamic> t_train =
+      ((y_train.array() - y_mean) / y_scale).matrix().transpose().cast<S>();
+
+  // He initialisation for ReLU layers, variance 1/fan_in for the linear output; zero biases.
+  Network<S> net;
+  std::vector<int> widths{static_cast<int>(X.cols())};
+  widths.insert(widths.end(), options.hidden.begin(), options.hidden.end());
+  widths.push_back(1);
+  for (std::size_t l = 0; l + 1 < widths.size(); ++l) {
+    const bool is_output = l + 2 == widths.size();
+    const double sd = std::sqrt((is_output ? 1.0 : 2.0) / widths[l]);
+    Matrix w(widths[l + 1], widths[l]);
+    // Filled in row-major order so that the draw order reads like the JSON layout.
+    for (Eigen::Index r = 0; r < w.rows(); ++r) {
+      for (Eigen::Index c = 0; c < w.cols(); ++c) w(r, c) = static_cast<S>(sd * random.normal());
+    }
+    net.weights.push_back(std::move(w));
+    net.bias.push_back(Network<S>::Vector::Zero(widths[l + 1]));
+  }
+  const std::size_t layers = net.layer_count();
+
+  std::vector<AdamState<S>> adam_w(layers), adam_b(layers);
+  std::vector<Matrix> grad_w(layers);
+  std::vector<Network<S>::Vector> grad_b(layers);
+  for (std::size_t l = 0; l < layers; ++l) {
+    adam_w[l].m = adam_w[l].v = Matrix::Zero(net.weights[l].rows(), net.weights[l].cols());
+    adam_b[l].m = adam_b[l].v = Matrix::Zero(net.bias[l].size(), 1);
+    grad_w[l].resize(net.weights[l].rows(), net.weights[l].cols());
+  }
+
+  const Eigen::Index batch = std::min<Eigen::Index>(options.batch_size, train_count);
+  auto acts = make_activations(net, batch);
+  auto deltas = make_activations(net, batch);  // same shapes: d loss / d pre-activation
+  auto eval_acts = make_activations(net, kInferenceChunk);
+  Eigen::Matrix<S, 1, Eigen::Dynamic> batch_targets(batch);
+
+  const long steps_per_epoch = static_cast<long>((train_count + batch - 1) / batch);
+  const long total_steps = steps_per_epoch * options.epochs;
+  long step = 0;
+  std::vector<Eigen::Index> train_order(static_cast<std::size_t>(train_count));
+  for (Eigen::Index i = 0; i < train_count; ++i) train_order[static_cast<std::size_t>(i)] = i;
+  std::vector<double> train_rmse, test_rmse;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+
+  for (int epoch = 0; epoch < options.epochs; ++epoch) {
+    random.shuffle(train_order);
+    double squared_error_sum = 0;
+    for (Eigen::Index start = 0; start < train_count; start += batch, ++step) {
+      const Eigen::Index n = std::min(batch, train_count - start);
+      for (Eigen::Index k = 0; k < n; ++k) {
+        const Eigen::Index src = train_order[static_cast<std::size_t>(start + k)];
+        acts[0].col(k) = z_train.col(src);
+        batch_targets[k] = t_train[src];
+      }
+      forward(net, acts, n);
+      // Mean squared error over the batch: d loss / d output = 2 (output - target) / n.
+      auto top = deltas[layers].leftCols(n);
+      top = acts[layers].leftCols(n) - batch_targets.leftCols(n);
+      squared_error_sum += static_cast<double>(top.squaredNorm());
+      top *= S(2) / static_cast<S>(n);
+      for (std::size_t l = layers; l-- > 0;) {
+        const auto delta = deltas[l + 1].leftCols(n);
+        grad_w[l].noalias() = delta * acts[l].leftCols(n).transpose();
+        grad_b[l] = delta.rowwise().sum();
+        if (l > 0) {
+          auto below = deltas[l].leftCols(n);
+          below.noalias() = net.weights[l].transpose() * delta;
+          // ReLU passes the gradient where its output was positive.
+          below.array() *= (acts[l].leftCols(n).array() > S(0)).template cast<S>();
+        }
+      }
+      const S lr = static_cast<S>(learning_rate_at(options, step, total_steps));
+      const S bias1 = S(1) - std::pow(S(0.9), static_cast<S>(step + 1));
+      const S bias2 = S(1) - std::pow(S(0.999), static_cast<S>(step + 1));
+      const S decay = static_cast<S>(options.l2_weight_decay);
+      for (std::size_t l = 0; l < layers; ++l) {
+        adam_step<S>(net.weights[l], grad_w[l], adam_w[l].m, adam_w[l].v, lr, bias1, bias2, decay);
+        adam_step<S>(net.bias[l], grad_b[l], adam_b[l].m, adam_b[l].v, lr, bias1, bias2, S(0));
+      }
+    }
+    const double epoch_train_rmse =
+        std::sqrt(squared_error_sum / static_cast<double>(train_count)) * y_scale;
+    if (!std::isfinite(epoch_train_rmse)) {
+      throw MlpError("mlp: training diverged at epoch " + std::to_string(epoch + 1) +
+                     "; lower learning_rate");
+    }
+    double epoch_test_rmse = nan;
+    if (test_count > 0) {
+      const auto predicted = evaluate(net, z_test, eval_acts);
+      const Eigen::VectorXd err =
+          predicted.transpose().cast<double>() * y_scale + Eigen::VectorXd::Constant(test_count, y_mean) - y_test;
+      epoch_test_rmse = std::sqrt(err.squaredNorm() / static_cast<double>(test_count));
+    }
+    train_rmse.push_back(epoch_train_rmse);
+    test_rmse.push_back(epoch_test_rmse);
+    if (options.progress) options.progress(epoch + 1, epoch_train_rmse, epoch_test_rmse);
+  }
+
+  std::vector<MlpLayer> model_layers;
+  for (std::size_t l = 0; l < layers; ++l) {
+    model_layers.push_back({net.weights[l].template cast<double>(),
+                            net.bias[l].template cast<double>()});
+  }
+  Mlp model(input, y_mean, y_scale, std::move(model_layers));
+
+  if (report) {
+    report->train_rmse = std::move(train_rmse);
+    report->test_rmse = std::move(test_rmse);
+    report->train_samples = static_cast<int>(train_count);
+    report->test_samples = static_cast<int>(test_count);
+    const Eigen::VectorXd train_error = model.predict(x_train) - y_train;
+    report->final_train_rmse = std::sqrt(train_error.squaredNorm() / static_cast<double>(train_count));
+    report->max_abs_train_error = train_error.cwiseAbs().maxCoeff();
+    if (test_count > 0) {
+      const Eigen::VectorXd test_error = model.predict(x_test) - y_test;
+      report->final_test_rmse = std::sqrt(test_error.squaredNorm() / static_cast<double>(test_count));
+      report->max_abs_test_error = test_error.cwiseAbs().maxCoeff();
+    } else {
+      report->final_test_rmse = report->max_abs_test_error = nan;
+    }
+    report->seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  }
+  return model;
+}
+
+// ---------------------------------------------------------------- model
+
+Mlp::Mlp(Standardizer input, double output_mean, double output_scale,
+         std::vector<MlpLayer> layers)
+    : input_(std::move(input)),
+      output_mean_(output_mean),
+      output_scale_(output_scale),
+      layers_(std::move(layers)) {
+  check_and_prepare();
+}
+
+void Mlp::check_and_prepare() {
+  if (layers_.empty()) throw MlpError("mlp: no layers");
+  const Eigen::Index inputs = input_.mean.size();
+  if (inputs < 1 || input_.scale.size() != inputs) {
+    throw MlpError("mlp: input_mean has " + std::to_string(inputs) + " values, input_scale " +
+                   std::to_string(input_.scale.size()) + "; need the same, at least 1");
+  }
+  if (!input_.mean.allFinite() || !(input_.scale.array() > 0).all() ||
+      !input_.scale.allFinite()) {
+    throw MlpError("mlp: input_mean must be finite and input_scale finite and > 0");
+  }
+  if (!std::isfinite(output_mean_) || !(output_scale_ > 0) || !std::isfinite(output_scale_)) {
+    throw MlpError("mlp: output_mean must be finite and output_scale finite and > 0");
+  }
+  Eigen::Index width = inputs;
+  max_width_ = static_cast<int>(inputs);
+  for (std::size_t l = 0; l < layers_.size(); ++l) {
+    const auto& layer = layers_[l];
+    const std::string name = "layers[" + std::to_string(l) + "]";
+    if (layer.weights.cols() != width) {
+      throw MlpError("mlp: " + name + ".weights has " + std::to_string(layer.weights.cols()) +
+                     " columns, expected " + std::to_string(width) +
+                     (l == 0 ? " (input size)" : " (outputs of the layer before)"));
+    }
+    if (layer.bias.size() != layer.weights.rows()) {
+      throw MlpError("mlp: " + name + ".bias has " + std::to_string(layer.bias.size()) +
+                     " values for " + std::to_string(layer.weights.rows()) + " weight rows");
+    }
+    if (!layer.weights.allFinite() || !layer.bias.allFinite()) {
+      throw MlpError("mlp: " + name + " has a NaN or infinite weight or bias");
+    }
+    width = layer.weights.rows();
+    if (width < 1) throw MlpError("mlp: " + name + " has no outputs");
+    max_width_ = std::max(max_width_, static_cast<int>(width));
+  }
+  if (width != 1) {
+    throw MlpError("mlp: the last layer has " + std::to_string(width) + " outputs; need 1");
+  }
+  if (max_width_ > kMlpMaxLayerWidth) {
+    throw MlpError("mlp: a layer is " + std::to_string(max_width_) + " wide; at most " +
+                   std::to_string(kMlpMaxLayerWidth) + " supported");
+  }
+  inverse_input_scale_ = input_.scale.cwiseInverse();
+  weights_f_.clear();
+  bias_f_.clear();
+  for (const auto& layer : layers_) {
+    weights_f_.push_back(layer.weights.cast<float>());
+    bias_f_.push_back(layer.bias.cast<float>());
+  }
+}
+
+std::vector<int> Mlp::hidden_sizes() const {
+  std::vector<int> sizes;
+  for (std::size_t l = 0; l + 1 < layers_.size(); ++l) {
+    sizes.push_back(static_cast<int>(layers_[l].weights.rows()));
+  }
+  return sizes;
+}
+
+double Mlp::predict(const double* x) const {
+  if (layers_.empty()) return std::numeric_limits<double>::quiet_NaN();
+  alignas(64) float buffer_a[kMlpMaxLayerWidth];
+  alignas(64) float buffer_b[kMlpMaxLayerWidth];
+  float* in = buffer_a;
+  float* out = buffer_b;
+  const Eigen::Index inputs = input_.mean.size();
+  for (Eigen::Index j = 0; j < inputs; ++j) {
+    in[j] = static_cast<float>((x[j] - input_.mean[j]) * inverse_input_scale_[j]);
+  }
+  const std::size_t layers = weights_f_.size();
+  for (std::size_t l = 0; l + 1 < layers; ++l) {
+    const Eigen::MatrixXf& w = weights_f_[l];
+    Eigen::Map<Eigen::VectorXf> o(out, w.rows());
+    o = bias_f_[l];
+    // Column by column so that the inputs ReLU zeroed (about half) cost nothing.
+    for (Eigen::Index j = 0; j < w.cols(); ++j) {
+      if (in[j] != 0.0f) o.noalias() += in[j] * w.col(j);
+    }
+    o = o.cwiseMax(0.0f);
+    std::swap(in, out);
+  }
+  const Eigen::MatrixXf& w_out = weights_f_.back();
+  const float z = w_out.row(0).dot(Eigen::Map<const Eigen::VectorXf>(in, w_out.cols())) +
+                  bias_f_.back()[0];
+  return static_cast<double>(z) * output_scale_ + output_mean_;
+}
+
+template <class Fetch>
+void Mlp::predict_chunked(Eigen::Index count, Fetch fetch, double* out) const {
+  if (layers_.empty()) {
+    std::fill(out, out + count, std::numeric_limits<double>::quiet_NaN());
+    return;
+  }
+  const Eigen::Index inputs = input_.mean.size();
+  const Eigen::Index chunk = std::min(count, kInferenceChunk);
+  Eigen::MatrixXf a(max_width_, chunk), b(max_width_, chunk);
+  for (Eigen::Index start = 0; start < count; start += chunk) {
+    const Eigen::Index n = std::min(chunk, count - start);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      for (Eigen::Index j = 0; j < inputs; ++j) {
+        a(j, k) = static_cast<float>((fetch(start + k, j) - input_.mean[j]) *
+                                     inverse_input_scale_[j]);
+      }
+    }
+    Eigen::Index width = inputs;
+    for (std::size_t l = 0; l < weights_f_.size(); ++l) {
+      const Eigen::MatrixXf& w = weights_f_[l];
+      auto next = b.topLeftCorner(w.rows(), n);
+      next.noalias() = w * a.topLeftCorner(width, n);
+      next.colwise() += bias_f_[l];
+      if (l + 1 < weights_f_.size()) next = next.cwiseMax(0.0f);
+      width = w.rows();
+      a.swap(b);
+    }
+    for (Eigen::Index k = 0; k < n; ++k) {
+      out[start + k] = static_cast<double>(a(0, k)) * output_scale_ + output_mean_;
+    }
+  }
+}
+
+Eigen::VectorXd Mlp::predict(const Eigen::MatrixXd& X) const {
+  if (X.cols() != input_.mean.size()) {
+    throw MlpError("mlp: predict got " + std::to_string(X.cols()) + " inputs per sample, model has " +
+                   std::to_string(input_.mean.size()));
+  }
+  Eigen::VectorXd out(X.rows());
+  predict_chunked(
+      X.rows(), [&X](Eigen::Index i, Eigen::Index j) { return X(i, j); }, out.data());
+  return out;
+}
+
+void Mlp::predict_rows(const double* rows, Eigen::Index count, double* out) const {
+  const Eigen::Index inputs = input_.mean.size();
+  predict_chunked(
+      count, [rows, inputs](Eigen::Index i, Eigen::Index j) { return rows[i * inputs + j]; },
+      out);
+}
+
+double Mlp::predict_with_gradient(const double* x, double* grad_out) const {
+  const Eigen::Index inputs = input_.mean.size();
+  if (layers_.empty()) {
+    std::fill(grad_out, grad_out + inputs, std::numeric_limits<double>::quiet_NaN());
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  // Every hidden activation is kept for the backward pass; sized once per thread.
+  thread_local std::vector<double> scratch;
+  std::size_t needed = static_cast<std::size_t>(inputs) + 2 * static_cast<std::size_t>(max_width_);
+  for (std::size_t l = 0; l + 1 < layers_.size(); ++l) {
+    needed += static_cast<std::size_t>(layers_[l].weights.rows());
+  }
+  if (scratch.size() < needed) scratch.resize(needed);
+
+  double* z0 = scratch.data();
+  for (Eigen::Index j = 0; j < inputs; ++j) {
+    z0[j] = (x[j] - input_.mean[j]) * inverse_input_scale_[j];
+  }
+  double* cursor = z0 + inputs;
+  const double* in = z0;
+  const std::size_t layers = layers_.size();
+  for (std::size_t l = 0; l + 1 < layers; ++l) {
+    const auto& layer = layers_[l];
+    Eigen::Map<Eigen::VectorXd> o(cursor, layer.weights.rows());
+    o.noalias() = layer.weights * Eigen::Map<const Eigen::VectorXd>(in, layer.weights.cols());
+    o = (o + layer.bias).cwiseMax(0.0);
+    in = cursor;
+    cursor += layer.weights.rows();
+  }
+  const auto& last = layers_.back();
+  const double z =
+      last.weights.row(0).dot(Eigen::Map<const Eigen::VectorXd>(in, last.weights.cols())) +
+      last.bias[0];
+
+  // Backward: g = d z / d (activations of layer l), starting from the output row.
+  double* g = cursor;
+  double* g_below = cursor + max_width_;
+  Eigen::Map<Eigen::VectorXd>(g, last.weights.cols()) = last.weights.row(0).transpose();
+  const double* act_end = cursor;
+  for (std::size_t l = layers - 1; l-- > 0;) {
+    const auto& layer = layers_[l];
+    const Eigen::Index outputs = layer.weights.rows();
+    const double* act = act_end - outputs;
+    Eigen::Map<Eigen::VectorXd> grad(g, outputs);
+    grad.array() *= (Eigen::Map<const Eigen::ArrayXd>(act, outputs) > 0.0).cast<double>();
+    Eigen::Map<Eigen::VectorXd>(g_below, layer.weights.cols()).noalias() =
+        layer.weights.transpose() * grad;
+    std::swap(g, g_below);
+    act_end = act;
+  }
+  for (Eigen::Index j = 0; j < inputs; ++j) {
+    grad_out[j] = g[j] * output_scale_ * inverse_input_scale_[j];
+  }
+  return z * output_scale_ + output_mean_;
+}
+
+// ---------------------------------------------------------------- JSON
+
+json Mlp::to_json() const {
+  if (layers_.empty()) throw MlpError("mlp: cannot write an empty model");
+  json layers = json::array();
+  for (const auto& layer : layers_) {
+    json rows = json::array();
+    for (Eigen::Index r = 0; r < layer.weights.rows(); ++r) {
+      const Eigen::VectorXd row = layer.weights.row(r).transpose();
+      rows.push_back(to_json_array(row));
+    }
+    layers.push_back({{"weights", std::move(rows)}, {"bias", to_json_array(layer.bias)}});
+  }
+  return {{"format", "pyrocam-mlp"},
+          {"version", kMlpFormatVersion},
+          {"activation", "relu"},
+          {"input_mean", to_json_array(input_.mean)},
+          {"input_scale", to_json_array(input_.scale)},
+          {"output_mean", output_mean_},
+          {"output_scale", output_scale_},
+          {"layers", std::move(layers)}};
+}
+
+Mlp Mlp::from_json(const json& j) {
+  const std::string top = "the MLP object";
+  const json& format = require(j, "format", top);
+  if (!format.is_string() || format.get<std::string>() != "pyrocam-mlp") {
+    throw MlpError("mlp json: \"format\" is " + format.dump() + ", expected \"pyrocam-mlp\"");
+  }
+  const json& version = require(j, "version", top);
+  if (!version.is_number_integer() || version.get<int>() != kMlpFormatVersion) {
+    throw MlpError("mlp json: unsupported \"version\" " + version.dump() + ", expected " +
+                   std::to_string(kMlpFormatVersion));
+  }
+  if (j.contains("activation") && j["activation"] != "relu") {
+    throw MlpError("mlp json: unsupported \"activation\" " + j["activation"].dump() +
+                   ", expected \"relu\"");
+  }
+  Standardizer input;
+  input.mean = read_vector(require(j, "input_mean", top), "input_mean");
+  input.scale = read_vector(require(j, "input_scale", top), "input_scale");
+  const double output_mean = read_number(require(j, "output_mean", top), "output_mean");
+  const double output_scale = read_number(require(j, "output_scale", top), "output_scale");
+  const json& layers_json = require(j, "layers", top);
+  if (!layers_json.is_array() || layers_json.empty()) {
+    throw MlpError("mlp json: \"layers\" must be a non-empty array");
+  }
+  std::vector<MlpLayer> layers;
+  for (std::size_t l = 0; l < layers_json.size(); ++l) {
+    const std::string name = "layers[" + std::to_string(l) + "]";
+    MlpLayer layer;
+    layer.weights = read_matrix(require(layers_json[l], "weights", name), name + ".weights");
+    layer.bias = read_vector(require(layers_json[l], "bias", name), name + ".bias");
+    layers.push_back(std::move(layer));
+  }
+  try {
+    return Mlp(std::move(input), output_mean, output_scale, std::move(layers));
+  } catch (const MlpError& e) {
+    // Same message, marked as coming from the file.
+    std::string message = e.what();
+    if (message.rfind("mlp: ", 0) == 0) message = "mlp json: " + message.substr(5);
+    throw MlpError(message);
+  }
+}
+
+}  // namespace pyrocam
