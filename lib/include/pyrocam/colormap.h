@@ -1,0 +1,99 @@
+// False-colour display of temperature images: palettes, a lookup table from the 16-bit
+// temperature code (0.1 K, 0 = no reading) straight to 8-bit 4-channel pixels, a smoothed auto
+// range, isotherm (alarm) colouring and a scale bar with labelled ticks in degC.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pyrocam {
+
+enum class Palette { kIron, kInferno, kRainbow, kGrey };
+Palette parse_palette(const std::string& name);  // "iron", "inferno", "rainbow", "grey"
+std::string palette_name(Palette palette);
+
+struct Rgb {
+  std::uint8_t r = 0, g = 0, b = 0;
+};
+// 256 colours from cold (index 0) to hot (255).
+const std::array<Rgb, 256>& palette_colors(Palette palette);
+
+// Byte order of the 4-channel output pixels in memory.
+enum class ChannelOrder { kRGBA, kBGRA };
+
+// 0.1 K code <-> degC.
+inline double decikelvin_to_celsius(std::uint16_t code) { return code * 0.1 - 273.15; }
+
+struct ColormapSettings {
+  Palette palette = Palette::kIron;
+  double min_c = 500, max_c = 2500;  // mapped to the ends of the palette (clamped beyond)
+  std::uint32_t invalid_argb = 0;    // colour of code 0 (no reading); 0 = transparent
+  std::optional<double> isotherm_c;  // pixels at or above it get isotherm_argb
+  std::uint32_t isotherm_argb = 0xFF00FF00u;
+  ChannelOrder order = ChannelOrder::kRGBA;
+
+  bool operator==(const ColormapSettings& o) const {
+    return palette == o.palette && min_c == o.min_c && max_c == o.max_c &&
+           invalid_argb == o.invalid_argb && isotherm_c == o.isotherm_c &&
+           isotherm_argb == o.isotherm_argb && order == o.order;
+  }
+  bool operator!=(const ColormapSettings& o) const { return !(*this == o); }
+};
+
+// A 65536-entry table from temperature code to output pixel: mapping a frame is one load per
+// pixel. Rebuilding (about 0.1 ms) happens only when the settings change.
+class ThermalColormap {
+ public:
+  // Throws InputError unless min_c < max_c (both finite).
+  void configure(const ColormapSettings& settings);
+  const ColormapSettings& settings() const { return settings_; }
+  // decikelvin CV_16U -> out CV_8UC4 of the same size (allocated if it does not fit).
+  void apply(const cv::Mat& decikelvin, cv::Mat& out) const;
+  // The output pixel of one code, as bytes in memory order.
+  std::array<std::uint8_t, 4> pixel(std::uint16_t code) const;
+
+ private:
+  ColormapSettings settings_;
+  bool configured_ = false;
+  std::vector<std::uint32_t> lut_;
+};
+
+// Bytes of an ARGB colour (0xAARRGGBB) in the given memory order, packed as a native uint32.
+std::uint32_t pack_argb(std::uint32_t argb, ChannelOrder order);
+
+// Lowest and highest valid (non-zero) temperature in degC; nullopt when no pixel is valid.
+std::optional<std::pair<double, double>> valid_range_c(const cv::Mat& decikelvin);
+
+// Auto range that does not flicker: an exponential moving average of each frame's valid range;
+// `weight` (0..1] is the share of the newest frame (1 = no smoothing). The range is kept at
+// least min_span_c wide.
+class AutoRange {
+ public:
+  void reset() { have_ = false; }
+  // Updates with a frame's range (nullopt: no valid pixel, keeps the last range).
+  void update(std::optional<std::pair<double, double>> frame_range, double weight);
+  bool valid() const { return have_; }
+  double min_c() const { return min_; }
+  double max_c() const { return max_; }
+
+  static constexpr double kMinSpanC = 1.0;
+
+ private:
+  bool have_ = false;
+  double min_ = 0, max_ = 0;
+};
+
+// Tick values (degC) at a 1, 2 or 5 x 10^k step, about `target` of them within [min_c, max_c].
+std::vector<double> nice_ticks(double min_c, double max_c, int target = 5);
+
+// Draws a vertical scale bar (palette gradient, hot at the top) with tick labels in degC at the
+// right edge of a CV_8UC4 image; opaque, so it shows when overlaid. Too small an image (under
+// 48 px high or 64 px wide) gets none.
+void draw_scale_bar(cv::Mat& image, Palette palette, double min_c, double max_c,
+                    ChannelOrder order);
+
+}  // namespace pyrocam

@@ -1,0 +1,42 @@
+// Dark-frame subtraction with saturation marking: the first step from raw camera gray values to
+// signals (METHOD.md section 3 and 5). The result is float32 DN; a pixel whose raw value reached
+// the saturation level (before subtraction) is +INFINITY, a pixel without a reading NaN.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+namespace pyrocam {
+
+// The largest raw value of a bit depth: 2^bits - 1.
+int full_scale_dn(int bit_depth);
+// The default saturation level: 220/255 of the full scale (the paper's 220 of 255 for 8 bits),
+// rounded. Throws InputError for a bit depth outside 1..16.
+double default_saturation_level(int bit_depth);
+
+// out = raw - dark per pixel as CV_32F, with +INF where raw >= saturation_level. raw is CV_8U or
+// CV_16U (any stride), dark CV_32F of the same size (a NaN in the dark gives NaN). out is
+// (re)allocated only if its size or type differs, so it may wrap a caller's buffer. Throws
+// InputError on a size or type mismatch naming both sizes.
+void subtract_dark(const cv::Mat& raw, const cv::Mat& dark, double saturation_level, cv::Mat& out);
+
+// Converts a dark image read from a file (CV_8U/CV_16U) or a constant level to the CV_32F dark
+// subtract_dark takes.
+cv::Mat dark_from_image(const cv::Mat& image);
+cv::Mat dark_from_level(int width, int height, double level_dn);
+
+// Averages raw frames into a dark frame (lens cap on). All frames must have the size of the first.
+class DarkAccumulator {
+ public:
+  void reset();
+  // Adds one CV_8U/CV_16U frame; throws InputError if its size differs from the first frame's.
+  void add(const cv::Mat& raw);
+  int count() const { return count_; }
+  // Mean of the frames added so far as CV_32F; throws InputError when none was added.
+  cv::Mat mean() const;
+
+ private:
+  cv::Mat sum_;  // CV_64F
+  int count_ = 0;
+};
+
+}  // namespace pyrocam
