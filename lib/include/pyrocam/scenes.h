@@ -29,7 +29,7 @@ struct SceneSequenceSettings {
   std::vector<double> temperatures_c;  // plate/filament (default: a sweep suited to the kind)
   int width = 256, height = 256;
   double exposure_us = 0;  // 0: each frame exposed so its hottest band reaches target_dn
-  double target_dn = 180;
+  double target_dn = 140;  // brightest band above the dark level, under the 220 DN raw limit
   double emissivity = 0;  // 0: the kind's default (plate 0.7, filament 0.4, melt pool 0.35)
   std::string image_extension = ".pgm";
 };

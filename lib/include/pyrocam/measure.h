@@ -1,0 +1,64 @@
+// From raw mosaic frames to temperature images: dark subtraction, demosaicking and per-pixel
+// estimation, the same code path for the ratiotemp element and `pyrocam-calib measure`.
+#pragma once
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "pyrocam/demosaic.h"
+#include "pyrocam/estimators.h"
+
+namespace pyrocam {
+
+// Temperature (CV_32F degC, NaN = no reading) and, when asked, its expanded uncertainty (CV_32F
+// degC, NaN where no reading) from band planes (CV_32F DN, +INF saturated, NaN invalid).
+class PlaneEstimator {
+ public:
+  PlaneEstimator(const ThermalModel& model, Method method);
+  void estimate(const std::vector<cv::Mat>& planes, cv::Mat& temperature_c,
+                cv::Mat* uncertainty_c = nullptr) const;
+  const TemperatureEstimator& estimator() const { return *estimator_; }
+
+ private:
+  const ThermalModel& model_;
+  std::unique_ptr<TemperatureEstimator> estimator_;
+};
+
+struct MeasureOptions {
+  Method method = Method::kMlp;
+  DemosaicMethod demosaic = DemosaicMethod::kBilinear;
+  double saturation_level_dn = -1;  // raw DN; -1: the profile's inference saturation threshold
+  bool uncertainty = false;
+};
+
+// One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.
+class FrameMeasurer {
+ public:
+  FrameMeasurer(const ThermalModel& model, const MeasureOptions& options);
+  void measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& temperature_c,
+               cv::Mat* uncertainty_c = nullptr);
+  cv::Size output_size(cv::Size raw) const;
+
+ private:
+  const ThermalModel& model_;
+  MeasureOptions options_;
+  PlaneEstimator planes_estimator_;
+  cv::Mat signal_;
+  std::vector<cv::Mat> planes_;
+};
+
+// GRAY16 in units of 0.1 K, 0 = no reading (NaN or outside 0.1..6553.5 K).
+cv::Mat encode_decikelvin(const cv::Mat& temperature_c);
+// Back to degC (NaN for 0).
+cv::Mat decode_decikelvin(const cv::Mat& decikelvin);
+
+struct RegionStats {
+  std::size_t pixels = 0, valid = 0;
+  double valid_fraction = 0;
+  double min_c = NAN, max_c = NAN, mean_c = NAN, median_c = NAN;
+};
+// Statistics of the finite pixels of a CV_32F temperature image inside mask (empty = all).
+RegionStats region_stats(const cv::Mat& temperature_c, const cv::Mat& mask = cv::Mat());
+
+}  // namespace pyrocam
