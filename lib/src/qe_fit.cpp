@@ -264,10 +264,12 @@ class RegularisedModel {
   Eigen::VectorXd qe(int b, const Eigen::VectorXd& th, Eigen::MatrixXd* dq = nullptr) const {
     const double* pb = th.data() + nb_ + b * kPerBand;
     const double h = pb[2];
-    const Eigen::VectorXd base = q0_.row(b).transpose();
-    const Eigen::VectorXd s = h != 0 ? shifted(base, profile_.grid, h) : base;
-    const Eigen::ArrayXd factor = 1.0 + pb[0] * x_ + pb[1] * x_.square();
+    // The band's own filter shifts (sensor QE); lens and optical filters stay where they are.
     const Eigen::VectorXd sensor = profile_.sensor_qe.row(b).transpose();
+    const Eigen::ArrayXd optics = profile_.optics_transmission.array();
+    const Eigen::VectorXd s = h != 0 ? (shifted(sensor, profile_.grid, h).array() * optics).matrix()
+                                     : Eigen::VectorXd(q0_.row(b).transpose());
+    const Eigen::ArrayXd factor = 1.0 + pb[0] * x_ + pb[1] * x_.square();
     const Eigen::VectorXd leak = leak_ * th.tail(nk_);
     Eigen::VectorXd q = (s.array() * factor).matrix() + sensor.cwiseProduct(leak);
     const Eigen::ArrayXd positive = (q.array() > 0).cast<double>();  // Q >= 0 by clamping
@@ -278,8 +280,9 @@ class RegularisedModel {
       dq->col(1) = (s.array() * x_.square() * positive).matrix();
       const double eps = 0.5 * profile_.grid.step_nm();
       dq->col(2) =
-          ((shifted(base, profile_.grid, h + eps) - shifted(base, profile_.grid, h - eps)).array() /
-           (2 * eps) * factor * positive)
+          ((shifted(sensor, profile_.grid, h + eps) - shifted(sensor, profile_.grid, h - eps))
+               .array() /
+           (2 * eps) * optics * factor * positive)
               .matrix();
       dq->rightCols(nk_) = (leak_.array().colwise() * (sensor.array() * positive)).matrix();
     }
@@ -365,6 +368,20 @@ class RegularisedModel {
 
   double gain(int b, const Eigen::VectorXd& th) const { return gain0_[b] * std::exp(th[b]); }
 
+  // rms relative misfit of the absolute rates.
+  double data_rms(const Eigen::VectorXd& th) const {
+    double ss = 0;
+    std::size_t count = 0;
+    for (int b = 0; b < nb_; ++b) {
+      const Eigen::VectorXd sim = gain(b, th) * rates(b, qe(b, th));
+      for (Eigen::Index i : p_.valid[b]) {
+        const double e = sim[i] / data_.rates(b, i) - 1;
+        ss += e * e, ++count;
+      }
+    }
+    return std::sqrt(ss / static_cast<double>(count));
+  }
+
  private:
   Eigen::VectorXd rates(int b, const Eigen::VectorXd& q) const {
     return profile_.dn_per_electron()[b] * (p_.radiance * q);
@@ -383,6 +400,53 @@ class RegularisedModel {
   int nb_ = 0;
   Eigen::Index nk_ = 0;
 };
+
+// Levenberg-Marquardt with the leak bumps bounded below by zero: a bump at its bound whose
+// gradient points outwards is held there (active set), and steps are projected. Returns the
+// iterations taken.
+int levenberg_marquardt(const RegularisedModel& model, Eigen::VectorXd& th, int max_iterations) {
+  const Eigen::Index n = model.size(), lo = model.leak_offset();
+  Eigen::VectorXd res, res_new;
+  Eigen::MatrixXd jac;
+  model.evaluate(th, res, &jac);
+  double cost = res.squaredNorm(), mu = 1e-3;
+  int it = 0;
+  bool converged = false;
+  for (; it < max_iterations && !converged; ++it) {
+    const Eigen::VectorXd grad = jac.transpose() * res;
+    std::vector<Eigen::Index> free;
+    for (Eigen::Index k = 0; k < n; ++k)
+      if (!model.fixed(k) && (k < lo || th[k] > 0 || grad[k] < 0)) free.push_back(k);
+    const auto nf = static_cast<Eigen::Index>(free.size());
+    Eigen::MatrixXd jf(jac.rows(), nf);
+    Eigen::VectorXd gf(nf);
+    for (Eigen::Index c = 0; c < nf; ++c) jf.col(c) = jac.col(free[c]), gf[c] = grad[free[c]];
+    const Eigen::MatrixXd h = jf.transpose() * jf;
+    bool improved = false;
+    for (int tries = 0; tries < 12 && !improved; ++tries) {
+      Eigen::MatrixXd a = h;
+      a.diagonal() += mu * (h.diagonal().array() + 1e-12).matrix();
+      const Eigen::VectorXd step = a.ldlt().solve(-gf);
+      Eigen::VectorXd trial = th;
+      for (Eigen::Index c = 0; c < nf; ++c) trial[free[c]] += step[c];
+      trial.tail(n - lo) = trial.tail(n - lo).cwiseMax(0.0);
+      model.evaluate(trial, res_new, nullptr);
+      const double c_new = res_new.squaredNorm();
+      if (c_new < cost) {
+        const double gain = cost - c_new;
+        th = trial, mu = std::max(mu / 3, 1e-9);
+        improved = true;
+        converged = gain < 1e-10 * cost + 1e-14;
+        cost = c_new;
+        model.evaluate(th, res, &jac);
+      } else {
+        mu *= 4;
+      }
+    }
+    if (!improved) break;
+  }
+  return it;
+}
 
 // Prediction error sums for pooling over folds.
 void prediction_sums(const CameraProfile& profile, const QeFitResult& fit,
@@ -460,49 +524,20 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
                                const RegularisedOptions& options) {
   const auto start = Clock::now();
   const Problem p = prepare(profile, data);
-  const RegularisedModel model(profile, data, p, options);
-  const Eigen::Index n = model.size(), lo = model.leak_offset();
-  Eigen::VectorXd th = Eigen::VectorXd::Zero(n), res, res_new;
-  Eigen::MatrixXd jac;
-  model.evaluate(th, res, &jac);
-  double cost = res.squaredNorm(), mu = 1e-3;
-  int it = 0;
-  bool converged = false;
-  // Levenberg-Marquardt with the leak bumps bounded below by zero: a bump at its bound whose
-  // gradient points outwards is held there (active set), and steps are projected.
-  for (; it < options.max_iterations && !converged; ++it) {
-    const Eigen::VectorXd grad = jac.transpose() * res;
-    std::vector<Eigen::Index> free;
-    for (Eigen::Index k = 0; k < n; ++k)
-      if (!model.fixed(k) && (k < lo || th[k] > 0 || grad[k] < 0)) free.push_back(k);
-    const auto nf = static_cast<Eigen::Index>(free.size());
-    Eigen::MatrixXd jf(jac.rows(), nf);
-    Eigen::VectorXd gf(nf);
-    for (Eigen::Index c = 0; c < nf; ++c) jf.col(c) = jac.col(free[c]), gf[c] = grad[free[c]];
-    const Eigen::MatrixXd h = jf.transpose() * jf;
-    bool improved = false;
-    for (int tries = 0; tries < 12 && !improved; ++tries) {
-      Eigen::MatrixXd a = h;
-      a.diagonal() += mu * (h.diagonal().array() + 1e-12).matrix();
-      const Eigen::VectorXd step = a.ldlt().solve(-gf);
-      Eigen::VectorXd trial = th;
-      for (Eigen::Index c = 0; c < nf; ++c) trial[free[c]] += step[c];
-      trial.tail(n - lo) = trial.tail(n - lo).cwiseMax(0.0);
-      model.evaluate(trial, res_new, nullptr);
-      const double c_new = res_new.squaredNorm();
-      if (c_new < cost) {
-        const double gain = cost - c_new;
-        th = trial, mu = std::max(mu / 3, 1e-9);
-        improved = true;
-        converged = gain < 1e-10 * cost + 1e-14;
-        cost = c_new;
-        model.evaluate(th, res, &jac);
-      } else {
-        mu *= 4;
-      }
-    }
-    if (!improved) break;
+  RegularisedOptions o = options;
+  Eigen::VectorXd th;
+  int iterations = 0;
+  // Reweighting: the data's weight against the priors is 1 / relative_noise; refit with the
+  // misfit actually reached (noise-free data earn tighter fits, noisy data stronger priors).
+  for (int pass = 0; pass < std::max(1, options.noise_passes); ++pass) {
+    const RegularisedModel model(profile, data, p, o);
+    if (th.size() == 0) th = Eigen::VectorXd::Zero(model.size());
+    iterations += levenberg_marquardt(model, th, o.max_iterations);
+    const double misfit = std::clamp(model.data_rms(th), options.min_relative_noise, 0.05);
+    if (std::abs(std::log(misfit / o.relative_noise)) < std::log(1.5)) break;
+    o.relative_noise = misfit;
   }
+  const RegularisedModel model(profile, data, p, o);
   QeFitResult r;
   r.solver = QeSolver::kRegularised;
   r.system_qe.resize(profile.band_count(), profile.grid.size());
@@ -511,7 +546,7 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
     r.system_qe.row(b) = model.qe(b, th).cwiseMin(1.0).transpose();
     r.gains[b] = model.gain(b, th);
   }
-  r.diagnostics.iterations = it;
+  r.diagnostics.iterations = iterations;
   finish(profile, p, data, start, r);
   return r;
 }

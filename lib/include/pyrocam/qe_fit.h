@@ -29,13 +29,15 @@ struct PaperSearchOptions {
   double taper_nm = 100;           // log-linear taper from one to the other outside the band
 };
 
-// The regularised solve. Q_b = shift(Q0_b, h_b) * (1 + t_b x + u_b x^2) + S_b(l) * leak(l), with
+// The regularised solve. Q_b = shift(S_b, h_b) * optics * (1 + t_b x + u_b x^2) + S_b * leak, with
 // x = (l - pass band centre) / 100 nm, S_b the band's sensor QE, leak >= 0 a smooth sum of
 // bumps in the optical filter's blocking region shared by all bands (one filter), and a free
 // gain per band. Each sigma is a prior standard deviation (a Gaussian penalty); 0 fixes the
 // parameter at the datasheet's.
 struct RegularisedOptions {
-  double relative_noise = 0.005;       // expected relative rms error of a measured rate
+  double relative_noise = 0.005;       // expected relative rms error of a measured rate (the start)
+  int noise_passes = 3;                // refits weighting the data by the misfit reached, at most
+  double min_relative_noise = 2e-4;    // floor of that estimate
   double tilt_sigma = 0.02;            // per 100 nm
   double curvature_sigma = 0.0;        // per (100 nm)^2; off: trades against the leak, worse highs
   double shift_sigma_nm = 3.0;         // only for bands narrower than narrow_band_fwhm_nm:
