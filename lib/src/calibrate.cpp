@@ -9,8 +9,8 @@
 
 #include "pyrocam/baselines.h"
 #include "pyrocam/estimators.h"
+#include "pyrocam/qe_fit.h"
 #include "pyrocam/spectrum.h"
-#include "qe_adapter.h"
 
 namespace pyrocam {
 namespace {
@@ -155,14 +155,15 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   const Eigen::MatrixXd rates = out.rates.rates();
   const Eigen::MatrixXd datasheet = profile.system_qe();
 
-  // QE optimisation: every requested solver, chosen by held-out residual.
+  // QE optimisation: every requested solver, chosen by held-out (cross-validation) residual.
   std::vector<std::string> solvers;
   if (opt.qe_solver == "auto")
     solvers = {"paper", "regularised"};
   else
     solvers = {opt.qe_solver};
-  QeFitInput input{profile, t_c, rates};
+  const CalibrationRates data{t_c, rates.transpose()};
   Eigen::MatrixXd best_q = datasheet;
+  Eigen::VectorXd best_k = band_scale(profile, datasheet, t_c, rates);
   double best_held_out = INFINITY;
   std::string best_solver = "datasheet";
   for (std::size_t s = 0; s < solvers.size(); ++s) {
@@ -170,16 +171,34 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
     const auto t0 = Clock::now();
     QeSolverReport rep;
     rep.solver = solvers[s];
-    const QeFitResult fit = fit_system_qe(input, solvers[s]);
-    rep.calibration_residual = fit.calibration_residual;
-    rep.held_out_residual = held_out_residual(input, solvers[s]);
-    rep.qe_change_rms = std::sqrt((fit.system_qe - datasheet).array().square().mean());
+    if (solvers[s] == "datasheet") {
+      rep.calibration_residual =
+          std::sqrt(normalised_rate_residuals(profile, datasheet, data).array().square().mean());
+      rep.held_out_residual = rep.calibration_residual;
+      rep.qe_change_rms = 0;
+      rep.seconds = since(t0);
+      out.solvers.push_back(rep);
+      continue;
+    }
+    QeFitOptions qo;
+    qo.solver = solvers[s] == "paper" ? QeSolver::kPaper : QeSolver::kRegularised;
+    const QeFitResult fit = fit_qe(profile, data, qo);
+    const auto rms_of = [](const Eigen::VectorXd& v) {
+      return std::sqrt(v.array().square().mean());
+    };
+    rep.calibration_residual = rms_of(fit.diagnostics.residual_after);
+    rep.qe_change_rms = rms_of(fit.diagnostics.qe_change_rms);
+    stage("cross-validating QE (" + solvers[s] + ")", s, solvers.size());
+    CrossValidation cv = cross_validate(profile, data, qo, 5);
+    rep.held_out_residual = rms_of(cv.heldout_residual);
     rep.seconds = since(t0);
     out.solvers.push_back(rep);
     if (rep.held_out_residual < best_held_out) {
       best_held_out = rep.held_out_residual;
       best_q = fit.system_qe;
+      best_k = fit.gains;
       best_solver = solvers[s];
+      out.qe_spread = cv.qe_spread;
     }
   }
   stage("optimising QE", solvers.size(), solvers.size());
@@ -189,15 +208,10 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   m.qe_solver = best_solver;
   m.min_temperature_c = opt.min_temperature_c;
   m.max_temperature_c = opt.max_temperature_c;
-  m.camera = CameraModel{profile, best_q, band_scale(profile, best_q, t_c, rates)};
+  m.camera = CameraModel{profile, best_q, best_k};
   const CameraModel sheet_camera{profile, datasheet, band_scale(profile, datasheet, t_c, rates)};
   out.rate_residual_datasheet = rate_residuals(sheet_camera, t_c, rates);
   out.rate_residual_optimised = rate_residuals(m.camera, t_c, rates);
-  if (best_solver != "datasheet") {
-    stage("cross-validating QE", 0, 1);
-    out.qe_spread = cross_validation_spread(input, best_solver);
-    stage("cross-validating QE", 1, 1);
-  }
 
   // The synthetic locus and the network on it.
   const Locus locus =
@@ -271,11 +285,10 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
           static_cast<std::size_t>(u.monte_carlo_refits));
     std::vector<double> t_perturbed = t_c;
     for (double& t : t_perturbed) t += tc_error(rng);
-    QeFitInput pin{profile, t_perturbed, rates};
-    const QeFitResult fit =
-        fit_system_qe(pin, best_solver == "paper" ? "regularised" : best_solver);
-    const CameraModel cam{profile, fit.system_qe,
-                          band_scale(profile, fit.system_qe, t_perturbed, rates)};
+    QeFitOptions qo;
+    qo.solver = best_solver == "paper" ? QeSolver::kPaper : QeSolver::kRegularised;
+    const QeFitResult fit = fit_qe(profile, CalibrationRates{t_perturbed, rates.transpose()}, qo);
+    const CameraModel cam{profile, fit.system_qe, fit.gains};
     const OhnoEstimator inv(
         make_locus(cam, opt.min_temperature_c - 100, opt.max_temperature_c + 100, 1));
     for (std::size_t i = 0; i < u.temperature_c.size(); ++i)

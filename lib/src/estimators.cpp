@@ -31,6 +31,9 @@ class MlpEstimator : public TemperatureEstimator {
 // (unknown emissivity, exposure and geometry): chi2(T) = sum w (S - a m(T))^2, a profiled out.
 class LikelihoodEstimator : public TemperatureEstimator {
  public:
+  // Two minima closer than this in chi2 (about 3 sigma) make the reading ambiguous.
+  static constexpr double kAmbiguityChi2 = 9.0;
+
   explicit LikelihoodEstimator(const ThermalModel& m)
       : TemperatureEstimator(m),
         locus_(make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 1.0)) {}
@@ -61,18 +64,36 @@ class LikelihoodEstimator : public TemperatureEstimator {
       return sss - ssm * ssm / smm;
     };
     const Eigen::Index coarse = 20;
+    // Coarse scan, keeping every local minimum: with few valid bands the locus can pass the
+    // same ratios twice, and a reading that fits two temperatures is no reading.
+    std::vector<double> c;
+    for (Eigen::Index i = 0; i < n; i += coarse) c.push_back(chi2(i));
+    auto refine = [&](Eigen::Index around, double& value) {
+      Eigen::Index best_i = around;
+      value = chi2(around);
+      const Eigen::Index lo = std::max<Eigen::Index>(0, around - coarse);
+      const Eigen::Index hi = std::min<Eigen::Index>(n - 1, around + coarse);
+      for (Eigen::Index i = lo; i <= hi; ++i) {
+        const double v = chi2(i);
+        if (v < value) value = v, best_i = i;
+      }
+      return best_i;
+    };
+    std::vector<Eigen::Index> minima;
+    for (std::size_t k = 0; k < c.size(); ++k)
+      if ((k == 0 || c[k] <= c[k - 1]) && (k + 1 == c.size() || c[k] <= c[k + 1]))
+        minima.push_back(static_cast<Eigen::Index>(k) * coarse);
     Eigen::Index best = 0;
     double best_chi2 = std::numeric_limits<double>::infinity();
-    for (Eigen::Index i = 0; i < n; i += coarse) {
-      const double c = chi2(i);
-      if (c < best_chi2) best_chi2 = c, best = i;
+    std::vector<std::pair<Eigen::Index, double>> refined;
+    for (Eigen::Index m : minima) {
+      double v;
+      const Eigen::Index i = refine(m, v);
+      refined.emplace_back(i, v);
+      if (v < best_chi2) best_chi2 = v, best = i;
     }
-    const Eigen::Index lo = std::max<Eigen::Index>(0, best - coarse);
-    const Eigen::Index hi = std::min<Eigen::Index>(n - 1, best + coarse);
-    for (Eigen::Index i = lo; i <= hi; ++i) {
-      const double c = chi2(i);
-      if (c < best_chi2) best_chi2 = c, best = i;
-    }
+    for (const auto& [i, v] : refined)
+      if (std::abs(i - best) > 3 * coarse && v - best_chi2 < kAmbiguityChi2) return NAN;
     if (best == 0 || best == n - 1) return NAN;  // at the edge: outside the model's range
     // Parabola through the minimum and its neighbours for sub-step resolution.
     const double cm = chi2(best - 1), cp = chi2(best + 1);

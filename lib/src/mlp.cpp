@@ -1,6 +1,10 @@
 #include "pyrocam/mlp.h"
 
+#include <Eigen/QR>
+
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -15,12 +19,13 @@ namespace {
 
 using json = nlohmann::json;
 
-// Training precision. Double keeps the 0.5 degC target (1.7e-4 of the span) well clear of
-// rounding in the late, tiny Adam steps.
-#ifdef EXP_FLOAT
-using TrainScalar = float;
+// Adam runs in single precision: twice the speed of double where Eigen has only SSE2, and its
+// mini-batch noise (~1 degC) dwarfs float rounding. The L-BFGS polish that must resolve
+// 0.5 degC (1.7e-4 of the span) runs in double.
+#ifdef EXP_DOUBLE
+using AdamScalar = double;
 #else
-using TrainScalar = double;
+using AdamScalar = float;
 #endif
 
 // Samples per chunk in the batch inference path: activations of the widest layer stay in L2.
@@ -96,6 +101,156 @@ Eigen::Matrix<S, 1, Eigen::Dynamic> evaluate(const Network<S>& net,
   return out;
 }
 
+// Backward pass after forward(): the gradient of the mean squared error over the n columns into
+// grad (same shapes as net); deltas has the activations' shapes. Returns the sum of squared
+// errors.
+template <class S>
+double backward(const Network<S>& net, const std::vector<typename Network<S>::Matrix>& acts,
+                std::vector<typename Network<S>::Matrix>& deltas,
+                const Eigen::Matrix<S, 1, Eigen::Dynamic>& targets, Eigen::Index n,
+                Network<S>& grad) {
+  const std::size_t layers = net.layer_count();
+  auto top = deltas[layers].leftCols(n);
+  top = acts[layers].leftCols(n) - targets.leftCols(n);
+  const double squared_error_sum = static_cast<double>(top.squaredNorm());
+  top *= S(2) / static_cast<S>(n);  // d mean(e^2) / d output
+  for (std::size_t l = layers; l-- > 0;) {
+    const auto delta = deltas[l + 1].leftCols(n);
+    grad.weights[l].noalias() = delta * acts[l].leftCols(n).transpose();
+    grad.bias[l] = delta.rowwise().sum();
+    if (l > 0) {
+      auto below = deltas[l].leftCols(n);
+      below.noalias() = net.weights[l].transpose() * delta;
+      // ReLU passes the gradient where its output was positive.
+      below.array() *= (acts[l].leftCols(n).array() > S(0)).template cast<S>();
+    }
+  }
+  return squared_error_sum;
+}
+
+template <class S>
+Eigen::Index parameter_count(const Network<S>& net) {
+  Eigen::Index count = 0;
+  for (std::size_t l = 0; l < net.layer_count(); ++l) {
+    count += net.weights[l].size() + net.bias[l].size();
+  }
+  return count;
+}
+
+void flatten(const Network<double>& net, Eigen::VectorXd& theta) {
+  theta.resize(parameter_count(net));
+  Eigen::Index at = 0;
+  for (std::size_t l = 0; l < net.layer_count(); ++l) {
+    theta.segment(at, net.weights[l].size()) = net.weights[l].reshaped();
+    at += net.weights[l].size();
+    theta.segment(at, net.bias[l].size()) = net.bias[l];
+    at += net.bias[l].size();
+  }
+}
+
+void unflatten(const Eigen::VectorXd& theta, Network<double>& net) {
+  Eigen::Index at = 0;
+  for (std::size_t l = 0; l < net.layer_count(); ++l) {
+    net.weights[l].reshaped() = theta.segment(at, net.weights[l].size());
+    at += net.weights[l].size();
+    net.bias[l] = theta.segment(at, net.bias[l].size());
+    at += net.bias[l].size();
+  }
+}
+
+// Full-batch L-BFGS (two-loop recursion, Armijo backtracking) on the training set's mean squared
+// error, from Adam's result. Mini-batch Adam stalls at a noise floor of about 1 degC on a
+// noise-free locus; a few hundred quasi-Newton steps take it well below. Returns the number of
+// iterations done (fewer when no step decreases the loss any more).
+int polish_with_lbfgs(Network<double>& net, const Eigen::MatrixXd& inputs,
+                      const Eigen::RowVectorXd& targets, int iterations) {
+  constexpr int kMemory = 10;
+  constexpr double kArmijo = 1e-4;
+  const Eigen::Index n = inputs.cols();
+  auto acts = make_activations(net, n);
+  auto deltas = make_activations(net, n);
+  acts[0] = inputs;
+  Network<double> grad = net;
+  Eigen::VectorXd grad_flat;
+  auto loss_and_gradient = [&](const Eigen::VectorXd& theta, Eigen::VectorXd& g) {
+    unflatten(theta, net);
+    forward(net, acts, n);
+    const double sse = backward(net, acts, deltas, targets, n, grad);
+    flatten(grad, g);
+    return sse / static_cast<double>(n);
+  };
+
+  if (std::getenv("LSQ")) {
+    forward(net, acts, n);
+    const std::size_t L = net.layer_count();
+    Eigen::MatrixXd A(n, acts[L - 1].rows() + 1);
+    A.leftCols(acts[L - 1].rows()) = acts[L - 1].transpose();
+    A.col(A.cols() - 1).setOnes();
+    Eigen::VectorXd sol = A.colPivHouseholderQr().solve(targets.transpose());
+    net.weights[L - 1].row(0) = sol.head(sol.size() - 1).transpose();
+    net.bias[L - 1][0] = sol[sol.size() - 1];
+    forward(net, acts, n);
+    std::fprintf(stderr, "after lsq loss %.4e\n", (acts[L].row(0) - targets).squaredNorm() / n);
+  }
+  Eigen::VectorXd x, g, x_next, g_next, direction;
+  flatten(net, x);
+  double loss = loss_and_gradient(x, g);
+  std::vector<Eigen::VectorXd> s_history, y_history;
+  std::vector<double> rho_history;
+  std::vector<double> alpha(kMemory);
+  int done = 0;
+  for (; done < iterations; ++done) {
+    // Two-loop recursion: direction = -H g with H from the last kMemory steps.
+    direction = -g;
+    const int stored = static_cast<int>(s_history.size());
+    for (int i = stored - 1; i >= 0; --i) {
+      alpha[i] = rho_history[i] * s_history[i].dot(direction);
+      direction -= alpha[i] * y_history[i];
+    }
+    if (stored > 0) {
+      direction *= s_history.back().dot(y_history.back()) / y_history.back().squaredNorm();
+    } else {
+      direction *= 1e-3 / std::max(1e-300, g.lpNorm<Eigen::Infinity>());  // cautious first step
+    }
+    for (int i = 0; i < stored; ++i) {
+      const double beta = rho_history[i] * y_history[i].dot(direction);
+      direction += (alpha[i] - beta) * s_history[i];
+    }
+    double slope = g.dot(direction);
+    if (!(slope < 0)) {  // not a descent direction: forget the history, go downhill
+      s_history.clear(), y_history.clear(), rho_history.clear();
+      direction = -g * (1e-3 / std::max(1e-300, g.lpNorm<Eigen::Infinity>()));
+      slope = g.dot(direction);
+    }
+    double step = 1, next_loss = 0;
+    bool accepted = false;
+    for (int halving = 0; halving < 30 && !accepted; ++halving, step *= 0.5) {
+      x_next = x + step * direction;
+      next_loss = loss_and_gradient(x_next, g_next);
+      accepted = next_loss <= loss + kArmijo * step * slope;
+    }
+    if (!accepted) break;
+    Eigen::VectorXd s = x_next - x, y = g_next - g;
+    const double sy = s.dot(y);
+    if (sy > 1e-12 * s.norm() * y.norm()) {  // keep H positive definite
+      if (static_cast<int>(s_history.size()) == kMemory) {
+        s_history.erase(s_history.begin());
+        y_history.erase(y_history.begin());
+        rho_history.erase(rho_history.begin());
+      }
+      s_history.push_back(std::move(s));
+      y_history.push_back(std::move(y));
+      rho_history.push_back(1 / sy);
+    }
+    x.swap(x_next);
+    g.swap(g_next);
+    loss = next_loss;
+    if (std::getenv("DBG") && done % 10 == 0) std::fprintf(stderr, "it %d loss %.4e step %g hist %zu\n", done, loss, step * 2, s_history.size());
+  }
+  unflatten(x, net);
+  return done;
+}
+
 double learning_rate_at(const MlpTrainingOptions& o, long step, long total_steps) {
   const long warmup = std::max(1L, std::lround(o.warmup_fraction * total_steps));
   if (step < warmup) return o.learning_rate * static_cast<double>(step + 1) / warmup;
@@ -113,6 +268,7 @@ void check_options(const MlpTrainingOptions& o) {
     }
   }
   if (o.epochs < 1) throw MlpError("mlp: epochs must be at least 1");
+  if (o.polish_iterations < 0) throw MlpError("mlp: polish_iterations must be >= 0");
   if (o.batch_size < 1) throw MlpError("mlp: batch_size must be at least 1");
   if (!(o.learning_rate > 0) || !(o.final_learning_rate >= 0) ||
       !(o.final_learning_rate <= o.learning_rate)) {
@@ -127,15 +283,9 @@ void check_options(const MlpTrainingOptions& o) {
   }
 }
 
-// Adam moments for one parameter block.
-template <class S>
-struct AdamState {
-  typename Network<S>::Matrix m, v;
-};
-
-template <class S, class Param, class Grad>
-void adam_step(Param& p, const Grad& g, typename Network<S>::Matrix& m,
-               typename Network<S>::Matrix& v, S lr, S bias1, S bias2, S decay) {
+// One Adam step on a parameter block (AdamW decay when decay > 0).
+template <class Param, class Grad, class S>
+void adam_step(Param& p, const Grad& g, Param& m, Param& v, S lr, S bias1, S bias2, S decay) {
   constexpr S kBeta1 = S(0.9), kBeta2 = S(0.999), kEpsilon = S(1e-8);
   m.array() = kBeta1 * m.array() + (1 - kBeta1) * g.array();
   v.array() = kBeta2 * v.array() + (1 - kBeta2) * g.array().square();
@@ -220,7 +370,7 @@ Eigen::MatrixXd Standardizer::invert(const Eigen::MatrixXd& standardized) const 
 
 Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
                const MlpTrainingOptions& options, MlpTrainingReport* report) {
-  using S = TrainScalar;
+  using S = AdamScalar;
   using Matrix = Network<S>::Matrix;
   const auto started = std::chrono::steady_clock::now();
   check_options(options);
@@ -239,7 +389,6 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   const Eigen::Index train_count = samples - test_count;
   if (train_count < 1) throw MlpError("mlp: no training samples left after the test split");
 
-  // Standardise on the training rows only, so that the test set stays unseen.
   Random random(options.seed);
   std::vector<Eigen::Index> order(static_cast<std::size_t>(samples));
   for (Eigen::Index i = 0; i < samples; ++i) order[static_cast<std::size_t>(i)] = i;
@@ -256,14 +405,16 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
       y_train[i - test_count] = y[src];
     }
   }
+  // Standardise on the training rows only, so that the test set stays unseen.
   const Standardizer input = Standardizer::fit(x_train);
   const Standardizer output = Standardizer::fit(y_train);
   const double y_mean = output.mean[0], y_scale = output.scale[0];
   // Samples as columns: each layer is then one matrix product per batch.
-  const Matrix z_train = input.apply(x_train).transpose().cast<S>();
-  const Matrix z_test = input.apply(x_test).transpose().cast<S>();
-  const Eigen::Matrix<S, 1, Eigen::Dynamic> t_train =
-      ((y_train.array() - y_mean) / y_scale).matrix().transpose().cast<S>();
+  const Eigen::MatrixXd z_train = input.apply(x_train).transpose();
+  const Eigen::RowVectorXd t_train = ((y_train.array() - y_mean) / y_scale).matrix().transpose();
+  const Matrix z_train_s = z_train.cast<S>();
+  const Matrix z_test_s = input.apply(x_test).transpose().cast<S>();
+  const Eigen::Matrix<S, 1, Eigen::Dynamic> t_train_s = t_train.cast<S>();
 
   // He initialisation for ReLU layers, variance 1/fan_in for the linear output; zero biases.
   Network<S> net;
@@ -274,7 +425,7 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
     const bool is_output = l + 2 == widths.size();
     const double sd = std::sqrt((is_output ? 1.0 : 2.0) / widths[l]);
     Matrix w(widths[l + 1], widths[l]);
-    // Filled in row-major order so that the draw order reads like the JSON layout.
+    // Row by row, the order the JSON lists them.
     for (Eigen::Index r = 0; r < w.rows(); ++r) {
       for (Eigen::Index c = 0; c < w.cols(); ++c) w(r, c) = static_cast<S>(sd * random.normal());
     }
@@ -282,19 +433,29 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
     net.bias.push_back(Network<S>::Vector::Zero(widths[l + 1]));
   }
   const std::size_t layers = net.layer_count();
-
-  std::vector<AdamState<S>> adam_w(layers), adam_b(layers);
-  std::vector<Matrix> grad_w(layers);
-  std::vector<Network<S>::Vector> grad_b(layers);
-  for (std::size_t l = 0; l < layers; ++l) {
-    adam_w[l].m = adam_w[l].v = Matrix::Zero(net.weights[l].rows(), net.weights[l].cols());
-    adam_b[l].m = adam_b[l].v = Matrix::Zero(net.bias[l].size(), 1);
-    grad_w[l].resize(net.weights[l].rows(), net.weights[l].cols());
+  if (!std::getenv("NOKINK")) {
+    // Data-dependent biases: each hidden unit's kink passes through a random training sample, so
+    // that the kinks spread along the data instead of all crossing the origin, and no unit starts
+    // dead.
+    Matrix a = z_train_s;
+    for (std::size_t l = 0; l + 1 < layers; ++l) {
+      Matrix z = net.weights[l] * a;
+      for (Eigen::Index i = 0; i < z.rows(); ++i) {
+        net.bias[l][i] = -z(i, static_cast<Eigen::Index>(random.below(static_cast<std::size_t>(train_count))));
+      }
+      z.colwise() += net.bias[l];
+      a = z.cwiseMax(S(0));
+    }
   }
 
+  Network<S> grad = net, adam_m = net, adam_v = net;
+  for (std::size_t l = 0; l < layers; ++l) {
+    adam_m.weights[l].setZero(), adam_m.bias[l].setZero();
+    adam_v.weights[l].setZero(), adam_v.bias[l].setZero();
+  }
   const Eigen::Index batch = std::min<Eigen::Index>(options.batch_size, train_count);
   auto acts = make_activations(net, batch);
-  auto deltas = make_activations(net, batch);  // same shapes: d loss / d pre-activation
+  auto deltas = make_activations(net, batch);  // d loss / d pre-activation, same shapes
   auto eval_acts = make_activations(net, kInferenceChunk);
   Eigen::Matrix<S, 1, Eigen::Dynamic> batch_targets(batch);
 
@@ -305,6 +466,14 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   for (Eigen::Index i = 0; i < train_count; ++i) train_order[static_cast<std::size_t>(i)] = i;
   std::vector<double> train_rmse, test_rmse;
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto test_set_rmse = [&](const auto& network, auto& activations, const auto& z_test) {
+    if (test_count == 0) return nan;
+    const auto predicted = evaluate(network, z_test, activations);
+    const Eigen::VectorXd error =
+        (predicted.transpose().template cast<double>().array() * y_scale + y_mean).matrix() -
+        y_test;
+    return std::sqrt(error.squaredNorm() / static_cast<double>(test_count));
+  };
 
   for (int epoch = 0; epoch < options.epochs; ++epoch) {
     random.shuffle(train_order);
@@ -313,33 +482,20 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
       const Eigen::Index n = std::min(batch, train_count - start);
       for (Eigen::Index k = 0; k < n; ++k) {
         const Eigen::Index src = train_order[static_cast<std::size_t>(start + k)];
-        acts[0].col(k) = z_train.col(src);
-        batch_targets[k] = t_train[src];
+        acts[0].col(k) = z_train_s.col(src);
+        batch_targets[k] = t_train_s[src];
       }
       forward(net, acts, n);
-      // Mean squared error over the batch: d loss / d output = 2 (output - target) / n.
-      auto top = deltas[layers].leftCols(n);
-      top = acts[layers].leftCols(n) - batch_targets.leftCols(n);
-      squared_error_sum += static_cast<double>(top.squaredNorm());
-      top *= S(2) / static_cast<S>(n);
-      for (std::size_t l = layers; l-- > 0;) {
-        const auto delta = deltas[l + 1].leftCols(n);
-        grad_w[l].noalias() = delta * acts[l].leftCols(n).transpose();
-        grad_b[l] = delta.rowwise().sum();
-        if (l > 0) {
-          auto below = deltas[l].leftCols(n);
-          below.noalias() = net.weights[l].transpose() * delta;
-          // ReLU passes the gradient where its output was positive.
-          below.array() *= (acts[l].leftCols(n).array() > S(0)).template cast<S>();
-        }
-      }
+      squared_error_sum += backward(net, acts, deltas, batch_targets, n, grad);
       const S lr = static_cast<S>(learning_rate_at(options, step, total_steps));
-      const S bias1 = S(1) - std::pow(S(0.9), static_cast<S>(step + 1));
-      const S bias2 = S(1) - std::pow(S(0.999), static_cast<S>(step + 1));
+      const S bias1 = static_cast<S>(1 - std::pow(0.9, static_cast<double>(step + 1)));
+      const S bias2 = static_cast<S>(1 - std::pow(0.999, static_cast<double>(step + 1)));
       const S decay = static_cast<S>(options.l2_weight_decay);
       for (std::size_t l = 0; l < layers; ++l) {
-        adam_step<S>(net.weights[l], grad_w[l], adam_w[l].m, adam_w[l].v, lr, bias1, bias2, decay);
-        adam_step<S>(net.bias[l], grad_b[l], adam_b[l].m, adam_b[l].v, lr, bias1, bias2, S(0));
+        adam_step(net.weights[l], grad.weights[l], adam_m.weights[l], adam_v.weights[l], lr, bias1,
+                  bias2, decay);
+        adam_step(net.bias[l], grad.bias[l], adam_m.bias[l], adam_v.bias[l], lr, bias1, bias2,
+                  S(0));
       }
     }
     const double epoch_train_rmse =
@@ -348,22 +504,25 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
       throw MlpError("mlp: training diverged at epoch " + std::to_string(epoch + 1) +
                      "; lower learning_rate");
     }
-    double epoch_test_rmse = nan;
-    if (test_count > 0) {
-      const auto predicted = evaluate(net, z_test, eval_acts);
-      const Eigen::VectorXd err =
-          predicted.transpose().cast<double>() * y_scale + Eigen::VectorXd::Constant(test_count, y_mean) - y_test;
-      epoch_test_rmse = std::sqrt(err.squaredNorm() / static_cast<double>(test_count));
-    }
+    const double epoch_test_rmse = test_set_rmse(net, eval_acts, z_test_s);
     train_rmse.push_back(epoch_train_rmse);
     test_rmse.push_back(epoch_test_rmse);
     if (options.progress) options.progress(epoch + 1, epoch_train_rmse, epoch_test_rmse);
   }
 
+  Network<double> net_double;
+  for (std::size_t l = 0; l < layers; ++l) {
+    net_double.weights.push_back(net.weights[l].template cast<double>());
+    net_double.bias.push_back(net.bias[l].template cast<double>());
+  }
+  int polish_done = 0;
+  if (options.polish_iterations > 0) {
+    polish_done = polish_with_lbfgs(net_double, z_train, t_train, options.polish_iterations);
+  }
+
   std::vector<MlpLayer> model_layers;
   for (std::size_t l = 0; l < layers; ++l) {
-    model_layers.push_back({net.weights[l].template cast<double>(),
-                            net.bias[l].template cast<double>()});
+    model_layers.push_back({std::move(net_double.weights[l]), std::move(net_double.bias[l])});
   }
   Mlp model(input, y_mean, y_scale, std::move(model_layers));
 
@@ -372,12 +531,15 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
     report->test_rmse = std::move(test_rmse);
     report->train_samples = static_cast<int>(train_count);
     report->test_samples = static_cast<int>(test_count);
+    report->polish_iterations_done = polish_done;
     const Eigen::VectorXd train_error = model.predict(x_train) - y_train;
-    report->final_train_rmse = std::sqrt(train_error.squaredNorm() / static_cast<double>(train_count));
+    report->final_train_rmse =
+        std::sqrt(train_error.squaredNorm() / static_cast<double>(train_count));
     report->max_abs_train_error = train_error.cwiseAbs().maxCoeff();
     if (test_count > 0) {
       const Eigen::VectorXd test_error = model.predict(x_test) - y_test;
-      report->final_test_rmse = std::sqrt(test_error.squaredNorm() / static_cast<double>(test_count));
+      report->final_test_rmse =
+          std::sqrt(test_error.squaredNorm() / static_cast<double>(test_count));
       report->max_abs_test_error = test_error.cwiseAbs().maxCoeff();
     } else {
       report->final_test_rmse = report->max_abs_test_error = nan;

@@ -1,0 +1,288 @@
+// Calibration preprocessing, model files, baselines and estimators (fast checks; the accuracy
+// targets of the whole calibration are in test_targets.cpp).
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "pyrocam/baselines.h"
+#include "pyrocam/calibration.h"
+#include "pyrocam/estimators.h"
+#include "pyrocam/model.h"
+#include "pyrocam/simulator.h"
+#include "test_support.h"
+
+namespace pyrocam {
+namespace {
+
+using test::ScratchDir;
+
+class Campaign : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new ScratchDir("calib");
+    profile_ = new CameraProfile(load_profile_by_name("rgb-reference"));
+    Simulator camera(*profile_, UnitPerturbation{"typical", 4});
+    true_qe_ = new Eigen::MatrixXd(camera.system_qe());
+    CampaignSettings s;
+    s.temperatures_c = {700, 800, 900, 1000, 1100};
+    s.exposure_count = 30;
+    s.frames_per_setting = 2;
+    s.width = 48;
+    s.height = 48;
+    s.roi_area_px = 900;
+    write_furnace_campaign(dir_->path(), camera, s);
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    delete profile_;
+    delete true_qe_;
+  }
+  static ScratchDir* dir_;
+  static CameraProfile* profile_;
+  static Eigen::MatrixXd* true_qe_;
+};
+ScratchDir* Campaign::dir_ = nullptr;
+CameraProfile* Campaign::profile_ = nullptr;
+Eigen::MatrixXd* Campaign::true_qe_ = nullptr;
+
+TEST_F(Campaign, slopes_recover_the_true_signal_rates) {
+  const RateTable rt = extract_rates(Dataset::open(dir_->path()), *profile_);
+  ASSERT_EQ(rt.temperatures_c.size(), 5u);
+  const Eigen::MatrixXd r = rt.rates();
+  for (std::size_t t = 0; t < 5; ++t) {
+    const Eigen::VectorXd truth =
+        signal_rates(*profile_, *true_qe_, celsius_to_kelvin(rt.temperatures_c[t]));
+    for (int b = 0; b < 3; ++b) {
+      SCOPED_TRACE(std::to_string(rt.temperatures_c[t]) + " " + profile_->band_names[b]);
+      EXPECT_NEAR(r(t, b) / truth[b], 1.0, 0.01);
+      EXPECT_GT(rt.fits[t][b].r_squared, 0.999);
+      EXPECT_GE(rt.fits[t][b].points, 3);
+    }
+  }
+  // The sweep runs from dim to saturated at every temperature.
+  int saturated = 0, dim = 0;
+  for (const auto& st : rt.status)
+    for (PointStatus s : st)
+      saturated += s == PointStatus::kSaturated, dim += s == PointStatus::kDim;
+  EXPECT_GT(saturated, 20);
+  EXPECT_GT(dim, 20);
+}
+
+TEST_F(Campaign, saturation_is_judged_on_raw_values) {
+  // 235 raw with a 50 DN dark is only 185 DN net, yet above the 240 DN raw limit it is not:
+  // 245 raw is saturated even though net is 195.
+  EXPECT_EQ(classify_point(*profile_, 245, 195, 0, 1e-3), PointStatus::kSaturated);
+  EXPECT_EQ(classify_point(*profile_, 235, 185, 0, 1e-3), PointStatus::kUsed);
+  EXPECT_EQ(classify_point(*profile_, 235, 185, 0.01, 1e-3), PointStatus::kSaturated);
+  EXPECT_EQ(classify_point(*profile_, 58, 8, 0, 1e-3), PointStatus::kDim);
+}
+
+TEST_F(Campaign, rejects_a_profile_whose_mosaic_does_not_fit_the_images_n) {
+  const CameraProfile nir = load_profile_by_name("nir5x5-reference");
+  try {
+    extract_rates(Dataset::open(dir_->path()), nir);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not whole 5x5 mosaic periods"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST_F(Campaign, rejects_a_profile_of_another_bit_depth_n) {
+  CameraProfile p16 = *profile_;
+  p16.bit_depth = 12;
+  try {
+    extract_rates(Dataset::open(dir_->path()), p16);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("describes a 12-bit camera"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(CalibrationData, rejects_a_band_without_usable_points_n) {
+  ScratchDir dir("nousable");
+  Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"datasheet", 1});
+  CampaignSettings s;
+  s.temperatures_c = {700, 710};
+  s.exposure_count = 2;  // 100 and 126 us: everything is dim at 700 degC
+  s.frames_per_setting = 1;
+  s.width = s.height = 32;
+  s.roi_area_px = 300;
+  write_furnace_campaign(dir.path(), camera, s);
+  try {
+    extract_rates(Dataset::open(dir.path()), camera.profile());
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("band R has no temperature with 2 usable points"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(FitLine, recovers_slope_intercept_and_r_squared) {
+  const SlopeFit f = fit_line({100, 200, 400}, {12, 22, 42});
+  EXPECT_NEAR(f.rate_dn_per_s, 0.1 * 1e6, 1e-6);
+  EXPECT_NEAR(f.intercept_dn, 2, 1e-9);
+  EXPECT_NEAR(f.r_squared, 1, 1e-12);
+  EXPECT_TRUE(std::isnan(fit_line({100}, {12}).rate_dn_per_s));
+}
+
+// A model whose network is a tiny hand-made one: enough to test files and estimators that do
+// not depend on the network's accuracy.
+ThermalModel small_model(const CameraProfile& p) {
+  ThermalModel m;
+  m.camera = CameraModel{p, p.system_qe(), Eigen::VectorXd::Ones(p.band_count())};
+  m.datasheet_qe = p.system_qe();
+  m.qe_solver = "datasheet";
+  const int inputs = static_cast<int>(p.normalisation.numerators.size());
+  Standardizer st{Eigen::VectorXd::Zero(inputs), Eigen::VectorXd::Ones(inputs)};
+  MlpLayer l1{Eigen::MatrixXd::Constant(4, inputs, 0.1), Eigen::VectorXd::Constant(4, 0.2)};
+  MlpLayer l2{Eigen::MatrixXd::Constant(1, 4, 0.3), Eigen::VectorXd::Constant(1, 0.0)};
+  m.mlp = Mlp(st, 1500, 500, {l1, l2});
+  m.uncertainty.temperature_c = {500, 3500};
+  m.uncertainty.u_calibration_c = {2, 4};
+  m.uncertainty.u_emissivity_c = {1, 3};
+  m.provenance = {{"tool", "test"}};
+  return m;
+}
+
+TEST(ModelFile, round_trips) {
+  ScratchDir dir("model");
+  const ThermalModel m = small_model(load_profile_by_name("rgb-reference"));
+  save_model(m, dir / "m.json");
+  EXPECT_FALSE(std::filesystem::exists(dir / "m.json.partial"));
+  const ThermalModel back = load_model(dir / "m.json");
+  EXPECT_EQ(back.profile().name, "rgb-reference");
+  EXPECT_TRUE(back.camera.system_qe.isApprox(m.camera.system_qe, 1e-15));
+  EXPECT_TRUE(back.profile().system_qe().isApprox(m.profile().system_qe(), 1e-15));
+  const double x[2] = {0.7, 0.3};
+  EXPECT_EQ(back.mlp.predict(x), m.mlp.predict(x));
+  EXPECT_NEAR(back.uncertainty.systematic_u_c(2000), std::sqrt(3.0 * 3 + 2 * 2), 1e-12);
+  EXPECT_NO_THROW(check_model_layout(back, "rggb"));
+  EXPECT_THROW(check_model_layout(back, "5x5"), InputError);
+}
+
+class ModelFileDamage : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    save_model(small_model(load_profile_by_name("rgb-reference")), dir / "m.json");
+    std::ifstream in(dir / "m.json");
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  void expect_rejected(const std::string& damaged, const std::string& needle) {
+    test::write_text(dir / "bad.json", damaged);
+    try {
+      load_model(dir / "bad.json");
+      ADD_FAILURE() << "accepted: " << needle;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
+    }
+  }
+  ScratchDir dir{"damage"};
+  std::string text;
+};
+
+TEST_F(ModelFileDamage, rejects_a_truncated_file_n) {
+  expect_rejected(text.substr(0, text.size() / 2), "truncated or corrupt");
+}
+
+TEST_F(ModelFileDamage, rejects_an_edited_file_n) {
+  std::string edited = text;
+  const auto pos = edited.find("\"qe_solver\": \"datasheet\"");
+  ASSERT_NE(pos, std::string::npos);
+  edited.replace(pos, 24, "\"qe_solver\": \"datasheef\"");
+  expect_rejected(edited, "checksum mismatch");
+}
+
+TEST_F(ModelFileDamage, rejects_another_version_n) {
+  std::string edited = text;
+  const auto pos = edited.rfind("\"version\": 1");  // the file's, written last
+  ASSERT_NE(pos, std::string::npos);
+  edited.replace(pos, 12, "\"version\": 9");
+  expect_rejected(edited, "model format version 9");
+}
+
+TEST_F(ModelFileDamage, rejects_a_missing_file_n) {
+  EXPECT_THROW(load_model(dir / "none.json"), InputError);
+}
+
+TEST(Baselines, ohno_inverts_the_noise_free_locus) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  const CameraModel cam{p, p.system_qe(), Eigen::VectorXd::Ones(3)};
+  const OhnoEstimator ohno(make_locus(cam, 500, 3500, 1));
+  for (double t : {612.3, 1000.0, 1777.7, 2950.5})
+    EXPECT_NEAR(ohno.temperature_c(cam.rates(t) * 1e-3), t, 0.3) << t;
+  EXPECT_TRUE(std::isnan(ohno.temperature_c(Eigen::Vector3d(0, 0, 0))));
+}
+
+TEST(Baselines, two_colour_is_exact_for_narrow_bands_without_blue) {
+  // Monochromatic R (650 nm) and G (550 nm) under Wien's approximation: the formula is exact.
+  const double lr = 650e-9, lg = 550e-9;
+  auto wien = [](double l, double t_k) { return std::pow(l, -5) * std::exp(-kC2 / (l * t_k)); };
+  std::vector<Eigen::VectorXd> meas, sim;
+  std::vector<double> temps;
+  for (double t = 800; t <= 1400; t += 50) {
+    const double tk = celsius_to_kelvin(t);
+    meas.push_back(Eigen::Vector3d(wien(lr, tk), wien(lg, tk), 0));
+    sim.push_back(meas.back());
+    temps.push_back(t);
+  }
+  const TwoColourEstimator e = TwoColourEstimator::fit(meas, sim, temps, 0, 1, 2);
+  for (std::size_t i = 0; i < temps.size(); ++i)
+    EXPECT_NEAR(e.temperature_c(meas[i]), temps[i], 0.5);
+  EXPECT_NEAR(e.params().lambda_r_nm, 650, 2);
+  EXPECT_NEAR(e.params().lambda_g_nm, 550, 2);
+}
+
+TEST(Estimators, likelihood_fit_inverts_noise_free_signals_and_drops_saturated_bands) {
+  const ThermalModel m = small_model(load_profile_by_name("rgb-reference"));
+  const auto est = make_estimator(m, Method::kLikelihood);
+  for (double t : {700.0, 1234.5, 2000.0, 3000.0}) {
+    Eigen::VectorXd s = m.camera.rates(t);
+    s *= 150 / s.maxCoeff();  // an exposure that puts the brightest band at 150 DN
+    EXPECT_NEAR(est->temperature_c(s.data()), t, 0.5) << t;
+    // With two bands left the locus may reach the same ratio twice: a reading, if any, must
+    // be the right one.
+    Eigen::VectorXd sat = s;
+    Eigen::Index brightest;
+    sat.maxCoeff(&brightest);
+    sat[brightest] = INFINITY;
+    const double two_bands = est->temperature_c(sat.data());
+    if (std::isfinite(two_bands)) {
+      EXPECT_NEAR(two_bands, t, 1.0) << t << " without its brightest band";
+    }
+  }
+  // 25 bands: one saturated band leaves plenty.
+  const ThermalModel nir = small_model(load_profile_by_name("nir5x5-reference"));
+  const auto nir_est = make_estimator(nir, Method::kLikelihood);
+  for (double t : {1100.0, 2345.6}) {
+    Eigen::VectorXd s = nir.camera.rates(t);
+    s *= 150 / s.maxCoeff();
+    s[12] = INFINITY;
+    EXPECT_NEAR(nir_est->temperature_c(s.data()), t, 0.5) << t;
+  }
+  const double dim[3] = {5, 5, 5};
+  EXPECT_TRUE(std::isnan(est->temperature_c(dim)));
+}
+
+TEST(Estimators, mlp_method_needs_every_band_valid) {
+  const ThermalModel m = small_model(load_profile_by_name("rgb-reference"));
+  const auto est = make_estimator(m, Method::kMlp);
+  const double ok[3] = {100, 120, 60}, saturated[3] = {INFINITY, 120, 60}, dim[3] = {100, 12, 60},
+               nan[3] = {100, NAN, 60};
+  EXPECT_TRUE(std::isfinite(est->temperature_c(ok)));
+  EXPECT_TRUE(std::isnan(est->temperature_c(saturated)));
+  EXPECT_TRUE(std::isnan(est->temperature_c(dim)));
+  EXPECT_TRUE(std::isnan(est->temperature_c(nan)));
+}
+
+TEST(Estimators, lut_method_rejects_a_multispectral_model_n) {
+  const ThermalModel m = small_model(load_profile_by_name("nir5x5-reference"));
+  EXPECT_THROW(make_estimator(m, Method::kLut), InputError);
+  EXPECT_THROW(parse_method("neural"), InputError);
+}
+
+}  // namespace
+}  // namespace pyrocam
