@@ -1,0 +1,1 @@
+#include "element_support.h"
