@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <filesystem>
 
 namespace pyrocam::gst {
 
@@ -106,6 +107,14 @@ cv::Mat MappedImage::plane(int index, int width, int height) const {
 int structure_int(const GstStructure* s, const char* field, int fallback) {
   int v;
   return gst_structure_get_int(s, field, &v) ? v : fallback;
+}
+
+ErrorKind profile_error_kind(const std::string& name) {
+  const bool looks_like_file = name.find('/') != std::string::npos ||
+                               (name.size() > 5 && name.compare(name.size() - 5, 5, ".json") == 0);
+  std::error_code ec;
+  return looks_like_file && !std::filesystem::exists(name, ec) ? ErrorKind::kNotFound
+                                                               : ErrorKind::kRead;
 }
 
 void post_error(GstElement* element, ErrorKind kind, const std::string& user,

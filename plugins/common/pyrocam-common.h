@@ -71,6 +71,10 @@ enum class ErrorKind {
   kNegotiation,  // CORE NEGOTIATION: caps that cannot work
   kNumeric,      // LIBRARY FAILED: numeric or other library failure
 };
+/* How a camera profile that failed to load is reported: NOT_FOUND when it names a file (a path
+ * or a .json name) that is not there, else READ. */
+ErrorKind profile_error_kind(const std::string& name_or_path);
+
 void post_error(GstElement* element, ErrorKind kind, const std::string& user,
                 const std::string& debug, const char* function, int line);
 #define PYROCAM_POST_ERROR(element, kind, user, debug) \

@@ -105,8 +105,6 @@ struct State {
   std::string pattern;
   cv::Mat file_dark;  // CV_32F from `location`
   std::string file_dark_path;
-  cv::Mat level_dark;  // CV_32F constant
-  double level_value = std::numeric_limits<double>::quiet_NaN();
   cv::Mat captured_dark;
   pyrocam::DarkAccumulator accumulator;
   bool capturing = false;
@@ -253,23 +251,11 @@ static gboolean gst_dark_sub_transform_size(GstBaseTransform* trans, GstPadDirec
   return TRUE;
 }
 
-/* The dark frame for the next output, or nullptr when none fits (error posted). */
-static const cv::Mat* choose_dark(GstDarkSub* self, const Settings& settings) {
-  State& st = *self->state;
+/* The dark frame for the next output: a captured or file dark, or nullptr for the constant
+ * level (or none: see the caller). */
+static const cv::Mat* frame_dark(const State& st) {
   if (!st.captured_dark.empty()) return &st.captured_dark;
   if (!st.file_dark.empty()) return &st.file_dark;
-  if (settings.dark_level >= 0) {
-    if (st.level_dark.cols != st.format.width || st.level_dark.rows != st.format.height ||
-        st.level_value != settings.dark_level) {
-      st.level_dark =
-          pyrocam::dark_from_level(st.format.width, st.format.height, settings.dark_level);
-      st.level_value = settings.dark_level;
-    }
-    return &st.level_dark;
-  }
-  PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
-                     "No dark frame: set location, dark-level or emit capture-dark",
-                     "location is empty, dark-level < 0 and no dark was captured");
   return nullptr;
 }
 
@@ -422,15 +408,19 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
       }
       return;
     }
-    const cv::Mat* dark = choose_dark(self, settings);
-    if (!dark) {
-      ret = GST_FLOW_ERROR;
-      return;
-    }
     const double saturation = settings.saturation_level >= 0
                                   ? settings.saturation_level
                                   : pyrocam::default_saturation_level(st.bit_depth);
-    pyrocam::subtract_dark(raw.image(), *dark, saturation, out.image());
+    if (const cv::Mat* dark = frame_dark(st)) {
+      pyrocam::subtract_dark(raw.image(), *dark, saturation, out.image());
+    } else if (settings.dark_level >= 0) {
+      pyrocam::subtract_dark_level(raw.image(), settings.dark_level, saturation, out.image());
+    } else {
+      PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
+                         "No dark frame: set location, dark-level or emit capture-dark",
+                         "location is empty, dark-level < 0 and no dark was captured");
+      ret = GST_FLOW_ERROR;
+    }
   });
   return ok ? ret : GST_FLOW_ERROR;
 }

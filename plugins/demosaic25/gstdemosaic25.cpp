@@ -241,9 +241,10 @@ static gboolean gst_demosaic25_start(GstBaseTransform* trans) {
   st = State();
   if (settings.profile.empty()) return TRUE;
   pyrocam::CameraProfile profile;
-  const bool ok = PYROCAM_GUARDED(
-      self, pg::ErrorKind::kRead, "Could not load camera profile " + settings.profile,
-      [&] { profile = pyrocam::load_profile_by_name(settings.profile); });
+  const bool ok = PYROCAM_GUARDED(self, pg::profile_error_kind(settings.profile),
+                                  "Could not load camera profile " + settings.profile, [&] {
+                                    profile = pyrocam::load_profile_by_name(settings.profile);
+                                  });
   if (!ok) return FALSE;
   if (profile.mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot) {
     if (profile.mosaic.period_width != 5 || profile.mosaic.period_height != 5) {

@@ -233,7 +233,8 @@ static gboolean gst_pyrocam_src_start(GstBaseSrc* src) {
   const Settings settings = copy_settings(self);
   std::unique_ptr<pyrocam::Simulator> camera;
   const bool ok = PYROCAM_GUARDED(
-      self, pg::ErrorKind::kRead, "Could not set up the simulated camera " + settings.profile, [&] {
+      self, pg::profile_error_kind(settings.profile),
+      "Could not set up the simulated camera " + settings.profile, [&] {
         const pyrocam::CameraProfile profile = pyrocam::load_profile_by_name(settings.profile);
         const auto unit = pyrocam::UnitPerturbation::parse(
             settings.unit == GST_PYROCAM_SRC_UNIT_TYPICAL ? "typical" : "datasheet", settings.seed);

@@ -153,6 +153,7 @@ TEST(Demosaic25Errors, rejects_a_missing_profile) {
       "demosaic25 profile=/nonexistent/camera.json ! fakesink");
   ASSERT_TRUE(r.error);
   EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_NOT_FOUND);
   EXPECT_NE(r.message.find("/nonexistent/camera.json"), std::string::npos) << r.message;
 }
 

@@ -1,6 +1,7 @@
 // pyrocamsrc: caps per profile, negotiated sizes, timestamps, determinism, live property
 // changes, bus errors, and the smoke pipeline through darksub and demosaic25.
 #include "element_support.h"
+#include "test_support.h"
 
 namespace pyrocam::test {
 namespace {
@@ -78,6 +79,7 @@ TEST_F(PyrocamSrc, equal_seeds_give_equal_frames) {
 TEST_F(PyrocamSrc, exposure_change_while_playing_brightens_frames) {
   h = gst_harness_new_parse("pyrocamsrc scene=plate exposure=20 unit=datasheet");
   gst_harness_set_sink_caps_str(h, "video/x-bayer,width=40,height=20");
+  gst_harness_set_blocking_push_mode(h);  // the source waits for each pull
   gst_harness_play(h);
   auto centre_mean = [&] {
     GstBuffer* b = gst_harness_pull(h);
@@ -92,7 +94,7 @@ TEST_F(PyrocamSrc, exposure_change_while_playing_brightens_frames) {
   gst_harness_set(h, "pyrocamsrc", "exposure", 200.0, nullptr);
   // Frames rendered before the change may still be queued in the harness.
   double bright = 0;
-  for (int i = 0; i < 30 && bright < dim + 20; ++i) bright = centre_mean();
+  for (int i = 0; i < 5 && bright < dim + 20; ++i) bright = centre_mean();
   EXPECT_GT(bright, dim + 20);
 }
 
@@ -121,7 +123,20 @@ TEST(PyrocamSrcErrors, rejects_a_missing_profile) {
   const auto r = run_pipeline("pyrocamsrc profile=/nonexistent/camera.json ! fakesink");
   ASSERT_TRUE(r.error);
   EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_NOT_FOUND);
   EXPECT_NE(r.message.find("/nonexistent/camera.json"), std::string::npos) << r.message;
+}
+
+TEST(PyrocamSrcErrors, rejects_a_corrupt_profile) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  ScratchDir dir("pyrocamsrc-profile");
+  write_text(dir / "camera.json", "{ \"format\": \"pyrocam-camera-profile\", ");
+  const auto r =
+      run_pipeline("pyrocamsrc profile=" + (dir / "camera.json").string() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_READ);
+  EXPECT_NE(r.message.find("camera.json"), std::string::npos) << r.message;
 }
 
 TEST(PyrocamSrcErrors, rejects_a_size_that_is_not_whole_macro_pixels) {
