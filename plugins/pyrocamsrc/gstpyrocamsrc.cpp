@@ -17,7 +17,8 @@
  * 2500 degC; the plate and the filament glow at #GstPyrocamSrc:temperature. Emissivities are
  * those of the calibration tool's scenes (plate 0.7, filament 0.4, melt pool 0.35). With
  * #GstPyrocamSrc:exposure 0 the exposure puts the brightest band 150 DN above the dark level at
- * the scene's nominal (plate, filament) or hottest (melt pool, 2500 degC) temperature.
+ * the scene's nominal temperature (plate, filament) or at 2000 degC (melt pool, as the
+ * calibration tool's scene sequences: the hottest frames saturate, the coolest are dim).
  *
  * ## Example launch line
  * |[
@@ -66,7 +67,7 @@ constexpr guint64 DEFAULT_SEED = 1;
 constexpr gboolean DEFAULT_IS_LIVE = FALSE;
 constexpr int DEFAULT_WIDTH = 320, DEFAULT_HEIGHT = 240, DEFAULT_FPS = 30;
 constexpr int kMeltPoolFrames = 100;
-constexpr double kMeltPoolHottestC = 2500.0;
+constexpr double kMeltPoolExposureC = 2000.0;  // as pyrocam-calib's scene sequences
 constexpr double kTargetDn = 150.0;
 
 struct Settings {
@@ -287,7 +288,7 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
       const int index = static_cast<int>(st.frame % kMeltPoolFrames);
       pool = pyrocam::melt_pool_scene(st.width, st.height, index, kMeltPoolFrames);
       map = &pool;
-      nominal_c = kMeltPoolHottestC;
+      nominal_c = kMeltPoolExposureC;
     } else {
       if (st.scene_map.empty() || st.scene_kind != settings.scene ||
           st.scene_temperature != settings.temperature_c) {
@@ -455,7 +456,8 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
       gobject_class, PROP_EXPOSURE,
       g_param_spec_double("exposure", "Exposure",
                           "Exposure time in microseconds (0..10000000); 0: automatic, the "
-                          "brightest band 150 DN above dark at the scene's nominal temperature",
+                          "brightest band 150 DN above dark at the scene's nominal temperature "
+                          "(melt pool: 2000 degC)",
                           0.0, 1e7, DEFAULT_EXPOSURE, playing));
   g_object_class_install_property(
       gobject_class, PROP_TEMPERATURE,
