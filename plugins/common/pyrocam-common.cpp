@@ -104,6 +104,18 @@ cv::Mat MappedImage::plane(int index, int width, int height) const {
                                                                 static_cast<std::size_t>(height));
 }
 
+void ensure_buffer_pool(GstQuery* query, gsize size) {
+  if (size == 0 || gst_query_get_n_allocation_pools(query) > 0) return;
+  GstCaps* caps = nullptr;
+  gst_query_parse_allocation(query, &caps, nullptr);
+  GstBufferPool* pool = gst_buffer_pool_new();
+  GstStructure* config = gst_buffer_pool_get_config(pool);
+  gst_buffer_pool_config_set_params(config, caps, static_cast<guint>(size), 2, 0);
+  if (gst_buffer_pool_set_config(pool, config))
+    gst_query_add_allocation_pool(query, pool, static_cast<guint>(size), 2, 0);
+  gst_object_unref(pool);
+}
+
 int structure_int(const GstStructure* s, const char* field, int fallback) {
   int v;
   return gst_structure_get_int(s, field, &v) ? v : fallback;

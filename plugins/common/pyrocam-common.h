@@ -58,6 +58,11 @@ class MappedImage {
   cv::Mat image_;
 };
 
+/* For GstBaseTransform::decide_allocation: when downstream offers no buffer pool, adds one of
+ * `size`-byte buffers, so that large frames are not allocated (and page-faulted) anew each
+ * time. */
+void ensure_buffer_pool(GstQuery* query, gsize size);
+
 /* Integer field of a structure when fixed, else `fallback`. */
 int structure_int(const GstStructure* s, const char* field, int fallback);
 

@@ -316,6 +316,20 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
   return check_dark_size(self);
 }
 
+static gboolean gst_dark_sub_decide_allocation(GstBaseTransform* trans, GstQuery* query) {
+  GstCaps* caps = nullptr;
+  gst_query_parse_allocation(query, &caps, nullptr);
+  gsize size = 0;
+  if (caps) {
+    const GstStructure* s = gst_caps_get_structure(caps, 0);
+    size = static_cast<gsize>(pg::structure_int(s, "width", 0)) *
+           static_cast<gsize>(pg::structure_int(s, "height", 0)) *
+           static_cast<gsize>(pg::structure_int(s, "bands", 1)) * sizeof(float);
+  }
+  pg::ensure_buffer_pool(query, size);
+  return GST_BASE_TRANSFORM_CLASS(gst_dark_sub_parent_class)->decide_allocation(trans, query);
+}
+
 static gboolean gst_dark_sub_start(GstBaseTransform* trans) {
   GstDarkSub* self = GST_DARK_SUB(trans);
   const Settings settings = copy_settings(self);
@@ -583,6 +597,7 @@ static void gst_dark_sub_class_init(GstDarkSubClass* klass) {
   trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_dark_sub_transform_caps);
   trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_dark_sub_transform_size);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_dark_sub_set_caps);
+  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(gst_dark_sub_decide_allocation);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_dark_sub_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_dark_sub_stop);
   trans_class->sink_event = GST_DEBUG_FUNCPTR(gst_dark_sub_sink_event);

@@ -234,6 +234,20 @@ static gboolean gst_demosaic25_set_caps(GstBaseTransform* trans, GstCaps* incaps
   return TRUE;
 }
 
+static gboolean gst_demosaic25_decide_allocation(GstBaseTransform* trans, GstQuery* query) {
+  GstCaps* caps = nullptr;
+  gst_query_parse_allocation(query, &caps, nullptr);
+  gsize size = 0;
+  if (caps) {
+    const GstStructure* s = gst_caps_get_structure(caps, 0);
+    size = static_cast<gsize>(pg::structure_int(s, "width", 0)) *
+           static_cast<gsize>(pg::structure_int(s, "height", 0)) *
+           static_cast<gsize>(pg::structure_int(s, "bands", 1)) * sizeof(float);
+  }
+  pg::ensure_buffer_pool(query, size);
+  return GST_BASE_TRANSFORM_CLASS(gst_demosaic25_parent_class)->decide_allocation(trans, query);
+}
+
 static gboolean gst_demosaic25_start(GstBaseTransform* trans) {
   GstDemosaic25* self = GST_DEMOSAIC25(trans);
   const Settings settings = copy_settings(self);
@@ -380,6 +394,7 @@ static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
   trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_transform_caps);
   trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_demosaic25_transform_size);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_set_caps);
+  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(gst_demosaic25_decide_allocation);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_demosaic25_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_demosaic25_stop);
   trans_class->transform = GST_DEBUG_FUNCPTR(gst_demosaic25_transform);
