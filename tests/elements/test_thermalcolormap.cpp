@@ -129,6 +129,24 @@ TEST_F(ThermalColormap, empty_fixed_range_warns_and_keeps_working_n) {
   EXPECT_EQ(run(kCodes).size(), kCodes.size() * 4);
 }
 
+TEST_F(ThermalColormap, survives_flush_and_eos) {
+  start("thermalcolormap range-mode=fixed", nullptr);
+  EXPECT_EQ(run(kCodes).size(), kCodes.size() * 4);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_start()));
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_stop(TRUE)));
+  GstSegment segment;
+  gst_segment_init(&segment, GST_FORMAT_TIME);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_segment(&segment)));
+  EXPECT_EQ(run(kCodes), library(kCodes, ColormapSettings{}));
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_eos()));
+  bool eos = false;
+  while (GstEvent* ev = gst_harness_try_pull_event(h)) {
+    eos |= GST_EVENT_TYPE(ev) == GST_EVENT_EOS;
+    gst_event_unref(ev);
+  }
+  EXPECT_TRUE(eos);
+}
+
 TEST(ThermalColormapPipeline, overlays_on_a_camera_image_with_compositor) {
   REQUIRE_ELEMENT("thermalcolormap");
   const auto r = run_pipeline(
