@@ -46,14 +46,78 @@ void bin_cells(const cv::Mat& in, const MosaicLayout& layout, std::vector<cv::Ma
 // How a band is obtained at a pixel of a given parity.
 enum class Op { kSelf, kHorizontal, kVertical, kDiagonal, kCross };
 
+template <Op kOp>
+inline float eval(const float* up, const float* mid, const float* down, int x) {
+  switch (kOp) {
+    case Op::kSelf:
+      return mid[x];
+    case Op::kHorizontal:
+      return 0.5f * (mid[x - 1] + mid[x + 1]);
+    case Op::kVertical:
+      return 0.5f * (up[x] + down[x]);
+    case Op::kDiagonal:
+      return 0.25f * ((up[x - 1] + up[x + 1]) + (down[x - 1] + down[x + 1]));
+    case Op::kCross:
+      return 0.25f * ((up[x] + down[x]) + (mid[x - 1] + mid[x + 1]));
+  }
+  return 0.f;
+}
+
+// One output row of one band: even columns by kEven, odd ones by kOdd, in one contiguous pass.
+template <Op kEven, Op kOdd>
+void bilinear_row(const float* up, const float* mid, const float* down, float* o, int width) {
+  int x = 0;
+  for (; x + 1 < width; x += 2) {
+    o[x] = eval<kEven>(up, mid, down, x);
+    o[x + 1] = eval<kOdd>(up, mid, down, x + 1);
+  }
+  if (x < width) o[x] = eval<kEven>(up, mid, down, x);
+}
+
+using RowFn = void (*)(const float*, const float*, const float*, float*, int);
+
+template <Op kEven>
+RowFn row_fn(Op odd) {
+  switch (odd) {
+    case Op::kSelf:
+      return bilinear_row<kEven, Op::kSelf>;
+    case Op::kHorizontal:
+      return bilinear_row<kEven, Op::kHorizontal>;
+    case Op::kVertical:
+      return bilinear_row<kEven, Op::kVertical>;
+    case Op::kDiagonal:
+      return bilinear_row<kEven, Op::kDiagonal>;
+    case Op::kCross:
+      return bilinear_row<kEven, Op::kCross>;
+  }
+  return nullptr;
+}
+
+RowFn row_fn(Op even, Op odd) {
+  switch (even) {
+    case Op::kSelf:
+      return row_fn<Op::kSelf>(odd);
+    case Op::kHorizontal:
+      return row_fn<Op::kHorizontal>(odd);
+    case Op::kVertical:
+      return row_fn<Op::kVertical>(odd);
+    case Op::kDiagonal:
+      return row_fn<Op::kDiagonal>(odd);
+    case Op::kCross:
+      return row_fn<Op::kCross>(odd);
+  }
+  return nullptr;
+}
+
 // Bilinear Bayer interpolation over a padded copy (1 pixel mirrored border) so that the inner
-// loops need no bounds checks.
+// loops need no bounds checks. The operation of each band, row parity and column parity is
+// fixed by the pattern and chosen once, outside the loops.
 class BayerBilinear {
  public:
   explicit BayerBilinear(const MosaicLayout& layout) {
     for (int b = 0; b < 3; ++b)
       for (int py = 0; py < 2; ++py)
-        for (int px = 0; px < 2; ++px) ops_[b][py][px] = op_for(layout, b, px, py);
+        rows_[b][py] = row_fn(op_for(layout, b, 0, py), op_for(layout, b, 1, py));
   }
 
   void run(const cv::Mat& padded, std::vector<cv::Mat>& planes, int y0, int y1) const {
@@ -62,30 +126,8 @@ class BayerBilinear {
       const float* up = padded.ptr<float>(y) + 1;
       const float* mid = padded.ptr<float>(y + 1) + 1;
       const float* down = padded.ptr<float>(y + 2) + 1;
-      for (int b = 0; b < 3; ++b) {
-        float* o = planes[static_cast<std::size_t>(b)].ptr<float>(y);
-        for (int px = 0; px < 2; ++px) {
-          switch (ops_[b][y & 1][px]) {
-            case Op::kSelf:
-              for (int x = px; x < width; x += 2) o[x] = mid[x];
-              break;
-            case Op::kHorizontal:
-              for (int x = px; x < width; x += 2) o[x] = 0.5f * (mid[x - 1] + mid[x + 1]);
-              break;
-            case Op::kVertical:
-              for (int x = px; x < width; x += 2) o[x] = 0.5f * (up[x] + down[x]);
-              break;
-            case Op::kDiagonal:
-              for (int x = px; x < width; x += 2)
-                o[x] = 0.25f * ((up[x - 1] + up[x + 1]) + (down[x - 1] + down[x + 1]));
-              break;
-            case Op::kCross:
-              for (int x = px; x < width; x += 2)
-                o[x] = 0.25f * ((up[x] + down[x]) + (mid[x - 1] + mid[x + 1]));
-              break;
-          }
-        }
-      }
+      for (int b = 0; b < 3; ++b)
+        rows_[b][y & 1](up, mid, down, planes[static_cast<std::size_t>(b)].ptr<float>(y), width);
     }
   }
 
@@ -98,7 +140,7 @@ class BayerBilinear {
     return Op::kDiagonal;
   }
 
-  std::array<std::array<std::array<Op, 2>, 2>, 3> ops_{};
+  std::array<std::array<RowFn, 2>, 3> rows_{};
 };
 
 }  // namespace

@@ -44,6 +44,25 @@ TEST(DarkSub, sixteen_bit_frames_and_caller_buffers) {
   EXPECT_EQ(buffer[2], 3462.f);  // 3522 < 3523 = round(220/255 * 4095)
 }
 
+TEST(DarkSub, constant_level_and_large_frames_match_the_dark_frame_path) {
+  cv::Mat raw(600, 700, CV_16U);
+  cv::randu(raw, 0, 4096);
+  cv::Mat dark = dark_from_level(700, 600, 64.5), a, b;
+  subtract_dark(raw, dark, 3533, a);
+  subtract_dark_level(raw, 64.5, 3533, b);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(cv::countNonZero(a != b), 0);  // +INF == +INF
+  for (int y : {0, 299, 599})
+    for (int x : {0, 350, 699}) {
+      const float v = raw.at<std::uint16_t>(y, x);
+      if (v >= 3533) {
+        EXPECT_TRUE(std::isinf(a.at<float>(y, x)));
+      } else {
+        EXPECT_EQ(a.at<float>(y, x), v - 64.5f);
+      }
+    }
+}
+
 TEST(DarkSub, rejects_a_dark_of_another_size_naming_both) {
   cv::Mat raw(4, 6, CV_8U, cv::Scalar(10)), out;
   try {

@@ -19,6 +19,10 @@ double default_saturation_level(int bit_depth);
 // InputError on a size or type mismatch naming both sizes.
 void subtract_dark(const cv::Mat& raw, const cv::Mat& dark, double saturation_level, cv::Mat& out);
 
+// The same with a constant dark level (no dark frame to read: less memory traffic).
+void subtract_dark_level(const cv::Mat& raw, double level_dn, double saturation_level,
+                         cv::Mat& out);
+
 // Converts a dark image read from a file (CV_8U/CV_16U) or a constant level to the CV_32F dark
 // subtract_dark takes.
 cv::Mat dark_from_image(const cv::Mat& image);

@@ -1,0 +1,80 @@
+/* The media types the pyrocam elements exchange, defined once. Every field is documented here;
+ * elements use only these macros for their pad templates and caps.
+ *
+ * Raw mosaics (camera input, what pyrocamsrc produces and darksub consumes):
+ *   video/x-bayer, format=(string){rggb,bggr,grbg,gbrg}: 8-bit Bayer as aravissrc gives it; the
+ *     format names the colour of the top-left 2x2 cell. Row stride: GST_ROUND_UP_4 (width), as
+ *     bayer2rgb expects; a buffer of exactly width*height bytes (no padding) is accepted too.
+ *   video/x-raw, format=(string){GRAY8,GRAY16_LE}: a mosaic carried as gray video (16-bit Bayer
+ *     has no caps in GStreamer 1.22); strides as GstVideoInfo gives them. The mosaic layout then
+ *     comes from the receiving element's `pattern` property and, for GRAY16_LE, the number of
+ *     significant bits from its `bit-depth` property.
+ *
+ * video/x-pyrocam-mosaic: the mosaic after dark subtraction (darksub's output).
+ *   format    (string) F32LE: one little-endian IEEE float32 per sensor pixel, in DN above the
+ *             dark level. +INFINITY marks a saturated pixel (raw value >= the saturation level
+ *             before subtraction); NaN a pixel without a reading (e.g. while a dark is captured).
+ *   width     (int) sensor pixels per row; height (int) rows. Row stride is width * 4 bytes, no
+ *             padding; a buffer holds exactly width * height * 4 bytes.
+ *   framerate (fraction) as the camera's.
+ *   pattern   (string) rggb, bggr, grbg, gbrg (2x2 Bayer, named by the top-left cell) or 5x5
+ *             (snapshot mosaic, band index = row * 5 + column in the cell unless a camera profile
+ *             says otherwise).
+ *   bit-depth (int) significant bits of the raw samples (8 for 8-bit input, e.g. 12 for a 12-bit
+ *             camera carried as GRAY16_LE); the DN scale of the values.
+ *
+ * video/x-pyrocam-bands: planar band images (demosaic25's output, ratiotemp's input).
+ *   format    (string) F32LE: float32 DN as in x-pyrocam-mosaic, with the same marks: a value
+ *             computed from any saturated pixel is +INFINITY, from any NaN pixel NaN.
+ *   bands     (int) number of planes: 3 for Bayer (R, G, B), 25 for 5x5 (band index = row * 5 +
+ *             column in the 5x5 cell, or the camera profile's band map).
+ *   width, height (int) size of each plane (the output size: full sensor size for bilinear
+ *             Bayer, sensor size / period for binned Bayer and 5x5).
+ *   framerate (fraction) as the input's.
+ *   layout    (string) bayer or 5x5: the mosaic the bands come from.
+ *   Memory: plane after plane (band 0 first), each width * height floats, rows without padding;
+ *   a buffer holds exactly bands * width * height * 4 bytes.
+ *
+ * Temperatures: video/x-raw, format=(string)GRAY16_LE, one value per pixel in units of 0.1 K
+ *   (e.g. 14732 = 1473.2 K = 1200.05 degC); 0 means "no reading" (saturated, too dim, invalid).
+ */
+#pragma once
+
+#include <gst/gst.h>
+
+#define PYROCAM_MOSAIC_MEDIA_TYPE "video/x-pyrocam-mosaic"
+#define PYROCAM_BANDS_MEDIA_TYPE "video/x-pyrocam-bands"
+
+#define PYROCAM_BAYER_FORMATS "{ rggb, bggr, grbg, gbrg }"
+#define PYROCAM_PATTERNS "{ rggb, bggr, grbg, gbrg, 5x5 }"
+#define PYROCAM_LAYOUTS "{ bayer, 5x5 }"
+#define PYROCAM_SNAPSHOT_PATTERN_NAME "5x5"
+
+#define PYROCAM_SIZE_RANGE "width = (int) [ 1, max ], height = (int) [ 1, max ]"
+#define PYROCAM_FRAMERATE_RANGE "framerate = (fraction) [ 0/1, max ]"
+
+/* Raw mosaics: 8-bit Bayer, or gray video carrying any mosaic. */
+#define PYROCAM_RAW_BAYER_CAPS                                                      \
+  "video/x-bayer, format = (string) " PYROCAM_BAYER_FORMATS ", " PYROCAM_SIZE_RANGE \
+  ", " PYROCAM_FRAMERATE_RANGE
+#define PYROCAM_RAW_GRAY_CAPS                                                \
+  "video/x-raw, format = (string) { GRAY8, GRAY16_LE }, " PYROCAM_SIZE_RANGE \
+  ", " PYROCAM_FRAMERATE_RANGE
+#define PYROCAM_RAW_CAPS PYROCAM_RAW_BAYER_CAPS "; " PYROCAM_RAW_GRAY_CAPS
+
+#define PYROCAM_MOSAIC_CAPS                                                                       \
+  PYROCAM_MOSAIC_MEDIA_TYPE ", format = (string) F32LE, " PYROCAM_SIZE_RANGE                      \
+                            ", " PYROCAM_FRAMERATE_RANGE ", pattern = (string) " PYROCAM_PATTERNS \
+                            ", bit-depth = (int) [ 1, 16 ]"
+
+#define PYROCAM_BANDS_CAPS                                                   \
+  PYROCAM_BANDS_MEDIA_TYPE                                                   \
+  ", format = (string) F32LE, bands = (int) [ 1, max ], " PYROCAM_SIZE_RANGE \
+  ", " PYROCAM_FRAMERATE_RANGE ", layout = (string) " PYROCAM_LAYOUTS
+
+#define PYROCAM_TEMPERATURE_CAPS \
+  "video/x-raw, format = (string) GRAY16_LE, " PYROCAM_SIZE_RANGE ", " PYROCAM_FRAMERATE_RANGE
+
+/* Temperature code: kelvin = code / PYROCAM_TEMPERATURE_CODES_PER_KELVIN; 0 = no reading. */
+#define PYROCAM_TEMPERATURE_CODES_PER_KELVIN 10
+#define PYROCAM_TEMPERATURE_NO_READING 0

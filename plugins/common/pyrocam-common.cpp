@@ -1,0 +1,163 @@
+#include "pyrocam-common.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+
+namespace pyrocam::gst {
+
+bool parse_raw_caps(GstCaps* caps, RawFormat* out) {
+  if (!caps || gst_caps_get_size(caps) < 1) return false;
+  const GstStructure* s = gst_caps_get_structure(caps, 0);
+  RawFormat f;
+  if (gst_structure_has_name(s, "video/x-bayer")) {
+    const char* format = gst_structure_get_string(s, "format");
+    if (!format || !gst_structure_get_int(s, "width", &f.width) ||
+        !gst_structure_get_int(s, "height", &f.height))
+      return false;
+    f.bayer_caps = true;
+    f.pattern = format;
+    f.bytes_per_sample = 1;
+    gst_video_info_init(&f.info);
+  } else if (gst_structure_has_name(s, "video/x-raw")) {
+    if (!gst_video_info_from_caps(&f.info, caps)) return false;
+    const GstVideoFormat vf = GST_VIDEO_INFO_FORMAT(&f.info);
+    if (vf != GST_VIDEO_FORMAT_GRAY8 && vf != GST_VIDEO_FORMAT_GRAY16_LE) return false;
+    f.bytes_per_sample = vf == GST_VIDEO_FORMAT_GRAY8 ? 1 : 2;
+    f.width = GST_VIDEO_INFO_WIDTH(&f.info);
+    f.height = GST_VIDEO_INFO_HEIGHT(&f.info);
+  } else {
+    return false;
+  }
+  if (f.width < 1 || f.height < 1) return false;
+  *out = f;
+  return true;
+}
+
+gsize raw_frame_size(const RawFormat& f) {
+  if (!f.bayer_caps) return GST_VIDEO_INFO_SIZE(&f.info);
+  return static_cast<gsize>(GST_ROUND_UP_4(f.width)) * static_cast<gsize>(f.height);
+}
+
+MosaicLayout layout_for_pattern(const std::string& pattern) {
+  if (pattern == PYROCAM_SNAPSHOT_PATTERN_NAME) {
+    std::vector<int> map(25);
+    for (int i = 0; i < 25; ++i) map[static_cast<std::size_t>(i)] = i;
+    return MosaicLayout::snapshot(5, 5, map);
+  }
+  return MosaicLayout::bayer(pattern);
+}
+
+void MappedImage::reset() {
+  if (video_frame_) gst_video_frame_unmap(&frame_);
+  if (buffer_) gst_buffer_unmap(buffer_, &map_);
+  video_frame_ = false;
+  buffer_ = nullptr;
+  image_ = cv::Mat();
+}
+
+void MappedImage::map_raw(GstBuffer* buffer, const RawFormat& f) {
+  reset();
+  const int type = f.bytes_per_sample == 1 ? CV_8U : CV_16U;
+  if (!f.bayer_caps) {
+    if (!gst_video_frame_map(&frame_, const_cast<GstVideoInfo*>(&f.info), buffer, GST_MAP_READ))
+      throw InputError("cannot map a " + std::to_string(gst_buffer_get_size(buffer)) +
+                       "-byte buffer as a " + std::to_string(f.width) + "x" +
+                       std::to_string(f.height) + " gray frame");
+    video_frame_ = true;
+    image_ = cv::Mat(f.height, f.width, type, GST_VIDEO_FRAME_PLANE_DATA(&frame_, 0),
+                     static_cast<std::size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(&frame_, 0)));
+    return;
+  }
+  if (!gst_buffer_map(buffer, &map_, GST_MAP_READ)) throw InputError("cannot map the buffer");
+  buffer_ = buffer;
+  const gsize tight = static_cast<gsize>(f.width) * static_cast<gsize>(f.height);
+  std::size_t stride;
+  if (map_.size >= raw_frame_size(f))
+    stride = static_cast<std::size_t>(GST_ROUND_UP_4(f.width));
+  else if (map_.size == tight)  // cameras that do not pad rows
+    stride = static_cast<std::size_t>(f.width);
+  else
+    throw InputError("a " + std::to_string(map_.size) + "-byte buffer is too small for a " +
+                     std::to_string(f.width) + "x" + std::to_string(f.height) + " Bayer frame");
+  image_ = cv::Mat(f.height, f.width, type, map_.data, stride);
+}
+
+void MappedImage::map_float(GstBuffer* buffer, int width, int height, int planes,
+                            GstMapFlags flags) {
+  reset();
+  if (!gst_buffer_map(buffer, &map_, flags)) throw InputError("cannot map the buffer");
+  buffer_ = buffer;
+  const gsize needed = static_cast<gsize>(width) * static_cast<gsize>(height) *
+                       static_cast<gsize>(planes) * sizeof(float);
+  if (map_.size < needed)
+    throw InputError("a " + std::to_string(map_.size) + "-byte buffer is too small for " +
+                     std::to_string(planes) + " float plane(s) of " + std::to_string(width) + "x" +
+                     std::to_string(height));
+  image_ = cv::Mat(height * planes, width, CV_32F, map_.data);
+}
+
+cv::Mat MappedImage::plane(int index, int width, int height) const {
+  return cv::Mat(height, width, CV_32F,
+                 const_cast<float*>(image_.ptr<float>(0)) + static_cast<std::size_t>(index) *
+                                                                static_cast<std::size_t>(width) *
+                                                                static_cast<std::size_t>(height));
+}
+
+void ensure_buffer_pool(GstQuery* query, gsize size) {
+  if (size == 0 || gst_query_get_n_allocation_pools(query) > 0) return;
+  GstCaps* caps = nullptr;
+  gst_query_parse_allocation(query, &caps, nullptr);
+  GstBufferPool* pool = gst_buffer_pool_new();
+  GstStructure* config = gst_buffer_pool_get_config(pool);
+  gst_buffer_pool_config_set_params(config, caps, static_cast<guint>(size), 2, 0);
+  if (gst_buffer_pool_set_config(pool, config))
+    gst_query_add_allocation_pool(query, pool, static_cast<guint>(size), 2, 0);
+  gst_object_unref(pool);
+}
+
+int structure_int(const GstStructure* s, const char* field, int fallback) {
+  int v;
+  return gst_structure_get_int(s, field, &v) ? v : fallback;
+}
+
+ErrorKind profile_error_kind(const std::string& name) {
+  const bool looks_like_file = name.find('/') != std::string::npos ||
+                               (name.size() > 5 && name.compare(name.size() - 5, 5, ".json") == 0);
+  std::error_code ec;
+  return looks_like_file && !std::filesystem::exists(name, ec) ? ErrorKind::kNotFound
+                                                               : ErrorKind::kRead;
+}
+
+void post_error(GstElement* element, ErrorKind kind, const std::string& user,
+                const std::string& debug, const char* function, int line) {
+  GQuark domain = GST_RESOURCE_ERROR;
+  gint code = GST_RESOURCE_ERROR_FAILED;
+  switch (kind) {
+    case ErrorKind::kNotFound:
+      code = GST_RESOURCE_ERROR_NOT_FOUND;
+      break;
+    case ErrorKind::kRead:
+      code = GST_RESOURCE_ERROR_READ;
+      break;
+    case ErrorKind::kSettings:
+      code = GST_RESOURCE_ERROR_SETTINGS;
+      break;
+    case ErrorKind::kFormat:
+      domain = GST_STREAM_ERROR;
+      code = GST_STREAM_ERROR_FORMAT;
+      break;
+    case ErrorKind::kNegotiation:
+      domain = GST_CORE_ERROR;
+      code = GST_CORE_ERROR_NEGOTIATION;
+      break;
+    case ErrorKind::kNumeric:
+      domain = GST_LIBRARY_ERROR;
+      code = GST_LIBRARY_ERROR_FAILED;
+      break;
+  }
+  gst_element_message_full(element, GST_MESSAGE_ERROR, domain, code, g_strdup(user.c_str()),
+                           g_strdup(debug.c_str()), __FILE__, function, line);
+}
+
+}  // namespace pyrocam::gst

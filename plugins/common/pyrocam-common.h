@@ -1,0 +1,112 @@
+/* Helpers shared by the pyrocam elements: buffer <-> library image views, caps field access,
+ * and the mapping of library exceptions to bus errors. */
+#pragma once
+
+#include <gst/gst.h>
+#include <gst/video/video.h>
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <utility>
+
+#include "pyrocam-caps.h"
+#include "pyrocam/mosaic.h"
+#include "pyrocam/spectrum.h"
+
+namespace pyrocam::gst {
+
+/* What a raw mosaic caps structure says (video/x-bayer or video/x-raw GRAY8/GRAY16_LE). */
+struct RawFormat {
+  bool bayer_caps = false;  // video/x-bayer: pattern from the caps
+  std::string pattern;      // lower case: rggb.. from x-bayer caps; empty for gray video
+  int bytes_per_sample = 1;
+  int width = 0, height = 0;
+  GstVideoInfo info;  // valid for video/x-raw only
+};
+/* Parses fixed raw mosaic caps; false if they are not such caps. */
+bool parse_raw_caps(GstCaps* caps, RawFormat* out);
+/* Bytes of one raw frame as the caps describe it (with the row padding). */
+gsize raw_frame_size(const RawFormat& format);
+
+/* The layout of a pattern name: a Bayer pattern or "5x5" (identity band map). Throws
+ * InputError for anything else. */
+MosaicLayout layout_for_pattern(const std::string& pattern);
+
+/* A mapped buffer seen as an image; unmaps when it goes. */
+class MappedImage {
+ public:
+  MappedImage() = default;
+  ~MappedImage() { reset(); }
+  MappedImage(const MappedImage&) = delete;
+  MappedImage& operator=(const MappedImage&) = delete;
+  /* Raw mosaic buffer (read). Throws InputError if the buffer is too small. */
+  void map_raw(GstBuffer* buffer, const RawFormat& format);
+  /* Tightly packed float32 image of width x height x planes (read or write). Throws InputError
+   * if the buffer is too small. */
+  void map_float(GstBuffer* buffer, int width, int height, int planes, GstMapFlags flags);
+  const cv::Mat& image() const { return image_; }
+  cv::Mat& image() { return image_; }
+  /* Plane `index` of a planar float image mapped with map_float. */
+  cv::Mat plane(int index, int width, int height) const;
+  void reset();
+
+ private:
+  GstBuffer* buffer_ = nullptr;
+  GstMapInfo map_{};
+  GstVideoFrame frame_{};
+  bool video_frame_ = false;
+  cv::Mat image_;
+};
+
+/* For GstBaseTransform::decide_allocation: when downstream offers no buffer pool, adds one of
+ * `size`-byte buffers, so that large frames are not allocated (and page-faulted) anew each
+ * time. */
+void ensure_buffer_pool(GstQuery* query, gsize size);
+
+/* Integer field of a structure when fixed, else `fallback`. */
+int structure_int(const GstStructure* s, const char* field, int fallback);
+
+/* How a failure is reported on the bus (STYLE.md: errors carry a domain, a user message and a
+ * debug message). */
+enum class ErrorKind {
+  kNotFound,     // RESOURCE NOT_FOUND: a file that is not there
+  kRead,         // RESOURCE READ: a file that cannot be read or parsed
+  kSettings,     // RESOURCE SETTINGS: a bad property value
+  kFormat,       // STREAM FORMAT: shape, size or band mismatch in the data
+  kNegotiation,  // CORE NEGOTIATION: caps that cannot work
+  kNumeric,      // LIBRARY FAILED: numeric or other library failure
+};
+/* How a camera profile that failed to load is reported: NOT_FOUND when it names a file (a path
+ * or a .json name) that is not there, else READ. */
+ErrorKind profile_error_kind(const std::string& name_or_path);
+
+void post_error(GstElement* element, ErrorKind kind, const std::string& user,
+                const std::string& debug, const char* function, int line);
+#define PYROCAM_POST_ERROR(element, kind, user, debug) \
+  ::pyrocam::gst::post_error(GST_ELEMENT(element), kind, user, debug, GST_FUNCTION, __LINE__)
+
+/* Runs fn, which may throw; no exception leaves. An InputError is posted as `input_kind` with
+ * `what` as the user message's start, any other exception as LIBRARY FAILED. Returns whether fn
+ * completed. */
+template <typename Fn>
+bool guarded(GstElement* element, ErrorKind input_kind, const std::string& what, Fn&& fn,
+             const char* function = "", int line = 0) {
+  try {
+    std::forward<Fn>(fn)();
+    return true;
+  } catch (const pyrocam::InputError& e) {
+    post_error(element, input_kind, what + ": " + e.what(),
+               std::string("InputError in ") + function, function, line);
+  } catch (const cv::Exception& e) {
+    post_error(element, ErrorKind::kNumeric, what + ": OpenCV failed",
+               std::string("cv::Exception in ") + function + ": " + e.what(), function, line);
+  } catch (const std::exception& e) {
+    post_error(element, ErrorKind::kNumeric, what + ": " + e.what(),
+               std::string("std::exception in ") + function, function, line);
+  }
+  return false;
+}
+#define PYROCAM_GUARDED(element, kind, what, ...) \
+  ::pyrocam::gst::guarded(GST_ELEMENT(element), kind, what, __VA_ARGS__, GST_FUNCTION, __LINE__)
+
+}  // namespace pyrocam::gst

@@ -1,0 +1,25 @@
+/* darksub: subtracts a dark frame from raw mosaics and marks saturated pixels. */
+#pragma once
+
+#include <gst/base/gstbasetransform.h>
+#include <gst/gst.h>
+
+G_BEGIN_DECLS
+
+#define GST_TYPE_DARK_SUB (gst_dark_sub_get_type())
+G_DECLARE_FINAL_TYPE(GstDarkSub, gst_dark_sub, GST, DARK_SUB, GstBaseTransform)
+
+/* The mosaic layout of gray-video input (video/x-bayer caps carry their own). */
+typedef enum {
+  GST_DARK_SUB_PATTERN_RGGB,
+  GST_DARK_SUB_PATTERN_BGGR,
+  GST_DARK_SUB_PATTERN_GRBG,
+  GST_DARK_SUB_PATTERN_GBRG,
+  GST_DARK_SUB_PATTERN_5X5,
+} GstDarkSubPattern;
+#define GST_TYPE_DARK_SUB_PATTERN (gst_dark_sub_pattern_get_type())
+GType gst_dark_sub_pattern_get_type(void);
+
+GST_ELEMENT_REGISTER_DECLARE(darksub);
+
+G_END_DECLS

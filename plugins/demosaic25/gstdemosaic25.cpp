@@ -1,0 +1,408 @@
+/**
+ * SECTION:element-demosaic25
+ * @title: demosaic25
+ *
+ * Turns a dark-subtracted mosaic (video/x-pyrocam-mosaic) into planar float32 band images
+ * (video/x-pyrocam-bands, see pyrocam-caps.h), keeping the saturation (+INF) and no-reading
+ * (NaN) marks: a band value computed from any saturated pixel is +INF, from any NaN pixel NaN.
+ *
+ * - 2x2 Bayer mosaics give 3 bands R, G, B. #GstDemosaic25:method bilinear keeps the full
+ *   resolution: each missing band at a pixel is the mean of the nearest pixels of that band
+ *   (mirrored at the borders), as the paper's colour camera gives a reading for every pixel.
+ *   bin2x2 halves the resolution: R, the mean of both G, and B of each 2x2 cell, every value
+ *   measured rather than interpolated.
+ * - 5x5 snapshot mosaics give 25 bands, one reading per 5x5 macro-pixel (output width/5 x
+ *   height/5, as the paper); band index = row * 5 + column in the cell, or the band map of the
+ *   camera profile named by #GstDemosaic25:profile. The method does not apply.
+ *
+ * ## Example launch line
+ * |[
+ * gst-launch-1.0 pyrocamsrc ! darksub dark-level=50 ! demosaic25 method=bin2x2 ! fakesink
+ * ]|
+ */
+#include "gstdemosaic25.h"
+
+#include <string>
+#include <vector>
+
+#include "pyrocam-caps.h"
+#include "pyrocam-common.h"
+#include "pyrocam/demosaic.h"
+#include "pyrocam/profile.h"
+
+GST_DEBUG_CATEGORY_STATIC(gst_demosaic25_debug);
+#define GST_CAT_DEFAULT gst_demosaic25_debug
+
+namespace pg = pyrocam::gst;
+
+namespace {
+
+enum { PROP_0, PROP_METHOD, PROP_PROFILE };
+
+constexpr GstDemosaic25Method DEFAULT_METHOD = GST_DEMOSAIC25_METHOD_BILINEAR;
+
+struct Settings {
+  GstDemosaic25Method method = DEFAULT_METHOD;
+  std::string profile;
+};
+
+struct State {
+  bool have_snapshot_layout = false;  // from the profile, loaded in start()
+  pyrocam::MosaicLayout snapshot_layout;
+  bool configured = false;
+  pyrocam::MosaicLayout layout;
+  pyrocam::DemosaicMethod method = pyrocam::DemosaicMethod::kBilinear;
+  int in_width = 0, in_height = 0, out_width = 0, out_height = 0, bands = 0;
+  std::vector<cv::Mat> planes;  // headers onto the output buffer, reused
+};
+
+pyrocam::DemosaicMethod to_library(GstDemosaic25Method m) {
+  return m == GST_DEMOSAIC25_METHOD_BIN2X2 ? pyrocam::DemosaicMethod::kBinCells
+                                           : pyrocam::DemosaicMethod::kBilinear;
+}
+
+bool is_snapshot(const char* pattern) {
+  return pattern && g_str_equal(pattern, PYROCAM_SNAPSHOT_PATTERN_NAME);
+}
+
+}  // namespace
+
+struct _GstDemosaic25 {
+  GstBaseTransform parent;
+  Settings* settings;
+  State* state;
+};
+
+G_DEFINE_TYPE(GstDemosaic25, gst_demosaic25, GST_TYPE_BASE_TRANSFORM);
+GST_ELEMENT_REGISTER_DEFINE(demosaic25, "demosaic25", GST_RANK_NONE, GST_TYPE_DEMOSAIC25);
+
+GType gst_demosaic25_method_get_type(void) {
+  static GType type = 0;
+  static const GEnumValue values[] = {
+      {GST_DEMOSAIC25_METHOD_BILINEAR, "Bilinear interpolation, full resolution", "bilinear"},
+      {GST_DEMOSAIC25_METHOD_BIN2X2, "2x2 binning (R, mean G, B per cell), half resolution",
+       "bin2x2"},
+      {0, nullptr, nullptr},
+  };
+  if (g_once_init_enter(&type)) {
+    GType t = g_enum_register_static("GstDemosaic25Method", values);
+    g_once_init_leave(&type, t);
+  }
+  return type;
+}
+
+static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
+    "sink", GST_PAD_SINK, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_MOSAIC_CAPS));
+static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
+    "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_BANDS_CAPS));
+
+static Settings copy_settings(GstDemosaic25* self) {
+  GST_OBJECT_LOCK(self);
+  Settings s = *self->settings;
+  GST_OBJECT_UNLOCK(self);
+  return s;
+}
+
+/* A dimension scaled by 1/divisor (forward) or by divisor (backward, any remainder allowed). */
+static void scale_dimension(const GstStructure* from, GstStructure* to, const char* field,
+                            int divisor, bool forward) {
+  const GValue* v = gst_structure_get_value(from, field);
+  if (v && G_VALUE_HOLDS_INT(v)) {
+    const int n = g_value_get_int(v);
+    if (divisor == 1)
+      gst_structure_set(to, field, G_TYPE_INT, n, nullptr);
+    else if (forward)
+      gst_structure_set(to, field, G_TYPE_INT, std::max(1, n / divisor), nullptr);
+    else if (n <= G_MAXINT / divisor - 1)
+      gst_structure_set(to, field, GST_TYPE_INT_RANGE, n * divisor, n * divisor + divisor - 1,
+                        nullptr);
+    else
+      gst_structure_set(to, field, GST_TYPE_INT_RANGE, 1, G_MAXINT, nullptr);
+  } else {
+    gst_structure_set(to, field, GST_TYPE_INT_RANGE, 1, G_MAXINT, nullptr);
+  }
+}
+
+static void copy_framerate(const GstStructure* from, GstStructure* to) {
+  const GValue* v = gst_structure_get_value(from, "framerate");
+  if (v) gst_structure_set_value(to, "framerate", v);
+}
+
+static GstCaps* gst_demosaic25_transform_caps(GstBaseTransform* trans, GstPadDirection direction,
+                                              GstCaps* caps, GstCaps* filter) {
+  GstDemosaic25* self = GST_DEMOSAIC25(trans);
+  const Settings settings = copy_settings(self);
+  const int bayer_divisor = settings.method == GST_DEMOSAIC25_METHOD_BIN2X2 ? 2 : 1;
+  const bool forward = direction == GST_PAD_SINK;
+  GstCaps* result = gst_caps_new_empty();
+  for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
+    const GstStructure* s = gst_caps_get_structure(caps, i);
+    /* Which layouts this structure allows. */
+    bool bayer = true, snapshot = true;
+    const char* fixed = gst_structure_get_string(s, forward ? "pattern" : "layout");
+    if (fixed) {
+      snapshot = is_snapshot(fixed);
+      bayer = !snapshot;
+    }
+    for (int pass = 0; pass < 2; ++pass) {
+      const bool snap = pass == 1;
+      if ((snap && !snapshot) || (!snap && !bayer)) continue;
+      const int divisor = snap ? 5 : bayer_divisor;
+      GstStructure* out;
+      if (forward) {
+        out = gst_structure_new(PYROCAM_BANDS_MEDIA_TYPE, "format", G_TYPE_STRING, "F32LE", "bands",
+                                G_TYPE_INT, snap ? 25 : 3, "layout", G_TYPE_STRING,
+                                snap ? PYROCAM_SNAPSHOT_PATTERN_NAME : "bayer", nullptr);
+      } else {
+        out = gst_structure_new(PYROCAM_MOSAIC_MEDIA_TYPE, "format", G_TYPE_STRING, "F32LE",
+                                "bit-depth", GST_TYPE_INT_RANGE, 1, 16, nullptr);
+        if (snap) {
+          gst_structure_set(out, "pattern", G_TYPE_STRING, PYROCAM_SNAPSHOT_PATTERN_NAME, nullptr);
+        } else {
+          GValue formats = G_VALUE_INIT;
+          g_value_init(&formats, GST_TYPE_LIST);
+          gst_value_deserialize(&formats, PYROCAM_BAYER_FORMATS);
+          gst_structure_take_value(out, "pattern", &formats);
+        }
+      }
+      scale_dimension(s, out, "width", divisor, forward);
+      scale_dimension(s, out, "height", divisor, forward);
+      copy_framerate(s, out);
+      result = gst_caps_merge_structure(result, out);
+    }
+  }
+  if (filter) {
+    GstCaps* tmp = gst_caps_intersect_full(filter, result, GST_CAPS_INTERSECT_FIRST);
+    gst_caps_unref(result);
+    result = tmp;
+  }
+  GST_DEBUG_OBJECT(self, "transformed %" GST_PTR_FORMAT " to %" GST_PTR_FORMAT, caps, result);
+  return result;
+}
+
+static gboolean gst_demosaic25_transform_size(GstBaseTransform* /*trans*/,
+                                              GstPadDirection direction, GstCaps* /*caps*/,
+                                              gsize /*size*/, GstCaps* othercaps,
+                                              gsize* othersize) {
+  const GstStructure* s = gst_caps_get_structure(othercaps, 0);
+  const gsize w = static_cast<gsize>(pg::structure_int(s, "width", 0));
+  const gsize h = static_cast<gsize>(pg::structure_int(s, "height", 0));
+  const gsize planes =
+      direction == GST_PAD_SINK ? static_cast<gsize>(pg::structure_int(s, "bands", 0)) : 1;
+  *othersize = w * h * planes * sizeof(float);
+  return *othersize > 0;
+}
+
+static gboolean gst_demosaic25_set_caps(GstBaseTransform* trans, GstCaps* incaps,
+                                        GstCaps* outcaps) {
+  GstDemosaic25* self = GST_DEMOSAIC25(trans);
+  const Settings settings = copy_settings(self);
+  State& st = *self->state;
+  st.configured = false;
+  const GstStructure* in = gst_caps_get_structure(incaps, 0);
+  const GstStructure* out = gst_caps_get_structure(outcaps, 0);
+  const char* pattern = gst_structure_get_string(in, "pattern");
+  st.in_width = pg::structure_int(in, "width", 0);
+  st.in_height = pg::structure_int(in, "height", 0);
+  st.out_width = pg::structure_int(out, "width", 0);
+  st.out_height = pg::structure_int(out, "height", 0);
+  st.bands = pg::structure_int(out, "bands", 0);
+  st.method = to_library(settings.method);
+  const bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kNegotiation, "Unsupported mosaic", [&] {
+    if (!pattern) throw pyrocam::InputError("the input caps name no pattern");
+    if (is_snapshot(pattern) && st.have_snapshot_layout)
+      st.layout = st.snapshot_layout;
+    else
+      st.layout = pg::layout_for_pattern(pattern);
+    const cv::Size size =
+        pyrocam::demosaic_output_size(st.layout, st.method, {st.in_width, st.in_height});
+    if (size.width != st.out_width || size.height != st.out_height ||
+        st.bands != st.layout.band_count())
+      throw pyrocam::InputError("a " + std::to_string(st.in_width) + "x" +
+                                std::to_string(st.in_height) + " " + pattern + " mosaic gives " +
+                                std::to_string(st.layout.band_count()) + " bands of " +
+                                std::to_string(size.width) + "x" + std::to_string(size.height) +
+                                ", not " + std::to_string(st.bands) + " of " +
+                                std::to_string(st.out_width) + "x" + std::to_string(st.out_height));
+    if (size.width < 1 || size.height < 1)
+      throw pyrocam::InputError("the mosaic is smaller than one period");
+  });
+  if (!ok) return FALSE;
+  st.configured = true;
+  GST_INFO_OBJECT(self, "%dx%d %s -> %d bands of %dx%d", st.in_width, st.in_height, pattern,
+                  st.bands, st.out_width, st.out_height);
+  return TRUE;
+}
+
+static gboolean gst_demosaic25_decide_allocation(GstBaseTransform* trans, GstQuery* query) {
+  GstCaps* caps = nullptr;
+  gst_query_parse_allocation(query, &caps, nullptr);
+  gsize size = 0;
+  if (caps) {
+    const GstStructure* s = gst_caps_get_structure(caps, 0);
+    size = static_cast<gsize>(pg::structure_int(s, "width", 0)) *
+           static_cast<gsize>(pg::structure_int(s, "height", 0)) *
+           static_cast<gsize>(pg::structure_int(s, "bands", 1)) * sizeof(float);
+  }
+  pg::ensure_buffer_pool(query, size);
+  return GST_BASE_TRANSFORM_CLASS(gst_demosaic25_parent_class)->decide_allocation(trans, query);
+}
+
+static gboolean gst_demosaic25_start(GstBaseTransform* trans) {
+  GstDemosaic25* self = GST_DEMOSAIC25(trans);
+  const Settings settings = copy_settings(self);
+  State& st = *self->state;
+  st = State();
+  if (settings.profile.empty()) return TRUE;
+  pyrocam::CameraProfile profile;
+  const bool ok = PYROCAM_GUARDED(self, pg::profile_error_kind(settings.profile),
+                                  "Could not load camera profile " + settings.profile, [&] {
+                                    profile = pyrocam::load_profile_by_name(settings.profile);
+                                  });
+  if (!ok) return FALSE;
+  if (profile.mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot) {
+    if (profile.mosaic.period_width != 5 || profile.mosaic.period_height != 5) {
+      PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
+                         "Camera profile " + settings.profile + " has a " + profile.mosaic.pattern +
+                             " mosaic; only 5x5 is supported",
+                         "snapshot mosaic period is not 5x5");
+      return FALSE;
+    }
+    st.snapshot_layout = profile.mosaic;
+    st.have_snapshot_layout = true;
+  }
+  GST_INFO_OBJECT(self, "camera profile %s (%s)", profile.name.c_str(),
+                  profile.mosaic.pattern.c_str());
+  return TRUE;
+}
+
+static gboolean gst_demosaic25_stop(GstBaseTransform* trans) {
+  *GST_DEMOSAIC25(trans)->state = State();
+  return TRUE;
+}
+
+static GstFlowReturn gst_demosaic25_transform(GstBaseTransform* trans, GstBuffer* inbuf,
+                                              GstBuffer* outbuf) {
+  GstDemosaic25* self = GST_DEMOSAIC25(trans);
+  State& st = *self->state;
+  if (!st.configured) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation, "No format negotiated",
+                       "transform called before set_caps");
+    return GST_FLOW_NOT_NEGOTIATED;
+  }
+  const bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not demosaic", [&] {
+    pg::MappedImage in, out;
+    in.map_float(inbuf, st.in_width, st.in_height, 1, GST_MAP_READ);
+    out.map_float(outbuf, st.out_width, st.out_height, st.bands, GST_MAP_WRITE);
+    st.planes.resize(static_cast<std::size_t>(st.bands));
+    for (int b = 0; b < st.bands; ++b)
+      st.planes[static_cast<std::size_t>(b)] = out.plane(b, st.out_width, st.out_height);
+    pyrocam::demosaic(in.image(), st.layout, st.method, st.planes);
+  });
+  return ok ? GST_FLOW_OK : GST_FLOW_ERROR;
+}
+
+static void gst_demosaic25_set_property(GObject* object, guint prop_id, const GValue* value,
+                                        GParamSpec* pspec) {
+  GstDemosaic25* self = GST_DEMOSAIC25(object);
+  GST_OBJECT_LOCK(self);
+  Settings& s = *self->settings;
+  const bool running = GST_STATE(self) > GST_STATE_READY;
+  switch (prop_id) {
+    case PROP_METHOD:
+      if (running)
+        GST_WARNING_OBJECT(self, "method can only change in NULL or READY");
+      else
+        s.method = static_cast<GstDemosaic25Method>(g_value_get_enum(value));
+      break;
+    case PROP_PROFILE:
+      if (running) {
+        GST_WARNING_OBJECT(self, "profile can only change in NULL or READY");
+      } else {
+        const char* v = g_value_get_string(value);
+        s.profile = v ? v : "";
+      }
+      break;
+    default:
+      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+      break;
+  }
+  GST_OBJECT_UNLOCK(self);
+}
+
+static void gst_demosaic25_get_property(GObject* object, guint prop_id, GValue* value,
+                                        GParamSpec* pspec) {
+  GstDemosaic25* self = GST_DEMOSAIC25(object);
+  GST_OBJECT_LOCK(self);
+  const Settings& s = *self->settings;
+  switch (prop_id) {
+    case PROP_METHOD:
+      g_value_set_enum(value, s.method);
+      break;
+    case PROP_PROFILE:
+      g_value_set_string(value, s.profile.empty() ? nullptr : s.profile.c_str());
+      break;
+    default:
+      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+      break;
+  }
+  GST_OBJECT_UNLOCK(self);
+}
+
+static void gst_demosaic25_finalize(GObject* object) {
+  GstDemosaic25* self = GST_DEMOSAIC25(object);
+  delete self->settings;
+  delete self->state;
+  G_OBJECT_CLASS(gst_demosaic25_parent_class)->finalize(object);
+}
+
+static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
+  GObjectClass* gobject_class = G_OBJECT_CLASS(klass);
+  GstElementClass* element_class = GST_ELEMENT_CLASS(klass);
+  GstBaseTransformClass* trans_class = GST_BASE_TRANSFORM_CLASS(klass);
+
+  GST_DEBUG_CATEGORY_INIT(gst_demosaic25_debug, "demosaic25", 0, "pyrocam demosaicking");
+
+  gobject_class->set_property = gst_demosaic25_set_property;
+  gobject_class->get_property = gst_demosaic25_get_property;
+  gobject_class->finalize = gst_demosaic25_finalize;
+
+  const auto ready = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                              GST_PARAM_MUTABLE_READY);
+  g_object_class_install_property(
+      gobject_class, PROP_METHOD,
+      g_param_spec_enum("method", "Bayer method",
+                        "How 2x2 Bayer mosaics become R, G, B planes: bilinear (full "
+                        "resolution, interpolated) or bin2x2 (half resolution, R, mean G, B of "
+                        "each cell); 5x5 mosaics always give one reading per macro-pixel",
+                        GST_TYPE_DEMOSAIC25_METHOD, DEFAULT_METHOD, ready));
+  g_object_class_install_property(
+      gobject_class, PROP_PROFILE,
+      g_param_spec_string("profile", "Camera profile",
+                          "Camera profile (shipped name such as nir5x5-reference, or a path to "
+                          "its JSON file) whose 5x5 band map orders the output bands; empty: "
+                          "band index = row * 5 + column",
+                          nullptr, ready));
+
+  gst_element_class_set_static_metadata(
+      element_class, "Mosaic to band planes", "Filter/Video",
+      "Demosaics dark-subtracted Bayer or 5x5 snapshot mosaics into float32 band planes",
+      "pyrocam developers");
+  gst_element_class_add_static_pad_template(element_class, &sink_template);
+  gst_element_class_add_static_pad_template(element_class, &src_template);
+
+  trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_transform_caps);
+  trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_demosaic25_transform_size);
+  trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_set_caps);
+  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(gst_demosaic25_decide_allocation);
+  trans_class->start = GST_DEBUG_FUNCPTR(gst_demosaic25_start);
+  trans_class->stop = GST_DEBUG_FUNCPTR(gst_demosaic25_stop);
+  trans_class->transform = GST_DEBUG_FUNCPTR(gst_demosaic25_transform);
+
+  gst_type_mark_as_plugin_api(GST_TYPE_DEMOSAIC25_METHOD, static_cast<GstPluginAPIFlags>(0));
+}
+
+static void gst_demosaic25_init(GstDemosaic25* self) {
+  self->settings = new Settings();
+  self->state = new State();
+}

@@ -1,0 +1,20 @@
+/* The pyrocam plugin: registers the elements, nothing more. */
+#include <gst/gst.h>
+
+#include "darksub/gstdarksub.h"
+#include "demosaic25/gstdemosaic25.h"
+#include "pyrocamsrc/gstpyrocamsrc.h"
+#include "thermalcolormap/gstthermalcolormap.h"
+
+static gboolean plugin_init(GstPlugin* plugin) {
+  gboolean ok = FALSE;
+  ok |= GST_ELEMENT_REGISTER(pyrocamsrc, plugin);
+  ok |= GST_ELEMENT_REGISTER(darksub, plugin);
+  ok |= GST_ELEMENT_REGISTER(demosaic25, plugin);
+  ok |= GST_ELEMENT_REGISTER(thermalcolormap, plugin);
+  return ok;
+}
+
+GST_PLUGIN_DEFINE(GST_VERSION_MAJOR, GST_VERSION_MINOR, pyrocam,
+                  "Calibrated thermal imaging with colour and snapshot-mosaic cameras", plugin_init,
+                  PYROCAM_PLUGIN_VERSION, "MIT/X11", "pyrocam", PYROCAM_ORIGIN)

@@ -1,0 +1,246 @@
+// darksub: caps of both raw media types, values against the library, saturation marks, dark
+// capture, live property changes, flush/EOS, and bus errors for bad dark frames.
+#include <cmath>
+#include <limits>
+
+#include "element_support.h"
+#include "pyrocam/darksub.h"
+#include "pyrocam/image_io.h"
+#include "test_support.h"
+
+namespace pyrocam::test {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+class DarkSub : public ::testing::Test {
+ protected:
+  void SetUp() override { REQUIRE_ELEMENT("darksub"); }
+  void TearDown() override {
+    if (h) gst_harness_teardown(h);
+  }
+  GstHarness* h = nullptr;
+};
+
+// A 6x4 8-bit frame: a ramp with one saturated and one just-below pixel.
+std::vector<std::uint8_t> frame6x4() {
+  std::vector<std::uint8_t> v(24);
+  for (int i = 0; i < 24; ++i) v[i] = static_cast<std::uint8_t>(60 + 5 * i);
+  v[7] = 220;  // saturated at the default level 220 of 8 bit
+  v[8] = 219;
+  return v;
+}
+
+// Row-padded copy (GStreamer's 4-byte row alignment).
+std::vector<std::uint8_t> padded(const std::vector<std::uint8_t>& v, int w, int h, int stride) {
+  std::vector<std::uint8_t> out(static_cast<std::size_t>(stride * h), 0);
+  for (int y = 0; y < h; ++y)
+    std::copy(v.begin() + y * w, v.begin() + (y + 1) * w, out.begin() + y * stride);
+  return out;
+}
+
+std::vector<float> expected(const std::vector<std::uint8_t>& raw, int w, int h, double dark,
+                            double saturation) {
+  cv::Mat in(h, w, CV_8U, const_cast<std::uint8_t*>(raw.data())), out;
+  subtract_dark(in, dark_from_level(w, h, dark), saturation, out);
+  return std::vector<float>(out.begin<float>(), out.end<float>());
+}
+
+TEST_F(DarkSub, bayer_caps_give_mosaic_caps_and_library_values) {
+  h = gst_harness_new_parse("darksub dark-level=50");
+  gst_harness_set_src_caps_str(h, "video/x-bayer,format=grbg,width=6,height=4,framerate=30/1");
+  const auto raw = frame6x4();
+  ASSERT_EQ(gst_harness_push(h, buffer_from(padded(raw, 6, 4, 8))), GST_FLOW_OK);
+  GstBuffer* out = gst_harness_try_pull(h);
+  ASSERT_NE(out, nullptr);
+  EXPECT_EQ(values_of<float>(out), expected(raw, 6, 4, 50, 220));
+  EXPECT_EQ(values_of<float>(out)[7], kInf);
+  EXPECT_EQ(values_of<float>(out)[8], 169.f);
+  gst_buffer_unref(out);
+  const std::string caps = sink_caps(h);
+  EXPECT_NE(caps.find("video/x-pyrocam-mosaic"), std::string::npos) << caps;
+  EXPECT_NE(caps.find("pattern=(string)grbg"), std::string::npos) << caps;
+  EXPECT_NE(caps.find("bit-depth=(int)8"), std::string::npos) << caps;
+  EXPECT_NE(caps.find("format=(string)F32LE"), std::string::npos) << caps;
+  // Cameras that send rows without padding are read too.
+  ASSERT_EQ(gst_harness_push(h, buffer_from(raw)), GST_FLOW_OK);
+  out = gst_harness_try_pull(h);
+  ASSERT_NE(out, nullptr);
+  EXPECT_EQ(values_of<float>(out), expected(raw, 6, 4, 50, 220));
+  gst_buffer_unref(out);
+}
+
+TEST_F(DarkSub, gray8_caps_use_the_pattern_property) {
+  h = gst_harness_new_parse("darksub dark-level=50 pattern=5x5");
+  gst_harness_set_src_caps_str(h, "video/x-raw,format=GRAY8,width=10,height=5,framerate=30/1");
+  std::vector<std::uint8_t> raw(50);
+  for (int i = 0; i < 50; ++i) raw[i] = static_cast<std::uint8_t>(50 + 4 * i);
+  ASSERT_EQ(gst_harness_push(h, buffer_from(padded(raw, 10, 5, 12))), GST_FLOW_OK);
+  GstBuffer* out = gst_harness_try_pull(h);
+  ASSERT_NE(out, nullptr);
+  EXPECT_EQ(values_of<float>(out), expected(raw, 10, 5, 50, 220));
+  gst_buffer_unref(out);
+  const std::string caps = sink_caps(h);
+  EXPECT_NE(caps.find("pattern=(string)5x5"), std::string::npos) << caps;
+}
+
+TEST_F(DarkSub, gray16_caps_use_the_bit_depth_property) {
+  h = gst_harness_new_parse("darksub dark-level=100 pattern=bggr bit-depth=12");
+  gst_harness_set_src_caps_str(h, "video/x-raw,format=GRAY16_LE,width=4,height=2,framerate=30/1");
+  const std::vector<std::uint16_t> raw = {100, 1000, 3532, 3533, 4095, 0, 200, 300};
+  ASSERT_EQ(gst_harness_push(h, buffer_from(raw)), GST_FLOW_OK);
+  GstBuffer* out = gst_harness_try_pull(h);
+  ASSERT_NE(out, nullptr);
+  const auto v = values_of<float>(out);
+  gst_buffer_unref(out);
+  ASSERT_EQ(v.size(), 8u);
+  EXPECT_EQ(v[0], 0.f);
+  EXPECT_EQ(v[2], 3432.f);  // below round(220/255 * 4095) = 3533
+  EXPECT_EQ(v[3], kInf);
+  EXPECT_EQ(v[4], kInf);
+  EXPECT_EQ(v[5], -100.f);
+  const std::string caps = sink_caps(h);
+  EXPECT_NE(caps.find("bit-depth=(int)12"), std::string::npos) << caps;
+  EXPECT_NE(caps.find("pattern=(string)bggr"), std::string::npos) << caps;
+}
+
+TEST_F(DarkSub, dark_frame_from_a_file) {
+  ScratchDir dir("darksub");
+  cv::Mat dark(4, 6, CV_8U);
+  for (int i = 0; i < 24; ++i) dark.data[i] = static_cast<std::uint8_t>(40 + i);
+  write_raw_image(dir / "dark.pgm", dark);
+  h = gst_harness_new_parse(("darksub location=" + (dir / "dark.pgm").string()).c_str());
+  gst_harness_set_src_caps_str(h, "video/x-bayer,format=rggb,width=6,height=4,framerate=30/1");
+  const auto raw = frame6x4();
+  ASSERT_EQ(gst_harness_push(h, buffer_from(padded(raw, 6, 4, 8))), GST_FLOW_OK);
+  GstBuffer* out = gst_harness_try_pull(h);
+  ASSERT_NE(out, nullptr);
+  const auto v = values_of<float>(out);
+  gst_buffer_unref(out);
+  for (int i = 0; i < 24; ++i) {
+    if (i != 7) {
+      EXPECT_EQ(v[i], static_cast<float>(raw[i]) - (40 + i)) << i;
+    }
+  }
+  EXPECT_EQ(v[7], kInf);
+}
+
+TEST_F(DarkSub, property_changes_apply_while_playing) {
+  h = gst_harness_new_parse("darksub dark-level=50");
+  gst_harness_set_src_caps_str(h, "video/x-bayer,format=rggb,width=6,height=4,framerate=30/1");
+  GstElement* e = find_element(h, "darksub");
+  const auto raw = frame6x4();
+  auto push_pull = [&] {
+    EXPECT_EQ(gst_harness_push(h, buffer_from(padded(raw, 6, 4, 8))), GST_FLOW_OK);
+    GstBuffer* out = gst_harness_try_pull(h);
+    std::vector<float> v = out ? values_of<float>(out) : std::vector<float>{};
+    if (out) gst_buffer_unref(out);
+    return v;
+  };
+  EXPECT_EQ(push_pull(), expected(raw, 6, 4, 50, 220));
+  g_object_set(e, "saturation-level", 200.0, "dark-level", 60.0, nullptr);
+  const auto v = push_pull();
+  EXPECT_EQ(v, expected(raw, 6, 4, 60, 200));
+  EXPECT_EQ(v[8], kInf);  // 219 >= 200 now
+  gst_object_unref(e);
+}
+
+TEST_F(DarkSub, capture_dark_averages_frames_and_outputs_nan_meanwhile) {
+  h = gst_harness_new_parse("darksub capture-frames=2 dark-level=0");
+  gst_harness_set_src_caps_str(h, "video/x-raw,format=GRAY8,width=4,height=2,framerate=30/1");
+  GstElement* e = find_element(h, "darksub");
+  g_signal_emit_by_name(e, "capture-dark");
+  const std::vector<std::uint8_t> d1(8, 40), d2(8, 44), light(8, 100);
+  for (const auto* frame : {&d1, &d2}) {
+    ASSERT_EQ(gst_harness_push(h, buffer_from(*frame)), GST_FLOW_OK);
+    GstBuffer* out = gst_harness_try_pull(h);
+    ASSERT_NE(out, nullptr);
+    for (float f : values_of<float>(out)) EXPECT_TRUE(std::isnan(f));
+    gst_buffer_unref(out);
+  }
+  ASSERT_EQ(gst_harness_push(h, buffer_from(light)), GST_FLOW_OK);
+  GstBuffer* out = gst_harness_try_pull(h);
+  ASSERT_NE(out, nullptr);
+  for (float f : values_of<float>(out)) EXPECT_EQ(f, 58.f);
+  gst_buffer_unref(out);
+  gst_object_unref(e);
+}
+
+TEST_F(DarkSub, survives_flush_and_eos) {
+  h = gst_harness_new_parse("darksub dark-level=50");
+  gst_harness_set_src_caps_str(h, "video/x-bayer,format=rggb,width=6,height=4,framerate=30/1");
+  const auto raw = frame6x4();
+  ASSERT_EQ(gst_harness_push(h, buffer_from(padded(raw, 6, 4, 8))), GST_FLOW_OK);
+  gst_buffer_unref(gst_harness_pull(h));
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_start()));
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_stop(TRUE)));
+  GstSegment segment;
+  gst_segment_init(&segment, GST_FORMAT_TIME);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_segment(&segment)));
+  ASSERT_EQ(gst_harness_push(h, buffer_from(padded(raw, 6, 4, 8))), GST_FLOW_OK);
+  GstBuffer* out = gst_harness_try_pull(h);
+  ASSERT_NE(out, nullptr);
+  EXPECT_EQ(values_of<float>(out), expected(raw, 6, 4, 50, 220));
+  gst_buffer_unref(out);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_eos()));
+  bool eos = false;
+  while (GstEvent* ev = gst_harness_try_pull_event(h)) {
+    eos |= GST_EVENT_TYPE(ev) == GST_EVENT_EOS;
+    gst_event_unref(ev);
+  }
+  EXPECT_TRUE(eos);
+  // And it starts again after a state change.
+  gst_harness_set(h, "darksub", "dark-level", 10.0, nullptr);
+  ASSERT_EQ(gst_element_set_state(h->element, GST_STATE_READY), GST_STATE_CHANGE_SUCCESS);
+  ASSERT_EQ(gst_element_set_state(h->element, GST_STATE_PLAYING), GST_STATE_CHANGE_SUCCESS);
+}
+
+const char* kGraySource =
+    "videotestsrc num-buffers=2 ! video/x-raw,format=GRAY8,width=16,height=8 ! ";
+
+TEST(DarkSubErrors, rejects_a_missing_dark_file) {
+  REQUIRE_ELEMENT("darksub");
+  const auto r =
+      run_pipeline(std::string(kGraySource) + "darksub location=/nonexistent/dark.pgm ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_NOT_FOUND);
+  EXPECT_NE(r.message.find("/nonexistent/dark.pgm"), std::string::npos) << r.message;
+}
+
+TEST(DarkSubErrors, rejects_a_dark_of_the_wrong_size) {
+  REQUIRE_ELEMENT("darksub");
+  ScratchDir dir("darksub-size");
+  write_raw_image(dir / "dark.png", cv::Mat(6, 12, CV_8U, cv::Scalar(50)));
+  const auto r = run_pipeline(std::string(kGraySource) +
+                              "darksub location=" + (dir / "dark.png").string() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_STREAM_ERROR);
+  EXPECT_EQ(r.code, GST_STREAM_ERROR_FORMAT);
+  EXPECT_NE(r.message.find("12x6"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("16x8"), std::string::npos) << r.message;
+}
+
+TEST(DarkSubErrors, rejects_a_corrupt_dark_file) {
+  REQUIRE_ELEMENT("darksub");
+  ScratchDir dir("darksub-corrupt");
+  write_text(dir / "dark.pgm", "P5\n16 8\n255\nshort");
+  const auto r = run_pipeline(std::string(kGraySource) +
+                              "darksub location=" + (dir / "dark.pgm").string() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_READ);
+  EXPECT_NE(r.message.find("dark.pgm"), std::string::npos) << r.message;
+}
+
+TEST(DarkSubErrors, rejects_running_without_a_dark) {
+  REQUIRE_ELEMENT("darksub");
+  const auto r = run_pipeline(std::string(kGraySource) + "darksub ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_SETTINGS);
+  EXPECT_NE(r.message.find("dark-level"), std::string::npos) << r.message;
+}
+
+}  // namespace
+}  // namespace pyrocam::test

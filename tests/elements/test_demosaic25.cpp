@@ -1,0 +1,172 @@
+// demosaic25: caps in both directions, planes against the library, marks through darksub and
+// demosaic25, 5x5 macro-pixels, profile band map, flush/EOS, bus errors.
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "element_support.h"
+#include "pyrocam/demosaic.h"
+
+namespace pyrocam::test {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+class Demosaic25 : public ::testing::Test {
+ protected:
+  void SetUp() override { REQUIRE_ELEMENT("demosaic25"); }
+  void TearDown() override {
+    if (h) gst_harness_teardown(h);
+  }
+  // Pushes one float mosaic and returns the output planes (empty on failure).
+  std::vector<float> run(const std::vector<float>& mosaic) {
+    EXPECT_EQ(gst_harness_push(h, buffer_from(mosaic)), GST_FLOW_OK);
+    GstBuffer* out = gst_harness_try_pull(h);
+    if (!out) return {};
+    auto v = values_of<float>(out);
+    gst_buffer_unref(out);
+    return v;
+  }
+  GstHarness* h = nullptr;
+};
+
+std::vector<float> ramp(int w, int h) {
+  std::vector<float> v(static_cast<std::size_t>(w * h));
+  for (int i = 0; i < w * h; ++i) v[i] = static_cast<float>((i * 37) % 101);
+  return v;
+}
+
+// The library's planes for a mosaic, concatenated.
+std::vector<float> library(const std::vector<float>& mosaic, int w, int h,
+                           const MosaicLayout& layout, DemosaicMethod method) {
+  cv::Mat in(h, w, CV_32F, const_cast<float*>(mosaic.data()));
+  std::vector<cv::Mat> planes;
+  demosaic(in, layout, method, planes);
+  std::vector<float> out;
+  for (const cv::Mat& p : planes) out.insert(out.end(), p.begin<float>(), p.end<float>());
+  return out;
+}
+
+std::string mosaic_caps(const char* pattern, int w, int h) {
+  return "video/x-pyrocam-mosaic,format=F32LE,width=" + std::to_string(w) +
+         ",height=" + std::to_string(h) + ",framerate=30/1,pattern=" + pattern + ",bit-depth=8";
+}
+
+void expect_same(const std::vector<float>& a, const std::vector<float>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (std::isnan(b[i])) {
+      EXPECT_TRUE(std::isnan(a[i])) << i;
+    } else {
+      EXPECT_EQ(a[i], b[i]) << i;
+    }
+  }
+}
+
+TEST_F(Demosaic25, bilinear_keeps_full_resolution) {
+  h = gst_harness_new_parse("demosaic25");
+  gst_harness_set_src_caps_str(h, mosaic_caps("gbrg", 8, 6).c_str());
+  const auto mosaic = ramp(8, 6);
+  expect_same(run(mosaic),
+              library(mosaic, 8, 6, MosaicLayout::bayer("GBRG"), DemosaicMethod::kBilinear));
+  const std::string caps = sink_caps(h);
+  for (const char* part : {"video/x-pyrocam-bands", "bands=(int)3", "width=(int)8", "height=(int)6",
+                           "layout=(string)bayer", "format=(string)F32LE"})
+    EXPECT_NE(caps.find(part), std::string::npos) << part << " in " << caps;
+}
+
+TEST_F(Demosaic25, bin2x2_halves_resolution) {
+  h = gst_harness_new_parse("demosaic25 method=bin2x2");
+  gst_harness_set_src_caps_str(h, mosaic_caps("rggb", 8, 6).c_str());
+  const auto mosaic = ramp(8, 6);
+  expect_same(run(mosaic),
+              library(mosaic, 8, 6, MosaicLayout::bayer("RGGB"), DemosaicMethod::kBinCells));
+  const std::string caps = sink_caps(h);
+  EXPECT_NE(caps.find("width=(int)4"), std::string::npos) << caps;
+  EXPECT_NE(caps.find("height=(int)3"), std::string::npos) << caps;
+}
+
+TEST_F(Demosaic25, snapshot_gives_25_bands_per_macro_pixel) {
+  h = gst_harness_new_parse("demosaic25 profile=nir5x5-reference");
+  gst_harness_set_src_caps_str(h, mosaic_caps("5x5", 10, 15).c_str());
+  auto mosaic = ramp(10, 15);
+  mosaic[3] = kInf;                    // band 3 of macro-pixel (0,0)
+  mosaic[10 * 5 + 7] = std::nanf("");  // band 2 of macro-pixel (1,1)
+  const auto out = run(mosaic);
+  std::vector<int> identity(25);
+  std::iota(identity.begin(), identity.end(), 0);
+  expect_same(out, library(mosaic, 10, 15, MosaicLayout::snapshot(5, 5, identity),
+                           DemosaicMethod::kBinCells));
+  ASSERT_EQ(out.size(), 25u * 2 * 3);
+  EXPECT_EQ(out[3 * 6 + 0], kInf);
+  EXPECT_TRUE(std::isnan(out[2 * 6 + 1 * 2 + 1]));
+  const std::string caps = sink_caps(h);
+  for (const char* part : {"bands=(int)25", "width=(int)2", "height=(int)3", "layout=(string)5x5"})
+    EXPECT_NE(caps.find(part), std::string::npos) << part << " in " << caps;
+}
+
+TEST_F(Demosaic25, saturated_pixel_stays_marked_through_darksub_and_demosaic25) {
+  REQUIRE_ELEMENT("darksub");
+  h = gst_harness_new_parse("darksub dark-level=50 ! demosaic25");
+  gst_harness_set_src_caps_str(h, "video/x-bayer,format=rggb,width=8,height=8,framerate=30/1");
+  std::vector<std::uint8_t> raw(64, 120);
+  raw[2 * 8 + 2] = 255;  // an R pixel
+  ASSERT_EQ(gst_harness_push(h, buffer_from(raw)), GST_FLOW_OK);
+  GstBuffer* out = gst_harness_try_pull(h);
+  ASSERT_NE(out, nullptr);
+  const auto v = values_of<float>(out);
+  gst_buffer_unref(out);
+  ASSERT_EQ(v.size(), 3u * 64);
+  EXPECT_EQ(v[2 * 8 + 2], kInf);       // R at the saturated pixel
+  EXPECT_EQ(v[3 * 8 + 3], kInf);       // R interpolated from it at the B pixel
+  EXPECT_EQ(v[64 + 2 * 8 + 2], 70.f);  // G there is measured around it
+  EXPECT_EQ(v[0], 70.f);
+  EXPECT_EQ(v[2 * 64 + 5 * 8 + 5], 70.f);  // B far away
+}
+
+TEST_F(Demosaic25, survives_flush_and_eos) {
+  h = gst_harness_new_parse("demosaic25 method=bin2x2");
+  gst_harness_set_src_caps_str(h, mosaic_caps("bggr", 4, 4).c_str());
+  const auto mosaic = ramp(4, 4);
+  EXPECT_EQ(run(mosaic).size(), 12u);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_start()));
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_stop(TRUE)));
+  GstSegment segment;
+  gst_segment_init(&segment, GST_FORMAT_TIME);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_segment(&segment)));
+  expect_same(run(mosaic),
+              library(mosaic, 4, 4, MosaicLayout::bayer("BGGR"), DemosaicMethod::kBinCells));
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_eos()));
+  bool eos = false;
+  while (GstEvent* ev = gst_harness_try_pull_event(h)) {
+    eos |= GST_EVENT_TYPE(ev) == GST_EVENT_EOS;
+    gst_event_unref(ev);
+  }
+  EXPECT_TRUE(eos);
+}
+
+TEST(Demosaic25Errors, rejects_a_missing_profile) {
+  REQUIRE_ELEMENT("demosaic25");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! "
+      "demosaic25 profile=/nonexistent/camera.json ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_NOT_FOUND);
+  EXPECT_NE(r.message.find("/nonexistent/camera.json"), std::string::npos) << r.message;
+}
+
+TEST(Demosaic25Errors, rejects_caps_it_cannot_produce_n) {
+  REQUIRE_ELEMENT("demosaic25");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  // 25 bands cannot come from a Bayer camera: negotiation fails with an error, no crash.
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! "
+      "demosaic25 ! video/x-pyrocam-bands,bands=25 ! fakesink");
+  EXPECT_TRUE(r.error);
+  EXPECT_FALSE(r.timed_out);
+}
+
+}  // namespace
+}  // namespace pyrocam::test

@@ -1,0 +1,152 @@
+// pyrocamsrc: caps per profile, negotiated sizes, timestamps, determinism, live property
+// changes, bus errors, and the smoke pipeline through darksub and demosaic25.
+#include "element_support.h"
+#include "test_support.h"
+
+namespace pyrocam::test {
+namespace {
+
+class PyrocamSrc : public ::testing::Test {
+ protected:
+  void SetUp() override { REQUIRE_ELEMENT("pyrocamsrc"); }
+  void TearDown() override {
+    if (h) gst_harness_teardown(h);
+  }
+  GstHarness* h = nullptr;
+};
+
+TEST_F(PyrocamSrc, colour_profile_gives_bayer_frames_with_timestamps) {
+  h = gst_harness_new_parse("pyrocamsrc scene=plate temperature=1100");
+  gst_harness_play(h);
+  for (guint64 i = 0; i < 3; ++i) {
+    GstBuffer* b = gst_harness_pull(h);
+    ASSERT_NE(b, nullptr);
+    EXPECT_EQ(gst_buffer_get_size(b), 320u * 240u);
+    EXPECT_EQ(GST_BUFFER_PTS(b), gst_util_uint64_scale(i, GST_SECOND, 30));
+    EXPECT_EQ(GST_BUFFER_DURATION(b), gst_util_uint64_scale(i + 1, GST_SECOND, 30) -
+                                          gst_util_uint64_scale(i, GST_SECOND, 30));
+    EXPECT_EQ(GST_BUFFER_OFFSET(b), i);
+    if (i == 0) {
+      // The plate (central 60 %) glows: its mean is well above the dark level of 50 DN.
+      const auto v = values_of<std::uint8_t>(b);
+      double centre = 0;
+      for (int x = 140; x < 180; ++x) centre += v[120 * 320 + x];
+      EXPECT_GT(centre / 40, 80);
+      EXPECT_LT(v[0], 60);  // the cold corner shows the dark level
+    }
+    gst_buffer_unref(b);
+  }
+  const std::string caps = sink_caps(h);
+  for (const char* part : {"video/x-bayer", "format=(string)rggb", "width=(int)320",
+                           "height=(int)240", "framerate=(fraction)30/1"})
+    EXPECT_NE(caps.find(part), std::string::npos) << part << " in " << caps;
+}
+
+TEST_F(PyrocamSrc, snapshot_profile_gives_gray8_of_the_negotiated_size) {
+  h = gst_harness_new_parse("pyrocamsrc profile=nir5x5-reference scene=filament");
+  gst_harness_set_sink_caps_str(h, "video/x-raw,width=100,height=50,framerate=10/1");
+  gst_harness_play(h);
+  GstBuffer* b = gst_harness_pull(h);
+  ASSERT_NE(b, nullptr);
+  EXPECT_EQ(gst_buffer_get_size(b), 100u * 50u);
+  gst_buffer_unref(b);
+  b = gst_harness_pull(h);
+  ASSERT_NE(b, nullptr);
+  EXPECT_EQ(GST_BUFFER_PTS(b), GST_SECOND / 10);
+  gst_buffer_unref(b);
+  const std::string caps = sink_caps(h);
+  EXPECT_NE(caps.find("format=(string)GRAY8"), std::string::npos) << caps;
+}
+
+std::vector<std::uint8_t> first_frame(const char* launch) {
+  GstHarness* h = gst_harness_new_parse(launch);
+  gst_harness_set_sink_caps_str(h, "video/x-bayer,width=40,height=20");
+  gst_harness_play(h);
+  GstBuffer* b = gst_harness_pull(h);
+  std::vector<std::uint8_t> v = b ? values_of<std::uint8_t>(b) : std::vector<std::uint8_t>{};
+  if (b) gst_buffer_unref(b);
+  gst_harness_teardown(h);
+  return v;
+}
+
+TEST_F(PyrocamSrc, equal_seeds_give_equal_frames) {
+  const auto a = first_frame("pyrocamsrc seed=5");
+  EXPECT_EQ(a.size(), 40u * 20u);
+  EXPECT_EQ(a, first_frame("pyrocamsrc seed=5"));
+  EXPECT_NE(a, first_frame("pyrocamsrc seed=6"));
+}
+
+TEST_F(PyrocamSrc, exposure_change_while_playing_brightens_frames) {
+  h = gst_harness_new_parse("pyrocamsrc scene=plate exposure=20 unit=datasheet");
+  gst_harness_set_sink_caps_str(h, "video/x-bayer,width=40,height=20");
+  gst_harness_set_blocking_push_mode(h);  // the source waits for each pull
+  gst_harness_play(h);
+  auto centre_mean = [&] {
+    GstBuffer* b = gst_harness_pull(h);
+    const auto v = b ? values_of<std::uint8_t>(b) : std::vector<std::uint8_t>(40 * 20, 0);
+    if (b) gst_buffer_unref(b);
+    double sum = 0;
+    for (int y = 8; y < 12; ++y)
+      for (int x = 16; x < 24; ++x) sum += v[y * 40 + x];
+    return sum / 32;
+  };
+  const double dim = centre_mean();
+  gst_harness_set(h, "pyrocamsrc", "exposure", 200.0, nullptr);
+  // Frames rendered before the change may still be queued in the harness.
+  double bright = 0;
+  for (int i = 0; i < 5 && bright < dim + 20; ++i) bright = centre_mean();
+  EXPECT_GT(bright, dim + 20);
+}
+
+TEST(PyrocamSrcPipeline, smoke_runs_through_darksub_and_demosaic25_to_eos) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  REQUIRE_ELEMENT("darksub");
+  REQUIRE_ELEMENT("demosaic25");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=5 ! darksub dark-level=50 ! demosaic25 ! fakesink name=sink");
+  EXPECT_TRUE(r.eos) << r.message << " " << r.debug;
+  EXPECT_EQ(r.buffers, 5);
+}
+
+TEST(PyrocamSrcPipeline, live_snapshot_camera_through_the_chain) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline(
+      "pyrocamsrc is-live=true num-buffers=3 profile=nir5x5-reference ! "
+      "video/x-raw,framerate=50/1 ! darksub dark-level=50 pattern=5x5 ! demosaic25 ! "
+      "fakesink name=sink sync=true");
+  EXPECT_TRUE(r.eos) << r.message << " " << r.debug;
+  EXPECT_EQ(r.buffers, 3);
+}
+
+TEST(PyrocamSrcErrors, rejects_a_missing_profile) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline("pyrocamsrc profile=/nonexistent/camera.json ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_NOT_FOUND);
+  EXPECT_NE(r.message.find("/nonexistent/camera.json"), std::string::npos) << r.message;
+}
+
+TEST(PyrocamSrcErrors, rejects_a_corrupt_profile) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  ScratchDir dir("pyrocamsrc-profile");
+  write_text(dir / "camera.json", "{ \"format\": \"pyrocam-camera-profile\", ");
+  const auto r =
+      run_pipeline("pyrocamsrc profile=" + (dir / "camera.json").string() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_READ);
+  EXPECT_NE(r.message.find("camera.json"), std::string::npos) << r.message;
+}
+
+TEST(PyrocamSrcErrors, rejects_a_size_that_is_not_whole_macro_pixels) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline(
+      "pyrocamsrc profile=nir5x5-reference num-buffers=1 ! video/x-raw,width=64,height=48 ! "
+      "fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_NE(r.message.find("64x48"), std::string::npos) << r.message;
+}
+
+}  // namespace
+}  // namespace pyrocam::test

@@ -1,0 +1,163 @@
+// thermalcolormap: output formats, colours against the library, transparent no-reading pixels,
+// live property changes, auto range, scale bar, isotherm, and an overlay with compositor.
+#include <cmath>
+
+#include "element_support.h"
+#include "pyrocam/colormap.h"
+
+namespace pyrocam::test {
+namespace {
+
+std::uint16_t code_of(double t_c) {
+  return static_cast<std::uint16_t>(std::lround((t_c + 273.15) * 10));
+}
+
+class ThermalColormap : public ::testing::Test {
+ protected:
+  void SetUp() override { REQUIRE_ELEMENT("thermalcolormap"); }
+  void TearDown() override {
+    if (h) gst_harness_teardown(h);
+  }
+  void start(const char* launch, const char* out_format, int w = 4, int h_ = 2) {
+    h = gst_harness_new_parse(launch);
+    gst_harness_set_src_caps_str(h, ("video/x-raw,format=GRAY16_LE,width=" + std::to_string(w) +
+                                     ",height=" + std::to_string(h_) + ",framerate=30/1")
+                                        .c_str());
+    if (out_format)
+      gst_harness_set_sink_caps_str(h, (std::string("video/x-raw,format=") + out_format).c_str());
+  }
+  std::vector<std::uint8_t> run(const std::vector<std::uint16_t>& codes) {
+    EXPECT_EQ(gst_harness_push(h, buffer_from(codes)), GST_FLOW_OK);
+    GstBuffer* out = gst_harness_try_pull(h);
+    if (!out) return {};
+    auto v = values_of<std::uint8_t>(out);
+    gst_buffer_unref(out);
+    return v;
+  }
+  GstHarness* h = nullptr;
+};
+
+// The library's bytes for codes under given settings.
+std::vector<std::uint8_t> library(const std::vector<std::uint16_t>& codes,
+                                  const ColormapSettings& s) {
+  pyrocam::ThermalColormap map;
+  map.configure(s);
+  std::vector<std::uint8_t> out;
+  for (std::uint16_t c : codes) {
+    const auto p = map.pixel(c);
+    out.insert(out.end(), p.begin(), p.end());
+  }
+  return out;
+}
+
+const std::vector<std::uint16_t> kCodes = {
+    0, code_of(900), code_of(1100), code_of(1300), code_of(1500), code_of(1700), code_of(1900), 0};
+
+TEST_F(ThermalColormap, fixed_range_rgba_matches_the_library_with_transparent_invalid) {
+  start("thermalcolormap range-mode=fixed min-temperature=1000 max-temperature=1800", nullptr);
+  const auto out = run(kCodes);
+  ColormapSettings s;
+  s.min_c = 1000;
+  s.max_c = 1800;
+  EXPECT_EQ(out, library(kCodes, s));
+  EXPECT_EQ(out[3], 0);  // alpha of "no reading"
+  EXPECT_EQ(out[7], 255);
+  const std::string caps = sink_caps(h);
+  EXPECT_NE(caps.find("format=(string)RGBA"), std::string::npos) << caps;
+}
+
+TEST_F(ThermalColormap, bgra_output_and_palette_change_while_playing) {
+  start("thermalcolormap range-mode=fixed min-temperature=1000 max-temperature=1800", "BGRA");
+  ColormapSettings s;
+  s.min_c = 1000;
+  s.max_c = 1800;
+  s.order = ChannelOrder::kBGRA;
+  EXPECT_EQ(run(kCodes), library(kCodes, s));
+  GstElement* e = find_element(h, "thermalcolormap");
+  g_object_set(e, "palette", 1 /* inferno */, "invalid-color", 0x80FF0000u, nullptr);
+  gst_object_unref(e);
+  s.palette = Palette::kInferno;
+  s.invalid_argb = 0x80FF0000u;
+  const auto out = run(kCodes);
+  EXPECT_EQ(out, library(kCodes, s));
+  EXPECT_EQ(out[2], 0xFF);  // red of the invalid colour, BGRA order
+  EXPECT_EQ(out[3], 0x80);
+}
+
+TEST_F(ThermalColormap, isotherm_marks_hot_pixels) {
+  start("thermalcolormap range-mode=fixed isotherm-threshold=1500 isotherm-color=0xFF0000FF",
+        "RGBx");
+  const auto out = run(kCodes);
+  for (int i : {4, 5, 6}) {
+    EXPECT_EQ(out[4 * i + 0], 0) << i;
+    EXPECT_EQ(out[4 * i + 2], 255) << i;  // blue
+  }
+  EXPECT_NE(out[4 * 3 + 0], 0);  // 1300 degC in the iron palette has red
+}
+
+TEST_F(ThermalColormap, auto_range_follows_the_frames_smoothly) {
+  start("thermalcolormap range-mode=auto auto-smoothing=0.5 palette=grey", nullptr, 2, 1);
+  // First frame: its own range, so the hot end is white and the cold end black.
+  auto out = run({code_of(1000), code_of(2000)});
+  EXPECT_EQ(out[0], 0);
+  EXPECT_EQ(out[4], 255);
+  // A hotter frame moves the range only half way: 1000 degC is now below the minimum (1100).
+  out = run({code_of(1200), code_of(2200)});
+  ColormapSettings s;
+  s.palette = Palette::kGrey;
+  s.min_c = 1100;
+  s.max_c = 2100;
+  EXPECT_EQ(out, library({code_of(1200), code_of(2200)}, s));
+}
+
+TEST_F(ThermalColormap, scale_bar_is_opaque_over_invalid_pixels) {
+  start("thermalcolormap scale-bar=true range-mode=fixed", nullptr, 160, 120);
+  const auto out = run(std::vector<std::uint16_t>(160 * 120, 0));
+  int opaque = 0;
+  for (int y = 0; y < 120; ++y)
+    for (int x = 0; x < 160; ++x) {
+      if (x < 80) {
+        EXPECT_EQ(out[4 * (y * 160 + x) + 3], 0) << x << "," << y;
+      }
+      if (out[4 * (y * 160 + x) + 3] == 255) ++opaque;
+    }
+  EXPECT_GT(opaque, 300);
+}
+
+TEST_F(ThermalColormap, empty_fixed_range_warns_and_keeps_working_n) {
+  start("thermalcolormap range-mode=fixed min-temperature=1500 max-temperature=1500", nullptr);
+  EXPECT_EQ(run(kCodes).size(), kCodes.size() * 4);
+}
+
+TEST_F(ThermalColormap, survives_flush_and_eos) {
+  start("thermalcolormap range-mode=fixed", nullptr);
+  EXPECT_EQ(run(kCodes).size(), kCodes.size() * 4);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_start()));
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_stop(TRUE)));
+  GstSegment segment;
+  gst_segment_init(&segment, GST_FORMAT_TIME);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_segment(&segment)));
+  EXPECT_EQ(run(kCodes), library(kCodes, ColormapSettings{}));
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_eos()));
+  bool eos = false;
+  while (GstEvent* ev = gst_harness_try_pull_event(h)) {
+    eos |= GST_EVENT_TYPE(ev) == GST_EVENT_EOS;
+    gst_event_unref(ev);
+  }
+  EXPECT_TRUE(eos);
+}
+
+TEST(ThermalColormapPipeline, overlays_on_a_camera_image_with_compositor) {
+  REQUIRE_ELEMENT("thermalcolormap");
+  const auto r = run_pipeline(
+      "compositor name=mix ! video/x-raw,format=BGRA,width=64,height=48 ! fakesink name=sink "
+      "videotestsrc num-buffers=3 ! video/x-raw,width=64,height=48,framerate=10/1 ! mix. "
+      "videotestsrc num-buffers=3 pattern=gradient ! "
+      "video/x-raw,format=GRAY16_LE,width=64,height=48,framerate=10/1 ! "
+      "thermalcolormap scale-bar=true ! mix.");
+  EXPECT_TRUE(r.eos) << r.message << " " << r.debug;
+  EXPECT_EQ(r.buffers, 3);
+}
+
+}  // namespace
+}  // namespace pyrocam::test
