@@ -1,4 +1,6 @@
 // `pyrocam-calib simulate`: furnace campaigns and test scenes from the simulated camera.
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 
@@ -35,6 +37,15 @@ Simulator make_camera(const CameraOptions& o) {
   return Simulator(profile, UnitPerturbation::parse(o.unit, o.unit_seed), o.noise_seed);
 }
 
+// The default frame size: `side` rounded to whole mosaic periods (128 -> 130 for 5x5).
+void default_size(const Simulator& camera, int side, int& w, int& h) {
+  const MosaicLayout& m = camera.profile().mosaic;
+  w = std::max(1, static_cast<int>(std::lround(static_cast<double>(side) / m.period_width))) *
+      m.period_width;
+  h = std::max(1, static_cast<int>(std::lround(static_cast<double>(side) / m.period_height))) *
+      m.period_height;
+}
+
 void parse_size(const std::string& text, int& w, int& h) {
   if (std::sscanf(text.c_str(), "%dx%d", &w, &h) != 2 || w < 1 || h < 1)
     throw CLI::ValidationError("--size", "expected WIDTHxHEIGHT, e.g. 128x128");
@@ -48,7 +59,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
 
   static CameraOptions campaign_camera;
   static CampaignSettings campaign;
-  static std::string campaign_out, campaign_size = "128x128";
+  static std::string campaign_out, campaign_size;
   CLI::App* c = sim->add_subcommand(
       "campaign", "Write a furnace calibration dataset like the paper's (METHOD.md section 3)");
   c->footer(
@@ -68,16 +79,24 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
   c->add_option("--frames", campaign.frames_per_setting, "Frames per setting")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  c->add_option("--size", campaign_size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  c->add_option("--furnace-error", campaign.furnace_error_sigma_c,
+                "Standard deviation, degC, of the plate's true temperature about the nominal one "
+                "at each step (furnace and thermocouple; 0: exact; truth in furnace-truth.csv)")
+      ->check(CLI::Range(0.0, 50.0))
+      ->capture_default_str();
+  c->add_option("--size", campaign_size,
+                "Image size WIDTHxHEIGHT, whole mosaic periods (default 128x128 rounded to "
+                "whole periods: 130x130 for 5x5)");
   c->add_option("--roi-area", campaign.roi_area_px, "Elliptical ROI area, pixels")
       ->capture_default_str();
   c->add_option("--format", campaign.image_extension, "Image file type")
       ->check(CLI::IsMember({".pgm", ".png", ".tif"}))
       ->capture_default_str();
   c->callback([&global, &selected] {
-    parse_size(campaign_size, campaign.width, campaign.height);
+    if (!campaign_size.empty()) parse_size(campaign_size, campaign.width, campaign.height);
     selected = [&global] {
       Simulator camera = make_camera(campaign_camera);
+      if (campaign_size.empty()) default_size(camera, 128, campaign.width, campaign.height);
       ProgressPrinter progress(global, "writing campaign");
       write_furnace_campaign(campaign_out, camera, campaign, std::ref(progress));
       if (!global.quiet)
@@ -90,7 +109,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
 
   static CameraOptions scene_camera;
   static SceneSequenceSettings scene;
-  static std::string scene_out, scene_kind = "melt-pool", scene_size = "256x256";
+  static std::string scene_out, scene_kind = "melt-pool", scene_size;
   CLI::App* s =
       sim->add_subcommand("scene", "Write a test scene sequence (plate, filament, melt pool)");
   s->footer(
@@ -106,7 +125,9 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   s->add_option("--temperatures", scene.temperatures_c, "Temperatures, degC (plate, filament)");
-  s->add_option("--size", scene_size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  s->add_option("--size", scene_size,
+                "Image size WIDTHxHEIGHT, whole mosaic periods (default 256x256 rounded to "
+                "whole periods: 255x255 for 5x5)");
   s->add_option("--exposure", scene.exposure_us, "Exposure, us (0: automatic)")
       ->capture_default_str();
   s->add_option("--emissivity", scene.emissivity, "Graybody emissivity (0: the scene's default)")
@@ -115,10 +136,11 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
       ->check(CLI::IsMember({".pgm", ".png", ".tif"}))
       ->capture_default_str();
   s->callback([&global, &selected] {
-    parse_size(scene_size, scene.width, scene.height);
+    if (!scene_size.empty()) parse_size(scene_size, scene.width, scene.height);
     selected = [&global] {
       scene.kind = parse_scene_kind(scene_kind);
       Simulator camera = make_camera(scene_camera);
+      if (scene_size.empty()) default_size(camera, 256, scene.width, scene.height);
       ProgressPrinter progress(global, "writing " + scene_kind);
       write_scene_sequence(scene_out, camera, scene, std::ref(progress));
       if (!global.quiet)

@@ -10,6 +10,13 @@ int MosaicLayout::band_count() const {
   return band_map.empty() ? 0 : *std::max_element(band_map.begin(), band_map.end()) + 1;
 }
 
+void MosaicLayout::check_whole_periods(int width, int height, const std::string& what) const {
+  if (width % period_width || height % period_height)
+    throw InputError(what + ": " + std::to_string(width) + "x" + std::to_string(height) +
+                     " is not a whole number of " + pattern + " mosaic periods (" +
+                     std::to_string(period_width) + "x" + std::to_string(period_height) + ")");
+}
+
 MosaicLayout MosaicLayout::bayer(const std::string& pattern) {
   std::string p = pattern;
   std::transform(p.begin(), p.end(), p.begin(), ::toupper);

@@ -210,6 +210,20 @@ class ProfileReader {
       uv.scale_sigma = number(u, "scale_sigma", "unit_variation", uv.scale_sigma);
       uv.tilt_sigma = number(u, "tilt_sigma", "unit_variation", uv.tilt_sigma);
       uv.shift_sigma_nm = number(u, "shift_sigma_nm", "unit_variation", uv.shift_sigma_nm);
+      uv.filter_shift_sigma_nm =
+          number(u, "filter_shift_sigma_nm", "unit_variation", uv.filter_shift_sigma_nm);
+      uv.ripple_rms = number(u, "ripple_rms", "unit_variation", uv.ripple_rms);
+      if (u.contains("ripple_period_nm")) {
+        uv.ripple_period_nm = {u.at("ripple_period_nm").at(0).get<double>(),
+                               u.at("ripple_period_nm").at(1).get<double>()};
+        if (!(uv.ripple_period_nm[0] > 0 && uv.ripple_period_nm[0] <= uv.ripple_period_nm[1]))
+          fail(
+              "unit_variation.ripple_period_nm must be [shortest, longest] with 0 < shortest <= "
+              "longest");
+      }
+      for (double sigma : {uv.leak_system_qe, uv.scale_sigma, uv.tilt_sigma, uv.shift_sigma_nm,
+                           uv.filter_shift_sigma_nm, uv.ripple_rms})
+        if (!(sigma >= 0)) fail("unit_variation: every size must be >= 0");
     }
     return p;
   }
@@ -355,7 +369,10 @@ nlohmann::json profile_to_json(const CameraProfile& p) {
                          {"leak_system_qe", u.leak_system_qe},
                          {"scale_sigma", u.scale_sigma},
                          {"tilt_sigma", u.tilt_sigma},
-                         {"shift_sigma_nm", u.shift_sigma_nm}};
+                         {"shift_sigma_nm", u.shift_sigma_nm},
+                         {"filter_shift_sigma_nm", u.filter_shift_sigma_nm},
+                         {"ripple_rms", u.ripple_rms},
+                         {"ripple_period_nm", {u.ripple_period_nm[0], u.ripple_period_nm[1]}}};
   return j;
 }
 

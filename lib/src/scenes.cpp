@@ -97,6 +97,7 @@ cv::Mat temperature_to_decikelvin(const cv::Mat& temperature_c) {
 void write_scene_sequence(const std::filesystem::path& folder, Simulator& camera,
                           SceneSequenceSettings s, const Progress& progress) {
   if (s.width < 16 || s.height < 16) throw InputError("scene: needs at least 16x16 pixels");
+  camera.profile().mosaic.check_whole_periods(s.width, s.height, "scene frame size");
   if (s.emissivity <= 0)
     s.emissivity = s.kind == SceneKind::kPlate ? 0.7 : s.kind == SceneKind::kFilament ? 0.4 : 0.35;
   if (s.temperatures_c.empty()) {

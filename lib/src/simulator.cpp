@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <random>
 #include <sstream>
@@ -66,6 +67,29 @@ Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbat
     if (leak[i] > 0) peak_qe = std::max(peak_qe, profile.sensor_qe.col(i).maxCoeff());
   const double leak_level = peak_qe > 0 ? v.leak_system_qe * uniform(rng) / peak_qe : 0.0;
 
+  // The deviations no QE solver here models (its own random stream, so that the components
+  // above stay the same for a seed whatever these are set to).
+  std::mt19937_64 unmodelled(mix(unit.seed ^ 0x5EC0DE5ull));
+  const Eigen::VectorXd optics = v.filter_shift_sigma_nm > 0
+                                     ? shift_curve(profile.optics_transmission, grid,
+                                                   v.filter_shift_sigma_nm * normal(unmodelled))
+                                     : profile.optics_transmission;
+  const auto ripple = [&]() {
+    // Three sinusoids of random period and phase, together of relative rms v.ripple_rms.
+    Eigen::VectorXd factor = Eigen::VectorXd::Ones(grid.size());
+    if (!(v.ripple_rms > 0)) return factor;
+    std::uniform_real_distribution<double> period(v.ripple_period_nm[0], v.ripple_period_nm[1]);
+    std::uniform_real_distribution<double> phase(0.0, 2 * M_PI);
+    const double amplitude = v.ripple_rms * std::sqrt(2.0 / 3.0);
+    for (int k = 0; k < 3; ++k) {
+      const double p = period(unmodelled), f = phase(unmodelled);
+      for (Eigen::Index i = 0; i < grid.size(); ++i)
+        factor[i] += amplitude * std::sin(2 * M_PI * grid.nm()[i] / p + f);
+    }
+    return Eigen::VectorXd(factor.cwiseMax(0.0));
+  };
+  const Eigen::VectorXd common_ripple = ripple();
+
   Eigen::MatrixXd q(profile.band_count(), grid.size());
   for (int band = 0; band < profile.band_count(); ++band) {
     const double shift = v.shift_sigma_nm * normal(rng);
@@ -73,11 +97,12 @@ Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbat
     const double tilt = v.tilt_sigma * normal(rng);
     const Eigen::VectorXd sensor =
         shift_curve(profile.sensor_qe.row(band).transpose(), grid, shift);
+    const Eigen::VectorXd band_ripple = ripple().cwiseProduct(common_ripple);
     for (Eigen::Index i = 0; i < grid.size(); ++i) {
       const double factor =
           std::max(0.0, scale * (1.0 + tilt * (grid.nm()[i] - centre_nm) / 100.0));
       const double value =
-          sensor[i] * profile.optics_transmission[i] * factor + leak_level * leak[i] * sensor[i];
+          sensor[i] * optics[i] * band_ripple[i] * factor + leak_level * leak[i] * sensor[i];
       q(band, i) = std::clamp(value, 0.0, 1.0);
     }
   }
@@ -195,6 +220,7 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
   if (s.first_exposure_us <= 0) s.first_exposure_us = colour ? 100 : 10000;
   if (s.exposure_count < 1 || s.frames_per_setting < 1 || s.width < 8 || s.height < 8)
     throw InputError("campaign: needs at least one exposure and frame, and 8x8 pixels");
+  camera.profile().mosaic.check_whole_periods(s.width, s.height, "campaign frame size");
   std::filesystem::create_directories(folder / "frames");
   std::filesystem::create_directories(folder / "darks");
 
@@ -238,8 +264,14 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
            camera.render(cv::Mat(s.height, s.width, CV_32F, cv::Scalar(s.dark_temperature_c)),
                          exposures[k]),
            FrameKind::kDark, s.dark_temperature_c, exposures[k]);
+  std::mt19937_64 furnace_rng(mix(s.furnace_seed));
+  std::normal_distribution<double> furnace_error(0.0, 1.0);
+  std::ofstream truth(folder / "furnace-truth.csv");
+  truth << "nominal_c,true_c\n" << std::setprecision(10);
   for (double t : s.temperatures_c) {
-    const cv::Mat plate(s.height, s.width, CV_32F, cv::Scalar(static_cast<float>(t)));
+    const double true_c = t + s.furnace_error_sigma_c * furnace_error(furnace_rng);
+    truth << t << "," << true_c << "\n";
+    const cv::Mat plate(s.height, s.width, CV_32F, cv::Scalar(static_cast<float>(true_c)));
     std::ostringstream stem;
     stem << "T" << std::setw(4) << std::setfill('0') << std::lround(t) << "_";
     for (std::size_t k = 0; k < exposures.size(); ++k)
@@ -247,6 +279,7 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
         emit(name("frames", stem.str(), k, f), camera.render(plate, exposures[k]),
              FrameKind::kFrame, t, exposures[k]);
   }
+  if (!truth) throw InputError((folder / "furnace-truth.csv").string() + ": cannot write");
   write_manifest(folder / "manifest.csv", rows);
 }
 

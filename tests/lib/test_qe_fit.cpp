@@ -190,10 +190,17 @@ TEST_F(ColourQeFit, missing_rates_are_skipped) {
     EXPECT_TRUE(f.system_qe.allFinite());
     EXPECT_TRUE(f.gains.allFinite());
     EXPECT_LT(f.diagnostics.residual_after.maxCoeff(), 0.01);
-    // The missing hottest B rate does not bias B's gain.
-    const QeFitResult full =
-        fit_qe(p, furnace_rates(p, q_true, temps), QeFitOptions{f.solver, {}, {}});
-    EXPECT_NEAR(f.gains[2] / full.gains[2], 1, 0.02);
+    // The missing hottest B rates do not bias B: the fitted model still predicts the B rates
+    // it did not see (and all others) as well as a fit to the full data does. (The split
+    // between gain and QE level may move: the paper's gain is taken at the hottest usable rate.)
+    const CalibrationRates all = furnace_rates(p, q_true, temps);
+    const QeFitResult full = fit_qe(p, all, QeFitOptions{f.solver, {}, {}});
+    const Eigen::VectorXd error = prediction_residuals(p, f, all);
+    const Eigen::VectorXd full_error = prediction_residuals(p, full, all);
+    std::cout << to_string(f.solver) << ": rate prediction error with rates missing "
+              << error.transpose() << ", with all " << full_error.transpose() << "\n";
+    EXPECT_LT(error[2], full_error[2] + 0.005);
+    EXPECT_LT(error.maxCoeff(), 0.01);
   }
 }
 

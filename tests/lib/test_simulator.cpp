@@ -134,6 +134,82 @@ TEST_F(SimulatedRgb, typical_unit_leaks_in_the_near_infrared) {
   for (int b = 0; b < 3; ++b) EXPECT_GT(s_unit[b], 1.1 * s_sheet[b]);
 }
 
+TEST_F(SimulatedRgb, typical_unit_deviates_outside_the_solvers_model_family) {
+  // Ripple and filter-edge shift come on top of the modelled shapes, from their own stream.
+  CameraProfile plain = profile;
+  plain.unit_variation.ripple_rms = 0;
+  plain.unit_variation.filter_shift_sigma_nm = 0;
+  const Eigen::MatrixXd modelled = true_system_qe(plain, UnitPerturbation{"typical", 5});
+  CameraProfile rippled = plain;
+  rippled.unit_variation.ripple_rms = 0.01;
+  const Eigen::MatrixXd with_ripple = true_system_qe(rippled, UnitPerturbation{"typical", 5});
+  // Inside the pass band: common x per-band ripple, each 1 % rms, about 1.4 % together.
+  const auto from = profile.grid.index_of(450), to = profile.grid.index_of(650);
+  for (int b = 0; b < 3; ++b) {
+    const Eigen::ArrayXd ratio = with_ripple.row(b).segment(from, to - from).array() /
+                                 modelled.row(b).segment(from, to - from).array();
+    const double rms = std::sqrt((ratio - 1).square().mean());
+    EXPECT_GT(rms, 0.004) << "band " << b;
+    EXPECT_LT(rms, 0.04) << "band " << b;
+  }
+  CameraProfile shifted = plain;
+  shifted.unit_variation.filter_shift_sigma_nm = 1.0;
+  const Eigen::MatrixXd with_shift = true_system_qe(shifted, UnitPerturbation{"typical", 5});
+  EXPECT_FALSE(with_shift.isApprox(modelled, 1e-6));
+  // At a filter edge a shift changes the QE by far more than inside the band.
+  const auto edge = profile.grid.index_of(profile.filter_pass_band_nm[1]);
+  EXPECT_GT(std::abs(with_shift(0, edge) / modelled(0, edge) - 1), 0.005);
+}
+
+TEST(SimulatedCampaign, furnace_truth_differs_from_the_nominal_temperatures_it_records) {
+  test::ScratchDir dir("furnace-truth");
+  // 12 bits and a deep well, so that every step is well exposed and quantisation negligible.
+  CameraProfile profile = load_profile_by_name("rgb-reference");
+  profile.bit_depth = 12;
+  profile.noise.full_well_e = 1e7;
+  Simulator camera(profile, UnitPerturbation{"datasheet", 1});
+  CampaignSettings s;
+  s.exposure_count = 1;
+  s.frames_per_setting = 1;
+  s.width = s.height = 16;
+  s.roi_area_px = 50;
+  s.furnace_error_sigma_c = 2.0;
+  camera.set_noise_enabled(false);
+  s.first_exposure_us = camera.exposure_for(1110, 3500);
+  write_furnace_campaign(dir.path(), camera, s);
+  const CsvTable truth = read_csv_table(dir / "furnace-truth.csv");
+  const auto& nominal = truth.columns[truth.column_index("nominal_c")];
+  const auto& true_c = truth.columns[truth.column_index("true_c")];
+  const std::vector<double> recorded = Dataset::open(dir.path()).temperatures_c();
+  ASSERT_EQ(nominal.size(), 41u);
+  ASSERT_EQ(recorded.size(), nominal.size());
+  double sum2 = 0;
+  for (std::size_t i = 0; i < nominal.size(); ++i) {
+    EXPECT_DOUBLE_EQ(recorded[i], nominal[i]);
+    sum2 += (true_c[i] - nominal[i]) * (true_c[i] - nominal[i]);
+  }
+  const double sd = std::sqrt(sum2 / static_cast<double>(nominal.size()));
+  EXPECT_GT(sd, 1.2);  // 41 draws of sigma 2: the rms is within [1.2, 2.8] with near certainty
+  EXPECT_LT(sd, 2.8);
+  // The frames show the true temperature, not the nominal one: take the step furthest off.
+  std::size_t worst = 0;
+  for (std::size_t i = 0; i < nominal.size(); ++i)
+    if (std::abs(true_c[i] - nominal[i]) > std::abs(true_c[worst] - nominal[worst])) worst = i;
+  const Dataset d = Dataset::open(dir.path());
+  const FrameGroup& g = d.frames()[worst];
+  ASSERT_DOUBLE_EQ(g.temperature_c, nominal[worst]);
+  const cv::Mat frame = d.average(g);
+  double red = 0;
+  int n = 0;
+  for (int y = 0; y < frame.rows; y += 2)
+    for (int x = 0; x < frame.cols; x += 2) red += frame.at<double>(y, x), ++n;
+  red = red / n - camera.profile().dark_offset_dn;
+  const double expected_true = camera.mean_signal_dn(true_c[worst], g.exposure_us)[0];
+  const double expected_nominal = camera.mean_signal_dn(nominal[worst], g.exposure_us)[0];
+  EXPECT_LT(std::abs(red - expected_true), 0.3 * std::abs(expected_nominal - expected_true))
+      << "red " << red << " DN; true " << expected_true << ", nominal " << expected_nominal;
+}
+
 TEST(SimulatedNir, five_by_five_units_shift_their_bands) {
   const CameraProfile p = load_profile_by_name("nir5x5-reference");
   const Eigen::MatrixXd unit = true_system_qe(p, UnitPerturbation{"typical", 2});

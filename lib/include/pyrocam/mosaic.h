@@ -21,6 +21,9 @@ struct MosaicLayout {
     return band_map[(y % period_height) * period_width + (x % period_width)];
   }
   int band_count() const;
+  // Throws InputError unless width x height is a whole number of periods; `what` names the
+  // image in the message.
+  void check_whole_periods(int width, int height, const std::string& what) const;
 
   // Bayer with bands R=0, G=1, B=2. Throws InputError for an unknown pattern.
   static MosaicLayout bayer(const std::string& pattern);

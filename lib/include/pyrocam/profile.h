@@ -46,6 +46,13 @@ struct UnitVariation {
   double scale_sigma = 0.03;                      // per-band relative scale, rms
   double tilt_sigma = 0.02;                       // per-band relative tilt per 100 nm, rms
   double shift_sigma_nm = 0.0;                    // per-band wavelength shift, rms
+  // Deviations outside the QE solver's model family, so that simulated calibrations are not
+  // judged on data the fit can explain exactly: the optical filter's edges moved (coating
+  // thickness), and a smooth spectral ripple (thin-film interference in cover glass,
+  // micro-lenses and dyes), common to all bands and per band.
+  double filter_shift_sigma_nm = 0.0;  // wavelength shift of the optics curve, rms
+  double ripple_rms = 0.0;             // relative rms of each ripple (common and per band)
+  std::array<double, 2> ripple_period_nm{40, 160};  // periods drawn uniformly in this range
 };
 
 struct CameraProfile {

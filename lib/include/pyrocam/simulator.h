@@ -69,6 +69,12 @@ struct CampaignSettings {
   int exposure_count = 30;
   int frames_per_setting = 10;
   double dark_temperature_c = 100;
+  // The plate's true temperature at each step differs from the nominal (thermocouple) value the
+  // manifest records: furnace non-uniformity, stabilisation and the thermocouple's tolerance.
+  // Normal, this standard deviation in degC, drawn per step from furnace_seed; 0: exact. The
+  // true values are written to furnace-truth.csv beside the manifest.
+  double furnace_error_sigma_c = 1.0;
+  std::uint64_t furnace_seed = 11;
   int width = 128, height = 128;
   double roi_area_px = 6000;  // elliptical, centred
   std::string image_extension = ".pgm";
