@@ -177,14 +177,22 @@ cv::Mat Simulator::render(const cv::Mat& temperature_c, double exposure_us, doub
     for (int s = r.start; s < r.end; ++s) {
       std::mt19937_64 rng(mix(frame_seed ^ static_cast<std::uint64_t>(s)));
       std::normal_distribution<double> normal(0.0, 1.0);
+      // Scenes are mostly uniform regions: the last rate of each band is usually the next one.
+      std::vector<float> last_t(static_cast<std::size_t>(profile_.band_count()), NAN);
+      std::vector<double> last_rate(last_t.size(), 0.0);
       for (int y = s * kStripe; y < std::min(height, (s + 1) * kStripe); ++y) {
         const float* t_row = temperature_c.ptr<float>(y);
         const float* fpn_row = dark_fpn_.ptr<float>(y);
         const float* prnu_row = prnu_.ptr<float>(y);
         for (int x = 0; x < width; ++x) {
           const int band = profile_.mosaic.band_at(x, y);
-          const double mean_e = electron_rate(band, t_row[x]) * t_s * emissivity * prnu_row[x] +
-                                nm.dark_current_e_per_s * t_s;
+          const auto b = static_cast<std::size_t>(band);
+          if (!(t_row[x] == last_t[b])) {
+            last_t[b] = t_row[x];
+            last_rate[b] = electron_rate(band, t_row[x]);
+          }
+          const double mean_e =
+              last_rate[b] * t_s * emissivity * prnu_row[x] + nm.dark_current_e_per_s * t_s;
           double e = mean_e;
           if (noise_) {
             if (mean_e < 30) {
