@@ -1,5 +1,6 @@
 #include "pyrocam/calibrate.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -145,6 +146,18 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   auto stage = [&](const std::string& name, std::size_t done, std::size_t total) {
     if (progress) progress(name, done, total);
   };
+  // The model must cover what it is calibrated on: the locus, the network and Table 4 too.
+  const std::vector<double> nominal_c = dataset.temperatures_c();
+  if (nominal_c.empty()) throw InputError(dataset.folder().string() + ": no frames to calibrate");
+  const auto [coolest, hottest] = std::minmax_element(nominal_c.begin(), nominal_c.end());
+  if (!(opt.min_temperature_c < opt.max_temperature_c) || *coolest < opt.min_temperature_c ||
+      *hottest > opt.max_temperature_c) {
+    std::ostringstream m;
+    m << dataset.folder().string() << ": calibration temperatures " << *coolest << "-" << *hottest
+      << " degC are outside the model's range " << opt.min_temperature_c << "-"
+      << opt.max_temperature_c << " degC (--min-temperature, --max-temperature)";
+    throw InputError(m.str());
+  }
   CalibrationOutcome out;
   ExtractOptions eo;
   eo.threads = opt.threads;

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "pyrocam/baselines.h"
+#include "pyrocam/calibrate.h"
 #include "pyrocam/calibration.h"
 #include "pyrocam/estimators.h"
 #include "pyrocam/model.h"
@@ -30,6 +31,7 @@ class Campaign : public ::testing::Test {
     s.width = 48;
     s.height = 48;
     s.roi_area_px = 900;
+    s.furnace_error_sigma_c = 0;  // rates are compared with the nominal temperatures' below
     write_furnace_campaign(dir_->path(), camera, s);
   }
   static void TearDownTestSuite() {
@@ -97,6 +99,19 @@ TEST_F(Campaign, rejects_a_profile_of_another_bit_depth_n) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("describes a 12-bit camera"), std::string::npos)
         << e.what();
+  }
+}
+
+TEST_F(Campaign, calibrate_rejects_data_outside_the_models_temperature_range_n) {
+  CalibrationOptions options;
+  options.min_temperature_c = 800;  // the campaign starts at 700 degC
+  options.mlp.epochs = 1;
+  try {
+    calibrate(Dataset::open(dir_->path()), *profile_, options);
+    ADD_FAILURE() << "calibrated data outside the model's range";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("700"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("800-3500"), std::string::npos) << e.what();
   }
 }
 
