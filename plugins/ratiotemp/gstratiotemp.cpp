@@ -223,8 +223,9 @@ std::string prepare_estimator(State& st, pyrocam::Method m) {
     if (a.max_difference_c > LUT_TOLERANCE_C || a.validity_differs * 100 > a.samples) {
       char what[256];
       g_snprintf(what, sizeof what,
-                 "its lookup table differs from its network by up to %.1f degC (at %.0f degC) "
-                 "and in %zu of %zu readings on the model's locus",
+                 "its lookup table differs from its network by up to %.1f degC (at %.0f degC "
+                 "on the model's locus; one reads where the other does not at %zu of %zu "
+                 "samples)",
                  a.max_difference_c, a.worst_temperature_c, a.validity_differs, a.samples);
       st.lut_problem = what;
       slot.reset();

@@ -650,6 +650,57 @@ TEST(RatioTempPipeline, snapshot_camera_through_the_chain) {
   EXPECT_NEAR(field_double(run.stats[0], "region-median-c"), 1000, 50);
 }
 
+// The bytes of every buffer that reaches the fakesink named "sink" of a pipeline run to EOS.
+std::vector<std::vector<std::uint8_t>> sink_frames(const std::string& description) {
+  std::vector<std::vector<std::uint8_t>> frames;
+  GError* error = nullptr;
+  GstElement* pipeline = gst_parse_launch(description.c_str(), &error);
+  EXPECT_TRUE(pipeline && !error) << (error ? error->message : "");
+  if (error) g_error_free(error);
+  if (!pipeline) return frames;
+  GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
+  g_object_set(sink, "signal-handoffs", TRUE, nullptr);
+  g_signal_connect(sink, "handoff",
+                   G_CALLBACK(+[](GstElement*, GstBuffer* b, GstPad*, gpointer out) {
+                     static_cast<std::vector<std::vector<std::uint8_t>>*>(out)->push_back(
+                         values_of<std::uint8_t>(b));
+                   }),
+                   &frames);
+  GstBus* bus = gst_element_get_bus(pipeline);
+  gst_element_set_state(pipeline, GST_STATE_PLAYING);
+  GstMessage* msg = gst_bus_timed_pop_filtered(
+      bus, 30 * GST_SECOND, static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
+  EXPECT_TRUE(msg && GST_MESSAGE_TYPE(msg) == GST_MESSAGE_EOS) << description;
+  if (msg) gst_message_unref(msg);
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(bus);
+  gst_object_unref(sink);
+  gst_object_unref(pipeline);
+  return frames;
+}
+
+TEST(RatioTempPipeline, temperatures_survive_an_ffv1_recording_bit_exactly) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
+  for (const char* e : {"avenc_ffv1", "avdec_ffv1", "matroskamux", "matroskademux"})
+    if (!have_element(e)) GTEST_SKIP() << e << " is not installed (gstreamer1.0-libav, -good)";
+  ScratchDir dir("ratiotemp-ffv1");
+  const std::string file = (dir / "t.mkv").string();
+  const auto direct = sink_frames(
+      "pyrocamsrc scene=plate temperature=1200 num-buffers=3 ! video/x-bayer,width=32,height=24 ! "
+      "darksub dark-level=50 ! demosaic25 ! ratiotemp model=" +
+      rgb_model_path() + " ! tee name=t ! queue ! avenc_ffv1 ! matroskamux ! filesink location=" +
+      file + " t. ! queue ! fakesink name=sink");
+  ASSERT_EQ(direct.size(), 3u);
+  const auto codes = std::vector<std::uint16_t>(
+      reinterpret_cast<const std::uint16_t*>(direct[0].data()),
+      reinterpret_cast<const std::uint16_t*>(direct[0].data() + direct[0].size()));
+  EXPECT_GT(count_nonzero(codes), 100u);  // the plate reads
+  const auto back = sink_frames("filesrc location=" + file +
+                                " ! matroskademux ! avdec_ffv1 ! video/x-raw,format=GRAY16_LE ! "
+                                "fakesink name=sink");
+  EXPECT_EQ(back, direct);
+}
+
 const std::string kColourChain =
     "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! "
     "demosaic25 ! ";
