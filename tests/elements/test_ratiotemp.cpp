@@ -278,6 +278,13 @@ TEST_F(RatioTemp, uncertainty_output_gives_the_library_uncertainty) {
       EXPECT_NEAR(out[i] / 10.0, lib.u.at<float>(static_cast<int>(i)), 0.0501) << i;
     }
   }
+  // The statistics stay those of the temperatures.
+  auto s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  double median = NAN;
+  EXPECT_TRUE(gst_structure_get_double(s[0], "median-c", &median));
+  EXPECT_DOUBLE_EQ(median, region_stats(lib.t).median_c);
+  free_all(s);
 }
 
 TEST_F(RatioTemp, saturated_nan_and_dim_bands_give_no_reading) {
