@@ -43,9 +43,27 @@ int main(int argc, char** argv) {
   std::printf("%s, %d frames, %u threads\n", caps_text, frames, g_get_num_processors());
   g_free(caps_text);
   for (int a = 6; a < argc; ++a) {
+    const std::string launch = "ratiotemp stats-interval=0 model=" + model + " " + argv[a];
+    // A configuration the element refuses would abort the harness: try it alone first.
+    GstElement* probe = gst_parse_launch(launch.c_str(), nullptr);
+    GstBus* bus = gst_bus_new();
+    gst_element_set_bus(probe, bus);
+    const bool starts = gst_element_set_state(probe, GST_STATE_PAUSED) != GST_STATE_CHANGE_FAILURE;
+    if (!starts) {
+      GstMessage* m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR);
+      GError* error = nullptr;
+      if (m) gst_message_parse_error(m, &error, nullptr);
+      std::printf("%-40s refused: %s\n", argv[a], error ? error->message : "?");
+      if (error) g_error_free(error);
+      if (m) gst_message_unref(m);
+    }
+    gst_element_set_state(probe, GST_STATE_NULL);
+    gst_element_set_bus(probe, nullptr);
+    gst_object_unref(bus);
+    gst_object_unref(probe);
+    if (!starts) continue;
     const auto t0 = std::chrono::steady_clock::now();
-    GstHarness* h = gst_harness_new_parse(
-        ("ratiotemp stats-interval=0 model=" + model + " " + argv[a]).c_str());
+    GstHarness* h = gst_harness_new_parse(launch.c_str());
     gst_harness_set_src_caps(h, gst_caps_ref(bands_caps));
     bool ok = gst_harness_push(h, gst_buffer_ref(bands)) == GST_FLOW_OK;
     if (ok) gst_buffer_unref(gst_harness_pull(h));
