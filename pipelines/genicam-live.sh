@@ -3,8 +3,8 @@
 #
 # A watchdog ends the pipeline with an error, and this script with exit status 1, when no frame
 # comes for WATCHDOG_MS: a camera unplugged, switched off, or losing packets never leaves a
-# frozen picture that looks live. (Aravis then spends up to about 10 s trying to stop the vanished
-# camera before the process exits.)
+# frozen picture that looks live. The diagnosis comes at once; Aravis then spends about 12 s on
+# control timeouts to the vanished camera before the process exits.
 #
 # Settings (environment variables, defaults in brackets):
 #   MODEL        calibrated model of THIS camera (required)

@@ -347,7 +347,7 @@ FakeGigECamera::FakeGigECamera(const std::string& log_path) {
   // One lock for every checkout on this machine: the control port is fixed.
   const std::string lock_path =
       (fs::temp_directory_path() / "pyrocam-fake-gv-camera.lock").string();
-  lock_fd_ = open(lock_path.c_str(), O_RDWR | O_CREAT, 0666);
+  lock_fd_ = open(lock_path.c_str(), O_RDONLY | O_CREAT, 0666);
   const bool locked =
       lock_fd_ >= 0 &&
       wait_until([this] { return flock(lock_fd_, LOCK_EX | LOCK_NB) == 0; }, milliseconds(60000));
