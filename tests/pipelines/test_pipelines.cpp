@@ -400,6 +400,21 @@ TEST_F(Stream, received_on_loopback_by_watch_stream) {
   std::cout << "[ info     ] worst PSNR of the received frames: " << worst << " dB\n";
 }
 
+TEST_F(Stream, screen_without_packets_ends_in_an_error_n) {
+  const int port = free_udp_port();
+  ASSERT_GT(port, 0);
+  const ScriptRun run = run_script("watch-stream.sh", {},
+                                   {{"ADDRESS", "127.0.0.1"},
+                                    {"PORT", std::to_string(port)},
+                                    {"WATCHDOG_MS", "500"},
+                                    {"SINK", "fakesink"}},
+                                   log("watch-stream"), kRunLimit);
+  ASSERT_TRUE(run.status.has_value()) << "hung";
+  EXPECT_EQ(*run.status, 1) << run.log;
+  EXPECT_NE(run.log.find("GstWatchdog:no-stream-packets"), std::string::npos) << run.log;
+  EXPECT_LT(run.seconds, 10.0);
+}
+
 // ---------------------------------------------------------------------------------------------
 
 class GenICam : public PipelineTest {
