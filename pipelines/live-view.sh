@@ -7,6 +7,7 @@
 #   CAPS         caps after the camera: format, size, frame rate      [video/x-bayer,width=320,height=240,framerate=30/1]
 #   DARK         darksub settings: dark-level=N or location=dark.pgm  [dark-level=50]
 #   NUM_BUFFERS  frames before the view ends; -1 runs until Ctrl-C    [-1]
+#   WATCHDOG_MS  end with an error when the camera sends nothing this long; 0: never [5000]
 #   SINK         where the view goes                                  [autovideosink]
 #
 # Example (the simulated melt pool, after scripts/main-job.sh made the model):
@@ -24,6 +25,7 @@ SOURCE=${SOURCE:-pyrocamsrc is-live=true}
 CAPS=${CAPS:-video/x-bayer,width=320,height=240,framerate=30/1}
 DARK=${DARK:-dark-level=50}
 NUM_BUFFERS=${NUM_BUFFERS:--1}
+WATCHDOG_MS=${WATCHDOG_MS:-5000}
 SINK=${SINK:-autovideosink}
 
 [[ -f $MODEL ]] || { echo "live-view: no model file $MODEL (set MODEL, or run scripts/main-job.sh)" >&2; exit 1; }
@@ -37,7 +39,8 @@ SINK=${SINK:-autovideosink}
 # so without the queue the start can deadlock (GStreamer 1.22).
 set -f # the fragments above split on spaces into gst-launch's words
 exec gst-launch-1.0 -e \
-  $SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! tee name=camera \
+  $SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! \
+    watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
   camera. ! queue ! bayer2rgb ! video/x-raw,format=RGBA ! mix.sink_0 \
   camera. ! queue ! darksub $DARK ! demosaic25 ! ratiotemp "model=$MODEL" ! \
     thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1 \

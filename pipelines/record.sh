@@ -5,7 +5,8 @@
 # a new segment every SEGMENT_SECONDS, so that a crash loses at most the segment being written.
 # Ctrl-C (SIGINT) sends EOS and finalises the last segment; stop a recording with SIGINT, not
 # SIGTERM or SIGKILL. The colour-mapped view (overlay over the camera's colour image) is written
-# to OUT/view.png, refreshed SNAPSHOT_RATE times a second.
+# to OUT/view.png, refreshed SNAPSHOT_RATE times a second. A camera that sends nothing for
+# WATCHDOG_MS ends the recording with an error: the segments already closed stay intact.
 #
 # Settings (environment variables, defaults in brackets):
 #   MODEL            calibrated model from pyrocam-calib calibrate        [out/model-rgb.json]
@@ -14,12 +15,16 @@
 #   CAPS             caps after the camera: format, size, frame rate     [video/x-bayer,width=320,height=240,framerate=30/1]
 #   DARK             darksub settings: dark-level=N or location=dark.pgm [dark-level=50]
 #   NUM_BUFFERS      frames to record; -1 records until Ctrl-C           [-1]
+#   WATCHDOG_MS      end with an error when the camera sends nothing this long; 0: never [5000]
 #   SEGMENT_SECONDS  length of one segment in seconds (decimals allowed) [10]
 #   SNAPSHOT_RATE    snapshots per second (at most the frame rate)       [1]
 #
 # Example: 300 frames of the simulated melt pool (10 s at 30 fps) into out/pool
 #   OUT=out/pool NUM_BUFFERS=300 SOURCE="pyrocamsrc scene=melt-pool" pipelines/record.sh
 #   pipelines/playback.sh out/pool
+# From a GenICam camera, with its own model and dark:
+#   MODEL=cam.json DARK=location=cam-dark.pgm SOURCE="aravissrc camera-name=192.168.1.42" \
+#     CAPS=video/x-bayer,format=rggb,width=1024,height=768 OUT=out/run2 pipelines/record.sh
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 if [[ -z ${GST_PLUGIN_PATH:-} && -f $here/../build/plugins/libgstpyrocam.so ]]; then
@@ -32,6 +37,7 @@ SOURCE=${SOURCE:-pyrocamsrc is-live=true}
 CAPS=${CAPS:-video/x-bayer,width=320,height=240,framerate=30/1}
 DARK=${DARK:-dark-level=50}
 NUM_BUFFERS=${NUM_BUFFERS:--1}
+WATCHDOG_MS=${WATCHDOG_MS:-5000}
 SEGMENT_SECONDS=${SEGMENT_SECONDS:-10}
 SNAPSHOT_RATE=${SNAPSHOT_RATE:-1}
 
@@ -54,7 +60,8 @@ fi
 # so without the queue the start can deadlock (GStreamer 1.22).
 set -f # the fragments above split on spaces into gst-launch's words
 exec gst-launch-1.0 -e \
-  $SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! tee name=camera \
+  $SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! \
+    watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
   camera. ! queue ! darksub $DARK ! demosaic25 ! ratiotemp "model=$MODEL" ! tee name=temperature \
   temperature. ! queue ! avenc_ffv1 gop-size=1 ! \
     splitmuxsink muxer=matroskamux max-size-time="$segment_ns" "location=$OUT/temperature-%05d.mkv" \

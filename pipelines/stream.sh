@@ -11,6 +11,7 @@
 #   CAPS         caps after the camera: format, size, frame rate      [video/x-bayer,width=320,height=240,framerate=30/1]
 #   DARK         darksub settings: dark-level=N or location=dark.pgm  [dark-level=50]
 #   NUM_BUFFERS  frames to send; -1 streams until Ctrl-C              [-1]
+#   WATCHDOG_MS  end with an error when the camera sends nothing this long; 0: never [5000]
 #
 # Example: to every screen listening on the multicast group 239.255.42.42, port 5004
 #   HOST=239.255.42.42 pipelines/stream.sh
@@ -30,6 +31,7 @@ SOURCE=${SOURCE:-pyrocamsrc is-live=true}
 CAPS=${CAPS:-video/x-bayer,width=320,height=240,framerate=30/1}
 DARK=${DARK:-dark-level=50}
 NUM_BUFFERS=${NUM_BUFFERS:--1}
+WATCHDOG_MS=${WATCHDOG_MS:-5000}
 
 [[ -f $MODEL ]] || { echo "stream: no model file $MODEL (set MODEL, or run scripts/main-job.sh)" >&2; exit 1; }
 fps=$(sed -n 's/.*framerate=\(([a-z]*)\)\{0,1\} *\([0-9]*\)\/\([0-9]*\).*/\2 \3/p' <<<"$CAPS")
@@ -45,7 +47,8 @@ key_int=$(awk -v f="${fps:-30 1}" -v s="$KEY_SECONDS" 'BEGIN { split(f, r, " ");
 # so without the queue the start can deadlock (GStreamer 1.22).
 set -f # the fragments above split on spaces into gst-launch's words
 exec gst-launch-1.0 -e \
-  $SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! tee name=camera \
+  $SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! \
+    watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
   camera. ! queue ! bayer2rgb ! video/x-raw,format=RGBA ! mix.sink_0 \
   camera. ! queue ! darksub $DARK ! demosaic25 ! ratiotemp "model=$MODEL" ! \
     thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1 \

@@ -377,4 +377,12 @@ void FakeGigECamera::kill_now() {
   }
 }
 
+void FakeGigECamera::freeze() {
+  if (process_) process_->signal_group(SIGSTOP);
+}
+
+void FakeGigECamera::thaw() {
+  if (process_) process_->signal_group(SIGCONT);
+}
+
 }  // namespace pyrocam::test

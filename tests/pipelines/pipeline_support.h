@@ -110,6 +110,8 @@ class FakeGigECamera {
   bool ok() const { return error_.empty(); }
   const std::string& error() const { return error_; }
   void kill_now();  // SIGKILL: the camera vanishes as if unplugged
+  void freeze();    // SIGSTOP: the camera stops sending but keeps its sockets
+  void thaw();      // SIGCONT
 
  private:
   int lock_fd_ = -1;

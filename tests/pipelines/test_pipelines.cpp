@@ -484,6 +484,53 @@ TEST_F(GenICam, camera_that_vanishes_ends_in_a_clear_error_n) {
   EXPECT_NE(view.log().find("GstWatchdog:camera-sent-no-frame"), std::string::npos) << view.log();
 }
 
+TEST_F(GenICam, recording_from_a_camera_that_stops_keeps_its_closed_segments_n) {
+  FakeGigECamera camera(log("camera"));
+  ASSERT_TRUE(camera.ok()) << camera.error();
+  const std::string rec = (dir / "rec").string();
+  Process recording({pipeline_script("record.sh")},
+                    {{"MODEL", rgb_model()},
+                     {"DARK", "dark-level=0"},
+                     {"OUT", rec},
+                     {"SOURCE", "aravissrc camera-name=127.0.0.1 exposure=10000 gain=0"},
+                     {"CAPS", "video/x-bayer,format=rggb,width=128,height=128"},
+                     {"SEGMENT_SECONDS", "0.4"},
+                     {"WATCHDOG_MS", "1000"}},
+                    log("record"));
+  const auto segments = [&] { return files_in(rec, "temperature-", ".mkv"); };
+  ASSERT_TRUE(wait_until([&] { return segments().size() >= 3 || !recording.running(); },
+                         milliseconds(20000)))
+      << recording.log();
+  ASSERT_TRUE(recording.running()) << recording.log();
+
+  // The camera stops sending (frozen, not gone); once the error is out it resumes, so that
+  // Aravis stops it without waiting for control-channel timeouts.
+  camera.freeze();
+  const bool diagnosed = wait_until(
+      [&] { return recording.log().find("GstWatchdog:camera-sent-no-frame") != std::string::npos; },
+      milliseconds(5000));
+  camera.thaw();
+  ASSERT_TRUE(diagnosed) << "no watchdog error within 5 s: " << recording.log();
+  const auto status = recording.wait_for(milliseconds(30000));
+  ASSERT_TRUE(status.has_value()) << recording.log();
+  EXPECT_NE(*status, 0) << recording.log();
+
+  const auto files = segments();
+  ASSERT_GE(files.size(), 3u);
+  std::size_t frames = 0;
+  for (std::size_t s = 0; s + 1 < files.size(); ++s) {
+    const Video seg = decode_segment(files[s]);
+    ASSERT_TRUE(seg.error.empty()) << files[s] << ": " << seg.error;
+    EXPECT_FALSE(seg.frames.empty()) << files[s];
+    EXPECT_EQ(seg.width, 128);
+    EXPECT_EQ(seg.height, 128);
+    for (const Bytes& f : seg.frames) EXPECT_EQ(f.size(), static_cast<std::size_t>(128 * 128 * 2));
+    frames += seg.frames.size();
+  }
+  std::cout << "[ info     ] " << files.size() - 1 << " closed segments kept, " << frames
+            << " frames\n";
+}
+
 TEST_F(GenICam, rejects_a_missing_dark_n) {
   Env env = settings(5);
   env["DARK"] = "";
