@@ -1,16 +1,63 @@
 #!/usr/bin/env bash
-# README command 1: install what is missing, build, and run the main job on the built-in default
-# (the simulated colour camera): a furnace calibration campaign and a melt-pool scene sequence.
+# README command 1: install what is missing, build, calibrate the simulated colour camera once
+# (a furnace campaign, then pyrocam-calib calibrate), and record a simulated melt pool through
+# the full chain (pyrocamsrc -> darksub -> demosaic25 -> ratiotemp -> thermalcolormap): a
+# radiometric recording (FFV1/Matroska segments) and a colour-mapped snapshot PNG.
+#
+# Settings (environment variables, defaults in brackets):
+#   PYROCAM_OUT  folder for everything it writes                         [out]
+#   MODEL        the model to use; calibrated first if the file is missing [PYROCAM_OUT/model-rgb.json]
+#   FRAMES       melt-pool frames to record (30 a second)               [300]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
 scripts/build.sh
+
 out=${PYROCAM_OUT:-out}
-mkdir -p "$out"
+model=${MODEL:-$out/model-rgb.json}
+frames=${FRAMES:-300}
 tool=build/calib-tool/pyrocam-calib
-$tool simulate campaign --profile rgb-reference --unit typical --frames 3 --out "$out/furnace-rgb"
-$tool simulate scene --scene melt-pool --profile rgb-reference --unit typical --frames 30 \
-  --out "$out/melt-pool"
+mkdir -p "$out"
+
+if [[ -f $model ]]; then
+  echo "main-job: using the model $model (delete it to calibrate again)"
+else
+  echo "main-job: no model yet: simulated furnace campaign of the colour camera (rgb-reference,"
+  echo "          a typical unit), then calibration; about a minute"
+  rm -rf "$out/furnace-rgb"
+  "$tool" simulate campaign --profile rgb-reference --unit typical --frames 3 \
+    --out "$out/furnace-rgb"
+  "$tool" calibrate --dataset "$out/furnace-rgb" --profile rgb-reference --out "$model"
+fi
+
+recording=$out/melt-pool-$(date +%Y%m%d-%H%M%S)
+echo "main-job: recording $frames frames of the simulated melt pool into $recording"
+# Not live: the frames are computed as fast as the machine can, with the same timestamps.
+MODEL=$model OUT=$recording NUM_BUFFERS=$frames SEGMENT_SECONDS=2 SNAPSHOT_RATE=1 \
+  CAPS=video/x-bayer,width=320,height=240,framerate=30/1 \
+  SOURCE="pyrocamsrc scene=melt-pool" pipelines/record.sh >"$out/record.log" 2>&1 || {
+  cat "$out/record.log" >&2
+  echo "main-job: the recording failed (log: $out/record.log)" >&2
+  exit 1
+}
+
+# Read the recording back: every frame must decode.
+shopt -s nullglob
+segments=("$recording"/temperature-*.mkv)
+bytes=$(gst-launch-1.0 -q splitmuxsrc "location=$recording/temperature-*.mkv" ! avdec_ffv1 ! \
+  video/x-raw,format=GRAY16_LE ! fdsink fd=1 | wc -c)
+decoded=$((bytes / (320 * 240 * 2)))
+if ((decoded != frames)); then
+  echo "main-job: the recording decodes to $decoded frames, not $frames" >&2
+  exit 1
+fi
+
+report=${model%.json}-report.html
 echo
-echo "calibration dataset: $out/furnace-rgb/manifest.csv"
-echo "melt-pool sequence:  $out/melt-pool/manifest.csv (true temperatures in $out/melt-pool/truth/)"
+echo "model:             $model"
+[[ -f $report ]] && echo "calibration:       $report"
+echo "thermal recording: $recording/ (${#segments[@]} segments, $decoded frames, all decoded back:"
+echo "                   320x240 GRAY16_LE in FFV1/Matroska, 0.1 K per step, 0 = no reading)"
+printf '                   %s\n' "${segments[@]}"
+echo "colour snapshot:   $recording/view.png"
+echo "play it back:      pipelines/playback.sh $recording"

@@ -1,0 +1,82 @@
+#!/usr/bin/env bash
+# GenICam live view: a real camera (aravissrc) through the calibrated chain; a camera that stops sending ends in an error.
+#
+# A watchdog ends the pipeline with an error, and this script with exit status 1, when no frame
+# comes for WATCHDOG_MS: a camera unplugged, switched off, or losing packets never leaves a
+# frozen picture that looks live. The diagnosis comes at once; Aravis then spends about 12 s on
+# control timeouts to the vanished camera before the process exits.
+#
+# Settings (environment variables, defaults in brackets):
+#   MODEL        calibrated model of THIS camera (required)
+#   DARK         darksub settings for this camera (required): location=dark.pgm or dark-level=N
+#   CAMERA       camera name (arv-tool-0.8 lists them) or IP address  [the first camera found]
+#   CAPS         caps after the camera: Bayer format, size, frame rate [video/x-bayer,format=rggb]
+#   EXPOSURE_US  exposure time in microseconds                        [the camera's setting]
+#   GAIN_DB      gain in dB                                           [the camera's setting]
+#   WATCHDOG_MS  longest wait for a frame, in ms                      [2000]
+#   NUM_BUFFERS  frames before the view ends; -1 runs until Ctrl-C    [-1]
+#   SINK         where the view goes                                  [autovideosink]
+#
+# Example:
+#   MODEL=cam42.json DARK=location=cam42-dark.pgm CAMERA=192.168.1.42 \
+#     CAPS=video/x-bayer,format=rggb,width=1024,height=768 pipelines/genicam-live.sh
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+if [[ -z ${GST_PLUGIN_PATH:-} && -f $here/../build/plugins/libgstpyrocam.so ]]; then
+  export GST_PLUGIN_PATH=$here/../build/plugins
+fi
+
+MODEL=${MODEL:-}
+DARK=${DARK:-}
+CAMERA=${CAMERA:-}
+CAPS=${CAPS:-video/x-bayer,format=rggb}
+EXPOSURE_US=${EXPOSURE_US:-}
+GAIN_DB=${GAIN_DB:-}
+WATCHDOG_MS=${WATCHDOG_MS:-2000}
+NUM_BUFFERS=${NUM_BUFFERS:--1}
+SINK=${SINK:-autovideosink}
+
+# A model or dark level that belongs to another camera gives temperatures that look right and are
+# wrong: no defaults for these two.
+[[ -n $MODEL ]] || { echo "genicam-live: set MODEL to the calibrated model of this camera" >&2; exit 2; }
+[[ -f $MODEL ]] || { echo "genicam-live: no model file $MODEL" >&2; exit 1; }
+[[ -n $DARK ]] || { echo "genicam-live: set DARK to this camera's dark: DARK=location=dark.pgm or DARK=dark-level=N" >&2; exit 2; }
+
+camera=(aravissrc num-buffers="$NUM_BUFFERS")
+[[ -n $CAMERA ]] && camera+=("camera-name=$CAMERA")
+[[ -n $EXPOSURE_US ]] && camera+=("exposure=$EXPOSURE_US")
+[[ -n $GAIN_DB ]] && camera+=("gain=$GAIN_DB")
+
+# compositor, live: start-time-selection=first starts its output at the camera's first frame
+# (not at 0, which adds frames before it and can negotiate a 1x1 picture); latency=100 ms waits
+# that long for the slower temperature branch, so that no frame goes out without its overlay.
+# The queue after it keeps its thread free: in a live pipeline the first sink to get a frame
+# waits for the others, while compositor answers the tee's allocation queries from that thread,
+# so without the queue the start can deadlock (GStreamer 1.22).
+set -f # the fragments above split on spaces into gst-launch's words
+set +e
+# gst-launch's messages pass through a filter that adds a plain diagnosis to the watchdog's
+# error at once (Aravis may then take seconds to let go of the vanished camera). The filter
+# ignores Ctrl-C so that gst-launch can still print while it stops.
+gst-launch-1.0 \
+  "${camera[@]}" ! $CAPS ! watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
+  camera. ! queue ! bayer2rgb ! video/x-raw,format=RGBA ! mix.sink_0 \
+  camera. ! queue ! darksub $DARK ! demosaic25 ! ratiotemp "model=$MODEL" ! \
+    thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1 \
+  compositor name=mix start-time-selection=first latency=100000000 \
+    sink_0::zorder=0 sink_1::zorder=1 ! video/x-raw,format=RGBA ! queue ! videoconvert ! $SINK \
+  2>&1 | (
+  trap '' INT
+  stopped=0
+  while IFS= read -r line; do
+    printf '%s\n' "$line"
+    if [[ $line == *GstWatchdog:camera-sent-no-frame:* && $stopped == 0 ]]; then
+      echo "genicam-live: camera ${CAMERA:-(first found)} sent no frame for $WATCHDOG_MS ms: unplugged, switched off, or losing packets" >&2
+      stopped=1
+    fi
+  done
+  exit $((stopped ? 3 : 0)))
+statuses=("${PIPESTATUS[@]}")
+set -e
+if ((statuses[1] == 3)); then exit 1; fi
+exit "${statuses[0]}"

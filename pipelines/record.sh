@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# Record: temperatures as 16-bit lossless video (FFV1 in Matroska segments) plus a colour-mapped snapshot PNG.
+#
+# The temperatures (GRAY16_LE, 0.1 K per step, 0 = no reading) go to OUT/temperature-NNNNN.mkv,
+# a new segment every SEGMENT_SECONDS, so that a crash loses at most the segment being written.
+# Ctrl-C (SIGINT) sends EOS and finalises the last segment; stop a recording with SIGINT, not
+# SIGTERM or SIGKILL. The colour-mapped view (overlay over the camera's colour image) is written
+# to OUT/view.png, refreshed SNAPSHOT_RATE times a second. A camera that sends nothing for
+# WATCHDOG_MS ends the recording with an error: the segments already closed stay intact.
+#
+# Settings (environment variables, defaults in brackets):
+#   MODEL            calibrated model from pyrocam-calib calibrate        [out/model-rgb.json]
+#   OUT              folder for the segments and the snapshot            [out/recording]
+#   SOURCE           camera element with its properties                  [pyrocamsrc is-live=true]
+#   CAPS             caps after the camera: format, size, frame rate     [video/x-bayer,width=320,height=240,framerate=30/1]
+#   DARK             darksub settings: dark-level=N or location=dark.pgm [dark-level=50]
+#   NUM_BUFFERS      frames to record; -1 records until Ctrl-C           [-1]
+#   WATCHDOG_MS      end with an error when the camera sends nothing this long; 0: never [5000]
+#   SEGMENT_SECONDS  length of one segment in seconds (decimals allowed) [10]
+#   SNAPSHOT_RATE    snapshots per second (at most the frame rate)       [1]
+#
+# Example: 300 frames of the simulated melt pool (10 s at 30 fps) into out/pool
+#   OUT=out/pool NUM_BUFFERS=300 SOURCE="pyrocamsrc scene=melt-pool" pipelines/record.sh
+#   pipelines/playback.sh out/pool
+# From a GenICam camera, with its own model and dark:
+#   MODEL=cam.json DARK=location=cam-dark.pgm SOURCE="aravissrc camera-name=192.168.1.42" \
+#     CAPS=video/x-bayer,format=rggb,width=1024,height=768 OUT=out/run2 pipelines/record.sh
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+if [[ -z ${GST_PLUGIN_PATH:-} && -f $here/../build/plugins/libgstpyrocam.so ]]; then
+  export GST_PLUGIN_PATH=$here/../build/plugins
+fi
+
+MODEL=${MODEL:-out/model-rgb.json}
+OUT=${OUT:-out/recording}
+SOURCE=${SOURCE:-pyrocamsrc is-live=true}
+CAPS=${CAPS:-video/x-bayer,width=320,height=240,framerate=30/1}
+DARK=${DARK:-dark-level=50}
+NUM_BUFFERS=${NUM_BUFFERS:--1}
+WATCHDOG_MS=${WATCHDOG_MS:-5000}
+SEGMENT_SECONDS=${SEGMENT_SECONDS:-10}
+SNAPSHOT_RATE=${SNAPSHOT_RATE:-1}
+
+[[ -f $MODEL ]] || { echo "record: no model file $MODEL (set MODEL, or run scripts/main-job.sh)" >&2; exit 1; }
+segment_ns=$(awk -v s="$SEGMENT_SECONDS" 'BEGIN { if (s + 0 <= 0) exit 1; printf "%.0f", s * 1e9 }') ||
+  { echo "record: SEGMENT_SECONDS must be a positive number of seconds, not '$SEGMENT_SECONDS'" >&2; exit 2; }
+mkdir -p "$OUT"
+if compgen -G "$OUT/temperature-*.mkv" >/dev/null; then
+  echo "record: $OUT already holds a recording; choose another OUT" >&2
+  exit 1
+fi
+
+# Every FFV1 frame is a key frame (gop-size=1): a segment can start on any frame and decodes
+# alone. The snapshot branch keeps SNAPSHOT_RATE frames a second, so PNG encoding costs little.
+# compositor, live: start-time-selection=first starts its output at the camera's first frame
+# (not at 0, which adds frames before it and can negotiate a 1x1 picture); latency=100 ms waits
+# that long for the slower temperature branch, so that no frame goes out without its overlay.
+# The queue after it keeps its thread free: in a live pipeline the first sink to get a frame
+# waits for the others, while compositor answers the tee's allocation queries from that thread,
+# so without the queue the start can deadlock (GStreamer 1.22).
+set -f # the fragments above split on spaces into gst-launch's words
+exec gst-launch-1.0 -e \
+  $SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! \
+    watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
+  camera. ! queue ! darksub $DARK ! demosaic25 ! ratiotemp "model=$MODEL" ! tee name=temperature \
+  temperature. ! queue ! avenc_ffv1 gop-size=1 ! \
+    splitmuxsink muxer=matroskamux max-size-time="$segment_ns" "location=$OUT/temperature-%05d.mkv" \
+  temperature. ! queue ! thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1 \
+  camera. ! queue ! bayer2rgb ! video/x-raw,format=RGBA ! mix.sink_0 \
+  compositor name=mix start-time-selection=first latency=100000000 \
+    sink_0::zorder=0 sink_1::zorder=1 ! video/x-raw,format=RGBA ! queue ! \
+    videorate drop-only=true max-rate="$SNAPSHOT_RATE" ! videoconvert ! video/x-raw,format=RGB ! \
+    pngenc ! multifilesink "location=$OUT/view.png"

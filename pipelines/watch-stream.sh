@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Watch: a monitoring screen showing the RTP/UDP H.264 overlay stream sent by stream.sh.
+#
+# Settings (environment variables, defaults in brackets):
+#   ADDRESS      address to listen on: this machine's, or the multicast group stream.sh sends to [0.0.0.0]
+#   PORT         UDP port                                             [5004]
+#   LATENCY_MS   jitter buffer: how late a packet may come, in ms     [100]
+#   WATCHDOG_MS  end with an error after this long without a packet; 0 waits forever [10000]
+#   SINK         where the frames go                                  [autovideosink]
+#
+# It shows the stream until Ctrl-C. When no packet comes for WATCHDOG_MS (the sender stopped, the
+# network broke) it ends with an error from the element "no-stream-packets", so that a frozen
+# picture is never taken for a live one.
+#
+# Example: pipelines/watch-stream.sh   (while pipelines/stream.sh runs on the camera machine)
+set -euo pipefail
+
+ADDRESS=${ADDRESS:-0.0.0.0}
+PORT=${PORT:-5004}
+LATENCY_MS=${LATENCY_MS:-100}
+WATCHDOG_MS=${WATCHDOG_MS:-10000}
+SINK=${SINK:-autovideosink}
+
+set -f # the fragments above split on spaces into gst-launch's words
+exec gst-launch-1.0 \
+  udpsrc address="$ADDRESS" port="$PORT" \
+    caps=application/x-rtp,media=video,encoding-name=H264,clock-rate=90000,payload=96 ! \
+  watchdog name=no-stream-packets timeout="$WATCHDOG_MS" ! \
+  rtpjitterbuffer latency="$LATENCY_MS" ! rtph264depay ! h264parse ! avdec_h264 ! \
+  videoconvert ! $SINK

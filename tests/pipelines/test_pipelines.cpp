@@ -1,0 +1,544 @@
+// The scripts in pipelines/, each run as users run it (a child process with settings in its
+// environment) with a bounded number of frames and a time limit, and what came out checked
+// against the same frames computed directly by a reference pipeline in this process:
+// recorded temperatures bit-exact, frame counts, caps, the overlay pixel by pixel, a stream
+// received on loopback, a networked GigE Vision camera, and a camera that vanishes.
+#include <signal.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <set>
+#include <thread>
+
+#include "element_support.h"
+#include "pipeline_support.h"
+#include "test_support.h"
+
+namespace pyrocam::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Small frames keep every run within seconds; the simulated camera is seeded, so the same
+// settings give the same frames in a script and in a reference pipeline.
+constexpr int kWidth = 160, kHeight = 120, kFps = 30;
+const std::string kCaps = "video/x-bayer,width=160,height=120,framerate=30/1";
+const std::string kDark = "dark-level=50";
+const std::string kScene = "pyrocamsrc scene=melt-pool seed=7";
+const std::string kLiveScene = kScene + " is-live=true";
+constexpr milliseconds kRunLimit(60000);
+
+std::string rgb_model() { return test_model("test-model-rgb.json"); }
+
+// Raw camera frames to temperatures, as in the scripts.
+std::string temperature_elements() {
+  return "darksub " + kDark + " ! demosaic25 ! ratiotemp model=\"" + rgb_model() + "\"";
+}
+std::string temperature_chain() { return kCaps + " ! " + temperature_elements(); }
+
+// The reference frames, computed here without the scripts.
+Video reference_temperatures(int frames) {
+  return pull_frames(kScene + " num-buffers=" + std::to_string(frames) + " ! " +
+                     temperature_chain() + " ! appsink name=out");
+}
+Video reference_overlay(int frames) {
+  return pull_frames(
+      kScene + " num-buffers=" + std::to_string(frames) + " ! " + temperature_chain() +
+      " ! thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! appsink name=out");
+}
+Video reference_camera(int frames) {
+  return pull_frames(kScene + " num-buffers=" + std::to_string(frames) + " ! " + kCaps +
+                     " ! bayer2rgb ! video/x-raw,format=RGBA ! appsink name=out");
+}
+
+// The overlay over the camera image as the stream sends it, before H.264: through I420 (4:2:0).
+Video reference_stream_view(int frames) {
+  return pull_frames(kScene + " num-buffers=" + std::to_string(frames) + " ! " + kCaps +
+                     " ! tee name=camera camera. ! queue ! bayer2rgb ! video/x-raw,format=RGBA ! "
+                     "mix.sink_0 camera. ! queue ! " +
+                     temperature_elements() +
+                     " ! thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1 "
+                     "compositor name=mix sink_0::zorder=0 sink_1::zorder=1 ! "
+                     "video/x-raw,format=RGBA ! videoconvert ! video/x-raw,format=I420 ! "
+                     "videoconvert ! video/x-raw,format=RGBA ! appsink name=out");
+}
+
+Video decode_segment(const std::string& path) {
+  return pull_frames("filesrc location=\"" + path +
+                     "\" ! matroskademux ! avdec_ffv1 ! video/x-raw,format=GRAY16_LE ! "
+                     "appsink name=out");
+}
+
+// Raw frames written one per file by multifilesink.
+std::vector<Bytes> frames_in_files(const std::string& dir, const std::string& prefix) {
+  std::vector<Bytes> out;
+  for (const auto& f : files_in(dir, prefix, ".rgba")) out.push_back(read_bytes(f));
+  return out;
+}
+
+std::string raw_sink(const ScratchDir& dir, const std::string& prefix) {
+  return "video/x-raw,format=RGBA ! multifilesink sync=false location=\"" +
+         (dir / (prefix + "%05d.rgba")).string() + "\"";
+}
+
+// The melt pool must give readings, or a bit-exact comparison of empty frames would prove little.
+void expect_readings(const Video& temperatures) {
+  std::size_t valid = 0;
+  for (const Bytes& f : temperatures.frames)
+    for (std::size_t i = 0; i + 1 < f.size(); i += 2) valid += (f[i] | f[i + 1]) != 0;
+  EXPECT_GE(valid, temperatures.frames.size() * 10)
+      << "the reference frames hold fewer than 10 readings a frame";
+}
+
+class PipelineTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp", "thermalcolormap"})
+      REQUIRE_ELEMENT(e);
+    ASSERT_TRUE(fs::exists(rgb_model())) << rgb_model();
+  }
+  ScratchDir dir{"pipeline"};
+  std::string log(const std::string& name) const { return (dir / (name + ".log")).string(); }
+};
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(Files, every_pipeline_has_a_purpose_line_and_a_test) {
+  const std::set<std::string> tested = {"live-view.sh", "record.sh",       "playback.sh",
+                                        "stream.sh",    "watch-stream.sh", "genicam-live.sh"};
+  std::set<std::string> found;
+  for (const auto& entry : fs::directory_iterator(pipeline_script(""))) {
+    const std::string name = entry.path().filename().string();
+    found.insert(name);
+    EXPECT_TRUE(tested.count(name)) << name << " is in pipelines/ but no test runs it";
+    std::ifstream in(entry.path());
+    std::string shebang, purpose;
+    std::getline(in, shebang);
+    std::getline(in, purpose);
+    EXPECT_EQ(shebang, "#!/usr/bin/env bash") << name;
+    EXPECT_EQ(purpose.rfind("# ", 0), 0u) << name << ": line 2 must be '# <purpose>'";
+    EXPECT_GE(purpose.size(), 30u) << name << ": a one-line purpose on line 2";
+    EXPECT_TRUE((fs::status(entry.path()).permissions() & fs::perms::owner_exec) != fs::perms::none)
+        << name << " is not executable";
+  }
+  for (const auto& name : tested) EXPECT_TRUE(found.count(name)) << name << " is missing";
+}
+
+// ---------------------------------------------------------------------------------------------
+
+class LiveView : public PipelineTest {};
+
+TEST_F(LiveView, overlay_over_the_camera_image_frame_by_frame) {
+  constexpr int kFrames = 20;
+  const ScriptRun run = run_script("live-view.sh", {},
+                                   {{"MODEL", rgb_model()},
+                                    {"SOURCE", kScene},
+                                    {"CAPS", kCaps},
+                                    {"NUM_BUFFERS", std::to_string(kFrames)},
+                                    {"SINK", raw_sink(dir, "view-")}},
+                                   log("live-view"), kRunLimit);
+  ASSERT_EQ(run.status, 0) << run.log;
+  const auto frames = frames_in_files(dir.path().string(), "view-");
+  ASSERT_EQ(frames.size(), static_cast<std::size_t>(kFrames));
+  const Video camera = reference_camera(kFrames), overlay = reference_overlay(kFrames);
+  ASSERT_EQ(camera.frames.size(), static_cast<std::size_t>(kFrames)) << camera.error;
+  ASSERT_EQ(overlay.frames.size(), static_cast<std::size_t>(kFrames)) << overlay.error;
+  int opaque = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    ASSERT_EQ(frames[i].size(), static_cast<std::size_t>(kWidth * kHeight * 4)) << "frame " << i;
+    const CompositeCheck c = check_composite(frames[i], camera.frames[i], overlay.frames[i]);
+    EXPECT_EQ(c.wrong, 0) << "frame " << i << ": " << c.opaque << " opaque, " << c.transparent
+                          << " transparent, " << c.blended << " blended overlay pixels";
+    opaque += c.opaque;
+  }
+  EXPECT_GT(opaque, kFrames * 100)
+      << "no overlay drawn (no opaque pixel: no reading, no scale bar)";
+}
+
+TEST_F(LiveView, rejects_a_missing_model_n) {
+  const std::string missing = (dir / "no-such-model.json").string();
+  const ScriptRun run = run_script("live-view.sh", {},
+                                   {{"MODEL", missing}, {"NUM_BUFFERS", "5"}, {"SINK", "fakesink"}},
+                                   log("live-view"), kRunLimit);
+  ASSERT_TRUE(run.status.has_value()) << "hung";
+  EXPECT_NE(*run.status, 0);
+  EXPECT_NE(run.log.find(missing), std::string::npos) << run.log;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+class Record : public PipelineTest {
+ protected:
+  Env settings(const std::string& source, int frames) const {
+    return {{"MODEL", rgb_model()},
+            {"OUT", (dir / "rec").string()},
+            {"SOURCE", source},
+            {"CAPS", kCaps},
+            {"NUM_BUFFERS", std::to_string(frames)},
+            {"SEGMENT_SECONDS", "0.5"},
+            {"SNAPSHOT_RATE", std::to_string(kFps)}};
+  }
+  std::vector<std::string> segments() const {
+    return files_in((dir / "rec").string(), "temperature-", ".mkv");
+  }
+  static constexpr int kFramesPerSegment = kFps / 2;  // SEGMENT_SECONDS = 0.5
+};
+
+TEST_F(Record, temperatures_decode_bit_exact_in_segments_with_a_snapshot) {
+  constexpr int kFrames = 3 * kFramesPerSegment;
+  const ScriptRun run =
+      run_script("record.sh", {}, settings(kScene, kFrames), log("record"), kRunLimit);
+  ASSERT_EQ(run.status, 0) << run.log;
+
+  const Video reference = reference_temperatures(kFrames);
+  ASSERT_EQ(reference.frames.size(), static_cast<std::size_t>(kFrames)) << reference.error;
+  ASSERT_EQ(reference.frames[0].size(), static_cast<std::size_t>(kWidth * kHeight * 2));
+  expect_readings(reference);
+
+  const auto files = segments();
+  ASSERT_EQ(files.size(), 3u);
+  int next = 0;
+  for (const auto& file : files) {
+    // Each segment decodes alone: its own key frames and header.
+    const Video seg = decode_segment(file);
+    ASSERT_TRUE(seg.error.empty()) << file << ": " << seg.error;
+    EXPECT_EQ(seg.frames.size(), static_cast<std::size_t>(kFramesPerSegment)) << file;
+    EXPECT_EQ(seg.format, "GRAY16_LE");
+    EXPECT_EQ(seg.width, kWidth);
+    EXPECT_EQ(seg.height, kHeight);
+    EXPECT_EQ(seg.fps_n, kFps);
+    EXPECT_EQ(seg.fps_d, 1);
+    for (const Bytes& frame : seg.frames) {
+      ASSERT_LT(next, kFrames);
+      EXPECT_TRUE(frame == reference.frames[next]) << file << ": frame " << next << " differs";
+      ++next;
+    }
+  }
+  EXPECT_EQ(next, kFrames);
+
+  // The container holds FFV1, and the segments play as one stream in order.
+  const Video encoded =
+      pull_frames("filesrc location=\"" + files[0] + "\" ! matroskademux ! appsink name=out");
+  EXPECT_EQ(encoded.media, "video/x-ffv") << encoded.error;
+  const Video joined =
+      pull_frames("splitmuxsrc location=\"" + (dir / "rec" / "temperature-*.mkv").string() +
+                  "\" ! avdec_ffv1 ! appsink name=out");
+  ASSERT_EQ(joined.frames.size(), static_cast<std::size_t>(kFrames)) << joined.error;
+  EXPECT_TRUE(joined.frames == reference.frames);
+
+  // The snapshot is the last frame's colour-mapped view over the camera image.
+  const Video snapshot =
+      pull_frames("filesrc location=\"" + (dir / "rec" / "view.png").string() +
+                  "\" ! pngdec ! videoconvert ! video/x-raw,format=RGBA ! appsink name=out");
+  ASSERT_EQ(snapshot.frames.size(), 1u) << snapshot.error;
+  EXPECT_EQ(snapshot.width, kWidth);
+  EXPECT_EQ(snapshot.height, kHeight);
+  const Video camera = reference_camera(kFrames), overlay = reference_overlay(kFrames);
+  ASSERT_EQ(camera.frames.size(), static_cast<std::size_t>(kFrames)) << camera.error;
+  ASSERT_EQ(overlay.frames.size(), static_cast<std::size_t>(kFrames)) << overlay.error;
+  const CompositeCheck c =
+      check_composite(snapshot.frames[0], camera.frames.back(), overlay.frames.back());
+  EXPECT_EQ(c.wrong, 0);
+  EXPECT_GT(c.opaque, 100);
+}
+
+TEST_F(Record, ctrl_c_finalises_the_last_segment) {
+  Process rec({pipeline_script("record.sh")}, settings(kLiveScene, -1), log("record"));
+  // Two segments on disk: the first is closed, the second is being written.
+  ASSERT_TRUE(
+      wait_until([&] { return segments().size() >= 2 || !rec.running(); }, milliseconds(20000)))
+      << rec.log();
+  ASSERT_TRUE(rec.running()) << rec.log();
+  std::this_thread::sleep_for(milliseconds(200));
+  rec.signal_group(SIGINT);  // what Ctrl-C in a terminal does
+  const auto status = rec.wait_for(milliseconds(15000));
+  ASSERT_TRUE(status.has_value()) << "no exit 15 s after SIGINT: " << rec.log();
+  EXPECT_EQ(*status, 0) << rec.log();
+
+  std::vector<Bytes> recorded;
+  const auto files = segments();
+  for (const auto& file : files) {
+    const Video seg = decode_segment(file);
+    ASSERT_TRUE(seg.error.empty()) << file << " was not finalised: " << seg.error;
+    EXPECT_FALSE(seg.frames.empty()) << file;
+    recorded.insert(recorded.end(), seg.frames.begin(), seg.frames.end());
+  }
+  ASSERT_GT(recorded.size(), static_cast<std::size_t>(kFramesPerSegment));
+  const Video reference = reference_temperatures(static_cast<int>(recorded.size()));
+  ASSERT_EQ(reference.frames.size(), recorded.size()) << reference.error;
+  for (std::size_t i = 0; i < recorded.size(); ++i)
+    EXPECT_TRUE(recorded[i] == reference.frames[i]) << "frame " << i << " differs";
+}
+
+TEST_F(Record, sigkill_loses_at_most_the_last_segment) {
+  Process rec({pipeline_script("record.sh")}, settings(kLiveScene, -1), log("record"));
+  ASSERT_TRUE(
+      wait_until([&] { return segments().size() >= 3 || !rec.running(); }, milliseconds(20000)))
+      << rec.log();
+  ASSERT_TRUE(rec.running()) << rec.log();
+  rec.signal_group(SIGKILL);
+  ASSERT_EQ(rec.wait_for(milliseconds(5000)), 128 + SIGKILL);
+
+  const auto files = segments();
+  ASSERT_GE(files.size(), 3u);
+  std::vector<Bytes> recorded;
+  for (std::size_t s = 0; s + 1 < files.size(); ++s) {
+    const Video seg = decode_segment(files[s]);
+    ASSERT_TRUE(seg.error.empty()) << files[s] << ": " << seg.error;
+    EXPECT_EQ(seg.frames.size(), static_cast<std::size_t>(kFramesPerSegment)) << files[s];
+    recorded.insert(recorded.end(), seg.frames.begin(), seg.frames.end());
+  }
+  const Video reference = reference_temperatures(static_cast<int>(recorded.size()));
+  ASSERT_EQ(reference.frames.size(), recorded.size()) << reference.error;
+  for (std::size_t i = 0; i < recorded.size(); ++i)
+    EXPECT_TRUE(recorded[i] == reference.frames[i]) << "frame " << i << " differs";
+}
+
+TEST_F(Record, rejects_a_corrupt_model_n) {
+  const std::string model = (dir / "corrupt-model.json").string();
+  write_text(model, "{ \"format\": \"pyrocam-model\", \"version\": 1, ");
+  Env env = settings(kScene, 10);
+  env["MODEL"] = model;
+  const ScriptRun run = run_script("record.sh", {}, env, log("record"), kRunLimit);
+  ASSERT_TRUE(run.status.has_value()) << "hung";
+  EXPECT_NE(*run.status, 0) << run.log;
+  EXPECT_NE(run.log.find("corrupt-model.json"), std::string::npos) << run.log;
+  for (const auto& file : segments())
+    EXPECT_TRUE(decode_segment(file).frames.empty()) << file << " holds frames from a bad model";
+}
+
+// ---------------------------------------------------------------------------------------------
+
+class Playback : public PipelineTest {};
+
+TEST_F(Playback, colour_frames_of_a_recording_match_thermalcolormap) {
+  constexpr int kFrames = 30;
+  const std::string rec = (dir / "rec").string();
+  const ScriptRun recording = run_script("record.sh", {},
+                                         {{"MODEL", rgb_model()},
+                                          {"OUT", rec},
+                                          {"SOURCE", kScene},
+                                          {"CAPS", kCaps},
+                                          {"NUM_BUFFERS", std::to_string(kFrames)},
+                                          {"SEGMENT_SECONDS", "0.5"}},
+                                         log("record"), kRunLimit);
+  ASSERT_EQ(recording.status, 0) << recording.log;
+  ASSERT_EQ(files_in(rec, "temperature-", ".mkv").size(), 2u);
+
+  const ScriptRun run = run_script("playback.sh", {rec}, {{"SINK", raw_sink(dir, "play-")}},
+                                   log("playback"), kRunLimit);
+  ASSERT_EQ(run.status, 0) << run.log;
+  const auto frames = frames_in_files(dir.path().string(), "play-");
+  const Video reference = reference_overlay(kFrames);
+  ASSERT_EQ(reference.frames.size(), static_cast<std::size_t>(kFrames)) << reference.error;
+  ASSERT_EQ(frames.size(), static_cast<std::size_t>(kFrames));
+  for (int i = 0; i < kFrames; ++i)
+    EXPECT_TRUE(frames[i] == reference.frames[i]) << "colour frame " << i << " differs";
+}
+
+TEST_F(Playback, rejects_a_folder_without_segments_n) {
+  const ScriptRun run = run_script("playback.sh", {dir.path().string()}, {{"SINK", "fakesink"}},
+                                   log("playback"), kRunLimit);
+  ASSERT_TRUE(run.status.has_value()) << "hung";
+  EXPECT_NE(*run.status, 0);
+  EXPECT_NE(run.log.find("no temperature-*.mkv segments"), std::string::npos) << run.log;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+class Stream : public PipelineTest {};
+
+TEST_F(Stream, received_on_loopback_by_watch_stream) {
+  constexpr int kFrames = 30;
+  const int port = free_udp_port();
+  ASSERT_GT(port, 0);
+  Process screen(
+      {pipeline_script("watch-stream.sh")},
+      {{"ADDRESS", "127.0.0.1"}, {"PORT", std::to_string(port)}, {"SINK", raw_sink(dir, "rx-")}},
+      log("watch-stream"));
+  ASSERT_TRUE(
+      wait_until([&] { return udp_port_bound(port) || !screen.running(); }, milliseconds(10000)))
+      << screen.log();
+  ASSERT_TRUE(screen.running()) << screen.log();
+
+  const ScriptRun sent = run_script("stream.sh", {},
+                                    {{"HOST", "127.0.0.1"},
+                                     {"PORT", std::to_string(port)},
+                                     {"MODEL", rgb_model()},
+                                     {"SOURCE", kLiveScene},
+                                     {"CAPS", kCaps},
+                                     {"NUM_BUFFERS", std::to_string(kFrames)}},
+                                    log("stream"), kRunLimit);
+  ASSERT_EQ(sent.status, 0) << sent.log;
+  // A screen shows frames until stopped: wait for the last one (and a moment for any extra),
+  // then stop it as a user would.
+  const auto received = [&] { return files_in(dir.path().string(), "rx-", ".rgba").size(); };
+  wait_until([&] { return received() >= static_cast<std::size_t>(kFrames); }, milliseconds(5000));
+  std::this_thread::sleep_for(milliseconds(300));
+  ASSERT_TRUE(screen.running()) << screen.log();
+  screen.signal_group(SIGINT);
+  const auto status = screen.wait_for(milliseconds(10000));
+  ASSERT_TRUE(status.has_value()) << "the screen did not stop on Ctrl-C: " << screen.log();
+  EXPECT_EQ(*status, 0) << screen.log();
+
+  const auto frames = frames_in_files(dir.path().string(), "rx-");
+  ASSERT_EQ(frames.size(), static_cast<std::size_t>(kFrames));
+  const Video reference = reference_stream_view(kFrames);
+  ASSERT_EQ(reference.frames.size(), static_cast<std::size_t>(kFrames)) << reference.error;
+  double worst = INFINITY;
+  for (int i = 0; i < kFrames; ++i) {
+    ASSERT_EQ(frames[i].size(), static_cast<std::size_t>(kWidth * kHeight * 4));
+    // H.264 is lossy: the frame must be the same picture, not the same bytes. A missing
+    // overlay or a frame out of order falls far below 30 dB.
+    const double db = psnr(frames[i], reference.frames[i]);
+    worst = std::min(worst, db);
+    EXPECT_GT(db, 30.0) << "frame " << i;
+  }
+  std::cout << "[ info     ] worst PSNR of the received frames: " << worst << " dB\n";
+}
+
+TEST_F(Stream, screen_without_packets_ends_in_an_error_n) {
+  const int port = free_udp_port();
+  ASSERT_GT(port, 0);
+  const ScriptRun run = run_script("watch-stream.sh", {},
+                                   {{"ADDRESS", "127.0.0.1"},
+                                    {"PORT", std::to_string(port)},
+                                    {"WATCHDOG_MS", "500"},
+                                    {"SINK", "fakesink"}},
+                                   log("watch-stream"), kRunLimit);
+  ASSERT_TRUE(run.status.has_value()) << "hung";
+  EXPECT_EQ(*run.status, 1) << run.log;
+  EXPECT_NE(run.log.find("GstWatchdog:no-stream-packets"), std::string::npos) << run.log;
+  EXPECT_LT(run.seconds, 10.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+class GenICam : public PipelineTest {
+ protected:
+  Env settings(int frames) const {
+    return {{"MODEL", rgb_model()},
+            {"DARK", "dark-level=0"},
+            {"CAMERA", "127.0.0.1"},
+            // 128x128: larger frames exceed the default socket buffer as non-root (PLATFORM.md).
+            {"CAPS", "video/x-bayer,format=rggb,width=128,height=128"},
+            // The fake camera keeps what a client set: every run sets both.
+            {"EXPOSURE_US", "10000"},
+            {"GAIN_DB", "0"},
+            {"NUM_BUFFERS", std::to_string(frames)},
+            {"SINK", raw_sink(dir, "cam-")}};
+  }
+};
+
+TEST_F(GenICam, fake_gige_camera_through_the_full_chain) {
+  constexpr int kFrames = 15;
+  FakeGigECamera camera(log("camera"));
+  ASSERT_TRUE(camera.ok()) << camera.error();
+  const ScriptRun run =
+      run_script("genicam-live.sh", {}, settings(kFrames), log("genicam"), kRunLimit);
+  ASSERT_EQ(run.status, 0) << run.log;
+  const auto frames = frames_in_files(dir.path().string(), "cam-");
+  ASSERT_EQ(frames.size(), static_cast<std::size_t>(kFrames));
+  std::set<Bytes> distinct;
+  for (const Bytes& f : frames) {
+    ASSERT_EQ(f.size(), static_cast<std::size_t>(128 * 128 * 4));
+    distinct.insert(f);
+    // The fake camera's test pattern: bright somewhere, not a blank frame.
+    EXPECT_GT(*std::max_element(f.begin(), f.end()), 100);
+  }
+  EXPECT_GT(distinct.size(), 1u) << "the camera sent the same frame every time";
+}
+
+TEST_F(GenICam, camera_that_vanishes_ends_in_a_clear_error_n) {
+  FakeGigECamera camera(log("camera"));
+  ASSERT_TRUE(camera.ok()) << camera.error();
+  Env env = settings(-1);
+  env["WATCHDOG_MS"] = "1000";
+  Process view({pipeline_script("genicam-live.sh")}, env, log("genicam"));
+  ASSERT_TRUE(wait_until(
+      [&] { return files_in(dir.path().string(), "cam-", ".rgba").size() >= 5 || !view.running(); },
+      milliseconds(20000)))
+      << view.log();
+  ASSERT_TRUE(view.running()) << view.log();
+
+  // The diagnosis comes as soon as the watchdog fires; Aravis then spends several seconds on
+  // control-channel timeouts to the vanished camera before gst-launch can exit.
+  const std::string diagnosis = "camera 127.0.0.1 sent no frame for 1000 ms";
+  const auto gone = std::chrono::steady_clock::now();
+  const auto since_gone = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - gone).count();
+  };
+  camera.kill_now();
+  ASSERT_TRUE(wait_until([&] { return view.log().find(diagnosis) != std::string::npos; },
+                         milliseconds(5000)))
+      << "no diagnosis within 5 s of the camera vanishing: " << view.log();
+  const double message_s = since_gone();
+  const auto status = view.wait_for(milliseconds(30000));
+  ASSERT_TRUE(status.has_value()) << "still running 30 s after the camera vanished: " << view.log();
+  std::cout << "[ info     ] camera gone -> diagnosis after " << message_s << " s, exit status "
+            << *status << " after " << since_gone() << " s\n";
+  EXPECT_EQ(*status, 1) << view.log();
+  EXPECT_NE(view.log().find("GstWatchdog:camera-sent-no-frame"), std::string::npos) << view.log();
+}
+
+TEST_F(GenICam, recording_from_a_camera_that_stops_keeps_its_closed_segments_n) {
+  FakeGigECamera camera(log("camera"));
+  ASSERT_TRUE(camera.ok()) << camera.error();
+  const std::string rec = (dir / "rec").string();
+  Process recording({pipeline_script("record.sh")},
+                    {{"MODEL", rgb_model()},
+                     {"DARK", "dark-level=0"},
+                     {"OUT", rec},
+                     {"SOURCE", "aravissrc camera-name=127.0.0.1 exposure=10000 gain=0"},
+                     {"CAPS", "video/x-bayer,format=rggb,width=128,height=128"},
+                     {"SEGMENT_SECONDS", "0.4"},
+                     {"WATCHDOG_MS", "1000"}},
+                    log("record"));
+  const auto segments = [&] { return files_in(rec, "temperature-", ".mkv"); };
+  ASSERT_TRUE(wait_until([&] { return segments().size() >= 3 || !recording.running(); },
+                         milliseconds(20000)))
+      << recording.log();
+  ASSERT_TRUE(recording.running()) << recording.log();
+
+  // The camera stops sending (frozen, not gone); once the error is out it resumes, so that
+  // Aravis stops it without waiting for control-channel timeouts.
+  camera.freeze();
+  const bool diagnosed = wait_until(
+      [&] { return recording.log().find("GstWatchdog:camera-sent-no-frame") != std::string::npos; },
+      milliseconds(5000));
+  camera.thaw();
+  ASSERT_TRUE(diagnosed) << "no watchdog error within 5 s: " << recording.log();
+  const auto status = recording.wait_for(milliseconds(30000));
+  ASSERT_TRUE(status.has_value()) << recording.log();
+  EXPECT_NE(*status, 0) << recording.log();
+
+  const auto files = segments();
+  ASSERT_GE(files.size(), 3u);
+  std::size_t frames = 0;
+  for (std::size_t s = 0; s + 1 < files.size(); ++s) {
+    const Video seg = decode_segment(files[s]);
+    ASSERT_TRUE(seg.error.empty()) << files[s] << ": " << seg.error;
+    EXPECT_FALSE(seg.frames.empty()) << files[s];
+    EXPECT_EQ(seg.width, 128);
+    EXPECT_EQ(seg.height, 128);
+    for (const Bytes& f : seg.frames) EXPECT_EQ(f.size(), static_cast<std::size_t>(128 * 128 * 2));
+    frames += seg.frames.size();
+  }
+  std::cout << "[ info     ] " << files.size() - 1 << " closed segments kept, " << frames
+            << " frames\n";
+}
+
+TEST_F(GenICam, rejects_a_missing_dark_n) {
+  Env env = settings(5);
+  env["DARK"] = "";
+  const ScriptRun run = run_script("genicam-live.sh", {}, env, log("genicam"), kRunLimit);
+  ASSERT_TRUE(run.status.has_value()) << "hung";
+  EXPECT_EQ(*run.status, 2);
+  EXPECT_NE(run.log.find("set DARK"), std::string::npos) << run.log;
+}
+
+}  // namespace
+}  // namespace pyrocam::test
