@@ -383,6 +383,19 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
                    std::to_string(kMlpMaxLayerWidth));
   }
   if (!X.allFinite() || !y.allFinite()) throw MlpError("mlp: training data has NaN or inf");
+  Eigen::MatrixXd transformed = X;
+  if (options.input_transform == MlpInputTransform::kLog) {
+    for (Eigen::Index c = 0; c < X.cols(); ++c) {
+      for (Eigen::Index r = 0; r < X.rows(); ++r) {
+        if (!(X(r, c) > 0)) {
+          throw MlpError("mlp: the log input transform needs inputs > 0; sample " +
+                         std::to_string(r) + " input " + std::to_string(c) + " is " +
+                         std::to_string(X(r, c)));
+        }
+        transformed(r, c) = std::log(X(r, c));
+      }
+    }
+  }
   const Eigen::Index samples = X.rows();
   const auto test_count =
       static_cast<Eigen::Index>(std::lround(options.test_fraction * static_cast<double>(samples)));
@@ -393,27 +406,31 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   std::vector<Eigen::Index> order(static_cast<std::size_t>(samples));
   for (Eigen::Index i = 0; i < samples; ++i) order[static_cast<std::size_t>(i)] = i;
   random.shuffle(order);
+  // Raw inputs for the final report, transformed ones for training.
   Eigen::MatrixXd x_train(train_count, X.cols()), x_test(test_count, X.cols());
+  Eigen::MatrixXd v_train(train_count, X.cols()), v_test(test_count, X.cols());
   Eigen::VectorXd y_train(train_count), y_test(test_count);
   for (Eigen::Index i = 0; i < samples; ++i) {
     const Eigen::Index src = order[static_cast<std::size_t>(i)];
     if (i < test_count) {
       x_test.row(i) = X.row(src);
+      v_test.row(i) = transformed.row(src);
       y_test[i] = y[src];
     } else {
       x_train.row(i - test_count) = X.row(src);
+      v_train.row(i - test_count) = transformed.row(src);
       y_train[i - test_count] = y[src];
     }
   }
   // Standardise on the training rows only, so that the test set stays unseen.
-  const Standardizer input = Standardizer::fit(x_train);
+  const Standardizer input = Standardizer::fit(v_train);
   const Standardizer output = Standardizer::fit(y_train);
   const double y_mean = output.mean[0], y_scale = output.scale[0];
   // Samples as columns: each layer is then one matrix product per batch.
-  const Eigen::MatrixXd z_train = input.apply(x_train).transpose();
+  const Eigen::MatrixXd z_train = input.apply(v_train).transpose();
   const Eigen::RowVectorXd t_train = ((y_train.array() - y_mean) / y_scale).matrix().transpose();
   const Matrix z_train_s = z_train.cast<S>();
-  const Matrix z_test_s = input.apply(x_test).transpose().cast<S>();
+  const Matrix z_test_s = input.apply(v_test).transpose().cast<S>();
   const Eigen::Matrix<S, 1, Eigen::Dynamic> t_train_s = t_train.cast<S>();
 
   // He initialisation for ReLU layers, variance 1/fan_in for the linear output; zero biases.
@@ -524,7 +541,7 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   for (std::size_t l = 0; l < layers; ++l) {
     model_layers.push_back({std::move(net_double.weights[l]), std::move(net_double.bias[l])});
   }
-  Mlp model(input, y_mean, y_scale, std::move(model_layers));
+  Mlp model(options.input_transform, input, y_mean, y_scale, std::move(model_layers));
 
   if (report) {
     report->train_rmse = std::move(train_rmse);
@@ -552,9 +569,10 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
 
 // ---------------------------------------------------------------- model
 
-Mlp::Mlp(Standardizer input, double output_mean, double output_scale,
-         std::vector<MlpLayer> layers)
-    : input_(std::move(input)),
+Mlp::Mlp(MlpInputTransform input_transform, Standardizer input, double output_mean,
+         double output_scale, std::vector<MlpLayer> layers)
+    : input_transform_(input_transform),
+      input_(std::move(input)),
       output_mean_(output_mean),
       output_scale_(output_scale),
       layers_(std::move(layers)) {
@@ -620,16 +638,25 @@ std::vector<int> Mlp::hidden_sizes() const {
   return sizes;
 }
 
+template <class T>
+bool Mlp::standardise_input(const double* x, T* z) const {
+  bool valid = true;
+  for (Eigen::Index j = 0; j < input_.mean.size(); ++j) {
+    const double v = input_transform_ == MlpInputTransform::kLog ? std::log(x[j]) : x[j];
+    const double standardised = (v - input_.mean[j]) * inverse_input_scale_[j];
+    valid = valid && std::isfinite(standardised);  // log of <= 0 gives -inf or NaN
+    z[j] = static_cast<T>(standardised);
+  }
+  return valid;
+}
+
 double Mlp::predict(const double* x) const {
   if (layers_.empty()) return std::numeric_limits<double>::quiet_NaN();
   alignas(64) float buffer_a[kMlpMaxLayerWidth];
   alignas(64) float buffer_b[kMlpMaxLayerWidth];
   float* in = buffer_a;
   float* out = buffer_b;
-  const Eigen::Index inputs = input_.mean.size();
-  for (Eigen::Index j = 0; j < inputs; ++j) {
-    in[j] = static_cast<float>((x[j] - input_.mean[j]) * inverse_input_scale_[j]);
-  }
+  if (!standardise_input(x, in)) return std::numeric_limits<double>::quiet_NaN();
   const std::size_t layers = weights_f_.size();
   for (std::size_t l = 0; l + 1 < layers; ++l) {
     const Eigen::MatrixXf& w = weights_f_[l];
@@ -657,13 +684,14 @@ void Mlp::predict_chunked(Eigen::Index count, Fetch fetch, double* out) const {
   const Eigen::Index inputs = input_.mean.size();
   const Eigen::Index chunk = std::min(count, kInferenceChunk);
   Eigen::MatrixXf a(max_width_, chunk), b(max_width_, chunk);
+  std::vector<double> sample(static_cast<std::size_t>(inputs));
+  std::vector<char> valid(static_cast<std::size_t>(chunk));
   for (Eigen::Index start = 0; start < count; start += chunk) {
     const Eigen::Index n = std::min(chunk, count - start);
     for (Eigen::Index k = 0; k < n; ++k) {
-      for (Eigen::Index j = 0; j < inputs; ++j) {
-        a(j, k) = static_cast<float>((fetch(start + k, j) - input_.mean[j]) *
-                                     inverse_input_scale_[j]);
-      }
+      for (Eigen::Index j = 0; j < inputs; ++j) sample[static_cast<std::size_t>(j)] = fetch(start + k, j);
+      valid[static_cast<std::size_t>(k)] = standardise_input(sample.data(), &a(0, k));
+      if (!valid[static_cast<std::size_t>(k)]) a.col(k).head(inputs).setZero();
     }
     Eigen::Index width = inputs;
     for (std::size_t l = 0; l < weights_f_.size(); ++l) {
@@ -676,7 +704,9 @@ void Mlp::predict_chunked(Eigen::Index count, Fetch fetch, double* out) const {
       a.swap(b);
     }
     for (Eigen::Index k = 0; k < n; ++k) {
-      out[start + k] = static_cast<double>(a(0, k)) * output_scale_ + output_mean_;
+      out[start + k] = valid[static_cast<std::size_t>(k)]
+                           ? static_cast<double>(a(0, k)) * output_scale_ + output_mean_
+                           : std::numeric_limits<double>::quiet_NaN();
     }
   }
 }
@@ -714,8 +744,9 @@ double Mlp::predict_with_gradient(const double* x, double* grad_out) const {
   if (scratch.size() < needed) scratch.resize(needed);
 
   double* z0 = scratch.data();
-  for (Eigen::Index j = 0; j < inputs; ++j) {
-    z0[j] = (x[j] - input_.mean[j]) * inverse_input_scale_[j];
+  if (!standardise_input(x, z0)) {
+    std::fill(grad_out, grad_out + inputs, std::numeric_limits<double>::quiet_NaN());
+    return std::numeric_limits<double>::quiet_NaN();
   }
   double* cursor = z0 + inputs;
   const double* in = z0;
@@ -750,7 +781,9 @@ double Mlp::predict_with_gradient(const double* x, double* grad_out) const {
     act_end = act;
   }
   for (Eigen::Index j = 0; j < inputs; ++j) {
-    grad_out[j] = g[j] * output_scale_ * inverse_input_scale_[j];
+    // d log(x) / dx = 1 / x
+    const double transform_slope = input_transform_ == MlpInputTransform::kLog ? 1.0 / x[j] : 1.0;
+    grad_out[j] = g[j] * output_scale_ * inverse_input_scale_[j] * transform_slope;
   }
   return z * output_scale_ + output_mean_;
 }
@@ -771,6 +804,7 @@ json Mlp::to_json() const {
   return {{"format", "pyrocam-mlp"},
           {"version", kMlpFormatVersion},
           {"activation", "relu"},
+          {"input_transform", input_transform_ == MlpInputTransform::kLog ? "log" : "none"},
           {"input_mean", to_json_array(input_.mean)},
           {"input_scale", to_json_array(input_.scale)},
           {"output_mean", output_mean_},
@@ -793,6 +827,14 @@ Mlp Mlp::from_json(const json& j) {
     throw MlpError("mlp json: unsupported \"activation\" " + j["activation"].dump() +
                    ", expected \"relu\"");
   }
+  const json& transform = require(j, "input_transform", top);
+  MlpInputTransform input_transform = MlpInputTransform::kNone;
+  if (transform == "log") {
+    input_transform = MlpInputTransform::kLog;
+  } else if (transform != "none") {
+    throw MlpError("mlp json: unsupported \"input_transform\" " + transform.dump() +
+                   ", expected \"log\" or \"none\"");
+  }
   Standardizer input;
   input.mean = read_vector(require(j, "input_mean", top), "input_mean");
   input.scale = read_vector(require(j, "input_scale", top), "input_scale");
@@ -811,7 +853,7 @@ Mlp Mlp::from_json(const json& j) {
     layers.push_back(std::move(layer));
   }
   try {
-    return Mlp(std::move(input), output_mean, output_scale, std::move(layers));
+    return Mlp(input_transform, std::move(input), output_mean, output_scale, std::move(layers));
   } catch (const MlpError& e) {
     // Same message, marked as coming from the file.
     std::string message = e.what();

@@ -139,7 +139,7 @@ ThermalModel small_model(const CameraProfile& p) {
   Standardizer st{Eigen::VectorXd::Zero(inputs), Eigen::VectorXd::Ones(inputs)};
   MlpLayer l1{Eigen::MatrixXd::Constant(4, inputs, 0.1), Eigen::VectorXd::Constant(4, 0.2)};
   MlpLayer l2{Eigen::MatrixXd::Constant(1, 4, 0.3), Eigen::VectorXd::Constant(1, 0.0)};
-  m.mlp = Mlp(st, 1500, 500, {l1, l2});
+  m.mlp = Mlp(MlpInputTransform::kNone, st, 1500, 500, {l1, l2});
   m.uncertainty.temperature_c = {500, 3500};
   m.uncertainty.u_calibration_c = {2, 4};
   m.uncertainty.u_emissivity_c = {1, 3};

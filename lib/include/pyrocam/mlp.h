@@ -22,6 +22,13 @@ inline constexpr int kMlpFormatVersion = 1;
 // lives on the stack.
 inline constexpr int kMlpMaxLayerWidth = 1024;
 
+// Applied to each input before standardising. Band ratios vary over orders of magnitude along
+// the Planck locus (blue/red spans 2 to 8000 between 500 and 3500 degC), so that standardised
+// raw ratios crowd the hot end into a sliver of the input range; their logarithms are close to
+// linear in 1/T and spread evenly. With kLog every input must be > 0; predictions for samples
+// with an input <= 0 are NaN.
+enum class MlpInputTransform { kNone, kLog };
+
 // Per-column affine map to zero mean and unit scale: z = (x - mean) / scale.
 struct Standardizer {
   Eigen::VectorXd mean, scale;
@@ -36,6 +43,7 @@ struct Standardizer {
 
 struct MlpTrainingOptions {
   std::vector<int> hidden = {250, 200, 150, 100, 50};
+  MlpInputTransform input_transform = MlpInputTransform::kLog;
   int epochs = 400;
   int batch_size = 32;
   // Per-step schedule: linear warm-up from 0 to learning_rate over the first warmup_fraction
@@ -85,7 +93,8 @@ class Mlp {
                    const MlpTrainingOptions& options, MlpTrainingReport* report = nullptr);
 
   // Builds a model from given parts (checked as from_json checks them).
-  Mlp(Standardizer input, double output_mean, double output_scale, std::vector<MlpLayer> layers);
+  Mlp(MlpInputTransform input_transform, Standardizer input, double output_mean,
+      double output_scale, std::vector<MlpLayer> layers);
 
   // One sample of input_size() values. Single precision inside (|error| ~1e-6 of the output
   // scale), no heap allocation: for per-pixel use.
@@ -103,11 +112,14 @@ class Mlp {
   bool empty() const { return layers_.empty(); }
   std::vector<int> hidden_sizes() const;
   const std::vector<MlpLayer>& layers() const { return layers_; }
+  MlpInputTransform input_transform() const { return input_transform_; }
+  // Of the transformed inputs.
   const Standardizer& input_standardizer() const { return input_; }
   double output_mean() const { return output_mean_; }
   double output_scale() const { return output_scale_; }
 
-  // {"format": "pyrocam-mlp", "version": 1, "activation": "relu", "input_mean": [...],
+  // {"format": "pyrocam-mlp", "version": 1, "activation": "relu",
+  //  "input_transform": "log" | "none", "input_mean": [...],
   //  "input_scale": [...], "output_mean": m, "output_scale": s,
   //  "layers": [{"weights": [[row of inputs], ...one row per output], "bias": [...]}, ...]}
   // Numbers are written so that they read back bit-identical.
@@ -118,9 +130,14 @@ class Mlp {
 
  private:
   void check_and_prepare();  // validates parts, builds the single-precision copies
+  // Transform and standardise one sample into z; false when an input is invalid (NaN, inf, or
+  // <= 0 under kLog).
+  template <class T>
+  bool standardise_input(const double* x, T* z) const;
   template <class Fetch>
   void predict_chunked(Eigen::Index count, Fetch fetch, double* out) const;
 
+  MlpInputTransform input_transform_ = MlpInputTransform::kNone;
   Standardizer input_;
   double output_mean_ = 0, output_scale_ = 1;
   std::vector<MlpLayer> layers_;
