@@ -45,8 +45,12 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
   c->add_option("--locus-step", a.options.locus_step_c, "Locus step, degC")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  c->add_option("--epochs", a.options.mlp.epochs, "MLP training epochs")
-      ->check(CLI::Range(1, 100000))
+  c->add_option("--epochs", a.options.mlp.epochs, "MLP training: Adam epochs")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
+  c->add_option("--polish-iterations", a.options.mlp.polish_iterations,
+                "MLP training: L-BFGS iterations after Adam (0: Adam only, as in the paper)")
+      ->check(CLI::Range(0, 100000))
       ->capture_default_str();
   c->add_option("--mc-refits", a.options.monte_carlo_refits,
                 "Monte-Carlo QE refits for the thermocouple uncertainty")

@@ -154,15 +154,17 @@ void write_report_html(const CalibrationOutcome& o, const std::filesystem::path&
       {"Slope fits of ROI signal vs exposure: R²", "temperature (°C)", "R²", false, 1000, 280}, r2);
 
   // MLP.
-  std::vector<double> epochs;
-  for (std::size_t e = 0; e < o.mlp_report.train_rmse.size(); ++e)
-    epochs.push_back(static_cast<double>(e + 1));
+  // One pass per Adam epoch, then per L-BFGS iteration of the polish.
+  const std::vector<double> passes(o.mlp_report.pass.begin(), o.mlp_report.pass.end());
   h << "<h2>Temperature network</h2><p>Max error over the noise-free locus: "
     << num(o.mlp_locus_max_error_c, 3) << " °C; held-out rmse "
     << num(o.mlp_report.final_test_rmse, 3) << " °C.</p>"
-    << svg_plot({"MLP training curve", "epoch", "rmse (°C, log)", true, 1000, 320},
-                {{"train", epochs, o.mlp_report.train_rmse, colour(2)},
-                 {"test", epochs, o.mlp_report.test_rmse, colour(0)}});
+    << svg_plot(
+           {"MLP training curve: " + std::to_string(o.mlp_report.epochs) + " Adam epochs, then " +
+                std::to_string(o.mlp_report.polish_iterations_done) + " L-BFGS iterations",
+            "pass over the training set", "rmse (°C, log)", true, 1000, 320},
+           {{"train", passes, o.mlp_report.train_rmse, colour(2)},
+            {"test", passes, o.mlp_report.test_rmse, colour(0)}});
 
   // Uncertainty.
   const UncertaintyModel& u = m.uncertainty;

@@ -232,14 +232,17 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   MlpTrainingOptions mo = opt.mlp;
   mo.seed = opt.seed;
   auto user_progress = opt.mlp.progress;
-  mo.progress = [&](int epoch, double train, double test) {
-    stage("training MLP", static_cast<std::size_t>(std::min(epoch + 1, mo.epochs)),
-          static_cast<std::size_t>(mo.epochs));
-    if (user_progress) user_progress(epoch, train, test);
+  // One pass per Adam epoch or polish iteration; the polish may stop early.
+  const auto passes = static_cast<std::size_t>(mo.epochs + mo.polish_iterations);
+  mo.progress = [&](int pass, double train, double test) {
+    stage("training MLP", std::min(static_cast<std::size_t>(pass), passes), passes);
+    if (user_progress) user_progress(pass, train, test);
   };
   m.mlp = Mlp::train(locus.ratios, locus.temperature_c, mo, &out.mlp_report);
-  const Eigen::VectorXd fitted = m.mlp.predict(locus.ratios);
-  out.mlp_locus_max_error_c = (fitted - locus.temperature_c).cwiseAbs().maxCoeff();
+  stage("training MLP", passes, passes);
+  const Eigen::VectorXd locus_error = m.mlp.predict(locus.ratios) - locus.temperature_c;
+  out.mlp_locus_max_error_c = locus_error.cwiseAbs().maxCoeff();
+  out.mlp_locus_rms_error_c = std::sqrt(locus_error.squaredNorm() / locus_error.size());
 
   // Table 4: every estimator on the calibration settings' ROI means.
   stage("evaluating", 0, 1);
@@ -377,7 +380,10 @@ nlohmann::json outcome_summary(const CalibrationOutcome& o) {
   j["table4"] = t4;
   j["mlp"] = {{"final_train_rmse_c", o.mlp_report.final_train_rmse},
               {"final_test_rmse_c", o.mlp_report.final_test_rmse},
-              {"locus_max_error_c", o.mlp_locus_max_error_c}};
+              {"locus_max_error_c", o.mlp_locus_max_error_c},
+              {"locus_rms_error_c", o.mlp_locus_rms_error_c},
+              {"polish_iterations", o.mlp_report.polish_iterations_done},
+              {"seconds", o.mlp_report.seconds}};
   j["warnings"] = o.warnings;
   j["seconds"] = o.seconds;
   return j;

@@ -1,10 +1,7 @@
 #include "pyrocam/mlp.h"
 
 #include <Eigen/QR>
-
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -19,17 +16,72 @@ namespace {
 
 using json = nlohmann::json;
 
-// Adam runs in single precision: twice the speed of double where Eigen has only SSE2, and its
-// mini-batch noise (~1 degC) dwarfs float rounding. The L-BFGS polish that must resolve
-// 0.5 degC (1.7e-4 of the span) runs in double.
-#ifdef EXP_DOUBLE
-using AdamScalar = double;
-#else
-using AdamScalar = float;
-#endif
+// Training runs in single precision: twice the speed of double where Eigen has only SSE2. Its
+// rounding stops the polish near a training rmse of 0.02-0.03 degC on the locus, far below the
+// half-degree target; the output layer's least squares run in double.
+using TrainingScalar = float;
+
+constexpr double kKelvinOffset = 273.15;
+
+// Target (degC) -> the network's output quantity.
+double to_network_units(MlpOutputTransform t, double y) {
+  switch (t) {
+    case MlpOutputTransform::kInverseKelvin:
+      return 1.0 / (y + kKelvinOffset);
+    case MlpOutputTransform::kLogKelvin:
+      return std::log(y + kKelvinOffset);
+    case MlpOutputTransform::kNone:
+      break;
+  }
+  return y;
+}
+
+// The inverse of to_network_units; NaN where v is outside its range.
+double from_network_units(MlpOutputTransform t, double v) {
+  switch (t) {
+    case MlpOutputTransform::kInverseKelvin:
+      return v > 0 ? 1.0 / v - kKelvinOffset : std::numeric_limits<double>::quiet_NaN();
+    case MlpOutputTransform::kLogKelvin: {
+      const double y = std::exp(v) - kKelvinOffset;
+      return std::isfinite(y) ? y : std::numeric_limits<double>::quiet_NaN();
+    }
+    case MlpOutputTransform::kNone:
+      break;
+  }
+  return v;
+}
+
+// d from_network_units / d v.
+double target_slope(MlpOutputTransform t, double v) {
+  switch (t) {
+    case MlpOutputTransform::kInverseKelvin:
+      return -1.0 / (v * v);
+    case MlpOutputTransform::kLogKelvin:
+      return std::exp(v);
+    case MlpOutputTransform::kNone:
+      break;
+  }
+  return 1.0;
+}
+
+const char* to_string(MlpInputTransform t) { return t == MlpInputTransform::kLog ? "log" : "none"; }
+
+const char* to_string(MlpOutputTransform t) {
+  switch (t) {
+    case MlpOutputTransform::kInverseKelvin:
+      return "inverse_kelvin";
+    case MlpOutputTransform::kLogKelvin:
+      return "log_kelvin";
+    case MlpOutputTransform::kNone:
+      break;
+  }
+  return "none";
+}
 
 // Samples per chunk in the batch inference path: activations of the widest layer stay in L2.
 constexpr Eigen::Index kInferenceChunk = 256;
+// The training curve gets a point every this many polish iterations (and at the last).
+constexpr int kPolishReportInterval = 10;
 
 // The standard library's distributions are implementation-defined; these are not, so a seed
 // means the same model with any standard library.
@@ -37,7 +89,7 @@ class Random {
  public:
   explicit Random(std::uint64_t seed) : engine_(seed) {}
   double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }  // [0, 1)
-  double normal() {  // Box-Muller, one value per pair
+  double normal() {                     // Box-Muller, one value per pair
     const double u1 = 1.0 - uniform();  // (0, 1]
     const double u2 = uniform();
     return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
@@ -66,9 +118,10 @@ struct Network {
 // input block); returns the output row. Hidden layers ReLU, output linear.
 template <class S>
 void forward(const Network<S>& net, std::vector<typename Network<S>::Matrix>& acts,
-             Eigen::Index cols) {
+             Eigen::Index cols, std::size_t first_layer = 0,
+             std::size_t end_layer = std::numeric_limits<std::size_t>::max()) {
   const std::size_t layers = net.layer_count();
-  for (std::size_t l = 0; l < layers; ++l) {
+  for (std::size_t l = first_layer; l < std::min(layers, end_layer); ++l) {
     auto out = acts[l + 1].leftCols(cols);
     out.noalias() = net.weights[l] * acts[l].leftCols(cols);
     out.colwise() += net.bias[l];
@@ -101,19 +154,22 @@ Eigen::Matrix<S, 1, Eigen::Dynamic> evaluate(const Network<S>& net,
   return out;
 }
 
-// Backward pass after forward(): the gradient of the mean squared error over the n columns into
-// grad (same shapes as net); deltas has the activations' shapes. Returns the sum of squared
-// errors.
+// Backward pass after forward(): the gradient of the weighted mean squared error
+// mean(w e^2) over the n columns into grad (same shapes as net); deltas has the activations'
+// shapes. Returns the weighted sum of squared errors, sum(w e^2).
 template <class S>
 double backward(const Network<S>& net, const std::vector<typename Network<S>::Matrix>& acts,
                 std::vector<typename Network<S>::Matrix>& deltas,
-                const Eigen::Matrix<S, 1, Eigen::Dynamic>& targets, Eigen::Index n,
+                const Eigen::Matrix<S, 1, Eigen::Dynamic>& targets,
+                const Eigen::Matrix<S, 1, Eigen::Dynamic>& weights, Eigen::Index n,
                 Network<S>& grad) {
   const std::size_t layers = net.layer_count();
   auto top = deltas[layers].leftCols(n);
   top = acts[layers].leftCols(n) - targets.leftCols(n);
-  const double squared_error_sum = static_cast<double>(top.squaredNorm());
-  top *= S(2) / static_cast<S>(n);  // d mean(e^2) / d output
+  const double squared_error_sum =
+      static_cast<double>((top.array().square() * weights.leftCols(n).array()).sum());
+  // d mean(w e^2) / d output
+  top.array() *= weights.leftCols(n).array() * (S(2) / static_cast<S>(n));
   for (std::size_t l = layers; l-- > 0;) {
     const auto delta = deltas[l + 1].leftCols(n);
     grad.weights[l].noalias() = delta * acts[l].leftCols(n).transpose();
@@ -137,61 +193,115 @@ Eigen::Index parameter_count(const Network<S>& net) {
   return count;
 }
 
-void flatten(const Network<double>& net, Eigen::VectorXd& theta) {
+// All parameters in one vector (double whatever the network's scalar), layer by layer: weights
+// column-major, then biases.
+template <class S>
+void flatten(const Network<S>& net, Eigen::VectorXd& theta) {
   theta.resize(parameter_count(net));
   Eigen::Index at = 0;
   for (std::size_t l = 0; l < net.layer_count(); ++l) {
-    theta.segment(at, net.weights[l].size()) = net.weights[l].reshaped();
+    theta.segment(at, net.weights[l].size()) = net.weights[l].reshaped().template cast<double>();
     at += net.weights[l].size();
-    theta.segment(at, net.bias[l].size()) = net.bias[l];
+    theta.segment(at, net.bias[l].size()) = net.bias[l].template cast<double>();
     at += net.bias[l].size();
   }
 }
 
-void unflatten(const Eigen::VectorXd& theta, Network<double>& net) {
+template <class S>
+void unflatten(const Eigen::VectorXd& theta, Network<S>& net) {
   Eigen::Index at = 0;
   for (std::size_t l = 0; l < net.layer_count(); ++l) {
-    net.weights[l].reshaped() = theta.segment(at, net.weights[l].size());
+    net.weights[l].reshaped() = theta.segment(at, net.weights[l].size()).template cast<S>();
     at += net.weights[l].size();
-    net.bias[l] = theta.segment(at, net.bias[l].size());
+    net.bias[l] = theta.segment(at, net.bias[l].size()).template cast<S>();
     at += net.bias[l].size();
   }
 }
 
-// Full-batch L-BFGS (two-loop recursion, Armijo backtracking) on the training set's mean squared
-// error, from Adam's result. Mini-batch Adam stalls at a noise floor of about 1 degC on a
-// noise-free locus; a few hundred quasi-Newton steps take it well below. Returns the number of
-// iterations done (fewer when no step decreases the loss any more).
-int polish_with_lbfgs(Network<double>& net, const Eigen::MatrixXd& inputs,
-                      const Eigen::RowVectorXd& targets, int iterations) {
-  constexpr int kMemory = 10;
+// What the polish minimises: the weighted mean squared error of the network on the training set
+// (standardised units) plus weight_decay times the sum of squared weights (biases free).
+struct PolishProblem {
+  Eigen::MatrixXf inputs;            // standardised, one column per sample
+  Eigen::RowVectorXd targets;        // standardised network outputs
+  Eigen::RowVectorXd weights;        // per sample, mean 1
+  Eigen::RowVectorXd slope_squared;  // (target units per standardised output)^2, for reports
+  double weight_decay = 0;
+};
+
+// The output layer (weights and bias) that minimises the polish's loss given the last hidden
+// layer's activations (one column per sample): ridge least squares in double precision.
+void fit_output_layer(Network<float>& net, const Eigen::MatrixXf& hidden,
+                      const PolishProblem& problem) {
+  const Eigen::Index n = problem.targets.size(), features = hidden.rows();
+  const Eigen::VectorXd root_w = problem.weights.transpose().cwiseSqrt();
+  const Eigen::Index ridge_rows = problem.weight_decay > 0 ? features : 0;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n + ridge_rows, features + 1);
+  a.topLeftCorner(n, features) =
+      root_w.asDiagonal() * hidden.leftCols(n).transpose().cast<double>();
+  a.topRightCorner(n, 1) = root_w;
+  if (ridge_rows > 0) {
+    // mean(w e^2) + decay |W|^2 = (|sqrt(w) e|^2 + |sqrt(n decay) W|^2) / n
+    a.bottomLeftCorner(features, features)
+        .diagonal()
+        .setConstant(std::sqrt(static_cast<double>(n) * problem.weight_decay));
+  }
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n + ridge_rows);
+  b.head(n) = root_w.cwiseProduct(problem.targets.transpose());
+  // Column pivoting copes with dead units (zero columns).
+  const Eigen::VectorXd solution = a.colPivHouseholderQr().solve(b);
+  net.weights.back().row(0) = solution.head(features).transpose().cast<float>();
+  net.bias.back()[0] = static_cast<float>(solution[features]);
+}
+
+// Full-batch L-BFGS (two-loop recursion, Armijo backtracking) from the network as it is, in
+// single precision. The output layer is refitted by least squares at every evaluation
+// (variable projection), so that L-BFGS moves the hidden layers only, against a loss in which
+// the output layer is always optimal: far better conditioned than moving all layers at once.
+// Calls on_iteration(train_rmse) after every iteration, the network at the new point, the rmse
+// in target units to first order. Returns the number of iterations done: fewer than asked when
+// no step lowers the loss any more (the limit of single precision).
+template <class OnIteration>
+int polish_with_lbfgs(Network<float>& net, const PolishProblem& problem, int iterations,
+                      OnIteration on_iteration) {
+  constexpr int kMemory = 30;
   constexpr double kArmijo = 1e-4;
-  const Eigen::Index n = inputs.cols();
+  const Eigen::Index n = problem.inputs.cols();
+  const std::size_t layers = net.layer_count();
   auto acts = make_activations(net, n);
   auto deltas = make_activations(net, n);
-  acts[0] = inputs;
-  Network<double> grad = net;
-  Eigen::VectorXd grad_flat;
-  auto loss_and_gradient = [&](const Eigen::VectorXd& theta, Eigen::VectorXd& g) {
+  acts[0] = problem.inputs;
+  const Eigen::RowVectorXf targets = problem.targets.cast<float>();
+  const Eigen::RowVectorXf weights = problem.weights.cast<float>();
+  Network<float> grad = net;
+  const Eigen::Index output_params = net.weights.back().size() + 1;
+  const Eigen::Index output_at = parameter_count(net) - output_params;
+  double train_rmse = 0;
+  // Sets the output layer (in net and theta), returns the loss, its gradient into g.
+  auto loss_and_gradient = [&](Eigen::VectorXd& theta, Eigen::VectorXd& g) {
     unflatten(theta, net);
-    forward(net, acts, n);
-    const double sse = backward(net, acts, deltas, targets, n, grad);
+    forward(net, acts, n, 0, layers - 1);
+    fit_output_layer(net, acts[layers - 1], problem);
+    theta.segment(output_at, output_params - 1) = net.weights.back().reshaped().cast<double>();
+    theta[output_at + output_params - 1] = static_cast<double>(net.bias.back()[0]);
+    forward(net, acts, n, layers - 1);
+    const Eigen::ArrayXd residual =
+        (acts[layers].row(0).leftCols(n) - targets).transpose().cast<double>().array();
+    train_rmse = std::sqrt((residual.square() * problem.slope_squared.transpose().array()).mean());
+    const double sse = backward(net, acts, deltas, targets, weights, n, grad);
+    double penalty = 0;
+    if (problem.weight_decay > 0) {
+      const auto decay = static_cast<float>(problem.weight_decay);
+      for (std::size_t l = 0; l < layers; ++l) {
+        penalty += problem.weight_decay * static_cast<double>(net.weights[l].squaredNorm());
+        grad.weights[l] += 2 * decay * net.weights[l];
+      }
+    }
     flatten(grad, g);
-    return sse / static_cast<double>(n);
+    // The output layer is at its optimum: its gradient is zero but for rounding.
+    g.segment(output_at, output_params).setZero();
+    return sse / static_cast<double>(n) + penalty;
   };
 
-  if (std::getenv("LSQ")) {
-    forward(net, acts, n);
-    const std::size_t L = net.layer_count();
-    Eigen::MatrixXd A(n, acts[L - 1].rows() + 1);
-    A.leftCols(acts[L - 1].rows()) = acts[L - 1].transpose();
-    A.col(A.cols() - 1).setOnes();
-    Eigen::VectorXd sol = A.colPivHouseholderQr().solve(targets.transpose());
-    net.weights[L - 1].row(0) = sol.head(sol.size() - 1).transpose();
-    net.bias[L - 1][0] = sol[sol.size() - 1];
-    forward(net, acts, n);
-    std::fprintf(stderr, "after lsq loss %.4e\n", (acts[L].row(0) - targets).squaredNorm() / n);
-  }
   Eigen::VectorXd x, g, x_next, g_next, direction;
   flatten(net, x);
   double loss = loss_and_gradient(x, g);
@@ -231,6 +341,7 @@ int polish_with_lbfgs(Network<double>& net, const Eigen::MatrixXd& inputs,
     }
     if (!accepted) break;
     Eigen::VectorXd s = x_next - x, y = g_next - g;
+    s.segment(output_at, output_params).setZero();  // set by least squares, not by the step
     const double sy = s.dot(y);
     if (sy > 1e-12 * s.norm() * y.norm()) {  // keep H positive definite
       if (static_cast<int>(s_history.size()) == kMemory) {
@@ -245,7 +356,7 @@ int polish_with_lbfgs(Network<double>& net, const Eigen::MatrixXd& inputs,
     x.swap(x_next);
     g.swap(g_next);
     loss = next_loss;
-    if (std::getenv("DBG") && done % 10 == 0) std::fprintf(stderr, "it %d loss %.4e step %g hist %zu\n", done, loss, step * 2, s_history.size());
+    on_iteration(train_rmse);
   }
   unflatten(x, net);
   return done;
@@ -267,8 +378,10 @@ void check_options(const MlpTrainingOptions& o) {
                      std::to_string(kMlpMaxLayerWidth));
     }
   }
-  if (o.epochs < 1) throw MlpError("mlp: epochs must be at least 1");
+  if (o.epochs < 0) throw MlpError("mlp: epochs must be >= 0");
   if (o.polish_iterations < 0) throw MlpError("mlp: polish_iterations must be >= 0");
+  if (o.polish_rounds < 1) throw MlpError("mlp: polish_rounds must be at least 1");
+  if (!(o.polish_weight_decay >= 0)) throw MlpError("mlp: polish_weight_decay must be >= 0");
   if (o.batch_size < 1) throw MlpError("mlp: batch_size must be at least 1");
   if (!(o.learning_rate > 0) || !(o.final_learning_rate >= 0) ||
       !(o.final_learning_rate <= o.learning_rate)) {
@@ -306,8 +419,7 @@ const json& require(const json& j, const char* key, const std::string& where) {
 
 double read_number(const json& j, const std::string& where) {
   if (!j.is_number()) {
-    throw MlpError("mlp json: " + where + " is not a number (" + std::string(j.type_name()) +
-                   ")");
+    throw MlpError("mlp json: " + where + " is not a number (" + std::string(j.type_name()) + ")");
   }
   const double value = j.get<double>();
   if (!std::isfinite(value)) throw MlpError("mlp json: " + where + " is not finite (NaN or inf)");
@@ -324,7 +436,8 @@ Eigen::VectorXd read_vector(const json& j, const std::string& where) {
 }
 
 Eigen::MatrixXd read_matrix(const json& j, const std::string& where) {
-  if (!j.is_array() || j.empty()) throw MlpError("mlp json: " + where + " is not a non-empty array of rows");
+  if (!j.is_array() || j.empty())
+    throw MlpError("mlp json: " + where + " is not a non-empty array of rows");
   const std::size_t cols = j[0].is_array() ? j[0].size() : 0;
   Eigen::MatrixXd m(static_cast<Eigen::Index>(j.size()), static_cast<Eigen::Index>(cols));
   for (std::size_t r = 0; r < j.size(); ++r) {
@@ -339,7 +452,9 @@ Eigen::MatrixXd read_matrix(const json& j, const std::string& where) {
   return m;
 }
 
-json to_json_array(const Eigen::VectorXd& v) { return json(std::vector<double>(v.data(), v.data() + v.size())); }
+json to_json_array(const Eigen::VectorXd& v) {
+  return json(std::vector<double>(v.data(), v.data() + v.size()));
+}
 
 }  // namespace
 
@@ -370,8 +485,9 @@ Eigen::MatrixXd Standardizer::invert(const Eigen::MatrixXd& standardized) const 
 
 Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
                const MlpTrainingOptions& options, MlpTrainingReport* report) {
-  using S = AdamScalar;
+  using S = TrainingScalar;
   using Matrix = Network<S>::Matrix;
+  using Row = Eigen::Matrix<S, 1, Eigen::Dynamic>;
   const auto started = std::chrono::steady_clock::now();
   check_options(options);
   if (X.rows() != y.size()) {
@@ -383,6 +499,29 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
                    std::to_string(kMlpMaxLayerWidth));
   }
   if (!X.allFinite() || !y.allFinite()) throw MlpError("mlp: training data has NaN or inf");
+  Eigen::MatrixXd transformed = X;
+  if (options.input_transform == MlpInputTransform::kLog) {
+    for (Eigen::Index c = 0; c < X.cols(); ++c) {
+      for (Eigen::Index r = 0; r < X.rows(); ++r) {
+        if (!(X(r, c) > 0)) {
+          throw MlpError("mlp: the log input transform needs inputs > 0; sample " +
+                         std::to_string(r) + " input " + std::to_string(c) + " is " +
+                         std::to_string(X(r, c)));
+        }
+        transformed(r, c) = std::log(X(r, c));
+      }
+    }
+  }
+  Eigen::VectorXd y_network(y.size());
+  for (Eigen::Index r = 0; r < y.size(); ++r) {
+    if (options.output_transform != MlpOutputTransform::kNone && !(y[r] > -kKelvinOffset)) {
+      throw MlpError("mlp: the output transform \"" +
+                     std::string(to_string(options.output_transform)) +
+                     "\" needs targets above absolute zero (-273.15 degC); target " +
+                     std::to_string(r) + " is " + std::to_string(y[r]));
+    }
+    y_network[r] = to_network_units(options.output_transform, y[r]);
+  }
   const Eigen::Index samples = X.rows();
   const auto test_count =
       static_cast<Eigen::Index>(std::lround(options.test_fraction * static_cast<double>(samples)));
@@ -392,31 +531,72 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   Random random(options.seed);
   std::vector<Eigen::Index> order(static_cast<std::size_t>(samples));
   for (Eigen::Index i = 0; i < samples; ++i) order[static_cast<std::size_t>(i)] = i;
-  random.shuffle(order);
+  if (options.stratified_split && test_count > 0 && test_count <= samples - 2) {
+    // Held-out samples evenly spaced in target order from a random phase, never the first or
+    // the last: the ends are trained on, held-out samples lie between training ones.
+    std::vector<Eigen::Index> by_target = order;
+    std::stable_sort(by_target.begin(), by_target.end(),
+                     [&y](Eigen::Index a, Eigen::Index b) { return y[a] < y[b]; });
+    const double spacing =
+        static_cast<double>(samples - 2) / static_cast<double>(test_count);  // >= 1
+    const double phase = random.uniform();
+    std::vector<char> held_out(static_cast<std::size_t>(samples), 0);
+    for (Eigen::Index k = 0; k < test_count; ++k) {
+      const auto rank = 1 + static_cast<std::size_t>((static_cast<double>(k) + phase) * spacing);
+      held_out[std::min(rank, by_target.size() - 2)] = 1;
+    }
+    std::size_t next_test = 0, next_train = static_cast<std::size_t>(test_count);
+    for (std::size_t i = 0; i < by_target.size(); ++i) {
+      order[held_out[i] ? next_test++ : next_train++] = by_target[i];
+    }
+  } else {
+    random.shuffle(order);
+  }
+  // Raw inputs and targets for the final report, transformed ones for training.
   Eigen::MatrixXd x_train(train_count, X.cols()), x_test(test_count, X.cols());
-  Eigen::VectorXd y_train(train_count), y_test(test_count);
+  Eigen::MatrixXd v_train(train_count, X.cols()), v_test(test_count, X.cols());
+  Eigen::VectorXd y_train(train_count), y_test(test_count), w_train(train_count);
   for (Eigen::Index i = 0; i < samples; ++i) {
     const Eigen::Index src = order[static_cast<std::size_t>(i)];
     if (i < test_count) {
       x_test.row(i) = X.row(src);
+      v_test.row(i) = transformed.row(src);
       y_test[i] = y[src];
     } else {
       x_train.row(i - test_count) = X.row(src);
+      v_train.row(i - test_count) = transformed.row(src);
       y_train[i - test_count] = y[src];
+      w_train[i - test_count] = y_network[src];
     }
   }
   // Standardise on the training rows only, so that the test set stays unseen.
-  const Standardizer input = Standardizer::fit(x_train);
-  const Standardizer output = Standardizer::fit(y_train);
+  const Standardizer input = Standardizer::fit(v_train);
+  const Standardizer output = Standardizer::fit(w_train);
   const double y_mean = output.mean[0], y_scale = output.scale[0];
   // Samples as columns: each layer is then one matrix product per batch.
-  const Eigen::MatrixXd z_train = input.apply(x_train).transpose();
-  const Eigen::RowVectorXd t_train = ((y_train.array() - y_mean) / y_scale).matrix().transpose();
+  const Eigen::MatrixXd z_train = input.apply(v_train).transpose();
+  const Eigen::RowVectorXd t_train = ((w_train.array() - y_mean) / y_scale).matrix().transpose();
   const Matrix z_train_s = z_train.cast<S>();
-  const Matrix z_test_s = input.apply(x_test).transpose().cast<S>();
-  const Eigen::Matrix<S, 1, Eigen::Dynamic> t_train_s = t_train.cast<S>();
+  const Matrix z_test_s = input.apply(v_test).transpose().cast<S>();
+  const Row t_train_s = t_train.cast<S>();
+  // (d target / d standardised output)^2 per training sample: what turns a squared error of the
+  // network into one in target units. The loss weights are these over their mean (or 1).
+  Eigen::RowVectorXd slope_squared(train_count);
+  for (Eigen::Index i = 0; i < train_count; ++i) {
+    const double slope = target_slope(options.output_transform, w_train[i]) * y_scale;
+    slope_squared[i] = slope * slope;
+  }
+  const double mean_slope_squared = slope_squared.mean();
+  const Eigen::RowVectorXd loss_weights =
+      options.loss_in_target_units ? Eigen::RowVectorXd(slope_squared / mean_slope_squared)
+                                   : Eigen::RowVectorXd::Ones(train_count);
+  // Per-sample factors from a weighted squared error (w e^2) to one in target units^2.
+  const Eigen::RowVectorXd to_target_units =
+      options.loss_in_target_units ? Eigen::RowVectorXd::Constant(train_count, mean_slope_squared)
+                                   : slope_squared;
+  const Row loss_weights_s = loss_weights.cast<S>();
 
-  // He initialisation for ReLU layers, variance 1/fan_in for the linear output; zero biases.
+  // He initialisation for ReLU layers, variance 1/fan_in for the linear output.
   Network<S> net;
   std::vector<int> widths{static_cast<int>(X.cols())};
   widths.insert(widths.end(), options.hidden.begin(), options.hidden.end());
@@ -433,15 +613,17 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
     net.bias.push_back(Network<S>::Vector::Zero(widths[l + 1]));
   }
   const std::size_t layers = net.layer_count();
-  if (!std::getenv("NOKINK")) {
-    // Data-dependent biases: each hidden unit's kink passes through a random training sample, so
-    // that the kinks spread along the data instead of all crossing the origin, and no unit starts
-    // dead.
+  // Data-dependent hidden biases: each hidden unit's kink passes through a random training
+  // sample, so that the kinks spread along the data instead of all crossing the origin, and no
+  // unit starts dead. The output bias stays 0 (the target mean).
+  {
     Matrix a = z_train_s;
     for (std::size_t l = 0; l + 1 < layers; ++l) {
       Matrix z = net.weights[l] * a;
       for (Eigen::Index i = 0; i < z.rows(); ++i) {
-        net.bias[l][i] = -z(i, static_cast<Eigen::Index>(random.below(static_cast<std::size_t>(train_count))));
+        const auto sample =
+            static_cast<Eigen::Index>(random.below(static_cast<std::size_t>(train_count)));
+        net.bias[l][i] = -z(i, sample);
       }
       z.colwise() += net.bias[l];
       a = z.cwiseMax(S(0));
@@ -457,36 +639,47 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   auto acts = make_activations(net, batch);
   auto deltas = make_activations(net, batch);  // d loss / d pre-activation, same shapes
   auto eval_acts = make_activations(net, kInferenceChunk);
-  Eigen::Matrix<S, 1, Eigen::Dynamic> batch_targets(batch);
+  Row batch_targets(batch), batch_weights(batch);
 
   const long steps_per_epoch = static_cast<long>((train_count + batch - 1) / batch);
   const long total_steps = steps_per_epoch * options.epochs;
   long step = 0;
   std::vector<Eigen::Index> train_order(static_cast<std::size_t>(train_count));
   for (Eigen::Index i = 0; i < train_count; ++i) train_order[static_cast<std::size_t>(i)] = i;
+  std::vector<int> pass;
   std::vector<double> train_rmse, test_rmse;
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  const MlpOutputTransform output_transform = options.output_transform;
   auto test_set_rmse = [&](const auto& network, auto& activations, const auto& z_test) {
     if (test_count == 0) return nan;
     const auto predicted = evaluate(network, z_test, activations);
-    const Eigen::VectorXd error =
-        (predicted.transpose().template cast<double>().array() * y_scale + y_mean).matrix() -
-        y_test;
-    return std::sqrt(error.squaredNorm() / static_cast<double>(test_count));
+    double squared_error_sum = 0;
+    for (Eigen::Index i = 0; i < test_count; ++i) {
+      const double v = static_cast<double>(predicted[i]) * y_scale + y_mean;
+      const double error = from_network_units(output_transform, v) - y_test[i];
+      squared_error_sum += error * error;
+    }
+    return std::sqrt(squared_error_sum / static_cast<double>(test_count));
   };
 
   for (int epoch = 0; epoch < options.epochs; ++epoch) {
     random.shuffle(train_order);
-    double squared_error_sum = 0;
+    double squared_error_sum = 0;  // in target units, to first order
     for (Eigen::Index start = 0; start < train_count; start += batch, ++step) {
       const Eigen::Index n = std::min(batch, train_count - start);
+      double factor_sum = 0;
       for (Eigen::Index k = 0; k < n; ++k) {
         const Eigen::Index src = train_order[static_cast<std::size_t>(start + k)];
         acts[0].col(k) = z_train_s.col(src);
         batch_targets[k] = t_train_s[src];
+        batch_weights[k] = loss_weights_s[src];
+        factor_sum += to_target_units[src];
       }
       forward(net, acts, n);
-      squared_error_sum += backward(net, acts, deltas, batch_targets, n, grad);
+      const double weighted_sum =
+          backward(net, acts, deltas, batch_targets, batch_weights, n, grad);
+      // Exact when the factor is the same for all samples (weighted loss), approximate else.
+      squared_error_sum += weighted_sum * factor_sum / static_cast<double>(n);
       const S lr = static_cast<S>(learning_rate_at(options, step, total_steps));
       const S bias1 = static_cast<S>(1 - std::pow(0.9, static_cast<double>(step + 1)));
       const S bias2 = static_cast<S>(1 - std::pow(0.999, static_cast<double>(step + 1)));
@@ -498,39 +691,74 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
                   S(0));
       }
     }
-    const double epoch_train_rmse =
-        std::sqrt(squared_error_sum / static_cast<double>(train_count)) * y_scale;
+    const double epoch_train_rmse = std::sqrt(squared_error_sum / static_cast<double>(train_count));
     if (!std::isfinite(epoch_train_rmse)) {
       throw MlpError("mlp: training diverged at epoch " + std::to_string(epoch + 1) +
                      "; lower learning_rate");
     }
     const double epoch_test_rmse = test_set_rmse(net, eval_acts, z_test_s);
+    pass.push_back(epoch + 1);
     train_rmse.push_back(epoch_train_rmse);
     test_rmse.push_back(epoch_test_rmse);
     if (options.progress) options.progress(epoch + 1, epoch_train_rmse, epoch_test_rmse);
   }
 
-  Network<double> net_double;
-  for (std::size_t l = 0; l < layers; ++l) {
-    net_double.weights.push_back(net.weights[l].template cast<double>());
-    net_double.bias.push_back(net.bias[l].template cast<double>());
-  }
+  // The polish, in rounds; between rounds each sample's weight is multiplied by its absolute
+  // error (Lawson's iteration: the weighted least-squares fit tends to the minimax fit), with a
+  // floor of a twentieth of the largest error so that no sample drops out.
+  PolishProblem problem{z_train_s, t_train, loss_weights, slope_squared,
+                        options.polish_weight_decay};
   int polish_done = 0;
-  if (options.polish_iterations > 0) {
-    polish_done = polish_with_lbfgs(net_double, z_train, t_train, options.polish_iterations);
+  const int pass_before_polish = options.epochs;
+  auto record_polish_point = [&](double train) {
+    const double test = test_set_rmse(net, eval_acts, z_test_s);
+    if (!std::isfinite(train)) throw MlpError("mlp: the polish diverged");
+    pass.push_back(pass_before_polish + polish_done);
+    train_rmse.push_back(train);
+    test_rmse.push_back(test);
+    if (options.progress) options.progress(pass.back(), train, test);
+  };
+  double last_train = 0;
+  for (int round = 0; round < options.polish_rounds && options.polish_iterations > 0; ++round) {
+    const int budget = options.polish_iterations * (round + 1) / options.polish_rounds -
+                       options.polish_iterations * round / options.polish_rounds;
+    polish_with_lbfgs(net, problem, budget, [&](double train) {
+      ++polish_done;
+      last_train = train;
+      if (polish_done % kPolishReportInterval == 0) record_polish_point(train);
+    });
+    if (round + 1 < options.polish_rounds) {
+      const Eigen::RowVectorXf predicted = evaluate(net, z_train_s, eval_acts);
+      Eigen::ArrayXd error(train_count);
+      for (Eigen::Index i = 0; i < train_count; ++i) {
+        const double v = static_cast<double>(predicted[i]) * y_scale + y_mean;
+        error[i] = std::abs(from_network_units(output_transform, v) - y_train[i]);
+      }
+      const double floor = error.maxCoeff() / 20;
+      if (!(floor > 0)) break;  // exact fit (or NaN): nothing to reweight
+      for (Eigen::Index i = 0; i < train_count; ++i) {
+        problem.weights[i] *= std::max(error[i], floor);
+      }
+      problem.weights /= problem.weights.mean();
+    }
   }
+  if (polish_done % kPolishReportInterval != 0) record_polish_point(last_train);  // the last
 
   std::vector<MlpLayer> model_layers;
   for (std::size_t l = 0; l < layers; ++l) {
-    model_layers.push_back({std::move(net_double.weights[l]), std::move(net_double.bias[l])});
+    model_layers.push_back(
+        {net.weights[l].template cast<double>(), net.bias[l].template cast<double>()});
   }
-  Mlp model(input, y_mean, y_scale, std::move(model_layers));
+  Mlp model(options.input_transform, input, options.output_transform, y_mean, y_scale,
+            std::move(model_layers));
 
   if (report) {
+    report->pass = std::move(pass);
     report->train_rmse = std::move(train_rmse);
     report->test_rmse = std::move(test_rmse);
     report->train_samples = static_cast<int>(train_count);
     report->test_samples = static_cast<int>(test_count);
+    report->epochs = options.epochs;
     report->polish_iterations_done = polish_done;
     const Eigen::VectorXd train_error = model.predict(x_train) - y_train;
     report->final_train_rmse =
@@ -552,9 +780,11 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
 
 // ---------------------------------------------------------------- model
 
-Mlp::Mlp(Standardizer input, double output_mean, double output_scale,
-         std::vector<MlpLayer> layers)
-    : input_(std::move(input)),
+Mlp::Mlp(MlpInputTransform input_transform, Standardizer input, MlpOutputTransform output_transform,
+         double output_mean, double output_scale, std::vector<MlpLayer> layers)
+    : input_transform_(input_transform),
+      input_(std::move(input)),
+      output_transform_(output_transform),
       output_mean_(output_mean),
       output_scale_(output_scale),
       layers_(std::move(layers)) {
@@ -568,8 +798,7 @@ void Mlp::check_and_prepare() {
     throw MlpError("mlp: input_mean has " + std::to_string(inputs) + " values, input_scale " +
                    std::to_string(input_.scale.size()) + "; need the same, at least 1");
   }
-  if (!input_.mean.allFinite() || !(input_.scale.array() > 0).all() ||
-      !input_.scale.allFinite()) {
+  if (!input_.mean.allFinite() || !(input_.scale.array() > 0).all() || !input_.scale.allFinite()) {
     throw MlpError("mlp: input_mean must be finite and input_scale finite and > 0");
   }
   if (!std::isfinite(output_mean_) || !(output_scale_ > 0) || !std::isfinite(output_scale_)) {
@@ -620,16 +849,29 @@ std::vector<int> Mlp::hidden_sizes() const {
   return sizes;
 }
 
+template <class T>
+bool Mlp::standardise_input(const double* x, T* z) const {
+  bool valid = true;
+  for (Eigen::Index j = 0; j < input_.mean.size(); ++j) {
+    const double v = input_transform_ == MlpInputTransform::kLog ? std::log(x[j]) : x[j];
+    const double standardised = (v - input_.mean[j]) * inverse_input_scale_[j];
+    valid = valid && std::isfinite(standardised);  // log of <= 0 gives -inf or NaN
+    z[j] = static_cast<T>(standardised);
+  }
+  return valid;
+}
+
+double Mlp::output_from_network(double z) const {
+  return from_network_units(output_transform_, z * output_scale_ + output_mean_);
+}
+
 double Mlp::predict(const double* x) const {
   if (layers_.empty()) return std::numeric_limits<double>::quiet_NaN();
   alignas(64) float buffer_a[kMlpMaxLayerWidth];
   alignas(64) float buffer_b[kMlpMaxLayerWidth];
   float* in = buffer_a;
   float* out = buffer_b;
-  const Eigen::Index inputs = input_.mean.size();
-  for (Eigen::Index j = 0; j < inputs; ++j) {
-    in[j] = static_cast<float>((x[j] - input_.mean[j]) * inverse_input_scale_[j]);
-  }
+  if (!standardise_input(x, in)) return std::numeric_limits<double>::quiet_NaN();
   const std::size_t layers = weights_f_.size();
   for (std::size_t l = 0; l + 1 < layers; ++l) {
     const Eigen::MatrixXf& w = weights_f_[l];
@@ -643,9 +885,9 @@ double Mlp::predict(const double* x) const {
     std::swap(in, out);
   }
   const Eigen::MatrixXf& w_out = weights_f_.back();
-  const float z = w_out.row(0).dot(Eigen::Map<const Eigen::VectorXf>(in, w_out.cols())) +
-                  bias_f_.back()[0];
-  return static_cast<double>(z) * output_scale_ + output_mean_;
+  const float z =
+      w_out.row(0).dot(Eigen::Map<const Eigen::VectorXf>(in, w_out.cols())) + bias_f_.back()[0];
+  return output_from_network(static_cast<double>(z));
 }
 
 template <class Fetch>
@@ -657,13 +899,15 @@ void Mlp::predict_chunked(Eigen::Index count, Fetch fetch, double* out) const {
   const Eigen::Index inputs = input_.mean.size();
   const Eigen::Index chunk = std::min(count, kInferenceChunk);
   Eigen::MatrixXf a(max_width_, chunk), b(max_width_, chunk);
+  std::vector<double> sample(static_cast<std::size_t>(inputs));
+  std::vector<char> valid(static_cast<std::size_t>(chunk));
   for (Eigen::Index start = 0; start < count; start += chunk) {
     const Eigen::Index n = std::min(chunk, count - start);
     for (Eigen::Index k = 0; k < n; ++k) {
-      for (Eigen::Index j = 0; j < inputs; ++j) {
-        a(j, k) = static_cast<float>((fetch(start + k, j) - input_.mean[j]) *
-                                     inverse_input_scale_[j]);
-      }
+      for (Eigen::Index j = 0; j < inputs; ++j)
+        sample[static_cast<std::size_t>(j)] = fetch(start + k, j);
+      valid[static_cast<std::size_t>(k)] = standardise_input(sample.data(), &a(0, k));
+      if (!valid[static_cast<std::size_t>(k)]) a.col(k).head(inputs).setZero();
     }
     Eigen::Index width = inputs;
     for (std::size_t l = 0; l < weights_f_.size(); ++l) {
@@ -676,15 +920,17 @@ void Mlp::predict_chunked(Eigen::Index count, Fetch fetch, double* out) const {
       a.swap(b);
     }
     for (Eigen::Index k = 0; k < n; ++k) {
-      out[start + k] = static_cast<double>(a(0, k)) * output_scale_ + output_mean_;
+      out[start + k] = valid[static_cast<std::size_t>(k)]
+                           ? output_from_network(static_cast<double>(a(0, k)))
+                           : std::numeric_limits<double>::quiet_NaN();
     }
   }
 }
 
 Eigen::VectorXd Mlp::predict(const Eigen::MatrixXd& X) const {
   if (X.cols() != input_.mean.size()) {
-    throw MlpError("mlp: predict got " + std::to_string(X.cols()) + " inputs per sample, model has " +
-                   std::to_string(input_.mean.size()));
+    throw MlpError("mlp: predict got " + std::to_string(X.cols()) +
+                   " inputs per sample, model has " + std::to_string(input_.mean.size()));
   }
   Eigen::VectorXd out(X.rows());
   predict_chunked(
@@ -695,8 +941,7 @@ Eigen::VectorXd Mlp::predict(const Eigen::MatrixXd& X) const {
 void Mlp::predict_rows(const double* rows, Eigen::Index count, double* out) const {
   const Eigen::Index inputs = input_.mean.size();
   predict_chunked(
-      count, [rows, inputs](Eigen::Index i, Eigen::Index j) { return rows[i * inputs + j]; },
-      out);
+      count, [rows, inputs](Eigen::Index i, Eigen::Index j) { return rows[i * inputs + j]; }, out);
 }
 
 double Mlp::predict_with_gradient(const double* x, double* grad_out) const {
@@ -714,8 +959,9 @@ double Mlp::predict_with_gradient(const double* x, double* grad_out) const {
   if (scratch.size() < needed) scratch.resize(needed);
 
   double* z0 = scratch.data();
-  for (Eigen::Index j = 0; j < inputs; ++j) {
-    z0[j] = (x[j] - input_.mean[j]) * inverse_input_scale_[j];
+  if (!standardise_input(x, z0)) {
+    std::fill(grad_out, grad_out + inputs, std::numeric_limits<double>::quiet_NaN());
+    return std::numeric_limits<double>::quiet_NaN();
   }
   double* cursor = z0 + inputs;
   const double* in = z0;
@@ -749,10 +995,16 @@ double Mlp::predict_with_gradient(const double* x, double* grad_out) const {
     std::swap(g, g_below);
     act_end = act;
   }
+  const double v = z * output_scale_ + output_mean_;
+  const double output_slope = target_slope(output_transform_, v) * output_scale_;
   for (Eigen::Index j = 0; j < inputs; ++j) {
-    grad_out[j] = g[j] * output_scale_ * inverse_input_scale_[j];
+    // d log(x) / dx = 1 / x
+    const double input_slope = input_transform_ == MlpInputTransform::kLog ? 1.0 / x[j] : 1.0;
+    grad_out[j] = g[j] * output_slope * inverse_input_scale_[j] * input_slope;
   }
-  return z * output_scale_ + output_mean_;
+  const double y = from_network_units(output_transform_, v);
+  if (std::isnan(y)) std::fill(grad_out, grad_out + inputs, y);
+  return y;
 }
 
 // ---------------------------------------------------------------- JSON
@@ -771,8 +1023,10 @@ json Mlp::to_json() const {
   return {{"format", "pyrocam-mlp"},
           {"version", kMlpFormatVersion},
           {"activation", "relu"},
+          {"input_transform", to_string(input_transform_)},
           {"input_mean", to_json_array(input_.mean)},
           {"input_scale", to_json_array(input_.scale)},
+          {"output_transform", to_string(output_transform_)},
           {"output_mean", output_mean_},
           {"output_scale", output_scale_},
           {"layers", std::move(layers)}};
@@ -785,13 +1039,39 @@ Mlp Mlp::from_json(const json& j) {
     throw MlpError("mlp json: \"format\" is " + format.dump() + ", expected \"pyrocam-mlp\"");
   }
   const json& version = require(j, "version", top);
-  if (!version.is_number_integer() || version.get<int>() != kMlpFormatVersion) {
-    throw MlpError("mlp json: unsupported \"version\" " + version.dump() + ", expected " +
-                   std::to_string(kMlpFormatVersion));
+  if (!version.is_number_integer() || version.get<int>() < 1 ||
+      version.get<int>() > kMlpFormatVersion) {
+    throw MlpError("mlp json: unsupported \"version\" " + version.dump() +
+                   ", this build reads 1 to " + std::to_string(kMlpFormatVersion));
   }
+  const int format_version = version.get<int>();
   if (j.contains("activation") && j["activation"] != "relu") {
     throw MlpError("mlp json: unsupported \"activation\" " + j["activation"].dump() +
                    ", expected \"relu\"");
+  }
+  // Version 1 had no transforms: both were "none".
+  MlpInputTransform input_transform = MlpInputTransform::kNone;
+  MlpOutputTransform output_transform = MlpOutputTransform::kNone;
+  if (format_version >= 2) {
+    const json& in = require(j, "input_transform", top);
+    if (in == to_string(MlpInputTransform::kLog)) {
+      input_transform = MlpInputTransform::kLog;
+    } else if (in != to_string(MlpInputTransform::kNone)) {
+      throw MlpError("mlp json: unsupported \"input_transform\" " + in.dump() +
+                     ", expected \"none\" or \"log\"");
+    }
+    const json& out = require(j, "output_transform", top);
+    bool known = false;
+    for (const auto t : {MlpOutputTransform::kNone, MlpOutputTransform::kInverseKelvin,
+                         MlpOutputTransform::kLogKelvin}) {
+      if (out == to_string(t)) output_transform = t, known = true;
+    }
+    if (!known) {
+      throw MlpError("mlp json: unsupported \"output_transform\" " + out.dump() +
+                     ", expected \"none\", \"inverse_kelvin\" or \"log_kelvin\"");
+    }
+  } else if (j.contains("input_transform") || j.contains("output_transform")) {
+    throw MlpError("mlp json: version 1 has no transforms, yet the file names one");
   }
   Standardizer input;
   input.mean = read_vector(require(j, "input_mean", top), "input_mean");
@@ -811,7 +1091,8 @@ Mlp Mlp::from_json(const json& j) {
     layers.push_back(std::move(layer));
   }
   try {
-    return Mlp(std::move(input), output_mean, output_scale, std::move(layers));
+    return Mlp(input_transform, std::move(input), output_transform, output_mean, output_scale,
+               std::move(layers));
   } catch (const MlpError& e) {
     // Same message, marked as coming from the file.
     std::string message = e.what();

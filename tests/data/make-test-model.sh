@@ -10,5 +10,6 @@ rm -rf "$work"
 "$tool" -q simulate campaign --profile "$profile" --unit typical --frames 2 --size "$size" \
   --roi-area "$roi_area" --out "$work/campaign"
 "$tool" -q calibrate --dataset "$work/campaign" --profile "$profile" --solver regularised \
-  --epochs 30 --mc-refits 0 --locus-step 2 --out "$out" --report "$work/report"
+  --epochs 30 --polish-iterations 50 --mc-refits 0 --locus-step 2 --out "$out" \
+  --report "$work/report"
 rm -rf "$work/campaign"

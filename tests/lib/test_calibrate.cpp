@@ -154,7 +154,7 @@ ThermalModel small_model(const CameraProfile& p) {
   Standardizer st{Eigen::VectorXd::Zero(inputs), Eigen::VectorXd::Ones(inputs)};
   MlpLayer l1{Eigen::MatrixXd::Constant(4, inputs, 0.1), Eigen::VectorXd::Constant(4, 0.2)};
   MlpLayer l2{Eigen::MatrixXd::Constant(1, 4, 0.3), Eigen::VectorXd::Constant(1, 0.0)};
-  m.mlp = Mlp(st, 1500, 500, {l1, l2});
+  m.mlp = Mlp(MlpInputTransform::kNone, st, MlpOutputTransform::kNone, 1500, 500, {l1, l2});
   m.uncertainty.temperature_c = {500, 3500};
   m.uncertainty.u_calibration_c = {2, 4};
   m.uncertainty.u_emissivity_c = {1, 3};
@@ -217,6 +217,32 @@ TEST_F(ModelFileDamage, rejects_another_version_n) {
   ASSERT_NE(pos, std::string::npos);
   edited.replace(pos, 12, "\"version\": 9");
   expect_rejected(edited, "model format version 9");
+}
+
+TEST_F(ModelFileDamage, rejects_an_mlp_with_an_unknown_transform_n) {
+  // Consistent file (checksum recomputed) written by some other build.
+  nlohmann::json file = nlohmann::json::parse(text);
+  file["payload"]["mlp"]["output_transform"] = "kelvin_squared";
+  file["checksum_fnv1a64"] = fnv1a_hex(file["payload"].dump());
+  expect_rejected(file.dump(),
+                  "MLP: mlp json: unsupported \"output_transform\" \"kelvin_squared\"");
+}
+
+TEST_F(ModelFileDamage, reads_an_mlp_of_format_version_1) {
+  // Written before the transforms: no transform keys, meaning none.
+  nlohmann::json file = nlohmann::json::parse(text);
+  nlohmann::json& mlp = file["payload"]["mlp"];
+  ASSERT_EQ(mlp["input_transform"], "none");
+  ASSERT_EQ(mlp["output_transform"], "none");
+  mlp.erase("input_transform");
+  mlp.erase("output_transform");
+  mlp["version"] = 1;
+  file["checksum_fnv1a64"] = fnv1a_hex(file["payload"].dump());
+  test::write_text(dir / "v1.json", file.dump());
+  const ThermalModel old = load_model(dir / "v1.json");
+  const ThermalModel now = load_model(dir / "m.json");
+  const double x[2] = {0.7, 0.2};
+  EXPECT_EQ(old.mlp.predict(x), now.mlp.predict(x));
 }
 
 TEST_F(ModelFileDamage, rejects_a_missing_file_n) {

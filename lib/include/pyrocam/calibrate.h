@@ -47,6 +47,7 @@ struct CalibrationOutcome {
   Eigen::MatrixXd rate_residual_datasheet, rate_residual_optimised;  // T x bands, relative
   MlpTrainingReport mlp_report;
   double mlp_locus_max_error_c = NAN;  // over the whole noise-free locus
+  double mlp_locus_rms_error_c = NAN;
   std::vector<EstimatorScore> table4;
   std::vector<std::string> warnings;
   std::string verdict;
