@@ -1,8 +1,13 @@
 #include "pyrocam/estimators.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "pyrocam/spectrum.h"
@@ -11,6 +16,53 @@ namespace pyrocam {
 namespace {
 
 constexpr int kMaxBands = 64;
+
+// Hot loops are compiled twice, for x86-64-v3 (AVX2) and the baseline, the version picked when the
+// program loads. The library is built with -ffp-contract=off (no fused multiply-adds), so both
+// versions give the same bits.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define PYROCAM_VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define PYROCAM_VECTOR_CLONES
+#endif
+
+constexpr std::ptrdiff_t kChi2Block = 32;  // samples per step of approximate_chi2
+
+// Approximate chi2 of the likelihood fit from low-rank factors stored rank after rank, `stride`
+// samples each (see LikelihoodEstimator): at `count` samples from `from`, into out[0 .. count
+// rounded up to kChi2Block) (values past count are meaningless). Blocks of samples keep their
+// sums in registers.
+template <class Real>
+void approximate_chi2_impl(const Real* along, int rank, const Real* along2, int rank2,
+                           std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
+                           const Real* p, const Real* q, Real sss, Real* out) {
+  for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kChi2Block) {
+    Real ssm[kChi2Block] = {}, smm[kChi2Block] = {};
+    for (int r = 0; r < rank; ++r) {
+      const Real* a = along + r * stride + from + i0;
+      for (std::ptrdiff_t j = 0; j < kChi2Block; ++j) ssm[j] += p[r] * a[j];
+    }
+    for (int r = 0; r < rank2; ++r) {
+      const Real* a = along2 + r * stride + from + i0;
+      for (std::ptrdiff_t j = 0; j < kChi2Block; ++j) smm[j] += q[r] * a[j];
+    }
+    for (std::ptrdiff_t j = 0; j < kChi2Block; ++j) out[i0 + j] = sss - ssm[j] * ssm[j] / smm[j];
+  }
+}
+
+PYROCAM_VECTOR_CLONES
+void approximate_chi2(const float* along, int rank, const float* along2, int rank2,
+                      std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
+                      const float* p, const float* q, float sss, float* out) {
+  approximate_chi2_impl(along, rank, along2, rank2, stride, from, count, p, q, sss, out);
+}
+
+PYROCAM_VECTOR_CLONES
+void approximate_chi2(const double* along, int rank, const double* along2, int rank2,
+                      std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
+                      const double* p, const double* q, double sss, double* out) {
+  approximate_chi2_impl(along, rank, along2, rank2, stride, from, count, p, q, sss, out);
+}
 
 class MlpEstimator : public TemperatureEstimator {
  public:
@@ -29,91 +81,345 @@ class MlpEstimator : public TemperatureEstimator {
 
 // Weighted least squares of the band signals against the modelled locus with a free scale
 // (unknown emissivity, exposure and geometry): chi2(T) = sum w (S - a m(T))^2, a profiled out.
-class LikelihoodEstimator : public TemperatureEstimator {
+// The locus is sampled every 1 degC; chi2 is scanned every kCoarse samples keeping every local
+// minimum (with few valid bands the locus can pass the same ratios twice, and a reading that
+// fits two temperatures is no reading), each minimum is refined to the 1 degC sample within
+// kCoarse of it, and a parabola through the best sample and its neighbours gives the answer.
+// This base holds what both implementations share: the weights, the exact chi2 and the decision.
+class LikelihoodFit : public TemperatureEstimator {
  public:
   // Two minima closer than this in chi2 (about 3 sigma) make the reading ambiguous.
   static constexpr double kAmbiguityChi2 = 9.0;
+  static constexpr Eigen::Index kCoarse = 20;
 
-  explicit LikelihoodEstimator(const ThermalModel& m)
+  explicit LikelihoodFit(const ThermalModel& m)
       : TemperatureEstimator(m),
-        locus_(make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 1.0)) {}
-
-  double temperature_c(const double* s) const override {
-    double w[kMaxBands];
-    int valid = 0;
+        locus_(make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 1.0)),
+        rates_(static_cast<std::size_t>(locus_.size() * bands_)),
+        squares_(rates_.size()) {
+    for (Eigen::Index i = 0; i < locus_.size(); ++i)
+      for (int b = 0; b < bands_; ++b) {
+        const double m = locus_.rates(i, b);
+        rates_[static_cast<std::size_t>(i * bands_ + b)] = m;
+        squares_[static_cast<std::size_t>(i * bands_ + b)] = m * m;
+      }
+    // signal_variance_dn2 per band as gain * signal + floor, with the same arithmetic.
+    const Eigen::VectorXd k = m.profile().dn_per_electron();
     for (int b = 0; b < bands_; ++b) {
-      // A saturated or dim band is dropped; the rest still fix the temperature.
+      const double read = k[b] * m.profile().noise.read_noise_e;
+      shot_gain_[b] = k[b];
+      noise_floor_[b] = 2 * (read * read + 1.0 / 12);
+    }
+  }
+
+ protected:
+  struct Minimum {
+    Eigen::Index index;
+    double chi2;
+    double below, above;  // chi2 at index -1 and +1 when already known, else NaN
+  };
+
+  // A pixel's signals as the fit uses them: inverse noise variances w (0 drops a band:
+  // saturated, NaN or dim; the rest still fix the temperature), w*s (0 for a dropped band) and
+  // sum w s^2.
+  struct Weighted {
+    double w[kMaxBands], ws[kMaxBands];
+    double sss;
+  };
+
+  // Returns how many bands count.
+  int weigh(const double* s, Weighted& px) const {
+    int valid = 0;
+    px.sss = 0;
+    for (int b = 0; b < bands_; ++b) {
       if (std::isfinite(s[b]) && s[b] >= dim_dn_) {
-        w[b] = 1.0 / signal_variance_dn2(model_.profile(), b, s[b]);
+        px.w[b] = 1.0 / (shot_gain_[b] * std::max(s[b], 0.0) + noise_floor_[b]);
+        px.ws[b] = px.w[b] * s[b];
+        px.sss += px.ws[b] * s[b];
         ++valid;
       } else {
-        w[b] = 0;
+        px.w[b] = px.ws[b] = 0;
       }
     }
-    if (valid < 2) return NAN;
-    const Eigen::Index n = locus_.size();
-    auto chi2 = [&](Eigen::Index i) {
-      double smm = 0, ssm = 0, sss = 0;
-      for (int b = 0; b < bands_; ++b) {
-        if (w[b] == 0) continue;
-        const double m = locus_.rates(i, b);
-        smm += w[b] * m * m;
-        ssm += w[b] * s[b] * m;
-        sss += w[b] * s[b] * s[b];
+    return valid;
+  }
+
+  // chi2 at locus sample i: two dot products over the bands, in four partial sums.
+  double chi2(Eigen::Index i, const Weighted& px) const {
+    const double* m = &rates_[static_cast<std::size_t>(i * bands_)];
+    const double* m2 = &squares_[static_cast<std::size_t>(i * bands_)];
+    double ssm[4] = {0, 0, 0, 0}, smm[4] = {0, 0, 0, 0};
+    int b = 0;
+    for (; b + 4 <= bands_; b += 4)
+      for (int k = 0; k < 4; ++k) {
+        ssm[k] += px.ws[b + k] * m[b + k];
+        smm[k] += px.w[b + k] * m2[b + k];
       }
-      return sss - ssm * ssm / smm;
-    };
-    const Eigen::Index coarse = 20;
-    // Coarse scan, keeping every local minimum: with few valid bands the locus can pass the
-    // same ratios twice, and a reading that fits two temperatures is no reading.
-    std::vector<double> c;
-    for (Eigen::Index i = 0; i < n; i += coarse) c.push_back(chi2(i));
-    auto refine = [&](Eigen::Index around, double& value) {
-      Eigen::Index best_i = around;
-      value = chi2(around);
-      const Eigen::Index lo = std::max<Eigen::Index>(0, around - coarse);
-      const Eigen::Index hi = std::min<Eigen::Index>(n - 1, around + coarse);
-      for (Eigen::Index i = lo; i <= hi; ++i) {
-        const double v = chi2(i);
-        if (v < value) value = v, best_i = i;
-      }
-      return best_i;
-    };
-    std::vector<Eigen::Index> minima;
-    for (std::size_t k = 0; k < c.size(); ++k)
-      if ((k == 0 || c[k] <= c[k - 1]) && (k + 1 == c.size() || c[k] <= c[k + 1]))
-        minima.push_back(static_cast<Eigen::Index>(k) * coarse);
-    Eigen::Index best = 0;
+    for (; b < bands_; ++b) {
+      ssm[0] += px.ws[b] * m[b];
+      smm[0] += px.w[b] * m2[b];
+    }
+    const double sm = (ssm[0] + ssm[1]) + (ssm[2] + ssm[3]);
+    const double mm = (smm[0] + smm[1]) + (smm[2] + smm[3]);
+    return px.sss - sm * sm / mm;
+  }
+
+  // The reading from the refined minima: the best one, unless another one far from it fits
+  // almost as well (ambiguous) or it sits at an end of the locus (outside the range).
+  double decide(const Minimum* minima, std::size_t count, const Weighted& px) const {
+    std::size_t best_k = 0;
     double best_chi2 = std::numeric_limits<double>::infinity();
-    std::vector<std::pair<Eigen::Index, double>> refined;
-    for (Eigen::Index m : minima) {
-      double v;
-      const Eigen::Index i = refine(m, v);
-      refined.emplace_back(i, v);
-      if (v < best_chi2) best_chi2 = v, best = i;
-    }
-    for (const auto& [i, v] : refined)
-      if (std::abs(i - best) > 3 * coarse && v - best_chi2 < kAmbiguityChi2) return NAN;
+    for (std::size_t k = 0; k < count; ++k)
+      if (minima[k].chi2 < best_chi2) best_chi2 = minima[k].chi2, best_k = k;
+    const Eigen::Index best = count ? minima[best_k].index : 0;
+    for (std::size_t k = 0; k < count; ++k)
+      if (std::abs(minima[k].index - best) > 3 * kCoarse &&
+          minima[k].chi2 - best_chi2 < kAmbiguityChi2)
+        return NAN;
+    const Eigen::Index n = locus_.size();
     if (best == 0 || best == n - 1) return NAN;  // at the edge: outside the model's range
     // Parabola through the minimum and its neighbours for sub-step resolution.
-    const double cm = chi2(best - 1), cp = chi2(best + 1);
+    const double cm = std::isnan(minima[best_k].below) ? chi2(best - 1, px) : minima[best_k].below;
+    const double cp = std::isnan(minima[best_k].above) ? chi2(best + 1, px) : minima[best_k].above;
     const double denom = cm - 2 * best_chi2 + cp;
     const double offset = denom > 0 ? 0.5 * (cm - cp) / denom : 0.0;
     const double step = locus_.temperature_c[1] - locus_.temperature_c[0];
     return in_range(locus_.temperature_c[best] + std::clamp(offset, -1.0, 1.0) * step);
   }
 
- private:
   Locus locus_;
+  std::vector<double> rates_, squares_;  // m and m^2: samples x bands, row after row
+  double shot_gain_[kMaxBands] = {}, noise_floor_[kMaxBands] = {};
 };
 
-// The MLP tabulated over the colour camera's two log ratios, in coordinates that follow the
-// locus: u = ln r1 along it and d = ln r2 - v_locus(u) across it. Pixels off the table fall
-// back to the network itself, so the answer is the MLP's wherever the table is not exact.
+// The definition: every coarse sample and every 1 degC sample of each refinement window.
+class ExhaustiveLikelihoodEstimator : public LikelihoodFit {
+ public:
+  using LikelihoodFit::LikelihoodFit;
+
+  double temperature_c(const double* s) const override {
+    Weighted px;
+    if (weigh(s, px) < 2) return NAN;
+    const Eigen::Index n = locus_.size();
+    std::vector<double> c;
+    for (Eigen::Index i = 0; i < n; i += kCoarse) c.push_back(chi2(i, px));
+    std::vector<Minimum> refined;
+    for (std::size_t k = 0; k < c.size(); ++k) {
+      if (!((k == 0 || c[k] <= c[k - 1]) && (k + 1 == c.size() || c[k] <= c[k + 1]))) continue;
+      const Eigen::Index around = static_cast<Eigen::Index>(k) * kCoarse;
+      Minimum best{around, chi2(around, px), NAN, NAN};
+      const Eigen::Index lo = std::max<Eigen::Index>(0, around - kCoarse);
+      const Eigen::Index hi = std::min<Eigen::Index>(n - 1, around + kCoarse);
+      for (Eigen::Index i = lo; i <= hi; ++i) {
+        const double v = chi2(i, px);
+        if (v < best.chi2) best = {i, v, NAN, NAN};
+      }
+      refined.push_back(best);
+    }
+    return decide(refined.data(), refined.size(), px);
+  }
+};
+
+// The same fit, fast. chi2(T) = sss - ssm(T)^2 / smm(T) does not change when m(T) is scaled,
+// so the locus rows are normalised, and the normalised rates (and their squares) over the
+// samples form matrices of very low rank (smooth spectra: 9 to 11 of 25 columns leave rows off by
+// 1e-8 to 1e-10). With such factors, ssm and smm at a sample cost one multiply-add per rank
+// instead of one per band. An approximate chi2 from them steers the scan; the exact chi2 (double
+// precision, as the exhaustive scan computes it) settles everything the approximation's error
+// bound leaves open:
+//  - coarse scan in single precision: two coarse samples closer than twice the bound are
+//    compared exactly;
+//  - refinement window in double precision from finer factors: every sample within the bound of
+//    the exact chi2 of the approximate best is evaluated exactly, and the best of those wins.
+// So the answer and the no-reading decisions are those of the exhaustive scan (the unit tests
+// compare both on noisy pixels, with saturated, dim and NaN bands).
+class LikelihoodEstimator : public LikelihoodFit {
+ public:
+  static constexpr int kMaxRank = 16;
+  // Row error left by the factors (rows have unit length): coarse, window.
+  static constexpr double kCoarseRankTolerance = 1e-8, kWindowRankTolerance = 1e-10;
+  // Error bounds of the approximate chi2, relative to sum w s^2 (ten times the largest seen on
+  // noisy pixels of both reference cameras).
+  static constexpr double kCoarseError = 1e-5, kWindowError = 1e-8;
+  static constexpr Eigen::Index kMaxCoarse = 504;  // coarse samples: a 10 000 degC range
+
+  explicit LikelihoodEstimator(const ThermalModel& m) : LikelihoodFit(m) {
+    const Eigen::Index n = locus_.size();
+    Eigen::MatrixXd unit(n, bands_), squares(n, bands_);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::RowVectorXd row = locus_.rates.row(i);
+      const double norm = row.norm();
+      if (!(norm > 0) || !std::isfinite(norm))
+        throw InputError("method likelihood: the model's locus has no signal at " +
+                         std::to_string(locus_.temperature_c[i]) + " degC");
+      unit.row(i) = row / norm;
+      squares.row(i) = unit.row(i).array().square().matrix();
+    }
+    coarse_count_ = (n + kCoarse - 1) / kCoarse;
+    if (coarse_count_ > kMaxCoarse)
+      throw InputError("method likelihood: the model's temperature range is too wide");
+    stride_ = padded(n);
+    coarse_stride_ = padded(coarse_count_);
+    factor(unit, across_, rank_, coarse_rank_, along_, coarse_along_);
+    factor(squares, across2_, rank2_, coarse_rank2_, along2_, coarse_along2_);
+  }
+
+  double temperature_c(const double* s) const override {
+    Weighted px;
+    if (weigh(s, px) < 2) return NAN;
+    // Projections of w*s and w on the factors.
+    alignas(32) double p[kMaxRank] = {}, q[kMaxRank] = {};
+    for (int b = 0; b < bands_; ++b) {
+      const double* v = &across_[static_cast<std::size_t>(b * kMaxRank)];
+      const double* v2 = &across2_[static_cast<std::size_t>(b * kMaxRank)];
+      for (int r = 0; r < kMaxRank; ++r) {
+        p[r] += px.ws[b] * v[r];
+        q[r] += px.w[b] * v2[r];
+      }
+    }
+    alignas(32) float pf[kMaxRank], qf[kMaxRank];
+    for (int r = 0; r < kMaxRank; ++r) {
+      pf[r] = static_cast<float>(p[r]);
+      qf[r] = static_cast<float>(q[r]);
+    }
+
+    // Coarse scan.
+    alignas(32) float c[kMaxCoarse];
+    const Eigen::Index nc = coarse_count_;
+    approximate_chi2(coarse_along_.data(), coarse_rank_, coarse_along2_.data(), coarse_rank2_,
+                     coarse_stride_, 0, nc, pf, qf, static_cast<float>(px.sss), c);
+    const double tie = kCoarseError * px.sss + 1e-9;
+    auto not_above = [&](Eigen::Index k, Eigen::Index other) {
+      if (std::abs(c[k] - c[other]) > 2 * tie) return c[k] <= c[other];
+      return chi2(k * kCoarse, px) <= chi2(other * kCoarse, px);  // too close to tell: exactly
+    };
+    // Local minima. A sample clearly above a neighbour is none (flags as bytes, scanned eight
+    // at a time: most samples are not minima); the few others are checked.
+    const auto margin = static_cast<float>(2 * tie);
+    alignas(16) std::uint8_t candidate[kMaxCoarse + 8];
+    std::memset(candidate + nc, 0, 8);
+    candidate[0] = c[0] <= c[1] + margin;
+    for (Eigen::Index k = 1; k + 1 < nc; ++k)
+      candidate[k] = (c[k] <= c[k - 1] + margin) & (c[k] <= c[k + 1] + margin);
+    candidate[nc - 1] = c[nc - 1] <= c[nc - 2] + margin;
+    Minimum refined[kMaxCoarse];
+    std::size_t count = 0;
+    for (Eigen::Index k0 = 0; k0 < nc; k0 += 8) {
+      std::uint64_t word;
+      std::memcpy(&word, candidate + k0, sizeof word);
+      if (!word) continue;
+      for (Eigen::Index k = k0; k < std::min(k0 + 8, nc); ++k) {
+        if (!candidate[k]) continue;
+        if (!((k == 0 || not_above(k, k - 1)) && (k + 1 == nc || not_above(k, k + 1)))) continue;
+        refined[count++] = refine(k * kCoarse, px, p, q);
+      }
+    }
+    return decide(refined, count, px);
+  }
+
+ private:
+  // Room for n samples and the reads of a last, partial block of approximate_chi2.
+  static constexpr Eigen::Index padded(Eigen::Index n) {
+    return (n + kChi2Block - 1) / kChi2Block * kChi2Block + kChi2Block;
+  }
+
+  // Low-rank factors of a samples x bands matrix A ~ (A V) V^T, V orthonormal: across (bands x
+  // kMaxRank, V zero padded), along (rank x stride_, A V rank after rank, zero padded) for the
+  // windows and coarse_along (coarse rank x coarse_stride_, every kCoarse-th sample, single
+  // precision) for the coarse scan. V is grown greedily from the row A leaves least explained
+  // (pivoted Gram-Schmidt), so its first columns are the coarse factors.
+  void factor(const Eigen::MatrixXd& a, std::vector<double>& across, int& rank, int& coarse_rank,
+              std::vector<double>& along, std::vector<float>& coarse_along) const {
+    Eigen::MatrixXd left = a;
+    Eigen::MatrixXd v(a.cols(), 0);
+    coarse_rank = 0;
+    for (int r = 0; r < std::min<int>(kMaxRank, static_cast<int>(a.cols())); ++r) {
+      Eigen::Index worst;
+      const double norm = left.rowwise().norm().maxCoeff(&worst);
+      if (norm <= kCoarseRankTolerance && coarse_rank == 0) coarse_rank = r;
+      if (norm <= kWindowRankTolerance) break;
+      Eigen::VectorXd dir = left.row(worst).transpose() / norm;
+      for (int pass = 0; pass < 2; ++pass) dir -= v * (v.transpose() * dir);  // stay orthogonal
+      dir.normalize();
+      left -= (left * dir) * dir.transpose();
+      v.conservativeResize(Eigen::NoChange, r + 1);
+      v.col(r) = dir;
+    }
+    rank = static_cast<int>(v.cols());
+    if (coarse_rank == 0) coarse_rank = rank;
+    const Eigen::MatrixXd av = a * v;
+    across.assign(static_cast<std::size_t>(bands_ * kMaxRank), 0.0);
+    along.assign(static_cast<std::size_t>(rank * stride_), 0.0);
+    coarse_along.assign(static_cast<std::size_t>(coarse_rank * coarse_stride_), 0.f);
+    for (int r = 0; r < rank; ++r) {
+      for (int b = 0; b < bands_; ++b) across[static_cast<std::size_t>(b * kMaxRank + r)] = v(b, r);
+      for (Eigen::Index i = 0; i < a.rows(); ++i)
+        along[static_cast<std::size_t>(r * stride_ + i)] = av(i, r);
+      if (r >= coarse_rank) continue;
+      for (Eigen::Index j = 0; j < coarse_count_; ++j)
+        coarse_along[static_cast<std::size_t>(r * coarse_stride_ + j)] =
+            static_cast<float>(av(j * kCoarse, r));
+    }
+  }
+
+  // The exact best 1 degC sample within kCoarse of `around`, as the exhaustive scan finds it:
+  // the true best is no worse than the approximate best `at`, so its approximate chi2 is at most
+  // the exact chi2 of `at` plus the error bound; only such samples are evaluated exactly.
+  Minimum refine(Eigen::Index around, const Weighted& px, const double* p, const double* q) const {
+    const Eigen::Index n = locus_.size();
+    const Eigen::Index lo = std::max<Eigen::Index>(0, around - kCoarse);
+    const Eigen::Index hi = std::min<Eigen::Index>(n - 1, around + kCoarse);
+    alignas(32) double f[padded(2 * kCoarse + 1)];
+    approximate_chi2(along_.data(), rank_, along2_.data(), rank2_, stride_, lo, hi - lo + 1, p, q,
+                     px.sss, f);
+    Eigen::Index at = lo;
+    for (Eigen::Index i = lo; i <= hi; ++i)
+      if (f[i - lo] < f[at - lo]) at = i;
+    double exact[2 * kCoarse + 1];
+    for (Eigen::Index i = lo; i <= hi; ++i) exact[i - lo] = NAN;
+    exact[at - lo] = chi2(at, px);
+    Minimum best{at, exact[at - lo], NAN, NAN};
+    const double bound = best.chi2 + kWindowError * px.sss + 1e-12;
+    for (Eigen::Index i = lo; i <= hi; ++i) {
+      if (i == at || f[i - lo] > bound) continue;
+      exact[i - lo] = chi2(i, px);
+      if (exact[i - lo] < best.chi2 || (exact[i - lo] == best.chi2 && i < best.index))
+        best = {i, exact[i - lo], NAN, NAN};
+    }
+    // Neighbours already evaluated are kept for the parabola.
+    if (best.index - 1 >= lo) best.below = exact[best.index - 1 - lo];
+    if (best.index + 1 <= hi) best.above = exact[best.index + 1 - lo];
+    return best;
+  }
+
+  int rank_ = 0, rank2_ = 0, coarse_rank_ = 0, coarse_rank2_ = 0;
+  Eigen::Index stride_ = 0, coarse_count_ = 0, coarse_stride_ = 0;
+  std::vector<double> across_, across2_, along_, along2_;
+  std::vector<float> coarse_along_, coarse_along2_;
+};
+
+// The network tabulated over the colour camera's two ratios x = (s_n0 / ref, s_n1 / ref)
+// themselves, on a uniform grid. A ReLU network is piecewise affine in its inputs and a grid cell
+// is a rectangle in x, so bilinear interpolation of the cell's corners is exact wherever one
+// linear piece covers the cell and off only by the cell's share of a kink elsewhere. The spacing
+// follows the network's steepest slope along the locus (kCellChangeC per cell there), which
+// keeps that share well under 0.5 degC; the unit tests measure it on noisy pixels.
+//
+// Ratios do not follow the temperature monotonically (R/G of a camera behind a visible band-pass
+// rises, then falls), so no coordinate along the locus is used: the grid covers the box of the
+// locus widened by a factor e^kMarginLn in each ratio, which holds noisy pixels down to the dim
+// threshold and most mixed-temperature pixels at edges. It is filled in blocks of kBlockCells^2
+// cells the first time a pixel needs one, so a scene pays only for the ratios it shows, and the
+// memory is bounded by the box. Pixels outside the box, and estimates within kGuardC of the
+// model's range ends, go to the network itself: the no-reading decisions are the network's.
 class LutEstimator : public TemperatureEstimator {
  public:
-  static constexpr int kNu = 1024, kNd = 48;
-  static constexpr double kHalfWidth = 0.35;  // ln-ratio distance from the locus covered
+  static constexpr int kBlockShift = 4, kBlockCells = 1 << kBlockShift;
+  static constexpr int kBlockNodes = kBlockCells + 1;  // per side; edges stored in both blocks
+  static constexpr double kMarginLn = 1.0;
+  static constexpr double kCellChangeC = 8.0;
+  static constexpr double kGuardC = 2.0;
+  static constexpr std::size_t kMaxCells = std::size_t{1} << 24;  // 64 MB when every block is used
 
   explicit LutEstimator(const ThermalModel& m) : TemperatureEstimator(m), mlp_(m) {
     const Normalisation& n = m.profile().normalisation;
@@ -122,72 +428,234 @@ class LutEstimator : public TemperatureEstimator {
           "method lut needs a model with exactly two ratios (colour camera); this "
           "model has " +
           std::to_string(n.numerators.size()));
-    const Locus locus = make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 1.0);
-    const Eigen::ArrayXd u = locus.ratios.col(0).array().log();
-    const Eigen::ArrayXd v = locus.ratios.col(1).array().log();
-    u0_ = u.minCoeff() - 0.05;
-    const double u1 = u.maxCoeff() + 0.05;
-    du_ = (u1 - u0_) / (kNu - 1);
-    dd_ = 2 * kHalfWidth / (kNd - 1);
-    // v_locus(u) by linear interpolation of the (monotonic in T) locus, sorted by u.
-    std::vector<std::pair<double, double>> uv;
-    for (Eigen::Index i = 0; i < u.size(); ++i) uv.emplace_back(u[i], v[i]);
-    std::sort(uv.begin(), uv.end());
-    v_locus_.resize(kNu);
-    std::size_t j = 0;
-    for (int i = 0; i < kNu; ++i) {
-      const double x = u0_ + i * du_;
-      while (j + 2 < uv.size() && uv[j + 1].first < x) ++j;
-      const double f = std::clamp((x - uv[j].first) / (uv[j + 1].first - uv[j].first), 0.0, 1.0);
-      v_locus_[i] = static_cast<float>(uv[j].second + f * (uv[j + 1].second - uv[j].second));
-    }
-    Eigen::MatrixXd x(kNu * kNd, 2);
-    for (int i = 0; i < kNu; ++i)
-      for (int k = 0; k < kNd; ++k) {
-        x(i * kNd + k, 0) = std::exp(u0_ + i * du_);
-        x(i * kNd + k, 1) = std::exp(v_locus_[i] - kHalfWidth + k * dd_);
-      }
-    const Eigen::VectorXd t = m.mlp.predict(x);
-    table_.resize(static_cast<std::size_t>(kNu * kNd));
-    for (Eigen::Index i = 0; i < t.size(); ++i)
-      table_[static_cast<std::size_t>(i)] = static_cast<float>(t[i]);
     num0_ = n.numerators[0];
     num1_ = n.numerators[1];
     ref_ = n.reference;
+    const Locus locus = make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 1.0);
+    // Steepest slope of the network along the locus, degC per unit ratio (L1 over both).
+    double slope = 0;
+    for (Eigen::Index i = 0; i < locus.size(); i += 5) {
+      const double x[2] = {locus.ratios(i, 0), locus.ratios(i, 1)};
+      double g[2];
+      m.mlp.predict_with_gradient(x, g);
+      slope = std::max(slope, std::abs(g[0]) + std::abs(g[1]));
+    }
+    const double widen = std::exp(kMarginLn);
+    const double x_lo = locus.ratios.col(0).minCoeff() / widen;
+    const double x_hi = locus.ratios.col(0).maxCoeff() * widen;
+    const double y_lo = locus.ratios.col(1).minCoeff() / widen;
+    const double y_hi = locus.ratios.col(1).maxCoeff() * widen;
+    if (!(x_lo > 0) || !(y_lo > 0) || !std::isfinite(x_hi) || !std::isfinite(y_hi) ||
+        !(slope > 0) || !std::isfinite(slope))
+      throw InputError("method lut: the model's locus or network is degenerate");
+    h_ = kCellChangeC / slope;
+    // A coarser grid rather than an unbounded one for extreme models.
+    const double area_cells = (x_hi - x_lo) * (y_hi - y_lo) / (h_ * h_);
+    if (area_cells > static_cast<double>(kMaxCells))
+      h_ *= std::sqrt(area_cells / static_cast<double>(kMaxCells));
+    x0_ = x_lo;
+    y0_ = y_lo;
+    blocks_x_ = static_cast<int>(std::ceil((x_hi - x_lo) / h_ / kBlockCells));
+    blocks_y_ = static_cast<int>(std::ceil((y_hi - y_lo) / h_ / kBlockCells));
+    cells_x_ = static_cast<float>(blocks_x_ * kBlockCells);
+    cells_y_ = static_cast<float>(blocks_y_ * kBlockCells);
+    inv_h_ = static_cast<float>(1 / h_);
+    offset_x_ = static_cast<float>(x0_ / h_);
+    offset_y_ = static_cast<float>(y0_ / h_);
+    inv_ref_count_ = 1.0f / static_cast<float>(ref_.size());
+    lowest_ = static_cast<float>(m.min_temperature_c + kGuardC);
+    highest_ = static_cast<float>(m.max_temperature_c - kGuardC);
+    const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
+    blocks_.reset(new std::atomic<float*>[slots]);
+    for (std::size_t i = 0; i < slots; ++i) blocks_[i].store(nullptr, std::memory_order_relaxed);
   }
+
+  ~LutEstimator() override {
+    const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
+    for (std::size_t i = 0; i < slots; ++i) delete[] blocks_[i].load(std::memory_order_relaxed);
+  }
+  LutEstimator(const LutEstimator&) = delete;
+  LutEstimator& operator=(const LutEstimator&) = delete;
 
   double temperature_c(const double* s) const override {
     if (!all_bands_valid(s)) return NAN;
-    double ref = 0;
-    for (int b : ref_) ref += s[b];
-    ref /= static_cast<double>(ref_.size());
-    const double t = lookup(std::log(s[num0_] / ref), std::log(s[num1_] / ref));
-    return in_range(std::isfinite(t) ? t : mlp_.temperature_c(s));
+    float f[kMaxBands];
+    const float* planes[kMaxBands];
+    for (int b = 0; b < bands_; ++b) {
+      f[b] = static_cast<float>(s[b]);
+      planes[b] = &f[b];
+    }
+    float out;
+    estimate(planes, 1, &out);
+    return out;
+  }
+
+  // In chunks of pixels, in passes: the arithmetic of every pixel (branch-free, vectorised by
+  // the compiler), the table reads, the interpolation (vectorised), then the few pixels the
+  // network answers.
+  void estimate(const float* const* planes, std::size_t n, float* out) const override {
+    constexpr std::size_t kChunk = 256;
+    alignas(64) float status[kChunk], fx[kChunk], fy[kChunk], wx[kChunk], wy[kChunk];
+    alignas(64) float special[kChunk];
+    alignas(64) float corners[4 * kChunk];  // per pixel: its cell's four corners
+    alignas(64) std::int32_t block[kChunk], cell[kChunk];
+    const float dim = dim_f();
+    const std::int32_t blocks_x = blocks_x_;
+    const float lowest = lowest_, highest = highest_;
+    for (std::size_t start = 0; start < n; start += kChunk) {
+      const std::size_t m = std::min(kChunk, n - start);
+      valid_ratio_coordinates(planes, start, m, dim, status, fx, fy);
+      for (std::size_t k = 0; k < m; ++k) {
+        const auto ix = static_cast<std::int32_t>(fx[k]), iy = static_cast<std::int32_t>(fy[k]);
+        block[k] = (iy >> kBlockShift) * blocks_x + (ix >> kBlockShift);
+        cell[k] = (iy & (kBlockCells - 1)) * kBlockCells + (ix & (kBlockCells - 1));
+        wx[k] = fx[k] - static_cast<float>(ix);
+        wy[k] = fy[k] - static_cast<float>(iy);
+      }
+      for (std::size_t k = 0; k < m; ++k) {
+        float* c = corners + 4 * k;
+        if (status[k] != kInTable) {
+          c[0] = c[1] = c[2] = c[3] = 0;
+          continue;
+        }
+        const float* blk =
+            blocks_[static_cast<std::size_t>(block[k])].load(std::memory_order_acquire);
+        if (!blk) blk = build_block(block[k] % blocks_x, block[k] / blocks_x);
+        std::memcpy(c, blk + 4 * cell[k], 4 * sizeof(float));
+      }
+      float* __restrict o = out + start;
+      for (std::size_t k = 0; k < m; ++k) {
+        const float* c = corners + 4 * k;
+        const float below = c[0] + wx[k] * (c[1] - c[0]);
+        const float above = c[2] + wx[k] * (c[3] - c[2]);
+        const float t = below + wy[k] * (above - below);
+        o[k] = status[k] == kInTable ? t : NAN;
+      }
+      // Pixels the network answers: off the table, or near or beyond a range end. Selects in
+      // separate loops, which the compiler vectorises.
+      for (std::size_t k = 0; k < m; ++k) {
+        const float t = o[k], st = status[k];
+        const float outside_range = t >= lowest && t <= highest ? 0.f : 1.f;
+        const float off_table = st == kOffTable ? 1.f : outside_range;
+        special[k] = st == kInTable || st == kOffTable ? off_table : 0.f;
+      }
+      std::int32_t any_special = 0;
+      for (std::size_t k = 0; k < m; ++k) any_special |= static_cast<std::int32_t>(special[k]);
+      if (!any_special) continue;
+      for (std::size_t k = 0; k < m; ++k) {
+        if (special[k] == 0.f) continue;
+        const float t = o[k];
+        // Well beyond a range end there is no reading; near one, or off the table, the
+        // network decides.
+        const bool far_out =
+            status[k] == kInTable && (t < lowest - 2 * static_cast<float>(kGuardC) ||
+                                      t > highest + 2 * static_cast<float>(kGuardC));
+        o[k] = far_out ? NAN : static_cast<float>(network(planes, start + k));
+      }
+    }
+  }
+
+  std::size_t memory_bytes() const override {
+    return built_.load(std::memory_order_relaxed) * kBlockCells * kBlockCells * 4 * sizeof(float) +
+           static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_) *
+               sizeof(std::atomic<float*>);
   }
 
  private:
-  // Bilinear interpolation; NaN when (u, v) is off the table.
-  double lookup(double u, double v) const {
-    const double fu = (u - u0_) / du_;
-    if (!(fu >= 0) || fu >= kNu - 1) return NAN;
-    const int iu = static_cast<int>(fu);
-    const double wu = fu - iu;
-    const double vl = v_locus_[iu] + wu * (v_locus_[iu + 1] - v_locus_[iu]);
-    const double fd = (v - vl + kHalfWidth) / dd_;
-    if (!(fd >= 0) || fd >= kNd - 1) return NAN;
-    const int id = static_cast<int>(fd);
-    const double wd = fd - id;
-    // Rows follow the locus, so across-locus cells at u and u+du are aligned by offset d.
-    const float* a = &table_[static_cast<std::size_t>(iu * kNd + id)];
-    const float* b = a + kNd;
-    return (1 - wu) * ((1 - wd) * a[0] + wd * a[1]) + wu * ((1 - wd) * b[0] + wd * b[1]);
+  static constexpr float kInfF = std::numeric_limits<float>::infinity();
+  static constexpr float kInTable = 0.0f, kOffTable = -1.0f;  // pixel status codes
+
+  float dim_f() const { return static_cast<float>(dim_dn_); }
+
+  float reference(const float* s) const {
+    if (ref_.size() == 1) return s[ref_[0]];
+    float sum = 0;
+    for (int b : ref_) sum += s[b];
+    return sum * inv_ref_count_;
+  }
+
+  // Table coordinates (cells) of m pixels from `start`, 0 where status is not kInTable; status
+  // NaN for a pixel without a reading (a band saturated, NaN or dim), kOffTable for one outside
+  // the table. Written as selects that the compiler turns into vector masks: NaN fails every
+  // comparison, +INF the upper ones.
+  void valid_ratio_coordinates(const float* const* planes, std::size_t start, std::size_t m,
+                               float dim, float* status, float* fx, float* fy) const {
+    const float* __restrict a = planes[num0_] + start;
+    const float* __restrict b = planes[num1_] + start;
+    const float ox = offset_x_, oy = offset_y_, inv_h = inv_h_, cx = cells_x_, cy = cells_y_;
+    const float* __restrict r = planes[ref_[0]] + start;
+    auto pixel = [&](std::size_t k, float rv, bool others_read) {
+      const float av = a[k], bv = b[k];
+      const float scale = inv_h / rv;
+      const float x = av * scale - ox, y = bv * scale - oy;
+      const bool inside = x >= 0.f && x < cx && y >= 0.f && y < cy;
+      const float place = inside ? kInTable : kOffTable;
+      const float unsaturated = av < kInfF && bv < kInfF && rv < kInfF ? place : NAN;
+      const float bright = av >= dim && bv >= dim && rv >= dim ? unsaturated : NAN;
+      status[k] = others_read ? bright : NAN;
+      fx[k] = inside ? x : 0.f;
+      fy[k] = inside ? y : 0.f;
+    };
+    if (bands_ == 3 && ref_.size() == 1) {
+      for (std::size_t k = 0; k < m; ++k) pixel(k, r[k], true);
+      return;
+    }
+    for (std::size_t k = 0; k < m; ++k) {
+      // Every band must read; the reference is the mean of its bands.
+      float s[kMaxBands];
+      bool read = true;
+      for (int band = 0; band < bands_; ++band) {
+        s[band] = planes[band][start + k];
+        read &= s[band] >= dim && s[band] < kInfF;
+      }
+      pixel(k, reference(s), read);
+    }
+  }
+
+  double network(const float* const* planes, std::size_t i) const {
+    double s[kMaxBands];
+    for (int b = 0; b < bands_; ++b) s[b] = planes[b][i];
+    return mlp_.temperature_c(s);
+  }
+
+  // Fills a block with the network at its nodes and publishes it; two threads that need the same
+  // block at once both compute it (the same values) and one copy is kept.
+  const float* build_block(int bx, int by) const {
+    Eigen::MatrixXd x(kBlockNodes * kBlockNodes, 2);
+    for (int j = 0; j < kBlockNodes; ++j)
+      for (int i = 0; i < kBlockNodes; ++i) {
+        x(j * kBlockNodes + i, 0) = x0_ + (bx * kBlockCells + i) * h_;
+        x(j * kBlockNodes + i, 1) = y0_ + (by * kBlockCells + j) * h_;
+      }
+    const Eigen::VectorXd t = model_.mlp.predict(x);
+    // Cell after cell, each with its four corners (one 16-byte read per pixel).
+    std::unique_ptr<float[]> values(new float[4 * kBlockCells * kBlockCells]);
+    for (int j = 0; j < kBlockCells; ++j)
+      for (int i = 0; i < kBlockCells; ++i) {
+        float* c = &values[static_cast<std::size_t>(4 * (j * kBlockCells + i))];
+        c[0] = static_cast<float>(t[j * kBlockNodes + i]);
+        c[1] = static_cast<float>(t[j * kBlockNodes + i + 1]);
+        c[2] = static_cast<float>(t[(j + 1) * kBlockNodes + i]);
+        c[3] = static_cast<float>(t[(j + 1) * kBlockNodes + i + 1]);
+      }
+    std::atomic<float*>& slot = blocks_[static_cast<std::size_t>(by * blocks_x_ + bx)];
+    float* expected = nullptr;
+    if (slot.compare_exchange_strong(expected, values.get(), std::memory_order_acq_rel)) {
+      built_.fetch_add(1, std::memory_order_relaxed);
+      return values.release();
+    }
+    return expected;  // another thread was first
   }
 
   MlpEstimator mlp_;
-  double u0_ = 0, du_ = 1, dd_ = 1;
-  std::vector<float> v_locus_, table_;
   int num0_ = 0, num1_ = 1;
   std::vector<int> ref_;
+  double x0_ = 0, y0_ = 0, h_ = 1;
+  int blocks_x_ = 0, blocks_y_ = 0;
+  float cells_x_ = 0, cells_y_ = 0, inv_h_ = 1, offset_x_ = 0, offset_y_ = 0;
+  float inv_ref_count_ = 1, lowest_ = 0, highest_ = 0;
+  std::unique_ptr<std::atomic<float*>[]> blocks_;
+  mutable std::atomic<std::size_t> built_{0};
 };
 
 }  // namespace
@@ -246,6 +714,11 @@ std::unique_ptr<TemperatureEstimator> make_estimator(const ThermalModel& model, 
       return std::make_unique<LutEstimator>(model);
   }
   throw InputError("unknown estimator method");
+}
+
+std::unique_ptr<TemperatureEstimator> make_exhaustive_likelihood_estimator(
+    const ThermalModel& model) {
+  return std::make_unique<ExhaustiveLikelihoodEstimator>(model);
 }
 
 double signal_variance_dn2(const CameraProfile& p, int band, double signal_dn, int frames) {
