@@ -26,27 +26,29 @@ constexpr int kMaxBands = 64;
 #define PYROCAM_VECTOR_CLONES
 #endif
 
-constexpr std::ptrdiff_t kChi2Block = 32;  // samples per step of approximate_chi2
+// Samples per step of approximate_chi2: long coarse scans in single precision, short windows
+// in double precision.
+constexpr std::ptrdiff_t kCoarseBlock = 32, kWindowBlock = 8;
 
 // Approximate chi2 of the likelihood fit from low-rank factors stored rank after rank, `stride`
 // samples each (see LikelihoodEstimator): at `count` samples from `from`, into out[0 .. count
-// rounded up to kChi2Block) (values past count are meaningless). Blocks of samples keep their
-// sums in registers.
-template <class Real>
+// rounded up to kBlock) (values past count are meaningless). Blocks of samples keep their sums
+// in registers.
+template <std::ptrdiff_t kBlock, class Real>
 void approximate_chi2_impl(const Real* along, int rank, const Real* along2, int rank2,
                            std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
                            const Real* p, const Real* q, Real sss, Real* out) {
-  for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kChi2Block) {
-    Real ssm[kChi2Block] = {}, smm[kChi2Block] = {};
+  for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kBlock) {
+    Real ssm[kBlock] = {}, smm[kBlock] = {};
     for (int r = 0; r < rank; ++r) {
       const Real* a = along + r * stride + from + i0;
-      for (std::ptrdiff_t j = 0; j < kChi2Block; ++j) ssm[j] += p[r] * a[j];
+      for (std::ptrdiff_t j = 0; j < kBlock; ++j) ssm[j] += p[r] * a[j];
     }
     for (int r = 0; r < rank2; ++r) {
       const Real* a = along2 + r * stride + from + i0;
-      for (std::ptrdiff_t j = 0; j < kChi2Block; ++j) smm[j] += q[r] * a[j];
+      for (std::ptrdiff_t j = 0; j < kBlock; ++j) smm[j] += q[r] * a[j];
     }
-    for (std::ptrdiff_t j = 0; j < kChi2Block; ++j) out[i0 + j] = sss - ssm[j] * ssm[j] / smm[j];
+    for (std::ptrdiff_t j = 0; j < kBlock; ++j) out[i0 + j] = sss - ssm[j] * ssm[j] / smm[j];
   }
 }
 
@@ -54,14 +56,38 @@ PYROCAM_VECTOR_CLONES
 void approximate_chi2(const float* along, int rank, const float* along2, int rank2,
                       std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
                       const float* p, const float* q, float sss, float* out) {
-  approximate_chi2_impl(along, rank, along2, rank2, stride, from, count, p, q, sss, out);
+  approximate_chi2_impl<kCoarseBlock>(along, rank, along2, rank2, stride, from, count, p, q, sss,
+                                      out);
 }
 
 PYROCAM_VECTOR_CLONES
 void approximate_chi2(const double* along, int rank, const double* along2, int rank2,
                       std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
                       const double* p, const double* q, double sss, double* out) {
-  approximate_chi2_impl(along, rank, along2, rank2, stride, from, count, p, q, sss, out);
+  approximate_chi2_impl<kWindowBlock>(along, rank, along2, rank2, stride, from, count, p, q, sss,
+                                      out);
+}
+
+// chi2 = sss - ssm^2 / smm of the likelihood fit at one locus sample: ssm = sum (w s) m and
+// smm = sum w m^2 over the bands, each in four partial sums added in a fixed order (the same
+// bits in every compiled version).
+PYROCAM_VECTOR_CLONES
+double profiled_chi2(const double* m, const double* m2, const double* ws, const double* w,
+                     int bands, double sss) {
+  double ssm[4] = {0, 0, 0, 0}, smm[4] = {0, 0, 0, 0};
+  int b = 0;
+  for (; b + 4 <= bands; b += 4)
+    for (int k = 0; k < 4; ++k) {
+      ssm[k] += ws[b + k] * m[b + k];
+      smm[k] += w[b + k] * m2[b + k];
+    }
+  for (; b < bands; ++b) {
+    ssm[0] += ws[b] * m[b];
+    smm[0] += w[b] * m2[b];
+  }
+  const double sm = (ssm[0] + ssm[1]) + (ssm[2] + ssm[3]);
+  const double mm = (smm[0] + smm[1]) + (smm[2] + smm[3]);
+  return sss - sm * sm / mm;
 }
 
 class MlpEstimator : public TemperatureEstimator {
@@ -144,24 +170,11 @@ class LikelihoodFit : public TemperatureEstimator {
     return valid;
   }
 
-  // chi2 at locus sample i: two dot products over the bands, in four partial sums.
+  // chi2 at locus sample i.
   double chi2(Eigen::Index i, const Weighted& px) const {
-    const double* m = &rates_[static_cast<std::size_t>(i * bands_)];
-    const double* m2 = &squares_[static_cast<std::size_t>(i * bands_)];
-    double ssm[4] = {0, 0, 0, 0}, smm[4] = {0, 0, 0, 0};
-    int b = 0;
-    for (; b + 4 <= bands_; b += 4)
-      for (int k = 0; k < 4; ++k) {
-        ssm[k] += px.ws[b + k] * m[b + k];
-        smm[k] += px.w[b + k] * m2[b + k];
-      }
-    for (; b < bands_; ++b) {
-      ssm[0] += px.ws[b] * m[b];
-      smm[0] += px.w[b] * m2[b];
-    }
-    const double sm = (ssm[0] + ssm[1]) + (ssm[2] + ssm[3]);
-    const double mm = (smm[0] + smm[1]) + (smm[2] + smm[3]);
-    return px.sss - sm * sm / mm;
+    return profiled_chi2(&rates_[static_cast<std::size_t>(i * bands_)],
+                         &squares_[static_cast<std::size_t>(i * bands_)], px.ws, px.w, bands_,
+                         px.sss);
   }
 
   // The reading from the refined minima: the best one, unless another one far from it fits
@@ -262,6 +275,7 @@ class LikelihoodEstimator : public LikelihoodFit {
     coarse_stride_ = padded(coarse_count_);
     factor(unit, across_, rank_, coarse_rank_, along_, coarse_along_);
     factor(squares, across2_, rank2_, coarse_rank2_, along2_, coarse_along2_);
+    projected_ = std::min(kMaxRank, (std::max(rank_, rank2_) + 3) / 4 * 4);
   }
 
   double temperature_c(const double* s) const override {
@@ -270,9 +284,10 @@ class LikelihoodEstimator : public LikelihoodFit {
     // Projections of w*s and w on the factors.
     alignas(32) double p[kMaxRank] = {}, q[kMaxRank] = {};
     for (int b = 0; b < bands_; ++b) {
+      if (px.w[b] == 0) continue;
       const double* v = &across_[static_cast<std::size_t>(b * kMaxRank)];
       const double* v2 = &across2_[static_cast<std::size_t>(b * kMaxRank)];
-      for (int r = 0; r < kMaxRank; ++r) {
+      for (int r = 0; r < projected_; ++r) {
         p[r] += px.ws[b] * v[r];
         q[r] += px.w[b] * v2[r];
       }
@@ -320,7 +335,7 @@ class LikelihoodEstimator : public LikelihoodFit {
  private:
   // Room for n samples and the reads of a last, partial block of approximate_chi2.
   static constexpr Eigen::Index padded(Eigen::Index n) {
-    return (n + kChi2Block - 1) / kChi2Block * kChi2Block + kChi2Block;
+    return (n + kCoarseBlock - 1) / kCoarseBlock * kCoarseBlock + kCoarseBlock;
   }
 
   // Low-rank factors of a samples x bands matrix A ~ (A V) V^T, V orthonormal: across (bands x
@@ -369,7 +384,7 @@ class LikelihoodEstimator : public LikelihoodFit {
     const Eigen::Index n = locus_.size();
     const Eigen::Index lo = std::max<Eigen::Index>(0, around - kCoarse);
     const Eigen::Index hi = std::min<Eigen::Index>(n - 1, around + kCoarse);
-    alignas(32) double f[padded(2 * kCoarse + 1)];
+    alignas(32) double f[(2 * kCoarse + 1 + kWindowBlock - 1) / kWindowBlock * kWindowBlock];
     approximate_chi2(along_.data(), rank_, along2_.data(), rank2_, stride_, lo, hi - lo + 1, p, q,
                      px.sss, f);
     Eigen::Index at = lo;
@@ -393,6 +408,7 @@ class LikelihoodEstimator : public LikelihoodFit {
   }
 
   int rank_ = 0, rank2_ = 0, coarse_rank_ = 0, coarse_rank2_ = 0;
+  int projected_ = kMaxRank;  // ranks the projections compute (a multiple of 4)
   Eigen::Index stride_ = 0, coarse_count_ = 0, coarse_stride_ = 0;
   std::vector<double> across_, across2_, along_, along2_;
   std::vector<float> coarse_along_, coarse_along2_;
