@@ -10,6 +10,7 @@
 #include "commands.h"
 #include "pyrocam/darksub.h"
 #include "pyrocam/dataset.h"
+#include "pyrocam/difference_codes.h"
 #include "pyrocam/image_io.h"
 
 namespace pyrocam::cli {
@@ -165,16 +166,8 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
                         encode_decikelvin(t));
         if (a.uncertainty) {
           // Uncertainty as a temperature difference in 0.1 K, 0 = no reading.
-          cv::Mat ud(u.size(), CV_16U);
-          for (int y = 0; y < u.rows; ++y)
-            for (int x = 0; x < u.cols; ++x) {
-              const float v = u.at<float>(y, x);
-              ud.at<std::uint16_t>(y, x) =
-                  std::isfinite(v)
-                      ? static_cast<std::uint16_t>(std::clamp(std::lround(v * 10), 1L, 65535L))
-                      : 0;
-            }
-          write_raw_image(std::filesystem::path(a.out) / (stem + "_uncertainty" + ext), ud);
+          write_raw_image(std::filesystem::path(a.out) / (stem + "_uncertainty" + ext),
+                          encode_decikelvin_difference(u));
         }
         cv::Mat mask;
         if (!roi.empty()) cv::resize(roi, mask, t.size(), 0, 0, cv::INTER_NEAREST);

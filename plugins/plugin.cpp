@@ -4,6 +4,7 @@
 #include "darksub/gstdarksub.h"
 #include "demosaic25/gstdemosaic25.h"
 #include "pyrocamsrc/gstpyrocamsrc.h"
+#include "ratiotemp/gstratiotemp.h"
 #include "thermalcolormap/gstthermalcolormap.h"
 
 static gboolean plugin_init(GstPlugin* plugin) {
@@ -11,6 +12,7 @@ static gboolean plugin_init(GstPlugin* plugin) {
   ok |= GST_ELEMENT_REGISTER(pyrocamsrc, plugin);
   ok |= GST_ELEMENT_REGISTER(darksub, plugin);
   ok |= GST_ELEMENT_REGISTER(demosaic25, plugin);
+  ok |= GST_ELEMENT_REGISTER(ratiotemp, plugin);
   ok |= GST_ELEMENT_REGISTER(thermalcolormap, plugin);
   return ok;
 }

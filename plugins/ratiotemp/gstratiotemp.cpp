@@ -1,0 +1,817 @@
+/**
+ * SECTION:element-ratiotemp
+ * @title: ratiotemp
+ *
+ * Turns band planes (video/x-pyrocam-bands from demosaic25, see pyrocam-caps.h) into a
+ * temperature image with the thermal model that `pyrocam-calib calibrate` wrote
+ * (#GstRatioTemp:model). The output is video/x-raw, format=GRAY16_LE, of the same width,
+ * height and framerate: one value per pixel in units of 0.1 K (14732 = 1473.2 K = 1200.05 degC)
+ * and 0 for "no reading", so temperatures can be recorded losslessly (e.g. avenc_ffv1 !
+ * matroskamux) and read back by any tool.
+ *
+ * A pixel has no reading (0) when any band is saturated (+INF), without a reading (NaN) or
+ * below the model's dim threshold (profile `inference_dim_dn`, 20 DN for the shipped profiles),
+ * or when the estimate falls outside the model's temperature range. With
+ * #GstRatioTemp:allow-partial the likelihood method instead drops such bands and fits the rest
+ * when at least two remain (e.g. a colour pixel with a saturated red reads from green and blue);
+ * it gives no reading when they fit two temperatures about equally well. Two bands whose ratio
+ * is not monotonic over the model's range (the colour camera's red/green) pin such fits near
+ * the ratio's turning point, so partial readings are off by default.
+ *
+ * #GstRatioTemp:method chooses the per-pixel estimator (METHOD.md section 5):
+ * - mlp: the paper's network on the normalised band ratios, the reference. Far too slow for
+ *   live video at 100 000 pixels and more; use it for checks and offline work.
+ * - lut: a 2-D lookup table of the same network over the colour camera's two ratios (built
+ *   when the element starts); ratios off the table fall back to the network. Colour models
+ *   only: with a 5x5 model it is refused (RESOURCE SETTINGS). The table is trusted only after a
+ *   check against the network on the model's own locus (noise-free graybody signals every
+ *   1 degC, brightest band at 150 DN): where it differs by more than 1 degC anywhere, or reads
+ *   where the network does not (or the reverse) at more than 1 % of the samples, lut is
+ *   refused (RESOURCE SETTINGS, the message says by how much and where).
+ * - likelihood: a maximum-likelihood fit of temperature and an unknown scale to the band
+ *   signals along the model's Planckian locus, weighted by the sensor noise model.
+ * - auto (default): lut for models with two ratios (colour cameras) when the table passes its
+ *   check, else likelihood (with a warning on the bus saying why the table was not used).
+ * The method can change while playing; the new estimator is built (and checked) in the
+ * streaming thread before the next frame. A method that cannot be used is refused with a
+ * warning on the bus and the previous one stays.
+ *
+ * #GstRatioTemp:output uncertainty outputs the expanded uncertainty (k = 2, GUM: signal noise
+ * propagated per pixel plus the model's calibration and emissivity terms) instead of the
+ * temperature, in the same encoding: 0.1 K per code (a temperature difference, no offset),
+ * 0 = no reading, at least 1 where there is a reading. To get both, split the bands with tee
+ * into two ratiotemp elements (see below). The uncertainty costs 2 x bands extra estimates
+ * per pixel.
+ *
+ * Every #GstRatioTemp:stats-interval nanoseconds of buffer timestamps (0 = off) the element
+ * posts an element message "pyrocam-temperature-stats" with statistics of the frame's
+ * temperatures (always the temperatures, whatever the output), computed on the unquantised
+ * estimates:
+ * - timestamp, stream-time, running-time (guint64, ns): of the frame (GST_CLOCK_TIME_NONE when
+ *   unknown);
+ * - method (string): the estimator in use (mlp, lut or likelihood);
+ * - width, height (int): the frame's size;
+ * - pixels, valid (guint64): pixels of the frame, pixels with a reading;
+ * - valid-fraction (double): valid / pixels;
+ * - min-c, max-c, mean-c, median-c (double, degC): of the pixels with a reading; absent when
+ *   there are none. Prefer the median for a region's temperature: noise biases the mean of
+ *   per-pixel temperatures upward (METHOD.md section 7);
+ * - with #GstRatioTemp:region set: region-x, region-y, region-width, region-height (int, the
+ *   region clipped to the frame) and region-pixels, region-valid, region-valid-fraction,
+ *   region-min-c, region-max-c, region-mean-c, region-median-c, as above for the region.
+ * A message is posted for the first frame, then for the first frame whose timestamp is at
+ * least the interval after the last posted one (after a flush or a new segment, the next
+ * frame). Frames without a timestamp count by the framerate; without either, every frame
+ * posts.
+ *
+ * Errors: no model set: RESOURCE SETTINGS; a missing model file: RESOURCE NOT_FOUND; a
+ * truncated, edited, unparsable or other-version model: RESOURCE READ (the message names the
+ * file); input whose band count or layout (bayer, 5x5) differs from the model's: CORE
+ * NEGOTIATION naming both; an invalid region at start: RESOURCE SETTINGS (while playing: a
+ * warning, and no region statistics until a valid one is set).
+ *
+ * The 5x5 bands must be in the model's band order: if the camera profile has a band map other
+ * than row * 5 + column, give demosaic25 the same profile.
+ *
+ * ## Example launch lines
+ * |[
+ * gst-launch-1.0 pyrocamsrc ! darksub dark-level=50 ! demosaic25 ! ratiotemp model=cam.json ! \
+ *     thermalcolormap scale-bar=true ! videoconvert ! autovideosink
+ * ]| Live colour camera, region statistics every 0.5 s (gst-launch-1.0 -m prints them):
+ * |[
+ * gst-launch-1.0 -m aravissrc ! video/x-bayer,format=rggb ! darksub location=dark.pgm ! \
+ *     demosaic25 ! ratiotemp model=cam.json region=100,80,64,48 stats-interval=500000000 ! \
+ *     thermalcolormap ! videoconvert ! autovideosink
+ * ]| Temperature and uncertainty recorded losslessly side by side:
+ * |[
+ * gst-launch-1.0 pyrocamsrc num-buffers=100 ! darksub dark-level=50 ! demosaic25 ! tee name=b \
+ *     b. ! queue ! ratiotemp model=cam.json ! avenc_ffv1 ! matroskamux ! filesink location=t.mkv \
+ *     b. ! queue ! ratiotemp model=cam.json output=uncertainty ! avenc_ffv1 ! matroskamux ! \
+ *     filesink location=u.mkv
+ * ]|
+ */
+#include "gstratiotemp.h"
+
+#include <array>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "pyrocam-caps.h"
+#include "pyrocam-common.h"
+#include "pyrocam/band_validity.h"
+#include "pyrocam/difference_codes.h"
+#include "pyrocam/estimator_check.h"
+#include "pyrocam/measure.h"
+#include "pyrocam/model.h"
+
+GST_DEBUG_CATEGORY_STATIC(gst_ratio_temp_debug);
+#define GST_CAT_DEFAULT gst_ratio_temp_debug
+
+namespace pg = pyrocam::gst;
+
+namespace {
+
+enum {
+  PROP_0,
+  PROP_MODEL,
+  PROP_METHOD,
+  PROP_OUTPUT,
+  PROP_STATS_INTERVAL,
+  PROP_REGION,
+  PROP_ALLOW_PARTIAL,
+};
+
+constexpr GstRatioTempMethod DEFAULT_METHOD = GST_RATIO_TEMP_METHOD_AUTO;
+constexpr GstRatioTempOutput DEFAULT_OUTPUT = GST_RATIO_TEMP_OUTPUT_TEMPERATURE;
+constexpr guint64 DEFAULT_STATS_INTERVAL = GST_SECOND;
+constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
+constexpr const char* STATS_MESSAGE = "pyrocam-temperature-stats";
+/* The lookup table is used only where it gives the network's answer: within this many degC at
+ * every 1 degC sample of the model's locus, and reading where the network reads at all but 1 %
+ * of them (the range ends). */
+constexpr double LUT_TOLERANCE_C = 1.0;
+
+/* A rectangle of output pixels. */
+struct Region {
+  int x = 0, y = 0, width = 0, height = 0;
+};
+
+/* "x,y,width,height" (non-negative integers, width and height at least 1); false otherwise. */
+bool parse_region(const std::string& text, Region* out) {
+  gchar** parts = g_strsplit(text.c_str(), ",", -1);
+  bool ok = g_strv_length(parts) == 4;
+  gint64 v[4] = {0, 0, 0, 0};
+  for (int i = 0; ok && i < 4; ++i)
+    ok = g_ascii_string_to_signed(g_strstrip(parts[i]), 10, 0, G_MAXINT, &v[i], nullptr) &&
+         (i < 2 || v[i] >= 1);
+  g_strfreev(parts);
+  if (ok)
+    *out = {static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]),
+            static_cast<int>(v[3])};
+  return ok;
+}
+
+/* Property values; read and written under GST_OBJECT_LOCK, copied once per buffer. */
+struct Settings {
+  std::string model;
+  GstRatioTempMethod method = DEFAULT_METHOD;
+  GstRatioTempOutput output = DEFAULT_OUTPUT;
+  guint64 stats_interval = DEFAULT_STATS_INTERVAL;
+  gboolean allow_partial = DEFAULT_ALLOW_PARTIAL;
+  std::string region_text;   // as set; empty: no region
+  bool region_valid = true;  // region_text is empty or parsed into region
+  Region region;
+  guint region_serial = 0;  // bumped by every change of region
+};
+
+/* Streaming state: the model and its estimators are built in start(), the format in set_caps(),
+ * all dropped in stop(). The estimators refer to the model: they are declared after it, so
+ * they go first. */
+struct State {
+  std::unique_ptr<const pyrocam::ThermalModel> model;
+  std::string model_path;
+  std::array<std::unique_ptr<pyrocam::PlaneEstimator>, 3> estimators;  // by pyrocam::Method
+  pyrocam::Method method = pyrocam::Method::kMlp;                      // in use
+  GstRatioTempMethod method_request = DEFAULT_METHOD;   // the property value it came from
+  GstRatioTempMethod refused_request = DEFAULT_METHOD;  // last property value warned about
+  bool refused = false;
+  bool lut_checked = false;
+  std::string lut_problem;  // why the lookup table is not used for this model, if it is not
+  bool configured = false;
+  int width = 0, height = 0, bands = 0;
+  GstVideoInfo out_info{};
+  std::vector<cv::Mat> planes;  // headers onto the input buffer
+  cv::Mat temperature_c, uncertainty_c;
+  GstClockTime last_stats = GST_CLOCK_TIME_NONE;
+  guint64 frames = 0;  // since start or the last flush
+  guint region_serial_seen = 0;
+};
+
+const char* layout_name(const pyrocam::ThermalModel& model) {
+  return model.profile().mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot
+             ? PYROCAM_SNAPSHOT_PATTERN_NAME
+             : "bayer";
+}
+
+pyrocam::Method to_library(GstRatioTempMethod m) {
+  switch (m) {
+    case GST_RATIO_TEMP_METHOD_MLP:
+      return pyrocam::Method::kMlp;
+    case GST_RATIO_TEMP_METHOD_LUT:
+      return pyrocam::Method::kLut;
+    default:
+      return pyrocam::Method::kLikelihood;
+  }
+}
+
+/* Builds the estimator of a method unless it exists; for the lookup table, also checks it
+ * against the network on the model's locus (once). Returns "" when it can be used, else why
+ * not. */
+std::string prepare_estimator(State& st, pyrocam::Method m) {
+  if (m == pyrocam::Method::kLut && st.lut_checked && !st.lut_problem.empty())
+    return st.lut_problem;
+  auto& slot = st.estimators[static_cast<std::size_t>(m)];
+  try {
+    if (!slot) slot = std::make_unique<pyrocam::PlaneEstimator>(*st.model, m);
+    if (m != pyrocam::Method::kLut || st.lut_checked) return "";
+    pyrocam::PlaneEstimator mlp(*st.model, pyrocam::Method::kMlp);
+    const pyrocam::LocusAgreement a =
+        pyrocam::compare_on_locus(*st.model, slot->estimator(), mlp.estimator());
+    st.lut_checked = true;
+    if (a.max_difference_c > LUT_TOLERANCE_C || a.validity_differs * 100 > a.samples) {
+      char what[256];
+      g_snprintf(what, sizeof what,
+                 "its lookup table differs from its network by up to %.1f degC (at %.0f degC "
+                 "on the model's locus; one reads where the other does not at %zu of %zu "
+                 "samples)",
+                 a.max_difference_c, a.worst_temperature_c, a.validity_differs, a.samples);
+      st.lut_problem = what;
+      slot.reset();
+      return st.lut_problem;
+    }
+    return "";
+  } catch (const std::exception& e) {
+    slot.reset();
+    return e.what();
+  }
+}
+
+/* Picks and builds the estimator for a property value: auto is the lookup table for two-ratio
+ * models when it passes its check, likelihood otherwise (`fallback` then says why). Returns ""
+ * or why the method cannot be used. */
+std::string choose_estimator(State& st, GstRatioTempMethod request, pyrocam::Method* chosen,
+                             std::string* fallback) {
+  if (request == GST_RATIO_TEMP_METHOD_AUTO) {
+    if (st.model->profile().normalisation.numerators.size() == 2) {
+      const std::string why = prepare_estimator(st, pyrocam::Method::kLut);
+      if (why.empty()) {
+        *chosen = pyrocam::Method::kLut;
+        return "";
+      }
+      *fallback = why;
+    }
+    *chosen = pyrocam::Method::kLikelihood;
+  } else {
+    *chosen = to_library(request);
+  }
+  return prepare_estimator(st, *chosen);
+}
+
+/* An output buffer mapped as a GRAY16_LE frame (rows at the video info's stride); unmaps when
+ * it goes. */
+struct MappedFrame {
+  MappedFrame(GstBuffer* buffer, GstVideoInfo* info) {
+    if (!gst_video_frame_map(&frame, info, buffer, GST_MAP_WRITE))
+      throw pyrocam::InputError("cannot map a " + std::to_string(gst_buffer_get_size(buffer)) +
+                                "-byte buffer as a " + std::to_string(GST_VIDEO_INFO_WIDTH(info)) +
+                                "x" + std::to_string(GST_VIDEO_INFO_HEIGHT(info)) +
+                                " GRAY16_LE frame");
+    image = cv::Mat(GST_VIDEO_FRAME_HEIGHT(&frame), GST_VIDEO_FRAME_WIDTH(&frame), CV_16U,
+                    GST_VIDEO_FRAME_PLANE_DATA(&frame, 0),
+                    static_cast<std::size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0)));
+  }
+  ~MappedFrame() { gst_video_frame_unmap(&frame); }
+  MappedFrame(const MappedFrame&) = delete;
+  MappedFrame& operator=(const MappedFrame&) = delete;
+  GstVideoFrame frame;
+  cv::Mat image;
+};
+
+}  // namespace
+
+struct _GstRatioTemp {
+  GstBaseTransform parent;
+  Settings* settings;
+  State* state;
+};
+
+G_DEFINE_TYPE(GstRatioTemp, gst_ratio_temp, GST_TYPE_BASE_TRANSFORM);
+GST_ELEMENT_REGISTER_DEFINE(ratiotemp, "ratiotemp", GST_RANK_NONE, GST_TYPE_RATIO_TEMP);
+
+GType gst_ratio_temp_method_get_type(void) {
+  static GType type = 0;
+  static const GEnumValue values[] = {
+      {GST_RATIO_TEMP_METHOD_AUTO,
+       "lut for two-ratio (colour) models when it passes its check, likelihood otherwise", "auto"},
+      {GST_RATIO_TEMP_METHOD_MLP, "The paper's network on band ratios (reference, slow)", "mlp"},
+      {GST_RATIO_TEMP_METHOD_LUT, "2-D lookup table of the network (colour models only)", "lut"},
+      {GST_RATIO_TEMP_METHOD_LIKELIHOOD, "Maximum-likelihood fit along the Planckian locus",
+       "likelihood"},
+      {0, nullptr, nullptr},
+  };
+  if (g_once_init_enter(&type)) {
+    GType t = g_enum_register_static("GstRatioTempMethod", values);
+    g_once_init_leave(&type, t);
+  }
+  return type;
+}
+
+GType gst_ratio_temp_output_get_type(void) {
+  static GType type = 0;
+  static const GEnumValue values[] = {
+      {GST_RATIO_TEMP_OUTPUT_TEMPERATURE, "Temperature, 0.1 K per code", "temperature"},
+      {GST_RATIO_TEMP_OUTPUT_UNCERTAINTY,
+       "Expanded uncertainty (k = 2) of the temperature, 0.1 K per code", "uncertainty"},
+      {0, nullptr, nullptr},
+  };
+  if (g_once_init_enter(&type)) {
+    GType t = g_enum_register_static("GstRatioTempOutput", values);
+    g_once_init_leave(&type, t);
+  }
+  return type;
+}
+
+static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
+    "sink", GST_PAD_SINK, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_BANDS_CAPS));
+static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
+    "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_TEMPERATURE_CAPS));
+
+static Settings copy_settings(GstRatioTemp* self) {
+  GST_OBJECT_LOCK(self);
+  Settings s = *self->settings;
+  GST_OBJECT_UNLOCK(self);
+  return s;
+}
+
+static void reset_state(GstRatioTemp* self) {
+  delete self->state;  // estimators first, then the model
+  self->state = new State();
+}
+
+static void copy_dimensions(const GstStructure* from, GstStructure* to) {
+  for (const char* field : {"width", "height", "framerate"}) {
+    const GValue* v = gst_structure_get_value(from, field);
+    if (v) gst_structure_set_value(to, field, v);
+  }
+}
+
+static GstCaps* gst_ratio_temp_transform_caps(GstBaseTransform* trans, GstPadDirection direction,
+                                              GstCaps* caps, GstCaps* filter) {
+  /* The band count and layout are not restricted to the model's here: set_caps checks them and
+   * names both in its error, which a failed negotiation would not. */
+  GstCaps* templ = gst_caps_from_string(direction == GST_PAD_SINK ? PYROCAM_TEMPERATURE_CAPS
+                                                                  : PYROCAM_BANDS_CAPS);
+  GstCaps* result = gst_caps_new_empty();
+  for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
+    GstStructure* out = gst_structure_copy(gst_caps_get_structure(templ, 0));
+    copy_dimensions(gst_caps_get_structure(caps, i), out);
+    result = gst_caps_merge_structure(result, out);
+  }
+  gst_caps_unref(templ);
+  if (filter) {
+    GstCaps* tmp = gst_caps_intersect_full(filter, result, GST_CAPS_INTERSECT_FIRST);
+    gst_caps_unref(result);
+    result = tmp;
+  }
+  GST_DEBUG_OBJECT(trans, "transformed %" GST_PTR_FORMAT " to %" GST_PTR_FORMAT, caps, result);
+  return result;
+}
+
+static gboolean gst_ratio_temp_transform_size(GstBaseTransform* trans, GstPadDirection direction,
+                                              GstCaps* /*caps*/, gsize /*size*/, GstCaps* othercaps,
+                                              gsize* othersize) {
+  if (direction == GST_PAD_SINK) {
+    GstVideoInfo info;
+    if (!gst_video_info_from_caps(&info, othercaps)) {
+      GST_WARNING_OBJECT(trans, "cannot size %" GST_PTR_FORMAT, othercaps);
+      return FALSE;
+    }
+    *othersize = GST_VIDEO_INFO_SIZE(&info);
+    return TRUE;
+  }
+  const GstStructure* s = gst_caps_get_structure(othercaps, 0);
+  *othersize = static_cast<gsize>(pg::structure_int(s, "width", 0)) *
+               static_cast<gsize>(pg::structure_int(s, "height", 0)) *
+               static_cast<gsize>(pg::structure_int(s, "bands", 0)) * sizeof(float);
+  return *othersize > 0;
+}
+
+static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps,
+                                        GstCaps* outcaps) {
+  GstRatioTemp* self = GST_RATIO_TEMP(trans);
+  State& st = *self->state;
+  st.configured = false;
+  if (!st.model) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation, "No thermal model loaded",
+                       "set_caps called before start");
+    return FALSE;
+  }
+  const GstStructure* in = gst_caps_get_structure(incaps, 0);
+  const char* layout = gst_structure_get_string(in, "layout");
+  st.width = pg::structure_int(in, "width", 0);
+  st.height = pg::structure_int(in, "height", 0);
+  st.bands = pg::structure_int(in, "bands", 0);
+  if (!gst_video_info_from_caps(&st.out_info, outcaps) ||
+      GST_VIDEO_INFO_WIDTH(&st.out_info) != st.width ||
+      GST_VIDEO_INFO_HEIGHT(&st.out_info) != st.height || !layout || st.width < 1 ||
+      st.height < 1) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation, "Unsupported band or output format",
+                       "cannot parse the caps, or their sizes differ");
+    return FALSE;
+  }
+  const pyrocam::ThermalModel& model = *st.model;
+  const int model_bands = model.profile().band_count();
+  const std::string model_layout = layout_name(model);
+  if (st.bands != model_bands || model_layout != layout) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation,
+                       "Model " + st.model_path + " (" + model.profile().name + ") is for " +
+                           std::to_string(model_bands) + " bands of a " + model_layout +
+                           " mosaic, the stream has " + std::to_string(st.bands) + " bands of a " +
+                           layout + " mosaic",
+                       "band count or layout of the sink caps differs from the model's");
+    return FALSE;
+  }
+  st.planes.assign(static_cast<std::size_t>(st.bands), cv::Mat());
+  st.configured = true;
+  GST_INFO_OBJECT(self, "%d bands of %dx%d (%s) -> GRAY16_LE", st.bands, st.width, st.height,
+                  layout);
+  return TRUE;
+}
+
+static gboolean gst_ratio_temp_decide_allocation(GstBaseTransform* trans, GstQuery* query) {
+  GstCaps* caps = nullptr;
+  gst_query_parse_allocation(query, &caps, nullptr);
+  GstVideoInfo info;
+  if (caps && gst_video_info_from_caps(&info, caps))
+    pg::ensure_buffer_pool(query, GST_VIDEO_INFO_SIZE(&info));
+  return GST_BASE_TRANSFORM_CLASS(gst_ratio_temp_parent_class)->decide_allocation(trans, query);
+}
+
+static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
+  GstRatioTemp* self = GST_RATIO_TEMP(trans);
+  const Settings settings = copy_settings(self);
+  reset_state(self);
+  State& st = *self->state;
+  if (settings.model.empty()) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
+                       "No thermal model: set model to the file written by pyrocam-calib "
+                       "calibrate",
+                       "the model property is empty");
+    return FALSE;
+  }
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(settings.model, ec)) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNotFound,
+                       "Thermal model file " + settings.model + " not found",
+                       "model does not name a regular file");
+    return FALSE;
+  }
+  if (!settings.region_valid) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
+                       "region '" + settings.region_text +
+                           "' is not x,y,width,height (non-negative integers, width and height "
+                           "at least 1)",
+                       "the region property did not parse");
+    return FALSE;
+  }
+  bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kRead, "Could not read the thermal model", [&] {
+    st.model = std::make_unique<const pyrocam::ThermalModel>(pyrocam::load_model(settings.model));
+  });
+  if (!ok) return FALSE;
+  st.model_path = settings.model;
+  std::string fallback;
+  const std::string problem = choose_estimator(st, settings.method, &st.method, &fallback);
+  if (!problem.empty()) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
+                       "Method " + pyrocam::method_name(st.method) + " cannot be used with model " +
+                           settings.model + ": " + problem,
+                       "estimator construction or its check failed in start");
+    return FALSE;
+  }
+  if (!fallback.empty())
+    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                        ("method auto uses likelihood, not lut, for model %s: %s",
+                         settings.model.c_str(), fallback.c_str()),
+                        ("lookup table refused in start"));
+  st.method_request = settings.method;
+  st.region_serial_seen = settings.region_serial;
+  GST_INFO_OBJECT(self, "model %s (%s, %d bands, %g..%g degC), method %s", settings.model.c_str(),
+                  st.model->profile().name.c_str(), st.model->profile().band_count(),
+                  st.model->min_temperature_c, st.model->max_temperature_c,
+                  pyrocam::method_name(st.method).c_str());
+  return TRUE;
+}
+
+static gboolean gst_ratio_temp_stop(GstBaseTransform* trans) {
+  reset_state(GST_RATIO_TEMP(trans));
+  return TRUE;
+}
+
+static gboolean gst_ratio_temp_sink_event(GstBaseTransform* trans, GstEvent* event) {
+  GstRatioTemp* self = GST_RATIO_TEMP(trans);
+  if (GST_EVENT_TYPE(event) == GST_EVENT_FLUSH_STOP || GST_EVENT_TYPE(event) == GST_EVENT_SEGMENT) {
+    self->state->last_stats = GST_CLOCK_TIME_NONE;  // the next frame posts statistics
+    if (GST_EVENT_TYPE(event) == GST_EVENT_FLUSH_STOP) self->state->frames = 0;
+  }
+  return GST_BASE_TRANSFORM_CLASS(gst_ratio_temp_parent_class)->sink_event(trans, event);
+}
+
+/* Switches to the estimator the method property asks for, building it if needed. A method that
+ * cannot be used is refused with one warning per change; the current one stays. */
+static void apply_method(GstRatioTemp* self, GstRatioTempMethod request) {
+  State& st = *self->state;
+  if (request == st.method_request) {
+    st.refused = false;
+    return;
+  }
+  if (st.refused && st.refused_request == request) return;
+  pyrocam::Method chosen = st.method;
+  std::string fallback;
+  const std::string problem = choose_estimator(st, request, &chosen, &fallback);
+  if (problem.empty()) {
+    GST_INFO_OBJECT(self, "method %s -> %s%s%s", pyrocam::method_name(st.method).c_str(),
+                    pyrocam::method_name(chosen).c_str(),
+                    fallback.empty() ? "" : ", not lut: ", fallback.c_str());
+    st.method = chosen;
+    st.method_request = request;
+    st.refused = false;
+    return;
+  }
+  st.refused = true;
+  st.refused_request = request;
+  GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                      ("Method %s cannot be used with model %s: %s; keeping %s",
+                       pyrocam::method_name(chosen).c_str(), st.model_path.c_str(), problem.c_str(),
+                       pyrocam::method_name(st.method).c_str()),
+                      ("estimator construction or its check failed while playing"));
+}
+
+/* Where a frame is in the stream for the statistics interval: its timestamp, else its index
+ * over the framerate, else none. */
+static GstClockTime frame_position(const State& st, GstBuffer* buffer) {
+  if (GST_BUFFER_PTS_IS_VALID(buffer)) return GST_BUFFER_PTS(buffer);
+  const int fps_n = GST_VIDEO_INFO_FPS_N(&st.out_info), fps_d = GST_VIDEO_INFO_FPS_D(&st.out_info);
+  if (fps_n <= 0 || fps_d <= 0) return GST_CLOCK_TIME_NONE;
+  return gst_util_uint64_scale(st.frames, static_cast<guint64>(fps_d) * GST_SECOND,
+                               static_cast<guint64>(fps_n));
+}
+
+static void set_stats_fields(GstStructure* s, const std::string& prefix,
+                             const pyrocam::RegionStats& r) {
+  gst_structure_set(s, (prefix + "pixels").c_str(), G_TYPE_UINT64, static_cast<guint64>(r.pixels),
+                    (prefix + "valid").c_str(), G_TYPE_UINT64, static_cast<guint64>(r.valid),
+                    (prefix + "valid-fraction").c_str(), G_TYPE_DOUBLE, r.valid_fraction, nullptr);
+  if (r.valid == 0) return;
+  gst_structure_set(s, (prefix + "min-c").c_str(), G_TYPE_DOUBLE, r.min_c,
+                    (prefix + "max-c").c_str(), G_TYPE_DOUBLE, r.max_c, (prefix + "mean-c").c_str(),
+                    G_TYPE_DOUBLE, r.mean_c, (prefix + "median-c").c_str(), G_TYPE_DOUBLE,
+                    r.median_c, nullptr);
+}
+
+static void post_stats(GstRatioTemp* self, const Settings& settings, GstBuffer* buffer) {
+  const State& st = *self->state;
+  const GstSegment* segment = &GST_BASE_TRANSFORM(self)->segment;
+  const GstClockTime pts = GST_BUFFER_PTS(buffer);
+  GstClockTime stream_time = GST_CLOCK_TIME_NONE, running_time = GST_CLOCK_TIME_NONE;
+  if (GST_CLOCK_TIME_IS_VALID(pts) && segment->format == GST_FORMAT_TIME) {
+    stream_time = gst_segment_to_stream_time(segment, GST_FORMAT_TIME, pts);
+    running_time = gst_segment_to_running_time(segment, GST_FORMAT_TIME, pts);
+  }
+  GstStructure* s =
+      gst_structure_new(STATS_MESSAGE, "timestamp", G_TYPE_UINT64, static_cast<guint64>(pts),
+                        "stream-time", G_TYPE_UINT64, static_cast<guint64>(stream_time),
+                        "running-time", G_TYPE_UINT64, static_cast<guint64>(running_time), "method",
+                        G_TYPE_STRING, pyrocam::method_name(st.method).c_str(), "width", G_TYPE_INT,
+                        st.width, "height", G_TYPE_INT, st.height, nullptr);
+  set_stats_fields(s, "", pyrocam::region_stats(st.temperature_c));
+  if (!settings.region_text.empty() && settings.region_valid) {
+    const cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,
+                          settings.region.height);
+    const cv::Rect r = wanted & cv::Rect(0, 0, st.width, st.height);
+    gst_structure_set(s, "region-x", G_TYPE_INT, r.x, "region-y", G_TYPE_INT, r.y, "region-width",
+                      G_TYPE_INT, r.width, "region-height", G_TYPE_INT, r.height, nullptr);
+    set_stats_fields(
+        s, "region-",
+        r.empty() ? pyrocam::RegionStats() : pyrocam::region_stats(st.temperature_c(r)));
+  }
+  gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), s));
+}
+
+static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer* inbuf,
+                                              GstBuffer* outbuf) {
+  GstRatioTemp* self = GST_RATIO_TEMP(trans);
+  if (!self->state->configured) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation, "No format negotiated",
+                       "transform called before set_caps");
+    return GST_FLOW_NOT_NEGOTIATED;
+  }
+  const Settings settings = copy_settings(self);
+  apply_method(self, settings.method);
+  State& st = *self->state;
+  if (settings.region_serial != st.region_serial_seen) {
+    st.region_serial_seen = settings.region_serial;
+    if (!settings.region_valid)
+      GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                          ("region '%s' is not x,y,width,height; no region statistics until a "
+                           "valid one is set",
+                           settings.region_text.c_str()),
+                          ("the region property did not parse"));
+  }
+  const bool uncertainty = settings.output == GST_RATIO_TEMP_OUTPUT_UNCERTAINTY;
+  const bool ok =
+      PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not estimate temperatures", [&] {
+        pg::MappedImage in;
+        in.map_float(inbuf, st.width, st.height, st.bands, GST_MAP_READ);
+        for (int b = 0; b < st.bands; ++b)
+          st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
+        st.estimators[static_cast<std::size_t>(st.method)]->estimate(
+            st.planes, st.temperature_c, uncertainty ? &st.uncertainty_c : nullptr);
+        // mlp and lut need every band anyway; likelihood is held to that unless allow-partial.
+        if (!settings.allow_partial && st.method == pyrocam::Method::kLikelihood) {
+          const cv::Mat incomplete =
+              pyrocam::complete_band_mask(st.planes,
+                                          st.model->profile().thresholds.inference_dim_dn) == 0;
+          st.temperature_c.setTo(NAN, incomplete);
+          if (uncertainty) st.uncertainty_c.setTo(NAN, incomplete);
+        }
+        const cv::Mat codes = uncertainty ? pyrocam::encode_decikelvin_difference(st.uncertainty_c)
+                                          : pyrocam::encode_decikelvin(st.temperature_c);
+        MappedFrame out(outbuf, &st.out_info);
+        codes.copyTo(out.image);
+      });
+  if (!ok) return GST_FLOW_ERROR;
+  if (settings.stats_interval > 0) {
+    const GstClockTime position = frame_position(st, inbuf);
+    const bool due = !GST_CLOCK_TIME_IS_VALID(position) ||
+                     !GST_CLOCK_TIME_IS_VALID(st.last_stats) || position < st.last_stats ||
+                     position - st.last_stats >= settings.stats_interval;
+    if (due) {
+      post_stats(self, settings, inbuf);
+      st.last_stats = position;
+    }
+  }
+  ++st.frames;
+  return GST_FLOW_OK;
+}
+
+static void gst_ratio_temp_set_property(GObject* object, guint prop_id, const GValue* value,
+                                        GParamSpec* pspec) {
+  GstRatioTemp* self = GST_RATIO_TEMP(object);
+  GST_OBJECT_LOCK(self);
+  Settings& s = *self->settings;
+  const bool running = GST_STATE(self) > GST_STATE_READY;
+  switch (prop_id) {
+    case PROP_MODEL:
+      if (running) {
+        GST_WARNING_OBJECT(self, "model can only change in NULL or READY");
+      } else {
+        const char* v = g_value_get_string(value);
+        s.model = v ? v : "";
+      }
+      break;
+    case PROP_METHOD:
+      s.method = static_cast<GstRatioTempMethod>(g_value_get_enum(value));
+      break;
+    case PROP_OUTPUT:
+      if (running)
+        GST_WARNING_OBJECT(self, "output can only change in NULL or READY");
+      else
+        s.output = static_cast<GstRatioTempOutput>(g_value_get_enum(value));
+      break;
+    case PROP_STATS_INTERVAL:
+      s.stats_interval = g_value_get_uint64(value);
+      break;
+    case PROP_ALLOW_PARTIAL:
+      s.allow_partial = g_value_get_boolean(value);
+      break;
+    case PROP_REGION: {
+      const char* v = g_value_get_string(value);
+      s.region_text = v ? v : "";
+      s.region = Region();
+      s.region_valid = s.region_text.empty() || parse_region(s.region_text, &s.region);
+      ++s.region_serial;
+      if (!s.region_valid)
+        GST_WARNING_OBJECT(self, "region '%s' is not x,y,width,height", s.region_text.c_str());
+      break;
+    }
+    default:
+      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+      break;
+  }
+  GST_OBJECT_UNLOCK(self);
+}
+
+static void gst_ratio_temp_get_property(GObject* object, guint prop_id, GValue* value,
+                                        GParamSpec* pspec) {
+  GstRatioTemp* self = GST_RATIO_TEMP(object);
+  GST_OBJECT_LOCK(self);
+  const Settings& s = *self->settings;
+  switch (prop_id) {
+    case PROP_MODEL:
+      g_value_set_string(value, s.model.empty() ? nullptr : s.model.c_str());
+      break;
+    case PROP_METHOD:
+      g_value_set_enum(value, s.method);
+      break;
+    case PROP_OUTPUT:
+      g_value_set_enum(value, s.output);
+      break;
+    case PROP_STATS_INTERVAL:
+      g_value_set_uint64(value, s.stats_interval);
+      break;
+    case PROP_ALLOW_PARTIAL:
+      g_value_set_boolean(value, s.allow_partial);
+      break;
+    case PROP_REGION:
+      g_value_set_string(value, s.region_text.empty() ? nullptr : s.region_text.c_str());
+      break;
+    default:
+      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+      break;
+  }
+  GST_OBJECT_UNLOCK(self);
+}
+
+static void gst_ratio_temp_finalize(GObject* object) {
+  GstRatioTemp* self = GST_RATIO_TEMP(object);
+  delete self->settings;
+  delete self->state;
+  G_OBJECT_CLASS(gst_ratio_temp_parent_class)->finalize(object);
+}
+
+static void gst_ratio_temp_class_init(GstRatioTempClass* klass) {
+  GObjectClass* gobject_class = G_OBJECT_CLASS(klass);
+  GstElementClass* element_class = GST_ELEMENT_CLASS(klass);
+  GstBaseTransformClass* trans_class = GST_BASE_TRANSFORM_CLASS(klass);
+
+  GST_DEBUG_CATEGORY_INIT(gst_ratio_temp_debug, "ratiotemp", 0,
+                          "pyrocam band planes to temperature");
+
+  gobject_class->set_property = gst_ratio_temp_set_property;
+  gobject_class->get_property = gst_ratio_temp_get_property;
+  gobject_class->finalize = gst_ratio_temp_finalize;
+
+  const auto ready = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                              GST_PARAM_MUTABLE_READY);
+  const auto playing = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                                GST_PARAM_MUTABLE_PLAYING);
+  g_object_class_install_property(
+      gobject_class, PROP_MODEL,
+      g_param_spec_string("model", "Thermal model file",
+                          "Thermal model (JSON) written by pyrocam-calib calibrate for this "
+                          "camera; required",
+                          nullptr, ready));
+  g_object_class_install_property(
+      gobject_class, PROP_METHOD,
+      g_param_spec_enum("method", "Estimator",
+                        "Per-pixel temperature estimator: mlp (the paper's network, the "
+                        "reference, slow), lut (lookup table of the network, colour models "
+                        "only, checked against the network at start), likelihood (fit along the "
+                        "Planckian locus), auto (lut for colour models when it passes its check, "
+                        "likelihood otherwise)",
+                        GST_TYPE_RATIO_TEMP_METHOD, DEFAULT_METHOD, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_OUTPUT,
+      g_param_spec_enum("output", "Output",
+                        "What the GRAY16_LE pixels hold, in 0.1 K per code with 0 = no "
+                        "reading: the temperature (kelvin) or its expanded uncertainty (k = 2)",
+                        GST_TYPE_RATIO_TEMP_OUTPUT, DEFAULT_OUTPUT, ready));
+  g_object_class_install_property(
+      gobject_class, PROP_STATS_INTERVAL,
+      g_param_spec_uint64("stats-interval", "Statistics interval",
+                          "Nanoseconds of stream time between pyrocam-temperature-stats "
+                          "element messages (0 = none; the first frame always posts)",
+                          0, G_MAXUINT64, DEFAULT_STATS_INTERVAL, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_REGION,
+      g_param_spec_string("region", "Statistics region",
+                          "Region of output pixels for the statistics message, "
+                          "\"x,y,width,height\" (clipped to the frame); empty: frame only",
+                          nullptr, playing));
+
+  g_object_class_install_property(
+      gobject_class, PROP_ALLOW_PARTIAL,
+      g_param_spec_boolean("allow-partial", "Allow partial readings",
+                           "likelihood only: fit pixels where some bands are saturated, "
+                           "missing or below the dim threshold from the remaining bands (at "
+                           "least two); off: such pixels have no reading with every method",
+                           DEFAULT_ALLOW_PARTIAL, playing));
+
+  gst_element_class_set_static_metadata(
+      element_class, "Band planes to temperature", "Filter/Converter/Video",
+      "Estimates per-pixel temperatures (GRAY16_LE, 0.1 K, 0 = no reading) from band planes "
+      "with a calibrated thermal model",
+      "pyrocam developers");
+  gst_element_class_add_static_pad_template(element_class, &sink_template);
+  gst_element_class_add_static_pad_template(element_class, &src_template);
+
+  trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_ratio_temp_transform_caps);
+  trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_ratio_temp_transform_size);
+  trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_ratio_temp_set_caps);
+  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(gst_ratio_temp_decide_allocation);
+  trans_class->start = GST_DEBUG_FUNCPTR(gst_ratio_temp_start);
+  trans_class->stop = GST_DEBUG_FUNCPTR(gst_ratio_temp_stop);
+  trans_class->sink_event = GST_DEBUG_FUNCPTR(gst_ratio_temp_sink_event);
+  trans_class->transform = GST_DEBUG_FUNCPTR(gst_ratio_temp_transform);
+  trans_class->passthrough_on_same_caps = FALSE;
+
+  gst_type_mark_as_plugin_api(GST_TYPE_RATIO_TEMP_METHOD, static_cast<GstPluginAPIFlags>(0));
+  gst_type_mark_as_plugin_api(GST_TYPE_RATIO_TEMP_OUTPUT, static_cast<GstPluginAPIFlags>(0));
+}
+
+static void gst_ratio_temp_init(GstRatioTemp* self) {
+  self->settings = new Settings();
+  self->state = new State();
+}

@@ -1,0 +1,823 @@
+// ratiotemp: caps for colour and 5x5 bands, codes against the library for every method and
+// for the uncertainty, no-reading marks through the chain, live method/region changes, the
+// statistics message against region_stats, flush/EOS, and bus errors for bad models and caps.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <optional>
+
+#include "element_support.h"
+#include "pyrocam/band_validity.h"
+#include "pyrocam/darksub.h"
+#include "pyrocam/demosaic.h"
+#include "pyrocam/difference_codes.h"
+#include "pyrocam/estimator_check.h"
+#include "pyrocam/measure.h"
+#include "pyrocam/model.h"
+#include "test_support.h"
+
+namespace pyrocam::test {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+std::string model_path(const char* name) {
+  const char* dir = g_getenv("PYROCAM_TEST_MODEL_DIR");
+  return std::string(dir ? dir : ".") + "/" + name;
+}
+std::string rgb_model_path() { return model_path("test-model-rgb.json"); }
+std::string nir_model_path() { return model_path("test-model-nir5x5.json"); }
+
+// The test models, loaded once per binary.
+const ThermalModel& rgb_model() {
+  static const ThermalModel m = load_model(rgb_model_path());
+  return m;
+}
+const ThermalModel& nir_model() {
+  static const ThermalModel m = load_model(nir_model_path());
+  return m;
+}
+
+// What the element's auto method is for a model (its documented rule): the lookup table for
+// two-ratio models when it gives the network's answer on the model's locus (within 1 degC, and
+// reading where the network does at all but 1 % of the samples), else likelihood.
+bool lut_passes_its_check(const ThermalModel& m) {
+  const auto lut = make_estimator(m, Method::kLut);
+  const auto mlp = make_estimator(m, Method::kMlp);
+  const LocusAgreement a = compare_on_locus(m, *lut, *mlp);
+  return a.max_difference_c <= 1.0 && a.validity_differs * 100 <= a.samples;
+}
+Method rgb_auto_method() {
+  static const Method m = lut_passes_its_check(rgb_model()) ? Method::kLut : Method::kLikelihood;
+  return m;
+}
+
+// Band planes (plane after plane) of a graybody whose temperature runs from t0 to t1 over the
+// pixels, brightest band at `peak` DN, with a small per-pixel, per-band wobble so that the
+// ratios leave the locus a little as noisy pixels do.
+std::vector<float> graybody_planes(const ThermalModel& m, int w, int h, double t0, double t1,
+                                   double peak = 150) {
+  const int bands = m.profile().band_count();
+  const int n = w * h;
+  std::vector<float> v(static_cast<std::size_t>(bands * n));
+  for (int i = 0; i < n; ++i) {
+    const double t = n > 1 ? t0 + (t1 - t0) * i / (n - 1) : t0;
+    const Eigen::VectorXd rates = m.camera.rates(t);
+    const double scale = peak / rates.maxCoeff();
+    for (int b = 0; b < bands; ++b)
+      v[static_cast<std::size_t>(b * n + i)] =
+          static_cast<float>(rates[b] * scale * (1 + 0.01 * std::sin(1.7 * i + 0.9 * b)));
+  }
+  return v;
+}
+
+std::string bands_caps(int bands, const char* layout, int w, int h) {
+  return "video/x-pyrocam-bands,format=F32LE,bands=" + std::to_string(bands) +
+         ",width=" + std::to_string(w) + ",height=" + std::to_string(h) +
+         ",framerate=30/1,layout=" + layout;
+}
+
+std::vector<cv::Mat> plane_views(const std::vector<float>& planes, int bands, int w, int h) {
+  std::vector<cv::Mat> p;
+  for (int b = 0; b < bands; ++b)
+    p.emplace_back(h, w, CV_32F, const_cast<float*>(planes.data()) + b * w * h);
+  return p;
+}
+
+// The library's answer: temperature (degC) and, when asked, uncertainty. Unless `partial`,
+// pixels with any band that is not a reading have none (the element's allow-partial=false).
+struct LibraryResult {
+  cv::Mat t, u;
+};
+LibraryResult library(const ThermalModel& m, Method method, const std::vector<cv::Mat>& planes,
+                      bool uncertainty = false, bool partial = false) {
+  LibraryResult r;
+  PlaneEstimator est(m, method);
+  est.estimate(planes, r.t, uncertainty ? &r.u : nullptr);
+  if (!partial) {
+    const cv::Mat incomplete =
+        complete_band_mask(planes, m.profile().thresholds.inference_dim_dn) == 0;
+    r.t.setTo(NAN, incomplete);
+    if (uncertainty) r.u.setTo(NAN, incomplete);
+  }
+  return r;
+}
+LibraryResult library(const ThermalModel& m, Method method, const std::vector<float>& planes, int w,
+                      int h, bool uncertainty = false, bool partial = false) {
+  return library(m, method, plane_views(planes, m.profile().band_count(), w, h), uncertainty,
+                 partial);
+}
+
+std::vector<std::uint16_t> codes_of(const cv::Mat& codes) {
+  std::vector<std::uint16_t> v;
+  for (int y = 0; y < codes.rows; ++y)
+    v.insert(v.end(), codes.ptr<std::uint16_t>(y), codes.ptr<std::uint16_t>(y) + codes.cols);
+  return v;
+}
+std::vector<std::uint16_t> library_codes(const ThermalModel& m, Method method,
+                                         const std::vector<float>& planes, int w, int h,
+                                         bool partial = false) {
+  return codes_of(encode_decikelvin(library(m, method, planes, w, h, false, partial).t));
+}
+
+// GRAY16_LE pixels of an output buffer, without the row padding (stride GST_ROUND_UP_4(2 w)).
+std::vector<std::uint16_t> gray16_of(GstBuffer* buffer, int w, int h) {
+  const int stride = GST_ROUND_UP_4(2 * w);
+  EXPECT_EQ(gst_buffer_get_size(buffer), static_cast<gsize>(stride * h));
+  const auto bytes = values_of<std::uint8_t>(buffer);
+  std::vector<std::uint16_t> v(static_cast<std::size_t>(w * h));
+  if (bytes.size() < static_cast<std::size_t>(stride * h)) return v;
+  for (int y = 0; y < h; ++y)
+    std::memcpy(&v[static_cast<std::size_t>(y * w)], &bytes[static_cast<std::size_t>(y * stride)],
+                static_cast<std::size_t>(2 * w));
+  return v;
+}
+
+std::size_t count_nonzero(const std::vector<std::uint16_t>& v) {
+  return static_cast<std::size_t>(std::count_if(v.begin(), v.end(), [](auto c) { return c; }));
+}
+
+class RatioTemp : public ::testing::Test {
+ protected:
+  void SetUp() override { REQUIRE_ELEMENT("ratiotemp"); }
+  void TearDown() override {
+    if (bus) {
+      gst_element_set_bus(h->element, nullptr);
+      gst_object_unref(bus);
+    }
+    if (element) gst_object_unref(element);
+    if (h) gst_harness_teardown(h);
+  }
+  // The harness around a parsed chain, with a bus attached before it starts so that messages
+  // posted at start are kept.
+  void start(const std::string& launch, const std::string& caps) {
+    GError* error = nullptr;
+    GstElement* bin = gst_parse_bin_from_description(launch.c_str(), TRUE, &error);
+    ASSERT_TRUE(bin && !error) << (error ? error->message : launch);
+    bus = gst_bus_new();
+    gst_element_set_bus(bin, bus);
+    h = gst_harness_new_with_element(bin, "sink", "src");
+    gst_object_unref(bin);
+    element = find_element(h, "ratiotemp");
+    gst_harness_set_src_caps_str(h, caps.c_str());
+  }
+  // Pushes one frame of band planes (or raw bytes) and returns the output codes.
+  template <typename T>
+  std::vector<std::uint16_t> run(const std::vector<T>& input, int w, int height,
+                                 GstClockTime pts = GST_CLOCK_TIME_NONE) {
+    GstBuffer* in = buffer_from(input);
+    GST_BUFFER_PTS(in) = pts;
+    EXPECT_EQ(gst_harness_push(h, in), GST_FLOW_OK);
+    GstBuffer* out = gst_harness_try_pull(h);
+    if (!out) return {};
+    auto v = gray16_of(out, w, height);
+    gst_buffer_unref(out);
+    return v;
+  }
+  // Element messages of a name posted so far.
+  std::vector<GstStructure*> messages(const char* name) {
+    std::vector<GstStructure*> out;
+    while (GstMessage* m = gst_bus_pop_filtered(
+               bus, static_cast<GstMessageType>(GST_MESSAGE_ELEMENT | GST_MESSAGE_WARNING))) {
+      const GstStructure* s = gst_message_get_structure(m);
+      if (GST_MESSAGE_TYPE(m) == GST_MESSAGE_WARNING) {
+        GError* err = nullptr;
+        gst_message_parse_warning(m, &err, nullptr);
+        warnings.push_back(err->message);
+        g_error_free(err);
+      } else if (s && gst_structure_has_name(s, name)) {
+        out.push_back(gst_structure_copy(s));
+      }
+      gst_message_unref(m);
+    }
+    return out;
+  }
+  std::vector<GstStructure*> stats() { return messages("pyrocam-temperature-stats"); }
+
+  GstHarness* h = nullptr;
+  GstBus* bus = nullptr;
+  GstElement* element = nullptr;
+  std::vector<std::string> warnings;
+};
+
+void free_all(std::vector<GstStructure*>& v) {
+  for (GstStructure* s : v) gst_structure_free(s);
+  v.clear();
+}
+
+TEST_F(RatioTemp, bayer_bands_negotiate_to_gray16_of_the_same_size) {
+  start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 7, 5));
+  const auto planes = graybody_planes(rgb_model(), 7, 5, 900, 1600);
+  const auto out = run(planes, 7, 5);  // odd width: rows padded to 16 bytes
+  EXPECT_EQ(out, library_codes(rgb_model(), rgb_auto_method(), planes, 7, 5));
+  EXPECT_GT(count_nonzero(out), 30u);
+  const std::string caps = sink_caps(h);
+  for (const char* part : {"video/x-raw", "format=(string)GRAY16_LE", "width=(int)7",
+                           "height=(int)5", "framerate=(fraction)30/1"})
+    EXPECT_NE(caps.find(part), std::string::npos) << part << " in " << caps;
+}
+
+TEST_F(RatioTemp, snapshot_bands_negotiate_with_the_5x5_model) {
+  start("ratiotemp model=" + nir_model_path(), bands_caps(25, "5x5", 4, 3));
+  const auto planes = graybody_planes(nir_model(), 4, 3, 1000, 2000);
+  const auto out = run(planes, 4, 3);
+  // auto is likelihood for a 25-band model.
+  EXPECT_EQ(out, library_codes(nir_model(), Method::kLikelihood, planes, 4, 3));
+  EXPECT_GT(count_nonzero(out), 8u);
+  const std::string caps = sink_caps(h);
+  EXPECT_NE(caps.find("format=(string)GRAY16_LE"), std::string::npos) << caps;
+  EXPECT_NE(caps.find("width=(int)4"), std::string::npos) << caps;
+}
+
+TEST_F(RatioTemp, every_method_gives_the_library_codes) {
+  struct Case {
+    const char* method;
+    Method library_method;
+    bool colour;
+  };
+  std::vector<Case> cases = {Case{"mlp", Method::kMlp, true},
+                             Case{"likelihood", Method::kLikelihood, true},
+                             Case{"auto", rgb_auto_method(), true},
+                             Case{"mlp", Method::kMlp, false},
+                             Case{"likelihood", Method::kLikelihood, false},
+                             Case{"auto", Method::kLikelihood, false}};
+  // lut only where it passed its check (else the element refuses it: see RatioTempErrors).
+  if (rgb_auto_method() == Method::kLut) cases.push_back(Case{"lut", Method::kLut, true});
+  for (const Case& c : cases) {
+    SCOPED_TRACE(std::string(c.method) + (c.colour ? " colour" : " 5x5"));
+    const ThermalModel& m = c.colour ? rgb_model() : nir_model();
+    const int w = 6, hh = 4;
+    start(std::string("ratiotemp method=") + c.method +
+              " model=" + (c.colour ? rgb_model_path() : nir_model_path()),
+          bands_caps(m.profile().band_count(), c.colour ? "bayer" : "5x5", w, hh));
+    const auto planes = graybody_planes(m, w, hh, 800, 2400);
+    const auto out = run(planes, w, hh);
+    EXPECT_EQ(out, library_codes(m, c.library_method, planes, w, hh));
+    EXPECT_GT(count_nonzero(out), 12u);
+    TearDown();
+    h = nullptr, bus = nullptr, element = nullptr;
+  }
+}
+
+TEST_F(RatioTemp, uncertainty_output_gives_the_library_uncertainty) {
+  start("ratiotemp output=uncertainty model=" + rgb_model_path(), bands_caps(3, "bayer", 5, 4));
+  auto planes = graybody_planes(rgb_model(), 5, 4, 900, 1500);
+  for (int b = 0; b < 3; ++b) planes[b * 20 + 3] = kInf;  // pixel 3 saturated: no reading
+  const auto out = run(planes, 5, 4);
+  const LibraryResult lib = library(rgb_model(), rgb_auto_method(), planes, 5, 4, true);
+  EXPECT_EQ(out, codes_of(encode_decikelvin_difference(lib.u)));
+  EXPECT_EQ(out[3], 0);
+  // The uncertainty is there exactly where the temperature is, in 0.1 K without the 273.15 K
+  // offset of temperatures.
+  const auto t = codes_of(encode_decikelvin(lib.t));
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    EXPECT_EQ(out[i] != 0, t[i] != 0) << i;
+    if (out[i]) {
+      EXPECT_NEAR(out[i] / 10.0, lib.u.at<float>(static_cast<int>(i)), 0.0501) << i;
+    }
+  }
+  // The statistics stay those of the temperatures.
+  auto s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  double median = NAN;
+  EXPECT_TRUE(gst_structure_get_double(s[0], "median-c", &median));
+  EXPECT_DOUBLE_EQ(median, region_stats(lib.t).median_c);
+  free_all(s);
+}
+
+TEST_F(RatioTemp, saturated_nan_and_dim_bands_give_no_reading) {
+  start("ratiotemp method=mlp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 2));
+  auto planes = graybody_planes(rgb_model(), 4, 2, 1200, 1200);
+  const int n = 8;
+  const float nan = std::nanf("");
+  planes[0 * n + 0] = kInf;                             // R saturated
+  planes[1 * n + 1] = nan;                              // G without a reading
+  planes[2 * n + 2] = 5;                                // B below the 20 DN dim threshold
+  for (int b = 0; b < 3; ++b) planes[b * n + 3] = nan;  // nothing at all
+  planes[0 * n + 4] = kInf, planes[2 * n + 4] = 5;      // only G left
+  // The network needs every band.
+  const auto out = run(planes, 4, 2);
+  ASSERT_EQ(out.size(), 8u);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(out[i], 0) << i;
+  for (int i = 5; i < 8; ++i) {
+    // The untouched pixels read about 1200 degC (the wobble moves them a little).
+    EXPECT_NEAR(out[i] / 10.0 - 273.15, 1200, 60) << i;
+  }
+  // likelihood is held to every band too, unless allow-partial.
+  gst_util_set_object_arg(G_OBJECT(element), "method", "likelihood");
+  const auto lik = run(planes, 4, 2);
+  EXPECT_EQ(lik, library_codes(rgb_model(), Method::kLikelihood, planes, 4, 2));
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(lik[i], 0) << i;
+  EXPECT_EQ(count_nonzero(lik), 3u);
+  // With allow-partial it drops a saturated, missing or dim band and fits the rest, as the
+  // library does; with fewer than two bands left there is no reading.
+  g_object_set(element, "allow-partial", TRUE, nullptr);
+  const auto partial = run(planes, 4, 2);
+  EXPECT_EQ(partial, library_codes(rgb_model(), Method::kLikelihood, planes, 4, 2, true));
+  EXPECT_EQ(partial[3], 0);
+  EXPECT_EQ(partial[4], 0);
+  for (int i = 5; i < 8; ++i) EXPECT_EQ(partial[i], lik[i]) << i;
+}
+
+// A raw 8x8 RGGB frame of a graybody at t_c whose brightest band is 120 DN above the dark
+// level of 50, with a dim corner.
+std::vector<std::uint8_t> raw_bayer_frame(const ThermalModel& m, double t_c) {
+  const Eigen::VectorXd rates = m.camera.rates(t_c);
+  const Eigen::VectorXd dn = rates * (120 / rates.maxCoeff());
+  std::vector<std::uint8_t> raw(64);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) {
+      const int band = (y % 2 == 0 && x % 2 == 0) ? 0 : (y % 2 == 1 && x % 2 == 1) ? 2 : 1;
+      raw[y * 8 + x] = static_cast<std::uint8_t>(std::lround(50 + dn[band]));
+    }
+  for (int y = 0; y < 2; ++y)
+    for (int x = 6; x < 8; ++x) raw[y * 8 + x] = 55;  // 5 DN above dark: too dim
+  return raw;
+}
+
+// The library's chain on a raw frame: dark level 50, default saturation, bilinear, estimator.
+std::vector<std::uint16_t> library_chain(const std::vector<std::uint8_t>& raw, Method method) {
+  cv::Mat signal;
+  subtract_dark_level(cv::Mat(8, 8, CV_8U, const_cast<std::uint8_t*>(raw.data())), 50,
+                      default_saturation_level(8), signal);
+  std::vector<cv::Mat> planes;
+  demosaic(signal, MosaicLayout::bayer("RGGB"), DemosaicMethod::kBilinear, planes);
+  return codes_of(encode_decikelvin(library(rgb_model(), method, planes).t));
+}
+
+TEST_F(RatioTemp, saturated_pixel_stays_no_reading_through_darksub_and_demosaic25) {
+  REQUIRE_ELEMENT("darksub");
+  REQUIRE_ELEMENT("demosaic25");
+  start("darksub dark-level=50 ! demosaic25 ! ratiotemp method=mlp model=" + rgb_model_path(),
+        "video/x-bayer,format=rggb,width=8,height=8,framerate=30/1");
+  auto raw = raw_bayer_frame(rgb_model(), 1300);
+  raw[4 * 8 + 4] = 255;  // an R pixel, saturated
+  const auto out = run(raw, 8, 8);
+  ASSERT_EQ(out.size(), 64u);
+  EXPECT_EQ(out, library_chain(raw, Method::kMlp));
+  // The saturated R pixel and the pixels whose R is interpolated from it have no reading.
+  for (int y = 3; y <= 5; ++y)
+    for (int x = 3; x <= 5; ++x) EXPECT_EQ(out[y * 8 + x], 0) << x << "," << y;
+  EXPECT_EQ(out[1 * 8 + 7], 0);  // dim corner
+  EXPECT_NEAR(out[6 * 8 + 1] / 10.0 - 273.15, 1300, 60);
+  EXPECT_GT(count_nonzero(out), 40u);
+}
+
+TEST_F(RatioTemp, saturated_area_has_no_reading_with_the_default_method) {
+  REQUIRE_ELEMENT("darksub");
+  REQUIRE_ELEMENT("demosaic25");
+  start("darksub dark-level=50 ! demosaic25 ! ratiotemp model=" + rgb_model_path(),
+        "video/x-bayer,format=rggb,width=8,height=8,framerate=30/1");
+  auto raw = raw_bayer_frame(rgb_model(), 1300);
+  for (int y = 2; y < 6; ++y)
+    for (int x = 2; x < 6; ++x) raw[y * 8 + x] = 255;
+  const auto out = run(raw, 8, 8);
+  ASSERT_EQ(out.size(), 64u);
+  EXPECT_EQ(out, library_chain(raw, rgb_auto_method()));
+  // Every band of the central 2x2 comes from saturated pixels only.
+  for (int y = 3; y <= 4; ++y)
+    for (int x = 3; x <= 4; ++x) EXPECT_EQ(out[y * 8 + x], 0) << x << "," << y;
+  EXPECT_EQ(out[1 * 8 + 7], 0);  // dim corner
+  EXPECT_NEAR(out[7 * 8 + 0] / 10.0 - 273.15, 1300, 60);
+}
+
+TEST_F(RatioTemp, method_and_region_change_while_playing) {
+  start("ratiotemp method=likelihood stats-interval=0 model=" + rgb_model_path(),
+        bands_caps(3, "bayer", 6, 4));
+  const auto planes = graybody_planes(rgb_model(), 6, 4, 900, 1800);
+  EXPECT_EQ(run(planes, 6, 4), library_codes(rgb_model(), Method::kLikelihood, planes, 6, 4));
+  gst_util_set_object_arg(G_OBJECT(element), "method", "mlp");
+  const auto mlp = library_codes(rgb_model(), Method::kMlp, planes, 6, 4);
+  EXPECT_EQ(run(planes, 6, 4), mlp);
+  gst_util_set_object_arg(G_OBJECT(element), "method", "lut");
+  const bool lut = rgb_auto_method() == Method::kLut;
+  // The table where it passed its check; else refused with a warning, and the network stays.
+  EXPECT_EQ(run(planes, 6, 4), lut ? library_codes(rgb_model(), Method::kLut, planes, 6, 4) : mlp);
+  gst_util_set_object_arg(G_OBJECT(element), "method", "mlp");
+  EXPECT_EQ(run(planes, 6, 4), mlp);
+  auto s = stats();
+  EXPECT_TRUE(s.empty());  // stats-interval=0: none
+  // Statistics and a region switched on while playing.
+  g_object_set(element, "stats-interval", GST_SECOND, "region", "1,1,2,2", nullptr);
+  run(planes, 6, 4, 0);
+  s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  const char* method = gst_structure_get_string(s[0], "method");
+  EXPECT_STREQ(method, "mlp");
+  int rw = 0;
+  EXPECT_TRUE(gst_structure_get_int(s[0], "region-width", &rw));
+  EXPECT_EQ(rw, 2);
+  free_all(s);
+  g_object_set(element, "region", "2,0,3,1", nullptr);
+  run(planes, 6, 4, 2 * GST_SECOND);
+  s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  guint64 pixels = 0;
+  EXPECT_TRUE(gst_structure_get_uint64(s[0], "region-pixels", &pixels));
+  EXPECT_EQ(pixels, 3u);
+  free_all(s);
+  // An invalid region while playing: a warning, no region fields, frames still flow.
+  g_object_set(element, "region", "2,0,x", nullptr);
+  EXPECT_EQ(count_nonzero(run(planes, 6, 4, 4 * GST_SECOND)), count_nonzero(run(planes, 6, 4)));
+  s = stats();
+  ASSERT_FALSE(s.empty());
+  EXPECT_FALSE(gst_structure_has_field(s[0], "region-pixels"));
+  free_all(s);
+  ASSERT_EQ(warnings.size(), lut ? 1u : 2u);
+  if (!lut) {
+    EXPECT_NE(warnings[0].find("lookup table differs"), std::string::npos) << warnings[0];
+  }
+  EXPECT_NE(warnings.back().find("2,0,x"), std::string::npos) << warnings.back();
+}
+
+TEST_F(RatioTemp, auto_uses_the_lookup_table_only_when_it_passes_its_check) {
+  start("ratiotemp stats-interval=1 model=" + rgb_model_path(), bands_caps(3, "bayer", 3, 2));
+  const auto planes = graybody_planes(rgb_model(), 3, 2, 1100, 1300);
+  EXPECT_EQ(run(planes, 3, 2, 0), library_codes(rgb_model(), rgb_auto_method(), planes, 3, 2));
+  auto s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_EQ(gst_structure_get_string(s[0], "method"), method_name(rgb_auto_method()));
+  free_all(s);
+  if (rgb_auto_method() == Method::kLut) {
+    EXPECT_TRUE(warnings.empty());
+  } else {
+    // The user is told why, with the size of the table's error.
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("uses likelihood, not lut"), std::string::npos) << warnings[0];
+    EXPECT_NE(warnings[0].find("differs from its network by up to"), std::string::npos)
+        << warnings[0];
+  }
+}
+
+TEST_F(RatioTemp, lut_asked_for_while_playing_with_the_5x5_model_is_refused_n) {
+  start("ratiotemp model=" + nir_model_path(), bands_caps(25, "5x5", 3, 2));
+  const auto planes = graybody_planes(nir_model(), 3, 2, 1200, 1800);
+  const auto expected = library_codes(nir_model(), Method::kLikelihood, planes, 3, 2);
+  EXPECT_EQ(run(planes, 3, 2), expected);
+  gst_util_set_object_arg(G_OBJECT(element), "method", "lut");
+  EXPECT_EQ(run(planes, 3, 2), expected);  // still likelihood
+  EXPECT_EQ(run(planes, 3, 2), expected);
+  auto s = stats();
+  free_all(s);
+  ASSERT_EQ(warnings.size(), 1u);  // once, not per frame
+  EXPECT_NE(warnings[0].find("lut"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("likelihood"), std::string::npos) << warnings[0];
+}
+
+double field_double(const GstStructure* s, const char* name) {
+  double v = NAN;
+  EXPECT_TRUE(gst_structure_get_double(s, name, &v)) << name;
+  return v;
+}
+guint64 field_uint64(const GstStructure* s, const char* name) {
+  guint64 v = 0;
+  EXPECT_TRUE(gst_structure_get_uint64(s, name, &v)) << name;
+  return v;
+}
+
+void expect_stats(const GstStructure* s, const std::string& prefix, const RegionStats& r) {
+  SCOPED_TRACE(prefix);
+  EXPECT_EQ(field_uint64(s, (prefix + "pixels").c_str()), r.pixels);
+  EXPECT_EQ(field_uint64(s, (prefix + "valid").c_str()), r.valid);
+  EXPECT_DOUBLE_EQ(field_double(s, (prefix + "valid-fraction").c_str()), r.valid_fraction);
+  if (r.valid == 0) {
+    EXPECT_FALSE(gst_structure_has_field(s, (prefix + "median-c").c_str()));
+    return;
+  }
+  EXPECT_DOUBLE_EQ(field_double(s, (prefix + "min-c").c_str()), r.min_c);
+  EXPECT_DOUBLE_EQ(field_double(s, (prefix + "max-c").c_str()), r.max_c);
+  EXPECT_DOUBLE_EQ(field_double(s, (prefix + "mean-c").c_str()), r.mean_c);
+  EXPECT_DOUBLE_EQ(field_double(s, (prefix + "median-c").c_str()), r.median_c);
+}
+
+TEST_F(RatioTemp, stats_message_matches_region_stats_of_the_frame) {
+  start("ratiotemp stats-interval=1000000000 region=4,2,10,10 model=" + rgb_model_path(),
+        bands_caps(3, "bayer", 7, 5));
+  auto planes = graybody_planes(rgb_model(), 7, 5, 900, 1700);
+  for (int b = 0; b < 3; ++b) {  // two pixels without a reading, whatever the method
+    planes[b * 35 + 0] = kInf;
+    planes[b * 35 + 33] = NAN;
+  }
+  std::vector<float> dark(planes.size(), 1.0f);  // every band dim: no reading anywhere
+  // Frames at 0, 0.5, 1.0 and 1.2 s: the first and the third post.
+  run(planes, 7, 5, 0);
+  run(planes, 7, 5, GST_SECOND / 2);
+  run(planes, 7, 5, GST_SECOND);
+  run(dark, 7, 5, GST_SECOND + GST_SECOND / 5);
+  auto s = stats();
+  ASSERT_EQ(s.size(), 2u);
+  const cv::Mat t = library(rgb_model(), rgb_auto_method(), planes, 7, 5).t;
+  const cv::Rect region(4, 2, 3, 3);  // clipped to the 7x5 frame
+  for (std::size_t k = 0; k < 2; ++k) {
+    const GstStructure* m = s[k];
+    EXPECT_EQ(field_uint64(m, "timestamp"), k * GST_SECOND);
+    EXPECT_EQ(field_uint64(m, "running-time"), k * GST_SECOND);
+    EXPECT_EQ(field_uint64(m, "stream-time"), k * GST_SECOND);
+    EXPECT_EQ(gst_structure_get_string(m, "method"), method_name(rgb_auto_method()));
+    int v = 0;
+    EXPECT_TRUE(gst_structure_get_int(m, "width", &v) && v == 7);
+    EXPECT_TRUE(gst_structure_get_int(m, "height", &v) && v == 5);
+    EXPECT_TRUE(gst_structure_get_int(m, "region-x", &v) && v == 4);
+    EXPECT_TRUE(gst_structure_get_int(m, "region-y", &v) && v == 2);
+    EXPECT_TRUE(gst_structure_get_int(m, "region-width", &v) && v == 3);
+    EXPECT_TRUE(gst_structure_get_int(m, "region-height", &v) && v == 3);
+    const RegionStats frame = region_stats(t);
+    EXPECT_EQ(frame.valid, 33u);
+    expect_stats(m, "", frame);
+    const RegionStats reg = region_stats(t(region));
+    EXPECT_EQ(reg.pixels, 9u);
+    EXPECT_EQ(reg.valid, 8u);
+    expect_stats(m, "region-", reg);
+    // The median is reported apart from the mean.
+    EXPECT_NE(field_double(m, "median-c"), field_double(m, "mean-c"));
+  }
+  free_all(s);
+  // A frame without any reading: counts, fraction 0, no temperatures.
+  g_object_set(element, "stats-interval", G_GUINT64_CONSTANT(1), nullptr);
+  run(dark, 7, 5, 3 * GST_SECOND);
+  s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  expect_stats(s[0], "", region_stats(cv::Mat(5, 7, CV_32F, cv::Scalar(NAN))));
+  EXPECT_EQ(field_uint64(s[0], "pixels"), 35u);
+  EXPECT_FALSE(gst_structure_has_field(s[0], "min-c"));
+  free_all(s);
+}
+
+TEST_F(RatioTemp, survives_flush_and_eos) {
+  start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 4));
+  const auto planes = graybody_planes(rgb_model(), 4, 4, 1000, 1400);
+  const auto expected = library_codes(rgb_model(), rgb_auto_method(), planes, 4, 4);
+  EXPECT_EQ(run(planes, 4, 4, 0), expected);
+  EXPECT_EQ(run(planes, 4, 4, GST_SECOND / 10), expected);
+  auto s = stats();
+  EXPECT_EQ(s.size(), 1u);  // the second frame is within the 1 s default interval
+  free_all(s);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_start()));
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_stop(TRUE)));
+  GstSegment segment;
+  gst_segment_init(&segment, GST_FORMAT_TIME);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_segment(&segment)));
+  EXPECT_EQ(run(planes, 4, 4, GST_SECOND / 5), expected);
+  s = stats();
+  EXPECT_EQ(s.size(), 1u);  // after a flush the next frame posts
+  free_all(s);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_eos()));
+  bool eos = false;
+  while (GstEvent* ev = gst_harness_try_pull_event(h)) {
+    eos |= GST_EVENT_TYPE(ev) == GST_EVENT_EOS;
+    gst_event_unref(ev);
+  }
+  EXPECT_TRUE(eos);
+  // And it starts again after a state change.
+  ASSERT_EQ(gst_element_set_state(h->element, GST_STATE_READY), GST_STATE_CHANGE_SUCCESS);
+  ASSERT_EQ(gst_element_set_state(h->element, GST_STATE_PLAYING), GST_STATE_CHANGE_SUCCESS);
+}
+
+// Runs a pipeline to EOS or error, collecting the statistics messages.
+struct StatsRun {
+  BusResult result;
+  std::vector<GstStructure*> stats;
+  ~StatsRun() { free_all(stats); }
+};
+void run_with_stats(const std::string& description, StatsRun* run) {
+  GError* error = nullptr;
+  GstElement* pipeline = gst_parse_launch(description.c_str(), &error);
+  ASSERT_TRUE(pipeline && !error) << (error ? error->message : "");
+  GstBus* bus = gst_element_get_bus(pipeline);
+  gst_element_set_state(pipeline, GST_STATE_PLAYING);
+  for (;;) {
+    GstMessage* msg = gst_bus_timed_pop_filtered(
+        bus, 30 * GST_SECOND,
+        static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR | GST_MESSAGE_ELEMENT));
+    if (!msg) {
+      run->result.timed_out = true;
+      break;
+    }
+    const GstMessageType type = GST_MESSAGE_TYPE(msg);
+    if (type == GST_MESSAGE_ELEMENT) {
+      const GstStructure* s = gst_message_get_structure(msg);
+      if (s && gst_structure_has_name(s, "pyrocam-temperature-stats"))
+        run->stats.push_back(gst_structure_copy(s));
+    } else if (type == GST_MESSAGE_EOS) {
+      run->result.eos = true;
+    } else {
+      GError* err = nullptr;
+      gst_message_parse_error(msg, &err, nullptr);
+      run->result.error = true;
+      run->result.message = err->message;
+      g_error_free(err);
+    }
+    gst_message_unref(msg);
+    if (type != GST_MESSAGE_ELEMENT) break;
+  }
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(bus);
+  gst_object_unref(pipeline);
+}
+
+TEST(RatioTempPipeline, simulated_plate_reads_its_temperature_through_the_chain) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp", "thermalcolormap"})
+    REQUIRE_ELEMENT(e);
+  StatsRun run;
+  // The plate fills the central 60 %: the region is well inside it.
+  run_with_stats(
+      "pyrocamsrc scene=plate temperature=1050 num-buffers=3 ! "
+      "video/x-bayer,width=80,height=60 ! darksub dark-level=50 ! demosaic25 ! "
+      "ratiotemp stats-interval=1 region=30,20,20,20 model=" +
+          rgb_model_path() + " ! thermalcolormap ! fakesink",
+      &run);
+  ASSERT_TRUE(run.result.eos) << run.result.message;
+  ASSERT_EQ(run.stats.size(), 3u);
+  for (const GstStructure* s : run.stats) {
+    EXPECT_GT(field_double(s, "region-valid-fraction"), 0.9);
+    // A test model (short training) on a simulated typical unit: within 50 degC.
+    EXPECT_NEAR(field_double(s, "region-median-c"), 1050, 50);
+    // The cold background has no reading.
+    EXPECT_LT(field_double(s, "valid-fraction"), 0.7);
+  }
+}
+
+TEST(RatioTempPipeline, snapshot_camera_through_the_chain) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
+  StatsRun run;
+  run_with_stats(
+      "pyrocamsrc profile=nir5x5-reference scene=plate temperature=1000 num-buffers=2 ! "
+      "video/x-raw,width=100,height=50 ! darksub dark-level=50 pattern=5x5 ! demosaic25 ! "
+      "ratiotemp stats-interval=1 region=8,4,4,2 model=" +
+          nir_model_path() + " ! fakesink",
+      &run);
+  ASSERT_TRUE(run.result.eos) << run.result.message;
+  ASSERT_EQ(run.stats.size(), 2u);
+  int w = 0;
+  EXPECT_TRUE(gst_structure_get_int(run.stats[0], "width", &w));
+  EXPECT_EQ(w, 20);
+  EXPECT_STREQ(gst_structure_get_string(run.stats[0], "method"), "likelihood");
+  EXPECT_NEAR(field_double(run.stats[0], "region-median-c"), 1000, 50);
+}
+
+// The bytes of every buffer that reaches the fakesink named "sink" of a pipeline run to EOS.
+std::vector<std::vector<std::uint8_t>> sink_frames(const std::string& description) {
+  std::vector<std::vector<std::uint8_t>> frames;
+  GError* error = nullptr;
+  GstElement* pipeline = gst_parse_launch(description.c_str(), &error);
+  EXPECT_TRUE(pipeline && !error) << (error ? error->message : "");
+  if (error) g_error_free(error);
+  if (!pipeline) return frames;
+  GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
+  g_object_set(sink, "signal-handoffs", TRUE, nullptr);
+  g_signal_connect(sink, "handoff",
+                   G_CALLBACK(+[](GstElement*, GstBuffer* b, GstPad*, gpointer out) {
+                     static_cast<std::vector<std::vector<std::uint8_t>>*>(out)->push_back(
+                         values_of<std::uint8_t>(b));
+                   }),
+                   &frames);
+  GstBus* bus = gst_element_get_bus(pipeline);
+  gst_element_set_state(pipeline, GST_STATE_PLAYING);
+  GstMessage* msg = gst_bus_timed_pop_filtered(
+      bus, 30 * GST_SECOND, static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
+  EXPECT_TRUE(msg && GST_MESSAGE_TYPE(msg) == GST_MESSAGE_EOS) << description;
+  if (msg) gst_message_unref(msg);
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(bus);
+  gst_object_unref(sink);
+  gst_object_unref(pipeline);
+  return frames;
+}
+
+TEST(RatioTempPipeline, temperatures_survive_an_ffv1_recording_bit_exactly) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
+  for (const char* e : {"avenc_ffv1", "avdec_ffv1", "matroskamux", "matroskademux"})
+    if (!have_element(e)) GTEST_SKIP() << e << " is not installed (gstreamer1.0-libav, -good)";
+  ScratchDir dir("ratiotemp-ffv1");
+  const std::string file = (dir / "t.mkv").string();
+  const auto direct = sink_frames(
+      "pyrocamsrc scene=plate temperature=1200 num-buffers=3 ! video/x-bayer,width=32,height=24 ! "
+      "darksub dark-level=50 ! demosaic25 ! ratiotemp model=" +
+      rgb_model_path() + " ! tee name=t ! queue ! avenc_ffv1 ! matroskamux ! filesink location=" +
+      file + " t. ! queue ! fakesink name=sink");
+  ASSERT_EQ(direct.size(), 3u);
+  const auto codes = std::vector<std::uint16_t>(
+      reinterpret_cast<const std::uint16_t*>(direct[0].data()),
+      reinterpret_cast<const std::uint16_t*>(direct[0].data() + direct[0].size()));
+  EXPECT_GT(count_nonzero(codes), 100u);  // the plate reads
+  const auto back = sink_frames("filesrc location=" + file +
+                                " ! matroskademux ! avdec_ffv1 ! video/x-raw,format=GRAY16_LE ! "
+                                "fakesink name=sink");
+  EXPECT_EQ(back, direct);
+}
+
+const std::string kColourChain =
+    "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! "
+    "demosaic25 ! ";
+const std::string kSnapshotChain =
+    "pyrocamsrc num-buffers=1 profile=nir5x5-reference ! video/x-raw,width=20,height=10 ! "
+    "darksub dark-level=50 pattern=5x5 ! demosaic25 ! ";
+
+TEST(RatioTempErrors, rejects_running_without_a_model_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(kColourChain + "ratiotemp ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_SETTINGS);
+  EXPECT_NE(r.message.find("model"), std::string::npos) << r.message;
+}
+
+TEST(RatioTempErrors, rejects_a_missing_model_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(kColourChain + "ratiotemp model=/nonexistent/cam.json ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_NOT_FOUND);
+  EXPECT_NE(r.message.find("/nonexistent/cam.json"), std::string::npos) << r.message;
+}
+
+TEST(RatioTempErrors, rejects_a_truncated_model_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  ScratchDir dir("ratiotemp-truncated");
+  std::ifstream in(rgb_model_path(), std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(text.size(), 1000u);
+  write_text(dir / "cam.json", text.substr(0, text.size() / 2));
+  const auto r =
+      run_pipeline(kColourChain + "ratiotemp model=" + (dir / "cam.json").string() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_READ);
+  EXPECT_NE(r.message.find("cam.json"), std::string::npos) << r.message;
+}
+
+TEST(RatioTempErrors, rejects_a_model_of_another_version_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  ScratchDir dir("ratiotemp-version");
+  std::ifstream in(rgb_model_path(), std::ios::binary);
+  nlohmann::json j = nlohmann::json::parse(in);
+  j["version"] = kModelFormatVersion + 1;
+  write_text(dir / "cam.json", j.dump());
+  const auto r =
+      run_pipeline(kColourChain + "ratiotemp model=" + (dir / "cam.json").string() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_READ);
+  EXPECT_NE(r.message.find("cam.json"), std::string::npos) << r.message;
+}
+
+TEST(RatioTempErrors, rejects_a_band_count_mismatch_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(kColourChain + "ratiotemp model=" + nir_model_path() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("25 bands"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("3 bands"), std::string::npos) << r.message;
+  EXPECT_EQ(r.source.rfind("ratiotemp", 0), 0u) << r.source;
+}
+
+TEST(RatioTempErrors, rejects_a_colour_model_on_a_snapshot_camera_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r =
+      run_pipeline(kSnapshotChain + "ratiotemp model=" + rgb_model_path() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("3 bands of a bayer"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("25 bands of a 5x5"), std::string::npos) << r.message;
+}
+
+TEST(RatioTempErrors, rejects_lut_with_the_5x5_model_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(kSnapshotChain + "ratiotemp method=lut model=" + nir_model_path() +
+                              " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_SETTINGS);
+  EXPECT_NE(r.message.find("lut"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("two ratios"), std::string::npos) << r.message;
+}
+
+TEST(RatioTempErrors, rejects_a_lookup_table_that_disagrees_with_the_network_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  if (rgb_auto_method() == Method::kLut)
+    GTEST_SKIP() << "the test model's lookup table passes its check";
+  const auto r =
+      run_pipeline(kColourChain + "ratiotemp method=lut model=" + rgb_model_path() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_SETTINGS);
+  EXPECT_NE(r.message.find("lookup table differs from its network by up to"), std::string::npos)
+      << r.message;
+}
+
+TEST(RatioTempErrors, rejects_an_invalid_region_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(
+      kColourChain + "ratiotemp region=10,10,0,5 model=" + rgb_model_path() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_SETTINGS);
+  EXPECT_NE(r.message.find("10,10,0,5"), std::string::npos) << r.message;
+}
+
+}  // namespace
+}  // namespace pyrocam::test
