@@ -34,10 +34,13 @@ constexpr std::ptrdiff_t kCoarseBlock = 32, kWindowBlock = 8;
 // samples each (see LikelihoodEstimator): at `count` samples from `from`, into out[0 .. count
 // rounded up to kBlock) (values past count are meaningless). Blocks of samples keep their sums
 // in registers.
+// (Inlined into each compiled version, which would otherwise call one baseline copy.)
 template <std::ptrdiff_t kBlock, class Real>
-void approximate_chi2_impl(const Real* along, int rank, const Real* along2, int rank2,
-                           std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
-                           const Real* p, const Real* q, Real sss, Real* out) {
+[[gnu::always_inline]] inline void approximate_chi2_impl(const Real* along, int rank,
+                                                         const Real* along2, int rank2,
+                                                         std::ptrdiff_t stride, std::ptrdiff_t from,
+                                                         std::ptrdiff_t count, const Real* p,
+                                                         const Real* q, Real sss, Real* out) {
   for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kBlock) {
     Real ssm[kBlock] = {}, smm[kBlock] = {};
     for (int r = 0; r < rank; ++r) {
@@ -414,6 +417,85 @@ class LikelihoodEstimator : public LikelihoodFit {
   std::vector<float> coarse_along_, coarse_along2_;
 };
 
+// The lookup table's per-pixel passes (see LutEstimator::estimate), compiled for AVX2 too.
+namespace lut {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kInTable = 0.0f, kOffTable = -1.0f;  // pixel status codes; NaN: no reading
+
+struct Grid {
+  float dim, inv_h, offset_x, offset_y, cells_x, cells_y;
+};
+
+// Status and table coordinates (cells) of m pixels from their two numerators a, b and their
+// reference r; `others_read` (may be null) flags pixels whose other bands are all readable.
+// Coordinates are 0 where the status is not kInTable. Selects the compiler turns into vector
+// masks: NaN fails every comparison, +INF the upper ones. Returns whether any pixel reads.
+PYROCAM_VECTOR_CLONES
+bool coordinates(const float* __restrict a, const float* __restrict b, const float* __restrict r,
+                 const float* __restrict others_read, std::size_t m, Grid g,
+                 float* __restrict status, float* __restrict fx, float* __restrict fy) {
+  for (std::size_t k = 0; k < m; ++k) {
+    const float av = a[k], bv = b[k], rv = r[k];
+    const float scale = g.inv_h / rv;
+    const float x = av * scale - g.offset_x, y = bv * scale - g.offset_y;
+    const bool inside = x >= 0.f && x < g.cells_x && y >= 0.f && y < g.cells_y;
+    const float place = inside ? kInTable : kOffTable;
+    const float unsaturated = av < kInf && bv < kInf && rv < kInf ? place : NAN;
+    status[k] = av >= g.dim && bv >= g.dim && rv >= g.dim ? unsaturated : NAN;
+    fx[k] = inside ? x : 0.f;
+    fy[k] = inside ? y : 0.f;
+  }
+  if (others_read)
+    for (std::size_t k = 0; k < m; ++k) status[k] = others_read[k] != 0.f ? status[k] : NAN;
+  std::int32_t reads = 0;
+  for (std::size_t k = 0; k < m; ++k) reads |= status[k] == status[k] ? 1 : 0;
+  return reads != 0;
+}
+
+// Block and cell of each pixel and its position in the cell.
+PYROCAM_VECTOR_CLONES
+void cells(const float* __restrict fx, const float* __restrict fy, std::size_t m, int shift,
+           std::int32_t blocks_x, std::int32_t* __restrict block, std::int32_t* __restrict cell,
+           float* __restrict wx, float* __restrict wy) {
+  const std::int32_t mask = (1 << shift) - 1;
+  for (std::size_t k = 0; k < m; ++k) {
+    const auto ix = static_cast<std::int32_t>(fx[k]), iy = static_cast<std::int32_t>(fy[k]);
+    block[k] = (iy >> shift) * blocks_x + (ix >> shift);
+    cell[k] = ((iy & mask) << shift) + (ix & mask);
+    wx[k] = fx[k] - static_cast<float>(ix);
+    wy[k] = fy[k] - static_cast<float>(iy);
+  }
+}
+
+// Bilinear interpolation from each pixel's four cell corners (NaN where the status is not
+// kInTable), then `special` = 1 for the pixels the network answers: off the table, or near or
+// beyond a range end. Returns whether there are any.
+PYROCAM_VECTOR_CLONES
+bool interpolate(const float* __restrict corners, const float* __restrict wx,
+                 const float* __restrict wy, const float* __restrict status, std::size_t m,
+                 float lowest, float highest, float* __restrict out, float* __restrict special) {
+  for (std::size_t k = 0; k < m; ++k) {
+    const float* c = corners + 4 * k;
+    const float below = c[0] + wx[k] * (c[1] - c[0]);
+    const float above = c[2] + wx[k] * (c[3] - c[2]);
+    const float t = below + wy[k] * (above - below);
+    out[k] = status[k] == kInTable ? t : NAN;
+  }
+  // Selects in a separate loop, which the compiler vectorises.
+  for (std::size_t k = 0; k < m; ++k) {
+    const float t = out[k], st = status[k];
+    const float outside_range = t >= lowest && t <= highest ? 0.f : 1.f;
+    const float off_table = st == kOffTable ? 1.f : outside_range;
+    special[k] = st == kInTable || st == kOffTable ? off_table : 0.f;
+  }
+  std::int32_t any = 0;
+  for (std::size_t k = 0; k < m; ++k) any |= static_cast<std::int32_t>(special[k]);
+  return any != 0;
+}
+
+}  // namespace lut
+
 // The network tabulated over the colour camera's two ratios x = (s_n0 / ref, s_n1 / ref)
 // themselves, on a uniform grid. A ReLU network is piecewise affine in its inputs and a grid cell
 // is a rectangle in x, so bilinear interpolation of the cell's corners is exact wherever one
@@ -506,66 +588,62 @@ class LutEstimator : public TemperatureEstimator {
     return out;
   }
 
-  // In chunks of pixels, in passes: the arithmetic of every pixel (branch-free, vectorised by
-  // the compiler), the table reads, the interpolation (vectorised), then the few pixels the
-  // network answers.
+  // In chunks of pixels, in passes: the arithmetic of every pixel (branch-free, vectorised),
+  // the table reads, the interpolation (vectorised), then the few pixels the network answers.
+  // A chunk without a reading (background) stops after the first pass.
   void estimate(const float* const* planes, std::size_t n, float* out) const override {
     constexpr std::size_t kChunk = 256;
     alignas(64) float status[kChunk], fx[kChunk], fy[kChunk], wx[kChunk], wy[kChunk];
-    alignas(64) float special[kChunk];
+    alignas(64) float special[kChunk], others_read[kChunk];
     alignas(64) float corners[4 * kChunk];  // per pixel: its cell's four corners
     alignas(64) std::int32_t block[kChunk], cell[kChunk];
-    const float dim = dim_f();
-    const std::int32_t blocks_x = blocks_x_;
-    const float lowest = lowest_, highest = highest_;
+    const lut::Grid grid{dim_f(), inv_h_, offset_x_, offset_y_, cells_x_, cells_y_};
+    const bool three_bands = bands_ == 3 && ref_.size() == 1;
     for (std::size_t start = 0; start < n; start += kChunk) {
       const std::size_t m = std::min(kChunk, n - start);
-      valid_ratio_coordinates(planes, start, m, dim, status, fx, fy);
-      for (std::size_t k = 0; k < m; ++k) {
-        const auto ix = static_cast<std::int32_t>(fx[k]), iy = static_cast<std::int32_t>(fy[k]);
-        block[k] = (iy >> kBlockShift) * blocks_x + (ix >> kBlockShift);
-        cell[k] = (iy & (kBlockCells - 1)) * kBlockCells + (ix & (kBlockCells - 1));
-        wx[k] = fx[k] - static_cast<float>(ix);
-        wy[k] = fy[k] - static_cast<float>(iy);
+      float* __restrict o = out + start;
+      const float* reference = planes[ref_[0]] + start;
+      if (!three_bands) {
+        // Every band must read; the reference is the mean of its bands.
+        float* mean = wx;  // scratch until the cells pass
+        for (std::size_t k = 0; k < m; ++k) {
+          float s[kMaxBands];
+          bool read = true;
+          for (int band = 0; band < bands_; ++band) {
+            s[band] = planes[band][start + k];
+            read &= s[band] >= grid.dim && s[band] < lut::kInf;
+          }
+          mean[k] = this->reference(s);
+          others_read[k] = read ? 1.f : 0.f;
+        }
+        reference = mean;
       }
+      if (!lut::coordinates(planes[num0_] + start, planes[num1_] + start, reference,
+                            three_bands ? nullptr : others_read, m, grid, status, fx, fy)) {
+        std::fill(o, o + m, NAN);
+        continue;
+      }
+      lut::cells(fx, fy, m, kBlockShift, blocks_x_, block, cell, wx, wy);
       for (std::size_t k = 0; k < m; ++k) {
         float* c = corners + 4 * k;
-        if (status[k] != kInTable) {
+        if (status[k] != lut::kInTable) {
           c[0] = c[1] = c[2] = c[3] = 0;
           continue;
         }
         const float* blk =
             blocks_[static_cast<std::size_t>(block[k])].load(std::memory_order_acquire);
-        if (!blk) blk = build_block(block[k] % blocks_x, block[k] / blocks_x);
+        if (!blk) blk = build_block(block[k] % blocks_x_, block[k] / blocks_x_);
         std::memcpy(c, blk + 4 * cell[k], 4 * sizeof(float));
       }
-      float* __restrict o = out + start;
-      for (std::size_t k = 0; k < m; ++k) {
-        const float* c = corners + 4 * k;
-        const float below = c[0] + wx[k] * (c[1] - c[0]);
-        const float above = c[2] + wx[k] * (c[3] - c[2]);
-        const float t = below + wy[k] * (above - below);
-        o[k] = status[k] == kInTable ? t : NAN;
-      }
-      // Pixels the network answers: off the table, or near or beyond a range end. Selects in
-      // separate loops, which the compiler vectorises.
-      for (std::size_t k = 0; k < m; ++k) {
-        const float t = o[k], st = status[k];
-        const float outside_range = t >= lowest && t <= highest ? 0.f : 1.f;
-        const float off_table = st == kOffTable ? 1.f : outside_range;
-        special[k] = st == kInTable || st == kOffTable ? off_table : 0.f;
-      }
-      std::int32_t any_special = 0;
-      for (std::size_t k = 0; k < m; ++k) any_special |= static_cast<std::int32_t>(special[k]);
-      if (!any_special) continue;
+      if (!lut::interpolate(corners, wx, wy, status, m, lowest_, highest_, o, special)) continue;
       for (std::size_t k = 0; k < m; ++k) {
         if (special[k] == 0.f) continue;
         const float t = o[k];
         // Well beyond a range end there is no reading; near one, or off the table, the
         // network decides.
         const bool far_out =
-            status[k] == kInTable && (t < lowest - 2 * static_cast<float>(kGuardC) ||
-                                      t > highest + 2 * static_cast<float>(kGuardC));
+            status[k] == lut::kInTable && (t < lowest_ - 2 * static_cast<float>(kGuardC) ||
+                                           t > highest_ + 2 * static_cast<float>(kGuardC));
         o[k] = far_out ? NAN : static_cast<float>(network(planes, start + k));
       }
     }
@@ -578,9 +656,6 @@ class LutEstimator : public TemperatureEstimator {
   }
 
  private:
-  static constexpr float kInfF = std::numeric_limits<float>::infinity();
-  static constexpr float kInTable = 0.0f, kOffTable = -1.0f;  // pixel status codes
-
   float dim_f() const { return static_cast<float>(dim_dn_); }
 
   float reference(const float* s) const {
@@ -588,44 +663,6 @@ class LutEstimator : public TemperatureEstimator {
     float sum = 0;
     for (int b : ref_) sum += s[b];
     return sum * inv_ref_count_;
-  }
-
-  // Table coordinates (cells) of m pixels from `start`, 0 where status is not kInTable; status
-  // NaN for a pixel without a reading (a band saturated, NaN or dim), kOffTable for one outside
-  // the table. Written as selects that the compiler turns into vector masks: NaN fails every
-  // comparison, +INF the upper ones.
-  void valid_ratio_coordinates(const float* const* planes, std::size_t start, std::size_t m,
-                               float dim, float* status, float* fx, float* fy) const {
-    const float* __restrict a = planes[num0_] + start;
-    const float* __restrict b = planes[num1_] + start;
-    const float ox = offset_x_, oy = offset_y_, inv_h = inv_h_, cx = cells_x_, cy = cells_y_;
-    const float* __restrict r = planes[ref_[0]] + start;
-    auto pixel = [&](std::size_t k, float rv, bool others_read) {
-      const float av = a[k], bv = b[k];
-      const float scale = inv_h / rv;
-      const float x = av * scale - ox, y = bv * scale - oy;
-      const bool inside = x >= 0.f && x < cx && y >= 0.f && y < cy;
-      const float place = inside ? kInTable : kOffTable;
-      const float unsaturated = av < kInfF && bv < kInfF && rv < kInfF ? place : NAN;
-      const float bright = av >= dim && bv >= dim && rv >= dim ? unsaturated : NAN;
-      status[k] = others_read ? bright : NAN;
-      fx[k] = inside ? x : 0.f;
-      fy[k] = inside ? y : 0.f;
-    };
-    if (bands_ == 3 && ref_.size() == 1) {
-      for (std::size_t k = 0; k < m; ++k) pixel(k, r[k], true);
-      return;
-    }
-    for (std::size_t k = 0; k < m; ++k) {
-      // Every band must read; the reference is the mean of its bands.
-      float s[kMaxBands];
-      bool read = true;
-      for (int band = 0; band < bands_; ++band) {
-        s[band] = planes[band][start + k];
-        read &= s[band] >= dim && s[band] < kInfF;
-      }
-      pixel(k, reference(s), read);
-    }
   }
 
   double network(const float* const* planes, std::size_t i) const {

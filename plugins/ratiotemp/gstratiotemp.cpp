@@ -626,10 +626,15 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
           st.temperature_c.setTo(NAN, incomplete);
           if (uncertainty) st.uncertainty_c.setTo(NAN, incomplete);
         }
-        const cv::Mat codes = uncertainty ? pyrocam::encode_decikelvin_difference(st.uncertainty_c)
-                                          : pyrocam::encode_decikelvin(st.temperature_c);
         MappedFrame out(outbuf, &st.out_info);
-        codes.copyTo(out.image);
+        if (uncertainty) {
+          pyrocam::encode_decikelvin_difference(st.uncertainty_c).copyTo(out.image);
+        } else {
+          // Straight into the output frame (the header wraps it; a copy only if it did not fit).
+          cv::Mat codes = out.image;
+          pyrocam::encode_decikelvin(st.temperature_c, codes);
+          if (codes.data != out.image.data) codes.copyTo(out.image);
+        }
       });
   if (!ok) return GST_FLOW_ERROR;
   if (settings.stats_interval > 0) {

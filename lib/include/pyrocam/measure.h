@@ -50,6 +50,9 @@ class FrameMeasurer {
 
 // GRAY16 in units of 0.1 K, 0 = no reading (NaN or outside 0.1..6553.5 K).
 cv::Mat encode_decikelvin(const cv::Mat& temperature_c);
+// The same into `codes` (CV_16U), which may wrap a caller's buffer: written in place when its
+// size and type fit, else (re)allocated.
+void encode_decikelvin(const cv::Mat& temperature_c, cv::Mat& codes);
 // Back to degC (NaN for 0).
 cv::Mat decode_decikelvin(const cv::Mat& decikelvin);
 
