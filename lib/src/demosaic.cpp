@@ -1,6 +1,7 @@
 #include "pyrocam/demosaic.h"
 
 #include <array>
+#include <cstring>
 
 #include "pyrocam/spectrum.h"
 
@@ -109,9 +110,11 @@ RowFn row_fn(Op even, Op odd) {
   return nullptr;
 }
 
-// Bilinear Bayer interpolation over a padded copy (1 pixel mirrored border) so that the inner
-// loops need no bounds checks. The operation of each band, row parity and column parity is
-// fixed by the pattern and chosen once, outside the loops.
+// Bilinear Bayer interpolation. The inner loops read three source rows with a mirrored border
+// pixel on each side and need no bounds checks: each thread keeps the three rows around the one
+// it outputs in a small ring of padded copies (one new row per output row, from cache), rather
+// than a padded copy of the whole frame. The operation of each band, row parity and column
+// parity is fixed by the pattern and chosen once, outside the loops.
 class BayerBilinear {
  public:
   explicit BayerBilinear(const MosaicLayout& layout) {
@@ -120,12 +123,30 @@ class BayerBilinear {
         rows_[b][py] = row_fn(op_for(layout, b, 0, py), op_for(layout, b, 1, py));
   }
 
-  void run(const cv::Mat& padded, std::vector<cv::Mat>& planes, int y0, int y1) const {
-    const int width = planes[0].cols;
+  // Output rows [y0, y1) of a mosaic at least 2x2.
+  void run(const cv::Mat& mosaic, std::vector<cv::Mat>& planes, int y0, int y1) const {
+    const int width = mosaic.cols, height = mosaic.rows;
+    const auto padded_width = static_cast<std::size_t>(width) + 2;
+    std::vector<float> ring(3 * padded_width);
+    // Source row y (mirrored without repeating the edge) into ring slot y mod 3.
+    auto load = [&](int y) {
+      const int src = y < 0 ? -y : y >= height ? 2 * height - 2 - y : y;
+      const float* in = mosaic.ptr<float>(src);
+      float* out = &ring[static_cast<std::size_t>((y + 3) % 3) * padded_width];
+      out[0] = in[1];
+      std::memcpy(out + 1, in, static_cast<std::size_t>(width) * sizeof(float));
+      out[width + 1] = in[width - 2];
+    };
+    auto row = [&](int y) {
+      return &ring[static_cast<std::size_t>((y + 3) % 3) * padded_width] + 1;
+    };
+    load(y0 - 1);
+    load(y0);
     for (int y = y0; y < y1; ++y) {
-      const float* up = padded.ptr<float>(y) + 1;
-      const float* mid = padded.ptr<float>(y + 1) + 1;
-      const float* down = padded.ptr<float>(y + 2) + 1;
+      load(y + 1);
+      const float* up = row(y - 1);
+      const float* mid = row(y);
+      const float* down = row(y + 1);
       for (int b = 0; b < 3; ++b)
         rows_[b][y & 1](up, mid, down, planes[static_cast<std::size_t>(b)].ptr<float>(y), width);
     }
@@ -170,19 +191,15 @@ void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod 
     bin_cells(mosaic, layout, planes);
     return;
   }
-  // thread_local: no allocation per frame once the size is known.
-  thread_local cv::Mat padded;
-  cv::copyMakeBorder(mosaic, padded, 1, 1, 1, 1, cv::BORDER_REFLECT_101);
   const BayerBilinear bilinear(layout);
   const int height = mosaic.rows;
   if (static_cast<double>(mosaic.total()) < 512.0 * 512.0) {
-    bilinear.run(padded, planes, 0, height);
+    bilinear.run(mosaic, planes, 0, height);
     return;
   }
-  const cv::Mat& src = padded;
   cv::parallel_for_(
-      cv::Range(0, height), [&](const cv::Range& r) { bilinear.run(src, planes, r.start, r.end); },
-      2.0);
+      cv::Range(0, height),
+      [&](const cv::Range& r) { bilinear.run(mosaic, planes, r.start, r.end); }, 2.0);
 }
 
 }  // namespace pyrocam
