@@ -1,7 +1,6 @@
 #include "pyrocam/demosaic.h"
 
 #include <array>
-#include <cstring>
 
 #include "pyrocam/spectrum.h"
 
@@ -110,45 +109,61 @@ RowFn row_fn(Op even, Op odd) {
   return nullptr;
 }
 
-// Bilinear Bayer interpolation. The inner loops read three source rows with a mirrored border
-// pixel on each side and need no bounds checks: each thread keeps the three rows around the one
-// it outputs in a small ring of padded copies (one new row per output row, from cache), rather
-// than a padded copy of the whole frame. The operation of each band, row parity and column
-// parity is fixed by the pattern and chosen once, outside the loops.
+// The same at column x of a row `width` wide, mirroring neighbours outside it (the first and last
+// columns).
+float eval_mirrored(Op op, const float* up, const float* mid, const float* down, int x, int width) {
+  const int left = x == 0 ? 1 : x - 1, right = x == width - 1 ? width - 2 : x + 1;
+  switch (op) {
+    case Op::kSelf:
+      return mid[x];
+    case Op::kHorizontal:
+      return 0.5f * (mid[left] + mid[right]);
+    case Op::kVertical:
+      return 0.5f * (up[x] + down[x]);
+    case Op::kDiagonal:
+      return 0.25f * ((up[left] + up[right]) + (down[left] + down[right]));
+    case Op::kCross:
+      return 0.25f * ((up[x] + down[x]) + (mid[left] + mid[right]));
+  }
+  return 0.f;
+}
+
+// Bilinear Bayer interpolation straight from the mosaic's rows: the inner loops cover the
+// columns 2 .. width-3, which need no bounds checks, and the two columns on each side are done
+// one by one with mirrored neighbours (rows above the first and below the last are mirrored by
+// choosing the row). The operation of each band, row parity and column parity is fixed by the
+// pattern and chosen once, outside the loops.
 class BayerBilinear {
  public:
   explicit BayerBilinear(const MosaicLayout& layout) {
     for (int b = 0; b < 3; ++b)
-      for (int py = 0; py < 2; ++py)
-        rows_[b][py] = row_fn(op_for(layout, b, 0, py), op_for(layout, b, 1, py));
+      for (int py = 0; py < 2; ++py) {
+        for (int px = 0; px < 2; ++px) ops_[b][py][px] = op_for(layout, b, px, py);
+        rows_[b][py] = row_fn(ops_[b][py][0], ops_[b][py][1]);
+      }
   }
 
   // Output rows [y0, y1) of a mosaic at least 2x2.
   void run(const cv::Mat& mosaic, std::vector<cv::Mat>& planes, int y0, int y1) const {
     const int width = mosaic.cols, height = mosaic.rows;
-    const auto padded_width = static_cast<std::size_t>(width) + 2;
-    std::vector<float> ring(3 * padded_width);
-    // Source row y (mirrored without repeating the edge) into ring slot y mod 3.
-    auto load = [&](int y) {
-      const int src = y < 0 ? -y : y >= height ? 2 * height - 2 - y : y;
-      const float* in = mosaic.ptr<float>(src);
-      float* out = &ring[static_cast<std::size_t>((y + 3) % 3) * padded_width];
-      out[0] = in[1];
-      std::memcpy(out + 1, in, static_cast<std::size_t>(width) * sizeof(float));
-      out[width + 1] = in[width - 2];
-    };
+    // Mirrored without repeating the edge.
     auto row = [&](int y) {
-      return &ring[static_cast<std::size_t>((y + 3) % 3) * padded_width] + 1;
+      return mosaic.ptr<float>(y < 0 ? -y : y >= height ? 2 * height - 2 - y : y);
     };
-    load(y0 - 1);
-    load(y0);
+    const int inner_end = width >= 6 ? width - 2 : 0;  // inner columns [2, inner_end)
     for (int y = y0; y < y1; ++y) {
-      load(y + 1);
       const float* up = row(y - 1);
       const float* mid = row(y);
       const float* down = row(y + 1);
-      for (int b = 0; b < 3; ++b)
-        rows_[b][y & 1](up, mid, down, planes[static_cast<std::size_t>(b)].ptr<float>(y), width);
+      for (int b = 0; b < 3; ++b) {
+        float* out = planes[static_cast<std::size_t>(b)].ptr<float>(y);
+        const auto& ops = ops_[b][y & 1];
+        if (inner_end) rows_[b][y & 1](up + 2, mid + 2, down + 2, out + 2, inner_end - 2);
+        for (int x = 0; x < width; ++x) {
+          if (x == 2 && inner_end) x = inner_end;
+          out[x] = eval_mirrored(ops[x & 1], up, mid, down, x, width);
+        }
+      }
     }
   }
 
@@ -162,6 +177,7 @@ class BayerBilinear {
   }
 
   std::array<std::array<RowFn, 2>, 3> rows_{};
+  std::array<std::array<std::array<Op, 2>, 2>, 3> ops_{};  // band, row parity, column parity
 };
 
 }  // namespace
