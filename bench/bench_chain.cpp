@@ -16,6 +16,7 @@
 // (scripts/bench.sh builds the models and runs this.)
 #include <gst/app/gstappsrc.h>
 #include <gst/gst.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -61,15 +62,27 @@ struct Run {
   int frames = 0;            // frames timed (after the warm-up)
   double fps = 0;            // over the timed frames
   double first_frame_s = 0;  // from PLAYING to the first frame at the sink
+  double cpu_ms = 0;         // process CPU time per timed frame (all threads)
   long rss_warm_kb = 0, rss_end_kb = 0;
 };
 
+// Process CPU time (user + system), s.
+double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 struct Handoffs {
   std::vector<Clock::time_point> at;
+  std::vector<double> cpu;
 };
 
 void on_handoff(GstElement*, GstBuffer*, GstPad*, gpointer data) {
-  static_cast<Handoffs*>(data)->at.push_back(Clock::now());
+  auto* h = static_cast<Handoffs*>(data);
+  h->at.push_back(Clock::now());
+  h->cpu.push_back(cpu_seconds());
 }
 
 // Pushes `frames` timestamped references to `raw` through `chain` (a launch fragment between
@@ -95,6 +108,7 @@ Run run_chain(const std::string& chain, const std::string& caps, const cv::Mat& 
   gst_caps_unref(src_caps);
   Handoffs handoffs;
   handoffs.at.reserve(static_cast<std::size_t>(frames) + 1);
+  handoffs.cpu.reserve(static_cast<std::size_t>(frames) + 1);
   g_signal_connect(sink, "handoff", G_CALLBACK(on_handoff), &handoffs);
 
   // One buffer wrapping the frame; each push is a metadata copy sharing its memory.
@@ -143,9 +157,9 @@ Run run_chain(const std::string& chain, const std::string& caps, const cv::Mat& 
   r.first_frame_s = std::chrono::duration<double>(handoffs.at.front() - started).count();
   const int first = std::min(warmup, got - 2);
   r.frames = got - 1 - first;
-  r.fps = r.frames / std::chrono::duration<double>(handoffs.at.back() -
-                                                   handoffs.at[static_cast<std::size_t>(first)])
-                         .count();
+  const auto f = static_cast<std::size_t>(first);
+  r.fps = r.frames / std::chrono::duration<double>(handoffs.at.back() - handoffs.at[f]).count();
+  r.cpu_ms = 1e3 * (handoffs.cpu.back() - handoffs.cpu[f]) / r.frames;
   if (r.rss_warm_kb == 0) r.rss_warm_kb = r.rss_end_kb;
   r.ok = true;
   return r;
@@ -153,12 +167,14 @@ Run run_chain(const std::string& chain, const std::string& caps, const cv::Mat& 
 
 void print_run(const std::string& what, const Run& r) {
   if (!r.ok) {
-    std::printf("%-44s FAILED: %s\n", what.c_str(), r.error.c_str());
+    std::printf("%-52s FAILED: %s\n", what.c_str(), r.error.c_str());
     return;
   }
   std::printf(
-      "%-44s %8.1f frames/s  (%4d frames timed, first frame after %.2f s, RSS %ld -> %ld MB)\n",
-      what.c_str(), r.fps, r.frames, r.first_frame_s, r.rss_warm_kb / 1024, r.rss_end_kb / 1024);
+      "%-52s %7.1f frames/s %7.1f CPU ms/frame  (%4d frames timed, first after %.2f s, RSS %ld "
+      "-> %ld MB)\n",
+      what.c_str(), r.fps, r.cpu_ms, r.frames, r.first_frame_s, r.rss_warm_kb / 1024,
+      r.rss_end_kb / 1024);
   std::fflush(stdout);
 }
 

@@ -18,6 +18,10 @@ class PlaneEstimator {
   PlaneEstimator(const ThermalModel& model, Method method);
   void estimate(const std::vector<cv::Mat>& planes, cv::Mat& temperature_c,
                 cv::Mat* uncertainty_c = nullptr) const;
+  // The temperature codes (CV_16U, 0.1 K, 0 = no reading) straight from the planes: the same
+  // values as encode_decikelvin(estimate()), without the float image in memory. `codes` may wrap
+  // a caller's buffer (written in place when its size and type fit).
+  void estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat& codes) const;
   const TemperatureEstimator& estimator() const { return *estimator_; }
 
  private:
