@@ -93,6 +93,50 @@ double profiled_chi2(const double* m, const double* m2, const double* ws, const 
   return sss - sm * sm / mm;
 }
 
+// The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
+// and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
+// Returns how many bands read. Selects, so that the divisions vectorise.
+PYROCAM_VECTOR_CLONES
+int weigh_bands(const double* __restrict s, int bands, double dim, const double* __restrict gain,
+                const double* __restrict floor, double* __restrict w, double* __restrict ws,
+                double* sss) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  for (int b = 0; b < bands; ++b) {
+    const double v = s[b];
+    const bool reads = v >= dim && v < kInf;  // NaN fails both
+    const double weight = 1.0 / (gain[b] * std::max(v, 0.0) + floor[b]);
+    w[b] = reads ? weight : 0.0;
+    ws[b] = reads ? weight * v : 0.0;
+  }
+  int valid = 0;
+  double sum = 0;
+  for (int b = 0; b < bands; ++b) {
+    valid += w[b] != 0.0;
+    sum += w[b] != 0.0 ? ws[b] * s[b] : 0.0;
+  }
+  *sss = sum;
+  return valid;
+}
+
+constexpr int kMaxRank = 16;  // low-rank factors of the likelihood fit's locus
+
+// Projections p = V^T (w s), q = V2^T w on the factors (bands x kMaxRank each, zero padded), in
+// double and single precision.
+PYROCAM_VECTOR_CLONES
+void project(const double* __restrict ws, const double* __restrict w, int bands,
+             const double* __restrict v, const double* __restrict v2, double* __restrict p,
+             double* __restrict q, float* __restrict pf, float* __restrict qf) {
+  for (int b = 0; b < bands; ++b)
+    for (int r = 0; r < kMaxRank; ++r) {
+      p[r] += ws[b] * v[b * kMaxRank + r];
+      q[r] += w[b] * v2[b * kMaxRank + r];
+    }
+  for (int r = 0; r < kMaxRank; ++r) {
+    pf[r] = static_cast<float>(p[r]);
+    qf[r] = static_cast<float>(q[r]);
+  }
+}
+
 class MlpEstimator : public TemperatureEstimator {
  public:
   using TemperatureEstimator::TemperatureEstimator;
@@ -158,19 +202,7 @@ class LikelihoodFit : public TemperatureEstimator {
 
   // Returns how many bands count.
   int weigh(const double* s, Weighted& px) const {
-    int valid = 0;
-    px.sss = 0;
-    for (int b = 0; b < bands_; ++b) {
-      if (std::isfinite(s[b]) && s[b] >= dim_dn_) {
-        px.w[b] = 1.0 / (shot_gain_[b] * std::max(s[b], 0.0) + noise_floor_[b]);
-        px.ws[b] = px.w[b] * s[b];
-        px.sss += px.ws[b] * s[b];
-        ++valid;
-      } else {
-        px.w[b] = px.ws[b] = 0;
-      }
-    }
-    return valid;
+    return weigh_bands(s, bands_, dim_dn_, shot_gain_, noise_floor_, px.w, px.ws, &px.sss);
   }
 
   // chi2 at locus sample i.
@@ -251,7 +283,6 @@ class ExhaustiveLikelihoodEstimator : public LikelihoodFit {
 // compare both on noisy pixels, with saturated, dim and NaN bands).
 class LikelihoodEstimator : public LikelihoodFit {
  public:
-  static constexpr int kMaxRank = 16;
   // Row error left by the factors (rows have unit length): coarse, window.
   static constexpr double kCoarseRankTolerance = 1e-8, kWindowRankTolerance = 1e-10;
   // Error bounds of the approximate chi2, relative to sum w s^2 (ten times the largest seen on
@@ -286,20 +317,8 @@ class LikelihoodEstimator : public LikelihoodFit {
     if (weigh(s, px) < 2) return NAN;
     // Projections of w*s and w on the factors.
     alignas(32) double p[kMaxRank] = {}, q[kMaxRank] = {};
-    for (int b = 0; b < bands_; ++b) {
-      if (px.w[b] == 0) continue;
-      const double* v = &across_[static_cast<std::size_t>(b * kMaxRank)];
-      const double* v2 = &across2_[static_cast<std::size_t>(b * kMaxRank)];
-      for (int r = 0; r < projected_; ++r) {
-        p[r] += px.ws[b] * v[r];
-        q[r] += px.w[b] * v2[r];
-      }
-    }
     alignas(32) float pf[kMaxRank], qf[kMaxRank];
-    for (int r = 0; r < kMaxRank; ++r) {
-      pf[r] = static_cast<float>(p[r]);
-      qf[r] = static_cast<float>(q[r]);
-    }
+    project(px.ws, px.w, bands_, across_.data(), across2_.data(), p, q, pf, qf);
 
     // Coarse scan.
     alignas(32) float c[kMaxCoarse];
