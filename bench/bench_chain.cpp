@@ -11,8 +11,8 @@
 // machine. Not a test.
 //
 // Usage: bench_chain --rgb-model M.json --nir-model N.json [--frames N] [--mlp-frames N]
-//                    [--scene plate|melt-pool] [--queues] [--only colour|5x5] [--methods
-//                    lut,likelihood,mlp]
+//                    [--scene plate:T|filament:T|melt-pool] [--queues] [--only colour|5x5]
+//                    [--methods lut,likelihood,mlp]
 // (scripts/bench.sh builds the models and runs this.)
 #include <gst/app/gstappsrc.h>
 #include <gst/gst.h>
@@ -29,16 +29,15 @@
 #include <thread>
 #include <vector>
 
+#include "bench_support.h"
 #include "pyrocam/model.h"
-#include "pyrocam/scenes.h"
-#include "pyrocam/simulator.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
 struct Options {
-  std::string rgb_model, nir_model, scene = "plate";
+  std::string rgb_model, nir_model, scene = "plate:1500";
   int frames = 600, mlp_frames = 3, warmup = 20;
   bool queues = false;
   std::string only;                            // "colour" or "5x5": one chain
@@ -77,12 +76,15 @@ double cpu_seconds() {
 struct Handoffs {
   std::vector<Clock::time_point> at;
   std::vector<double> cpu;
+  std::size_t warmup = 0;
+  long rss_warm_kb = 0;  // when the last warm-up frame reached the sink
 };
 
 void on_handoff(GstElement*, GstBuffer*, GstPad*, gpointer data) {
   auto* h = static_cast<Handoffs*>(data);
   h->at.push_back(Clock::now());
   h->cpu.push_back(cpu_seconds());
+  if (h->at.size() == h->warmup + 1) h->rss_warm_kb = status_kb("VmRSS");
 }
 
 // Pushes `frames` timestamped references to `raw` through `chain` (a launch fragment between
@@ -109,6 +111,7 @@ Run run_chain(const std::string& chain, const std::string& caps, const cv::Mat& 
   Handoffs handoffs;
   handoffs.at.reserve(static_cast<std::size_t>(frames) + 1);
   handoffs.cpu.reserve(static_cast<std::size_t>(frames) + 1);
+  handoffs.warmup = static_cast<std::size_t>(warmup);
   g_signal_connect(sink, "handoff", G_CALLBACK(on_handoff), &handoffs);
 
   // One buffer wrapping the frame; each push is a metadata copy sharing its memory.
@@ -125,7 +128,6 @@ Run run_chain(const std::string& chain, const std::string& caps, const cv::Mat& 
       GST_BUFFER_PTS(b) = static_cast<GstClockTime>(i) * duration;
       GST_BUFFER_DURATION(b) = duration;
       if (gst_app_src_push_buffer(GST_APP_SRC(src), b) != GST_FLOW_OK) return;
-      if (i == warmup) r.rss_warm_kb = status_kb("VmRSS");
     }
     gst_app_src_end_of_stream(GST_APP_SRC(src));
   });
@@ -160,7 +162,7 @@ Run run_chain(const std::string& chain, const std::string& caps, const cv::Mat& 
   const auto f = static_cast<std::size_t>(first);
   r.fps = r.frames / std::chrono::duration<double>(handoffs.at.back() - handoffs.at[f]).count();
   r.cpu_ms = 1e3 * (handoffs.cpu.back() - handoffs.cpu[f]) / r.frames;
-  if (r.rss_warm_kb == 0) r.rss_warm_kb = r.rss_end_kb;
+  r.rss_warm_kb = handoffs.rss_warm_kb ? handoffs.rss_warm_kb : r.rss_end_kb;
   r.ok = true;
   return r;
 }
@@ -176,26 +178,6 @@ void print_run(const std::string& what, const Run& r) {
       what.c_str(), r.fps, r.cpu_ms, r.frames, r.first_frame_s, r.rss_warm_kb / 1024,
       r.rss_end_kb / 1024);
   std::fflush(stdout);
-}
-
-// A raw frame of the scene through the model's camera (a typical unit), exposed so that its
-// hottest pixels read 140 DN above the dark level.
-cv::Mat render(const pyrocam::ThermalModel& m, const std::string& scene, int width, int height,
-               double* valid_hint) {
-  cv::Mat t;
-  double emissivity = 0.7;
-  if (scene == "melt-pool") {
-    t = pyrocam::melt_pool_scene(width, height, 3, 10);
-    emissivity = 0.35;
-  } else {
-    t = pyrocam::plate_scene(width, height, 1500);
-  }
-  double peak = 0;
-  cv::minMaxLoc(t, nullptr, &peak, nullptr, nullptr, t == t);
-  pyrocam::Simulator camera(m.profile(), pyrocam::UnitPerturbation::parse("typical", 1));
-  cv::Mat raw = camera.render(t, camera.exposure_for(peak, 140, emissivity), emissivity);
-  *valid_hint = static_cast<double>(cv::countNonZero(t == t)) / static_cast<double>(t.total());
-  return raw;
 }
 
 }  // namespace
@@ -228,11 +210,12 @@ int main(int argc, char** argv) {
     }
   }
   if (o.rgb_model.empty() || o.nir_model.empty()) {
-    std::fprintf(stderr,
-                 "usage: %s --rgb-model M.json --nir-model N.json [--frames N] "
-                 "[--mlp-frames N] [--scene plate|melt-pool] [--queues] [--only colour|5x5] "
-                 "[--methods lut,likelihood,mlp]\n",
-                 argv[0]);
+    std::fprintf(
+        stderr,
+        "usage: %s --rgb-model M.json --nir-model N.json [--frames N] "
+        "[--mlp-frames N] [--scene plate:T|filament:T|melt-pool] [--queues] [--only colour|5x5] "
+        "[--methods lut,likelihood,mlp]\n",
+        argv[0]);
     return 2;
   }
   GstElementFactory* f = gst_element_factory_find("ratiotemp");
@@ -250,8 +233,9 @@ int main(int argc, char** argv) {
   };
   if (o.only.empty() || o.only == "colour") {
     const pyrocam::ThermalModel m = pyrocam::load_model(o.rgb_model);
-    double hot = 0;
-    const cv::Mat raw = render(m, o.scene, 2048, 2048, &hot);
+    const auto scene = pyrocam::bench::make_scene(o.scene, 2048, 2048);
+    const double hot = pyrocam::bench::hot_fraction(scene);
+    const cv::Mat raw = pyrocam::bench::render(m, scene);
     const std::string caps = "video/x-bayer,format=rggb,width=2048,height=2048,framerate=30/1";
     std::printf(
         "\ncolour camera, 2048x2048 8-bit RGGB, %.0f %% of the pixels on the hot object, "
@@ -268,18 +252,19 @@ int main(int argc, char** argv) {
                 run_chain(chain + " method=lut", caps, raw, o.frames, o.warmup));
     if (wanted("likelihood"))
       print_run("darksub ! demosaic25 ! ratiotemp method=likelihood",
-                run_chain(chain + " method=likelihood", caps, raw, std::max(o.frames / 10, 12), 2));
+                run_chain(chain + " method=likelihood", caps, raw, std::max(o.frames / 50, 8), 2));
     if (wanted("mlp"))
       print_run("darksub ! demosaic25 ! ratiotemp method=mlp",
                 run_chain(chain + " method=mlp", caps, raw, o.mlp_frames, 1));
   }
   if (o.only.empty() || o.only == "5x5") {
     const pyrocam::ThermalModel m = pyrocam::load_model(o.nir_model);
-    double hot = 0;
     // The sensor's frame; the chain reads its whole 5x5 periods, 2045x1085 (gray video rows are
     // padded to a multiple of 4 bytes: the same 2048 bytes per row). bayer2rgb (which crashes on
     // odd sizes) reads the whole frame.
-    const cv::Mat sensor = render(m, o.scene, 2048, 1088, &hot);
+    const auto scene = pyrocam::bench::make_scene(o.scene, 2048, 1088);
+    const double hot = pyrocam::bench::hot_fraction(scene);
+    const cv::Mat sensor = pyrocam::bench::render(m, scene);
     const cv::Mat raw = sensor(cv::Rect(0, 0, 2048, 1085)).clone();
     const std::string caps = "video/x-raw,format=GRAY8,width=2045,height=1085,framerate=30/1";
     std::printf(

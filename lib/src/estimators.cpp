@@ -321,7 +321,7 @@ class LikelihoodEstimator : public LikelihoodFit {
     project(px.ws, px.w, bands_, across_.data(), across2_.data(), p, q, pf, qf);
 
     // Coarse scan.
-    alignas(32) float c[kMaxCoarse];
+    alignas(32) float c[kMaxCoarse + kCoarseBlock];  // written in whole blocks
     const Eigen::Index nc = coarse_count_;
     approximate_chi2(coarse_along_.data(), coarse_rank_, coarse_along2_.data(), coarse_rank2_,
                      coarse_stride_, 0, nc, pf, qf, static_cast<float>(px.sss), c);

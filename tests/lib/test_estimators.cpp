@@ -208,5 +208,26 @@ TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {
   EXPECT_TRUE(std::isnan(fast->temperature_c(s.data())));
 }
 
+TEST(PlaneEstimator, codes_straight_from_the_planes_are_the_encoded_temperatures) {
+  const ThermalModel m = test_model("test-model-rgb.json");
+  const double saturation =
+      m.profile().thresholds.inference_saturation_dn - m.profile().dark_offset_dn;
+  // A few hundred rows of a realistic width, so that rows go to several threads.
+  const NoisyPixels px = noisy_pixels(m, {900, 1500, 2400}, 600, 15, 200, saturation, 0.05, 3);
+  std::vector<cv::Mat> planes;
+  for (const cv::Mat& p : as_planes(px)) planes.push_back(p.reshape(1, 450));
+  for (Method method : {Method::kLut, Method::kLikelihood}) {
+    const PlaneEstimator estimator(m, method);
+    cv::Mat t, codes;
+    estimator.estimate(planes, t);
+    estimator.estimate_codes(planes, codes);
+    const cv::Mat expected = encode_decikelvin(t);
+    ASSERT_EQ(codes.type(), CV_16U);
+    ASSERT_EQ(codes.size(), expected.size());
+    EXPECT_EQ(cv::countNonZero(codes != expected), 0) << method_name(method);
+    EXPECT_GT(cv::countNonZero(codes), static_cast<int>(codes.total() / 4)) << method_name(method);
+  }
+}
+
 }  // namespace
 }  // namespace pyrocam
