@@ -526,9 +526,11 @@ bool interpolate(const float* __restrict corners, const float* __restrict wx,
 // rises, then falls), so no coordinate along the locus is used: the grid covers the box of the
 // locus widened by a factor e^kMarginLn in each ratio, which holds noisy pixels down to the dim
 // threshold and most mixed-temperature pixels at edges. It is filled in blocks of kBlockCells^2
-// cells the first time a pixel needs one, so a scene pays only for the ratios it shows, and the
-// memory is bounded by the box. Pixels outside the box, and estimates within kGuardC of the
-// model's range ends, go to the network itself: the no-reading decisions are the network's.
+// cells the first time a pixel needs one, so a scene pays only for the ratios it shows; at most
+// kMaxBlocks are filled (the band around the locus that noisy pixels of every temperature reach
+// takes about a quarter of them). Pixels outside the box or in a block beyond that budget, and
+// estimates within kGuardC of the model's range ends, go to the network itself: the no-reading
+// decisions are the network's.
 class LutEstimator : public TemperatureEstimator {
  public:
   static constexpr int kBlockShift = 4, kBlockCells = 1 << kBlockShift;
@@ -536,7 +538,8 @@ class LutEstimator : public TemperatureEstimator {
   static constexpr double kMarginLn = 1.0;
   static constexpr double kCellChangeC = 8.0;
   static constexpr double kGuardC = 2.0;
-  static constexpr std::size_t kMaxCells = std::size_t{1} << 24;  // 64 MB when every block is used
+  static constexpr std::size_t kMaxCells = std::size_t{1} << 24;  // in the box
+  static constexpr std::size_t kMaxBlocks = 8192;                 // filled: 32 MB
 
   explicit LutEstimator(const ThermalModel& m) : TemperatureEstimator(m), mlp_(m) {
     const Normalisation& n = m.profile().normalisation;
@@ -652,6 +655,11 @@ class LutEstimator : public TemperatureEstimator {
         const float* blk =
             blocks_[static_cast<std::size_t>(block[k])].load(std::memory_order_acquire);
         if (!blk) blk = build_block(block[k] % blocks_x_, block[k] / blocks_x_);
+        if (!blk) {  // over the memory budget
+          status[k] = lut::kOffTable;
+          c[0] = c[1] = c[2] = c[3] = 0;
+          continue;
+        }
         std::memcpy(c, blk + 4 * cell[k], 4 * sizeof(float));
       }
       if (!lut::interpolate(corners, wx, wy, status, m, lowest_, highest_, o, special)) continue;
@@ -691,8 +699,10 @@ class LutEstimator : public TemperatureEstimator {
   }
 
   // Fills a block with the network at its nodes and publishes it; two threads that need the same
-  // block at once both compute it (the same values) and one copy is kept.
+  // block at once both compute it (the same values) and one copy is kept. Null once kMaxBlocks
+  // are filled.
   const float* build_block(int bx, int by) const {
+    if (built_.load(std::memory_order_relaxed) >= kMaxBlocks) return nullptr;
     Eigen::MatrixXd x(kBlockNodes * kBlockNodes, 2);
     for (int j = 0; j < kBlockNodes; ++j)
       for (int i = 0; i < kBlockNodes; ++i) {
