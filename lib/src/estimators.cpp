@@ -493,13 +493,21 @@ void cells(const float* __restrict fx, const float* __restrict fy, std::size_t m
 PYROCAM_VECTOR_CLONES
 bool interpolate(const float* __restrict corners, const float* __restrict wx,
                  const float* __restrict wy, const float* __restrict status, std::size_t m,
-                 float lowest, float highest, float* __restrict out, float* __restrict special) {
+                 MlpOutputTransform space, float lowest, float highest, float* __restrict out,
+                 float* __restrict special) {
   for (std::size_t k = 0; k < m; ++k) {
     const float* c = corners + 4 * k;
     const float below = c[0] + wx[k] * (c[1] - c[0]);
     const float above = c[2] + wx[k] * (c[3] - c[2]);
-    const float t = below + wy[k] * (above - below);
-    out[k] = status[k] == kInTable ? t : NAN;
+    const float v = below + wy[k] * (above - below);
+    out[k] = status[k] == kInTable ? v : NAN;
+  }
+  // Back from the network's output space to degC (a value <= 0 of 1/T leaves the range).
+  constexpr float kZeroCelsiusF = static_cast<float>(kZeroCelsius);
+  if (space == MlpOutputTransform::kInverseKelvin) {
+    for (std::size_t k = 0; k < m; ++k) out[k] = 1.f / out[k] - kZeroCelsiusF;
+  } else if (space == MlpOutputTransform::kLogKelvin) {
+    for (std::size_t k = 0; k < m; ++k) out[k] = std::exp(out[k]) - kZeroCelsiusF;
   }
   // Selects in a separate loop, which the compiler vectorises.
   for (std::size_t k = 0; k < m; ++k) {
@@ -516,11 +524,14 @@ bool interpolate(const float* __restrict corners, const float* __restrict wx,
 }  // namespace lut
 
 // The network tabulated over the colour camera's two ratios x = (s_n0 / ref, s_n1 / ref)
-// themselves, on a uniform grid. A ReLU network is piecewise affine in its inputs and a grid cell
-// is a rectangle in x, so bilinear interpolation of the cell's corners is exact wherever one
-// linear piece covers the cell and off only by the cell's share of a kink elsewhere. The spacing
-// follows the network's steepest slope along the locus (kCellChangeC per cell there), which
-// keeps that share well under 0.5 degC; the unit tests measure it on noisy pixels.
+// themselves, on a uniform grid. A ReLU network is piecewise affine in its inputs (log ratios,
+// when it takes their logarithms, which are close to affine over a cell) and a grid cell is a
+// rectangle in x, so bilinear interpolation of the cell's corners, in the space of the network's
+// output unit, is exact or nearly so wherever one linear piece covers the cell and off only by
+// the cell's share of a kink elsewhere. The spacing follows the network's steepest slope along
+// the locus (kCellChangeC per cell there); off the locus the network can be steeper, which is
+// why the change per cell is well under the 0.5 degC tolerance's ten-fold; the unit tests
+// measure the agreement on noisy pixels.
 //
 // Ratios do not follow the temperature monotonically (R/G of a camera behind a visible band-pass
 // rises, then falls), so no coordinate along the locus is used: the grid covers the box of the
@@ -536,9 +547,9 @@ class LutEstimator : public TemperatureEstimator {
   static constexpr int kBlockShift = 4, kBlockCells = 1 << kBlockShift;
   static constexpr int kBlockNodes = kBlockCells + 1;  // per side; edges stored in both blocks
   static constexpr double kMarginLn = 1.0;
-  static constexpr double kCellChangeC = 8.0;
+  static constexpr double kCellChangeC = 4.0;
   static constexpr double kGuardC = 2.0;
-  static constexpr std::size_t kMaxCells = std::size_t{1} << 24;  // in the box
+  static constexpr std::size_t kMaxCells = std::size_t{1} << 26;  // in the box
   static constexpr std::size_t kMaxBlocks = 8192;                 // filled: 32 MB
 
   explicit LutEstimator(const ThermalModel& m) : TemperatureEstimator(m), mlp_(m) {
@@ -662,7 +673,8 @@ class LutEstimator : public TemperatureEstimator {
         }
         std::memcpy(c, blk + 4 * cell[k], 4 * sizeof(float));
       }
-      if (!lut::interpolate(corners, wx, wy, status, m, lowest_, highest_, o, special)) continue;
+      if (!lut::interpolate(corners, wx, wy, status, m, space_, lowest_, highest_, o, special))
+        continue;
       for (std::size_t k = 0; k < m; ++k) {
         if (special[k] == 0.f) continue;
         const float t = o[k];
@@ -709,7 +721,7 @@ class LutEstimator : public TemperatureEstimator {
         x(j * kBlockNodes + i, 0) = x0_ + (bx * kBlockCells + i) * h_;
         x(j * kBlockNodes + i, 1) = y0_ + (by * kBlockCells + j) * h_;
       }
-    const Eigen::VectorXd t = model_.mlp.predict(x);
+    const Eigen::VectorXd t = to_output_space(model_.mlp.predict(x));
     // Cell after cell, each with its four corners (one 16-byte read per pixel).
     std::unique_ptr<float[]> values(new float[4 * kBlockCells * kBlockCells]);
     for (int j = 0; j < kBlockCells; ++j)
@@ -729,7 +741,23 @@ class LutEstimator : public TemperatureEstimator {
     return expected;  // another thread was first
   }
 
+  // The table holds the network's answer in the space of its output unit (1/T for an
+  // inverse-kelvin output): there the network is piecewise affine in its (log) inputs and close
+  // to affine in the ratios themselves; degC would curve steeply at the hot end.
+  Eigen::VectorXd to_output_space(const Eigen::VectorXd& t_c) const {
+    switch (space_) {
+      case MlpOutputTransform::kInverseKelvin:
+        return (t_c.array() + kZeroCelsius).inverse().matrix();
+      case MlpOutputTransform::kLogKelvin:
+        return (t_c.array() + kZeroCelsius).log().matrix();
+      case MlpOutputTransform::kNone:
+        break;
+    }
+    return t_c;
+  }
+
   MlpEstimator mlp_;
+  MlpOutputTransform space_ = model_.mlp.output_transform();
   int num0_ = 0, num1_ = 1;
   std::vector<int> ref_;
   double x0_ = 0, y0_ = 0, h_ = 1;
