@@ -109,25 +109,61 @@ RowFn row_fn(Op even, Op odd) {
   return nullptr;
 }
 
-// Bilinear Bayer interpolation over a padded copy (1 pixel mirrored border) so that the inner
-// loops need no bounds checks. The operation of each band, row parity and column parity is
-// fixed by the pattern and chosen once, outside the loops.
+// The same at column x of a row `width` wide, mirroring neighbours outside it (the first and last
+// columns).
+float eval_mirrored(Op op, const float* up, const float* mid, const float* down, int x, int width) {
+  const int left = x == 0 ? 1 : x - 1, right = x == width - 1 ? width - 2 : x + 1;
+  switch (op) {
+    case Op::kSelf:
+      return mid[x];
+    case Op::kHorizontal:
+      return 0.5f * (mid[left] + mid[right]);
+    case Op::kVertical:
+      return 0.5f * (up[x] + down[x]);
+    case Op::kDiagonal:
+      return 0.25f * ((up[left] + up[right]) + (down[left] + down[right]));
+    case Op::kCross:
+      return 0.25f * ((up[x] + down[x]) + (mid[left] + mid[right]));
+  }
+  return 0.f;
+}
+
+// Bilinear Bayer interpolation straight from the mosaic's rows: the inner loops cover the
+// columns 2 .. width-3, which need no bounds checks, and the two columns on each side are done
+// one by one with mirrored neighbours (rows above the first and below the last are mirrored by
+// choosing the row). The operation of each band, row parity and column parity is fixed by the
+// pattern and chosen once, outside the loops.
 class BayerBilinear {
  public:
   explicit BayerBilinear(const MosaicLayout& layout) {
     for (int b = 0; b < 3; ++b)
-      for (int py = 0; py < 2; ++py)
-        rows_[b][py] = row_fn(op_for(layout, b, 0, py), op_for(layout, b, 1, py));
+      for (int py = 0; py < 2; ++py) {
+        for (int px = 0; px < 2; ++px) ops_[b][py][px] = op_for(layout, b, px, py);
+        rows_[b][py] = row_fn(ops_[b][py][0], ops_[b][py][1]);
+      }
   }
 
-  void run(const cv::Mat& padded, std::vector<cv::Mat>& planes, int y0, int y1) const {
-    const int width = planes[0].cols;
+  // Output rows [y0, y1) of a mosaic at least 2x2.
+  void run(const cv::Mat& mosaic, std::vector<cv::Mat>& planes, int y0, int y1) const {
+    const int width = mosaic.cols, height = mosaic.rows;
+    // Mirrored without repeating the edge.
+    auto row = [&](int y) {
+      return mosaic.ptr<float>(y < 0 ? -y : y >= height ? 2 * height - 2 - y : y);
+    };
+    const int inner_end = width >= 6 ? width - 2 : 0;  // inner columns [2, inner_end)
     for (int y = y0; y < y1; ++y) {
-      const float* up = padded.ptr<float>(y) + 1;
-      const float* mid = padded.ptr<float>(y + 1) + 1;
-      const float* down = padded.ptr<float>(y + 2) + 1;
-      for (int b = 0; b < 3; ++b)
-        rows_[b][y & 1](up, mid, down, planes[static_cast<std::size_t>(b)].ptr<float>(y), width);
+      const float* up = row(y - 1);
+      const float* mid = row(y);
+      const float* down = row(y + 1);
+      for (int b = 0; b < 3; ++b) {
+        float* out = planes[static_cast<std::size_t>(b)].ptr<float>(y);
+        const auto& ops = ops_[b][y & 1];
+        if (inner_end) rows_[b][y & 1](up + 2, mid + 2, down + 2, out + 2, inner_end - 2);
+        for (int x = 0; x < width; ++x) {
+          if (x == 2 && inner_end) x = inner_end;
+          out[x] = eval_mirrored(ops[x & 1], up, mid, down, x, width);
+        }
+      }
     }
   }
 
@@ -141,6 +177,7 @@ class BayerBilinear {
   }
 
   std::array<std::array<RowFn, 2>, 3> rows_{};
+  std::array<std::array<std::array<Op, 2>, 2>, 3> ops_{};  // band, row parity, column parity
 };
 
 }  // namespace
@@ -170,19 +207,15 @@ void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod 
     bin_cells(mosaic, layout, planes);
     return;
   }
-  // thread_local: no allocation per frame once the size is known.
-  thread_local cv::Mat padded;
-  cv::copyMakeBorder(mosaic, padded, 1, 1, 1, 1, cv::BORDER_REFLECT_101);
   const BayerBilinear bilinear(layout);
   const int height = mosaic.rows;
   if (static_cast<double>(mosaic.total()) < 512.0 * 512.0) {
-    bilinear.run(padded, planes, 0, height);
+    bilinear.run(mosaic, planes, 0, height);
     return;
   }
-  const cv::Mat& src = padded;
   cv::parallel_for_(
-      cv::Range(0, height), [&](const cv::Range& r) { bilinear.run(src, planes, r.start, r.end); },
-      2.0);
+      cv::Range(0, height),
+      [&](const cv::Range& r) { bilinear.run(mosaic, planes, r.start, r.end); }, 2.0);
 }
 
 }  // namespace pyrocam

@@ -610,37 +610,52 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
                           ("the region property did not parse"));
   }
   const bool uncertainty = settings.output == GST_RATIO_TEMP_OUTPUT_UNCERTAINTY;
+  // Statistics need the float temperatures; without them (and without uncertainties) the codes
+  // come straight from the planes.
+  const GstClockTime position = frame_position(st, inbuf);
+  const bool stats_due =
+      settings.stats_interval > 0 &&
+      (!GST_CLOCK_TIME_IS_VALID(position) || !GST_CLOCK_TIME_IS_VALID(st.last_stats) ||
+       position < st.last_stats || position - st.last_stats >= settings.stats_interval);
   const bool ok =
       PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not estimate temperatures", [&] {
         pg::MappedImage in;
         in.map_float(inbuf, st.width, st.height, st.bands, GST_MAP_READ);
         for (int b = 0; b < st.bands; ++b)
           st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
-        st.estimators[static_cast<std::size_t>(st.method)]->estimate(
-            st.planes, st.temperature_c, uncertainty ? &st.uncertainty_c : nullptr);
+        const pyrocam::PlaneEstimator& estimator =
+            *st.estimators[static_cast<std::size_t>(st.method)];
         // mlp and lut need every band anyway; likelihood is held to that unless allow-partial.
-        if (!settings.allow_partial && st.method == pyrocam::Method::kLikelihood) {
-          const cv::Mat incomplete =
-              pyrocam::complete_band_mask(st.planes,
-                                          st.model->profile().thresholds.inference_dim_dn) == 0;
+        cv::Mat incomplete;
+        if (!settings.allow_partial && st.method == pyrocam::Method::kLikelihood)
+          incomplete = pyrocam::complete_band_mask(
+                           st.planes, st.model->profile().thresholds.inference_dim_dn) == 0;
+        MappedFrame out(outbuf, &st.out_info);
+        if (!uncertainty && !stats_due) {
+          // Straight into the output frame (the header wraps it; a copy only if it did not fit).
+          cv::Mat codes = out.image;
+          estimator.estimate_codes(st.planes, codes);
+          if (!incomplete.empty()) codes.setTo(0, incomplete);
+          if (codes.data != out.image.data) codes.copyTo(out.image);
+          return;
+        }
+        estimator.estimate(st.planes, st.temperature_c, uncertainty ? &st.uncertainty_c : nullptr);
+        if (!incomplete.empty()) {
           st.temperature_c.setTo(NAN, incomplete);
           if (uncertainty) st.uncertainty_c.setTo(NAN, incomplete);
         }
-        const cv::Mat codes = uncertainty ? pyrocam::encode_decikelvin_difference(st.uncertainty_c)
-                                          : pyrocam::encode_decikelvin(st.temperature_c);
-        MappedFrame out(outbuf, &st.out_info);
-        codes.copyTo(out.image);
+        if (uncertainty) {
+          pyrocam::encode_decikelvin_difference(st.uncertainty_c).copyTo(out.image);
+        } else {
+          cv::Mat codes = out.image;
+          pyrocam::encode_decikelvin(st.temperature_c, codes);
+          if (codes.data != out.image.data) codes.copyTo(out.image);
+        }
       });
   if (!ok) return GST_FLOW_ERROR;
-  if (settings.stats_interval > 0) {
-    const GstClockTime position = frame_position(st, inbuf);
-    const bool due = !GST_CLOCK_TIME_IS_VALID(position) ||
-                     !GST_CLOCK_TIME_IS_VALID(st.last_stats) || position < st.last_stats ||
-                     position - st.last_stats >= settings.stats_interval;
-    if (due) {
-      post_stats(self, settings, inbuf);
-      st.last_stats = position;
-    }
+  if (stats_due) {
+    post_stats(self, settings, inbuf);
+    st.last_stats = position;
   }
   ++st.frames;
   return GST_FLOW_OK;

@@ -31,6 +31,9 @@ class TemperatureEstimator {
   virtual void estimate(const float* const* planes, std::size_t n, float* out_c) const;
 
   const ThermalModel& model() const { return model_; }
+  // Bytes of the tables the estimator holds (the lookup table grows as pixels need its blocks,
+  // up to a bound set by the model).
+  virtual std::size_t memory_bytes() const { return 0; }
 
  protected:
   // All bands finite and at least the dim threshold.
@@ -45,6 +48,12 @@ class TemperatureEstimator {
 // The model must outlive the estimator. Throws InputError when the method does not fit the
 // model (the lookup table needs exactly two ratios).
 std::unique_ptr<TemperatureEstimator> make_estimator(const ThermalModel& model, Method method);
+
+// The likelihood fit by its definition, scanning every coarse and every 1 degC locus sample:
+// slow, the reference that the fast fit of make_estimator(model, Method::kLikelihood) is tested
+// and benchmarked against (same answers to 0.01 degC, same no-reading decisions).
+std::unique_ptr<TemperatureEstimator> make_exhaustive_likelihood_estimator(
+    const ThermalModel& model);
 
 // Signal noise variance of one band reading (EMVA 1288), DN^2, averaged over `frames` frames;
 // the dark frame's noise is included.

@@ -18,6 +18,10 @@ class PlaneEstimator {
   PlaneEstimator(const ThermalModel& model, Method method);
   void estimate(const std::vector<cv::Mat>& planes, cv::Mat& temperature_c,
                 cv::Mat* uncertainty_c = nullptr) const;
+  // The temperature codes (CV_16U, 0.1 K, 0 = no reading) straight from the planes: the same
+  // values as encode_decikelvin(estimate()), without the float image in memory. `codes` may wrap
+  // a caller's buffer (written in place when its size and type fit).
+  void estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat& codes) const;
   const TemperatureEstimator& estimator() const { return *estimator_; }
 
  private:
@@ -50,6 +54,9 @@ class FrameMeasurer {
 
 // GRAY16 in units of 0.1 K, 0 = no reading (NaN or outside 0.1..6553.5 K).
 cv::Mat encode_decikelvin(const cv::Mat& temperature_c);
+// The same into `codes` (CV_16U), which may wrap a caller's buffer: written in place when its
+// size and type fit, else (re)allocated.
+void encode_decikelvin(const cv::Mat& temperature_c, cv::Mat& codes);
 // Back to degC (NaN for 0).
 cv::Mat decode_decikelvin(const cv::Mat& decikelvin);
 

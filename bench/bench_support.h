@@ -1,0 +1,68 @@
+// Shared by the benchmarks: simulated raw frames of a scene through a model's camera.
+#pragma once
+
+#include <cstdlib>
+#include <ctime>
+#include <opencv2/core.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "pyrocam/model.h"
+#include "pyrocam/scenes.h"
+#include "pyrocam/simulator.h"
+
+namespace pyrocam::bench {
+
+// A scene by name: "plate:T", "filament:T" (T in degC) or "melt-pool".
+struct Scene {
+  std::string name = "plate:1500";
+  cv::Mat temperature_c;  // NaN: cold background
+  double emissivity = 0.7;
+};
+
+inline Scene make_scene(const std::string& spec, int width, int height) {
+  Scene s;
+  s.name = spec;
+  const auto colon = spec.find(':');
+  const std::string kind = spec.substr(0, colon);
+  const double t = colon == std::string::npos ? 1500 : std::atof(spec.c_str() + colon + 1);
+  if (kind == "plate") {
+    s.temperature_c = plate_scene(width, height, t);
+    s.emissivity = 0.7;
+  } else if (kind == "filament") {
+    s.temperature_c = filament_scene(width, height, t);
+    s.emissivity = 0.4;
+  } else if (kind == "melt-pool") {
+    s.temperature_c = melt_pool_scene(width, height, 3, 10);
+    s.emissivity = 0.35;
+  } else {
+    throw std::invalid_argument("unknown scene '" + spec + "' (plate:T, filament:T or melt-pool)");
+  }
+  return s;
+}
+
+// A raw frame of the scene through the model's camera (a typical unit), exposed so that its
+// hottest pixels read 140 DN above the dark level (under the 220 DN raw saturation level).
+inline cv::Mat render(const ThermalModel& m, const Scene& scene) {
+  double peak = 0;
+  cv::minMaxLoc(scene.temperature_c, nullptr, &peak, nullptr, nullptr,
+                scene.temperature_c == scene.temperature_c);
+  Simulator camera(m.profile(), UnitPerturbation::parse("typical", 1));
+  return camera.render(scene.temperature_c, camera.exposure_for(peak, 140, scene.emissivity),
+                       scene.emissivity);
+}
+
+// Fraction of the frame on the hot object.
+inline double hot_fraction(const Scene& scene) {
+  return static_cast<double>(cv::countNonZero(scene.temperature_c == scene.temperature_c)) /
+         static_cast<double>(scene.temperature_c.total());
+}
+
+// Process CPU time (all threads), s.
+inline double process_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+}  // namespace pyrocam::bench
