@@ -12,13 +12,12 @@
 // 100 degC, as a region's median reading). --noisy-copies trains on noisy copies as calibrate
 // does.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
-
-#include <algorithm>
-#include <memory>
 
 #include "pyrocam/locus.h"
 #include "pyrocam/mlp.h"
@@ -50,8 +49,9 @@ void off_locus(const pyrocam::Mlp& model, const pyrocam::ThermalModel& thermal,
   const pyrocam::MlpSamples samples = noisy.sample(rows, 12345, &truth);
   const Eigen::VectorXd reading = model.predict(samples.inputs);
   const double low = locus.temperature_c[0], high = locus.temperature_c[locus.size() - 1];
-  std::printf("  single-pixel noisy copies (%d), reading - likelihood fit | median reading - truth\n",
-              static_cast<int>(samples.targets.size()));
+  std::printf(
+      "  single-pixel noisy copies (%d), reading - likelihood fit | median reading - truth\n",
+      static_cast<int>(samples.targets.size()));
   for (int part = 0; part < 3; ++part) {
     const double from = low + (high - low) * part / 3, to = low + (high - low) * (part + 1) / 3;
     double vs_fit = 0, fit_vs_truth = 0, median_sq = 0;

@@ -634,8 +634,9 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
     Eigen::MatrixXd v = samples.inputs;
     if (options.input_transform == MlpInputTransform::kLog) {
       if (!(samples.inputs.array() > 0).all()) {
-        throw MlpError("mlp: the log input transform needs inputs > 0; an augmented sample has "
-                       "an input <= 0");
+        throw MlpError(
+            "mlp: the log input transform needs inputs > 0; an augmented sample has "
+            "an input <= 0");
       }
       v = samples.inputs.array().log().matrix();
     }
@@ -801,8 +802,8 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   // The polish, in rounds; between rounds each sample's weight is multiplied by its absolute
   // error (Lawson's iteration: the weighted least-squares fit tends to the minimax fit), with a
   // floor of a twentieth of the largest error so that no sample drops out.
-  PolishProblem problem{z_train_s, t_train, loss_weights, slope_squared,
-                        options.polish_weight_decay, train_count};
+  PolishProblem problem{
+      z_train_s, t_train, loss_weights, slope_squared, options.polish_weight_decay, train_count};
   if (augmenting && options.polish_iterations > 0) {
     augmented = make_augmented(random.bits());
     const Eigen::Index total = train_count + augmented.size();

@@ -82,8 +82,8 @@ MlpSamples NoisyLocus::sample(const std::vector<Eigen::Index>& rows, std::uint64
           inside = inside && noisy[b] >= dim && noisy[b] <= bright;
         }
         if (!inside) continue;
-        const double target = likelihood_ ? likelihood_->temperature_c(noisy.data())
-                                          : locus_.temperature_c[row];
+        const double target =
+            likelihood_ ? likelihood_->temperature_c(noisy.data()) : locus_.temperature_c[row];
         if (!std::isfinite(target)) continue;
         out.inputs.row(made) = normalised_ratios(profile.normalisation, noisy).transpose();
         out.targets[made] = target;
