@@ -52,6 +52,11 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
                 "MLP training: L-BFGS iterations after Adam (0: Adam only, as in the paper)")
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
+  c->add_option("--noisy-copies", a.options.noisy_locus.copies,
+                "MLP training: noisy single-pixel copies of each locus sample trained on besides "
+                "it, read as the likelihood fit reads them (0: the locus alone)")
+      ->check(CLI::Range(0, 100))
+      ->capture_default_str();
   c->add_option("--mc-refits", a.options.monte_carlo_refits,
                 "Monte-Carlo QE refits for the thermocouple uncertainty")
       ->check(CLI::Range(0, 1000))

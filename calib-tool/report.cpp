@@ -158,7 +158,16 @@ void write_report_html(const CalibrationOutcome& o, const std::filesystem::path&
   const std::vector<double> passes(o.mlp_report.pass.begin(), o.mlp_report.pass.end());
   h << "<h2>Temperature network</h2><p>Max error over the noise-free locus: "
     << num(o.mlp_locus_max_error_c, 3) << " °C; held-out rmse "
-    << num(o.mlp_report.final_test_rmse, 3) << " °C.</p>"
+    << num(o.mlp_report.final_test_rmse, 3) << " °C.";
+  if (o.mlp_report.augmented_samples > 0) {
+    h << " Trained besides on " << o.mlp_report.augmented_samples
+      << " noisy single-pixel copies of the locus's training samples, towards the likelihood "
+         "fit's reading of each, so that pixels off the locus read as that fit reads them: "
+         "the network's rmse from those readings "
+      << num(o.mlp_report.augmented_rmse, 3) << " °C, median |difference| "
+      << num(o.mlp_report.augmented_median_abs_error, 3) << " °C.";
+  }
+  h << "</p>"
     << svg_plot(
            {"MLP training curve: " + std::to_string(o.mlp_report.epochs) + " Adam epochs, then " +
                 std::to_string(o.mlp_report.polish_iterations_done) + " L-BFGS iterations",

@@ -10,6 +10,7 @@
 
 #include "pyrocam/baselines.h"
 #include "pyrocam/estimators.h"
+#include "pyrocam/noisy_locus.h"
 #include "pyrocam/qe_fit.h"
 #include "pyrocam/spectrum.h"
 
@@ -231,6 +232,14 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
       make_locus(m.camera, opt.min_temperature_c, opt.max_temperature_c, opt.locus_step_c);
   MlpTrainingOptions mo = opt.mlp;
   mo.seed = opt.seed;
+  NoisyLocusOptions no = opt.noisy_locus;
+  std::unique_ptr<NoisyLocus> noisy;
+  if (no.copies > 0) {
+    noisy = std::make_unique<NoisyLocus>(m, locus, no);
+    mo.augment = [&noisy](const std::vector<Eigen::Index>& rows, std::uint64_t seed) {
+      return noisy->sample(rows, seed);
+    };
+  }
   auto user_progress = opt.mlp.progress;
   // One pass per Adam epoch or polish iteration; the polish may stop early.
   const auto passes = static_cast<std::size_t>(mo.epochs + mo.polish_iterations);
@@ -383,6 +392,9 @@ nlohmann::json outcome_summary(const CalibrationOutcome& o) {
               {"locus_max_error_c", o.mlp_locus_max_error_c},
               {"locus_rms_error_c", o.mlp_locus_rms_error_c},
               {"polish_iterations", o.mlp_report.polish_iterations_done},
+              {"noisy_copies", o.mlp_report.augmented_samples},
+              {"noisy_copies_rmse_c", o.mlp_report.augmented_rmse},
+              {"noisy_copies_median_abs_error_c", o.mlp_report.augmented_median_abs_error},
               {"seconds", o.mlp_report.seconds}};
   j["warnings"] = o.warnings;
   j["seconds"] = o.seconds;

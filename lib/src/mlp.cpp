@@ -88,6 +88,7 @@ constexpr int kPolishReportInterval = 10;
 class Random {
  public:
   explicit Random(std::uint64_t seed) : engine_(seed) {}
+  std::uint64_t bits() { return engine_(); }
   double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }  // [0, 1)
   double normal() {                     // Box-Muller, one value per pair
     const double u1 = 1.0 - uniform();  // (0, 1]
@@ -223,9 +224,12 @@ void unflatten(const Eigen::VectorXd& theta, Network<S>& net) {
 struct PolishProblem {
   Eigen::MatrixXf inputs;            // standardised, one column per sample
   Eigen::RowVectorXd targets;        // standardised network outputs
-  Eigen::RowVectorXd weights;        // per sample, mean 1
+  Eigen::RowVectorXd weights;        // per sample; mean 1 over the reported samples
   Eigen::RowVectorXd slope_squared;  // (target units per standardised output)^2, for reports
   double weight_decay = 0;
+  // The training rmse is reported over the first this many samples (the training rows; the
+  // augmented samples follow them).
+  Eigen::Index reported = 0;
 };
 
 // The output layer (weights and bias) that minimises the polish's loss given the last hidden
@@ -284,9 +288,14 @@ int polish_with_lbfgs(Network<float>& net, const PolishProblem& problem, int ite
     theta.segment(output_at, output_params - 1) = net.weights.back().reshaped().cast<double>();
     theta[output_at + output_params - 1] = static_cast<double>(net.bias.back()[0]);
     forward(net, acts, n, layers - 1);
+    const Eigen::Index reported = problem.reported;
     const Eigen::ArrayXd residual =
-        (acts[layers].row(0).leftCols(n) - targets).transpose().cast<double>().array();
-    train_rmse = std::sqrt((residual.square() * problem.slope_squared.transpose().array()).mean());
+        (acts[layers].row(0).leftCols(reported) - targets.leftCols(reported))
+            .transpose()
+            .cast<double>()
+            .array();
+    train_rmse = std::sqrt(
+        (residual.square() * problem.slope_squared.leftCols(reported).transpose().array()).mean());
     const double sse = backward(net, acts, deltas, targets, weights, n, grad);
     double penalty = 0;
     if (problem.weight_decay > 0) {
@@ -596,6 +605,65 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
                                    : slope_squared;
   const Row loss_weights_s = loss_weights.cast<S>();
 
+  // Augmented samples, prepared as the training rows are: standardised inputs (columns) and
+  // targets, loss weights, and the factors to target units.
+  struct Augmented {
+    Eigen::MatrixXd inputs;  // raw, one row each
+    Eigen::VectorXd targets;
+    Matrix z;
+    Row t;
+    Row weights;
+    Eigen::RowVectorXd t_double, weights_double, slope_squared;
+    Eigen::Index size() const { return targets.size(); }
+  };
+  const std::vector<Eigen::Index> training_rows(order.begin() + test_count, order.end());
+  const bool augmenting = static_cast<bool>(options.augment);
+  auto make_augmented = [&](std::uint64_t augment_seed) {
+    Augmented a;
+    MlpSamples samples = options.augment(training_rows, augment_seed);
+    const Eigen::Index count = samples.inputs.rows();
+    if (samples.targets.size() != count || (count > 0 && samples.inputs.cols() != X.cols())) {
+      throw MlpError("mlp: augmentation gave " + std::to_string(count) + " samples of " +
+                     std::to_string(samples.inputs.cols()) + " inputs and " +
+                     std::to_string(samples.targets.size()) + " targets; need " +
+                     std::to_string(X.cols()) + " inputs and one target each");
+    }
+    if (!samples.inputs.allFinite() || !samples.targets.allFinite()) {
+      throw MlpError("mlp: augmented samples have NaN or inf");
+    }
+    Eigen::MatrixXd v = samples.inputs;
+    if (options.input_transform == MlpInputTransform::kLog) {
+      if (!(samples.inputs.array() > 0).all()) {
+        throw MlpError(
+            "mlp: the log input transform needs inputs > 0; an augmented sample has "
+            "an input <= 0");
+      }
+      v = samples.inputs.array().log().matrix();
+    }
+    a.z = input.apply(v).transpose().cast<S>();
+    a.t_double.resize(count), a.weights_double.resize(count), a.slope_squared.resize(count);
+    for (Eigen::Index i = 0; i < count; ++i) {
+      const double target = samples.targets[i];
+      if (options.output_transform != MlpOutputTransform::kNone && !(target > -kKelvinOffset)) {
+        throw MlpError("mlp: augmented target " + std::to_string(target) +
+                       " degC is below absolute zero");
+      }
+      const double network = to_network_units(options.output_transform, target);
+      a.t_double[i] = (network - y_mean) / y_scale;
+      const double slope = target_slope(options.output_transform, network) * y_scale;
+      a.slope_squared[i] = slope * slope;
+      a.weights_double[i] =
+          options.augmented_weight *
+          (options.loss_in_target_units ? a.slope_squared[i] / mean_slope_squared : 1.0);
+    }
+    a.t = a.t_double.cast<S>();
+    a.weights = a.weights_double.cast<S>();
+    a.inputs = std::move(samples.inputs);
+    a.targets = std::move(samples.targets);
+    return a;
+  };
+  Augmented augmented;  // the last set made: the report's
+
   // He initialisation for ReLU layers, variance 1/fan_in for the linear output.
   Network<S> net;
   std::vector<int> widths{static_cast<int>(X.cols())};
@@ -641,9 +709,14 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   auto eval_acts = make_activations(net, kInferenceChunk);
   Row batch_targets(batch), batch_weights(batch);
 
-  const long steps_per_epoch = static_cast<long>((train_count + batch - 1) / batch);
+  // The first epoch's augmented samples fix the schedule's length (later epochs have about as
+  // many; the schedule holds its final rate should they have more).
+  if (augmenting && options.epochs > 0) augmented = make_augmented(random.bits());
+  const long steps_per_epoch =
+      static_cast<long>((train_count + augmented.size() + batch - 1) / batch);
   const long total_steps = steps_per_epoch * options.epochs;
   long step = 0;
+  // Indices below train_count are training rows, the rest augmented samples.
   std::vector<Eigen::Index> train_order(static_cast<std::size_t>(train_count));
   for (Eigen::Index i = 0; i < train_count; ++i) train_order[static_cast<std::size_t>(i)] = i;
   std::vector<int> pass;
@@ -663,23 +736,46 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   };
 
   for (int epoch = 0; epoch < options.epochs; ++epoch) {
+    if (augmenting) {
+      if (epoch > 0) augmented = make_augmented(random.bits());
+      train_order.resize(static_cast<std::size_t>(train_count + augmented.size()));
+      for (std::size_t i = 0; i < train_order.size(); ++i) {
+        train_order[i] = static_cast<Eigen::Index>(i);
+      }
+    }
     random.shuffle(train_order);
-    double squared_error_sum = 0;  // in target units, to first order
-    for (Eigen::Index start = 0; start < train_count; start += batch, ++step) {
-      const Eigen::Index n = std::min(batch, train_count - start);
+    const auto epoch_count = static_cast<Eigen::Index>(train_order.size());
+    double squared_error_sum = 0;  // in target units, to first order, of the training rows
+    for (Eigen::Index start = 0; start < epoch_count; start += batch, ++step) {
+      const Eigen::Index n = std::min(batch, epoch_count - start);
       double factor_sum = 0;
       for (Eigen::Index k = 0; k < n; ++k) {
         const Eigen::Index src = train_order[static_cast<std::size_t>(start + k)];
-        acts[0].col(k) = z_train_s.col(src);
-        batch_targets[k] = t_train_s[src];
-        batch_weights[k] = loss_weights_s[src];
-        factor_sum += to_target_units[src];
+        if (src < train_count) {
+          acts[0].col(k) = z_train_s.col(src);
+          batch_targets[k] = t_train_s[src];
+          batch_weights[k] = loss_weights_s[src];
+          factor_sum += to_target_units[src];
+        } else {
+          const Eigen::Index a = src - train_count;
+          acts[0].col(k) = augmented.z.col(a);
+          batch_targets[k] = augmented.t[a];
+          batch_weights[k] = augmented.weights[a];
+        }
       }
       forward(net, acts, n);
+      if (augmenting) {
+        for (Eigen::Index k = 0; k < n; ++k) {
+          const Eigen::Index src = train_order[static_cast<std::size_t>(start + k)];
+          if (src >= train_count) continue;
+          const double error = static_cast<double>(acts[layers](0, k) - batch_targets[k]);
+          squared_error_sum += error * error * slope_squared[src];
+        }
+      }
       const double weighted_sum =
           backward(net, acts, deltas, batch_targets, batch_weights, n, grad);
       // Exact when the factor is the same for all samples (weighted loss), approximate else.
-      squared_error_sum += weighted_sum * factor_sum / static_cast<double>(n);
+      if (!augmenting) squared_error_sum += weighted_sum * factor_sum / static_cast<double>(n);
       const S lr = static_cast<S>(learning_rate_at(options, step, total_steps));
       const S bias1 = static_cast<S>(1 - std::pow(0.9, static_cast<double>(step + 1)));
       const S bias2 = static_cast<S>(1 - std::pow(0.999, static_cast<double>(step + 1)));
@@ -706,8 +802,20 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   // The polish, in rounds; between rounds each sample's weight is multiplied by its absolute
   // error (Lawson's iteration: the weighted least-squares fit tends to the minimax fit), with a
   // floor of a twentieth of the largest error so that no sample drops out.
-  PolishProblem problem{z_train_s, t_train, loss_weights, slope_squared,
-                        options.polish_weight_decay};
+  PolishProblem problem{
+      z_train_s, t_train, loss_weights, slope_squared, options.polish_weight_decay, train_count};
+  if (augmenting && options.polish_iterations > 0) {
+    augmented = make_augmented(random.bits());
+    const Eigen::Index total = train_count + augmented.size();
+    problem.inputs.conservativeResize(Eigen::NoChange, total);
+    problem.inputs.rightCols(augmented.size()) = augmented.z;
+    problem.targets.conservativeResize(total);
+    problem.targets.tail(augmented.size()) = augmented.t_double;
+    problem.weights.conservativeResize(total);
+    problem.weights.tail(augmented.size()) = augmented.weights_double;
+    problem.slope_squared.conservativeResize(total);
+    problem.slope_squared.tail(augmented.size()) = augmented.slope_squared;
+  }
   int polish_done = 0;
   const int pass_before_polish = options.epochs;
   auto record_polish_point = [&](double train) {
@@ -739,7 +847,7 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
       for (Eigen::Index i = 0; i < train_count; ++i) {
         problem.weights[i] *= std::max(error[i], floor);
       }
-      problem.weights /= problem.weights.mean();
+      problem.weights.head(train_count) /= problem.weights.head(train_count).mean();
     }
   }
   if (polish_done % kPolishReportInterval != 0) record_polish_point(last_train);  // the last
@@ -771,6 +879,19 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
       report->max_abs_test_error = test_error.cwiseAbs().maxCoeff();
     } else {
       report->final_test_rmse = report->max_abs_test_error = nan;
+    }
+    report->augmented_samples = static_cast<int>(augmented.size());
+    if (augmented.size() > 0) {
+      const Eigen::VectorXd error = model.predict(augmented.inputs) - augmented.targets;
+      report->augmented_rmse =
+          std::sqrt(error.squaredNorm() / static_cast<double>(augmented.size()));
+      std::vector<double> abs_error(error.data(), error.data() + error.size());
+      for (double& e : abs_error) e = std::abs(e);
+      const auto middle = abs_error.begin() + static_cast<std::ptrdiff_t>(abs_error.size() / 2);
+      std::nth_element(abs_error.begin(), middle, abs_error.end());
+      report->augmented_median_abs_error = *middle;
+    } else {
+      report->augmented_rmse = report->augmented_median_abs_error = nan;
     }
     report->seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

@@ -8,6 +8,7 @@
 
 #include "pyrocam/calibration.h"
 #include "pyrocam/model.h"
+#include "pyrocam/noisy_locus.h"
 
 namespace pyrocam {
 
@@ -15,6 +16,8 @@ struct CalibrationOptions {
   std::string qe_solver = "auto";  // paper, regularised, auto (lower held-out error), datasheet
   double min_temperature_c = 500, max_temperature_c = 3500, locus_step_c = 1;
   MlpTrainingOptions mlp;
+  // Noisy copies of the locus the network is trained on besides it (copies 0: none).
+  NoisyLocusOptions noisy_locus;
   int monte_carlo_refits = 8;
   double thermocouple_tolerance_c = 4.4;
   std::uint64_t seed = 1;
