@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 
@@ -125,12 +126,84 @@ template <int kFixedBands>
   }
 }
 
+// Three bands (colour cameras), in chunks of pixels and passes that vectorise: the locus
+// positions, the table reads, then the arithmetic of every pixel (branch-free). A chunk without
+// a reading (background) stops after the first pass. The same arithmetic as apply_misfit_impl;
+// with fewer than three bands reading there is nothing to check.
 PYROCAM_VECTOR_CLONES
 void apply_misfit_3(const float* const* planes, std::size_t n, float* t, const float* table,
                     int samples, float t0, float inv_step, float dim, const float* gain,
                     const float* floor, float error2, float window, const float* thresholds) {
-  apply_misfit_impl<3>(planes, 3, n, t, table, samples, t0, inv_step, dim, gain, floor, error2,
-                       window, thresholds);
+  constexpr std::size_t kChunk = 256;
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  alignas(64) float fraction[kChunk], m0[3][kChunk], dm[3][kChunk];
+  alignas(64) std::int32_t index[kChunk];
+  const float threshold = thresholds[3];
+  const float last = static_cast<float>(samples - 1);
+  const std::int32_t top = samples - 2;
+  const float g0 = gain[0], g1 = gain[1], g2 = gain[2];
+  const float f0 = floor[0], f1 = floor[1], f2 = floor[2];
+  for (std::size_t start = 0; start < n; start += kChunk) {
+    const std::size_t count = std::min(kChunk, n - start);
+    float* __restrict tc = t + start;
+    int readings = 0;
+    for (std::size_t k = 0; k < count; ++k) readings += tc[k] == tc[k] ? 1 : 0;
+    if (!readings) continue;
+    for (std::size_t k = 0; k < count; ++k) {
+      float u = (tc[k] - t0) * inv_step;  // NaN for no reading
+      u = u >= 0.f ? u : 0.f;
+      u = u <= last ? u : last;
+      std::int32_t i = static_cast<std::int32_t>(u);
+      i = i < top ? i : top;
+      index[k] = i;
+      fraction[k] = u - static_cast<float>(i);
+    }
+    for (int b = 0; b < 3; ++b) {
+      const float* __restrict row = table + static_cast<std::ptrdiff_t>(b) * samples;
+      for (std::size_t k = 0; k < count; ++k) {
+        const float below = row[index[k]], above = row[index[k] + 1];
+        m0[b][k] = below;
+        dm[b][k] = above - below;
+      }
+    }
+    const float* __restrict p0 = planes[0] + start;
+    const float* __restrict p1 = planes[1] + start;
+    const float* __restrict p2 = planes[2] + start;
+    for (std::size_t k = 0; k < count; ++k) {
+      const float v0 = p0[k], v1 = p1[k], v2 = p2[k];
+      const bool all_read =
+          v0 >= dim && v0 < kInf && v1 >= dim && v1 < kInf && v2 >= dim && v2 < kInf;  // NaN fails
+      const float s0 = all_read ? v0 : 0.f, s1 = all_read ? v1 : 0.f, s2 = all_read ? v2 : 0.f;
+      const float w0 = 1.f / (g0 * s0 + f0 + error2 * s0 * s0);
+      const float w1 = 1.f / (g1 * s1 + f1 + error2 * s1 * s1);
+      const float w2 = 1.f / (g2 * s2 + f2 + error2 * s2 * s2);
+      const float fr = fraction[k];
+      const float m_0 = m0[0][k] + fr * dm[0][k], m_1 = m0[1][k] + fr * dm[1][k],
+                  m_2 = m0[2][k] + fr * dm[2][k];
+      const float d0 = dm[0][k] * inv_step, d1 = dm[1][k] * inv_step, d2 = dm[2][k] * inv_step;
+      const float sm = w0 * s0 * m_0 + w1 * s1 * m_1 + w2 * s2 * m_2;
+      const float mm = w0 * m_0 * m_0 + w1 * m_1 * m_1 + w2 * m_2 * m_2;
+      const float sd = w0 * s0 * d0 + w1 * s1 * d1 + w2 * s2 * d2;
+      const float md = w0 * m_0 * d0 + w1 * m_1 * d1 + w2 * m_2 * d2;
+      const float a = sm / mm, along = md / mm;
+      const float r0 = s0 - a * m_0, r1 = s1 - a * m_1, r2 = s2 - a * m_2;
+      float chi2 = w0 * r0 * r0 + w1 * r1 * r1 + w2 * r2 * r2;
+      const float c0 = d0 - along * m_0, c1 = d1 - along * m_1, c2 = d2 - along * m_2;
+      const float curvature = w0 * c0 * c0 + w1 * c1 * c1 + w2 * c2 * c2;
+      // One Gauss-Newton step in temperature, at most `window` times the absolute temperature.
+      const float slope = -2 * a * (sd - a * md);
+      const float hessian = 2 * a * a * curvature;
+      const float temperature = tc[k];
+      const float limit = window * (temperature + kZeroCelsiusF);
+      float step = hessian > 0.f ? -slope / hessian : 0.f;
+      step = step < limit ? step : limit;
+      step = step > -limit ? step : -limit;
+      const float reduced = chi2 + slope * step + 0.5f * hessian * step * step;
+      chi2 = reduced < chi2 ? (reduced > 0.f ? reduced : 0.f) : chi2;
+      const bool drop = all_read && chi2 > threshold;  // NaN (no reading) fails
+      tc[k] = drop ? std::numeric_limits<float>::quiet_NaN() : temperature;
+    }
+  }
 }
 
 PYROCAM_VECTOR_CLONES
