@@ -25,7 +25,7 @@
  * for 5x5); the property is the chance that a true graybody pixel is dropped. Pixels that fail
  * have no reading (0). It drops pixels whose bands come from different temperatures only when
  * the mix leaves the Planckian locus: a colour camera's mixed pixels at a sharp edge often land
- * on the locus at another temperature (a simulated 735 degC plate still reads up to 2250 degC
+ * on the locus at another temperature (a simulated 735 degC plate still reads up to 2294 degC
  * at its edge with the check on), so it is no edge detector for colour cameras.
  *
  * #GstRatioTemp:method chooses the per-pixel estimator (METHOD.md section 5):
