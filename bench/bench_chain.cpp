@@ -42,6 +42,7 @@ struct Options {
   bool queues = false;
   std::string only;                            // "colour" or "5x5": one chain
   std::string methods = "lut,likelihood,mlp";  // ratiotemp methods to run
+  std::string misfit_probability = "0";        // ratiotemp's band-consistency check (0: off)
 };
 
 // kB from /proc/self/status ("VmRSS", "VmHWM").
@@ -204,6 +205,8 @@ int main(int argc, char** argv) {
       o.only = value();
     else if (a == "--methods")
       o.methods = value();
+    else if (a == "--misfit-probability")
+      o.misfit_probability = value();
     else {
       std::fprintf(stderr, "unknown argument %s\n", a.c_str());
       return 2;
@@ -214,7 +217,7 @@ int main(int argc, char** argv) {
         stderr,
         "usage: %s --rgb-model M.json --nir-model N.json [--frames N] "
         "[--mlp-frames N] [--scene plate:T|filament:T|melt-pool] [--queues] [--only colour|5x5] "
-        "[--methods lut,likelihood,mlp]\n",
+        "[--methods lut,likelihood,mlp] [--misfit-probability P]\n",
         argv[0]);
     return 2;
   }
@@ -246,7 +249,8 @@ int main(int argc, char** argv) {
         "darksub ! demosaic25 (no ratiotemp)",
         run_chain("darksub dark-level=50" + q + " ! demosaic25", caps, raw, o.frames, o.warmup));
     const std::string chain = "darksub dark-level=50" + q + " ! demosaic25" + q +
-                              " ! ratiotemp stats-interval=0 model=" + o.rgb_model;
+                              " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
+                              " misfit-probability=" + o.misfit_probability;
     if (wanted("lut"))
       print_run("darksub ! demosaic25 ! ratiotemp method=lut",
                 run_chain(chain + " method=lut", caps, raw, o.frames, o.warmup));
@@ -279,7 +283,8 @@ int main(int argc, char** argv) {
               run_chain("darksub dark-level=50 pattern=5x5" + q + " ! demosaic25", caps, raw,
                         o.frames, o.warmup));
     const std::string chain = "darksub dark-level=50 pattern=5x5" + q + " ! demosaic25" + q +
-                              " ! ratiotemp stats-interval=0 model=" + o.nir_model;
+                              " ! ratiotemp stats-interval=0 model=" + o.nir_model +
+                              " misfit-probability=" + o.misfit_probability;
     if (wanted("likelihood"))
       print_run("darksub ! demosaic25 ! ratiotemp method=likelihood",
                 run_chain(chain + " method=likelihood", caps, raw, o.frames / 2, o.warmup));

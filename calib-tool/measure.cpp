@@ -20,6 +20,7 @@ struct MeasureArgs {
   std::string model, dataset, frame, dark, roi, out;
   std::string method = "mlp", demosaic = "bilinear", format = "png";
   double saturation = -1;
+  double misfit_probability = 0;
   bool uncertainty = false;
 };
 
@@ -101,6 +102,12 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       ->capture_default_str();
   c->add_option("--saturation", a.saturation, "Raw saturation level, DN (-1: the model's)")
       ->capture_default_str();
+  c->add_option("--misfit-probability", a.misfit_probability,
+                "Band-consistency check: no reading where the bands fit no graybody near the "
+                "estimate; the chance that a true graybody pixel is dropped (0 = no check, "
+                "e.g. 1e-6)")
+      ->check(CLI::Range(0.0, 0.5))
+      ->capture_default_str();
   c->add_option("--format", a.format, "Image type: png or tiff")
       ->check(CLI::IsMember({"png", "tiff"}))
       ->capture_default_str();
@@ -118,6 +125,7 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       options.demosaic = parse_demosaic_method(a.demosaic);
       options.saturation_level_dn = a.saturation;
       options.uncertainty = a.uncertainty;
+      options.misfit_probability = a.misfit_probability;
       FrameMeasurer measurer(model, options);
 
       struct Job {

@@ -25,8 +25,10 @@ void encode_decikelvin_row(const float* __restrict in, std::uint16_t* __restrict
 
 }  // namespace
 
-PlaneEstimator::PlaneEstimator(const ThermalModel& model, Method method)
-    : model_(model), estimator_(make_estimator(model, method)) {}
+PlaneEstimator::PlaneEstimator(const ThermalModel& model, Method method, double misfit_probability)
+    : model_(model),
+      estimator_(make_estimator(model, method)),
+      misfit_(model, misfit_probability) {}
 
 void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv::Mat* u) const {
   const int bands = model_.profile().band_count();
@@ -47,6 +49,7 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
       float* out = t.ptr<float>(y);
       estimator_->estimate(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
+      misfit_.apply(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
       if (!u) continue;
       float* uo = u->ptr<float>(y);
       for (int x = 0; x < size.width; ++x) {
@@ -78,13 +81,16 @@ void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat&
     for (int y = rows.start; y < rows.end; ++y) {
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
       estimator_->estimate(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
+      misfit_.apply(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
       encode_decikelvin_row(t.data(), codes.ptr<std::uint16_t>(y), size.width);
     }
   });
 }
 
 FrameMeasurer::FrameMeasurer(const ThermalModel& model, const MeasureOptions& options)
-    : model_(model), options_(options), planes_estimator_(model, options.method) {
+    : model_(model),
+      options_(options),
+      planes_estimator_(model, options.method, options.misfit_probability) {
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model.profile().thresholds.inference_saturation_dn;
 }

@@ -18,6 +18,16 @@
  * is not monotonic over the model's range (the colour camera's red/green) pin such fits near
  * the ratio's turning point, so partial readings are off by default.
  *
+ * With #GstRatioTemp:misfit-probability above 0 (e.g. 1e-6; default 0, off) every reading goes
+ * through a band-consistency check: the band signals must be those of a graybody within 1 % of
+ * the estimated (absolute) temperature, within the sensor noise model plus 2 % of each signal
+ * for the model's own error (chi-squared with bands - 2 degrees of freedom: 1 for colour, 23
+ * for 5x5); the property is the chance that a true graybody pixel is dropped. Pixels that fail
+ * have no reading (0). It drops pixels whose bands come from different temperatures only when
+ * the mix leaves the Planckian locus: a colour camera's mixed pixels at a sharp edge often land
+ * on the locus at another temperature (a simulated 735 degC plate still reads up to 2294 degC
+ * at its edge with the check on), so it is no edge detector for colour cameras.
+ *
  * #GstRatioTemp:method chooses the per-pixel estimator (METHOD.md section 5):
  * - mlp: the paper's network on the normalised band ratios, the reference. Far too slow for
  *   live video at 100 000 pixels and more; use it for checks and offline work.
@@ -121,12 +131,15 @@ enum {
   PROP_STATS_INTERVAL,
   PROP_REGION,
   PROP_ALLOW_PARTIAL,
+  PROP_MISFIT_PROBABILITY,
 };
 
 constexpr GstRatioTempMethod DEFAULT_METHOD = GST_RATIO_TEMP_METHOD_AUTO;
 constexpr GstRatioTempOutput DEFAULT_OUTPUT = GST_RATIO_TEMP_OUTPUT_TEMPERATURE;
 constexpr guint64 DEFAULT_STATS_INTERVAL = GST_SECOND;
 constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
+constexpr double DEFAULT_MISFIT_PROBABILITY = 0.0;
+constexpr double MAX_MISFIT_PROBABILITY = 0.5;
 constexpr const char* STATS_MESSAGE = "pyrocam-temperature-stats";
 /* The lookup table is used only where it gives the network's answer: within this many degC at
  * every 1 degC sample of the model's locus, and reading where the network reads at all but 1 %
@@ -160,6 +173,7 @@ struct Settings {
   GstRatioTempOutput output = DEFAULT_OUTPUT;
   guint64 stats_interval = DEFAULT_STATS_INTERVAL;
   gboolean allow_partial = DEFAULT_ALLOW_PARTIAL;
+  double misfit_probability = DEFAULT_MISFIT_PROBABILITY;
   std::string region_text;   // as set; empty: no region
   bool region_valid = true;  // region_text is empty or parsed into region
   Region region;
@@ -623,8 +637,9 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         in.map_float(inbuf, st.width, st.height, st.bands, GST_MAP_READ);
         for (int b = 0; b < st.bands; ++b)
           st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
-        const pyrocam::PlaneEstimator& estimator =
-            *st.estimators[static_cast<std::size_t>(st.method)];
+        pyrocam::PlaneEstimator& chosen = *st.estimators[static_cast<std::size_t>(st.method)];
+        chosen.set_misfit_probability(settings.misfit_probability);
+        const pyrocam::PlaneEstimator& estimator = chosen;
         // mlp and lut need every band anyway; likelihood is held to that unless allow-partial.
         cv::Mat incomplete;
         if (!settings.allow_partial && st.method == pyrocam::Method::kLikelihood)
@@ -691,6 +706,9 @@ static void gst_ratio_temp_set_property(GObject* object, guint prop_id, const GV
     case PROP_ALLOW_PARTIAL:
       s.allow_partial = g_value_get_boolean(value);
       break;
+    case PROP_MISFIT_PROBABILITY:
+      s.misfit_probability = g_value_get_double(value);
+      break;
     case PROP_REGION: {
       const char* v = g_value_get_string(value);
       s.region_text = v ? v : "";
@@ -728,6 +746,9 @@ static void gst_ratio_temp_get_property(GObject* object, guint prop_id, GValue* 
       break;
     case PROP_ALLOW_PARTIAL:
       g_value_set_boolean(value, s.allow_partial);
+      break;
+    case PROP_MISFIT_PROBABILITY:
+      g_value_set_double(value, s.misfit_probability);
       break;
     case PROP_REGION:
       g_value_set_string(value, s.region_text.empty() ? nullptr : s.region_text.c_str());
@@ -803,6 +824,14 @@ static void gst_ratio_temp_class_init(GstRatioTempClass* klass) {
                            "missing or below the dim threshold from the remaining bands (at "
                            "least two); off: such pixels have no reading with every method",
                            DEFAULT_ALLOW_PARTIAL, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_MISFIT_PROBABILITY,
+      g_param_spec_double("misfit-probability", "Band-consistency false-rejection probability",
+                          "Band-consistency check: no reading where the bands fit no graybody "
+                          "within 1 % of the estimated temperature; the chance (0 to 0.5, "
+                          "unitless, e.g. 1e-6) that a true graybody pixel is dropped; 0 = no "
+                          "check",
+                          0.0, MAX_MISFIT_PROBABILITY, DEFAULT_MISFIT_PROBABILITY, playing));
 
   gst_element_class_set_static_metadata(
       element_class, "Band planes to temperature", "Filter/Converter/Video",

@@ -321,6 +321,44 @@ TEST_F(RatioTemp, saturated_nan_and_dim_bands_give_no_reading) {
   for (int i = 5; i < 8; ++i) EXPECT_EQ(partial[i], lik[i]) << i;
 }
 
+// misfit-probability: off by default; on, a pixel whose bands fit no graybody (green covered only
+// in part, as at an edge) has no reading, while the graybody pixels keep theirs, for every
+// method and for the statistics path as for the codes path.
+TEST_F(RatioTemp, mixed_pixel_has_no_reading_with_the_misfit_check) {
+  const ThermalModel& m = rgb_model();
+  const Eigen::VectorXd rates = m.camera.rates(1000);
+  const Eigen::VectorXd s = rates * (200 / rates.maxCoeff());
+  std::vector<float> planes(3 * 4);
+  for (int i = 0; i < 4; ++i)
+    for (int b = 0; b < 3; ++b)
+      planes[static_cast<std::size_t>(b * 4 + i)] = static_cast<float>(s[b]);
+  planes[1 * 4 + 0] *= 0.3f;  // pixel 0: green from the cold side in part
+  for (const char* method : {"mlp", "likelihood"}) {
+    SCOPED_TRACE(method);
+    start(std::string("ratiotemp stats-interval=0 method=") + method + " model=" + rgb_model_path(),
+          bands_caps(3, "bayer", 4, 1));
+    double probability = -1;
+    g_object_get(element, "misfit-probability", &probability, nullptr);
+    EXPECT_EQ(probability, 0.0);
+    const auto off = run(planes, 4, 1);
+    ASSERT_EQ(off.size(), 4u);
+    EXPECT_NE(off[0], 0);  // read, and far off: the estimators have no way to tell
+    g_object_set(element, "misfit-probability", 1e-6, nullptr);
+    const auto on = run(planes, 4, 1);
+    ASSERT_EQ(on.size(), 4u);
+    EXPECT_EQ(on[0], 0);
+    for (int i = 1; i < 4; ++i) {
+      EXPECT_EQ(on[i], off[i]) << i;
+      EXPECT_NEAR(on[i] / 10.0 - 273.15, 1000, 30) << i;
+    }
+    // The float path (statistics due) drops it too.
+    g_object_set(element, "stats-interval", G_GUINT64_CONSTANT(1), nullptr);
+    EXPECT_EQ(run(planes, 4, 1), on);
+    TearDown();
+    h = nullptr, bus = nullptr, element = nullptr;
+  }
+}
+
 // A raw 8x8 RGGB frame of a graybody at t_c whose brightest band is 120 DN above the dark
 // level of 50, with a dim corner.
 std::vector<std::uint8_t> raw_bayer_frame(const ThermalModel& m, double t_c) {

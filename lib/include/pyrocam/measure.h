@@ -8,14 +8,18 @@
 
 #include "pyrocam/demosaic.h"
 #include "pyrocam/estimators.h"
+#include "pyrocam/misfit.h"
 
 namespace pyrocam {
 
 // Temperature (CV_32F degC, NaN = no reading) and, when asked, its expanded uncertainty (CV_32F
-// degC, NaN where no reading) from band planes (CV_32F DN, +INF saturated, NaN invalid).
+// degC, NaN where no reading) from band planes (CV_32F DN, +INF saturated, NaN invalid). With a
+// misfit probability above 0, every reading then goes through the band-consistency check
+// (misfit.h): a pixel whose bands fit no graybody near its temperature gets no reading.
 class PlaneEstimator {
  public:
-  PlaneEstimator(const ThermalModel& model, Method method);
+  // misfit_probability: the check's false-rejection probability, 0 = no check.
+  PlaneEstimator(const ThermalModel& model, Method method, double misfit_probability = 0);
   void estimate(const std::vector<cv::Mat>& planes, cv::Mat& temperature_c,
                 cv::Mat* uncertainty_c = nullptr) const;
   // The temperature codes (CV_16U, 0.1 K, 0 = no reading) straight from the planes: the same
@@ -23,10 +27,14 @@ class PlaneEstimator {
   // a caller's buffer (written in place when its size and type fit).
   void estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat& codes) const;
   const TemperatureEstimator& estimator() const { return *estimator_; }
+  const MisfitCheck& misfit() const { return misfit_; }
+  // Not while an estimate runs. Throws InputError outside 0 or (0, 1).
+  void set_misfit_probability(double probability) { misfit_.set_probability(probability); }
 
  private:
   const ThermalModel& model_;
   std::unique_ptr<TemperatureEstimator> estimator_;
+  MisfitCheck misfit_;
 };
 
 struct MeasureOptions {
@@ -34,6 +42,7 @@ struct MeasureOptions {
   DemosaicMethod demosaic = DemosaicMethod::kBilinear;
   double saturation_level_dn = -1;  // raw DN; -1: the profile's inference saturation threshold
   bool uncertainty = false;
+  double misfit_probability = 0;  // band-consistency check (misfit.h); 0: none
 };
 
 // One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.
