@@ -23,6 +23,22 @@ constexpr float kZeroCelsiusF = 273.15f;
 #define PYROCAM_VECTOR_CLONES
 #endif
 
+// chi2 after one Gauss-Newton step in temperature from the reading, at most `window` times its
+// absolute temperature: a = the profiled scale, sd and md the weighted products of the signals
+// and of the locus rates with the rates' temperature derivative, curvature the weighted square
+// of that derivative across the rates. Never above the chi2 at the reading, never below 0.
+inline float chi2_after_step(float chi2, float a, float sd, float md, float curvature,
+                             float temperature_c, float window) {
+  const float slope = -2 * a * (sd - a * md);
+  const float hessian = 2 * a * a * curvature;
+  const float limit = window * (temperature_c + kZeroCelsiusF);
+  float step = hessian > 0.f ? -slope / hessian : 0.f;
+  step = step < limit ? step : limit;
+  step = step > -limit ? step : -limit;
+  const float reduced = chi2 + slope * step + 0.5f * hessian * step * step;
+  return reduced < chi2 ? (reduced > 0.f ? reduced : 0.f) : chi2;
+}
+
 // ln Gamma(a) for a = dof / 2 (a whole or half number): exact recursion from Gamma(1) = 1 and
 // Gamma(1/2) = sqrt(pi), no global state (std::lgamma may write signgam).
 double log_gamma_half_integer(int twice_a) {
@@ -112,15 +128,7 @@ template <int kFixedBands>
       const float across = d[b] - along * m[b];
       curvature += w[b] * across * across;
     }
-    // One Gauss-Newton step in temperature, at most `window` times the absolute temperature.
-    const float slope = -2 * a * (sd - a * md);
-    const float hessian = 2 * a * a * curvature;
-    const float limit = window * (temperature + kZeroCelsiusF);
-    float step = hessian > 0.f ? -slope / hessian : 0.f;
-    step = step < limit ? step : limit;
-    step = step > -limit ? step : -limit;
-    const float reduced = chi2 + slope * step + 0.5f * hessian * step * step;
-    chi2 = reduced < chi2 ? (reduced > 0.f ? reduced : 0.f) : chi2;
+    chi2 = chi2_after_step(chi2, a, sd, md, curvature, temperature, window);
     // NaN chi2 (no counted band) fails the comparison: the reading (if any) stays.
     t[k] = chi2 > thresholds[counted] ? std::numeric_limits<float>::quiet_NaN() : temperature;
   }
@@ -190,16 +198,8 @@ void apply_misfit_3(const float* const* planes, std::size_t n, float* t, const f
       float chi2 = w0 * r0 * r0 + w1 * r1 * r1 + w2 * r2 * r2;
       const float c0 = d0 - along * m_0, c1 = d1 - along * m_1, c2 = d2 - along * m_2;
       const float curvature = w0 * c0 * c0 + w1 * c1 * c1 + w2 * c2 * c2;
-      // One Gauss-Newton step in temperature, at most `window` times the absolute temperature.
-      const float slope = -2 * a * (sd - a * md);
-      const float hessian = 2 * a * a * curvature;
       const float temperature = tc[k];
-      const float limit = window * (temperature + kZeroCelsiusF);
-      float step = hessian > 0.f ? -slope / hessian : 0.f;
-      step = step < limit ? step : limit;
-      step = step > -limit ? step : -limit;
-      const float reduced = chi2 + slope * step + 0.5f * hessian * step * step;
-      chi2 = reduced < chi2 ? (reduced > 0.f ? reduced : 0.f) : chi2;
+      chi2 = chi2_after_step(chi2, a, sd, md, curvature, temperature, window);
       const bool drop = all_read && chi2 > threshold;  // NaN (no reading) fails
       tc[k] = drop ? std::numeric_limits<float>::quiet_NaN() : temperature;
     }
