@@ -21,6 +21,7 @@ struct MeasureArgs {
   std::string method = "mlp", demosaic = "bilinear", format = "png";
   double saturation = -1;
   double misfit_probability = 0;
+  bool allow_partial = false;
   bool uncertainty = false;
 };
 
@@ -112,6 +113,9 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       ->check(CLI::IsMember({"png", "tiff"}))
       ->capture_default_str();
   c->add_flag("--uncertainty", a.uncertainty, "Also write the expanded uncertainty (k=2)");
+  c->add_flag("--allow-partial", a.allow_partial,
+              "likelihood only: read pixels with some bands saturated or dim from the rest (at "
+              "least two; ratiotemp's allow-partial); without it such pixels have no reading");
   c->callback([&global, &selected, c] {
     if (a.dataset.empty() && a.frame.empty())
       throw CLI::ValidationError("measure", "give --dataset or --frame");
@@ -126,6 +130,7 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       options.saturation_level_dn = a.saturation;
       options.uncertainty = a.uncertainty;
       options.misfit_probability = a.misfit_probability;
+      options.allow_partial = a.allow_partial;
       FrameMeasurer measurer(model, options);
 
       struct Job {

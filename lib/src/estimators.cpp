@@ -247,7 +247,7 @@ class ExhaustiveLikelihoodEstimator : public LikelihoodFit {
 
   double temperature_c(const double* s) const override {
     Weighted px;
-    if (weigh(s, px) < 2) return NAN;
+    if (weigh(s, px) < min_bands_) return NAN;
     const Eigen::Index n = locus_.size();
     std::vector<double> c;
     for (Eigen::Index i = 0; i < n; i += kCoarse) c.push_back(chi2(i, px));
@@ -314,7 +314,7 @@ class LikelihoodEstimator : public LikelihoodFit {
 
   double temperature_c(const double* s) const override {
     Weighted px;
-    if (weigh(s, px) < 2) return NAN;
+    if (weigh(s, px) < min_bands_) return NAN;
     // Projections of w*s and w on the factors.
     alignas(32) double p[kMaxRank] = {}, q[kMaxRank] = {};
     alignas(32) float pf[kMaxRank], qf[kMaxRank];
@@ -792,7 +792,8 @@ std::string method_name(Method m) {
 TemperatureEstimator::TemperatureEstimator(const ThermalModel& model)
     : model_(model),
       bands_(model.profile().band_count()),
-      dim_dn_(model.profile().thresholds.inference_dim_dn) {
+      dim_dn_(model.profile().thresholds.inference_dim_dn),
+      min_bands_(bands_) {
   if (bands_ > kMaxBands) throw InputError("at most 64 bands are supported");
 }
 

@@ -91,6 +91,7 @@ FrameMeasurer::FrameMeasurer(const ThermalModel& model, const MeasureOptions& op
     : model_(model),
       options_(options),
       planes_estimator_(model, options.method, options.misfit_probability) {
+  planes_estimator_.set_allow_partial(options.allow_partial);
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model.profile().thresholds.inference_saturation_dn;
 }

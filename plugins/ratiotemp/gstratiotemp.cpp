@@ -110,7 +110,6 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
-#include "pyrocam/band_validity.h"
 #include "pyrocam/difference_codes.h"
 #include "pyrocam/estimator_check.h"
 #include "pyrocam/measure.h"
@@ -639,26 +638,17 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
           st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
         pyrocam::PlaneEstimator& chosen = *st.estimators[static_cast<std::size_t>(st.method)];
         chosen.set_misfit_probability(settings.misfit_probability);
+        chosen.set_allow_partial(settings.allow_partial);
         const pyrocam::PlaneEstimator& estimator = chosen;
-        // mlp and lut need every band anyway; likelihood is held to that unless allow-partial.
-        cv::Mat incomplete;
-        if (!settings.allow_partial && st.method == pyrocam::Method::kLikelihood)
-          incomplete = pyrocam::complete_band_mask(
-                           st.planes, st.model->profile().thresholds.inference_dim_dn) == 0;
         MappedFrame out(outbuf, &st.out_info);
         if (!uncertainty && !stats_due) {
           // Straight into the output frame (the header wraps it; a copy only if it did not fit).
           cv::Mat codes = out.image;
           estimator.estimate_codes(st.planes, codes);
-          if (!incomplete.empty()) codes.setTo(0, incomplete);
           if (codes.data != out.image.data) codes.copyTo(out.image);
           return;
         }
         estimator.estimate(st.planes, st.temperature_c, uncertainty ? &st.uncertainty_c : nullptr);
-        if (!incomplete.empty()) {
-          st.temperature_c.setTo(NAN, incomplete);
-          if (uncertainty) st.uncertainty_c.setTo(NAN, incomplete);
-        }
         if (uncertainty) {
           pyrocam::encode_decikelvin_difference(st.uncertainty_c).copyTo(out.image);
         } else {

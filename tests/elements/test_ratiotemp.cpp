@@ -95,12 +95,18 @@ LibraryResult library(const ThermalModel& m, Method method, const std::vector<cv
                       bool uncertainty = false, bool partial = false) {
   LibraryResult r;
   PlaneEstimator est(m, method);
+  est.set_allow_partial(partial);
   est.estimate(planes, r.t, uncertainty ? &r.u : nullptr);
   if (!partial) {
-    const cv::Mat incomplete =
-        complete_band_mask(planes, m.profile().thresholds.inference_dim_dn) == 0;
-    r.t.setTo(NAN, incomplete);
-    if (uncertainty) r.u.setTo(NAN, incomplete);
+    // Checked here against the independent mask, so that the element's results compared with
+    // these are held to it too.
+    const cv::Mat complete =
+        complete_band_mask(planes, m.profile().thresholds.inference_dim_dn) != 0;
+    for (int y = 0; y < r.t.rows; ++y)
+      for (int x = 0; x < r.t.cols; ++x)
+        if (!complete.at<std::uint8_t>(y, x)) {
+          EXPECT_TRUE(std::isnan(r.t.at<float>(y, x)));
+        }
   }
   return r;
 }

@@ -280,6 +280,8 @@ TEST(Baselines, two_colour_is_exact_for_narrow_bands_without_blue) {
 TEST(Estimators, likelihood_fit_inverts_noise_free_signals_and_drops_saturated_bands) {
   const ThermalModel m = small_model(load_profile_by_name("rgb-reference"));
   const auto est = make_estimator(m, Method::kLikelihood);
+  est->set_allow_partial(true);
+  const auto strict = make_estimator(m, Method::kLikelihood);  // every band needed (default)
   for (double t : {700.0, 1234.5, 2000.0, 3000.0}) {
     Eigen::VectorXd s = m.camera.rates(t);
     s *= 150 / s.maxCoeff();  // an exposure that puts the brightest band at 150 DN
@@ -291,6 +293,8 @@ TEST(Estimators, likelihood_fit_inverts_noise_free_signals_and_drops_saturated_b
     sat.maxCoeff(&brightest);
     sat[brightest] = INFINITY;
     const double two_bands = est->temperature_c(sat.data());
+    EXPECT_NEAR(strict->temperature_c(s.data()), t, 0.5) << t;
+    EXPECT_TRUE(std::isnan(strict->temperature_c(sat.data()))) << t << " partial, not allowed";
     if (std::isfinite(two_bands)) {
       EXPECT_NEAR(two_bands, t, 1.0) << t << " without its brightest band";
     }
@@ -298,6 +302,7 @@ TEST(Estimators, likelihood_fit_inverts_noise_free_signals_and_drops_saturated_b
   // 25 bands: one saturated band leaves plenty.
   const ThermalModel nir = small_model(load_profile_by_name("nir5x5-reference"));
   const auto nir_est = make_estimator(nir, Method::kLikelihood);
+  nir_est->set_allow_partial(true);
   for (double t : {1100.0, 2345.6}) {
     Eigen::VectorXd s = nir.camera.rates(t);
     s *= 150 / s.maxCoeff();

@@ -31,6 +31,13 @@ class TemperatureEstimator {
   virtual void estimate(const float* const* planes, std::size_t n, float* out_c) const;
 
   const ThermalModel& model() const { return model_; }
+
+  // Whether the likelihood fit may read a pixel from the bands left when some are saturated,
+  // missing or dim (at least two of them). Off (the default) such a pixel has no reading with
+  // every method: a colour pixel's two remaining bands can pin the fit near the turning point of
+  // their ratio, a reading that looks right and is not. The network and its table always need
+  // every band.
+  void set_allow_partial(bool allow) { min_bands_ = allow ? 2 : bands_; }
   // Bytes of the tables the estimator holds (the lookup table grows as pixels need its blocks,
   // up to a bound set by the model).
   virtual std::size_t memory_bytes() const { return 0; }
@@ -43,6 +50,7 @@ class TemperatureEstimator {
   const ThermalModel& model_;
   int bands_;
   double dim_dn_;
+  int min_bands_;  // bands the likelihood fit needs (set_allow_partial)
 };
 
 // The model must outlive the estimator. Throws InputError when the method does not fit the

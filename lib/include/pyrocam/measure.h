@@ -27,6 +27,8 @@ class PlaneEstimator {
   // a caller's buffer (written in place when its size and type fit).
   void estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat& codes) const;
   const TemperatureEstimator& estimator() const { return *estimator_; }
+  // See TemperatureEstimator::set_allow_partial (off by default).
+  void set_allow_partial(bool allow) { estimator_->set_allow_partial(allow); }
   const MisfitCheck& misfit() const { return misfit_; }
   // Not while an estimate runs. Throws InputError outside 0 or (0, 1).
   void set_misfit_probability(double probability) { misfit_.set_probability(probability); }
@@ -43,6 +45,7 @@ struct MeasureOptions {
   double saturation_level_dn = -1;  // raw DN; -1: the profile's inference saturation threshold
   bool uncertainty = false;
   double misfit_probability = 0;  // band-consistency check (misfit.h); 0: none
+  bool allow_partial = false;     // TemperatureEstimator::set_allow_partial
 };
 
 // One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.
