@@ -14,7 +14,7 @@ namespace {
 
 TEST(Planck, matches_colour_science_test_vectors) {
   std::ifstream in(test::shared_data_dir() / "colour_science_test_vectors_planck_ohno2013.json");
-  ASSERT_TRUE(in) << "shared/data test vectors not found";
+  ASSERT_TRUE(in) << "test vectors not found in " << test::shared_data_dir();
   const auto vectors = nlohmann::json::parse(in).at("planck_law");
   const auto wavelengths = vectors.at("wavelengths_m").get<std::vector<double>>();
   // The vectors use c1 = 3.741771e-16 (5 digits) where we use 2 h c^2 from exact constants.

@@ -181,8 +181,9 @@ TEST_F(ProfileFiles, rejects_unknown_band_in_normalisation_n) {
 }
 
 TEST(ImecXml, reads_25_bands_at_1nm_from_the_factory_file) {
-  const auto bands = read_imec_band_responses(test::shared_data_dir() /
-                                              "imec_CMV2K-SSM5x5-665_975-13.8.15.1_HS02-NIR.xml");
+  const auto bands =
+      read_imec_band_responses(std::filesystem::path(PYROCAM_TEST_PROFILE_DIR) / "curves" /
+                               "imec_CMV2K-SSM5x5-665_975-13.8.15.1_HS02-NIR.xml");
   ASSERT_EQ(bands.size(), 25u);
   EXPECT_EQ(bands[0].wavelength_nm.size(), 601u);
   EXPECT_DOUBLE_EQ(bands[24].wavelength_nm.back(), 1000.0);

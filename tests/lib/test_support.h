@@ -6,7 +6,7 @@
 
 namespace pyrocam::test {
 
-// ../shared/data (or $PYROCAM_SHARED_DATA).
+// tests/reference-data (or $PYROCAM_SHARED_DATA).
 std::filesystem::path shared_data_dir();
 // A fresh, empty folder under the system temp dir, removed when the object goes.
 class ScratchDir {
