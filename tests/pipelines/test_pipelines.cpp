@@ -370,7 +370,10 @@ TEST_F(Stream, received_on_loopback_by_watch_stream) {
                                      {"MODEL", rgb_model()},
                                      {"SOURCE", kLiveScene},
                                      {"CAPS", kCaps},
-                                     {"NUM_BUFFERS", std::to_string(kFrames)}},
+                                     {"NUM_BUFFERS", std::to_string(kFrames)},
+                                     // CI's two cores run other tests beside this one: the
+                                     // overlay branch may need more than the default 100 ms.
+                                     {"LATENCY_MS", "1000"}},
                                     log("stream"), kRunLimit);
   ASSERT_EQ(sent.status, 0) << sent.log;
   // A screen shows frames until stopped: wait for the last one (and a moment for any extra),
