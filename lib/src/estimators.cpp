@@ -303,6 +303,12 @@ class LikelihoodEstimator : public LikelihoodFit {
       squares.row(i) = unit.row(i).array().square().matrix();
     }
     coarse_count_ = (n + kCoarse - 1) / kCoarse;
+    // The coarse scan compares each sample with its neighbours: it needs two.
+    if (coarse_count_ < 2)
+      throw InputError("method likelihood: the model's temperature range (" +
+                       std::to_string(m.min_temperature_c) + " to " +
+                       std::to_string(m.max_temperature_c) + " degC) spans less than " +
+                       std::to_string(kCoarse) + " degC");
     if (coarse_count_ > kMaxCoarse)
       throw InputError("method likelihood: the model's temperature range is too wide");
     stride_ = padded(n);

@@ -324,6 +324,20 @@ TEST(Estimators, mlp_method_needs_every_band_valid) {
   EXPECT_TRUE(std::isnan(est->temperature_c(nan)));
 }
 
+TEST(Estimators, likelihood_rejects_a_range_narrower_than_its_coarse_step_n) {
+  ThermalModel m = small_model(load_profile_by_name("rgb-reference"));
+  m.min_temperature_c = 1000;
+  m.max_temperature_c = 1015;
+  try {
+    make_estimator(m, Method::kLikelihood);
+    ADD_FAILURE() << "a 15 degC range was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("spans less than 20 degC"), std::string::npos) << e.what();
+  }
+  m.max_temperature_c = 1040;
+  EXPECT_NO_THROW(make_estimator(m, Method::kLikelihood));
+}
+
 TEST(Estimators, lut_method_rejects_a_multispectral_model_n) {
   const ThermalModel m = small_model(load_profile_by_name("nir5x5-reference"));
   EXPECT_THROW(make_estimator(m, Method::kLut), InputError);
