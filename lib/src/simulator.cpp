@@ -69,11 +69,15 @@ Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbat
 
   // The deviations no QE solver here models (its own random stream, so that the components
   // above stay the same for a seed whatever these are set to).
+  // std::normal_distribution keeps the second value of each pair it draws for its next call,
+  // whatever engine that call passes: each stream needs its own.
   std::mt19937_64 unmodelled(mix(unit.seed ^ 0x5EC0DE5ull));
-  const Eigen::VectorXd optics = v.filter_shift_sigma_nm > 0
-                                     ? shift_curve(profile.optics_transmission, grid,
-                                                   v.filter_shift_sigma_nm * normal(unmodelled))
-                                     : profile.optics_transmission;
+  std::normal_distribution<double> unmodelled_normal(0.0, 1.0);
+  const Eigen::VectorXd optics =
+      v.filter_shift_sigma_nm > 0
+          ? shift_curve(profile.optics_transmission, grid,
+                        v.filter_shift_sigma_nm * unmodelled_normal(unmodelled))
+          : profile.optics_transmission;
   const auto ripple = [&]() {
     // Three sinusoids of random period and phase, together of relative rms v.ripple_rms.
     Eigen::VectorXd factor = Eigen::VectorXd::Ones(grid.size());

@@ -156,6 +156,11 @@ TEST_F(SimulatedRgb, typical_unit_deviates_outside_the_solvers_model_family) {
   shifted.unit_variation.filter_shift_sigma_nm = 1.0;
   const Eigen::MatrixXd with_shift = true_system_qe(shifted, UnitPerturbation{"typical", 5});
   EXPECT_FALSE(with_shift.isApprox(modelled, 1e-6));
+  // The modelled components (per-band shift, scale, tilt) stay those of the seed: in the flat
+  // middle of the pass band the shifted filter changes the QE by a hair, not by a band's scale.
+  const auto middle = profile.grid.index_of(550);
+  for (int b = 0; b < 3; ++b)
+    EXPECT_NEAR(with_shift(b, middle) / modelled(b, middle), 1.0, 2e-3) << "band " << b;
   // At a filter edge a shift changes the QE by far more than inside the band.
   const auto edge = profile.grid.index_of(profile.filter_pass_band_nm[1]);
   EXPECT_GT(std::abs(with_shift(0, edge) / modelled(0, edge) - 1), 0.005);
