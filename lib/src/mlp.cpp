@@ -11,6 +11,9 @@
 #include <string>
 #include <utility>
 
+#include "pyrocam/physics.h"
+#include "random.h"
+
 namespace pyrocam {
 namespace {
 
@@ -21,7 +24,7 @@ using json = nlohmann::json;
 // half-degree target; the output layer's least squares run in double.
 using TrainingScalar = float;
 
-constexpr double kKelvinOffset = 273.15;
+constexpr double kKelvinOffset = kZeroCelsius;
 
 // Target (degC) -> the network's output quantity.
 double to_network_units(MlpOutputTransform t, double y) {
@@ -82,29 +85,6 @@ const char* to_string(MlpOutputTransform t) {
 constexpr Eigen::Index kInferenceChunk = 256;
 // The training curve gets a point every this many polish iterations (and at the last).
 constexpr int kPolishReportInterval = 10;
-
-// The standard library's distributions are implementation-defined; these are not, so a seed
-// means the same model with any standard library.
-class Random {
- public:
-  explicit Random(std::uint64_t seed) : engine_(seed) {}
-  std::uint64_t bits() { return engine_(); }
-  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }  // [0, 1)
-  double normal() {                     // Box-Muller, one value per pair
-    const double u1 = 1.0 - uniform();  // (0, 1]
-    const double u2 = uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
-  }
-  // Uniform in [0, n); modulo bias is below 2^-40 for any n we shuffle.
-  std::size_t below(std::size_t n) { return static_cast<std::size_t>(engine_() % n); }
-  template <class T>
-  void shuffle(std::vector<T>& v) {
-    for (std::size_t i = v.size(); i > 1; --i) std::swap(v[i - 1], v[below(i)]);
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
 
 template <class S>
 struct Network {

@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
+
+#include "random.h"
 
 namespace pyrocam {
 namespace {
@@ -14,21 +15,6 @@ constexpr double kFitMarginC = 300;
 constexpr double kLowestFitC = 100;
 // Draws per copy before it is dropped.
 constexpr int kAttempts = 8;
-
-// mt19937_64 is specified exactly; the standard distributions are not, so these are written out
-// and a seed gives the same samples with any standard library.
-class Draw {
- public:
-  explicit Draw(std::uint64_t seed) : engine_(seed) {}
-  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }  // [0, 1)
-  double normal() {
-    const double u1 = 1.0 - uniform();  // (0, 1]
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * uniform());
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
 
 }  // namespace
 
@@ -55,7 +41,7 @@ MlpSamples NoisyLocus::sample(const std::vector<Eigen::Index>& rows, std::uint64
   const double dim = profile.thresholds.inference_dim_dn;
   // The saturation threshold is of raw values; the signals are dark-subtracted.
   const double bright = profile.thresholds.inference_saturation_dn - profile.dark_offset_dn;
-  Draw draw(seed);
+  Random draw(seed);
   MlpSamples out;
   out.inputs.resize(static_cast<Eigen::Index>(rows.size()) * options_.copies, inputs);
   out.targets.resize(out.inputs.rows());
