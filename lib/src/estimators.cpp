@@ -11,20 +11,12 @@
 #include <vector>
 
 #include "pyrocam/spectrum.h"
+#include "vector_clones.h"
 
 namespace pyrocam {
 namespace {
 
 constexpr int kMaxBands = 64;
-
-// Hot loops are compiled twice, for x86-64-v3 (AVX2) and the baseline, the version picked when the
-// program loads. The library is built with -ffp-contract=off (no fused multiply-adds), so both
-// versions give the same bits.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define PYROCAM_VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define PYROCAM_VECTOR_CLONES
-#endif
 
 // Samples per step of approximate_chi2: long coarse scans in single precision, short windows
 // in double precision.
@@ -176,12 +168,10 @@ class LikelihoodFit : public TemperatureEstimator {
         rates_[static_cast<std::size_t>(i * bands_ + b)] = m;
         squares_[static_cast<std::size_t>(i * bands_ + b)] = m * m;
       }
-    // signal_variance_dn2 per band as gain * signal + floor, with the same arithmetic.
-    const Eigen::VectorXd k = m.profile().dn_per_electron();
     for (int b = 0; b < bands_; ++b) {
-      const double read = k[b] * m.profile().noise.read_noise_e;
-      shot_gain_[b] = k[b];
-      noise_floor_[b] = 2 * (read * read + 1.0 / 12);
+      const SignalNoise n = signal_noise(m.profile(), b);
+      shot_gain_[b] = n.shot_gain;
+      noise_floor_[b] = n.floor_dn2;
     }
   }
 
@@ -838,12 +828,15 @@ std::unique_ptr<TemperatureEstimator> make_exhaustive_likelihood_estimator(
   return std::make_unique<ExhaustiveLikelihoodEstimator>(model);
 }
 
-double signal_variance_dn2(const CameraProfile& p, int band, double signal_dn, int frames) {
-  const double k = p.dn_per_electron()[band];
+SignalNoise signal_noise(const CameraProfile& p, int band) {
+  const double k = p.band_gain[band] * p.noise.system_gain_dn_per_e;
   const double read = k * p.noise.read_noise_e;
-  // Shot noise of the signal, read noise and quantisation of the frame and of its dark.
-  const double var = k * std::max(signal_dn, 0.0) + 2 * (read * read + 1.0 / 12);
-  return var / std::max(frames, 1);
+  return {k, 2 * (read * read + 1.0 / 12)};
+}
+
+double signal_variance_dn2(const CameraProfile& p, int band, double signal_dn, int frames) {
+  const SignalNoise n = signal_noise(p, band);
+  return (n.shot_gain * std::max(signal_dn, 0.0) + n.floor_dn2) / std::max(frames, 1);
 }
 
 double expanded_uncertainty_c(const TemperatureEstimator& est, const double* signals, double t_c,

@@ -6,16 +6,14 @@
 
 #include "pyrocam/darksub.h"
 #include "pyrocam/spectrum.h"
+#include "vector_clones.h"
 
 namespace pyrocam {
 
 namespace {
 
-// Compiled for x86-64-v3 too, where the rounding vectorises (same results: std::round, no
-// fused multiply-adds in this library).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("arch=x86-64-v3", "default")))
-#endif
+// Compiled for x86-64-v3 too, where the rounding vectorises.
+PYROCAM_VECTOR_CLONES
 void encode_decikelvin_row(const float* __restrict in, std::uint16_t* __restrict out, int n) {
   for (int x = 0; x < n; ++x) {
     const double dk = std::round((in[x] + kZeroCelsius) * 10);
@@ -26,9 +24,16 @@ void encode_decikelvin_row(const float* __restrict in, std::uint16_t* __restrict
 }  // namespace
 
 PlaneEstimator::PlaneEstimator(const ThermalModel& model, Method method, double misfit_probability)
-    : model_(model),
-      estimator_(make_estimator(model, method)),
-      misfit_(model, misfit_probability) {}
+    : model_(model), estimator_(make_estimator(model, method)), misfit_(nullptr) {
+  set_misfit_probability(misfit_probability);
+}
+
+void PlaneEstimator::set_misfit_probability(double probability) {
+  if (misfit_)
+    misfit_->set_probability(probability);
+  else if (probability != 0)  // the check's constructor refuses what set_probability refuses
+    misfit_ = std::make_unique<MisfitCheck>(model_, probability);
+}
 
 void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv::Mat* u) const {
   const int bands = model_.profile().band_count();
@@ -49,7 +54,7 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
       float* out = t.ptr<float>(y);
       estimator_->estimate(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
-      misfit_.apply(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
+      if (misfit_) misfit_->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
       if (!u) continue;
       float* uo = u->ptr<float>(y);
       for (int x = 0; x < size.width; ++x) {
@@ -81,7 +86,7 @@ void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat&
     for (int y = rows.start; y < rows.end; ++y) {
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
       estimator_->estimate(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
-      misfit_.apply(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
+      if (misfit_) misfit_->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
       encode_decikelvin_row(t.data(), codes.ptr<std::uint16_t>(y), size.width);
     }
   });

@@ -9,19 +9,13 @@
 #include "pyrocam/estimators.h"
 #include "pyrocam/physics.h"
 #include "pyrocam/spectrum.h"
+#include "vector_clones.h"
 
 namespace pyrocam {
 namespace {
 
 constexpr int kMaxBands = 64;
 constexpr float kZeroCelsiusF = 273.15f;
-
-// As in estimators.cpp: the pixel loop compiled for x86-64-v3 (AVX2 gathers) and the baseline.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define PYROCAM_VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define PYROCAM_VECTOR_CLONES
-#endif
 
 // chi2 after one Gauss-Newton step in temperature from the reading, at most `window` times its
 // absolute temperature: a = the profiled scale, sd and md the weighted products of the signals
@@ -268,12 +262,10 @@ MisfitCheck::MisfitCheck(const ThermalModel& model, double probability, double m
       table_[at] = static_cast<float>(table_d_[at]);
     }
   }
-  // signal_variance_dn2 as gain * signal + floor, with the same terms.
-  const Eigen::VectorXd k = model.profile().dn_per_electron();
   for (int b = 0; b < bands_; ++b) {
-    const double read = k[b] * model.profile().noise.read_noise_e;
-    gain_.push_back(static_cast<float>(k[b]));
-    floor_.push_back(static_cast<float>(2 * (read * read + 1.0 / 12)));
+    const SignalNoise n = signal_noise(model.profile(), b);
+    gain_.push_back(static_cast<float>(n.shot_gain));
+    floor_.push_back(static_cast<float>(n.floor_dn2));
   }
   set_probability(probability);
 }

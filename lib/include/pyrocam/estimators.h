@@ -68,6 +68,14 @@ std::unique_ptr<TemperatureEstimator> make_exhaustive_likelihood_estimator(
 double signal_variance_dn2(const CameraProfile& profile, int band, double signal_dn,
                            int frames = 1);
 
+// The same for a single frame as shot_gain * max(signal, 0) + floor (shot noise; read noise and
+// quantisation of the frame and of its dark), for loops that weigh many pixels.
+struct SignalNoise {
+  double shot_gain;  // DN per electron
+  double floor_dn2;
+};
+SignalNoise signal_noise(const CameraProfile& profile, int band);
+
 // Expanded uncertainty (k from the model, 2 by default) of an estimate, degC: GUM with band
 // sensitivities by central differences (dS = 1 DN) and the model's systematic terms.
 double expanded_uncertainty_c(const TemperatureEstimator& estimator, const double* signals,
