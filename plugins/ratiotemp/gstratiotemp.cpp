@@ -229,9 +229,8 @@ std::string prepare_estimator(State& st, pyrocam::Method m) {
   try {
     if (!slot) slot = std::make_unique<pyrocam::PlaneEstimator>(*st.model, m);
     if (m != pyrocam::Method::kLut || st.lut_checked) return "";
-    pyrocam::PlaneEstimator mlp(*st.model, pyrocam::Method::kMlp);
-    const pyrocam::LocusAgreement a =
-        pyrocam::compare_on_locus(*st.model, slot->estimator(), mlp.estimator());
+    const auto mlp = pyrocam::make_estimator(*st.model, pyrocam::Method::kMlp);
+    const pyrocam::LocusAgreement a = pyrocam::compare_on_locus(*st.model, slot->estimator(), *mlp);
     st.lut_checked = true;
     if (a.max_difference_c > LUT_TOLERANCE_C || a.validity_differs * 100 > a.samples) {
       char what[256];

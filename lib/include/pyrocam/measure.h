@@ -29,14 +29,14 @@ class PlaneEstimator {
   const TemperatureEstimator& estimator() const { return *estimator_; }
   // See TemperatureEstimator::set_allow_partial (off by default).
   void set_allow_partial(bool allow) { estimator_->set_allow_partial(allow); }
-  const MisfitCheck& misfit() const { return misfit_; }
   // Not while an estimate runs. Throws InputError outside 0 or (0, 1).
-  void set_misfit_probability(double probability) { misfit_.set_probability(probability); }
+  void set_misfit_probability(double probability);
 
  private:
   const ThermalModel& model_;
   std::unique_ptr<TemperatureEstimator> estimator_;
-  MisfitCheck misfit_;
+  // Made when the check is first turned on (its tables cost a locus).
+  std::unique_ptr<MisfitCheck> misfit_;
 };
 
 struct MeasureOptions {
