@@ -114,10 +114,13 @@ void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& te
                                      "raw frame for a model of " + profile.name);
   const int depth = profile.bit_depth <= 8 ? CV_8U : CV_16U;
   if (raw.channels() != 1 || raw.depth() != depth)
-    throw InputError("raw frame: " + std::string(raw.depth() == CV_8U ? "8" : "16") + "-bit " +
-                     std::to_string(raw.channels()) + "-channel image, but the model's camera (" +
-                     profile.name + ") gives " + std::to_string(profile.bit_depth) +
-                     "-bit single-channel frames");
+    throw InputError("raw frame: " +
+                     std::string(raw.depth() == CV_8U    ? "8-bit"
+                                 : raw.depth() == CV_16U ? "16-bit"
+                                                         : cv::depthToString(raw.depth())) +
+                     " " + std::to_string(raw.channels()) +
+                     "-channel image, but the model's camera (" + profile.name + ") gives " +
+                     std::to_string(profile.bit_depth) + "-bit single-channel frames");
   const cv::Mat dark_f = dark.type() == CV_32F ? dark : dark_from_image(dark);
   subtract_dark(raw, dark_f, options_.saturation_level_dn, signal_);
   demosaic(signal_, model_.profile().mosaic, options_.demosaic, planes_);

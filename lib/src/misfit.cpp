@@ -15,22 +15,24 @@ namespace pyrocam {
 namespace {
 
 constexpr int kMaxBands = 64;
-constexpr float kZeroCelsiusF = 273.15f;
 
 // chi2 after one Gauss-Newton step in temperature from the reading, at most `window` times its
 // absolute temperature: a = the profiled scale, sd and md the weighted products of the signals
 // and of the locus rates with the rates' temperature derivative, curvature the weighted square
 // of that derivative across the rates. Never above the chi2 at the reading, never below 0.
-inline float chi2_after_step(float chi2, float a, float sd, float md, float curvature,
-                             float temperature_c, float window) {
-  const float slope = -2 * a * (sd - a * md);
-  const float hessian = 2 * a * a * curvature;
-  const float limit = window * (temperature_c + kZeroCelsiusF);
-  float step = hessian > 0.f ? -slope / hessian : 0.f;
+// Branch-free, so that the float batch vectorises; the double definition uses it too.
+template <class Real>
+inline Real chi2_after_step(Real chi2, Real a, Real sd, Real md, Real curvature, Real temperature_c,
+                            Real window) {
+  const Real zero = 0, half = 0.5;
+  const Real slope = -2 * a * (sd - a * md);
+  const Real hessian = 2 * a * a * curvature;
+  const Real limit = window * (temperature_c + static_cast<Real>(kZeroCelsius));
+  Real step = hessian > zero ? -slope / hessian : zero;
   step = step < limit ? step : limit;
   step = step > -limit ? step : -limit;
-  const float reduced = chi2 + slope * step + 0.5f * hessian * step * step;
-  return reduced < chi2 ? (reduced > 0.f ? reduced : 0.f) : chi2;
+  const Real reduced = chi2 + slope * step + half * hessian * step * step;
+  return reduced < chi2 ? (reduced > zero ? reduced : zero) : chi2;
 }
 
 // ln Gamma(a) for a = dof / 2 (a whole or half number): exact recursion from Gamma(1) = 1 and
@@ -324,11 +326,7 @@ double MisfitCheck::chi2(const double* s, double t_c, int* counted_out) const {
     curvature += w[b] * (d[b] - along * m[b]) * (d[b] - along * m[b]);
   }
   // The best graybody within the window: one Gauss-Newton step in temperature.
-  const double slope = -2 * a * (sd - a * md), hessian = 2 * a * a * curvature;
-  const double limit = kMisfitWindow * (t_c + kZeroCelsius);
-  const double step = hessian > 0 ? std::clamp(-slope / hessian, -limit, limit) : 0.0;
-  const double reduced = chi2 + slope * step + 0.5 * hessian * step * step;
-  return reduced < chi2 ? std::max(reduced, 0.0) : chi2;
+  return chi2_after_step(chi2, a, sd, md, curvature, t_c, kMisfitWindow);
 }
 
 void MisfitCheck::apply(const float* const* planes, std::size_t n, float* t_c) const {

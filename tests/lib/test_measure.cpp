@@ -79,6 +79,9 @@ TEST(FrameMeasurer, rejects_frames_the_models_camera_cannot_give_n) {
   // 16-bit frames for an 8-bit camera.
   const cv::Mat deep(250, 250, CV_16U, cv::Scalar(60));
   expect_refusal(nir_measurer, deep, deep, "16-bit");
+  // A float image is named as such, not as a 16-bit one.
+  const cv::Mat floats(250, 250, CV_32F, cv::Scalar(60));
+  expect_refusal(nir_measurer, floats, floats, "32F");
 
   const ThermalModel rgb = model_of("rgb-reference");
   FrameMeasurer rgb_measurer(rgb, MeasureOptions{Method::kMlp});
