@@ -305,7 +305,6 @@ class LikelihoodEstimator : public LikelihoodFit {
     coarse_stride_ = padded(coarse_count_);
     factor(unit, across_, rank_, coarse_rank_, along_, coarse_along_);
     factor(squares, across2_, rank2_, coarse_rank2_, along2_, coarse_along2_);
-    projected_ = std::min(kMaxRank, (std::max(rank_, rank2_) + 3) / 4 * 4);
   }
 
   double temperature_c(const double* s) const override {
@@ -426,7 +425,6 @@ class LikelihoodEstimator : public LikelihoodFit {
   }
 
   int rank_ = 0, rank2_ = 0, coarse_rank_ = 0, coarse_rank2_ = 0;
-  int projected_ = kMaxRank;  // ranks the projections compute (a multiple of 4)
   Eigen::Index stride_ = 0, coarse_count_ = 0, coarse_stride_ = 0;
   std::vector<double> across_, across2_, along_, along2_;
   std::vector<float> coarse_along_, coarse_along2_;

@@ -39,7 +39,9 @@ class TemperatureEstimator {
   // every band.
   void set_allow_partial(bool allow) { min_bands_ = allow ? 2 : bands_; }
   // Bytes of the tables the estimator holds (the lookup table grows as pixels need its blocks,
-  // up to a bound set by the model).
+  // up to 8192 of 4 KB; past that, pixels in blocks not yet filled are read by the network itself,
+  // which differs from the table by at most about 0.5 degC: which pixels those are then depends
+  // on the frames seen before).
   virtual std::size_t memory_bytes() const { return 0; }
 
  protected:
