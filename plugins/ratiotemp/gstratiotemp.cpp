@@ -581,22 +581,28 @@ static void post_stats(GstRatioTemp* self, const Settings& settings, GstBuffer* 
     stream_time = gst_segment_to_stream_time(segment, GST_FORMAT_TIME, pts);
     running_time = gst_segment_to_running_time(segment, GST_FORMAT_TIME, pts);
   }
+  // The statistics first: nothing to free should they throw.
+  const pyrocam::RegionStats whole = pyrocam::region_stats(st.temperature_c);
+  const bool with_region = !settings.region_text.empty() && settings.region_valid;
+  cv::Rect r;
+  pyrocam::RegionStats region;
+  if (with_region) {
+    const cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,
+                          settings.region.height);
+    r = wanted & cv::Rect(0, 0, st.width, st.height);
+    if (!r.empty()) region = pyrocam::region_stats(st.temperature_c(r));
+  }
   GstStructure* s =
       gst_structure_new(STATS_MESSAGE, "timestamp", G_TYPE_UINT64, static_cast<guint64>(pts),
                         "stream-time", G_TYPE_UINT64, static_cast<guint64>(stream_time),
                         "running-time", G_TYPE_UINT64, static_cast<guint64>(running_time), "method",
                         G_TYPE_STRING, pyrocam::method_name(st.method).c_str(), "width", G_TYPE_INT,
                         st.width, "height", G_TYPE_INT, st.height, nullptr);
-  set_stats_fields(s, "", pyrocam::region_stats(st.temperature_c));
-  if (!settings.region_text.empty() && settings.region_valid) {
-    const cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,
-                          settings.region.height);
-    const cv::Rect r = wanted & cv::Rect(0, 0, st.width, st.height);
+  set_stats_fields(s, "", whole);
+  if (with_region) {
     gst_structure_set(s, "region-x", G_TYPE_INT, r.x, "region-y", G_TYPE_INT, r.y, "region-width",
                       G_TYPE_INT, r.width, "region-height", G_TYPE_INT, r.height, nullptr);
-    set_stats_fields(
-        s, "region-",
-        r.empty() ? pyrocam::RegionStats() : pyrocam::region_stats(st.temperature_c(r)));
+    set_stats_fields(s, "region-", region);
   }
   gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), s));
 }
@@ -658,7 +664,9 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
       });
   if (!ok) return GST_FLOW_ERROR;
   if (stats_due) {
-    post_stats(self, settings, inbuf);
+    if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not compute temperature statistics",
+                         [&] { post_stats(self, settings, inbuf); }))
+      return GST_FLOW_ERROR;
     st.last_stats = position;
   }
   ++st.frames;
