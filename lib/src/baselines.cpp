@@ -5,6 +5,8 @@
 #include <functional>
 #include <numeric>
 
+#include "portable_math.h"
+
 namespace pyrocam {
 
 OhnoEstimator::OhnoEstimator(const Locus& locus) : t_(locus.temperature_c) {
@@ -31,7 +33,7 @@ double TwoColourEstimator::temperature_c(const Eigen::VectorXd& s) const {
   const double rp = p_.band_gain[0] * s[r_] - blue, gp = p_.band_gain[1] * s[g_] - blue;
   if (!(rp > 0) || !(gp > 0)) return NAN;
   const double lr = p_.lambda_r_nm * 1e-9, lg = p_.lambda_g_nm * 1e-9;
-  const double denom = 5 * std::log(lg / lr) - std::log(p_.gain * rp / gp);
+  const double denom = 5 * portable::log(lg / lr) - portable::log(p_.gain * rp / gp);
   const double t_k = kC2 * (1 / lr - 1 / lg) / denom;
   return t_k > 0 ? kelvin_to_celsius(t_k) : NAN;
 }

@@ -10,6 +10,7 @@
 #include <memory>
 #include <vector>
 
+#include "portable_math.h"
 #include "pyrocam/spectrum.h"
 #include "vector_clones.h"
 
@@ -501,7 +502,7 @@ bool interpolate(const float* __restrict corners, const float* __restrict wx,
   if (space == MlpOutputTransform::kInverseKelvin) {
     for (std::size_t k = 0; k < m; ++k) out[k] = 1.f / out[k] - kZeroCelsiusF;
   } else if (space == MlpOutputTransform::kLogKelvin) {
-    for (std::size_t k = 0; k < m; ++k) out[k] = std::exp(out[k]) - kZeroCelsiusF;
+    for (std::size_t k = 0; k < m; ++k) out[k] = portable::exp(out[k]) - kZeroCelsiusF;
   }
   // Selects in a separate loop, which the compiler vectorises.
   for (std::size_t k = 0; k < m; ++k) {
@@ -565,7 +566,7 @@ class LutEstimator : public TemperatureEstimator {
       m.mlp.predict_with_gradient(x, g);
       slope = std::max(slope, std::abs(g[0]) + std::abs(g[1]));
     }
-    const double widen = std::exp(kMarginLn);
+    const double widen = portable::exp(kMarginLn);
     const double x_lo = locus.ratios.col(0).minCoeff() / widen;
     const double x_hi = locus.ratios.col(0).maxCoeff() * widen;
     const double y_lo = locus.ratios.col(1).minCoeff() / widen;
@@ -743,7 +744,9 @@ class LutEstimator : public TemperatureEstimator {
       case MlpOutputTransform::kInverseKelvin:
         return (t_c.array() + kZeroCelsius).inverse().matrix();
       case MlpOutputTransform::kLogKelvin:
-        return (t_c.array() + kZeroCelsius).log().matrix();
+        return (t_c.array() + kZeroCelsius)
+            .unaryExpr([](double v) { return portable::log(v); })
+            .matrix();
       case MlpOutputTransform::kNone:
         break;
     }

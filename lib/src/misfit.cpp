@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 
+#include "portable_math.h"
 #include "pyrocam/estimators.h"
 #include "pyrocam/physics.h"
 #include "pyrocam/spectrum.h"
@@ -38,8 +39,8 @@ inline Real chi2_after_step(Real chi2, Real a, Real sd, Real md, Real curvature,
 // ln Gamma(a) for a = dof / 2 (a whole or half number): exact recursion from Gamma(1) = 1 and
 // Gamma(1/2) = sqrt(pi), no global state (std::lgamma may write signgam).
 double log_gamma_half_integer(int twice_a) {
-  double log_g = twice_a % 2 ? 0.5 * std::log(3.14159265358979323846) : 0.0;
-  for (int k = twice_a % 2 ? 1 : 2; k + 2 <= twice_a; k += 2) log_g += std::log(k / 2.0);
+  double log_g = twice_a % 2 ? 0.5 * portable::log(3.14159265358979323846) : 0.0;
+  for (int k = twice_a % 2 ? 1 : 2; k + 2 <= twice_a; k += 2) log_g += portable::log(k / 2.0);
   return log_g;
 }
 
@@ -48,7 +49,7 @@ double log_gamma_half_integer(int twice_a) {
 double upper_gamma_q(int twice_a, double x) {
   const double a = twice_a / 2.0;
   if (!(x > 0)) return 1.0;
-  const double log_prefactor = -x + a * std::log(x) - log_gamma_half_integer(twice_a);
+  const double log_prefactor = -x + a * portable::log(x) - log_gamma_half_integer(twice_a);
   constexpr double kEps = 1e-15, kTiny = 1e-300;
   if (x < a + 1) {
     double term = 1.0 / a, sum = term, ap = a;
@@ -58,7 +59,7 @@ double upper_gamma_q(int twice_a, double x) {
       sum += term;
       if (std::abs(term) < std::abs(sum) * kEps) break;
     }
-    return std::max(0.0, 1.0 - sum * std::exp(log_prefactor));
+    return std::max(0.0, 1.0 - sum * portable::exp(log_prefactor));
   }
   double b = x + 1 - a, c = 1 / kTiny, d = 1 / b, h = d;
   for (int i = 1; i < 10000; ++i) {
@@ -73,7 +74,7 @@ double upper_gamma_q(int twice_a, double x) {
     h *= delta;
     if (std::abs(delta - 1) < kEps) break;
   }
-  return std::exp(log_prefactor) * h;
+  return portable::exp(log_prefactor) * h;
 }
 
 // The pixel loop: bands fixed at compile time (kFixedBands > 0, unrolled and vectorised across

@@ -11,6 +11,7 @@
 #include <string>
 #include <utility>
 
+#include "portable_math.h"
 #include "pyrocam/physics.h"
 #include "random.h"
 
@@ -32,7 +33,7 @@ double to_network_units(MlpOutputTransform t, double y) {
     case MlpOutputTransform::kInverseKelvin:
       return 1.0 / (y + kKelvinOffset);
     case MlpOutputTransform::kLogKelvin:
-      return std::log(y + kKelvinOffset);
+      return portable::log(y + kKelvinOffset);
     case MlpOutputTransform::kNone:
       break;
   }
@@ -45,7 +46,7 @@ double from_network_units(MlpOutputTransform t, double v) {
     case MlpOutputTransform::kInverseKelvin:
       return v > 0 ? 1.0 / v - kKelvinOffset : std::numeric_limits<double>::quiet_NaN();
     case MlpOutputTransform::kLogKelvin: {
-      const double y = std::exp(v) - kKelvinOffset;
+      const double y = portable::exp(v) - kKelvinOffset;
       return std::isfinite(y) ? y : std::numeric_limits<double>::quiet_NaN();
     }
     case MlpOutputTransform::kNone:
@@ -60,7 +61,7 @@ double target_slope(MlpOutputTransform t, double v) {
     case MlpOutputTransform::kInverseKelvin:
       return -1.0 / (v * v);
     case MlpOutputTransform::kLogKelvin:
-      return std::exp(v);
+      return portable::exp(v);
     case MlpOutputTransform::kNone:
       break;
   }
@@ -357,7 +358,7 @@ double learning_rate_at(const MlpTrainingOptions& o, long step, long total_steps
   const long decay_steps = std::max(1L, total_steps - warmup);
   const double progress = std::min(1.0, static_cast<double>(step - warmup) / decay_steps);
   return o.final_learning_rate +
-         0.5 * (o.learning_rate - o.final_learning_rate) * (1.0 + std::cos(M_PI * progress));
+         0.5 * (o.learning_rate - o.final_learning_rate) * (1.0 + portable::cos(M_PI * progress));
 }
 
 void check_options(const MlpTrainingOptions& o) {
@@ -497,7 +498,7 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
                          std::to_string(r) + " input " + std::to_string(c) + " is " +
                          std::to_string(X(r, c)));
         }
-        transformed(r, c) = std::log(X(r, c));
+        transformed(r, c) = portable::log(X(r, c));
       }
     }
   }
@@ -618,7 +619,7 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
             "mlp: the log input transform needs inputs > 0; an augmented sample has "
             "an input <= 0");
       }
-      v = samples.inputs.array().log().matrix();
+      v = samples.inputs.unaryExpr([](double x) { return portable::log(x); });
     }
     a.z = input.apply(v).transpose().cast<S>();
     a.t_double.resize(count), a.weights_double.resize(count), a.slope_squared.resize(count);
@@ -757,8 +758,8 @@ Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
       // Exact when the factor is the same for all samples (weighted loss), approximate else.
       if (!augmenting) squared_error_sum += weighted_sum * factor_sum / static_cast<double>(n);
       const S lr = static_cast<S>(learning_rate_at(options, step, total_steps));
-      const S bias1 = static_cast<S>(1 - std::pow(0.9, static_cast<double>(step + 1)));
-      const S bias2 = static_cast<S>(1 - std::pow(0.999, static_cast<double>(step + 1)));
+      const S bias1 = static_cast<S>(1 - portable::pow(0.9, static_cast<double>(step + 1)));
+      const S bias2 = static_cast<S>(1 - portable::pow(0.999, static_cast<double>(step + 1)));
       const S decay = static_cast<S>(options.l2_weight_decay);
       for (std::size_t l = 0; l < layers; ++l) {
         adam_step(net.weights[l], grad.weights[l], adam_m.weights[l], adam_v.weights[l], lr, bias1,
@@ -954,7 +955,7 @@ template <class T>
 bool Mlp::standardise_input(const double* x, T* z) const {
   bool valid = true;
   for (Eigen::Index j = 0; j < input_.mean.size(); ++j) {
-    const double v = input_transform_ == MlpInputTransform::kLog ? std::log(x[j]) : x[j];
+    const double v = input_transform_ == MlpInputTransform::kLog ? portable::log(x[j]) : x[j];
     const double standardised = (v - input_.mean[j]) * inverse_input_scale_[j];
     valid = valid && std::isfinite(standardised);  // log of <= 0 gives -inf or NaN
     z[j] = static_cast<T>(standardised);

@@ -4,17 +4,22 @@
 #include <stdexcept>
 #include <string>
 
+#include "portable_math.h"
+
 namespace pyrocam {
 
 double planck_energy_radiance(double wavelength_m, double temperature_k, double emissivity) {
   const double x = kC2 / (wavelength_m * temperature_k);
   // expm1 keeps precision in the Rayleigh-Jeans limit (x small).
-  return emissivity * kC1L / std::pow(wavelength_m, 5) / std::expm1(x);
+  return emissivity * kC1L /
+         (wavelength_m * wavelength_m * wavelength_m * wavelength_m * wavelength_m) /
+         portable::expm1(x);
 }
 
 double planck_photon_radiance(double wavelength_m, double temperature_k, double emissivity) {
   const double x = kC2 / (wavelength_m * temperature_k);
-  return emissivity * 2.0 * kSpeedOfLight / std::pow(wavelength_m, 4) / std::expm1(x);
+  return emissivity * 2.0 * kSpeedOfLight /
+         (wavelength_m * wavelength_m * wavelength_m * wavelength_m) / portable::expm1(x);
 }
 
 WavelengthGrid::WavelengthGrid(double start_nm, double stop_nm, double step_nm)

@@ -7,6 +7,8 @@
 #include <limits>
 #include <numeric>
 
+#include "portable_math.h"
+
 namespace pyrocam {
 namespace {
 
@@ -100,7 +102,7 @@ Eigen::VectorXd step_weights(const CameraProfile& profile, const PaperSearchOpti
   for (Eigen::Index j = 0; j < nm.size(); ++j) {
     const double d = std::max({0.0, lo - nm[j], nm[j] - hi});
     const double f = o.taper_nm > 0 ? std::min(1.0, d / o.taper_nm) : (d > 0 ? 1.0 : 0.0);
-    w[j] = o.step_in_band * std::pow(o.step_out_of_band / o.step_in_band, f);
+    w[j] = o.step_in_band * portable::pow(o.step_out_of_band / o.step_in_band, f);
   }
   return w;
 }
@@ -128,7 +130,7 @@ Eigen::VectorXd paper_search_band(const Eigen::MatrixXd& radiance_valid, Eigen::
 
   double current = loss(0, 0.0, ssd);
   for (int sweep = 0; sweep < o.sweeps; ++sweep) {
-    const double decade = std::pow(10.0, -(sweep / std::max(1, o.sweeps_per_decade)));
+    const double decade = portable::pow(10.0, -(sweep / std::max(1, o.sweeps_per_decade)));
     for (Eigen::Index j = 0; j < n_l; ++j) {
       const double step = weights[j] * decade;
       double best = current, best_d = 0, best_ssd = ssd;
@@ -184,7 +186,7 @@ Eigen::MatrixXd leak_basis(const CameraProfile& profile, double spacing, std::ve
     Eigen::VectorXd c = Eigen::VectorXd::Zero(nm.size());
     for (Eigen::Index j = 0; j < nm.size(); ++j) {
       const double x = (nm[j] - centre) / spacing;
-      if (std::abs(x) < 1 && (nm[j] < lo || nm[j] > hi)) c[j] = 0.5 + 0.5 * std::cos(M_PI * x);
+      if (std::abs(x) < 1 && (nm[j] < lo || nm[j] > hi)) c[j] = 0.5 + 0.5 * portable::cos(M_PI * x);
     }
     if (c.maxCoeff() > 0) cols.push_back(c), side.push_back(s);
   };
@@ -301,7 +303,7 @@ class RegularisedModel {
     Eigen::MatrixXd dq;
     for (int b = 0; b < nb_; ++b) {
       const Eigen::VectorXd q = qe(b, th, &dq);
-      const double k = gain0_[b] * std::exp(th[b]);
+      const double k = gain0_[b] * portable::exp(th[b]);
       const double g = profile_.dn_per_electron()[b];
       const Eigen::MatrixXd wdq = p_.radiance * dq;  // temperatures x local params
       const Eigen::VectorXd wq = p_.radiance * q;
@@ -366,7 +368,7 @@ class RegularisedModel {
     }
   }
 
-  double gain(int b, const Eigen::VectorXd& th) const { return gain0_[b] * std::exp(th[b]); }
+  double gain(int b, const Eigen::VectorXd& th) const { return gain0_[b] * portable::exp(th[b]); }
 
   // rms relative misfit of the absolute rates.
   double data_rms(const Eigen::VectorXd& th) const {
@@ -534,7 +536,7 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
     if (th.size() == 0) th = Eigen::VectorXd::Zero(model.size());
     iterations += levenberg_marquardt(model, th, o.max_iterations);
     const double misfit = std::clamp(model.data_rms(th), options.min_relative_noise, 0.05);
-    if (std::abs(std::log(misfit / o.relative_noise)) < std::log(1.5)) break;
+    if (std::abs(portable::log(misfit / o.relative_noise)) < portable::log(1.5)) break;
     o.relative_noise = misfit;
   }
   const RegularisedModel model(profile, data, p, o);

@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "portable_math.h"
+
 namespace pyrocam {
 
 class Random {
@@ -19,7 +21,7 @@ class Random {
   double normal() {                     // Box-Muller, one value per pair
     const double u1 = 1.0 - uniform();  // (0, 1]
     const double u2 = uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+    return std::sqrt(-2.0 * portable::log(u1)) * portable::cos(2.0 * M_PI * u2);
   }
   // Uniform in [0, n); modulo bias is below 2^-40 for any n we shuffle.
   std::size_t below(std::size_t n) { return static_cast<std::size_t>(engine_() % n); }

@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 
+#include "portable_math.h"
 #include "pyrocam/dataset.h"
 #include "pyrocam/image_io.h"
 
@@ -54,7 +55,7 @@ cv::Mat filament_scene(int width, int height, double t_c) {
 }
 
 double melt_pool_peak_c(int index, int count) {
-  return 2000.0 + 500.0 * std::sin(2 * M_PI * 1.5 * index / std::max(1, count));
+  return 2000.0 + 500.0 * portable::sin(2 * M_PI * 1.5 * index / std::max(1, count));
 }
 
 cv::Mat melt_pool_scene(int width, int height, int index, int count) {
@@ -72,10 +73,10 @@ cv::Mat melt_pool_scene(int width, int height, int index, int count) {
       const double dx = x + 0.5 - x0, dy = y + 0.5 - y0;
       double f;
       if (dx >= 0) {
-        f = std::exp(-(dx * dx + dy * dy) / (2 * r * r));
+        f = portable::exp(-(dx * dx + dy * dy) / (2 * r * r));
       } else {
         const double widen = r * (1.0 + (-dx) / (3 * r));
-        f = std::exp(dx / tail) * std::exp(-dy * dy / (2 * widen * widen));
+        f = portable::exp(dx / tail) * portable::exp(-dy * dy / (2 * widen * widen));
       }
       const double t = ambient + (peak - ambient) * f;
       if (t > 400) m.at<float>(y, x) = static_cast<float>(t);

@@ -7,6 +7,7 @@
 #include <random>
 #include <sstream>
 
+#include "portable_math.h"
 #include "pyrocam/dataset.h"
 #include "pyrocam/image_io.h"
 
@@ -60,7 +61,7 @@ Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbat
   const double a = v.leak_range_nm[0], b = v.leak_range_nm[1];
   for (Eigen::Index i = 0; i < grid.size(); ++i) {
     const double x = grid.nm()[i];
-    if (x > a && x < b) leak[i] = 0.5 - 0.5 * std::cos(2 * M_PI * (x - a) / (b - a));
+    if (x > a && x < b) leak[i] = 0.5 - 0.5 * portable::cos(2 * M_PI * (x - a) / (b - a));
   }
   double peak_qe = 0;
   for (Eigen::Index i = 0; i < grid.size(); ++i)
@@ -88,7 +89,7 @@ Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbat
     for (int k = 0; k < 3; ++k) {
       const double p = period(unmodelled), f = phase(unmodelled);
       for (Eigen::Index i = 0; i < grid.size(); ++i)
-        factor[i] += amplitude * std::sin(2 * M_PI * grid.nm()[i] / p + f);
+        factor[i] += amplitude * portable::sin(2 * M_PI * grid.nm()[i] / p + f);
     }
     return Eigen::VectorXd(factor.cwiseMax(0.0));
   };
@@ -132,7 +133,7 @@ double Simulator::electron_rate(int band, double temperature_c) const {
   // Rates span many decades: interpolate the logarithm.
   const double r0 = rate_table_(band, i0), r1 = rate_table_(band, i1);
   if (r0 <= 0 || r1 <= 0) return r0 * (1 - f) + r1 * f;
-  return r0 * std::pow(r1 / r0, f);
+  return r0 * portable::pow(r1 / r0, f);
 }
 
 Eigen::VectorXd Simulator::mean_signal_dn(double temperature_c, double exposure_us,
@@ -238,8 +239,8 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
 
   std::vector<double> exposures;
   for (int k = 0; k < s.exposure_count; ++k)
-    exposures.push_back(std::round(s.first_exposure_us * std::pow(s.exposure_factor, k) * 1000) /
-                        1000);
+    exposures.push_back(
+        std::round(s.first_exposure_us * portable::pow(s.exposure_factor, k) * 1000) / 1000);
 
   cv::Mat roi = cv::Mat::zeros(s.height, s.width, CV_8U);
   const double aspect = 1.2;  // a plate seen at an angle
