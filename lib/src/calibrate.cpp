@@ -13,6 +13,7 @@
 #include "pyrocam/noisy_locus.h"
 #include "pyrocam/qe_fit.h"
 #include "pyrocam/spectrum.h"
+#include "random.h"
 
 namespace pyrocam {
 namespace {
@@ -302,9 +303,10 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
     u.u_emissivity_c.push_back(std::abs(shifted - t));
   }
   std::vector<std::vector<double>> refit_t(u.temperature_c.size());
-  std::mt19937_64 rng(opt.seed ^ 0x7C0FFEEull);
-  std::uniform_real_distribution<double> tc_error(-opt.thermocouple_tolerance_c,
-                                                  opt.thermocouple_tolerance_c);
+  Random rng(opt.seed ^ 0x7C0FFEEull);
+  const auto tc_error = [&](Random& r) {
+    return r.uniform(-opt.thermocouple_tolerance_c, opt.thermocouple_tolerance_c);
+  };
   for (int k = 0; k < u.monte_carlo_refits; ++k) {
     stage("Monte-Carlo refits", static_cast<std::size_t>(k),
           static_cast<std::size_t>(u.monte_carlo_refits));

@@ -1,5 +1,6 @@
-// Seeded random numbers that mean the same with any standard library: std::mt19937_64 is
-// specified exactly, the standard distributions are not, so these are written out.
+// Seeded random numbers that mean the same with any standard library and on any CPU:
+// std::mt19937_64 is specified exactly, the standard distributions are not (and libstdc++'s call
+// glibc's per-CPU log), so these are written out over the library's own exp, log and cos.
 #pragma once
 
 #include <cmath>
@@ -18,10 +19,19 @@ class Random {
   explicit Random(std::uint64_t seed) : engine_(seed) {}
   std::uint64_t bits() { return engine_(); }
   double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }  // [0, 1)
+  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }    // [lo, hi)
   double normal() {                     // Box-Muller, one value per pair
     const double u1 = 1.0 - uniform();  // (0, 1]
     const double u2 = uniform();
     return std::sqrt(-2.0 * portable::log(u1)) * portable::cos(2.0 * M_PI * u2);
+  }
+  // Poisson counts by multiplying uniforms (Knuth): exact in distribution, meant for small means
+  // (the cost grows with the mean).
+  long poisson(double mean) {
+    const double limit = portable::exp(-mean);
+    long k = 0;
+    for (double p = uniform(); p > limit; p *= uniform()) ++k;
+    return k;
   }
   // Uniform in [0, n); modulo bias is below 2^-40 for any n we shuffle.
   std::size_t below(std::size_t n) { return static_cast<std::size_t>(engine_() % n); }

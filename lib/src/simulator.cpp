@@ -10,6 +10,7 @@
 #include "portable_math.h"
 #include "pyrocam/dataset.h"
 #include "pyrocam/image_io.h"
+#include "random.h"
 
 namespace pyrocam {
 namespace {
@@ -50,9 +51,9 @@ UnitPerturbation UnitPerturbation::parse(const std::string& name, std::uint64_t 
 Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbation& unit) {
   if (unit.name == "datasheet") return profile.system_qe();
   const UnitVariation& v = profile.unit_variation;
-  std::mt19937_64 rng(mix(unit.seed));
-  std::normal_distribution<double> normal(0.0, 1.0);
-  std::uniform_real_distribution<double> uniform(0.7, 1.3);
+  Random rng(mix(unit.seed));
+  const auto normal = [](Random& r) { return r.normal(); };
+  const auto uniform = [](Random& r) { return r.uniform(0.7, 1.3); };
   const WavelengthGrid& grid = profile.grid;
   const double centre_nm = 0.5 * (profile.filter_pass_band_nm[0] + profile.filter_pass_band_nm[1]);
 
@@ -70,10 +71,8 @@ Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbat
 
   // The deviations no QE solver here models (its own random stream, so that the components
   // above stay the same for a seed whatever these are set to).
-  // std::normal_distribution keeps the second value of each pair it draws for its next call,
-  // whatever engine that call passes: each stream needs its own.
-  std::mt19937_64 unmodelled(mix(unit.seed ^ 0x5EC0DE5ull));
-  std::normal_distribution<double> unmodelled_normal(0.0, 1.0);
+  Random unmodelled(mix(unit.seed ^ 0x5EC0DE5ull));
+  const auto unmodelled_normal = [](Random& r) { return r.normal(); };
   const Eigen::VectorXd optics =
       v.filter_shift_sigma_nm > 0
           ? shift_curve(profile.optics_transmission, grid,
@@ -83,8 +82,10 @@ Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbat
     // Three sinusoids of random period and phase, together of relative rms v.ripple_rms.
     Eigen::VectorXd factor = Eigen::VectorXd::Ones(grid.size());
     if (!(v.ripple_rms > 0)) return factor;
-    std::uniform_real_distribution<double> period(v.ripple_period_nm[0], v.ripple_period_nm[1]);
-    std::uniform_real_distribution<double> phase(0.0, 2 * M_PI);
+    const auto period = [&](Random& r) {
+      return r.uniform(v.ripple_period_nm[0], v.ripple_period_nm[1]);
+    };
+    const auto phase = [](Random& r) { return r.uniform(0.0, 2 * M_PI); };
     const double amplitude = v.ripple_rms * std::sqrt(2.0 / 3.0);
     for (int k = 0; k < 3; ++k) {
       const double p = period(unmodelled), f = phase(unmodelled);
@@ -154,8 +155,8 @@ double Simulator::exposure_for(double temperature_c, double target_dn, double em
 
 void Simulator::ensure_pixel_maps(int width, int height) {
   if (dark_fpn_.cols == width && dark_fpn_.rows == height) return;
-  std::mt19937_64 rng(mix(seed_ ^ 0xF1F0ull));
-  std::normal_distribution<float> normal(0.f, 1.f);
+  Random rng(mix(seed_ ^ 0xF1F0ull));
+  const auto normal = [](Random& r) { return static_cast<float>(r.normal()); };
   dark_fpn_.create(height, width, CV_32F);
   prnu_.create(height, width, CV_32F);
   for (int y = 0; y < height; ++y)
@@ -180,8 +181,8 @@ cv::Mat Simulator::render(const cv::Mat& temperature_c, double exposure_us, doub
 
   cv::parallel_for_(cv::Range(0, (height + kStripe - 1) / kStripe), [&](const cv::Range& r) {
     for (int s = r.start; s < r.end; ++s) {
-      std::mt19937_64 rng(mix(frame_seed ^ static_cast<std::uint64_t>(s)));
-      std::normal_distribution<double> normal(0.0, 1.0);
+      Random rng(mix(frame_seed ^ static_cast<std::uint64_t>(s)));
+      const auto normal = [](Random& r) { return r.normal(); };
       // Scenes are mostly uniform regions: the last rate of each band is usually the next one.
       std::vector<float> last_t(static_cast<std::size_t>(profile_.band_count()), NAN);
       std::vector<double> last_rate(last_t.size(), 0.0);
@@ -201,7 +202,7 @@ cv::Mat Simulator::render(const cv::Mat& temperature_c, double exposure_us, doub
           double e = mean_e;
           if (noise_) {
             if (mean_e < 30) {
-              e = std::poisson_distribution<long>(mean_e)(rng);
+              e = static_cast<double>(rng.poisson(mean_e));
             } else {
               e = mean_e + std::sqrt(mean_e) * normal(rng);
             }
@@ -277,8 +278,8 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
            camera.render(cv::Mat(s.height, s.width, CV_32F, cv::Scalar(s.dark_temperature_c)),
                          exposures[k]),
            FrameKind::kDark, s.dark_temperature_c, exposures[k]);
-  std::mt19937_64 furnace_rng(mix(s.furnace_seed));
-  std::normal_distribution<double> furnace_error(0.0, 1.0);
+  Random furnace_rng(mix(s.furnace_seed));
+  const auto furnace_error = [](Random& r) { return r.normal(); };
   std::ofstream truth(folder / "furnace-truth.csv");
   truth << "nominal_c,true_c\n" << std::setprecision(10);
   for (double t : s.temperatures_c) {
