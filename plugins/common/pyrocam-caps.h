@@ -6,9 +6,21 @@
  *     format names the colour of the top-left 2x2 cell. Row stride: GST_ROUND_UP_4 (width), as
  *     bayer2rgb expects; a buffer of exactly width*height bytes (no padding) is accepted too.
  *   video/x-raw, format=(string){GRAY8,GRAY16_LE}: a mosaic carried as gray video (16-bit Bayer
- *     has no caps in GStreamer 1.22); strides as GstVideoInfo gives them. The mosaic layout then
- *     comes from the receiving element's `pattern` property and, for GRAY16_LE, the number of
- *     significant bits from its `bit-depth` property.
+ *     has no caps in GStreamer 1.22); strides as GstVideoInfo gives them. Optional fields, set
+ *     by pyrocamsrc (and by a capsfilter after any other camera, e.g.
+ *     `aravissrc ! video/x-raw,format=GRAY16_LE,pattern=5x5,bit-depth=12`):
+ *     pattern          (string) the mosaic layout, as in x-pyrocam-mosaic below. Without it
+ *                      darksub must be told one by its `pattern` property, else it refuses the
+ *                      stream; a property that disagrees with the field is refused too (CORE
+ *                      NEGOTIATION): a 5x5 mosaic read as Bayer gives plausible wrong readings.
+ *     bit-depth        (int) [1, 16] significant bits of the samples (at most 8 for GRAY8).
+ *                      Without it: darksub's `bit-depth` property, else the sample size.
+ *     saturation-level (int) raw DN at and above which a pixel is saturated: the camera
+ *                      profile's inference saturation threshold, the one `measure` and the
+ *                      calibration use. Without it: darksub's `saturation-level` property,
+ *                      else 220/255 of the full scale of the bit depth (220 for 8 bit).
+ *   video/x-bayer carries no such fields (bayer2rgb shares the stream); its bit depth is 8 and
+ *   its saturation level darksub's default, which is the shipped profiles' threshold (220).
  *
  * video/x-pyrocam-mosaic: the mosaic after dark subtraction (darksub's output).
  *   format    (string) F32LE: one little-endian IEEE float32 per sensor pixel, in DN above the
@@ -49,6 +61,11 @@
 #define PYROCAM_PATTERNS "{ rggb, bggr, grbg, gbrg, 5x5 }"
 #define PYROCAM_LAYOUTS "{ bayer, 5x5 }"
 #define PYROCAM_SNAPSHOT_PATTERN_NAME "5x5"
+
+/* Names of the optional raw gray caps fields described above. */
+#define PYROCAM_FIELD_PATTERN "pattern"
+#define PYROCAM_FIELD_BIT_DEPTH "bit-depth"
+#define PYROCAM_FIELD_SATURATION_LEVEL "saturation-level"
 
 #define PYROCAM_SIZE_RANGE "width = (int) [ 1, max ], height = (int) [ 1, max ]"
 #define PYROCAM_FRAMERATE_RANGE "framerate = (fraction) [ 0/1, max ]"

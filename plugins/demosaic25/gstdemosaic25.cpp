@@ -15,6 +15,9 @@
  *   height/5, as the paper); band index = row * 5 + column in the cell, or the band map of the
  *   camera profile named by #GstDemosaic25:profile. The method does not apply.
  *
+ * With a #GstDemosaic25:profile, a stream whose mosaic pattern (from the caps) is not the
+ * profile's is refused (CORE NEGOTIATION naming both).
+ *
  * ## Example launch line
  * |[
  * gst-launch-1.0 pyrocamsrc ! darksub dark-level=50 ! demosaic25 method=bin2x2 ! fakesink
@@ -49,6 +52,7 @@ struct Settings {
 struct State {
   bool have_snapshot_layout = false;  // from the profile, loaded in start()
   pyrocam::MosaicLayout snapshot_layout;
+  std::string profile_name, profile_pattern;  // the profile's mosaic as a caps pattern
   bool configured = false;
   pyrocam::MosaicLayout layout;
   pyrocam::DemosaicMethod method = pyrocam::DemosaicMethod::kBilinear;
@@ -210,6 +214,10 @@ static gboolean gst_demosaic25_set_caps(GstBaseTransform* trans, GstCaps* incaps
   st.method = to_library(settings.method);
   const bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kNegotiation, "Unsupported mosaic", [&] {
     if (!pattern) throw pyrocam::InputError("the input caps name no pattern");
+    if (!st.profile_pattern.empty() && st.profile_pattern != pattern)
+      throw pyrocam::InputError("camera profile " + st.profile_name + " has a " +
+                                st.profile_pattern + " mosaic but the stream is a " + pattern +
+                                " mosaic");
     if (is_snapshot(pattern) && st.have_snapshot_layout)
       st.layout = st.snapshot_layout;
     else
@@ -270,7 +278,12 @@ static gboolean gst_demosaic25_start(GstBaseTransform* trans) {
     }
     st.snapshot_layout = profile.mosaic;
     st.have_snapshot_layout = true;
+    st.profile_pattern = PYROCAM_SNAPSHOT_PATTERN_NAME;
+  } else {
+    st.profile_pattern = profile.mosaic.pattern;
+    for (char& c : st.profile_pattern) c = static_cast<char>(g_ascii_tolower(c));
   }
+  st.profile_name = settings.profile;
   GST_INFO_OBJECT(self, "camera profile %s (%s)", profile.name.c_str(),
                   profile.mosaic.pattern.c_str());
   return TRUE;
@@ -380,8 +393,9 @@ static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
       gobject_class, PROP_PROFILE,
       g_param_spec_string("profile", "Camera profile",
                           "Camera profile (shipped name such as nir5x5-reference, or a path to "
-                          "its JSON file) whose 5x5 band map orders the output bands; empty: "
-                          "band index = row * 5 + column",
+                          "its JSON file) whose 5x5 band map orders the output bands; a stream "
+                          "whose mosaic is not the profile's is refused; empty: band index = "
+                          "row * 5 + column",
                           nullptr, ready));
 
   gst_element_class_set_static_metadata(

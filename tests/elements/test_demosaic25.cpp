@@ -157,6 +157,19 @@ TEST(Demosaic25Errors, rejects_a_missing_profile) {
   EXPECT_NE(r.message.find("/nonexistent/camera.json"), std::string::npos) << r.message;
 }
 
+TEST(Demosaic25Errors, rejects_a_stream_that_is_not_the_profiles_mosaic) {
+  REQUIRE_ELEMENT("demosaic25");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! "
+      "demosaic25 profile=nir5x5-reference ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("nir5x5-reference has a 5x5 mosaic"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("rggb mosaic"), std::string::npos) << r.message;
+}
+
 TEST(Demosaic25Errors, rejects_caps_it_cannot_produce_n) {
   REQUIRE_ELEMENT("demosaic25");
   REQUIRE_ELEMENT("pyrocamsrc");

@@ -759,6 +759,20 @@ const std::string kSnapshotChain =
     "pyrocamsrc num-buffers=1 profile=nir5x5-reference ! video/x-raw,width=20,height=10 ! "
     "darksub dark-level=50 pattern=5x5 ! demosaic25 ! ";
 
+TEST(RatioTempErrors, rejects_a_5x5_mosaic_with_a_colour_model_n) {
+  // darksub used to read the untagged 5x5 mosaic as RGGB: plausible temperatures, all wrong.
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 profile=nir5x5-reference ! video/x-raw,width=20,height=10 ! "
+      "darksub dark-level=5 ! demosaic25 ! ratiotemp model=" +
+      rgb_model_path() + " ! fakesink");
+  ASSERT_TRUE(r.error) << "ran to the end with a colour model on a 5x5 mosaic";
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("5x5"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("bayer"), std::string::npos) << r.message;
+}
+
 TEST(RatioTempErrors, rejects_running_without_a_model_n) {
   REQUIRE_ELEMENT("ratiotemp");
   const auto r = run_pipeline(kColourChain + "ratiotemp ! fakesink");
