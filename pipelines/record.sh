@@ -3,8 +3,9 @@
 #
 # The temperatures (GRAY16_LE, 0.1 K per step, 0 = no reading) go to OUT/temperature-NNNNN.mkv,
 # a new segment every SEGMENT_SECONDS, so that a crash loses at most the segment being written.
-# Ctrl-C (SIGINT) sends EOS and finalises the last segment; stop a recording with SIGINT, not
-# SIGTERM or SIGKILL. The colour-mapped view (overlay over the camera's colour image) is written
+# Ctrl-C (SIGINT) or SIGTERM sends EOS and finalises the last segment (a second one stops at
+# once, leaving it unfinalised); SIGKILL cannot be caught.
+# The colour-mapped view (overlay over the camera's colour image) is written
 # to OUT/view.png, refreshed SNAPSHOT_RATE times a second. A camera that sends nothing for
 # WATCHDOG_MS ends the recording with an error: the segments already closed stay intact.
 #
@@ -29,6 +30,20 @@ set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 if [[ -z ${GST_PLUGIN_PATH:-} && -f $here/../build/plugins/libgstpyrocam.so ]]; then
   export GST_PLUGIN_PATH=$here/../build/plugins
+fi
+# Pipelines run through pyrocam-launch (built with the plugin): unlike gst-launch-1.0 of
+# GStreamer 1.22 it never hangs after an error (exit 1 with the message); with -e SIGINT or
+# SIGTERM sends EOS so that the files are finalised, without it they stop the pipeline.
+launch=${PYROCAM_LAUNCH:-}
+if [[ -z $launch ]]; then
+  if [[ -x $here/../build/launcher/pyrocam-launch ]]; then
+    launch=$here/../build/launcher/pyrocam-launch
+  elif command -v pyrocam-launch >/dev/null; then
+    launch=pyrocam-launch
+  else
+    echo "$(basename "$0" .sh): pyrocam-launch not found: build the project (ninja -C build) or set PYROCAM_LAUNCH" >&2
+    exit 1
+  fi
 fi
 
 MODEL=${MODEL:-out/model-rgb.json}
@@ -58,8 +73,8 @@ fi
 # The queue after it keeps its thread free: in a live pipeline the first sink to get a frame
 # waits for the others, while compositor answers the tee's allocation queries from that thread,
 # so without the queue the start can deadlock (GStreamer 1.22).
-set -f # the fragments above split on spaces into gst-launch's words
-exec gst-launch-1.0 -e \
+set -f # the fragments above split on spaces into the launcher's words
+exec "$launch" -e \
   $SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! \
     watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
   camera. ! queue ! darksub $DARK ! demosaic25 ! ratiotemp "model=$MODEL" ! tee name=temperature \
