@@ -15,6 +15,12 @@
  *                      NEGOTIATION): a 5x5 mosaic read as Bayer gives plausible wrong readings.
  *     bit-depth        (int) [1, 16] significant bits of the samples (at most 8 for GRAY8).
  *                      Without it: darksub's `bit-depth` property, else the sample size.
+ *     band-map         (string) for 5x5: the band index of each position in the cell,
+ *                      row-major, 25 comma-separated integers ("0,1,...,24" is row * 5 +
+ *                      column): the camera profile's band map. darksub passes it on in
+ *                      x-pyrocam-mosaic, demosaic25 orders the bands by it and says the order
+ *                      it used in x-pyrocam-bands; a demosaic25 profile or a ratiotemp model
+ *                      whose band map differs is refused (CORE NEGOTIATION).
  *     saturation-level (int) raw DN at and above which a pixel is saturated: the camera
  *                      profile's inference saturation threshold, the one `measure` and the
  *                      calibration use. Without it: darksub's `saturation-level` property,
@@ -34,6 +40,7 @@
  *             says otherwise).
  *   bit-depth (int) significant bits of the raw samples (8 for 8-bit input, e.g. 12 for a 12-bit
  *             camera carried as GRAY16_LE); the DN scale of the values.
+ *   band-map  (string, optional, 5x5 only) as in the raw gray caps above.
  *
  * video/x-pyrocam-bands: planar band images (demosaic25's output, ratiotemp's input).
  *   format    (string) F32LE: float32 DN as in x-pyrocam-mosaic, with the same marks: a value
@@ -44,6 +51,8 @@
  *             Bayer, sensor size / period for binned Bayer and 5x5).
  *   framerate (fraction) as the input's.
  *   layout    (string) bayer or 5x5: the mosaic the bands come from.
+ *   band-map  (string, 5x5 only) the band map demosaic25 ordered the planes by (the input's
+ *             band-map field, its profile's, or row * 5 + column); plane b holds band b.
  *   Memory: plane after plane (band 0 first), each width * height floats, rows without padding;
  *   a buffer holds exactly bands * width * height * 4 bytes.
  *
@@ -66,6 +75,7 @@
 #define PYROCAM_FIELD_PATTERN "pattern"
 #define PYROCAM_FIELD_BIT_DEPTH "bit-depth"
 #define PYROCAM_FIELD_SATURATION_LEVEL "saturation-level"
+#define PYROCAM_FIELD_BAND_MAP "band-map"
 
 #define PYROCAM_SIZE_RANGE "width = (int) [ 1, max ], height = (int) [ 1, max ]"
 #define PYROCAM_FRAMERATE_RANGE "framerate = (fraction) [ 0/1, max ]"

@@ -194,6 +194,8 @@ static GstCaps* gst_dark_sub_transform_caps(GstBaseTransform* trans, GstPadDirec
          * property's, and with neither any pattern: set_caps refuses it. */
         const GValue* caps_pattern = gst_structure_get_value(s, PYROCAM_FIELD_PATTERN);
         const char* property_pattern = pattern_name(settings.pattern);
+        const GValue* band_map = gst_structure_get_value(s, PYROCAM_FIELD_BAND_MAP);
+        if (band_map) gst_structure_set_value(out, PYROCAM_FIELD_BAND_MAP, band_map);
         if (caps_pattern) {
           gst_structure_set_value(out, "pattern", caps_pattern);
         } else if (property_pattern) {

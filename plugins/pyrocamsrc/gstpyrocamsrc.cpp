@@ -176,6 +176,9 @@ static GstCaps* profile_caps(const pyrocam::CameraProfile& profile) {
         ", " PYROCAM_FIELD_BIT_DEPTH " = (int) " + std::to_string(profile.bit_depth) +
         ", " PYROCAM_FIELD_SATURATION_LEVEL " = (int) " +
         std::to_string(static_cast<int>(std::lround(profile.thresholds.inference_saturation_dn)));
+    if (profile.mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot)
+      caps += ", " PYROCAM_FIELD_BAND_MAP " = (string) \"" +
+              pyrocam::gst::band_map_text(profile.mosaic) + "\"";
   }
   caps += ", " PYROCAM_SIZE_RANGE ", framerate = (fraction) [ 1/1, max ]";
   return gst_caps_from_string(caps.c_str());

@@ -773,6 +773,20 @@ TEST(RatioTempErrors, rejects_a_5x5_mosaic_with_a_colour_model_n) {
   EXPECT_NE(r.message.find("bayer"), std::string::npos) << r.message;
 }
 
+TEST(RatioTempErrors, rejects_5x5_bands_in_another_order_than_the_models_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(
+      "videotestsrc num-buffers=1 ! video/x-raw,format=GRAY8,width=20,height=10,pattern=5x5,"
+      "band-map=(string)\"1,0,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24\" ! "
+      "darksub dark-level=5 ! demosaic25 ! ratiotemp model=" +
+      nir_model_path() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("in the order 0,1,2"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("in the order 1,0,2"), std::string::npos) << r.message;
+}
+
 TEST(RatioTempErrors, rejects_running_without_a_model_n) {
   REQUIRE_ELEMENT("ratiotemp");
   const auto r = run_pipeline(kColourChain + "ratiotemp ! fakesink");
