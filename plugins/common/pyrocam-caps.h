@@ -41,6 +41,9 @@
  *   bit-depth (int) significant bits of the raw samples (8 for 8-bit input, e.g. 12 for a 12-bit
  *             camera carried as GRAY16_LE); the DN scale of the values.
  *   band-map  (string, optional, 5x5 only) as in the raw gray caps above.
+ *   saturation-level (int, optional) the raw DN at and above which darksub marked pixels +INF
+ *             (its saturation-level property, else the raw caps' field, else its default);
+ *             darksub renegotiates when the property changes.
  *
  * video/x-pyrocam-bands: planar band images (demosaic25's output, ratiotemp's input).
  *   format    (string) F32LE: float32 DN as in x-pyrocam-mosaic, with the same marks: a value
@@ -51,6 +54,9 @@
  *             Bayer, sensor size / period for binned Bayer and 5x5).
  *   framerate (fraction) as the input's.
  *   layout    (string) bayer or 5x5: the mosaic the bands come from.
+ *   saturation-level (int, optional) as in x-pyrocam-mosaic, passed on by demosaic25. ratiotemp
+ *             refuses a level above its model profile's inference saturation threshold: pixels
+ *             the model calls saturated would reach it unmarked.
  *   band-map  (string, 5x5 only) the band map demosaic25 ordered the planes by (the input's
  *             band-map field, its profile's, or row * 5 + column); plane b holds band b.
  *   Memory: plane after plane (band 0 first), each width * height floats, rows without padding;

@@ -231,6 +231,18 @@ static GstCaps* gst_dark_sub_transform_caps(GstBaseTransform* trans, GstPadDirec
           g_value_unset(&v);
         }
       }
+      /* The raw level at and above which pixels are marked +INF, when it is known here. */
+      int bits = 0;
+      const int caps_level = pg::structure_int(s, PYROCAM_FIELD_SATURATION_LEVEL, -1);
+      if (settings.saturation_level >= 0)
+        gst_structure_set(out, PYROCAM_FIELD_SATURATION_LEVEL, G_TYPE_INT,
+                          static_cast<int>(std::ceil(settings.saturation_level)), nullptr);
+      else if (caps_level >= 0)
+        gst_structure_set(out, PYROCAM_FIELD_SATURATION_LEVEL, G_TYPE_INT, caps_level, nullptr);
+      else if (gst_structure_get_int(out, "bit-depth", &bits) && bits >= 1 && bits <= 16)
+        gst_structure_set(out, PYROCAM_FIELD_SATURATION_LEVEL, G_TYPE_INT,
+                          static_cast<int>(std::ceil(pyrocam::default_saturation_level(bits))),
+                          nullptr);
       result = gst_caps_merge_structure(result, out);
     } else {
       /* Mosaic -> raw: Bayer caps of the pattern, and gray video. */
@@ -586,6 +598,9 @@ static void gst_dark_sub_set_property(GObject* object, guint prop_id, const GVal
       break;
   }
   GST_OBJECT_UNLOCK(self);
+  /* The saturation level is in the output caps: renegotiate, so that ratiotemp sees it. */
+  if (prop_id == PROP_SATURATION_LEVEL)
+    gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
 }
 
 static void gst_dark_sub_get_property(GObject* object, guint prop_id, GValue* value,

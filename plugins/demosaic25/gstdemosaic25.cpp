@@ -184,6 +184,10 @@ static GstCaps* gst_demosaic25_transform_caps(GstBaseTransform* trans, GstPadDir
           gst_structure_take_value(out, "pattern", &formats);
         }
       }
+      if (forward) {
+        const GValue* level = gst_structure_get_value(s, PYROCAM_FIELD_SATURATION_LEVEL);
+        if (level) gst_structure_set_value(out, PYROCAM_FIELD_SATURATION_LEVEL, level);
+      }
       scale_dimension(s, out, "width", divisor, forward);
       scale_dimension(s, out, "height", divisor, forward);
       copy_framerate(s, out);

@@ -105,6 +105,7 @@
 #include "gstratiotemp.h"
 
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -435,6 +436,20 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
                            " mosaic, the stream has " + std::to_string(st.bands) + " bands of a " +
                            layout + " mosaic",
                        "band count or layout of the sink caps differs from the model's");
+    return FALSE;
+  }
+  /* Pixels the model's camera calls saturated must come marked: darksub's level must not be
+   * above the model profile's inference saturation threshold. */
+  const int level = pg::structure_int(in, PYROCAM_FIELD_SATURATION_LEVEL, -1);
+  const double model_level = model.profile().thresholds.inference_saturation_dn;
+  if (level > std::ceil(model_level)) {
+    PYROCAM_POST_ERROR(
+        self, pg::ErrorKind::kNegotiation,
+        "darksub marks pixels saturated from " + std::to_string(level) + " DN, above the " +
+            std::to_string(std::lround(model_level)) + " DN of model " + st.model_path + " (" +
+            model.profile().name +
+            "): set darksub saturation-level=" + std::to_string(std::lround(model_level)),
+        "saturation-level of the sink caps above the model profile's threshold");
     return FALSE;
   }
   /* 5x5: the planes must be in the model's band order. */

@@ -787,6 +787,20 @@ TEST(RatioTempErrors, rejects_5x5_bands_in_another_order_than_the_models_n) {
   EXPECT_NE(r.message.find("in the order 1,0,2"), std::string::npos) << r.message;
 }
 
+TEST(RatioTempErrors, rejects_a_saturation_level_above_the_models_n) {
+  // darksub would pass 220..239 DN unmarked, which the model's camera calls saturated.
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 "
+      "saturation-level=240 ! demosaic25 ! ratiotemp model=" +
+      rgb_model_path() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("from 240 DN"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("220 DN"), std::string::npos) << r.message;
+}
+
 TEST(RatioTempErrors, rejects_running_without_a_model_n) {
   REQUIRE_ELEMENT("ratiotemp");
   const auto r = run_pipeline(kColourChain + "ratiotemp ! fakesink");
