@@ -13,7 +13,8 @@
  * handling and the state change that fails). This launcher never waits on the pipeline without
  * a bound: after an error, an EOS or a signal, stopping the pipeline (state NULL) gets
  * --stop-timeout seconds (default 10); past that it reports the stall and exits anyway, with
- * the status the pipeline had earned. -m prints element messages (e.g. ratiotemp's statistics)
+ * the status the pipeline had earned (1 if neither an error nor the end of stream came: the
+ * files may not be finalised). -m prints element messages (e.g. ratiotemp's statistics)
  * on stdout, as gst-launch-1.0 -m does. Scripts in pipelines/ run their pipelines with it.
  */
 #include <glib-unix.h>
@@ -37,6 +38,7 @@ typedef struct {
 
 static Launch launch_state;
 static gint stop_guard_armed = 0;
+static gint eos_seen = 0; /* the end of stream went through: the files are finalised */
 
 /* Runs in its own thread: if the pipeline has not stopped in time, exit without it. */
 static gpointer stop_guard(gpointer data) {
@@ -47,7 +49,9 @@ static gpointer stop_guard(gpointer data) {
           "for it\n",
           seconds);
   fflush(stderr);
-  _exit(g_atomic_int_get(&launch_state.status));
+  /* Without an error and without the end of stream, the files may not be finalised. */
+  const int status = g_atomic_int_get(&launch_state.status);
+  _exit(status == 0 && !g_atomic_int_get(&eos_seen) ? 1 : status);
   return NULL;
 }
 
@@ -98,6 +102,7 @@ static gboolean on_bus(GstBus* bus, GstMessage* msg, gpointer data) {
       break;
     case GST_MESSAGE_EOS:
       fprintf(stderr, "Got EOS from element %s.\n", GST_OBJECT_NAME(GST_MESSAGE_SRC(msg)));
+      g_atomic_int_set(&eos_seen, 1);
       g_main_loop_quit(launch->loop);
       break;
     case GST_MESSAGE_ELEMENT: {
