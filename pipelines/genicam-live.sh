@@ -25,6 +25,20 @@ here=$(cd "$(dirname "$0")" && pwd)
 if [[ -z ${GST_PLUGIN_PATH:-} && -f $here/../build/plugins/libgstpyrocam.so ]]; then
   export GST_PLUGIN_PATH=$here/../build/plugins
 fi
+# Pipelines run through pyrocam-launch (built with the plugin): unlike gst-launch-1.0 of
+# GStreamer 1.22 it never hangs after an error (exit 1 with the message); with -e SIGINT or
+# SIGTERM sends EOS so that the files are finalised, without it they stop the pipeline.
+launch=${PYROCAM_LAUNCH:-}
+if [[ -z $launch ]]; then
+  if [[ -x $here/../build/launcher/pyrocam-launch ]]; then
+    launch=$here/../build/launcher/pyrocam-launch
+  elif command -v pyrocam-launch >/dev/null; then
+    launch=pyrocam-launch
+  else
+    echo "$(basename "$0" .sh): pyrocam-launch not found: build the project (ninja -C build) or set PYROCAM_LAUNCH" >&2
+    exit 1
+  fi
+fi
 
 MODEL=${MODEL:-}
 DARK=${DARK:-}
@@ -53,12 +67,12 @@ camera=(aravissrc num-buffers="$NUM_BUFFERS")
 # The queue after it keeps its thread free: in a live pipeline the first sink to get a frame
 # waits for the others, while compositor answers the tee's allocation queries from that thread,
 # so without the queue the start can deadlock (GStreamer 1.22).
-set -f # the fragments above split on spaces into gst-launch's words
+set -f # the fragments above split on spaces into the launcher's words
 set +e
-# gst-launch's messages pass through a filter that adds a plain diagnosis to the watchdog's
+# The launcher's messages pass through a filter that adds a plain diagnosis to the watchdog's
 # error at once (Aravis may then take seconds to let go of the vanished camera). The filter
-# ignores Ctrl-C so that gst-launch can still print while it stops.
-gst-launch-1.0 \
+# ignores Ctrl-C so that the launcher can still print while it stops.
+"$launch" \
   "${camera[@]}" ! $CAPS ! watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
   camera. ! queue ! bayer2rgb ! video/x-raw,format=RGBA ! mix.sink_0 \
   camera. ! queue ! darksub $DARK ! demosaic25 ! ratiotemp "model=$MODEL" ! \

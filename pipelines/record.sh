@@ -3,8 +3,11 @@
 #
 # The temperatures (GRAY16_LE, 0.1 K per step, 0 = no reading) go to OUT/temperature-NNNNN.mkv,
 # a new segment every SEGMENT_SECONDS, so that a crash loses at most the segment being written.
-# Ctrl-C (SIGINT) sends EOS and finalises the last segment; stop a recording with SIGINT, not
-# SIGTERM or SIGKILL. The colour-mapped view (overlay over the camera's colour image) is written
+# Ctrl-C (SIGINT) or SIGTERM sends EOS and finalises the last segment (a second one stops at
+# once, leaving it unfinalised). A killed recording (SIGKILL, power cut) keeps every closed
+# segment intact; the segment being written decodes up to its last whole frame, but has no
+# index (no seeking) and no duration: players estimate one from its last frame.
+# The colour-mapped view (overlay over the camera's colour image) is written
 # to OUT/view.png, refreshed SNAPSHOT_RATE times a second. A camera that sends nothing for
 # WATCHDOG_MS ends the recording with an error: the segments already closed stay intact.
 #
@@ -30,6 +33,20 @@ here=$(cd "$(dirname "$0")" && pwd)
 if [[ -z ${GST_PLUGIN_PATH:-} && -f $here/../build/plugins/libgstpyrocam.so ]]; then
   export GST_PLUGIN_PATH=$here/../build/plugins
 fi
+# Pipelines run through pyrocam-launch (built with the plugin): unlike gst-launch-1.0 of
+# GStreamer 1.22 it never hangs after an error (exit 1 with the message); with -e SIGINT or
+# SIGTERM sends EOS so that the files are finalised, without it they stop the pipeline.
+launch=${PYROCAM_LAUNCH:-}
+if [[ -z $launch ]]; then
+  if [[ -x $here/../build/launcher/pyrocam-launch ]]; then
+    launch=$here/../build/launcher/pyrocam-launch
+  elif command -v pyrocam-launch >/dev/null; then
+    launch=pyrocam-launch
+  else
+    echo "$(basename "$0" .sh): pyrocam-launch not found: build the project (ninja -C build) or set PYROCAM_LAUNCH" >&2
+    exit 1
+  fi
+fi
 
 MODEL=${MODEL:-out/model-rgb.json}
 OUT=${OUT:-out/recording}
@@ -51,20 +68,29 @@ if compgen -G "$OUT/temperature-*.mkv" >/dev/null; then
 fi
 
 # Every FFV1 frame is a key frame (gop-size=1): a segment can start on any frame and decodes
-# alone. The snapshot branch keeps SNAPSHOT_RATE frames a second, so PNG encoding costs little.
+# alone. A segment cut short by SIGKILL or a power cut has no index and no duration, and players
+# estimate its duration from the time of its last cluster: so each frame is its own Matroska
+# cluster (min-cluster-duration=0, about 1 % more bytes) and each segment starts at time 0
+# (offset-to-zero=true; splitmuxsrc and playback.sh join them). Measured on killed segments:
+# 7 frames (0.233 s) estimated 0.233 s; with the defaults 9 frames estimated 2.734 s (the
+# recording's time at the last 0.5 s cluster) and, in a first segment, 2.0 s estimated 1.0 s.
+# splitmuxsink sets muxer properties only with async-finalize=true. The snapshot branch keeps
+# SNAPSHOT_RATE frames a second, so PNG encoding costs little.
 # compositor, live: start-time-selection=first starts its output at the camera's first frame
 # (not at 0, which adds frames before it and can negotiate a 1x1 picture); latency=100 ms waits
 # that long for the slower temperature branch, so that no frame goes out without its overlay.
 # The queue after it keeps its thread free: in a live pipeline the first sink to get a frame
 # waits for the others, while compositor answers the tee's allocation queries from that thread,
 # so without the queue the start can deadlock (GStreamer 1.22).
-set -f # the fragments above split on spaces into gst-launch's words
-exec gst-launch-1.0 -e \
+set -f # the fragments above split on spaces into the launcher's words
+exec "$launch" -e \
   $SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! \
     watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
   camera. ! queue ! darksub $DARK ! demosaic25 ! ratiotemp "model=$MODEL" ! tee name=temperature \
   temperature. ! queue ! avenc_ffv1 gop-size=1 ! \
-    splitmuxsink muxer=matroskamux max-size-time="$segment_ns" "location=$OUT/temperature-%05d.mkv" \
+    splitmuxsink async-finalize=true muxer-factory=matroskamux \
+      "muxer-properties=properties,min-cluster-duration=(guint64)0,offset-to-zero=true" \
+      max-size-time="$segment_ns" "location=$OUT/temperature-%05d.mkv" \
   temperature. ! queue ! thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1 \
   camera. ! queue ! bayer2rgb ! video/x-raw,format=RGBA ! mix.sink_0 \
   compositor name=mix start-time-selection=first latency=100000000 \

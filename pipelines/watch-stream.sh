@@ -14,6 +14,21 @@
 #
 # Example: pipelines/watch-stream.sh   (while pipelines/stream.sh runs on the camera machine)
 set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+# Pipelines run through pyrocam-launch (built with the plugin): unlike gst-launch-1.0 of
+# GStreamer 1.22 it never hangs after an error (exit 1 with the message); with -e SIGINT or
+# SIGTERM sends EOS so that the files are finalised, without it they stop the pipeline.
+launch=${PYROCAM_LAUNCH:-}
+if [[ -z $launch ]]; then
+  if [[ -x $here/../build/launcher/pyrocam-launch ]]; then
+    launch=$here/../build/launcher/pyrocam-launch
+  elif command -v pyrocam-launch >/dev/null; then
+    launch=pyrocam-launch
+  else
+    echo "$(basename "$0" .sh): pyrocam-launch not found: build the project (ninja -C build) or set PYROCAM_LAUNCH" >&2
+    exit 1
+  fi
+fi
 
 ADDRESS=${ADDRESS:-0.0.0.0}
 PORT=${PORT:-5004}
@@ -21,8 +36,8 @@ LATENCY_MS=${LATENCY_MS:-100}
 WATCHDOG_MS=${WATCHDOG_MS:-10000}
 SINK=${SINK:-autovideosink}
 
-set -f # the fragments above split on spaces into gst-launch's words
-exec gst-launch-1.0 \
+set -f # the fragments above split on spaces into the launcher's words
+exec "$launch" \
   udpsrc address="$ADDRESS" port="$PORT" \
     caps=application/x-rtp,media=video,encoding-name=H264,clock-rate=90000,payload=96 ! \
   watchdog name=no-stream-packets timeout="$WATCHDOG_MS" ! \

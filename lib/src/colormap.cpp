@@ -79,7 +79,9 @@ std::uint32_t pack_bytes(std::uint8_t r, std::uint8_t g, std::uint8_t b, std::ui
 
 std::string format_tick(double value, double step) {
   std::ostringstream s;
-  const int decimals = step >= 1 ? 0 : static_cast<int>(std::ceil(-std::log10(step) - 1e-9));
+  const int decimals = step >= 1 || !(step > 0)
+                           ? 0
+                           : std::min(9, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
   s << std::fixed << std::setprecision(decimals) << value;
   return s.str();
 }
@@ -121,9 +123,10 @@ std::uint32_t pack_argb(std::uint32_t argb, ChannelOrder order) {
 }
 
 void ThermalColormap::configure(const ColormapSettings& s) {
-  if (!(std::isfinite(s.min_c) && std::isfinite(s.max_c) && s.min_c < s.max_c))
+  if (!(std::isfinite(s.min_c) && std::isfinite(s.max_c) && s.max_c - s.min_c >= kMinColormapSpanC))
     throw InputError("colour map: the temperature range " + std::to_string(s.min_c) + ".." +
-                     std::to_string(s.max_c) + " degC is empty");
+                     std::to_string(s.max_c) + " degC is narrower than " +
+                     std::to_string(kMinColormapSpanC) + " degC");
   if (configured_ && s == settings_) return;
   settings_ = s;
   configured_ = true;
@@ -202,7 +205,7 @@ void AutoRange::update(std::optional<std::pair<double, double>> frame_range, dou
 
 std::vector<double> nice_ticks(double min_c, double max_c, int target) {
   std::vector<double> ticks;
-  if (!(max_c > min_c) || target < 1) return ticks;
+  if (!(std::isfinite(min_c) && std::isfinite(max_c) && max_c > min_c) || target < 1) return ticks;
   const double raw = (max_c - min_c) / target;
   const double mag = std::pow(10.0, std::floor(std::log10(raw)));
   double step = mag;
@@ -211,15 +214,24 @@ std::vector<double> nice_ticks(double min_c, double max_c, int target) {
       step = m * mag;
       break;
     }
-  for (double v = std::ceil(min_c / step - 1e-9) * step; v <= max_c + 1e-9 * step; v += step)
+  // Ticks by index, not by adding step, so that a step below the resolution of the values
+  // cannot stall the loop; and never more than the bound, however the rounding falls.
+  const double first = std::ceil(min_c / step - 1e-9);
+  const double last = std::floor(max_c / step + 1e-9);
+  const int max_ticks = 2 * target + 2;
+  for (int i = 0; i < max_ticks && first + i <= last; ++i) {
+    const double v = (first + i) * step;
     ticks.push_back(std::abs(v) < 1e-9 * step ? 0.0 : v);
+  }
   return ticks;
 }
 
 void draw_scale_bar(cv::Mat& image, Palette palette, double min_c, double max_c,
                     ChannelOrder order) {
   if (image.type() != CV_8UC4) throw InputError("scale bar: image must be CV_8UC4");
-  if (image.rows < 48 || image.cols < 64 || !(max_c > min_c)) return;
+  if (image.rows < 48 || image.cols < 64 ||
+      !(std::isfinite(min_c) && std::isfinite(max_c) && max_c - min_c >= kMinColormapSpanC))
+    return;
   const auto& colors = palette_colors(palette);
   auto scalar = [order](std::uint8_t r, std::uint8_t g, std::uint8_t b) {
     return order == ChannelOrder::kRGBA ? cv::Scalar(r, g, b, 255) : cv::Scalar(b, g, r, 255);

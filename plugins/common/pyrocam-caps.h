@@ -6,9 +6,27 @@
  *     format names the colour of the top-left 2x2 cell. Row stride: GST_ROUND_UP_4 (width), as
  *     bayer2rgb expects; a buffer of exactly width*height bytes (no padding) is accepted too.
  *   video/x-raw, format=(string){GRAY8,GRAY16_LE}: a mosaic carried as gray video (16-bit Bayer
- *     has no caps in GStreamer 1.22); strides as GstVideoInfo gives them. The mosaic layout then
- *     comes from the receiving element's `pattern` property and, for GRAY16_LE, the number of
- *     significant bits from its `bit-depth` property.
+ *     has no caps in GStreamer 1.22); strides as GstVideoInfo gives them. Optional fields, set
+ *     by pyrocamsrc (and by a capsfilter after any other camera, e.g.
+ *     `aravissrc ! video/x-raw,format=GRAY16_LE,pattern=5x5,bit-depth=12`):
+ *     pattern          (string) the mosaic layout, as in x-pyrocam-mosaic below. Without it
+ *                      darksub must be told one by its `pattern` property, else it refuses the
+ *                      stream; a property that disagrees with the field is refused too (CORE
+ *                      NEGOTIATION): a 5x5 mosaic read as Bayer gives plausible wrong readings.
+ *     bit-depth        (int) [1, 16] significant bits of the samples (at most 8 for GRAY8).
+ *                      Without it: darksub's `bit-depth` property, else the sample size.
+ *     band-map         (string) for 5x5: the band index of each position in the cell,
+ *                      row-major, 25 comma-separated integers ("0,1,...,24" is row * 5 +
+ *                      column): the camera profile's band map. darksub passes it on in
+ *                      x-pyrocam-mosaic, demosaic25 orders the bands by it and says the order
+ *                      it used in x-pyrocam-bands; a demosaic25 profile or a ratiotemp model
+ *                      whose band map differs is refused (CORE NEGOTIATION).
+ *     saturation-level (int) raw DN at and above which a pixel is saturated: the camera
+ *                      profile's inference saturation threshold, the one `measure` and the
+ *                      calibration use. Without it: darksub's `saturation-level` property,
+ *                      else 220/255 of the full scale of the bit depth (220 for 8 bit).
+ *   video/x-bayer carries no such fields (bayer2rgb shares the stream); its bit depth is 8 and
+ *   its saturation level darksub's default, which is the shipped profiles' threshold (220).
  *
  * video/x-pyrocam-mosaic: the mosaic after dark subtraction (darksub's output).
  *   format    (string) F32LE: one little-endian IEEE float32 per sensor pixel, in DN above the
@@ -22,6 +40,10 @@
  *             says otherwise).
  *   bit-depth (int) significant bits of the raw samples (8 for 8-bit input, e.g. 12 for a 12-bit
  *             camera carried as GRAY16_LE); the DN scale of the values.
+ *   band-map  (string, optional, 5x5 only) as in the raw gray caps above.
+ *   saturation-level (int, optional) the raw DN at and above which darksub marked pixels +INF
+ *             (its saturation-level property, else the raw caps' field, else its default);
+ *             darksub renegotiates when the property changes.
  *
  * video/x-pyrocam-bands: planar band images (demosaic25's output, ratiotemp's input).
  *   format    (string) F32LE: float32 DN as in x-pyrocam-mosaic, with the same marks: a value
@@ -32,6 +54,11 @@
  *             Bayer, sensor size / period for binned Bayer and 5x5).
  *   framerate (fraction) as the input's.
  *   layout    (string) bayer or 5x5: the mosaic the bands come from.
+ *   saturation-level (int, optional) as in x-pyrocam-mosaic, passed on by demosaic25. ratiotemp
+ *             refuses a level above its model profile's inference saturation threshold: pixels
+ *             the model calls saturated would reach it unmarked.
+ *   band-map  (string, 5x5 only) the band map demosaic25 ordered the planes by (the input's
+ *             band-map field, its profile's, or row * 5 + column); plane b holds band b.
  *   Memory: plane after plane (band 0 first), each width * height floats, rows without padding;
  *   a buffer holds exactly bands * width * height * 4 bytes.
  *
@@ -49,6 +76,12 @@
 #define PYROCAM_PATTERNS "{ rggb, bggr, grbg, gbrg, 5x5 }"
 #define PYROCAM_LAYOUTS "{ bayer, 5x5 }"
 #define PYROCAM_SNAPSHOT_PATTERN_NAME "5x5"
+
+/* Names of the optional raw gray caps fields described above. */
+#define PYROCAM_FIELD_PATTERN "pattern"
+#define PYROCAM_FIELD_BIT_DEPTH "bit-depth"
+#define PYROCAM_FIELD_SATURATION_LEVEL "saturation-level"
+#define PYROCAM_FIELD_BAND_MAP "band-map"
 
 #define PYROCAM_SIZE_RANGE "width = (int) [ 1, max ], height = (int) [ 1, max ]"
 #define PYROCAM_FRAMERATE_RANGE "framerate = (fraction) [ 0/1, max ]"

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 namespace pyrocam::gst {
 
@@ -46,6 +49,35 @@ MosaicLayout layout_for_pattern(const std::string& pattern) {
     return MosaicLayout::snapshot(5, 5, map);
   }
   return MosaicLayout::bayer(pattern);
+}
+
+std::string band_map_text(const MosaicLayout& layout) {
+  std::string text;
+  for (std::size_t i = 0; i < layout.band_map.size(); ++i)
+    text += (i ? "," : "") + std::to_string(layout.band_map[i]);
+  return text;
+}
+
+MosaicLayout layout_for_band_map(const std::string& text) {
+  std::vector<int> map;
+  std::vector<bool> seen(25, false);
+  std::size_t start = 0;
+  while (start <= text.size() && map.size() <= 25) {
+    const std::size_t end = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, end - start);
+    char* stop = nullptr;
+    const long v = std::strtol(item.c_str(), &stop, 10);
+    if (item.empty() || !stop || *stop || v < 0 || v > 24 || seen[static_cast<std::size_t>(v)])
+      throw InputError("band-map '" + text +
+                       "' is not 25 comma-separated band indices, each 0..24 once");
+    seen[static_cast<std::size_t>(v)] = true;
+    map.push_back(static_cast<int>(v));
+    start = end + 1;
+  }
+  if (map.size() != 25)
+    throw InputError("band-map '" + text +
+                     "' is not 25 comma-separated band indices, each 0..24 once");
+  return MosaicLayout::snapshot(5, 5, map);
 }
 
 void MappedImage::reset() {

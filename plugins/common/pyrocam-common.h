@@ -32,6 +32,13 @@ gsize raw_frame_size(const RawFormat& format);
  * InputError for anything else. */
 MosaicLayout layout_for_pattern(const std::string& pattern);
 
+/* A 5x5 layout's band map as the caps' band-map field gives it: the band indices of the cell,
+ * row-major, comma-separated ("0,1,...,24"). */
+std::string band_map_text(const MosaicLayout& layout);
+/* The 5x5 layout of a band-map field. Throws InputError naming the text unless it holds 25
+ * band indices, each 0..24 once. */
+MosaicLayout layout_for_band_map(const std::string& text);
+
 /* A mapped buffer seen as an image; unmaps when it goes. */
 class MappedImage {
  public:

@@ -14,14 +14,18 @@
  *    The captured dark lasts until the element stops (READY) or another capture replaces it.
  *    Emitting the signal before PLAYING starts the stream with a capture. A flush restarts a
  *    capture in progress.
- * 2. an image file, #GstDarkSub:location (PGM, PNG or TIFF, 8 or 16 bit, of the frame's size);
+ * 2. an image file, #GstDarkSub:location (PGM, PNG or TIFF of the frame's size and sample
+ *    depth: 8 bit for GRAY8 and video/x-bayer, 16 bit for GRAY16_LE; another size or depth is
+ *    a STREAM FORMAT error);
  * 3. a constant, #GstDarkSub:dark-level (DN).
  * With none of them the element refuses to start: a thermal reading without a dark frame is
  * wrong by the dark offset, so subtracting 0 must be asked for (dark-level=0).
  *
  * Input: video/x-bayer (8-bit, pattern from the caps) or video/x-raw GRAY8/GRAY16_LE, whose
- * layout is #GstDarkSub:pattern and, for GRAY16_LE, whose significant bits are
- * #GstDarkSub:bit-depth.
+ * layout is the caps' pattern field (pyrocamsrc sets it) or else #GstDarkSub:pattern: gray
+ * input that says neither is refused, as is a property that disagrees with the caps (CORE
+ * NEGOTIATION): a 5x5 mosaic read as Bayer gives temperatures that look right and are wrong.
+ * The significant bits are the caps' bit-depth field, #GstDarkSub:bit-depth or the sample size.
  *
  * ## Example launch line
  * |[
@@ -67,8 +71,8 @@ guint gst_dark_sub_signals[LAST_SIGNAL] = {0};
 constexpr double DEFAULT_DARK_LEVEL = -1.0;
 constexpr double DEFAULT_SATURATION_LEVEL = -1.0;
 constexpr int DEFAULT_CAPTURE_FRAMES = 10;
-constexpr GstDarkSubPattern DEFAULT_PATTERN = GST_DARK_SUB_PATTERN_RGGB;
-constexpr int DEFAULT_BIT_DEPTH = 16;
+constexpr GstDarkSubPattern DEFAULT_PATTERN = GST_DARK_SUB_PATTERN_AUTO;
+constexpr int DEFAULT_BIT_DEPTH = 0;  // from the caps
 
 const char* pattern_name(GstDarkSubPattern p) {
   switch (p) {
@@ -82,8 +86,10 @@ const char* pattern_name(GstDarkSubPattern p) {
       return "gbrg";
     case GST_DARK_SUB_PATTERN_5X5:
       return PYROCAM_SNAPSHOT_PATTERN_NAME;
+    case GST_DARK_SUB_PATTERN_AUTO:
+      return nullptr;
   }
-  return "rggb";
+  return nullptr;
 }
 
 /* Property values; read and written under GST_OBJECT_LOCK, copied once per buffer. */
@@ -105,6 +111,8 @@ struct State {
   std::string pattern;
   cv::Mat file_dark;  // CV_32F from `location`
   std::string file_dark_path;
+  int file_dark_bits = 0;     // sample size of the file: 8 or 16
+  int saturation_level = -1;  // raw DN from the caps' saturation-level field; -1: none
   cv::Mat captured_dark;
   pyrocam::DarkAccumulator accumulator;
   bool capturing = false;
@@ -131,6 +139,8 @@ GType gst_dark_sub_pattern_get_type(void) {
       {GST_DARK_SUB_PATTERN_GRBG, "Bayer, G R / B G", "grbg"},
       {GST_DARK_SUB_PATTERN_GBRG, "Bayer, G B / R G", "gbrg"},
       {GST_DARK_SUB_PATTERN_5X5, "5x5 snapshot mosaic", "5x5"},
+      {GST_DARK_SUB_PATTERN_AUTO, "From the caps (video/x-bayer format, gray video's pattern)",
+       "auto"},
       {0, nullptr, nullptr},
   };
   if (g_once_init_enter(&type)) {
@@ -163,6 +173,8 @@ static GstCaps* gst_dark_sub_transform_caps(GstBaseTransform* trans, GstPadDirec
                                             GstCaps* caps, GstCaps* filter) {
   GstDarkSub* self = GST_DARK_SUB(trans);
   const Settings settings = copy_settings(self);
+  /* Bit depth of 8-bit input: the property when it fits (set_caps refuses one that does not). */
+  const int shallow = settings.bit_depth > 0 && settings.bit_depth <= 8 ? settings.bit_depth : 8;
   GstCaps* result = gst_caps_new_empty();
   for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
     const GstStructure* s = gst_caps_get_structure(caps, i);
@@ -176,28 +188,61 @@ static GstCaps* gst_dark_sub_transform_caps(GstBaseTransform* trans, GstPadDirec
           gst_structure_set_value(out, "pattern", format);
         else
           gst_structure_set(out, "pattern", G_TYPE_STRING, "rggb", nullptr);
-        gst_structure_set(out, "bit-depth", G_TYPE_INT, 8, nullptr);
+        gst_structure_set(out, "bit-depth", G_TYPE_INT, shallow, nullptr);
       } else {
-        gst_structure_set(out, "pattern", G_TYPE_STRING, pattern_name(settings.pattern), nullptr);
+        /* The caps' pattern wins (set_caps refuses a property that disagrees); without one the
+         * property's, and with neither any pattern: set_caps refuses it. */
+        const GValue* caps_pattern = gst_structure_get_value(s, PYROCAM_FIELD_PATTERN);
+        const char* property_pattern = pattern_name(settings.pattern);
+        const GValue* band_map = gst_structure_get_value(s, PYROCAM_FIELD_BAND_MAP);
+        if (band_map) gst_structure_set_value(out, PYROCAM_FIELD_BAND_MAP, band_map);
+        if (caps_pattern) {
+          gst_structure_set_value(out, "pattern", caps_pattern);
+        } else if (property_pattern) {
+          gst_structure_set(out, "pattern", G_TYPE_STRING, property_pattern, nullptr);
+        } else {
+          GValue all = G_VALUE_INIT;
+          g_value_init(&all, GST_TYPE_LIST);
+          gst_value_deserialize(&all, PYROCAM_PATTERNS);
+          gst_structure_take_value(out, "pattern", &all);
+        }
         const char* format = gst_structure_get_string(s, "format");
         if (format && g_str_equal(format, "GRAY8")) {
-          gst_structure_set(out, "bit-depth", G_TYPE_INT, 8, nullptr);
+          gst_structure_set(out, "bit-depth", G_TYPE_INT, shallow, nullptr);
         } else if (format && g_str_equal(format, "GRAY16_LE")) {
-          gst_structure_set(out, "bit-depth", G_TYPE_INT, settings.bit_depth, nullptr);
+          const int caps_bits = pg::structure_int(s, PYROCAM_FIELD_BIT_DEPTH, 0);
+          gst_structure_set(out, "bit-depth", G_TYPE_INT,
+                            caps_bits > 0            ? caps_bits
+                            : settings.bit_depth > 0 ? settings.bit_depth
+                                                     : 16,
+                            nullptr);
         } else {
           GValue list = G_VALUE_INIT, v = G_VALUE_INIT;
           gst_value_list_init(&list, 2);
           g_value_init(&v, G_TYPE_INT);
-          g_value_set_int(&v, 8);
+          g_value_set_int(&v, shallow);
           gst_value_list_append_value(&list, &v);
-          if (settings.bit_depth != 8) {
-            g_value_set_int(&v, settings.bit_depth);
+          const int deep = settings.bit_depth > 0 ? settings.bit_depth : 16;
+          if (deep != shallow) {
+            g_value_set_int(&v, deep);
             gst_value_list_append_value(&list, &v);
           }
           gst_structure_take_value(out, "bit-depth", &list);
           g_value_unset(&v);
         }
       }
+      /* The raw level at and above which pixels are marked +INF, when it is known here. */
+      int bits = 0;
+      const int caps_level = pg::structure_int(s, PYROCAM_FIELD_SATURATION_LEVEL, -1);
+      if (settings.saturation_level >= 0)
+        gst_structure_set(out, PYROCAM_FIELD_SATURATION_LEVEL, G_TYPE_INT,
+                          static_cast<int>(std::ceil(settings.saturation_level)), nullptr);
+      else if (caps_level >= 0)
+        gst_structure_set(out, PYROCAM_FIELD_SATURATION_LEVEL, G_TYPE_INT, caps_level, nullptr);
+      else if (gst_structure_get_int(out, "bit-depth", &bits) && bits >= 1 && bits <= 16)
+        gst_structure_set(out, PYROCAM_FIELD_SATURATION_LEVEL, G_TYPE_INT,
+                          static_cast<int>(std::ceil(pyrocam::default_saturation_level(bits))),
+                          nullptr);
       result = gst_caps_merge_structure(result, out);
     } else {
       /* Mosaic -> raw: Bayer caps of the pattern, and gray video. */
@@ -259,7 +304,13 @@ static const cv::Mat* frame_dark(const State& st) {
   return nullptr;
 }
 
-static gboolean check_dark_size(GstDarkSub* self) {
+/* The name of a raw format in messages. */
+static std::string raw_format_name(const pg::RawFormat& f) {
+  if (f.bayer_caps) return "8-bit video/x-bayer";
+  return f.bytes_per_sample == 1 ? "GRAY8" : "GRAY16_LE";
+}
+
+static gboolean check_dark(GstDarkSub* self) {
   State& st = *self->state;
   if (!st.captured_dark.empty() &&
       (st.captured_dark.cols != st.format.width || st.captured_dark.rows != st.format.height)) {
@@ -278,6 +329,16 @@ static gboolean check_dark_size(GstDarkSub* self) {
                        "size mismatch between location and the negotiated caps");
     return FALSE;
   }
+  if (!st.file_dark.empty() && st.file_dark_bits != 8 * st.format.bytes_per_sample) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kFormat,
+                       "Dark frame " + st.file_dark_path + " has " +
+                           std::to_string(st.file_dark_bits) +
+                           "-bit samples but the camera frames are " + raw_format_name(st.format) +
+                           " (" + std::to_string(8 * st.format.bytes_per_sample) +
+                           "-bit samples): take the dark from this stream",
+                       "sample depth mismatch between location and the negotiated caps");
+    return FALSE;
+  }
   return TRUE;
 }
 
@@ -292,13 +353,67 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
                        "parse_raw_caps failed on the sink caps");
     return FALSE;
   }
+  const int sample_bits = 8 * f.bytes_per_sample;
+  if (settings.bit_depth > sample_bits) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
+                       "bit-depth " + std::to_string(settings.bit_depth) + " does not fit the " +
+                           raw_format_name(f) + " input (" + std::to_string(sample_bits) +
+                           "-bit samples)",
+                       "bit-depth property above the sample size of the sink caps");
+    return FALSE;
+  }
+  /* The layout: from the caps, or told by the property; both must agree. */
+  const GstStructure* in = gst_caps_get_structure(incaps, 0);
+  const char* caps_pattern =
+      f.bayer_caps ? f.pattern.c_str() : gst_structure_get_string(in, PYROCAM_FIELD_PATTERN);
+  const char* property_pattern = pattern_name(settings.pattern);
+  if (!caps_pattern && !property_pattern) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation,
+                       raw_format_name(f) +
+                           " input does not say its mosaic layout: set darksub pattern (rggb, "
+                           "bggr, grbg, gbrg or 5x5) or a pattern field in the caps",
+                       "gray sink caps without a pattern field and pattern=auto");
+    return FALSE;
+  }
+  if (caps_pattern && property_pattern && !g_str_equal(caps_pattern, property_pattern)) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation,
+                       "darksub pattern=" + std::string(property_pattern) +
+                           " but the stream is a " + caps_pattern + " mosaic",
+                       "pattern property differs from the sink caps");
+    return FALSE;
+  }
+  const int caps_bits = pg::structure_int(in, PYROCAM_FIELD_BIT_DEPTH, 0);
+  if (caps_bits > 0 && settings.bit_depth > 0 && caps_bits != settings.bit_depth) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation,
+                       "darksub bit-depth=" + std::to_string(settings.bit_depth) +
+                           " but the stream says its samples have " + std::to_string(caps_bits) +
+                           " significant bits",
+                       "bit-depth property differs from the sink caps");
+    return FALSE;
+  }
+  /* The saturation level: the property, else the caps' (the camera profile's), else the
+   * default share of the full scale. */
+  st.saturation_level = pg::structure_int(in, PYROCAM_FIELD_SATURATION_LEVEL, -1);
   const GstStructure* out = gst_caps_get_structure(outcaps, 0);
   st.format = f;
   st.have_format = true;
-  st.bit_depth = pg::structure_int(out, "bit-depth", f.bytes_per_sample == 1 ? 8 : 16);
-  const char* pattern = gst_structure_get_string(out, "pattern");
-  st.pattern = pattern ? pattern : "";
-  if (f.bytes_per_sample == 1 && st.bit_depth > 8) st.bit_depth = 8;
+  st.bit_depth = pg::structure_int(out, "bit-depth", sample_bits);
+  st.pattern = caps_pattern ? caps_pattern : property_pattern;
+  const char* out_pattern = gst_structure_get_string(out, "pattern");
+  if (!out_pattern || st.pattern != out_pattern) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation,
+                       "The stream is a " + st.pattern + " mosaic but downstream asks for " +
+                           (out_pattern ? out_pattern : "no pattern"),
+                       "pattern of the source caps differs from the input's");
+    return FALSE;
+  }
+  if (st.bit_depth < 1 || st.bit_depth > sample_bits) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation,
+                       "Output caps with bit-depth " + std::to_string(st.bit_depth) +
+                           " do not fit the " + raw_format_name(f) + " input",
+                       "bit-depth of the source caps out of range");
+    return FALSE;
+  }
   bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kNegotiation, "Unsupported mosaic", [&] {
     const pyrocam::MosaicLayout layout = pg::layout_for_pattern(st.pattern);
     if (f.width % layout.period_width || f.height % layout.period_height)
@@ -313,7 +428,7 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
                        settings.saturation_level, st.bit_depth);
   GST_INFO_OBJECT(self, "%dx%d %s, %d bit, %d byte(s) per sample", f.width, f.height,
                   st.pattern.c_str(), st.bit_depth, f.bytes_per_sample);
-  return check_dark_size(self);
+  return check_dark(self);
 }
 
 static gboolean gst_dark_sub_decide_allocation(GstBaseTransform* trans, GstQuery* query) {
@@ -351,7 +466,9 @@ static gboolean gst_dark_sub_start(GstBaseTransform* trans) {
     }
     const bool ok =
         PYROCAM_GUARDED(self, pg::ErrorKind::kRead, "Could not read the dark frame", [&] {
-          st.file_dark = pyrocam::dark_from_image(pyrocam::read_raw_image(settings.location));
+          const cv::Mat image = pyrocam::read_raw_image(settings.location);
+          st.file_dark_bits = image.depth() == CV_8U ? 8 : 16;
+          st.file_dark = pyrocam::dark_from_image(image);
         });
     if (!ok) return FALSE;
     st.file_dark_path = settings.location;
@@ -422,8 +539,9 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
       }
       return;
     }
-    const double saturation = settings.saturation_level >= 0
-                                  ? settings.saturation_level
+    const double saturation = settings.saturation_level >= 0 ? settings.saturation_level
+                              : st.saturation_level >= 0
+                                  ? st.saturation_level
                                   : pyrocam::default_saturation_level(st.bit_depth);
     if (const cv::Mat* dark = frame_dark(st)) {
       pyrocam::subtract_dark(raw.image(), *dark, saturation, out.image());
@@ -480,6 +598,9 @@ static void gst_dark_sub_set_property(GObject* object, guint prop_id, const GVal
       break;
   }
   GST_OBJECT_UNLOCK(self);
+  /* The saturation level is in the output caps: renegotiate, so that ratiotemp sees it. */
+  if (prop_id == PROP_SATURATION_LEVEL)
+    gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
 }
 
 static void gst_dark_sub_get_property(GObject* object, guint prop_id, GValue* value,
@@ -538,7 +659,8 @@ static void gst_dark_sub_class_init(GstDarkSubClass* klass) {
   g_object_class_install_property(
       gobject_class, PROP_LOCATION,
       g_param_spec_string("location", "Dark frame file",
-                          "Dark frame image (PGM, PNG or TIFF, 8 or 16 bit, the frame's size) "
+                          "Dark frame image (PGM, PNG or TIFF of the frame's size and sample "
+                          "depth: 8 bit for 8-bit input, 16 bit for GRAY16_LE) "
                           "taken at the same exposure with the lens covered; empty: none",
                           nullptr, ready));
   g_object_class_install_property(
@@ -551,8 +673,10 @@ static void gst_dark_sub_class_init(GstDarkSubClass* klass) {
       gobject_class, PROP_SATURATION_LEVEL,
       g_param_spec_double("saturation-level", "Saturation level",
                           "Raw value in DN (before dark subtraction) at and above which a "
-                          "pixel is marked saturated (+INF) (0..65535); -1: 220/255 of the "
-                          "full scale of the bit depth (220 for 8 bit)",
+                          "pixel is marked saturated (+INF) (0..65535); -1: the caps' "
+                          "saturation-level (pyrocamsrc: the camera profile's inference "
+                          "threshold), else 220/255 of the full scale of the bit depth (220 for "
+                          "8 bit)",
                           -1.0, 65535.0, DEFAULT_SATURATION_LEVEL, playing));
   g_object_class_install_property(
       gobject_class, PROP_CAPTURE_FRAMES,
@@ -564,15 +688,18 @@ static void gst_dark_sub_class_init(GstDarkSubClass* klass) {
   g_object_class_install_property(
       gobject_class, PROP_PATTERN,
       g_param_spec_enum("pattern", "Mosaic pattern",
-                        "Mosaic layout of video/x-raw GRAY8/GRAY16_LE input (video/x-bayer "
-                        "caps carry their own)",
+                        "Mosaic layout of the input. auto: from the caps (the format of "
+                        "video/x-bayer, the pattern field of GRAY8/GRAY16_LE); gray input "
+                        "without a pattern field must be told one. A pattern that differs from "
+                        "the caps' is refused (CORE NEGOTIATION)",
                         GST_TYPE_DARK_SUB_PATTERN, DEFAULT_PATTERN, ready));
   g_object_class_install_property(
       gobject_class, PROP_BIT_DEPTH,
       g_param_spec_int("bit-depth", "Bit depth",
-                       "Significant bits of GRAY16_LE input, e.g. 12 for a 12-bit camera "
-                       "(1..16; 8-bit input is always 8)",
-                       1, 16, DEFAULT_BIT_DEPTH, ready));
+                       "Significant bits of the input samples, e.g. 12 for a 12-bit camera "
+                       "carried as GRAY16_LE (0..16; at most 8 for GRAY8 and video/x-bayer, "
+                       "which are refused otherwise; 0: the full sample size, 8 or 16)",
+                       0, 16, DEFAULT_BIT_DEPTH, ready));
 
   /**
    * GstDarkSub::capture-dark:

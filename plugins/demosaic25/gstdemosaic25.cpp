@@ -15,6 +15,11 @@
  *   height/5, as the paper); band index = row * 5 + column in the cell, or the band map of the
  *   camera profile named by #GstDemosaic25:profile. The method does not apply.
  *
+ * With a #GstDemosaic25:profile, a stream whose mosaic pattern (from the caps) is not the
+ * profile's, or whose 5x5 band-map caps field (pyrocamsrc sets it from its profile) differs
+ * from the profile's band map, is refused (CORE NEGOTIATION naming both). Without a profile the
+ * stream's band-map orders the bands. The output caps' band-map says the order used.
+ *
  * ## Example launch line
  * |[
  * gst-launch-1.0 pyrocamsrc ! darksub dark-level=50 ! demosaic25 method=bin2x2 ! fakesink
@@ -49,6 +54,8 @@ struct Settings {
 struct State {
   bool have_snapshot_layout = false;  // from the profile, loaded in start()
   pyrocam::MosaicLayout snapshot_layout;
+  std::string profile_name, profile_pattern;  // the profile's mosaic as a caps pattern
+  std::string profile_band_map;  // band-map text of a 5x5 profile; under the object lock
   bool configured = false;
   pyrocam::MosaicLayout layout;
   pyrocam::DemosaicMethod method = pyrocam::DemosaicMethod::kBilinear;
@@ -133,6 +140,9 @@ static GstCaps* gst_demosaic25_transform_caps(GstBaseTransform* trans, GstPadDir
   GstDemosaic25* self = GST_DEMOSAIC25(trans);
   const Settings settings = copy_settings(self);
   const int bayer_divisor = settings.method == GST_DEMOSAIC25_METHOD_BIN2X2 ? 2 : 1;
+  GST_OBJECT_LOCK(self);
+  const std::string profile_band_map = self->state->profile_band_map;
+  GST_OBJECT_UNLOCK(self);
   const bool forward = direction == GST_PAD_SINK;
   GstCaps* result = gst_caps_new_empty();
   for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
@@ -153,6 +163,15 @@ static GstCaps* gst_demosaic25_transform_caps(GstBaseTransform* trans, GstPadDir
         out = gst_structure_new(PYROCAM_BANDS_MEDIA_TYPE, "format", G_TYPE_STRING, "F32LE", "bands",
                                 G_TYPE_INT, snap ? 25 : 3, "layout", G_TYPE_STRING,
                                 snap ? PYROCAM_SNAPSHOT_PATTERN_NAME : "bayer", nullptr);
+        if (snap) {
+          /* The band order of the planes: the profile's, else the input's, else row * 5 +
+           * column (set_caps refuses a profile and an input that disagree). */
+          const char* in_map = gst_structure_get_string(s, PYROCAM_FIELD_BAND_MAP);
+          std::string map = profile_band_map.empty() ? (in_map ? in_map : "") : profile_band_map;
+          if (map.empty())
+            map = pg::band_map_text(pg::layout_for_pattern(PYROCAM_SNAPSHOT_PATTERN_NAME));
+          gst_structure_set(out, PYROCAM_FIELD_BAND_MAP, G_TYPE_STRING, map.c_str(), nullptr);
+        }
       } else {
         out = gst_structure_new(PYROCAM_MOSAIC_MEDIA_TYPE, "format", G_TYPE_STRING, "F32LE",
                                 "bit-depth", GST_TYPE_INT_RANGE, 1, 16, nullptr);
@@ -164,6 +183,10 @@ static GstCaps* gst_demosaic25_transform_caps(GstBaseTransform* trans, GstPadDir
           gst_value_deserialize(&formats, PYROCAM_BAYER_FORMATS);
           gst_structure_take_value(out, "pattern", &formats);
         }
+      }
+      if (forward) {
+        const GValue* level = gst_structure_get_value(s, PYROCAM_FIELD_SATURATION_LEVEL);
+        if (level) gst_structure_set_value(out, PYROCAM_FIELD_SATURATION_LEVEL, level);
       }
       scale_dimension(s, out, "width", divisor, forward);
       scale_dimension(s, out, "height", divisor, forward);
@@ -210,10 +233,27 @@ static gboolean gst_demosaic25_set_caps(GstBaseTransform* trans, GstCaps* incaps
   st.method = to_library(settings.method);
   const bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kNegotiation, "Unsupported mosaic", [&] {
     if (!pattern) throw pyrocam::InputError("the input caps name no pattern");
-    if (is_snapshot(pattern) && st.have_snapshot_layout)
+    if (!st.profile_pattern.empty() && st.profile_pattern != pattern)
+      throw pyrocam::InputError("camera profile " + st.profile_name + " has a " +
+                                st.profile_pattern + " mosaic but the stream is a " + pattern +
+                                " mosaic");
+    const char* in_map = gst_structure_get_string(in, PYROCAM_FIELD_BAND_MAP);
+    if (is_snapshot(pattern) && in_map) {
+      const pyrocam::MosaicLayout camera = pg::layout_for_band_map(in_map);
+      if (st.have_snapshot_layout && camera.band_map != st.snapshot_layout.band_map)
+        throw pyrocam::InputError("camera profile " + st.profile_name + " orders the 5x5 bands " +
+                                  pg::band_map_text(st.snapshot_layout) +
+                                  " but the stream's camera orders them " + in_map);
+      st.layout = st.have_snapshot_layout ? st.snapshot_layout : camera;
+    } else if (is_snapshot(pattern) && st.have_snapshot_layout) {
       st.layout = st.snapshot_layout;
-    else
+    } else {
       st.layout = pg::layout_for_pattern(pattern);
+    }
+    const char* out_map = gst_structure_get_string(out, PYROCAM_FIELD_BAND_MAP);
+    if (is_snapshot(pattern) && out_map && pg::band_map_text(st.layout) != out_map)
+      throw pyrocam::InputError("downstream asks for the 5x5 band order " + std::string(out_map) +
+                                ", the planes are in the order " + pg::band_map_text(st.layout));
     const cv::Size size =
         pyrocam::demosaic_output_size(st.layout, st.method, {st.in_width, st.in_height});
     if (size.width != st.out_width || size.height != st.out_height ||
@@ -252,7 +292,9 @@ static gboolean gst_demosaic25_start(GstBaseTransform* trans) {
   GstDemosaic25* self = GST_DEMOSAIC25(trans);
   const Settings settings = copy_settings(self);
   State& st = *self->state;
+  GST_OBJECT_LOCK(self);
   st = State();
+  GST_OBJECT_UNLOCK(self);
   if (settings.profile.empty()) return TRUE;
   pyrocam::CameraProfile profile;
   const bool ok = PYROCAM_GUARDED(self, pg::profile_error_kind(settings.profile),
@@ -270,14 +312,24 @@ static gboolean gst_demosaic25_start(GstBaseTransform* trans) {
     }
     st.snapshot_layout = profile.mosaic;
     st.have_snapshot_layout = true;
+    GST_OBJECT_LOCK(self);
+    st.profile_band_map = pg::band_map_text(profile.mosaic);
+    GST_OBJECT_UNLOCK(self);
+    st.profile_pattern = PYROCAM_SNAPSHOT_PATTERN_NAME;
+  } else {
+    st.profile_pattern = profile.mosaic.pattern;
+    for (char& c : st.profile_pattern) c = static_cast<char>(g_ascii_tolower(c));
   }
+  st.profile_name = settings.profile;
   GST_INFO_OBJECT(self, "camera profile %s (%s)", profile.name.c_str(),
                   profile.mosaic.pattern.c_str());
   return TRUE;
 }
 
 static gboolean gst_demosaic25_stop(GstBaseTransform* trans) {
+  GST_OBJECT_LOCK(trans);
   *GST_DEMOSAIC25(trans)->state = State();
+  GST_OBJECT_UNLOCK(trans);
   return TRUE;
 }
 
@@ -380,8 +432,9 @@ static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
       gobject_class, PROP_PROFILE,
       g_param_spec_string("profile", "Camera profile",
                           "Camera profile (shipped name such as nir5x5-reference, or a path to "
-                          "its JSON file) whose 5x5 band map orders the output bands; empty: "
-                          "band index = row * 5 + column",
+                          "its JSON file) whose 5x5 band map orders the output bands; a stream "
+                          "whose mosaic is not the profile's is refused; empty: band index = "
+                          "row * 5 + column",
                           nullptr, ready));
 
   gst_element_class_set_static_metadata(

@@ -8,8 +8,10 @@
  * profile's datasheet the way a real camera does (filter leak, per-band scale and tilt).
  *
  * Output follows the profile: 8-bit Bayer profiles give video/x-bayer (format = the pattern),
- * 5x5 profiles give video/x-raw GRAY8, profiles deeper than 8 bit GRAY16_LE. Width and height
- * must be multiples of the mosaic period (2 or 5); the default 320x240 at 30/1 suits both.
+ * 5x5 profiles give video/x-raw GRAY8, profiles deeper than 8 bit GRAY16_LE; gray video carries
+ * the profile's mosaic (pattern), bit-depth and saturation-level (its inference saturation
+ * threshold) in the caps, as pyrocam-caps.h describes, so that darksub reads it right. Width and
+ * height must be multiples of the mosaic period (2 or 5); the default 320x240 at 30/1 suits both.
  * Frames are timestamped from 0 at the negotiated frame rate; with #GstPyrocamSrc:is-live they
  * are pushed in real time.
  *
@@ -157,13 +159,26 @@ static Settings copy_settings(GstPyrocamSrc* self) {
 /* The caps the loaded profile can produce. */
 static GstCaps* profile_caps(const pyrocam::CameraProfile& profile) {
   std::string caps;
+  std::string pattern = profile.mosaic.pattern;
+  for (char& c : pattern) c = static_cast<char>(g_ascii_tolower(c));
   if (profile.mosaic.kind == pyrocam::MosaicLayout::Kind::kBayer && profile.bit_depth == 8) {
-    std::string pattern = profile.mosaic.pattern;
-    for (char& c : pattern) c = static_cast<char>(g_ascii_tolower(c));
     caps = "video/x-bayer, format = (string) " + pattern;
   } else {
-    caps = std::string("video/x-raw, format = (string) ") +
-           (profile.bit_depth == 8 ? "GRAY8" : "GRAY16_LE");
+    /* The layout and depth travel in the caps (pyrocam-caps.h), so that darksub cannot read
+     * the mosaic as another one. */
+    if (profile.mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot)
+      pattern = std::to_string(profile.mosaic.period_width) + "x" +
+                std::to_string(profile.mosaic.period_height);
+    caps =
+        std::string("video/x-raw, format = (string) ") +
+        (profile.bit_depth == 8 ? "GRAY8" : "GRAY16_LE") +
+        ", " PYROCAM_FIELD_PATTERN " = (string) " + pattern +
+        ", " PYROCAM_FIELD_BIT_DEPTH " = (int) " + std::to_string(profile.bit_depth) +
+        ", " PYROCAM_FIELD_SATURATION_LEVEL " = (int) " +
+        std::to_string(static_cast<int>(std::lround(profile.thresholds.inference_saturation_dn)));
+    if (profile.mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot)
+      caps += ", " PYROCAM_FIELD_BAND_MAP " = (string) \"" +
+              pyrocam::gst::band_map_text(profile.mosaic) + "\"";
   }
   caps += ", " PYROCAM_SIZE_RANGE ", framerate = (fraction) [ 1/1, max ]";
   return gst_caps_from_string(caps.c_str());

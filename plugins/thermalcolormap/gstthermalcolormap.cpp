@@ -11,9 +11,11 @@
  * #GstThermalColormap:isotherm-threshold get #GstThermalColormap:isotherm-color (an alarm).
  * #GstThermalColormap:scale-bar draws the palette with labelled ticks in degC at the right edge.
  *
- * In fixed mode a range with min-temperature >= max-temperature is refused with a warning on
- * the bus (RESOURCE SETTINGS) and the last good range stays in use, so that a user interface
- * setting one end after the other never stops the display.
+ * In fixed mode a range narrower than one temperature code (max-temperature - min-temperature
+ * below 0.1 degC, including min-temperature >= max-temperature) is refused with a warning on
+ * the bus (RESOURCE SETTINGS) and the last good range stays in use (the default 500..2500 degC
+ * before there is one), so that a user interface setting one end after the other never stops
+ * the display.
  *
  * ## Example launch line
  * |[
@@ -197,6 +199,32 @@ static gboolean gst_thermal_colormap_stop(GstBaseTransform* trans) {
   return TRUE;
 }
 
+/* GstVideoFilter answers a buffer it cannot map as a frame with a CORE NOT_IMPLEMENTED warning
+ * and drops it; a temperature stream with frames of the wrong size is a STREAM FORMAT error. */
+static GstFlowReturn gst_thermal_colormap_transform(GstBaseTransform* trans, GstBuffer* inbuf,
+                                                    GstBuffer* outbuf) {
+  GstVideoFilter* filter = GST_VIDEO_FILTER(trans);
+  if (!filter->negotiated) {
+    PYROCAM_POST_ERROR(trans, pg::ErrorKind::kNegotiation, "Not negotiated",
+                       "transform called before set_caps");
+    return GST_FLOW_NOT_NEGOTIATED;
+  }
+  GstVideoFrame frame;
+  if (!gst_video_frame_map(&frame, &filter->in_info, inbuf, GST_MAP_READ)) {
+    PYROCAM_POST_ERROR(
+        trans, pg::ErrorKind::kFormat,
+        "A temperature buffer of " + std::to_string(gst_buffer_get_size(inbuf)) +
+            " bytes does not hold a " + std::to_string(GST_VIDEO_INFO_WIDTH(&filter->in_info)) +
+            "x" + std::to_string(GST_VIDEO_INFO_HEIGHT(&filter->in_info)) + " GRAY16_LE frame of " +
+            std::to_string(GST_VIDEO_INFO_SIZE(&filter->in_info)) + " bytes",
+        "gst_video_frame_map failed on the input buffer");
+    return GST_FLOW_ERROR;
+  }
+  gst_video_frame_unmap(&frame);
+  return GST_BASE_TRANSFORM_CLASS(gst_thermal_colormap_parent_class)
+      ->transform(trans, inbuf, outbuf);
+}
+
 static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter,
                                                           GstVideoFrame* in_frame,
                                                           GstVideoFrame* out_frame) {
@@ -227,15 +255,16 @@ static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter
       cs.min_c = settings.min_c;
       cs.max_c = settings.max_c;
     }
-    if (!(cs.min_c < cs.max_c)) {
+    if (!(cs.max_c - cs.min_c >= pyrocam::kMinColormapSpanC)) {
       if (!st.warned_range)
         GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
-                            ("min-temperature %g degC is not below max-temperature %g degC; "
-                             "keeping the last range",
-                             cs.min_c, cs.max_c),
-                            ("fixed range is empty"));
+                            ("min-temperature %.17g degC is not at least %g degC below "
+                             "max-temperature %.17g degC; keeping the last range",
+                             cs.min_c, pyrocam::kMinColormapSpanC, cs.max_c),
+                            ("fixed range narrower than one temperature code"));
       st.warned_range = true;
-      if (st.colormap.settings().min_c < st.colormap.settings().max_c) {
+      if (st.colormap.settings().max_c - st.colormap.settings().min_c >=
+          pyrocam::kMinColormapSpanC) {
         cs.min_c = st.colormap.settings().min_c;
         cs.max_c = st.colormap.settings().max_c;
       } else {
@@ -417,6 +446,7 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
   trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_thermal_colormap_transform_caps);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_thermal_colormap_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_thermal_colormap_stop);
+  trans_class->transform = GST_DEBUG_FUNCPTR(gst_thermal_colormap_transform);
   filter_class->set_info = GST_DEBUG_FUNCPTR(gst_thermal_colormap_set_info);
   filter_class->transform_frame = GST_DEBUG_FUNCPTR(gst_thermal_colormap_transform_frame);
 

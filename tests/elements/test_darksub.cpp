@@ -147,7 +147,8 @@ TEST_F(DarkSub, property_changes_apply_while_playing) {
 
 TEST_F(DarkSub, capture_dark_averages_frames_and_outputs_nan_meanwhile) {
   h = gst_harness_new_parse("darksub capture-frames=2 dark-level=0");
-  gst_harness_set_src_caps_str(h, "video/x-raw,format=GRAY8,width=4,height=2,framerate=30/1");
+  gst_harness_set_src_caps_str(
+      h, "video/x-raw,format=GRAY8,width=4,height=2,framerate=30/1,pattern=rggb");
   GstElement* e = find_element(h, "darksub");
   g_signal_emit_by_name(e, "capture-dark");
   const std::vector<std::uint8_t> d1(8, 40), d2(8, 44), light(8, 100);
@@ -196,7 +197,7 @@ TEST_F(DarkSub, survives_flush_and_eos) {
 }
 
 const char* kGraySource =
-    "videotestsrc num-buffers=2 ! video/x-raw,format=GRAY8,width=16,height=8 ! ";
+    "videotestsrc num-buffers=2 ! video/x-raw,format=GRAY8,width=16,height=8,pattern=rggb ! ";
 
 TEST(DarkSubErrors, rejects_a_missing_dark_file) {
   REQUIRE_ELEMENT("darksub");
@@ -231,6 +232,95 @@ TEST(DarkSubErrors, rejects_a_corrupt_dark_file) {
   EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
   EXPECT_EQ(r.code, GST_RESOURCE_ERROR_READ);
   EXPECT_NE(r.message.find("dark.pgm"), std::string::npos) << r.message;
+}
+
+TEST(DarkSubErrors, rejects_a_16_bit_dark_on_an_8_bit_stream) {
+  REQUIRE_ELEMENT("darksub");
+  ScratchDir dir("darksub-depth");
+  write_raw_image(dir / "dark16.pgm", cv::Mat(8, 16, CV_16U, cv::Scalar(50)));
+  const auto r = run_pipeline(std::string(kGraySource) +
+                              "darksub location=" + (dir / "dark16.pgm").string() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_STREAM_ERROR);
+  EXPECT_EQ(r.code, GST_STREAM_ERROR_FORMAT);
+  EXPECT_NE(r.message.find("dark16.pgm"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("has 16-bit samples"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("GRAY8"), std::string::npos) << r.message;
+}
+
+TEST(DarkSubErrors, rejects_an_8_bit_dark_on_a_16_bit_stream) {
+  REQUIRE_ELEMENT("darksub");
+  ScratchDir dir("darksub-depth8");
+  write_raw_image(dir / "dark8.png", cv::Mat(8, 16, CV_8U, cv::Scalar(50)));
+  const auto r = run_pipeline(
+      "videotestsrc num-buffers=2 ! video/x-raw,format=GRAY16_LE,width=16,height=8,pattern=rggb ! "
+      "darksub location=" +
+      (dir / "dark8.png").string() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_STREAM_ERROR);
+  EXPECT_EQ(r.code, GST_STREAM_ERROR_FORMAT);
+  EXPECT_NE(r.message.find("dark8.png has 8-bit samples"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("GRAY16_LE"), std::string::npos) << r.message;
+}
+
+TEST(DarkSubErrors, rejects_a_bit_depth_that_gray8_cannot_carry) {
+  REQUIRE_ELEMENT("darksub");
+  const auto r =
+      run_pipeline(std::string(kGraySource) + "darksub dark-level=5 bit-depth=12 ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_SETTINGS);
+  EXPECT_NE(r.message.find("bit-depth 12"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("GRAY8"), std::string::npos) << r.message;
+}
+
+TEST(DarkSubErrors, rejects_gray_input_that_says_no_pattern) {
+  REQUIRE_ELEMENT("darksub");
+  const auto r = run_pipeline(
+      "videotestsrc num-buffers=2 ! video/x-raw,format=GRAY8,width=16,height=8 ! "
+      "darksub dark-level=5 ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("GRAY8"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("pattern"), std::string::npos) << r.message;
+}
+
+TEST(DarkSubErrors, rejects_a_pattern_that_differs_from_the_caps) {
+  REQUIRE_ELEMENT("darksub");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 profile=nir5x5-reference ! video/x-raw,width=20,height=10 ! "
+      "darksub dark-level=5 pattern=rggb ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("pattern=rggb"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("5x5 mosaic"), std::string::npos) << r.message;
+}
+
+TEST(DarkSubErrors, rejects_a_pattern_that_differs_from_the_bayer_format) {
+  REQUIRE_ELEMENT("darksub");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 ! video/x-bayer,format=rggb,width=20,height=10 ! "
+      "darksub dark-level=5 pattern=5x5 ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("pattern=5x5"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("rggb mosaic"), std::string::npos) << r.message;
+}
+
+TEST(DarkSubPipeline, takes_the_pattern_and_saturation_level_from_pyrocamsrc) {
+  REQUIRE_ELEMENT("darksub");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 profile=nir5x5-reference ! video/x-raw,width=20,height=10 ! "
+      "darksub dark-level=5 ! "
+      "video/x-pyrocam-mosaic,pattern=5x5,bit-depth=8 ! fakesink name=sink");
+  EXPECT_TRUE(r.eos) << r.message << " " << r.debug;
+  EXPECT_EQ(r.buffers, 1);
 }
 
 TEST(DarkSubErrors, rejects_running_without_a_dark) {

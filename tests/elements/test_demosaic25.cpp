@@ -157,6 +157,47 @@ TEST(Demosaic25Errors, rejects_a_missing_profile) {
   EXPECT_NE(r.message.find("/nonexistent/camera.json"), std::string::npos) << r.message;
 }
 
+TEST(Demosaic25Errors, rejects_a_stream_that_is_not_the_profiles_mosaic) {
+  REQUIRE_ELEMENT("demosaic25");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! "
+      "demosaic25 profile=nir5x5-reference ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("nir5x5-reference has a 5x5 mosaic"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("rggb mosaic"), std::string::npos) << r.message;
+}
+
+// A 5x5 stream whose camera orders bands 0 and 1 the other way round than row * 5 + column.
+const char* kSwappedBandMap = "1,0,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24";
+
+TEST(Demosaic25Errors, rejects_a_profile_whose_band_map_differs_from_the_streams) {
+  REQUIRE_ELEMENT("demosaic25");
+  const auto r = run_pipeline(
+      std::string("videotestsrc num-buffers=1 ! "
+                  "video/x-raw,format=GRAY8,width=20,height=10,pattern=5x5,band-map=(string)\"") +
+      kSwappedBandMap +
+      "\" ! darksub dark-level=5 ! demosaic25 profile=nir5x5-reference ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("orders the 5x5 bands 0,1,2"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find(kSwappedBandMap), std::string::npos) << r.message;
+}
+
+TEST(Demosaic25Pipeline, orders_the_bands_by_the_streams_band_map_and_says_so) {
+  REQUIRE_ELEMENT("demosaic25");
+  const auto r = run_pipeline(
+      std::string("videotestsrc num-buffers=1 ! "
+                  "video/x-raw,format=GRAY8,width=20,height=10,pattern=5x5,band-map=(string)\"") +
+      kSwappedBandMap + "\" ! darksub dark-level=5 ! demosaic25 ! " +
+      "video/x-pyrocam-bands,band-map=(string)\"" + kSwappedBandMap + "\" ! fakesink name=sink");
+  EXPECT_TRUE(r.eos) << r.message << " " << r.debug;
+  EXPECT_EQ(r.buffers, 1);
+}
+
 TEST(Demosaic25Errors, rejects_caps_it_cannot_produce_n) {
   REQUIRE_ELEMENT("demosaic25");
   REQUIRE_ELEMENT("pyrocamsrc");

@@ -759,6 +759,48 @@ const std::string kSnapshotChain =
     "pyrocamsrc num-buffers=1 profile=nir5x5-reference ! video/x-raw,width=20,height=10 ! "
     "darksub dark-level=50 pattern=5x5 ! demosaic25 ! ";
 
+TEST(RatioTempErrors, rejects_a_5x5_mosaic_with_a_colour_model_n) {
+  // darksub used to read the untagged 5x5 mosaic as RGGB: plausible temperatures, all wrong.
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 profile=nir5x5-reference ! video/x-raw,width=20,height=10 ! "
+      "darksub dark-level=5 ! demosaic25 ! ratiotemp model=" +
+      rgb_model_path() + " ! fakesink");
+  ASSERT_TRUE(r.error) << "ran to the end with a colour model on a 5x5 mosaic";
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("5x5"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("bayer"), std::string::npos) << r.message;
+}
+
+TEST(RatioTempErrors, rejects_5x5_bands_in_another_order_than_the_models_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(
+      "videotestsrc num-buffers=1 ! video/x-raw,format=GRAY8,width=20,height=10,pattern=5x5,"
+      "band-map=(string)\"1,0,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24\" ! "
+      "darksub dark-level=5 ! demosaic25 ! ratiotemp model=" +
+      nir_model_path() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("in the order 0,1,2"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("in the order 1,0,2"), std::string::npos) << r.message;
+}
+
+TEST(RatioTempErrors, rejects_a_saturation_level_above_the_models_n) {
+  // darksub would pass 220..239 DN unmarked, which the model's camera calls saturated.
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 "
+      "saturation-level=240 ! demosaic25 ! ratiotemp model=" +
+      rgb_model_path() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_CORE_ERROR);
+  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
+  EXPECT_NE(r.message.find("from 240 DN"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("220 DN"), std::string::npos) << r.message;
+}
+
 TEST(RatioTempErrors, rejects_running_without_a_model_n) {
   REQUIRE_ELEMENT("ratiotemp");
   const auto r = run_pipeline(kColourChain + "ratiotemp ! fakesink");

@@ -16,7 +16,32 @@ class ThermalColormap : public ::testing::Test {
  protected:
   void SetUp() override { REQUIRE_ELEMENT("thermalcolormap"); }
   void TearDown() override {
+    if (bus) {
+      gst_element_set_bus(h->element, nullptr);
+      gst_object_unref(bus);
+    }
     if (h) gst_harness_teardown(h);
+  }
+  // A bus on the harnessed element, to see its errors and warnings.
+  void attach_bus() {
+    bus = gst_bus_new();
+    gst_element_set_bus(h->element, bus);
+  }
+  // The first message of a type on the bus: its domain, code and message ("" if none).
+  std::string first(GstMessageType type, GQuark* domain = nullptr, int* code = nullptr) {
+    GstMessage* m = gst_bus_pop_filtered(bus, type);
+    if (!m) return "";
+    GError* err = nullptr;
+    if (type == GST_MESSAGE_ERROR)
+      gst_message_parse_error(m, &err, nullptr);
+    else
+      gst_message_parse_warning(m, &err, nullptr);
+    const std::string text = err->message;
+    if (domain) *domain = err->domain;
+    if (code) *code = err->code;
+    g_error_free(err);
+    gst_message_unref(m);
+    return text;
   }
   void start(const char* launch, const char* out_format, int w = 4, int h_ = 2) {
     h = gst_harness_new_parse(launch);
@@ -35,6 +60,7 @@ class ThermalColormap : public ::testing::Test {
     return v;
   }
   GstHarness* h = nullptr;
+  GstBus* bus = nullptr;
 };
 
 // The library's bytes for codes under given settings.
@@ -127,6 +153,43 @@ TEST_F(ThermalColormap, scale_bar_is_opaque_over_invalid_pixels) {
 TEST_F(ThermalColormap, empty_fixed_range_warns_and_keeps_working_n) {
   start("thermalcolormap range-mode=fixed min-temperature=1500 max-temperature=1500", nullptr);
   EXPECT_EQ(run(kCodes).size(), kCodes.size() * 4);
+}
+
+TEST_F(ThermalColormap, one_code_wide_fixed_range_warns_and_finishes_the_frame_n) {
+  // One ulp wide: the scale bar's tick loop used to stop advancing and grow without bound.
+  start(
+      "thermalcolormap range-mode=fixed min-temperature=1000 "
+      "max-temperature=1000.0000000000001 scale-bar=true",
+      nullptr, 160, 120);
+  attach_bus();
+  EXPECT_EQ(run(std::vector<std::uint16_t>(160 * 120, code_of(1000))).size(), 160u * 120u * 4u);
+  GQuark domain = 0;
+  int code = 0;
+  const std::string warning = first(GST_MESSAGE_WARNING, &domain, &code);
+  EXPECT_EQ(domain, GST_RESOURCE_ERROR);
+  EXPECT_EQ(code, GST_RESOURCE_ERROR_SETTINGS);
+  EXPECT_NE(warning.find("0.1 degC"), std::string::npos) << warning;
+  // Another too narrow range: still a whole frame, painted with the last good range.
+  GstElement* e = find_element(h, "thermalcolormap");
+  g_object_set(e, "max-temperature", 1000.05, nullptr);
+  gst_object_unref(e);
+  EXPECT_EQ(run(std::vector<std::uint16_t>(160 * 120, code_of(1000))).size(), 160u * 120u * 4u);
+}
+
+TEST_F(ThermalColormap, rejects_a_too_short_buffer) {
+  start("thermalcolormap range-mode=fixed", nullptr);
+  attach_bus();
+  const std::vector<std::uint16_t> short_frame(kCodes.begin(), kCodes.begin() + 5);
+  EXPECT_EQ(gst_harness_push(h, buffer_from(short_frame)), GST_FLOW_ERROR);
+  GQuark domain = 0;
+  int code = 0;
+  const std::string error = first(GST_MESSAGE_ERROR, &domain, &code);
+  EXPECT_EQ(domain, GST_STREAM_ERROR);
+  EXPECT_EQ(code, GST_STREAM_ERROR_FORMAT);
+  EXPECT_NE(error.find("10 bytes"), std::string::npos) << error;  // got
+  EXPECT_NE(error.find("16 bytes"), std::string::npos) << error;  // expected: 4x2 GRAY16_LE
+  EXPECT_NE(error.find("4x2"), std::string::npos) << error;
+  EXPECT_EQ(first(GST_MESSAGE_WARNING), "");  // no "not implemented" warning
 }
 
 TEST_F(ThermalColormap, survives_flush_and_eos) {

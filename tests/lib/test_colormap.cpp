@@ -1,6 +1,9 @@
 // False-colour mapping: palettes, lookup table, invalid and isotherm colours, auto range, ticks.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "pyrocam/colormap.h"
 #include "pyrocam/spectrum.h"
 
@@ -86,6 +89,36 @@ TEST(Colormap, nice_ticks) {
   EXPECT_EQ(nice_ticks(500, 2500, 5), (std::vector<double>{500, 1000, 1500, 2000, 2500}));
   EXPECT_EQ(nice_ticks(1013, 1087, 4), (std::vector<double>{1020, 1040, 1060, 1080}));
   EXPECT_TRUE(nice_ticks(5, 5).empty());
+}
+
+TEST(Colormap, nice_ticks_of_a_range_below_the_resolution_stay_bounded_n) {
+  // One ulp above 1000: adding the step to 1000 does not change it, so a loop by addition
+  // never ends.
+  const double hi = std::nextafter(1000.0, 2000.0);
+  EXPECT_LE(nice_ticks(1000, hi, 8).size(), 18u);
+  EXPECT_LE(nice_ticks(1e300, std::nextafter(1e300, 2e300), 5).size(), 12u);
+  EXPECT_TRUE(nice_ticks(0, std::numeric_limits<double>::infinity()).empty());
+  EXPECT_TRUE(nice_ticks(std::nan(""), 1).empty());
+  for (int target = 1; target <= 8; ++target)
+    EXPECT_LE(nice_ticks(-273.15, 10000, target).size(), 2u * target + 2u) << target;
+}
+
+TEST(Colormap, rejects_a_range_narrower_than_one_code) {
+  ThermalColormap map;
+  ColormapSettings s;
+  s.min_c = 1000;
+  s.max_c = std::nextafter(1000.0, 2000.0);
+  EXPECT_THROW(map.configure(s), InputError);
+  s.max_c = 1000 + kMinColormapSpanC / 2;
+  EXPECT_THROW(map.configure(s), InputError);
+  s.max_c = 1000 + kMinColormapSpanC;
+  EXPECT_NO_THROW(map.configure(s));
+  // The scale bar of a degenerate range is left out, not drawn forever.
+  cv::Mat img(240, 320, CV_8UC4, cv::Scalar(0, 0, 0, 0));
+  draw_scale_bar(img, Palette::kIron, 1000, std::nextafter(1000.0, 2000.0), ChannelOrder::kRGBA);
+  EXPECT_EQ(cv::countNonZero(img.reshape(1)), 0);
+  draw_scale_bar(img, Palette::kIron, 1000, 1000.1, ChannelOrder::kRGBA);
+  EXPECT_GT(cv::countNonZero(img.reshape(1)), 0);
 }
 
 TEST(Colormap, scale_bar_is_drawn_opaque_at_the_right_edge) {

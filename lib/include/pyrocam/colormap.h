@@ -28,6 +28,11 @@ enum class ChannelOrder { kRGBA, kBGRA };
 // 0.1 K code <-> degC.
 inline double decikelvin_to_celsius(std::uint16_t code) { return code * 0.1 - 273.15; }
 
+// The narrowest temperature range a colour map accepts: one temperature code (0.1 K). A
+// narrower range cannot tell two readings apart, and its scale-bar ticks would be steps below
+// the resolution of a double.
+constexpr double kMinColormapSpanC = 0.1;
+
 struct ColormapSettings {
   Palette palette = Palette::kIron;
   double min_c = 500, max_c = 2500;  // mapped to the ends of the palette (clamped beyond)
@@ -48,7 +53,7 @@ struct ColormapSettings {
 // pixel. Rebuilding (about 0.1 ms) happens only when the settings change.
 class ThermalColormap {
  public:
-  // Throws InputError unless min_c < max_c (both finite).
+  // Throws InputError unless min_c and max_c are finite and max_c - min_c >= kMinColormapSpanC.
   void configure(const ColormapSettings& settings);
   const ColormapSettings& settings() const { return settings_; }
   // decikelvin CV_16U -> out CV_8UC4 of the same size (allocated if it does not fit).
@@ -87,12 +92,13 @@ class AutoRange {
   double min_ = 0, max_ = 0;
 };
 
-// Tick values (degC) at a 1, 2 or 5 x 10^k step, about `target` of them within [min_c, max_c].
+// Tick values (degC) at a 1, 2 or 5 x 10^k step, about `target` of them within [min_c, max_c];
+// never more than 2 * target + 2 (a range too narrow for its magnitude gives fewer or none).
 std::vector<double> nice_ticks(double min_c, double max_c, int target = 5);
 
 // Draws a vertical scale bar (palette gradient, hot at the top) with tick labels in degC at the
 // right edge of a CV_8UC4 image; opaque, so it shows when overlaid. Too small an image (under
-// 48 px high or 64 px wide) gets none.
+// 48 px high or 64 px wide) or a range narrower than kMinColormapSpanC (or not finite) gets none.
 void draw_scale_bar(cv::Mat& image, Palette palette, double min_c, double max_c,
                     ChannelOrder order);
 
