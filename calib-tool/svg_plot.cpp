@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "pyrocam/colormap.h"
+
 namespace pyrocam::cli {
 namespace {
 
@@ -18,18 +20,10 @@ std::string fmt(double v) {
   return buf;
 }
 
-std::vector<double> nice_ticks(double lo, double hi, int target = 6) {
-  std::vector<double> t;
-  if (!(hi > lo)) return {lo};
-  const double raw = (hi - lo) / target;
-  const double mag = std::pow(10, std::floor(std::log10(raw)));
-  double step = mag;
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * mag >= raw) {
-      step = m * mag;
-      break;
-    }
-  for (double v = std::ceil(lo / step) * step; v <= hi + 1e-9 * step; v += step) t.push_back(v);
+// The library's ticks (bounded however small the step); a degenerate axis gets one tick.
+std::vector<double> axis_ticks(double lo, double hi) {
+  std::vector<double> t = nice_ticks(lo, hi, 6);
+  if (t.empty()) t.push_back(lo);
   return t;
 }
 
@@ -86,12 +80,12 @@ std::string svg_plot(const PlotSpec& spec, const std::vector<Series>& series) {
     << html_escape(spec.title) << "</text>";
   o << "<rect x='" << l << "' y='" << t << "' width='" << w - l - r << "' height='" << h - t - b
     << "' fill='none' stroke='#333'/>";
-  for (double v : nice_ticks(x0, x1)) {
+  for (double v : axis_ticks(x0, x1)) {
     o << "<line x1='" << px(v) << "' x2='" << px(v) << "' y1='" << t << "' y2='" << h - b
       << "' stroke='#eee'/><text x='" << px(v) << "' y='" << h - b + 14 << "' text-anchor='middle'>"
       << fmt(v) << "</text>";
   }
-  for (double v : nice_ticks(y0, y1)) {
+  for (double v : axis_ticks(y0, y1)) {
     o << "<line x1='" << l << "' x2='" << w - r << "' y1='" << py(v) << "' y2='" << py(v)
       << "' stroke='#eee'/><text x='" << l - 4 << "' y='" << py(v) + 4 << "' text-anchor='end'>"
       << (spec.log_y ? fmt(std::pow(10, v)) : fmt(v)) << "</text>";
