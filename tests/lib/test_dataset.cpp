@@ -100,7 +100,7 @@ TEST_F(DatasetFiles, rejects_unknown_kind_n) {
 
 TEST_F(DatasetFiles, rejects_missing_image_n) {
   std::filesystem::remove(dir / "frames/T0900_e01_f1.pgm");
-  expect_rejected("T0900_e01_f1.pgm: listed in manifest.csv but not found");
+  expect_rejected("T0900_e01_f1.pgm (manifest.csv line 11): listed but not found");
 }
 
 TEST_F(DatasetFiles, rejects_exposure_without_dark_n) {
