@@ -57,8 +57,9 @@ bool same_exposure(double a_us, double b_us) {
 }
 
 std::vector<ManifestRow> read_manifest(const std::filesystem::path& path) {
+  require_regular_file(path, "manifest");  // before opening: a FIFO would block
   std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": manifest not found or unreadable");
+  if (!in) throw InputError(path.string() + ": manifest unreadable");
   std::string line;
   if (!std::getline(in, line) || trim(line) != kManifestHeader)
     throw InputError(path.string() + ": first line must be '" + kManifestHeader + "'");
