@@ -39,8 +39,10 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
       ->check(CLI::IsMember({"auto", "paper", "regularised", "datasheet"}))
       ->capture_default_str();
   c->add_option("--min-temperature", a.options.min_temperature_c, "Locus start, degC")
+      ->check(CLI::Range(kModelMinTemperatureC, kModelMaxTemperatureC))
       ->capture_default_str();
   c->add_option("--max-temperature", a.options.max_temperature_c, "Locus end, degC")
+      ->check(CLI::Range(kModelMinTemperatureC, kModelMaxTemperatureC))
       ->capture_default_str();
   c->add_option("--locus-step", a.options.locus_step_c, "Locus step, degC")
       ->check(CLI::PositiveNumber)

@@ -2,6 +2,8 @@
 // same library code as the ratiotemp element.
 #include "pyrocam/measure.h"
 
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -17,7 +19,7 @@ namespace pyrocam::cli {
 namespace {
 
 struct MeasureArgs {
-  std::string model, dataset, frame, dark, roi, out;
+  std::string model, dataset, frame, dark, roi, out, pattern;
   std::string method = "mlp", demosaic = "bilinear", format = "png";
   double saturation = -1;
   double misfit_probability = 0;
@@ -84,16 +86,33 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       "Output: <stem>_temperature.png (16-bit, 0.1 K units, 0 = no reading), optionally\n"
       "<stem>_uncertainty.png (expanded, k=2, 0.1 K units), and stats.csv with ROI statistics\n"
       "per frame (and errors against truth/<stem>.png when the dataset has true temperatures).\n"
+      "A raw frame does not say which mosaic it was taken through: --pattern names it, or\n"
+      "the dataset's mosaic.txt (written by `pyrocam-calib simulate`); it must match the\n"
+      "model's, else nothing is measured.\n"
       "Examples:\n"
       "  pyrocam-calib measure --model rgb-model.json --dataset pool --out pool-t\n"
-      "  pyrocam-calib measure --model rgb-model.json --frame raw.pgm --dark dark.pgm --out t "
-      "--uncertainty");
+      "  pyrocam-calib measure --model rgb-model.json --frame raw.pgm --dark dark.pgm "
+      "--pattern rggb --out t --uncertainty");
   c->add_option("--model", a.model, "Model file from `pyrocam-calib calibrate`")->required();
   auto* ds = c->add_option("--dataset", a.dataset, "Dataset folder: every frame row is measured");
   auto* fr = c->add_option("--frame", a.frame, "One raw frame (PGM/PNG/TIFF)");
   c->add_option("--dark", a.dark, "Dark frame for --frame")->needs(fr);
   ds->excludes(fr);
-  c->add_option("--roi", a.roi, "ROI mask for the statistics (default: the dataset's roi.png)");
+  c->add_option("--pattern", a.pattern,
+                "Mosaic layout of the raw frames: rggb, bggr, grbg, gbrg (Bayer, by the top-left "
+                "cell) or the snapshot period, e.g. 5x5; must be the model's. Needed with --frame "
+                "and with a dataset that has no mosaic.txt; must agree with mosaic.txt otherwise")
+      ->check([](const std::string& v) {
+        try {
+          parse_mosaic_pattern(v, "--pattern");
+          return std::string();
+        } catch (const InputError& e) {
+          return std::string(e.what());
+        }
+      });
+  c->add_option(
+      "--roi", a.roi,
+      "ROI mask for the statistics, of the frames' size (default: the dataset's roi.png)");
   c->add_option("--out", a.out, "Output folder (created)")->required();
   c->add_option("--method", a.method, "Estimator: mlp, lut or likelihood")
       ->check(CLI::IsMember({"mlp", "lut", "likelihood"}))
@@ -121,6 +140,10 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       throw CLI::ValidationError("measure", "give --dataset or --frame");
     if (!a.frame.empty() && a.dark.empty())
       throw CLI::ValidationError("--dark", "--frame needs --dark");
+    if (!a.frame.empty() && a.pattern.empty())
+      throw CLI::ValidationError("--pattern",
+                                 "--frame needs --pattern: a raw frame does not say its mosaic "
+                                 "layout (rggb, bggr, grbg, gbrg or e.g. 5x5)");
     (void)c;
     selected = [&global] {
       const ThermalModel model = load_model(a.model);
@@ -139,8 +162,24 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       };
       std::vector<Job> jobs;
       cv::Mat roi;
+      // The frames' layout, and where it came from, for messages.
+      std::string pattern, pattern_source = "--pattern";
+      if (!a.pattern.empty()) pattern = parse_mosaic_pattern(a.pattern, "--pattern");
       if (!a.dataset.empty()) {
         const Dataset d = Dataset::open(a.dataset);
+        const std::string declared = d.mosaic_pattern();
+        const std::string mosaic_file = (d.folder() / kMosaicFile).string();
+        if (!declared.empty() && !pattern.empty() && declared != pattern)
+          throw InputError("--pattern " + pattern + " contradicts " + mosaic_file + " (" +
+                           declared + ")");
+        if (pattern.empty()) {
+          if (declared.empty())
+            throw InputError(
+                a.dataset + ": the dataset does not say its frames' mosaic layout (no " +
+                kMosaicFile + "); give --pattern (rggb, bggr, grbg, gbrg or e.g. 5x5)");
+          pattern = declared;
+          pattern_source = mosaic_file;
+        }
         roi = d.roi();
         for (const auto& row : d.rows()) {
           if (row.kind != FrameKind::kFrame) continue;
@@ -157,7 +196,15 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       } else {
         jobs.push_back({a.frame, a.dark, {}, NAN, NAN});
       }
-      if (!a.roi.empty()) roi = read_raw_image(a.roi) != 0;
+      std::string model_pattern = model.profile().mosaic.pattern;
+      std::transform(model_pattern.begin(), model_pattern.end(), model_pattern.begin(),
+                     [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+      if (model_pattern != pattern)
+        throw InputError(a.model + ": the model was calibrated for a " + model_pattern +
+                         " mosaic (profile " + model.profile().name + "), the frames are " +
+                         pattern + " (" + pattern_source + ")");
+      const cv::Size frame_size = read_image_size(jobs.front().frame);
+      if (!a.roi.empty()) roi = read_raw_image(a.roi, frame_size, "the frame") != 0;
       std::filesystem::create_directories(a.out);
       std::ofstream csv(std::filesystem::path(a.out) / "stats.csv");
       csv << "file,exposure_us,nominal_c,pixels,valid_fraction,min_c,max_c,mean_c,median_c,"
@@ -167,11 +214,7 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       for (std::size_t i = 0; i < jobs.size(); ++i) {
         const Job& j = jobs[i];
         const cv::Mat raw = read_raw_image(j.frame);
-        cv::Mat dark = read_raw_image(j.dark);
-        if (dark.size() != raw.size())
-          throw InputError(j.dark.string() + ": dark frame is " + std::to_string(dark.cols) + "x" +
-                           std::to_string(dark.rows) + ", the frame " + std::to_string(raw.cols) +
-                           "x" + std::to_string(raw.rows));
+        const cv::Mat dark = read_raw_image(j.dark, raw.size(), "the frame " + j.frame.string());
         cv::Mat t, u;
         measurer.measure(raw, dark, t, a.uncertainty ? &u : nullptr);
         const std::string stem = j.frame.stem().string();
@@ -186,8 +229,13 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
         if (!roi.empty()) cv::resize(roi, mask, t.size(), 0, 0, cv::INTER_NEAREST);
         const RegionStats s = region_stats(t, mask);
         TruthScore ts;
-        if (!j.truth.empty())
-          ts = compare_truth(t, read_raw_image(j.truth), model.profile().mosaic, options.demosaic);
+        if (!j.truth.empty()) {
+          const cv::Mat truth = read_raw_image(j.truth, raw.size(), "the frame");
+          if (truth.depth() != CV_16U)
+            throw InputError(j.truth.string() +
+                             ": true temperatures must be 16-bit (0.1 K units), this is 8-bit");
+          ts = compare_truth(t, truth, model.profile().mosaic, options.demosaic);
+        }
         csv << j.frame.filename().string() << "," << fmt(j.exposure_us) << "," << fmt(j.nominal_c)
             << "," << s.pixels << "," << fmt(s.valid_fraction) << "," << fmt(s.min_c) << ","
             << fmt(s.max_c) << "," << fmt(s.mean_c) << "," << fmt(s.median_c) << "," << ts.pixels

@@ -1,6 +1,7 @@
 #include "pyrocam/calibrate.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -149,8 +150,31 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
     if (progress) progress(name, done, total);
   };
   // The model must cover what it is calibrated on: the locus, the network and Table 4 too.
+  if (!dataset.mosaic_pattern().empty()) {
+    std::string profile_pattern = profile.mosaic.pattern;
+    std::transform(profile_pattern.begin(), profile_pattern.end(), profile_pattern.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (profile_pattern != dataset.mosaic_pattern())
+      throw InputError((dataset.folder() / kMosaicFile).string() + ": the images are " +
+                       dataset.mosaic_pattern() + ", the profile " + profile.name +
+                       " describes a " + profile_pattern + " mosaic");
+  }
   const std::vector<double> nominal_c = dataset.temperatures_c();
   if (nominal_c.empty()) throw InputError(dataset.folder().string() + ": no frames to calibrate");
+  if (nominal_c.size() < 2) {
+    std::ostringstream m;
+    m << dataset.folder().string() << ": every frame in manifest.csv is at one temperature ("
+      << nominal_c.front() << " degC); calibration needs frames at 2 or more temperatures";
+    throw InputError(m.str());
+  }
+  if (!(opt.min_temperature_c >= kModelMinTemperatureC &&
+        opt.max_temperature_c <= kModelMaxTemperatureC)) {
+    std::ostringstream m;
+    m << "the model's range " << opt.min_temperature_c << "-" << opt.max_temperature_c
+      << " degC leaves the range a model file may hold, " << kModelMinTemperatureC << "-"
+      << kModelMaxTemperatureC << " degC";
+    throw InputError(m.str());
+  }
   const auto [coolest, hottest] = std::minmax_element(nominal_c.begin(), nominal_c.end());
   if (!(opt.min_temperature_c < opt.max_temperature_c) || *coolest < opt.min_temperature_c ||
       *hottest > opt.max_temperature_c) {

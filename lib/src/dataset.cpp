@@ -1,7 +1,9 @@
 #include "pyrocam/dataset.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <map>
@@ -27,6 +29,27 @@ double parse_number(const std::string& text, const std::string& where) {
   return v;
 }
 
+// A manifest file name must stay inside the dataset folder, lexically: relative, no ".." that
+// climbs out, and nothing the operating system would cut or reinterpret (a NUL ends a C string).
+void check_relative_file_name(const std::string& name, const std::string& where) {
+  if (name.empty()) throw InputError(where + ": empty file name");
+  for (const char c : name)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      char code[8];
+      std::snprintf(code, sizeof code, "0x%02x",
+                    static_cast<unsigned>(static_cast<unsigned char>(c)));
+      throw InputError(where + ": file name holds a control character (byte " + code +
+                       "); file names must be printable text");
+    }
+  const std::filesystem::path p(name);
+  if (p.is_absolute() || p.has_root_name() || p.has_root_directory())
+    throw InputError(where + ": file '" + name +
+                     "' is an absolute path; files must be relative to the dataset folder");
+  const std::filesystem::path normal = p.lexically_normal();
+  if (normal.empty() || *normal.begin() == ".." || normal == ".")
+    throw InputError(where + ": file '" + name + "' leaves the dataset folder");
+}
+
 }  // namespace
 
 bool same_exposure(double a_us, double b_us) {
@@ -34,8 +57,9 @@ bool same_exposure(double a_us, double b_us) {
 }
 
 std::vector<ManifestRow> read_manifest(const std::filesystem::path& path) {
+  require_regular_file(path, "manifest");  // before opening: a FIFO would block
   std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": manifest not found or unreadable");
+  if (!in) throw InputError(path.string() + ": manifest unreadable");
   std::string line;
   if (!std::getline(in, line) || trim(line) != kManifestHeader)
     throw InputError(path.string() + ": first line must be '" + kManifestHeader + "'");
@@ -53,7 +77,8 @@ std::vector<ManifestRow> read_manifest(const std::filesystem::path& path) {
                        kManifestHeader + ")");
     ManifestRow row;
     row.file = f[0];
-    if (row.file.empty()) throw InputError(where + ": empty file name");
+    row.line = line_no;
+    check_relative_file_name(row.file, where);
     if (f[1] == "frame")
       row.kind = FrameKind::kFrame;
     else if (f[1] == "dark")
@@ -79,6 +104,29 @@ void write_manifest(const std::filesystem::path& path, const std::vector<Manifes
   if (!out) throw InputError(path.string() + ": write failed");
 }
 
+std::string parse_mosaic_pattern(const std::string& text, const std::string& where) {
+  std::string p = trim(text);
+  std::transform(p.begin(), p.end(), p.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  for (const char* bayer : {"rggb", "bggr", "grbg", "gbrg"})
+    if (p == bayer) return p;
+  const auto x = p.find('x');
+  auto period = [](const std::string& n) {
+    return !n.empty() && n.size() <= 2 && n[0] != '0' &&
+           std::all_of(n.begin(), n.end(), [](unsigned char c) { return std::isdigit(c); });
+  };
+  if (x != std::string::npos && period(p.substr(0, x)) && period(p.substr(x + 1))) return p;
+  throw InputError(where + ": mosaic layout '" + text +
+                   "' is not rggb, bggr, grbg, gbrg or a snapshot period such as 5x5");
+}
+
+void write_mosaic_pattern(const std::filesystem::path& folder, const std::string& pattern) {
+  const auto path = folder / kMosaicFile;
+  std::ofstream out(path);
+  out << parse_mosaic_pattern(pattern, path.string()) << "\n";
+  if (!out) throw InputError(path.string() + ": cannot write");
+}
+
 Dataset Dataset::open(const std::filesystem::path& folder) {
   if (!std::filesystem::is_directory(folder))
     throw InputError(folder.string() + ": dataset folder not found");
@@ -86,6 +134,13 @@ Dataset Dataset::open(const std::filesystem::path& folder) {
   d.folder_ = folder;
   d.rows_ = read_manifest(folder / "manifest.csv");
   const auto& rows = d.rows_;
+  if (const auto mosaic = folder / kMosaicFile; std::filesystem::exists(mosaic)) {
+    require_regular_file(mosaic, "mosaic layout file");
+    std::ifstream in(mosaic);
+    std::string line;
+    std::getline(in, line);
+    d.mosaic_pattern_ = parse_mosaic_pattern(line, mosaic.string());
+  }
 
   std::filesystem::path roi_path;
   for (const char* name : {"roi.png", "roi.pgm"})
@@ -97,10 +152,26 @@ Dataset Dataset::open(const std::filesystem::path& folder) {
     throw InputError(roi_path.string() + ": the ROI is empty (no nonzero pixel)");
 
   std::map<std::tuple<int, double, double>, FrameGroup> groups;
+  std::error_code ec;
+  const auto canonical_folder = std::filesystem::weakly_canonical(folder, ec);
+  if (ec)
+    throw InputError(folder.string() + ": cannot resolve the dataset folder (" + ec.message() +
+                     ")");
   for (const auto& r : rows) {
     const auto file = folder / r.file;
-    if (!std::filesystem::is_regular_file(file))
-      throw InputError(file.string() + ": listed in manifest.csv but not found");
+    const std::string row = file.string() + " (manifest.csv line " + std::to_string(r.line) + ")";
+    const auto type = std::filesystem::status(file, ec).type();
+    if (type == std::filesystem::file_type::not_found)
+      throw InputError(row + ": listed but not found");
+    if (type == std::filesystem::file_type::directory)
+      throw InputError(row + ": is a directory, not an image");
+    if (type != std::filesystem::file_type::regular)
+      throw InputError(row + ": is not a regular file (a FIFO, socket or device)");
+    // A symbolic link inside the folder must not lead out of it either.
+    const auto resolved = std::filesystem::weakly_canonical(file, ec);
+    const auto inside = resolved.lexically_relative(canonical_folder);
+    if (ec || inside.empty() || *inside.begin() == "..")
+      throw InputError(row + ": resolves to " + resolved.string() + ", outside the dataset folder");
     // Rounded keys merge rows whose numbers differ only by text formatting.
     const double t_key = r.kind == FrameKind::kDark ? 0.0 : std::round(r.temperature_c * 1e6);
     const auto key =
@@ -133,11 +204,8 @@ std::vector<double> Dataset::temperatures_c() const {
 }
 
 cv::Mat Dataset::load(const std::filesystem::path& file) const {
-  cv::Mat img = read_raw_image(file);
-  if (img.cols != width() || img.rows != height())
-    throw InputError(file.string() + ": image is " + std::to_string(img.cols) + "x" +
-                     std::to_string(img.rows) + ", the dataset's (ROI) size is " +
-                     std::to_string(width()) + "x" + std::to_string(height()));
+  // The header is checked against the ROI's size before anything is decoded.
+  cv::Mat img = read_raw_image(file, roi_.size(), "the dataset's (ROI) size");
   const int depth = img.depth() == CV_8U ? 8 : 16;
   if (bit_depth_ == 0) bit_depth_ = depth;
   if (depth != bit_depth_)

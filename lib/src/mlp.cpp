@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -362,6 +363,10 @@ double learning_rate_at(const MlpTrainingOptions& o, long step, long total_steps
 }
 
 void check_options(const MlpTrainingOptions& o) {
+  if (o.hidden.size() + 1 > static_cast<std::size_t>(kMlpMaxLayers)) {
+    throw MlpError("mlp: " + std::to_string(o.hidden.size()) + " hidden layers; at most " +
+                   std::to_string(kMlpMaxLayers - 1));
+  }
   for (int width : o.hidden) {
     if (width < 1 || width > kMlpMaxLayerWidth) {
       throw MlpError("mlp: hidden layer width " + std::to_string(width) + " outside 1.." +
@@ -394,6 +399,13 @@ void adam_step(Param& p, const Grad& g, Param& m, Param& v, S lr, S bias1, S bia
   v.array() = kBeta2 * v.array() + (1 - kBeta2) * g.array().square();
   if (decay > 0) p.array() *= 1 - lr * decay;
   p.array() -= lr * (m.array() / bias1) / ((v.array() / bias2).sqrt() + kEpsilon);
+}
+
+// A number in messages: "1e+06", "1e+308", "0.5".
+std::string to_text(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
 }
 
 // ---- JSON reading with messages that say where the problem is ----
@@ -429,6 +441,13 @@ Eigen::MatrixXd read_matrix(const json& j, const std::string& where) {
   if (!j.is_array() || j.empty())
     throw MlpError("mlp json: " + where + " is not a non-empty array of rows");
   const std::size_t cols = j[0].is_array() ? j[0].size() : 0;
+  // Bounded before the matrix is allocated from the two sizes.
+  const auto limit = static_cast<std::size_t>(kMlpMaxLayerWidth);
+  if (j.size() > limit || cols > limit) {
+    throw MlpError("mlp json: " + where + " is " + std::to_string(j.size()) + " x " +
+                   std::to_string(cols) + "; a layer is at most " + std::to_string(limit) +
+                   " wide");
+  }
   Eigen::MatrixXd m(static_cast<Eigen::Index>(j.size()), static_cast<Eigen::Index>(cols));
   for (std::size_t r = 0; r < j.size(); ++r) {
     const std::string row_where = where + "[" + std::to_string(r) + "]";
@@ -906,6 +925,16 @@ void Mlp::check_and_prepare() {
   if (!std::isfinite(output_mean_) || !(output_scale_ > 0) || !std::isfinite(output_scale_)) {
     throw MlpError("mlp: output_mean must be finite and output_scale finite and > 0");
   }
+  const auto too_large = [](double v) { return !(std::abs(v) <= kMlpMaxAbsParameter); };
+  if (input_.mean.unaryExpr(too_large).any() || input_.scale.unaryExpr(too_large).any() ||
+      too_large(output_mean_) || too_large(output_scale_)) {
+    throw MlpError("mlp: input_mean, input_scale, output_mean and output_scale must lie within +-" +
+                   to_text(kMlpMaxAbsParameter));
+  }
+  if (layers_.size() > static_cast<std::size_t>(kMlpMaxLayers)) {
+    throw MlpError("mlp: " + std::to_string(layers_.size()) + " layers; at most " +
+                   std::to_string(kMlpMaxLayers) + " supported");
+  }
   Eigen::Index width = inputs;
   max_width_ = static_cast<int>(inputs);
   for (std::size_t l = 0; l < layers_.size(); ++l) {
@@ -922,6 +951,12 @@ void Mlp::check_and_prepare() {
     }
     if (!layer.weights.allFinite() || !layer.bias.allFinite()) {
       throw MlpError("mlp: " + name + " has a NaN or infinite weight or bias");
+    }
+    const double largest =
+        std::max(layer.weights.cwiseAbs().maxCoeff(), layer.bias.cwiseAbs().maxCoeff());
+    if (largest > kMlpMaxAbsParameter) {
+      throw MlpError("mlp: " + name + " has a weight or bias of " + to_text(largest) +
+                     "; trained networks stay within +-" + to_text(kMlpMaxAbsParameter));
     }
     width = layer.weights.rows();
     if (width < 1) throw MlpError("mlp: " + name + " has no outputs");
@@ -1183,6 +1218,10 @@ Mlp Mlp::from_json(const json& j) {
   const json& layers_json = require(j, "layers", top);
   if (!layers_json.is_array() || layers_json.empty()) {
     throw MlpError("mlp json: \"layers\" must be a non-empty array");
+  }
+  if (layers_json.size() > static_cast<std::size_t>(kMlpMaxLayers)) {
+    throw MlpError("mlp json: \"layers\" holds " + std::to_string(layers_json.size()) +
+                   " layers; at most " + std::to_string(kMlpMaxLayers) + " supported");
   }
   std::vector<MlpLayer> layers;
   for (std::size_t l = 0; l < layers_json.size(); ++l) {

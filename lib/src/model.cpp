@@ -4,14 +4,23 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
+#include "json_input.h"
 #include "pyrocam/spectrum.h"
 
 namespace pyrocam {
 namespace {
 
 using nlohmann::json;
+
+// A number in messages: "-5", "1e+300", "0.25".
+std::string to_text(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
 
 json matrix_to_json(const Eigen::MatrixXd& m) {
   json rows = json::array();
@@ -32,8 +41,12 @@ Eigen::MatrixXd matrix_from_json(const json& j, Eigen::Index rows, Eigen::Index 
     if (!row.is_array() || static_cast<Eigen::Index>(row.size()) != cols)
       throw InputError(what + " rows must have " + std::to_string(cols) + " values");
     for (Eigen::Index c = 0; c < cols; ++c) {
-      m(r, c) = row[static_cast<std::size_t>(c)].get<double>();
-      if (!std::isfinite(m(r, c))) throw InputError(what + " holds a value that is not finite");
+      const json& v = row[static_cast<std::size_t>(c)];
+      if (!v.is_number()) throw InputError(what + " holds a value that is not a number");
+      m(r, c) = v.get<double>();
+      if (!std::isfinite(m(r, c)) || m(r, c) < 0)
+        throw InputError(what + "[" + std::to_string(r) + "][" + std::to_string(c) + "] is " +
+                         to_text(m(r, c)) + "; QE values must be finite and >= 0");
     }
   }
   return m;
@@ -47,6 +60,30 @@ double interpolate(const std::vector<double>& x, const std::vector<double>& y, d
   const std::size_t i = static_cast<std::size_t>(it - x.begin());
   const double f = (at - x[i - 1]) / (x[i] - x[i - 1]);
   return y[i - 1] + f * (y[i] - y[i - 1]);
+}
+
+// A list of finite numbers, each within [lo, hi]; the message names the field and the value.
+std::vector<double> numbers_within(const json& j, const std::string& what, double lo, double hi) {
+  if (!j.is_array()) throw InputError(what + " must be a list of numbers");
+  std::vector<double> out;
+  out.reserve(j.size());
+  for (std::size_t i = 0; i < j.size(); ++i) {
+    if (!j[i].is_number()) throw InputError(what + "[" + std::to_string(i) + "] is not a number");
+    const double v = j[i].get<double>();
+    if (!(v >= lo && v <= hi))
+      throw InputError(what + "[" + std::to_string(i) + "] is " + to_text(v) + ", outside " +
+                       to_text(lo) + ".." + to_text(hi));
+    out.push_back(v);
+  }
+  return out;
+}
+
+double number_within(const json& j, const std::string& what, double lo, double hi) {
+  if (!j.is_number()) throw InputError(what + " is not a number");
+  const double v = j.get<double>();
+  if (!(v >= lo && v <= hi))
+    throw InputError(what + " is " + to_text(v) + ", outside " + to_text(lo) + ".." + to_text(hi));
+  return v;
 }
 
 }  // namespace
@@ -105,11 +142,12 @@ void save_model(const ThermalModel& m, const std::filesystem::path& path) {
 
 ThermalModel load_model(const std::filesystem::path& path) {
   const std::string where = path.string();
+  require_regular_file(path, "model file");
   std::ifstream in(path);
-  if (!in) throw InputError(where + ": model file not found or unreadable");
+  if (!in) throw InputError(where + ": model file unreadable");
   json file;
   try {
-    file = json::parse(in);
+    file = parse_bounded_json(in, where);
   } catch (const json::exception& e) {
     throw InputError(where +
                      ": not a complete JSON model file (truncated or corrupt): " + e.what());
@@ -135,16 +173,17 @@ ThermalModel load_model(const std::filesystem::path& path) {
         matrix_from_json(payload.at("system_qe"), bands, wl, where + ": system_qe");
     m.datasheet_qe =
         matrix_from_json(payload.at("datasheet_qe"), bands, wl, where + ": datasheet_qe");
-    const auto k = payload.at("band_scale").get<std::vector<double>>();
+    const auto k = numbers_within(payload.at("band_scale"), where + ": band_scale",
+                                  std::numeric_limits<double>::min(), kModelMaxBandScale);
     if (static_cast<Eigen::Index>(k.size()) != bands)
       throw InputError(where + ": band_scale must have one value per band");
     m.camera.band_scale = Eigen::Map<const Eigen::VectorXd>(k.data(), bands);
-    if (!(m.camera.band_scale.array() > 0).all())
-      throw InputError(where + ": band_scale values must be > 0");
     m.qe_solver = payload.at("qe_solver").get<std::string>();
-    const auto range = payload.at("temperature_range_c").get<std::vector<double>>();
+    const auto range =
+        numbers_within(payload.at("temperature_range_c"), where + ": temperature_range_c",
+                       kModelMinTemperatureC, kModelMaxTemperatureC);
     if (range.size() != 2 || !(range[0] < range[1]))
-      throw InputError(where + ": temperature_range_c must be [min, max]");
+      throw InputError(where + ": temperature_range_c must be [min, max] with min < max");
     m.min_temperature_c = range[0];
     m.max_temperature_c = range[1];
     try {
@@ -157,16 +196,37 @@ ThermalModel load_model(const std::filesystem::path& path) {
                        " inputs, the normalisation gives " +
                        std::to_string(p.normalisation.numerators.size()));
     const json& u = payload.at("uncertainty");
-    m.uncertainty.temperature_c = u.at("temperature_c").get<std::vector<double>>();
-    m.uncertainty.u_calibration_c = u.at("u_calibration_c").get<std::vector<double>>();
-    m.uncertainty.u_emissivity_c = u.at("u_emissivity_c").get<std::vector<double>>();
-    if (m.uncertainty.u_calibration_c.size() != m.uncertainty.temperature_c.size() ||
-        m.uncertainty.u_emissivity_c.size() != m.uncertainty.temperature_c.size())
-      throw InputError(where + ": uncertainty tables differ in length");
-    m.uncertainty.thermocouple_tolerance_c = u.at("thermocouple_tolerance_c").get<double>();
-    m.uncertainty.emissivity_slope_u = u.at("emissivity_slope_u").get<double>();
-    m.uncertainty.monte_carlo_refits = u.at("monte_carlo_refits").get<int>();
-    m.uncertainty.coverage_factor = u.at("coverage_factor").get<double>();
+    const std::string uw = where + ": uncertainty.";
+    UncertaintyModel& um = m.uncertainty;
+    um.temperature_c = numbers_within(u.at("temperature_c"), uw + "temperature_c",
+                                      kModelMinTemperatureC, kModelMaxTemperatureC);
+    um.u_calibration_c =
+        numbers_within(u.at("u_calibration_c"), uw + "u_calibration_c", 0, kModelMaxUncertaintyC);
+    um.u_emissivity_c =
+        numbers_within(u.at("u_emissivity_c"), uw + "u_emissivity_c", 0, kModelMaxUncertaintyC);
+    if (um.temperature_c.empty())
+      throw InputError(uw + "temperature_c is empty; the uncertainty table needs at least one row");
+    if (um.u_calibration_c.size() != um.temperature_c.size() ||
+        um.u_emissivity_c.size() != um.temperature_c.size())
+      throw InputError(uw + "temperature_c, u_calibration_c and u_emissivity_c differ in length (" +
+                       std::to_string(um.temperature_c.size()) + ", " +
+                       std::to_string(um.u_calibration_c.size()) + ", " +
+                       std::to_string(um.u_emissivity_c.size()) + ")");
+    for (std::size_t i = 1; i < um.temperature_c.size(); ++i)
+      if (!(um.temperature_c[i] > um.temperature_c[i - 1]))
+        throw InputError(uw + "temperature_c must increase (" + to_text(um.temperature_c[i - 1]) +
+                         " then " + to_text(um.temperature_c[i]) + ")");
+    um.thermocouple_tolerance_c =
+        number_within(u.at("thermocouple_tolerance_c"), uw + "thermocouple_tolerance_c", 0,
+                      kModelMaxUncertaintyC);
+    um.emissivity_slope_u =
+        number_within(u.at("emissivity_slope_u"), uw + "emissivity_slope_u", 0, 1);
+    if (!u.at("monte_carlo_refits").is_number_integer())
+      throw InputError(uw + "monte_carlo_refits must be a whole number");
+    um.monte_carlo_refits = static_cast<int>(
+        number_within(u.at("monte_carlo_refits"), uw + "monte_carlo_refits", 0, 1e6));
+    um.coverage_factor = number_within(u.at("coverage_factor"), uw + "coverage_factor",
+                                       kModelMinCoverageFactor, kModelMaxCoverageFactor);
     m.provenance = payload.value("provenance", json::object());
     m.summary = payload.value("summary", json::object());
     return m;

@@ -29,6 +29,12 @@ WavelengthGrid::WavelengthGrid(double start_nm, double stop_nm, double step_nm)
                                 std::to_string(start_nm) + ".." + std::to_string(stop_nm) +
                                 " step " + std::to_string(step_nm) + " nm)");
   const double steps = (stop_nm - start_nm) / step_nm;
+  // Checked before lround, which is undefined for values beyond a long.
+  if (!(steps < static_cast<double>(kMaxWavelengthSamples) - 0.5))
+    throw std::invalid_argument("wavelength grid " + std::to_string(start_nm) + ".." +
+                                std::to_string(stop_nm) + " nm step " + std::to_string(step_nm) +
+                                " nm has more than " + std::to_string(kMaxWavelengthSamples) +
+                                " samples");
   const long n = std::lround(steps);
   if (std::abs(steps - n) > 1e-6)
     throw std::invalid_argument("wavelength grid step " + std::to_string(step_nm) +

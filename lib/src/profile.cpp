@@ -6,6 +6,8 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "json_input.h"
+
 namespace pyrocam {
 namespace {
 
@@ -36,11 +38,23 @@ class ProfileReader {
     return v;
   }
 
+  // A whole number within lo..hi; checked as a double first, since converting an out-of-range
+  // double to int is undefined.
+  int integer(const json& j, const char* key, const std::string& where, int fallback, int lo,
+              int hi, bool required = false) const {
+    const double v = number(j, key, where, fallback, required);
+    if (!(v >= lo && v <= hi) || v != std::floor(v))
+      fail(where + "." + key + " is " + json(v).dump() + "; expected a whole number within " +
+           std::to_string(lo) + ".." + std::to_string(hi));
+    return static_cast<int>(v);
+  }
+
   std::filesystem::path resolve(const std::string& rel) const {
     std::filesystem::path p(rel);
     if (p.is_relative()) p = path_.parent_path() / p;
     if (!std::filesystem::exists(p))
       fail("file '" + rel + "' not found (looked for " + p.string() + ")");
+    require_regular_file(p, "file named by " + path_.string());
     return p;
   }
 
@@ -73,7 +87,7 @@ class ProfileReader {
     }
     if (spec.contains("imec_xml")) {
       const auto bands = imec_bands(spec.at("imec_xml").get<std::string>());
-      const int b = static_cast<int>(number(spec, "band", where, 0, true));
+      const int b = integer(spec, "band", where, 0, 0, kMaxProfileBands - 1, true);
       if (b < 0 || b >= static_cast<int>(bands.size()))
         fail(where + ": band " + std::to_string(b) + " not in the IMEC file (" +
              std::to_string(bands.size()) + " bands)");
@@ -97,7 +111,7 @@ class ProfileReader {
     if (!in) fail("cannot open camera profile");
     json j;
     try {
-      j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
+      j = parse_bounded_json(in, path_.string(), /*ignore_comments=*/true);
     } catch (const json::exception& e) {
       fail(std::string("not valid JSON: ") + e.what());
     }
@@ -111,7 +125,8 @@ class ProfileReader {
   CameraProfile read(const json& j) {
     if (j.value("format", std::string()) != "pyrocam-camera-profile")
       fail("not a camera profile (\"format\" must be \"pyrocam-camera-profile\")");
-    const int version = static_cast<int>(number(j, "version", "profile", 0, true));
+    if (!j.is_object()) fail("not a camera profile (not a JSON object)");
+    const int version = integer(j, "version", "profile", 0, 0, 1000000, true);
     if (version != kProfileFormatVersion)
       fail("profile format version " + std::to_string(version) + ", this build reads version " +
            std::to_string(kProfileFormatVersion));
@@ -123,9 +138,16 @@ class ProfileReader {
 
     const json& g = require(j, "wavelength_grid_nm", "profile");
     try {
-      p.grid = WavelengthGrid(number(g, "start", "wavelength_grid_nm", 0, true),
-                              number(g, "stop", "wavelength_grid_nm", 0, true),
-                              number(g, "step", "wavelength_grid_nm", 0, true));
+      const double start = number(g, "start", "wavelength_grid_nm", 0, true);
+      const double stop = number(g, "stop", "wavelength_grid_nm", 0, true);
+      const double step = number(g, "step", "wavelength_grid_nm", 0, true);
+      // Bounded before the grid is allocated from the three numbers.
+      if (step > 0 && stop > start &&
+          !((stop - start) / step < static_cast<double>(kMaxProfileWavelengthSamples) - 0.5))
+        fail("wavelength_grid_nm " + json(start).dump() + ".." + json(stop).dump() + " step " +
+             json(step).dump() + " nm has more than " +
+             std::to_string(kMaxProfileWavelengthSamples) + " samples");
+      p.grid = WavelengthGrid(start, stop, step);
     } catch (const std::invalid_argument& e) {
       fail(e.what());
     }
@@ -156,8 +178,7 @@ class ProfileReader {
       p.filter_pass_band_nm = {p.grid.start_nm(), p.grid.stop_nm()};
     }
 
-    p.bit_depth = static_cast<int>(number(j, "bit_depth", "profile", 8));
-    if (p.bit_depth < 8 || p.bit_depth > 16) fail("bit_depth must be 8..16");
+    p.bit_depth = integer(j, "bit_depth", "profile", 8, 8, 16);
     p.dark_offset_dn = number(j, "dark_offset_dn", "profile", 0);
     if (p.dark_offset_dn < 0 || p.dark_offset_dn >= p.max_dn())
       fail("dark_offset_dn must lie within 0.." + std::to_string(p.max_dn()));
@@ -186,9 +207,21 @@ class ProfileReader {
       th.inference_dim_dn = number(t, "inference_dim_dn", "thresholds", th.inference_dim_dn);
       th.inference_saturation_dn =
           number(t, "inference_saturation_dn", "thresholds", th.inference_saturation_dn);
-      if (!(th.calibration_dim_dn < th.calibration_saturation_dn) ||
-          !(th.inference_dim_dn < th.inference_saturation_dn))
-        fail("thresholds: each dim threshold must be below its saturation threshold");
+    }
+    {
+      // Dim thresholds apply to dark-subtracted values and must keep a zero signal out (a ratio
+      // of zeros is no temperature); saturation thresholds apply to raw values.
+      const Thresholds& th = p.thresholds;
+      if (!(th.calibration_dim_dn > 0 && th.calibration_dim_dn < th.calibration_saturation_dn &&
+            th.calibration_saturation_dn <= p.max_dn()) ||
+          !(th.inference_dim_dn > 0 && th.inference_dim_dn < th.inference_saturation_dn &&
+            th.inference_saturation_dn <= p.max_dn()))
+        fail("thresholds: need 0 < dim < saturation <= " + std::to_string(p.max_dn()) +
+             " DN (bit_depth " + std::to_string(p.bit_depth) + ") for calibration (" +
+             std::to_string(th.calibration_dim_dn) + ", " +
+             std::to_string(th.calibration_saturation_dn) + ") and inference (" +
+             std::to_string(th.inference_dim_dn) + ", " +
+             std::to_string(th.inference_saturation_dn) + ")");
     }
 
     const json& norm = require(j, "normalisation", "profile");
@@ -236,11 +269,20 @@ class ProfileReader {
     } else if (type == "snapshot") {
       const json& rows = require(m, "band_map", "mosaic");
       if (!rows.is_array() || rows.empty()) fail("mosaic.band_map must be a list of rows");
-      std::vector<int> map;
       const std::size_t width = rows[0].size();
+      if (rows.size() > kMaxMosaicPeriod || width > kMaxMosaicPeriod)
+        fail("mosaic.band_map is " + std::to_string(width) + "x" + std::to_string(rows.size()) +
+             "; a mosaic period is at most " + std::to_string(kMaxMosaicPeriod) + " on a side");
+      std::vector<int> map;
       for (const auto& row : rows) {
         if (!row.is_array() || row.size() != width) fail("mosaic.band_map rows differ in length");
-        for (const auto& v : row) map.push_back(v.get<int>());
+        for (const auto& v : row) {
+          if (!v.is_number_integer() || v.get<long long>() < 0 ||
+              v.get<long long>() >= kMaxProfileBands)
+            fail("mosaic.band_map holds " + v.dump() + "; band indices are whole numbers 0.." +
+                 std::to_string(kMaxProfileBands - 1));
+          map.push_back(v.get<int>());
+        }
       }
       return MosaicLayout::snapshot(static_cast<int>(width), static_cast<int>(rows.size()),
                                     std::move(map));
@@ -257,12 +299,18 @@ class ProfileReader {
       const double gain = number(bands, "gain", "bands", 1.0);
       const std::string prefix = bands.value("name_prefix", std::string("b"));
       const auto responses = imec_bands(file);
+      if (responses.size() > static_cast<std::size_t>(kMaxProfileBands))
+        fail("the IMEC file " + file + " describes " + std::to_string(responses.size()) +
+             " bands; at most " + std::to_string(kMaxProfileBands) + " are supported");
       for (std::size_t b = 0; b < responses.size(); ++b) {
         p.band_names.push_back(prefix + std::to_string(b + 1));
         qe.push_back(responses[b].resample(p.grid));
         gains.push_back(gain);
       }
     } else if (bands.is_array() && !bands.empty()) {
+      if (bands.size() > static_cast<std::size_t>(kMaxProfileBands))
+        fail("bands lists " + std::to_string(bands.size()) + " bands; at most " +
+             std::to_string(kMaxProfileBands) + " are supported");
       for (std::size_t b = 0; b < bands.size(); ++b) {
         const std::string where = "bands[" + std::to_string(b) + "]";
         p.band_names.push_back(require(bands[b], "name", where).get<std::string>());
@@ -377,8 +425,7 @@ nlohmann::json profile_to_json(const CameraProfile& p) {
 }
 
 CameraProfile load_profile(const std::filesystem::path& path) {
-  if (!std::filesystem::exists(path))
-    throw InputError(path.string() + ": camera profile not found");
+  require_regular_file(path, "camera profile");
   return ProfileReader(path).read();
 }
 

@@ -162,6 +162,7 @@ void write_scene_sequence(const std::filesystem::path& folder, Simulator& camera
   if (s.kind == SceneKind::kMeltPool) roi = maps[0] >= static_cast<float>(nominal[0] - 100);
   write_raw_image(folder / "roi.png", roi);
   write_manifest(folder / "manifest.csv", rows);
+  write_mosaic_pattern(folder, camera.profile().mosaic.pattern);
 }
 
 }  // namespace pyrocam

@@ -295,6 +295,7 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
   }
   if (!truth) throw InputError((folder / "furnace-truth.csv").string() + ": cannot write");
   write_manifest(folder / "manifest.csv", rows);
+  write_mosaic_pattern(folder, camera.profile().mosaic.pattern);
 }
 
 }  // namespace pyrocam

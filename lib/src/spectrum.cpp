@@ -41,6 +41,19 @@ void check_increasing(const std::vector<double>& wl, const std::string& origin) 
 
 }  // namespace
 
+void require_regular_file(const std::filesystem::path& path, const std::string& what) {
+  std::error_code ec;
+  const std::filesystem::file_type type = std::filesystem::status(path, ec).type();
+  if (type == std::filesystem::file_type::regular) return;
+  if (type == std::filesystem::file_type::not_found)
+    throw InputError(path.string() + ": " + what + " not found");
+  if (ec) throw InputError(path.string() + ": cannot read " + what + " (" + ec.message() + ")");
+  if (type == std::filesystem::file_type::directory)
+    throw InputError(path.string() + ": " + what + " is a directory");
+  throw InputError(path.string() + ": " + what +
+                   " is not a regular file (a FIFO, socket or device)");
+}
+
 std::size_t CsvTable::column_index(const std::string& name) const {
   for (std::size_t i = 0; i < header.size(); ++i)
     if (header[i] == name) return i;
@@ -50,6 +63,7 @@ std::size_t CsvTable::column_index(const std::string& name) const {
 }
 
 CsvTable read_csv_table(const std::filesystem::path& path) {
+  require_regular_file(path, "CSV file");
   std::ifstream in(path);
   if (!in) throw InputError(path.string() + ": cannot open file");
   CsvTable table;
@@ -140,6 +154,7 @@ Eigen::VectorXd Spectrum::resample(const WavelengthGrid& grid) const {
 }
 
 std::vector<Spectrum> read_imec_band_responses(const std::filesystem::path& path) {
+  require_regular_file(path, "IMEC calibration file");
   pugi::xml_document doc;
   const pugi::xml_parse_result ok = doc.load_file(path.c_str());
   if (!ok) throw InputError(path.string() + ": not readable XML (" + ok.description() + ")");

@@ -249,6 +249,138 @@ TEST_F(ModelFileDamage, rejects_a_missing_file_n) {
   EXPECT_THROW(load_model(dir / "none.json"), InputError);
 }
 
+// A consistent file (checksum recomputed) whose payload was changed by `edit`: what another
+// program, or a corrupted copy re-signed by hand, could hand the loader.
+class ModelFileContent : public ModelFileDamage {
+ protected:
+  template <class Edit>
+  void expect_edit_rejected(Edit edit, const std::string& needle) {
+    nlohmann::json file = nlohmann::json::parse(text);
+    edit(file["payload"]);
+    file["checksum_fnv1a64"] = fnv1a_hex(file["payload"].dump());
+    expect_rejected(file.dump(), needle);
+  }
+};
+
+TEST_F(ModelFileContent, rejects_json_nested_a_million_levels_deep_n) {
+  // Serialising it for the checksum recursed once per level and overflowed the stack.
+  const int depth = 1000000;
+  expect_rejected("{\"format\": \"pyrocam-thermal-model\", \"version\": 1, \"payload\": {\"x\": " +
+                      std::string(depth, '[') + std::string(depth, ']') + "}}",
+                  "JSON nested deeper than 64 levels");
+}
+
+TEST_F(ModelFileContent, rejects_a_wavelength_grid_of_10_pow_12_samples_n) {
+  // The grid was allocated (8 TB) from three numbers before its curves were checked.
+  expect_edit_rejected(
+      [](nlohmann::json& p) {
+        auto& g = p["profile"]["wavelength_grid_nm"];
+        g["step"] = (g["stop"].get<double>() - g["start"].get<double>()) / 1e12;
+      },
+      "wavelength_grid_nm 350.0..1100.0 step 7.5e-10 nm has more than 100001 samples");
+}
+
+TEST_F(ModelFileContent, rejects_mlp_weights_of_1e308_n) {
+  expect_edit_rejected([](nlohmann::json& p) { p["mlp"]["layers"][0]["weights"][1][0] = 1e308; },
+                       "layers[0] has a weight or bias of 1e+308");
+}
+
+TEST_F(ModelFileContent, rejects_an_mlp_bias_of_1e300_n) {
+  expect_edit_rejected([](nlohmann::json& p) { p["mlp"]["layers"][1]["bias"][0] = -1e300; },
+                       "layers[1] has a weight or bias of 1e+300");
+}
+
+TEST_F(ModelFileContent, rejects_an_mlp_layer_wider_than_supported_before_allocating_n) {
+  // 2000 columns in row 0 and 2000 rows: refused from the sizes, not after reading rows.
+  expect_edit_rejected(
+      [](nlohmann::json& p) {
+        nlohmann::json rows = nlohmann::json::array();
+        rows.push_back(std::vector<double>(2000, 0.0));
+        for (int r = 1; r < 2000; ++r) rows.push_back(nlohmann::json::array());
+        p["mlp"]["layers"][0]["weights"] = rows;
+      },
+      "layers[0].weights is 2000 x 2000; a layer is at most 1024 wide");
+}
+
+TEST_F(ModelFileContent, rejects_a_temperature_range_of_huge_width_n) {
+  expect_edit_rejected(
+      [](nlohmann::json& p) {
+        p["temperature_range_c"] = {500, 1e300};
+      },
+      "temperature_range_c[1] is 1e+300, outside 0..5000");
+}
+
+TEST_F(ModelFileContent, rejects_a_temperature_range_below_zero_celsius_n) {
+  expect_edit_rejected(
+      [](nlohmann::json& p) {
+        p["temperature_range_c"] = {-400, 1000};
+      },
+      "temperature_range_c[0] is -400, outside 0..5000");
+}
+
+TEST_F(ModelFileContent, rejects_a_negative_coverage_factor_n) {
+  // -5 gave an all-zero uncertainty image.
+  expect_edit_rejected([](nlohmann::json& p) { p["uncertainty"]["coverage_factor"] = -5; },
+                       "uncertainty.coverage_factor is -5");
+}
+
+TEST_F(ModelFileContent, rejects_an_empty_uncertainty_table_n) {
+  expect_edit_rejected(
+      [](nlohmann::json& p) {
+        for (const char* key : {"temperature_c", "u_calibration_c", "u_emissivity_c"})
+          p["uncertainty"][key] = nlohmann::json::array();
+      },
+      "uncertainty.temperature_c is empty");
+}
+
+TEST_F(ModelFileContent, rejects_a_negative_uncertainty_n) {
+  expect_edit_rejected([](nlohmann::json& p) { p["uncertainty"]["u_calibration_c"][1] = -4; },
+                       "uncertainty.u_calibration_c[1] is -4");
+}
+
+TEST_F(ModelFileContent, rejects_an_uncertainty_table_out_of_order_n) {
+  expect_edit_rejected(
+      [](nlohmann::json& p) {
+        p["uncertainty"]["temperature_c"] = {3500, 500};
+      },
+      "uncertainty.temperature_c must increase");
+}
+
+TEST_F(ModelFileContent, rejects_a_dim_threshold_far_below_zero_n) {
+  expect_edit_rejected(
+      [](nlohmann::json& p) { p["profile"]["thresholds"]["inference_dim_dn"] = -1e300; },
+      "thresholds: need 0 < dim < saturation <= 255 DN");
+}
+
+TEST_F(ModelFileContent, rejects_a_saturation_threshold_above_the_bit_depth_n) {
+  expect_edit_rejected(
+      [](nlohmann::json& p) { p["profile"]["thresholds"]["inference_saturation_dn"] = 4000; },
+      "thresholds: need 0 < dim < saturation <= 255 DN");
+}
+
+TEST_F(ModelFileContent, rejects_a_negative_system_qe_n) {
+  expect_edit_rejected([](nlohmann::json& p) { p["system_qe"][2][10] = -0.5; },
+                       "system_qe[2][10] is -0.5; QE values must be finite and >= 0");
+}
+
+TEST_F(ModelFileContent, rejects_a_bit_depth_beyond_an_int_n) {
+  // Converting 1e300 to int is undefined; the value is checked as a number first.
+  expect_edit_rejected([](nlohmann::json& p) { p["profile"]["bit_depth"] = 1e300; },
+                       "profile.bit_depth is 1e+300; expected a whole number within 8..16");
+}
+
+TEST_F(ModelFileContent, rejects_a_directory_as_model_file_n) {
+  std::filesystem::create_directory(dir / "model.json");
+  try {
+    load_model(dir / "model.json");
+    ADD_FAILURE() << "accepted a directory";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("model.json: model file is a directory"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Baselines, ohno_inverts_the_noise_free_locus) {
   const CameraProfile p = load_profile_by_name("rgb-reference");
   const CameraModel cam{p, p.system_qe(), Eigen::VectorXd::Ones(3)};

@@ -1,5 +1,6 @@
 // The dataset format: a simulated campaign round-trips, and every promised rejection happens.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -78,6 +79,35 @@ TEST_F(DatasetFiles, rejects_missing_manifest_n) {
   expect_rejected("manifest not found");
 }
 
+TEST_F(DatasetFiles, rejects_a_fifo_as_manifest_without_blocking_n) {
+  std::filesystem::remove(dir / "manifest.csv");
+  ASSERT_EQ(mkfifo((dir / "manifest.csv").c_str(), 0600), 0);
+  expect_rejected("manifest.csv: manifest is not a regular file (a FIFO, socket or device)");
+}
+
+TEST_F(DatasetFiles, rejects_a_directory_listed_as_an_image_n) {
+  std::filesystem::remove(dir / "frames/T0900_e01_f1.pgm");
+  std::filesystem::create_directory(dir / "frames/T0900_e01_f1.pgm");
+  expect_rejected("T0900_e01_f1.pgm (manifest.csv line 11): is a directory, not an image");
+}
+
+TEST_F(DatasetFiles, rejects_a_path_climbing_out_of_the_folder_n) {
+  rewrite_manifest("frames/T0900_e01_f1.pgm", "frames/../../T0900_e01_f1.pgm");
+  expect_rejected(
+      "manifest.csv:11: file 'frames/../../T0900_e01_f1.pgm' leaves the dataset folder");
+}
+
+TEST_F(DatasetFiles, rejects_an_unknown_mosaic_layout_n) {
+  write_text(dir / "mosaic.txt", "rgbg\n");
+  expect_rejected("mosaic.txt: mosaic layout 'rgbg' is not rggb, bggr, grbg, gbrg");
+}
+
+TEST_F(DatasetFiles, reads_the_mosaic_layout_the_simulator_wrote) {
+  EXPECT_EQ(Dataset::open(dir.path()).mosaic_pattern(), "rggb");
+  std::filesystem::remove(dir / "mosaic.txt");
+  EXPECT_EQ(Dataset::open(dir.path()).mosaic_pattern(), "");
+}
+
 TEST_F(DatasetFiles, rejects_wrong_header_n) {
   rewrite_manifest("file,kind,temperature_c,exposure_us", "file,kind,temp,exposure");
   expect_rejected("first line must be 'file,kind,temperature_c,exposure_us'");
@@ -100,7 +130,7 @@ TEST_F(DatasetFiles, rejects_unknown_kind_n) {
 
 TEST_F(DatasetFiles, rejects_missing_image_n) {
   std::filesystem::remove(dir / "frames/T0900_e01_f1.pgm");
-  expect_rejected("T0900_e01_f1.pgm: listed in manifest.csv but not found");
+  expect_rejected("T0900_e01_f1.pgm (manifest.csv line 11): listed but not found");
 }
 
 TEST_F(DatasetFiles, rejects_exposure_without_dark_n) {

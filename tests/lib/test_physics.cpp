@@ -102,6 +102,9 @@ TEST(WavelengthGrid, rejects_bad_ranges_n) {
   EXPECT_THROW(WavelengthGrid(500, 400, 1), std::invalid_argument);
   EXPECT_THROW(WavelengthGrid(400, 500, 0), std::invalid_argument);
   EXPECT_THROW(WavelengthGrid(400, 500, 3), std::invalid_argument);
+  // 10^14 samples: refused before lround (undefined beyond a long) and before allocating.
+  EXPECT_THROW(WavelengthGrid(400, 500, 1e-12), std::invalid_argument);
+  EXPECT_THROW(WavelengthGrid(400, 1e300, 1e-300), std::invalid_argument);
   const WavelengthGrid g(400, 500, 5);
   EXPECT_EQ(g.size(), 21);
   EXPECT_EQ(g.index_of(451), 10);

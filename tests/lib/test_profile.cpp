@@ -143,6 +143,53 @@ TEST_F(ProfileFiles, rejects_band_count_not_matching_mosaic_n) {
   expect_rejected("p.json", "mosaic uses 4 bands, 3 are described");
 }
 
+TEST_F(ProfileFiles, rejects_a_band_index_beyond_an_int_n) {
+  // get<int> of 1e300 is an undefined conversion; the value is checked first.
+  mosaic = R"({"type": "snapshot", "band_map": [[0, 1], [2, 1e300]]})";
+  expect_rejected("p.json", "mosaic.band_map holds 1e+300; band indices are whole numbers 0..63");
+}
+
+TEST_F(ProfileFiles, rejects_a_mosaic_period_above_16_n) {
+  std::string row = "0";
+  for (int b = 1; b < 17; ++b) row += ", " + std::to_string(b);
+  mosaic = R"({"type": "snapshot", "band_map": [[)" + row + "]]}";
+  expect_rejected("p.json", "mosaic.band_map is 17x1; a mosaic period is at most 16 on a side");
+}
+
+TEST_F(ProfileFiles, rejects_a_wavelength_grid_of_10_pow_12_samples_n) {
+  write();
+  std::ifstream in(dir / "p.json");
+  std::string text(std::istreambuf_iterator<char>(in), {});
+  text.replace(text.find("\"step\": 10"), 10, "\"step\": 3e-10");
+  write_text(dir / "p.json", text);
+  try {
+    load_profile(dir / "p.json");
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("p.json: wavelength_grid_nm 400.0..700.0 step 3e-10 nm has "
+                                   "more than 100001 samples"),
+        std::string::npos)
+        << e.what();
+  }
+}
+
+TEST_F(ProfileFiles, rejects_a_dim_threshold_of_zero_n) {
+  extra = R"("thresholds": {"inference_dim_dn": 0},)";
+  expect_rejected("p.json", "thresholds: need 0 < dim < saturation <= 255 DN");
+}
+
+TEST_F(ProfileFiles, rejects_a_profile_nested_too_deep_n) {
+  extra = R"("description": )" + std::string(100, '[') + std::string(100, ']') + ",";
+  expect_rejected("p.json", "JSON nested deeper than 64 levels");
+}
+
+TEST_F(ProfileFiles, rejects_a_directory_as_curve_file_n) {
+  extra = R"("optics": ["curves/lens"],)";
+  std::filesystem::create_directories(dir / "curves/lens");
+  expect_rejected("curves/lens", "is a directory");
+}
+
 TEST_F(ProfileFiles, rejects_other_format_versions_n) {
   write();
   std::string text;

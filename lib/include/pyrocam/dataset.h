@@ -16,6 +16,7 @@ struct ManifestRow {
   FrameKind kind = FrameKind::kFrame;
   double temperature_c = 0;
   double exposure_us = 0;
+  int line = 0;  // in manifest.csv, for messages (0: not read from a file)
 };
 
 // All rows that share one (kind, temperature, exposure) setting; their images are averaged.
@@ -27,6 +28,10 @@ struct FrameGroup {
 };
 
 inline constexpr const char* kManifestHeader = "file,kind,temperature_c,exposure_us";
+// Optional file beside the manifest naming the images' mosaic layout, since a raw image carries
+// none: one line, "rggb", "bggr", "grbg", "gbrg" (Bayer, by the top-left cell) or a snapshot
+// period such as "5x5".
+inline constexpr const char* kMosaicFile = "mosaic.txt";
 
 class Dataset {
  public:
@@ -48,6 +53,8 @@ class Dataset {
   int width() const { return roi_.cols; }
   int height() const { return roi_.rows; }
   int bit_depth() const { return bit_depth_; }  // of the first image loaded (0 before)
+  // The images' layout from mosaic.txt, lower case; empty when the dataset has no mosaic.txt.
+  const std::string& mosaic_pattern() const { return mosaic_pattern_; }
 
   // Mean of a group's images as CV_64F. Throws InputError naming a file that is unreadable or
   // whose size or sample type differs from the dataset's.
@@ -60,8 +67,15 @@ class Dataset {
   std::vector<ManifestRow> rows_;
   std::vector<FrameGroup> frames_, darks_;
   cv::Mat roi_;
+  std::string mosaic_pattern_;
   mutable int bit_depth_ = 0;
 };
+
+// A mosaic layout name, trimmed and in lower case, as check_model_layout compares them: a
+// Bayer pattern or a snapshot period "WxH". Throws InputError "<where>: ..." for anything else.
+std::string parse_mosaic_pattern(const std::string& text, const std::string& where);
+// Writes `pattern` to folder/mosaic.txt.
+void write_mosaic_pattern(const std::filesystem::path& folder, const std::string& pattern);
 
 std::vector<ManifestRow> read_manifest(const std::filesystem::path& manifest_csv);
 void write_manifest(const std::filesystem::path& manifest_csv,

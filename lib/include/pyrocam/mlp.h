@@ -22,6 +22,11 @@ inline constexpr int kMlpFormatVersion = 2;
 // Widest layer (inputs included) the allocation-free single-sample path supports: its scratch
 // lives on the stack.
 inline constexpr int kMlpMaxLayerWidth = 1024;
+// Most layers a network may have, and the largest magnitude of any weight, bias or
+// standardisation number. Trained networks stay far inside (weights of order 1, set by weight
+// decay); a file beyond these is corrupt, and its readings would be nonsense that looks valid.
+inline constexpr int kMlpMaxLayers = 64;
+inline constexpr double kMlpMaxAbsParameter = 1e6;
 
 // Applied to each input before standardising. Band ratios vary over orders of magnitude along
 // the Planck locus (blue/red spans 2 to 8000 between 500 and 3500 degC), so that standardised

@@ -15,6 +15,13 @@ namespace pyrocam {
 inline constexpr int kModelFormatVersion = 1;
 inline constexpr const char* kModelFormat = "pyrocam-thermal-model";
 
+// What load_model accepts (docs/model-format.md): a file outside these ranges is corrupt or was
+// not written by pyrocam-calib, and would give readings that look right and are not.
+inline constexpr double kModelMinTemperatureC = 0, kModelMaxTemperatureC = 5000;
+inline constexpr double kModelMaxUncertaintyC = 1000;  // any table value or tolerance
+inline constexpr double kModelMinCoverageFactor = 1, kModelMaxCoverageFactor = 10;
+inline constexpr double kModelMaxBandScale = 1e6;
+
 // What inference needs for a per-pixel GUM uncertainty (METHOD.md section 7). Signal noise is
 // propagated per pixel from the profile's noise model; these are the temperature-dependent
 // terms that do not depend on the pixel's noise.

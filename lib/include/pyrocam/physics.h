@@ -26,12 +26,17 @@ double planck_energy_radiance(double wavelength_m, double temperature_k, double 
 // Graybody spectral photon radiance: photons s^-1 m^-2 sr^-1 per metre of wavelength.
 double planck_photon_radiance(double wavelength_m, double temperature_k, double emissivity = 1.0);
 
+// The most samples any wavelength grid may have (160 MB of vectors): a grid is allocated from
+// three numbers, so their ratio is bounded before anything is allocated. Files are held to the
+// much smaller kMaxProfileWavelengthSamples (profile.h).
+inline constexpr long kMaxWavelengthSamples = 10000001;
+
 // Uniform wavelength sampling with trapezoidal integration weights.
 class WavelengthGrid {
  public:
   WavelengthGrid() = default;
-  // start..stop inclusive; throws std::invalid_argument unless 0 < start < stop and step > 0
-  // divides the span (to 1e-6 nm).
+  // start..stop inclusive; throws std::invalid_argument unless 0 < start < stop, step > 0
+  // divides the span (to 1e-6 nm) and the grid has at most kMaxWavelengthSamples samples.
   WavelengthGrid(double start_nm, double stop_nm, double step_nm);
 
   double start_nm() const { return start_nm_; }

@@ -16,6 +16,12 @@
 namespace pyrocam {
 
 inline constexpr int kProfileFormatVersion = 1;
+// Bounds of what a profile may describe (docs/profile-format.md), checked before anything is
+// allocated from them: every band is a row of every bands x wavelengths matrix. 64 bands is
+// also what the estimators' per-pixel arrays hold.
+inline constexpr int kMaxProfileBands = 64;
+inline constexpr std::size_t kMaxMosaicPeriod = 16;           // band_map rows and columns
+inline constexpr long kMaxProfileWavelengthSamples = 100001;  // e.g. 0.01 nm over 1000 nm
 
 // EMVA 1288 linear camera model: DN = K (mu_e + mu_d) + offset.
 struct NoiseModel {

@@ -16,6 +16,11 @@ struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Throws InputError unless `path` is a regular file (after following links): "<path>: <what>
+// not found", "<path>: <what> is a directory" or "<path>: <what> is not a regular file (a FIFO,
+// socket or device)". It never opens the file, so a FIFO cannot block it.
+void require_regular_file(const std::filesystem::path& path, const std::string& what);
+
 // A numeric CSV table: optional '#' comment lines, one header row, numeric rows.
 struct CsvTable {
   std::filesystem::path path;

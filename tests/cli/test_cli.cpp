@@ -1,0 +1,314 @@
+// pyrocam-calib as users run it: bad input gives exit code 1 and one message on stderr that
+// names the file and the problem, and writes no output.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <fstream>
+#include <opencv2/core.hpp>
+
+#include "pyrocam/dataset.h"
+#include "pyrocam/image_io.h"
+#include "pyrocam/scenes.h"
+#include "pyrocam/simulator.h"
+#include "test_support.h"
+
+namespace pyrocam {
+namespace {
+
+using test::ScratchDir;
+using test::write_text;
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+struct ToolRun {
+  int exit_code = -1;
+  std::string err;
+};
+
+// Runs pyrocam-calib with `args` (already shell-quoted where needed), stdin closed; stderr is
+// kept. A timeout ends a run that hangs (a FIFO opened for reading blocks forever).
+ToolRun run_tool(const std::string& args, const ScratchDir& dir) {
+  const auto err = dir / "stderr.txt";
+  const std::string command = "timeout 120 '" + std::string(PYROCAM_CALIB_TOOL) + "' " + args +
+                              " < /dev/null > /dev/null 2> '" + err.string() + "'";
+  const int status = std::system(command.c_str());
+  ToolRun r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.err = read_text(err);
+  return r;
+}
+
+// CRC-32 of a PNG chunk's type and data, so that the test files are valid as far as they go.
+std::uint32_t png_crc(const std::string& bytes) {
+  std::uint32_t c = 0xffffffffu;
+  for (const unsigned char b : bytes) {
+    c ^= b;
+    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
+  }
+  return c ^ 0xffffffffu;
+}
+
+std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+std::filesystem::path test_model(const std::string& name) {
+  const char* dir = std::getenv("PYROCAM_TEST_MODEL_DIR");
+  return std::filesystem::path(dir ? dir : ".") / name;
+}
+
+// A small simulated colour campaign that calibrates: 5 temperatures, 3 exposures, 1 frame each.
+class CliDataset : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 5});
+    CampaignSettings s;
+    s.temperatures_c = {1000, 1025, 1050, 1075, 1100};  // 5: the QE cross-validation's groups
+    s.exposure_count = 3;
+    s.frames_per_setting = 1;
+    s.width = 32;
+    s.height = 32;
+    s.roi_area_px = 200;
+    write_furnace_campaign(data, camera, s);
+  }
+  void replace_in_manifest(const std::string& from, const std::string& to) {
+    std::string text = read_text(data / "manifest.csv");
+    const auto pos = text.find(from);
+    ASSERT_NE(pos, std::string::npos) << from;
+    text.replace(pos, from.size(), to);
+    write_text(data / "manifest.csv", text);
+  }
+  // The manifest line (1-based) that lists `file`.
+  int line_of(const std::string& file) {
+    std::ifstream in(data / "manifest.csv");
+    int n = 0;
+    for (std::string line; std::getline(in, line);) {
+      ++n;
+      if (line.rfind(file + ",", 0) == 0) return n;
+    }
+    return -1;
+  }
+  ToolRun calibrate() {
+    return run_tool("-q calibrate --dataset " + quoted(data) + " --out " + quoted(model) +
+                        " --epochs 1 --polish-iterations 0 --mc-refits 0",
+                    dir);
+  }
+  void expect_failed(const ToolRun& r, const std::vector<std::string>& needles) {
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    for (const auto& n : needles) EXPECT_NE(r.err.find(n), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(model)) << "a model was written";
+  }
+
+  ScratchDir dir{"cli"};
+  std::filesystem::path data = dir / "furnace", model = dir / "model.json";
+  const std::string first_frame = "frames/T1000_e00_f0.pgm";
+};
+
+TEST_F(CliDataset, calibrate_writes_a_model_from_the_intact_dataset) {
+  // What the rejections below are measured against: the same dataset, unchanged, calibrates.
+  const ToolRun r = calibrate();
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(model));
+}
+
+TEST_F(CliDataset, calibrate_rejects_a_manifest_path_leaving_the_dataset_n) {
+  const int line = line_of(first_frame);
+  replace_in_manifest(first_frame, "../../../../etc/passwd");
+  expect_failed(calibrate(), {"manifest.csv:" + std::to_string(line) +
+                              ": file '../../../../etc/passwd' leaves the dataset folder"});
+}
+
+TEST_F(CliDataset, calibrate_rejects_an_absolute_path_to_a_valid_image_n) {
+  // A readable image of the right size elsewhere was read and a model written (exit 0).
+  std::filesystem::copy_file(data / first_frame, dir / "elsewhere.pgm");
+  const int line = line_of(first_frame);
+  replace_in_manifest(first_frame, (dir / "elsewhere.pgm").string());
+  expect_failed(calibrate(), {"manifest.csv:" + std::to_string(line) + ": file '" +
+                              (dir / "elsewhere.pgm").string() + "' is an absolute path"});
+}
+
+TEST_F(CliDataset, calibrate_rejects_a_relative_path_to_another_folder_n) {
+  std::filesystem::create_directories(dir / "other");
+  std::filesystem::copy_file(data / first_frame, dir / "other/frame.pgm");
+  replace_in_manifest(first_frame, "frames/../../other/frame.pgm");
+  expect_failed(calibrate(), {"file 'frames/../../other/frame.pgm' leaves the dataset folder"});
+}
+
+TEST_F(CliDataset, calibrate_rejects_a_symbolic_link_out_of_the_dataset_n) {
+  std::filesystem::create_directories(dir / "other");
+  std::filesystem::rename(data / first_frame, dir / "other/frame.pgm");
+  std::filesystem::create_symlink(dir / "other/frame.pgm", data / first_frame);
+  expect_failed(calibrate(), {first_frame + " (manifest.csv line " +
+                                  std::to_string(line_of(first_frame)) + "): resolves to",
+                              "outside the dataset folder"});
+}
+
+TEST_F(CliDataset, calibrate_rejects_a_nul_inside_a_file_name_n) {
+  // The name was cut at the NUL without a message.
+  const int line = line_of(first_frame);
+  replace_in_manifest(first_frame, first_frame + std::string(1, '\0') + "x");
+  expect_failed(calibrate(), {"manifest.csv:" + std::to_string(line) +
+                              ": file name holds a control character (byte 0x00)"});
+}
+
+TEST_F(CliDataset, calibrate_rejects_a_directory_listed_as_a_frame_n) {
+  std::filesystem::remove(data / first_frame);
+  std::filesystem::create_directory(data / first_frame);
+  expect_failed(calibrate(),
+                {first_frame + " (manifest.csv line " + std::to_string(line_of(first_frame)) +
+                 "): is a directory, not an image"});
+}
+
+TEST_F(CliDataset, calibrate_rejects_a_fifo_listed_as_a_frame_without_blocking_n) {
+  std::filesystem::remove(data / first_frame);
+  ASSERT_EQ(mkfifo((data / first_frame).c_str(), 0600), 0);
+  expect_failed(calibrate(),
+                {first_frame + " (manifest.csv line " + std::to_string(line_of(first_frame)) +
+                 "): is not a regular file (a FIFO, socket or device)"});
+}
+
+TEST_F(CliDataset, calibrate_rejects_a_dataset_at_one_temperature_n) {
+  // It named band R ("no temperature with 2 usable points") instead.
+  std::string kept;
+  std::ifstream in(data / "manifest.csv");
+  for (std::string line; std::getline(in, line);)
+    if (line.find(",frame,") == std::string::npos || line.find(",frame,1000,") != std::string::npos)
+      kept += line + "\n";
+  in.close();
+  write_text(data / "manifest.csv", kept);
+  expect_failed(calibrate(), {"furnace: every frame in manifest.csv is at one temperature (1000 "
+                              "degC); calibration needs frames at 2 or more temperatures"});
+}
+
+TEST_F(CliDataset, calibrate_rejects_a_dataset_of_another_mosaic_than_the_profile_n) {
+  write_text(data / "mosaic.txt", "5x5\n");
+  expect_failed(calibrate(), {"mosaic.txt: the images are 5x5, the profile rgb-reference "
+                              "describes a rggb mosaic"});
+}
+
+TEST_F(CliDataset, calibrate_rejects_a_huge_png_dark_frame_before_decoding_n) {
+  // A 30000x30000 PNG was decoded in full (4.4 GB resident) before its size was checked. Its
+  // header is enough to show that: a decoder allocates from it before reading any pixel.
+  auto be32 = [](std::uint32_t v) {
+    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16),
+                       static_cast<char>(v >> 8), static_cast<char>(v)};
+  };
+  const std::string ihdr = "IHDR" + be32(30000) + be32(30000) + std::string("\x08\0\0\0\0", 5);
+  write_text(data / "darks/huge.png",
+             std::string("\x89PNG\r\n\x1a\n", 8) + be32(13) + ihdr + be32(png_crc(ihdr)));
+  replace_in_manifest("darks/e00_f0.pgm", "darks/huge.png");
+  expect_failed(calibrate(), {"huge.png: image is 30000x30000, the dataset's (ROI) size is 32x32"});
+}
+
+TEST(Cli, measure_rejects_a_model_path_that_is_a_directory_n) {
+  ScratchDir dir("cli");
+  std::filesystem::create_directory(dir / "model.json");
+  write_raw_image(dir / "f.pgm", cv::Mat::zeros(8, 8, CV_8U));
+  const ToolRun r = run_tool("measure --model " + quoted(dir / "model.json") + " --frame " +
+                                 quoted(dir / "f.pgm") + " --dark " + quoted(dir / "f.pgm") +
+                                 " --pattern rggb --out " + quoted(dir / "out"),
+                             dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("model.json: model file is a directory"), std::string::npos) << r.err;
+}
+
+TEST(Cli, measure_rejects_a_frame_without_pattern_n) {
+  ScratchDir dir("cli");
+  const ToolRun r = run_tool("measure --model m.json --frame f.pgm --dark d.pgm --out o", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--frame needs --pattern"), std::string::npos) << r.err;
+}
+
+TEST(Cli, measure_rejects_an_unknown_pattern_n) {
+  ScratchDir dir("cli");
+  const ToolRun r =
+      run_tool("measure --model m.json --frame f.pgm --dark d.pgm --pattern rgbg --out o", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("mosaic layout 'rgbg' is not rggb, bggr, grbg, gbrg"), std::string::npos)
+      << r.err;
+}
+
+// A 5x5 model on a Bayer frame read a 1200 degC plate as 652 degC.
+class CliMeasure : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::filesystem::exists(test_model("test-model-nir5x5.json")))
+      GTEST_SKIP() << "test models not built";
+    Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 6});
+    SceneSequenceSettings s;
+    s.kind = SceneKind::kPlate;
+    s.temperatures_c = {1200};
+    s.width = 100;
+    s.height = 100;
+    write_scene_sequence(data, camera, s);
+  }
+  ScratchDir dir{"cli"};
+  std::filesystem::path data = dir / "plate", out = dir / "out";
+};
+
+TEST_F(CliMeasure, measure_rejects_a_5x5_model_on_a_bayer_dataset_n) {
+  ASSERT_EQ(read_text(data / "mosaic.txt"), "rggb\n");
+  const ToolRun r = run_tool("measure --model " + quoted(test_model("test-model-nir5x5.json")) +
+                                 " --dataset " + quoted(data) + " --out " + quoted(out),
+                             dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("test-model-nir5x5.json: the model was calibrated for a 5x5 mosaic "
+                       "(profile nir5x5-reference), the frames are rggb (" +
+                       (data / "mosaic.txt").string() + ")"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out / "stats.csv"));
+}
+
+TEST_F(CliMeasure, measure_rejects_a_5x5_model_on_a_frame_named_bayer_n) {
+  const ToolRun r =
+      run_tool("measure --model " + quoted(test_model("test-model-nir5x5.json")) + " --frame " +
+                   quoted(data / "frames/0000.pgm") + " --dark " + quoted(data / "darks/0000.pgm") +
+                   " --pattern RGGB --out " + quoted(out),
+               dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("calibrated for a 5x5 mosaic (profile nir5x5-reference), the frames are "
+                       "rggb (--pattern)"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST_F(CliMeasure, measure_rejects_a_pattern_contradicting_the_dataset_n) {
+  const ToolRun r =
+      run_tool("measure --model " + quoted(test_model("test-model-rgb.json")) + " --dataset " +
+                   quoted(data) + " --pattern bggr --out " + quoted(out),
+               dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("--pattern bggr contradicts " + (data / "mosaic.txt").string() + " (rggb)"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST_F(CliMeasure, measure_rejects_a_dataset_that_does_not_name_its_mosaic_n) {
+  std::filesystem::remove(data / "mosaic.txt");
+  const ToolRun r = run_tool("measure --model " + quoted(test_model("test-model-rgb.json")) +
+                                 " --dataset " + quoted(data) + " --out " + quoted(out),
+                             dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("the dataset does not say its frames' mosaic layout (no mosaic.txt); give "
+                       "--pattern"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST_F(CliMeasure, measure_reads_the_plate_with_the_matching_model) {
+  const ToolRun r = run_tool("-q measure --model " + quoted(test_model("test-model-rgb.json")) +
+                                 " --dataset " + quoted(data) + " --out " + quoted(out),
+                             dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string stats = read_text(out / "stats.csv");
+  EXPECT_NE(stats.find("0000.pgm,"), std::string::npos) << stats;
+}
+
+}  // namespace
+}  // namespace pyrocam
