@@ -109,8 +109,9 @@ struct State {
   bool have_format = false;
   int bit_depth = 8;
   std::string pattern;
-  cv::Mat file_dark;  // CV_32F from `location`
+  cv::Mat file_dark;  // CV_32F from `location`, decoded once the stream's size is known
   std::string file_dark_path;
+  cv::Size file_dark_size;    // from the file's header, read in start()
   int file_dark_bits = 0;     // sample size of the file: 8 or 16
   int saturation_level = -1;  // raw DN from the caps' saturation-level field; -1: none
   cv::Mat captured_dark;
@@ -319,15 +320,29 @@ static gboolean check_dark(GstDarkSub* self) {
                        st.format.height);
     st.captured_dark.release();
   }
-  if (!st.file_dark.empty() &&
-      (st.file_dark.cols != st.format.width || st.file_dark.rows != st.format.height)) {
-    PYROCAM_POST_ERROR(self, pg::ErrorKind::kFormat,
-                       "Dark frame " + st.file_dark_path + " is " +
-                           std::to_string(st.file_dark.cols) + "x" +
-                           std::to_string(st.file_dark.rows) + " but the camera frames are " +
-                           std::to_string(st.format.width) + "x" + std::to_string(st.format.height),
-                       "size mismatch between location and the negotiated caps");
+  if (!st.file_dark_path.empty() &&
+      st.file_dark_size != cv::Size(st.format.width, st.format.height)) {
+    PYROCAM_POST_ERROR(
+        self, pg::ErrorKind::kFormat,
+        "Dark frame " + st.file_dark_path + " is " + std::to_string(st.file_dark_size.width) + "x" +
+            std::to_string(st.file_dark_size.height) + " but the camera frames are " +
+            std::to_string(st.format.width) + "x" + std::to_string(st.format.height),
+        "size mismatch between location and the negotiated caps");
     return FALSE;
+  }
+  // Decoded only now, at the stream's size: a file that cannot be this camera's frame (a
+  // 30000x30000 image) is refused from its header, before any pixel is decoded.
+  if (!st.file_dark_path.empty() && st.file_dark.empty()) {
+    const bool ok =
+        PYROCAM_GUARDED(self, pg::ErrorKind::kRead, "Could not read the dark frame", [&] {
+          const cv::Mat image =
+              pyrocam::read_raw_image(st.file_dark_path, st.file_dark_size, "the camera frame");
+          st.file_dark_bits = image.depth() == CV_8U ? 8 : 16;
+          st.file_dark = pyrocam::dark_from_image(image);
+        });
+    if (!ok) return FALSE;
+    GST_INFO_OBJECT(self, "dark frame %s, %dx%d", st.file_dark_path.c_str(), st.file_dark.cols,
+                    st.file_dark.rows);
   }
   if (!st.file_dark.empty() && st.file_dark_bits != 8 * st.format.bytes_per_sample) {
     PYROCAM_POST_ERROR(self, pg::ErrorKind::kFormat,
@@ -464,16 +479,12 @@ static gboolean gst_dark_sub_start(GstBaseTransform* trans) {
                          "location does not name a regular file");
       return FALSE;
     }
+    // The header only: the pixels are decoded in set_caps, once the frame size is known.
     const bool ok =
-        PYROCAM_GUARDED(self, pg::ErrorKind::kRead, "Could not read the dark frame", [&] {
-          const cv::Mat image = pyrocam::read_raw_image(settings.location);
-          st.file_dark_bits = image.depth() == CV_8U ? 8 : 16;
-          st.file_dark = pyrocam::dark_from_image(image);
-        });
+        PYROCAM_GUARDED(self, pg::ErrorKind::kRead, "Could not read the dark frame",
+                        [&] { st.file_dark_size = pyrocam::read_image_size(settings.location); });
     if (!ok) return FALSE;
     st.file_dark_path = settings.location;
-    GST_INFO_OBJECT(self, "dark frame %s, %dx%d", settings.location.c_str(), st.file_dark.cols,
-                    st.file_dark.rows);
   } else if (settings.dark_level < 0 && !st.capturing) {
     PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
                        "No dark frame: set location, dark-level or emit capture-dark",

@@ -1,6 +1,8 @@
 // darksub: caps of both raw media types, values against the library, saturation marks, dark
 // capture, live property changes, flush/EOS, and bus errors for bad dark frames.
 #include <cmath>
+#include <cstdint>
+#include <fstream>
 #include <limits>
 
 #include "element_support.h"
@@ -246,6 +248,27 @@ TEST(DarkSubErrors, rejects_a_16_bit_dark_on_an_8_bit_stream) {
   EXPECT_NE(r.message.find("dark16.pgm"), std::string::npos) << r.message;
   EXPECT_NE(r.message.find("has 16-bit samples"), std::string::npos) << r.message;
   EXPECT_NE(r.message.find("GRAY8"), std::string::npos) << r.message;
+}
+
+// A dark that cannot be this camera's frame is refused from its header: the PNG below declares
+// 10000x10000 (within the readers' limits) and holds no pixels, so decoding it first would fail
+// with "could not read" (and, were the pixels there, take 100 MB) instead of naming the sizes.
+TEST(DarkSubErrors, rejects_a_dark_of_another_size_from_its_header_n) {
+  REQUIRE_ELEMENT("darksub");
+  ScratchDir dir("darksub-huge");
+  const auto be32 = [](std::uint32_t v) {
+    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16),
+                       static_cast<char>(v >> 8), static_cast<char>(v)};
+  };
+  const std::string ihdr = be32(10000) + be32(10000) + std::string("\x08\x00\x00\x00\x00", 5);
+  std::ofstream(dir / "huge.png", std::ios::binary)
+      << std::string("\x89PNG\r\n\x1a\n", 8) << be32(13) << "IHDR" << ihdr << be32(0);
+  const auto r = run_pipeline(std::string(kGraySource) +
+                              "darksub location=" + (dir / "huge.png").string() + " ! fakesink");
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.domain, GST_STREAM_ERROR);
+  EXPECT_NE(r.message.find("huge.png is 10000x10000 but the camera frames are"), std::string::npos)
+      << r.message;
 }
 
 TEST(DarkSubErrors, rejects_an_8_bit_dark_on_a_16_bit_stream) {
