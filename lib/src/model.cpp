@@ -143,6 +143,12 @@ void save_model(const ThermalModel& m, const std::filesystem::path& path) {
 ThermalModel load_model(const std::filesystem::path& path) {
   const std::string where = path.string();
   require_regular_file(path, "model file");
+  std::error_code size_error;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, size_error);
+  if (!size_error && bytes > kModelMaxFileBytes)
+    throw InputError(where + ": model file is " + std::to_string(bytes >> 20) +
+                     " MB, more than any model (at most " +
+                     std::to_string(kModelMaxFileBytes >> 20) + " MB)");
   std::ifstream in(path);
   if (!in) throw InputError(where + ": model file unreadable");
   json file;

@@ -270,6 +270,14 @@ TEST_F(ModelFileContent, rejects_json_nested_a_million_levels_deep_n) {
                   "JSON nested deeper than 64 levels");
 }
 
+TEST_F(ModelFileDamage, rejects_a_file_larger_than_any_model_n) {
+  // Parsing holds about the file's size again in memory: a huge file is refused unread (a valid
+  // model padded with white space, which the parser would otherwise accept).
+  std::string padded = text;
+  padded.insert(padded.size() - 1, std::string(kModelMaxFileBytes, ' '));
+  expect_rejected(padded, "MB, more than any model (at most 64 MB)");
+}
+
 TEST_F(ModelFileContent, rejects_a_wavelength_grid_of_10_pow_12_samples_n) {
   // The grid was allocated (8 TB) from three numbers before its curves were checked.
   expect_edit_rejected(

@@ -2,6 +2,7 @@
 // self-describing, checksummed JSON (format in docs/model-format.md).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -21,6 +22,9 @@ inline constexpr double kModelMinTemperatureC = 0, kModelMaxTemperatureC = 5000;
 inline constexpr double kModelMaxUncertaintyC = 1000;  // any table value or tolerance
 inline constexpr double kModelMinCoverageFactor = 1, kModelMaxCoverageFactor = 10;
 inline constexpr double kModelMaxBandScale = 1e6;
+// A model file is a few MB (the QE on the wavelength grid dominates); parsing holds about as much
+// again in memory, so a larger file is refused before it is read.
+inline constexpr std::uintmax_t kModelMaxFileBytes = 64u << 20;
 
 // What inference needs for a per-pixel GUM uncertainty (METHOD.md section 7). Signal noise is
 // propagated per pixel from the profile's noise model; these are the temperature-dependent
