@@ -10,9 +10,16 @@
 // of the warm-up and the end of the run are printed too. Wall-clock figures: run on a quiet
 // machine. Not a test.
 //
+// Soak mode (--soak N): the resident memory of the colour chain with the lookup table over N
+// frames of the simulated camera, whose frames all differ (a moving melt pool, new noise):
+//   pyrocamsrc scene=melt-pool (8-bit RGGB, 320x240 or --soak-size) ! darksub ! demosaic25 !
+//   ratiotemp method=lut ! fakesink
+// printing the resident memory at frames 1k, 2k, 5k, 10k, 20k, 50k, 100k, ... and at the last.
+//
 // Usage: bench_chain --rgb-model M.json --nir-model N.json [--frames N] [--mlp-frames N]
 //                    [--scene plate:T|filament:T|melt-pool] [--queues] [--only colour|5x5]
 //                    [--methods lut,likelihood,mlp]
+//        bench_chain --rgb-model M.json --soak N [--soak-size WxH]
 // (scripts/bench.sh builds the models and runs this.)
 #include <gst/app/gstappsrc.h>
 #include <gst/gst.h>
@@ -43,6 +50,8 @@ struct Options {
   std::string only;                            // "colour" or "5x5": one chain
   std::string methods = "lut,likelihood,mlp";  // ratiotemp methods to run
   std::string misfit_probability = "0";        // ratiotemp's band-consistency check (0: off)
+  int soak = 0;                                // frames of the soak run (0: no soak)
+  int soak_width = 320, soak_height = 240;
 };
 
 // kB from /proc/self/status ("VmRSS", "VmHWM").
@@ -168,6 +177,82 @@ Run run_chain(const std::string& chain, const std::string& caps, const cv::Mat& 
   return r;
 }
 
+// The soak: resident memory at checkpoints (1, 2, 5 x 10^k frames from 1000 on, and the last).
+struct Soak {
+  int frames = 0;
+  int count = 0;
+  Clock::time_point started;
+  double cpu_started = 0;
+};
+
+bool soak_checkpoint(int frame, int last) {
+  if (frame == last) return true;
+  for (int decade = 1000; decade > 0 && decade <= frame; decade *= 10)
+    if (frame == decade || frame == 2 * decade || frame == 5 * decade) return true;
+  return false;
+}
+
+void on_soak_handoff(GstElement*, GstBuffer*, GstPad*, gpointer data) {
+  auto* s = static_cast<Soak*>(data);
+  if (!soak_checkpoint(++s->count, s->frames)) return;
+  const double wall = std::chrono::duration<double>(Clock::now() - s->started).count();
+  std::printf(
+      "  frame %7d: resident %6.1f MB (peak %6.1f MB), %6.0f s, %6.1f frames/s, %.2f CPU "
+      "ms/frame\n",
+      s->count, status_kb("VmRSS") / 1024.0, status_kb("VmHWM") / 1024.0, wall, s->count / wall,
+      1e3 * (cpu_seconds() - s->cpu_started) / s->count);
+  std::fflush(stdout);
+}
+
+int run_soak(const Options& o) {
+  const std::string size =
+      "width=" + std::to_string(o.soak_width) + ",height=" + std::to_string(o.soak_height);
+  const std::string launch =
+      "pyrocamsrc scene=melt-pool num-buffers=" + std::to_string(o.soak) +
+      " ! video/x-bayer,format=rggb," + size +
+      ",framerate=30/1 ! darksub dark-level=50 ! demosaic25 ! ratiotemp stats-interval=0 "
+      "method=lut model=" +
+      o.rgb_model + " ! fakesink name=sink sync=false signal-handoffs=true";
+  std::printf("soak: %s\n", launch.c_str());
+  std::printf("  start:         resident %6.1f MB\n", status_kb("VmRSS") / 1024.0);
+  GError* error = nullptr;
+  GstElement* pipeline = gst_parse_launch(launch.c_str(), &error);
+  if (!pipeline || error) {
+    std::fprintf(stderr, "soak: %s\n", error ? error->message : "could not build the pipeline");
+    if (error) g_error_free(error);
+    if (pipeline) gst_object_unref(pipeline);
+    return 1;
+  }
+  Soak soak;
+  soak.frames = o.soak;
+  GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
+  g_signal_connect(sink, "handoff", G_CALLBACK(on_soak_handoff), &soak);
+  soak.started = Clock::now();
+  soak.cpu_started = cpu_seconds();
+  gst_element_set_state(pipeline, GST_STATE_PLAYING);
+  GstBus* bus = gst_element_get_bus(pipeline);
+  GstMessage* m = gst_bus_timed_pop_filtered(
+      bus, GST_CLOCK_TIME_NONE, static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
+  int rc = 0;
+  if (m && GST_MESSAGE_TYPE(m) == GST_MESSAGE_ERROR) {
+    GError* e = nullptr;
+    gst_message_parse_error(m, &e, nullptr);
+    std::fprintf(stderr, "soak: %s\n", e ? e->message : "error");
+    if (e) g_error_free(e);
+    rc = 1;
+  }
+  if (m) gst_message_unref(m);
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(bus);
+  gst_object_unref(sink);
+  gst_object_unref(pipeline);
+  if (rc == 0 && soak.count != o.soak) {
+    std::fprintf(stderr, "soak: %d frames of %d reached the sink\n", soak.count, o.soak);
+    rc = 1;
+  }
+  return rc;
+}
+
 void print_run(const std::string& what, const Run& r) {
   if (!r.ok) {
     std::printf("%-52s FAILED: %s\n", what.c_str(), r.error.c_str());
@@ -207,18 +292,27 @@ int main(int argc, char** argv) {
       o.methods = value();
     else if (a == "--misfit-probability")
       o.misfit_probability = value();
-    else {
+    else if (a == "--soak")
+      o.soak = std::atoi(value().c_str());
+    else if (a == "--soak-size") {
+      const std::string v = value();
+      if (std::sscanf(v.c_str(), "%dx%d", &o.soak_width, &o.soak_height) != 2) {
+        std::fprintf(stderr, "--soak-size takes WIDTHxHEIGHT, not %s\n", v.c_str());
+        return 2;
+      }
+    } else {
       std::fprintf(stderr, "unknown argument %s\n", a.c_str());
       return 2;
     }
   }
-  if (o.rgb_model.empty() || o.nir_model.empty()) {
+  if (o.rgb_model.empty() || (o.nir_model.empty() && o.soak == 0) || o.soak < 0) {
     std::fprintf(
         stderr,
         "usage: %s --rgb-model M.json --nir-model N.json [--frames N] "
         "[--mlp-frames N] [--scene plate:T|filament:T|melt-pool] [--queues] [--only colour|5x5] "
-        "[--methods lut,likelihood,mlp] [--misfit-probability P]\n",
-        argv[0]);
+        "[--methods lut,likelihood,mlp] [--misfit-probability P]\n"
+        "       %s --rgb-model M.json --soak FRAMES [--soak-size WxH]\n",
+        argv[0], argv[0]);
     return 2;
   }
   GstElementFactory* f = gst_element_factory_find("ratiotemp");
@@ -227,6 +321,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   gst_object_unref(f);
+  if (o.soak > 0) return run_soak(o);
   const std::string q = o.queues ? " ! queue" : "";
   std::printf("pyrocam chain benchmark: %u CPU cores, scene %s%s\n", g_get_num_processors(),
               o.scene.c_str(), o.queues ? ", queues between elements" : "");

@@ -8,6 +8,9 @@
 #   RGB_MODEL, NIR_MODEL  model files to use instead
 #   SCENE                 plate:T, filament:T or melt-pool [plate:1500]
 #   FRAMES                frames per timed chain run [600] (the RSS growth is over this run)
+#   SOAK                  run only the soak instead: the colour chain with the lookup table on
+#                         SOAK frames of the simulated melt pool (320x240, every frame new),
+#                         printing the resident memory at 1k, 2k, 5k, 10k, ... frames
 # Wall-clock figures need a quiet machine: the CPU time per frame is the figure to compare
 # across runs on a busy one.
 set -euo pipefail
@@ -32,6 +35,9 @@ model() {  # profile, campaign size, model path
 rgb=${RGB_MODEL:-$data/model-rgb.json}
 nir=${NIR_MODEL:-$data/model-nir5x5.json}
 model rgb-reference 128x128 "$rgb"
+if [[ -n ${SOAK:-} ]]; then
+  GST_PLUGIN_PATH=$PWD/build/plugins exec build/bench/bench_chain --rgb-model "$rgb" --soak "$SOAK"
+fi
 model nir5x5-reference 130x130 "$nir"
 
 scene=${SCENE:-plate:1500}
