@@ -4,7 +4,7 @@
 # the test (-fno-sanitize-recover), so does any leak in pyrocam's own code; only what GStreamer and
 # GLib keep for the life of the process is suppressed (tests/sanitizers/lsan.supp).
 # Usage: scripts/test-sanitized.sh [extra `meson test` arguments, e.g. a test name]
-# Takes about 25 minutes on 2 cores (most of it the build).
+# On a busy 2-core machine: about 40 min to build the first time, about 15 min of tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 src=$PWD
