@@ -44,8 +44,9 @@ MODEL=$model OUT=$recording NUM_BUFFERS=$frames SEGMENT_SECONDS=2 SNAPSHOT_RATE=
 # Read the recording back: every frame must decode.
 shopt -s nullglob
 segments=("$recording"/temperature-*.mkv)
-bytes=$(gst-launch-1.0 -q splitmuxsrc "location=$recording/temperature-*.mkv" ! avdec_ffv1 ! \
-  video/x-raw,format=GRAY16_LE ! fdsink fd=1 | wc -c)
+# pyrocam-launch, not gst-launch-1.0, which can hang after an early error.
+bytes=$(build/launcher/pyrocam-launch splitmuxsrc "location=$recording/temperature-*.mkv" ! \
+  avdec_ffv1 ! video/x-raw,format=GRAY16_LE ! fdsink fd=1 | wc -c)
 decoded=$((bytes / (320 * 240 * 2)))
 if ((decoded != frames)); then
   echo "main-job: the recording decodes to $decoded frames, not $frames" >&2
