@@ -30,23 +30,8 @@
 #     CAPS=video/x-bayer,format=rggb,width=1024,height=768 OUT=out/run2 pipelines/record.sh
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
-if [[ -z ${GST_PLUGIN_PATH:-} && -f $here/../build/plugins/libgstpyrocam.so ]]; then
-  export GST_PLUGIN_PATH=$here/../build/plugins
-fi
-# Pipelines run through pyrocam-launch (built with the plugin): unlike gst-launch-1.0 of
-# GStreamer 1.22 it never hangs after an error (exit 1 with the message); with -e SIGINT or
-# SIGTERM sends EOS so that the files are finalised, without it they stop the pipeline.
-launch=${PYROCAM_LAUNCH:-}
-if [[ -z $launch ]]; then
-  if [[ -x $here/../build/launcher/pyrocam-launch ]]; then
-    launch=$here/../build/launcher/pyrocam-launch
-  elif command -v pyrocam-launch >/dev/null; then
-    launch=pyrocam-launch
-  else
-    echo "$(basename "$0" .sh): pyrocam-launch not found: build the project (ninja -C build) or set PYROCAM_LAUNCH" >&2
-    exit 1
-  fi
-fi
+# The build tree's plugin and `launch` (pyrocam-launch, which never hangs after an error).
+source "$here/lib/setup.sh"
 
 MODEL=${MODEL:-out/model-rgb.json}
 OUT=${OUT:-out/recording}

@@ -1,0 +1,19 @@
+# Sourced by every script in pipelines/ after it sets `here` to its own folder: uses the plugin of
+# the build tree unless GST_PLUGIN_PATH says otherwise, and sets `launch` to pyrocam-launch
+# (built with the plugin). Unlike gst-launch-1.0 of GStreamer 1.22 it never hangs after an error
+# (exit 1 with the message); with -e SIGINT or SIGTERM sends EOS so that the files are finalised,
+# without it they stop the pipeline.
+if [[ -z ${GST_PLUGIN_PATH:-} && -f $here/../build/plugins/libgstpyrocam.so ]]; then
+  export GST_PLUGIN_PATH=$here/../build/plugins
+fi
+launch=${PYROCAM_LAUNCH:-}
+if [[ -z $launch ]]; then
+  if [[ -x $here/../build/launcher/pyrocam-launch ]]; then
+    launch=$here/../build/launcher/pyrocam-launch
+  elif command -v pyrocam-launch >/dev/null; then
+    launch=pyrocam-launch
+  else
+    echo "$(basename "$0" .sh): pyrocam-launch not found: build the project (ninja -C build) or set PYROCAM_LAUNCH" >&2
+    exit 1
+  fi
+fi
