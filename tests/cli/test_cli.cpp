@@ -18,6 +18,7 @@
 namespace pyrocam {
 namespace {
 
+using test::png_header;
 using test::ScratchDir;
 using test::write_text;
 
@@ -42,16 +43,6 @@ ToolRun run_tool(const std::string& args, const ScratchDir& dir) {
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.err = read_text(err);
   return r;
-}
-
-// CRC-32 of a PNG chunk's type and data, so that the test files are valid as far as they go.
-std::uint32_t png_crc(const std::string& bytes) {
-  std::uint32_t c = 0xffffffffu;
-  for (const unsigned char b : bytes) {
-    c ^= b;
-    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
-  }
-  return c ^ 0xffffffffu;
 }
 
 std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
@@ -194,13 +185,7 @@ TEST_F(CliDataset, calibrate_rejects_a_dataset_of_another_mosaic_than_the_profil
 TEST_F(CliDataset, calibrate_rejects_a_huge_png_dark_frame_before_decoding_n) {
   // A 30000x30000 PNG was decoded in full (4.4 GB resident) before its size was checked. Its
   // header is enough to show that: a decoder allocates from it before reading any pixel.
-  auto be32 = [](std::uint32_t v) {
-    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16),
-                       static_cast<char>(v >> 8), static_cast<char>(v)};
-  };
-  const std::string ihdr = "IHDR" + be32(30000) + be32(30000) + std::string("\x08\0\0\0\0", 5);
-  write_text(data / "darks/huge.png",
-             std::string("\x89PNG\r\n\x1a\n", 8) + be32(13) + ihdr + be32(png_crc(ihdr)));
+  write_text(data / "darks/huge.png", png_header(30000, 30000, 8));
   replace_in_manifest("darks/e00_f0.pgm", "darks/huge.png");
   expect_failed(calibrate(), {"huge.png: image is 30000x30000, the dataset's (ROI) size is 32x32"});
 }

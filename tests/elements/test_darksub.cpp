@@ -256,13 +256,7 @@ TEST(DarkSubErrors, rejects_a_16_bit_dark_on_an_8_bit_stream) {
 TEST(DarkSubErrors, rejects_a_dark_of_another_size_from_its_header_n) {
   REQUIRE_ELEMENT("darksub");
   ScratchDir dir("darksub-huge");
-  const auto be32 = [](std::uint32_t v) {
-    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16),
-                       static_cast<char>(v >> 8), static_cast<char>(v)};
-  };
-  const std::string ihdr = be32(10000) + be32(10000) + std::string("\x08\x00\x00\x00\x00", 5);
-  std::ofstream(dir / "huge.png", std::ios::binary)
-      << std::string("\x89PNG\r\n\x1a\n", 8) << be32(13) << "IHDR" << ihdr << be32(0);
+  std::ofstream(dir / "huge.png", std::ios::binary) << test::png_header(10000, 10000, 8);
   const auto r = run_pipeline(std::string(kGraySource) +
                               "darksub location=" + (dir / "huge.png").string() + " ! fakesink");
   ASSERT_TRUE(r.error);

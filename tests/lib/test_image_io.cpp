@@ -13,35 +13,12 @@
 namespace pyrocam {
 namespace {
 
+using test::png_header;
 using test::ScratchDir;
 
 void write_bytes(const std::filesystem::path& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
-std::string big_endian32(std::uint32_t v) {
-  return {static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8),
-          static_cast<char>(v)};
-}
-
-// CRC-32 of a PNG chunk's type and data, so that the test files are valid as far as they go.
-std::uint32_t png_crc(const std::string& bytes) {
-  std::uint32_t c = 0xffffffffu;
-  for (const unsigned char b : bytes) {
-    c ^= b;
-    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
-  }
-  return c ^ 0xffffffffu;
-}
-
-// A PNG signature and IHDR chunk declaring width x height (gray, `bits` deep), cut off there:
-// all a decoder needs to decide what to allocate.
-std::string png_header(std::uint32_t width, std::uint32_t height, int bits) {
-  std::string ihdr = "IHDR" + big_endian32(width) + big_endian32(height);
-  ihdr += {static_cast<char>(bits), 0, 0, 0, 0};
-  return std::string("\x89PNG\r\n\x1a\n", 8) + big_endian32(13) + ihdr +
-         big_endian32(png_crc(ihdr));
 }
 
 // A little-endian TIFF whose first directory holds ImageWidth and ImageLength as LONGs.

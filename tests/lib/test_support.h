@@ -1,6 +1,7 @@
 // Helpers shared by the library tests: scratch folders and the reference data location.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 
@@ -20,5 +21,8 @@ class ScratchDir {
   std::filesystem::path path_;
 };
 void write_text(const std::filesystem::path& path, const std::string& text);
+// A PNG signature and IHDR chunk (valid CRC) declaring width x height, gray, `bits` deep, cut off
+// there: all a decoder needs to decide what to allocate.
+std::string png_header(std::uint32_t width, std::uint32_t height, int bits);
 
 }  // namespace pyrocam::test
