@@ -61,7 +61,8 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
   static CampaignSettings campaign;
   static std::string campaign_out, campaign_size;
   CLI::App* c = sim->add_subcommand(
-      "campaign", "Write a furnace calibration dataset like the paper's (METHOD.md section 3)");
+      "campaign",
+      "Write a furnace calibration dataset like the paper's (Sala et al. 2025, section 3)");
   c->footer(
       "Example:\n  pyrocam-calib simulate campaign --profile rgb-reference --unit typical "
       "--frames 10 --out furnace-rgb");

@@ -1,3 +1,6 @@
+// Over 600 lines: the three estimators (network, lookup table, likelihood fit), the noise model
+// and the GUM uncertainty share private helpers here; splitting them along those stages is
+// planned with the architecture issue (one file per estimator).
 #include "pyrocam/estimators.h"
 
 #include <algorithm>

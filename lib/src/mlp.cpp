@@ -1,3 +1,6 @@
+// Over 600 lines: the network's inference, its JSON form and its training (validation, split,
+// augmentation, Adam, L-BFGS polish) in one file; splitting training into stage files is planned
+// with the architecture issue.
 #include "pyrocam/mlp.h"
 
 #include <Eigen/QR>

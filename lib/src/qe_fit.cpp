@@ -1,3 +1,5 @@
+// Over 600 lines (625): the two QE solvers (the paper's and the regularised one) share the
+// residual, Jacobian and line-search code here.
 #include "pyrocam/qe_fit.h"
 
 #include <Eigen/Dense>

@@ -1,3 +1,5 @@
+/* Over 600 lines: dark capture, the layout and saturation fields of the caps and the GObject
+ * boilerplate; the caps-field copying is to move to plugins/common with the architecture issue. */
 /**
  * SECTION:element-darksub
  * @title: darksub

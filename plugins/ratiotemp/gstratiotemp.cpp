@@ -1,3 +1,5 @@
+/* Over 600 lines: estimator selection, uncertainty output, statistics messages and region
+ * handling; estimator selection is to move into the library with the architecture issue. */
 /**
  * SECTION:element-ratiotemp
  * @title: ratiotemp
