@@ -37,7 +37,7 @@
 #include <vector>
 
 #include "bench_support.h"
-#include "pyrocam/model.h"
+#include "pyrocam/runtime/model.h"
 
 namespace {
 

@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "bench_support.h"
-#include "pyrocam/darksub.h"
-#include "pyrocam/demosaic.h"
-#include "pyrocam/measure.h"
+#include "pyrocam/runtime/darksub.h"
+#include "pyrocam/runtime/demosaic.h"
+#include "pyrocam/runtime/measure.h"
 
 namespace {
 

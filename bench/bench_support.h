@@ -7,9 +7,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "pyrocam/model.h"
-#include "pyrocam/scenes.h"
-#include "pyrocam/simulator.h"
+#include "pyrocam/runtime/model.h"
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
 
 namespace pyrocam::bench {
 

@@ -19,11 +19,11 @@
 #include <string>
 #include <vector>
 
-#include "pyrocam/locus.h"
-#include "pyrocam/mlp.h"
-#include "pyrocam/model.h"
-#include "pyrocam/noisy_locus.h"
-#include "pyrocam/profile.h"
+#include "pyrocam/core/locus.h"
+#include "pyrocam/runtime/mlp.h"
+#include "pyrocam/runtime/model.h"
+#include "pyrocam/calibration/noisy_locus.h"
+#include "pyrocam/core/profile.h"
 
 namespace {
 

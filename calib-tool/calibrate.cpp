@@ -1,5 +1,5 @@
 // `pyrocam-calib calibrate`: furnace dataset + camera profile -> model file and report.
-#include "pyrocam/calibrate.h"
+#include "pyrocam/calibration/calibrate.h"
 
 #include <filesystem>
 #include <iostream>

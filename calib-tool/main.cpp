@@ -2,7 +2,7 @@
 #include <iostream>
 
 #include "commands.h"
-#include "pyrocam/spectrum.h"
+#include "pyrocam/core/error.h"
 
 int main(int argc, char** argv) {
   using namespace pyrocam::cli;

@@ -1,6 +1,6 @@
 // `pyrocam-calib measure`: raw frames and dark frames to temperature images offline, through the
 // same library code as the ratiotemp element.
-#include "pyrocam/measure.h"
+#include "pyrocam/runtime/measure.h"
 
 #include <algorithm>
 #include <cctype>
@@ -10,10 +10,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include "commands.h"
-#include "pyrocam/darksub.h"
-#include "pyrocam/dataset.h"
-#include "pyrocam/difference_codes.h"
-#include "pyrocam/image_io.h"
+#include "pyrocam/runtime/darksub.h"
+#include "pyrocam/core/dataset.h"
+#include "pyrocam/core/difference_codes.h"
+#include "pyrocam/core/image_io.h"
 
 namespace pyrocam::cli {
 namespace {

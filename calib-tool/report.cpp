@@ -5,7 +5,7 @@
 #include <iomanip>
 #include <sstream>
 
-#include "pyrocam/spectrum.h"
+#include "pyrocam/core/spectrum.h"
 #include "svg_plot.h"
 
 namespace pyrocam::cli {

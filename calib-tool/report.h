@@ -3,7 +3,7 @@
 
 #include <filesystem>
 
-#include "pyrocam/calibrate.h"
+#include "pyrocam/calibration/calibrate.h"
 
 namespace pyrocam::cli {
 

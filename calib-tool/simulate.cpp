@@ -5,8 +5,8 @@
 #include <iostream>
 
 #include "commands.h"
-#include "pyrocam/scenes.h"
-#include "pyrocam/simulator.h"
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
 
 namespace pyrocam::cli {
 namespace {

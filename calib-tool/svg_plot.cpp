@@ -6,7 +6,7 @@
 #include <limits>
 #include <sstream>
 
-#include "pyrocam/colormap.h"
+#include "pyrocam/runtime/colormap.h"
 
 namespace pyrocam::cli {
 namespace {

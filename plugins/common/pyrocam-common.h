@@ -10,8 +10,8 @@
 #include <utility>
 
 #include "pyrocam-caps.h"
-#include "pyrocam/mosaic.h"
-#include "pyrocam/spectrum.h"
+#include "pyrocam/core/mosaic.h"
+#include "pyrocam/core/error.h"
 
 namespace pyrocam::gst {
 

@@ -47,8 +47,8 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
-#include "pyrocam/darksub.h"
-#include "pyrocam/image_io.h"
+#include "pyrocam/runtime/darksub.h"
+#include "pyrocam/core/image_io.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_dark_sub_debug);
 #define GST_CAT_DEFAULT gst_dark_sub_debug

@@ -32,8 +32,8 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
-#include "pyrocam/demosaic.h"
-#include "pyrocam/profile.h"
+#include "pyrocam/runtime/demosaic.h"
+#include "pyrocam/core/profile.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_demosaic25_debug);
 #define GST_CAT_DEFAULT gst_demosaic25_debug

@@ -38,9 +38,9 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
-#include "pyrocam/profile.h"
-#include "pyrocam/scenes.h"
-#include "pyrocam/simulator.h"
+#include "pyrocam/core/profile.h"
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_pyrocam_src_debug);
 #define GST_CAT_DEFAULT gst_pyrocam_src_debug

@@ -115,10 +115,10 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
-#include "pyrocam/difference_codes.h"
-#include "pyrocam/estimator_check.h"
-#include "pyrocam/measure.h"
-#include "pyrocam/model.h"
+#include "pyrocam/core/difference_codes.h"
+#include "pyrocam/runtime/estimator_check.h"
+#include "pyrocam/runtime/measure.h"
+#include "pyrocam/runtime/model.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_ratio_temp_debug);
 #define GST_CAT_DEFAULT gst_ratio_temp_debug

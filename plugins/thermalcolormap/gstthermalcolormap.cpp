@@ -30,7 +30,7 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
-#include "pyrocam/colormap.h"
+#include "pyrocam/runtime/colormap.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_thermal_colormap_debug);
 #define GST_CAT_DEFAULT gst_thermal_colormap_debug

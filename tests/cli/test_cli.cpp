@@ -9,10 +9,10 @@
 #include <fstream>
 #include <opencv2/core.hpp>
 
-#include "pyrocam/dataset.h"
-#include "pyrocam/image_io.h"
-#include "pyrocam/scenes.h"
-#include "pyrocam/simulator.h"
+#include "pyrocam/core/dataset.h"
+#include "pyrocam/core/image_io.h"
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
 #include "test_support.h"
 
 namespace pyrocam {

@@ -6,8 +6,8 @@
 #include <limits>
 
 #include "element_support.h"
-#include "pyrocam/darksub.h"
-#include "pyrocam/image_io.h"
+#include "pyrocam/runtime/darksub.h"
+#include "pyrocam/core/image_io.h"
 #include "test_support.h"
 
 namespace pyrocam::test {

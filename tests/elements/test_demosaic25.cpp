@@ -5,7 +5,7 @@
 #include <numeric>
 
 #include "element_support.h"
-#include "pyrocam/demosaic.h"
+#include "pyrocam/runtime/demosaic.h"
 
 namespace pyrocam::test {
 namespace {

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "element_support.h"
-#include "pyrocam/colormap.h"
+#include "pyrocam/runtime/colormap.h"
 
 namespace pyrocam::test {
 namespace {

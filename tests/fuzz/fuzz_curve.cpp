@@ -1,6 +1,6 @@
 // libFuzzer target: pyrocam::read_spectrum_csv, the CSV curves a profile names (QE, filters).
 #include "fuzz_support.h"
-#include "pyrocam/spectrum.h"
+#include "pyrocam/core/spectrum.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto path = pyrocam::fuzz::write_input("curve.csv", data, size);

@@ -1,7 +1,7 @@
 // libFuzzer target: pyrocam::read_raw_image (PGM, PNG, TIFF; OpenCV picks the decoder by the
 // file's signature, so one target covers all three).
 #include "fuzz_support.h"
-#include "pyrocam/image_io.h"
+#include "pyrocam/core/image_io.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto path = pyrocam::fuzz::write_input("image", data, size);

@@ -1,6 +1,6 @@
 // libFuzzer target: pyrocam::read_imec_band_responses, the IMEC factory calibration XML.
 #include "fuzz_support.h"
-#include "pyrocam/spectrum.h"
+#include "pyrocam/core/spectrum.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto path = pyrocam::fuzz::write_input("imec.xml", data, size);

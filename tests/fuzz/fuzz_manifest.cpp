@@ -4,8 +4,8 @@
 #include <opencv2/core.hpp>
 
 #include "fuzz_support.h"
-#include "pyrocam/dataset.h"
-#include "pyrocam/image_io.h"
+#include "pyrocam/core/dataset.h"
+#include "pyrocam/core/image_io.h"
 
 namespace {
 

@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fuzz_support.h"
-#include "pyrocam/model.h"
+#include "pyrocam/runtime/model.h"
 
 namespace {
 

@@ -1,7 +1,7 @@
 // libFuzzer target: pyrocam::load_profile, the camera profile JSON. The input is written beside a
 // link to the shipped curves (profiles/curves), so that its relative curve paths resolve.
 #include "fuzz_support.h"
-#include "pyrocam/profile.h"
+#include "pyrocam/core/profile.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const bool linked = [] {

@@ -14,7 +14,7 @@
 #include <fstream>
 #include <string>
 
-#include "pyrocam/spectrum.h"
+#include "pyrocam/core/error.h"
 
 namespace pyrocam::fuzz {
 

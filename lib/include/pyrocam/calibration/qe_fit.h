@@ -1,0 +1,127 @@
+// System QE refinement from furnace signal rates (Sala et al. 2025 section 2.7; METHOD.md
+// section 4): the paper's evolutionary coordinate search, and a regularised least-squares solve
+// that constrains the correction by physics and by its effect at the temperatures of use.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "pyrocam/core/profile.h"
+
+namespace pyrocam {
+
+// Measured signal rates s_b(T_i) (DN/s after dark subtraction, slopes of ROI mean vs exposure).
+struct CalibrationRates {
+  std::vector<double> temperatures_c;  // calibration temperatures, degC (any order)
+  Eigen::MatrixXd rates;               // bands x temperatures; NaN (or <= 0) = no usable points
+};
+
+enum class QeSolver { kPaper, kRegularised };
+const char* to_string(QeSolver solver);
+
+// The paper's search. Defaults are the paper's; fewer sweeps are fine for quick checks.
+struct PaperSearchOptions {
+  int sweeps = 400;
+  int sweeps_per_decade = 100;     // the step shrinks tenfold after this many sweeps
+  double step_in_band = 0.01;      // step inside profile.filter_pass_band_nm
+  double step_out_of_band = 1e-4;  // step far outside it
+  double taper_nm = 100;           // log-linear taper from one to the other outside the band
+};
+
+// The regularised solve. Q_b = shift(S_b, h_b) * optics * (1 + t_b x + u_b x^2) + S_b * leak, with
+// x = (l - pass band centre) / 100 nm, S_b the band's sensor QE, leak >= 0 a smooth sum of
+// bumps in the optical filter's blocking region shared by all bands (one filter), and a free
+// gain per band. Each sigma is a prior standard deviation (a Gaussian penalty); 0 fixes the
+// parameter at the datasheet's.
+struct RegularisedOptions {
+  double relative_noise = 0.005;       // expected relative rms error of a measured rate (the start)
+  int noise_passes = 3;                // refits weighting the data by the misfit reached, at most
+  double min_relative_noise = 2e-4;    // floor of that estimate
+  double tilt_sigma = 0.02;            // per 100 nm
+  double curvature_sigma = 0.0;        // per (100 nm)^2; off: trades against the leak, worse highs
+  double shift_sigma_nm = 3.0;         // only for bands narrower than narrow_band_fwhm_nm:
+  double narrow_band_fwhm_nm = 60;     // for broad bands a shift is a tilt the data cannot tell
+  double leak_spacing_nm = 25;         // bump spacing (and half width)
+  double leak_sigma = 0.05;            // absolute filter transmission added by a leak
+  double leak_curvature_sigma = 0.01;  // second difference between neighbouring bumps
+  // Extrapolation control. A leak bump whose share of a band's signal grows by a factor L from
+  // the hottest calibration temperature to the hottest of use_temperatures_c has its prior
+  // sigma divided by L: the furnace barely sees it, the high range would depend on it.
+  std::vector<double> use_temperatures_c{1500, 2000, 2500, 3000};
+  // Optional penalty on the change of each band's rate at use_temperatures_c relative to the
+  // hottest calibration rate, against the datasheet's. Off: when the datasheet is wrong (a
+  // leak) the true change is large and this fights the data (worse fits and highs in tests).
+  double use_change_sigma = 0.0;
+  int max_iterations = 100;
+};
+
+struct QeFitOptions {
+  QeSolver solver = QeSolver::kRegularised;
+  PaperSearchOptions paper;
+  RegularisedOptions regularised;
+};
+
+struct QeFitDiagnostics {
+  // Per band: rms over the calibration temperatures of (simulated / measured - 1), both
+  // normalised by their value at the band's hottest usable temperature.
+  Eigen::VectorXd residual_before;  // datasheet QE
+  Eigen::VectorXd residual_after;   // fitted QE
+  Eigen::VectorXd qe_change_rms;    // per band rms(Q - Q_datasheet) over the grid
+  int iterations = 0;               // sweeps (paper) or Gauss-Newton iterations (regularised)
+  double wall_time_s = 0;
+};
+
+struct QeFitResult {
+  QeSolver solver = QeSolver::kRegularised;
+  Eigen::MatrixXd system_qe;  // bands x wavelengths on profile.grid, within [0, 1]
+  // k_b: measured rate / signal_rates(profile, system_qe, T) (which already holds etendue and
+  // band gains). Paper: at the band's hottest usable temperature; regularised: least squares
+  // over all temperatures.
+  Eigen::VectorXd gains;
+  QeFitDiagnostics diagnostics;
+};
+
+// Fits the QE. Throws InputError when shapes disagree, or naming the band when a band has fewer
+// than two usable rates.
+QeFitResult fit_qe(const CameraProfile& profile, const CalibrationRates& data,
+                   const QeFitOptions& options = {});
+QeFitResult fit_qe_paper(const CameraProfile& profile, const CalibrationRates& data,
+                         const PaperSearchOptions& options = {});
+QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRates& data,
+                               const RegularisedOptions& options = {});
+
+// The calibrated model's signal rates, DN/s: gains .* signal_rates(profile, system_qe, T).
+Eigen::VectorXd fitted_signal_rates(const CameraProfile& profile, const QeFitResult& fit,
+                                    double temperature_k, double emissivity = 1.0);
+
+// Per band rms of the normalised-rate residual (see QeFitDiagnostics) for any system QE.
+Eigen::VectorXd normalised_rate_residuals(const CameraProfile& profile,
+                                          const Eigen::MatrixXd& system_qe,
+                                          const CalibrationRates& data);
+
+// Per band rms of (fitted_signal_rates / measured - 1) over the usable rates of `data`: the error
+// of predicting absolute rates at temperatures the fit may not have seen.
+Eigen::VectorXd prediction_residuals(const CameraProfile& profile, const QeFitResult& fit,
+                                     const CalibrationRates& data);
+
+// Paper section 3.1: refit leaving out one of `groups` interleaved temperature groups (sorted
+// temperatures, i-th goes to group i % groups).
+struct CrossValidation {
+  Eigen::MatrixXd qe_spread;         // bands x wavelengths: std of the fitted QE over folds
+  Eigen::VectorXd heldout_residual;  // per band rms prediction error on held-out temperatures
+  std::vector<QeFitResult> folds;
+};
+CrossValidation cross_validate(const CameraProfile& profile, const CalibrationRates& data,
+                               const QeFitOptions& options = {}, int groups = 5);
+
+// Fit on all but the `hottest_held_out` hottest temperatures, test on those.
+struct ExtrapolationCheck {
+  double fitted_up_to_c = 0;
+  Eigen::VectorXd heldout_residual;  // per band rms prediction error on the hottest temperatures
+  QeFitResult fit;
+};
+ExtrapolationCheck extrapolation_check(const CameraProfile& profile, const CalibrationRates& data,
+                                       const QeFitOptions& options = {}, int hottest_held_out = 5);
+
+}  // namespace pyrocam

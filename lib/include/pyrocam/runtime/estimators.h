@@ -1,0 +1,86 @@
+// Per-pixel temperature estimators over band signals (METHOD.md section 5), shared by the
+// ratiotemp element and `pyrocam-calib measure`.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "pyrocam/runtime/model.h"
+
+namespace pyrocam {
+
+enum class Method {
+  kMlp,         // the paper's network on normalised ratios (the reference)
+  kLut,         // a 2-D lookup table of the network (colour cameras: two ratios)
+  kLikelihood,  // maximum-likelihood fit of T and scale to the band signals
+};
+Method parse_method(const std::string& name);  // "mlp", "lut", "likelihood"
+std::string method_name(Method m);
+
+class TemperatureEstimator {
+ public:
+  explicit TemperatureEstimator(const ThermalModel& model);
+  virtual ~TemperatureEstimator() = default;
+
+  // signals: one value per band, DN after dark subtraction; +inf marks a saturated band, NaN
+  // an invalid one. Returns degC, or NaN for no reading (a band dim or saturated where the
+  // method needs it, or a result outside the model's temperature range).
+  virtual double temperature_c(const double* signals) const = 0;
+
+  // Band-planar batch: planes[b][i] for i < n. Writes degC or NaN.
+  virtual void estimate(const float* const* planes, std::size_t n, float* out_c) const;
+
+  const ThermalModel& model() const { return model_; }
+
+  // Whether the likelihood fit may read a pixel from the bands left when some are saturated,
+  // missing or dim (at least two of them). Off (the default) such a pixel has no reading with
+  // every method: a colour pixel's two remaining bands can pin the fit near the turning point of
+  // their ratio, a reading that looks right and is not. The network and its table always need
+  // every band.
+  void set_allow_partial(bool allow) { min_bands_ = allow ? 2 : bands_; }
+  // Bytes of the tables the estimator holds (the lookup table grows as pixels need its blocks,
+  // up to 8192 of 4 KB; past that, pixels in blocks not yet filled are read by the network itself,
+  // which differs from the table by at most about 0.5 degC: which pixels those are then depends
+  // on the frames seen before).
+  virtual std::size_t memory_bytes() const { return 0; }
+
+ protected:
+  // All bands finite and at least the dim threshold.
+  bool all_bands_valid(const double* signals) const;
+  double in_range(double t_c) const;
+
+  const ThermalModel& model_;
+  int bands_;
+  double dim_dn_;
+  int min_bands_;  // bands the likelihood fit needs (set_allow_partial)
+};
+
+// The model must outlive the estimator. Throws InputError when the method does not fit the
+// model (the lookup table needs exactly two ratios).
+std::unique_ptr<TemperatureEstimator> make_estimator(const ThermalModel& model, Method method);
+
+// The likelihood fit by its definition, scanning every coarse and every 1 degC locus sample:
+// slow, the reference that the fast fit of make_estimator(model, Method::kLikelihood) is tested
+// and benchmarked against (same answers to 0.01 degC, same no-reading decisions).
+std::unique_ptr<TemperatureEstimator> make_exhaustive_likelihood_estimator(
+    const ThermalModel& model);
+
+// Signal noise variance of one band reading (EMVA 1288), DN^2, averaged over `frames` frames;
+// the dark frame's noise is included.
+double signal_variance_dn2(const CameraProfile& profile, int band, double signal_dn,
+                           int frames = 1);
+
+// The same for a single frame as shot_gain * max(signal, 0) + floor (shot noise; read noise and
+// quantisation of the frame and of its dark), for loops that weigh many pixels.
+struct SignalNoise {
+  double shot_gain;  // DN per electron
+  double floor_dn2;
+};
+SignalNoise signal_noise(const CameraProfile& profile, int band);
+
+// Expanded uncertainty (k from the model, 2 by default) of an estimate, degC: GUM with band
+// sensitivities by central differences (dS = 1 DN) and the model's systematic terms.
+double expanded_uncertainty_c(const TemperatureEstimator& estimator, const double* signals,
+                              double t_c, int frames = 1);
+
+}  // namespace pyrocam

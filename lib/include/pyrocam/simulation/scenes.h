@@ -1,0 +1,47 @@
+// Test scenes for the simulated camera: temperature maps (CV_32F, degC, NaN = cold background).
+#pragma once
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "pyrocam/simulation/simulator.h"
+
+namespace pyrocam {
+
+enum class SceneKind { kPlate, kFilament, kMeltPool };
+SceneKind parse_scene_kind(const std::string& name);  // "plate", "filament", "melt-pool"
+std::string scene_kind_name(SceneKind kind);
+
+// A plate at t_c filling the central 60 % of the frame.
+cv::Mat plate_scene(int width, int height, double t_c);
+// A vertical filament at t_c, about width/12 wide, cooler over its last two pixels per side.
+cv::Mat filament_scene(int width, int height, double t_c);
+// Frame `index` of a melt pool crossing the frame: a hot spot whose peak swings between
+// 1500 and 2500 degC with a cooling tail behind it.
+cv::Mat melt_pool_scene(int width, int height, int index, int count);
+double melt_pool_peak_c(int index, int count);
+
+struct SceneSequenceSettings {
+  SceneKind kind = SceneKind::kMeltPool;
+  int frames = 20;                     // melt pool only; plate/filament: one per temperature
+  std::vector<double> temperatures_c;  // plate/filament (default: a sweep suited to the kind)
+  int width = 256, height = 256;
+  double exposure_us = 0;  // 0: each frame exposed so its hottest band reaches target_dn
+  double target_dn = 140;  // brightest band above the dark level, under the 220 DN raw limit
+  double emissivity = 0;  // 0: the kind's default (plate 0.7, filament 0.4, melt pool 0.35)
+  std::string image_extension = ".pgm";
+};
+
+// Writes a dataset-format folder: frames/, darks/ (one per exposure), truth/ (16-bit PNG of the
+// true temperature in 0.1 K, 0 = background), manifest.csv (temperature_c is the frame's nominal
+// temperature: the plate's, the filament's, or the melt pool's peak) and roi.png (pixels at the
+// nominal temperature in the first frame).
+void write_scene_sequence(const std::filesystem::path& folder, Simulator& camera,
+                          SceneSequenceSettings settings, const Progress& progress = {});
+
+// Truth image in 0.1 K units, 0 where the map is NaN.
+cv::Mat temperature_to_decikelvin(const cv::Mat& temperature_c);
+
+}  // namespace pyrocam

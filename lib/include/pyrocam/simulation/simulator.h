@@ -1,0 +1,89 @@
+// A simulated camera: renders raw mosaic frames of a temperature map through a "true" camera
+// whose QE differs from the datasheet the way a real unit does, with EMVA 1288 noise.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "pyrocam/core/profile.h"
+
+namespace pyrocam {
+
+// A named, seeded deviation of a real unit from its datasheet.
+struct UnitPerturbation {
+  std::string name = "datasheet";  // "datasheet" (none) or "typical" (profile's unit_variation)
+  std::uint64_t seed = 1;
+
+  static UnitPerturbation parse(const std::string& name, std::uint64_t seed);
+};
+
+// System QE (bands x wavelengths) of the unit: the datasheet's, or perturbed by a filter leak,
+// per-band scale and tilt, and per-band wavelength shift, all drawn from `seed`.
+Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbation& unit);
+
+class Simulator {
+ public:
+  Simulator(CameraProfile profile, Eigen::MatrixXd system_qe, std::uint64_t noise_seed = 7);
+  Simulator(const CameraProfile& profile, const UnitPerturbation& unit,
+            std::uint64_t noise_seed = 7)
+      : Simulator(profile, true_system_qe(profile, unit), noise_seed) {}
+
+  const CameraProfile& profile() const { return profile_; }
+  const Eigen::MatrixXd& system_qe() const { return system_qe_; }
+  void set_noise_enabled(bool on) { noise_ = on; }
+
+  // Raw mosaic (CV_8U for bit depth 8, else CV_16U) of a temperature map (CV_32F, degC; NaN or
+  // below 100 degC emits nothing). Deterministic for a given noise seed and call sequence.
+  cv::Mat render(const cv::Mat& temperature_c, double exposure_us, double emissivity = 1.0);
+  cv::Mat render_dark(int width, int height, double exposure_us);
+
+  // Mean signal above the dark level per band, DN, noise-free and unclipped.
+  Eigen::VectorXd mean_signal_dn(double temperature_c, double exposure_us,
+                                 double emissivity = 1.0) const;
+  // Exposure that puts the brightest band at target_dn above the dark level.
+  double exposure_for(double temperature_c, double target_dn, double emissivity = 1.0) const;
+
+ private:
+  double electron_rate(int band, double temperature_c) const;
+  void ensure_pixel_maps(int width, int height);
+
+  CameraProfile profile_;
+  Eigen::MatrixXd system_qe_;
+  Eigen::MatrixXd rate_table_;  // bands x temperatures (1 K steps from kTableStartC), e-/s
+  std::uint64_t seed_;
+  std::uint64_t frame_counter_ = 0;
+  bool noise_ = true;
+  cv::Mat dark_fpn_, prnu_;  // per pixel, fixed for the unit
+};
+
+// A furnace campaign like the paper's (METHOD.md section 3).
+struct CampaignSettings {
+  std::vector<double> temperatures_c;  // empty: 700..1100 step 10 (colour), 800..1100 (5x5)
+  double first_exposure_us = 0;        // 0: 100 us colour, 10000 us multispectral
+  double exposure_factor = 1.26;
+  int exposure_count = 30;
+  int frames_per_setting = 10;
+  double dark_temperature_c = 100;
+  // The plate's true temperature at each step differs from the nominal (thermocouple) value the
+  // manifest records: furnace non-uniformity, stabilisation and the thermocouple's tolerance.
+  // Normal, this standard deviation in degC, drawn per step from furnace_seed; 0: exact. The
+  // true values are written to furnace-truth.csv beside the manifest.
+  double furnace_error_sigma_c = 1.0;
+  std::uint64_t furnace_seed = 11;
+  int width = 128, height = 128;
+  double roi_area_px = 6000;  // elliptical, centred
+  std::string image_extension = ".pgm";
+};
+
+using Progress = std::function<void(std::size_t done, std::size_t total)>;
+
+// Writes manifest.csv, frames, dark frames for every exposure and roi.png into `folder`.
+void write_furnace_campaign(const std::filesystem::path& folder, Simulator& camera,
+                            CampaignSettings settings, const Progress& progress = {});
+
+}  // namespace pyrocam

@@ -1,0 +1,223 @@
+#include "pyrocam/core/dataset.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <sstream>
+
+#include "pyrocam/core/image_io.h"
+#include "pyrocam/core/error.h"
+
+namespace pyrocam {
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return {};
+  return s.substr(b, s.find_last_not_of(" \t\r\n") - b + 1);
+}
+
+double parse_number(const std::string& text, const std::string& where) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v))
+    throw InputError(where + ": '" + text + "' is not a number");
+  return v;
+}
+
+// A manifest file name must stay inside the dataset folder, lexically: relative, no ".." that
+// climbs out, and nothing the operating system would cut or reinterpret (a NUL ends a C string).
+void check_relative_file_name(const std::string& name, const std::string& where) {
+  if (name.empty()) throw InputError(where + ": empty file name");
+  for (const char c : name)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      char code[8];
+      std::snprintf(code, sizeof code, "0x%02x",
+                    static_cast<unsigned>(static_cast<unsigned char>(c)));
+      throw InputError(where + ": file name holds a control character (byte " + code +
+                       "); file names must be printable text");
+    }
+  const std::filesystem::path p(name);
+  if (p.is_absolute() || p.has_root_name() || p.has_root_directory())
+    throw InputError(where + ": file '" + name +
+                     "' is an absolute path; files must be relative to the dataset folder");
+  const std::filesystem::path normal = p.lexically_normal();
+  if (normal.empty() || *normal.begin() == ".." || normal == ".")
+    throw InputError(where + ": file '" + name + "' leaves the dataset folder");
+}
+
+}  // namespace
+
+bool same_exposure(double a_us, double b_us) {
+  return std::abs(a_us - b_us) <= 1e-6 * std::max(std::abs(a_us), std::abs(b_us));
+}
+
+std::vector<ManifestRow> read_manifest(const std::filesystem::path& path) {
+  require_regular_file(path, "manifest");  // before opening: a FIFO would block
+  std::ifstream in(path);
+  if (!in) throw InputError(path.string() + ": manifest unreadable");
+  std::string line;
+  if (!std::getline(in, line) || trim(line) != kManifestHeader)
+    throw InputError(path.string() + ": first line must be '" + kManifestHeader + "'");
+  std::vector<ManifestRow> rows;
+  int line_no = 1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (trim(line).empty()) continue;
+    const std::string where = path.string() + ":" + std::to_string(line_no);
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string field; std::getline(ss, field, ',');) f.push_back(trim(field));
+    if (f.size() != 4)
+      throw InputError(where + ": " + std::to_string(f.size()) + " fields, expected 4 (" +
+                       kManifestHeader + ")");
+    ManifestRow row;
+    row.file = f[0];
+    row.line = line_no;
+    check_relative_file_name(row.file, where);
+    if (f[1] == "frame")
+      row.kind = FrameKind::kFrame;
+    else if (f[1] == "dark")
+      row.kind = FrameKind::kDark;
+    else
+      throw InputError(where + ": kind '" + f[1] + "' must be 'frame' or 'dark'");
+    row.temperature_c = parse_number(f[2], where + " temperature_c");
+    row.exposure_us = parse_number(f[3], where + " exposure_us");
+    if (!(row.exposure_us > 0)) throw InputError(where + ": exposure_us must be > 0");
+    rows.push_back(std::move(row));
+  }
+  if (rows.empty()) throw InputError(path.string() + ": no rows");
+  return rows;
+}
+
+void write_manifest(const std::filesystem::path& path, const std::vector<ManifestRow>& rows) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path.string() + ": cannot write manifest");
+  out << kManifestHeader << "\n" << std::setprecision(10);
+  for (const auto& r : rows)
+    out << r.file << "," << (r.kind == FrameKind::kDark ? "dark" : "frame") << ","
+        << r.temperature_c << "," << r.exposure_us << "\n";
+  if (!out) throw InputError(path.string() + ": write failed");
+}
+
+std::string parse_mosaic_pattern(const std::string& text, const std::string& where) {
+  std::string p = trim(text);
+  std::transform(p.begin(), p.end(), p.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  for (const char* bayer : {"rggb", "bggr", "grbg", "gbrg"})
+    if (p == bayer) return p;
+  const auto x = p.find('x');
+  auto period = [](const std::string& n) {
+    return !n.empty() && n.size() <= 2 && n[0] != '0' &&
+           std::all_of(n.begin(), n.end(), [](unsigned char c) { return std::isdigit(c); });
+  };
+  if (x != std::string::npos && period(p.substr(0, x)) && period(p.substr(x + 1))) return p;
+  throw InputError(where + ": mosaic layout '" + text +
+                   "' is not rggb, bggr, grbg, gbrg or a snapshot period such as 5x5");
+}
+
+void write_mosaic_pattern(const std::filesystem::path& folder, const std::string& pattern) {
+  const auto path = folder / kMosaicFile;
+  std::ofstream out(path);
+  out << parse_mosaic_pattern(pattern, path.string()) << "\n";
+  if (!out) throw InputError(path.string() + ": cannot write");
+}
+
+Dataset Dataset::open(const std::filesystem::path& folder) {
+  if (!std::filesystem::is_directory(folder))
+    throw InputError(folder.string() + ": dataset folder not found");
+  Dataset d;
+  d.folder_ = folder;
+  d.rows_ = read_manifest(folder / "manifest.csv");
+  const auto& rows = d.rows_;
+  if (const auto mosaic = folder / kMosaicFile; std::filesystem::exists(mosaic)) {
+    require_regular_file(mosaic, "mosaic layout file");
+    std::ifstream in(mosaic);
+    std::string line;
+    std::getline(in, line);
+    d.mosaic_pattern_ = parse_mosaic_pattern(line, mosaic.string());
+  }
+
+  std::filesystem::path roi_path;
+  for (const char* name : {"roi.png", "roi.pgm"})
+    if (std::filesystem::exists(folder / name)) roi_path = folder / name;
+  if (roi_path.empty()) throw InputError(folder.string() + ": no roi.png or roi.pgm");
+  const cv::Mat roi = read_raw_image(roi_path);
+  d.roi_ = roi != 0;
+  if (cv::countNonZero(d.roi_) == 0)
+    throw InputError(roi_path.string() + ": the ROI is empty (no nonzero pixel)");
+
+  std::map<std::tuple<int, double, double>, FrameGroup> groups;
+  std::error_code ec;
+  const auto canonical_folder = std::filesystem::weakly_canonical(folder, ec);
+  if (ec)
+    throw InputError(folder.string() + ": cannot resolve the dataset folder (" + ec.message() +
+                     ")");
+  for (const auto& r : rows) {
+    const auto file = folder / r.file;
+    const std::string row = file.string() + " (manifest.csv line " + std::to_string(r.line) + ")";
+    const auto type = std::filesystem::status(file, ec).type();
+    if (type == std::filesystem::file_type::not_found)
+      throw InputError(row + ": listed but not found");
+    if (type == std::filesystem::file_type::directory)
+      throw InputError(row + ": is a directory, not an image");
+    if (type != std::filesystem::file_type::regular)
+      throw InputError(row + ": is not a regular file (a FIFO, socket or device)");
+    // A symbolic link inside the folder must not lead out of it either.
+    const auto resolved = std::filesystem::weakly_canonical(file, ec);
+    const auto inside = resolved.lexically_relative(canonical_folder);
+    if (ec || inside.empty() || *inside.begin() == "..")
+      throw InputError(row + ": resolves to " + resolved.string() + ", outside the dataset folder");
+    // Rounded keys merge rows whose numbers differ only by text formatting.
+    const double t_key = r.kind == FrameKind::kDark ? 0.0 : std::round(r.temperature_c * 1e6);
+    const auto key =
+        std::make_tuple(static_cast<int>(r.kind), t_key, std::round(r.exposure_us * 1e3));
+    FrameGroup& g = groups[key];
+    g.kind = r.kind;
+    g.temperature_c = r.temperature_c;
+    g.exposure_us = r.exposure_us;
+    g.files.push_back(file);
+  }
+  for (auto& [key, g] : groups) (g.kind == FrameKind::kDark ? d.darks_ : d.frames_).push_back(g);
+  if (d.frames_.empty()) throw InputError(folder.string() + ": manifest lists no frames");
+  for (const auto& f : d.frames_) d.dark_for(f.exposure_us);  // throws if missing
+  return d;
+}
+
+const FrameGroup& Dataset::dark_for(double exposure_us) const {
+  for (const auto& g : darks_)
+    if (same_exposure(g.exposure_us, exposure_us)) return g;
+  std::ostringstream msg;
+  msg << folder_.string() << ": no dark frame for exposure " << exposure_us << " us";
+  throw InputError(msg.str());
+}
+
+std::vector<double> Dataset::temperatures_c() const {
+  std::vector<double> t;
+  for (const auto& g : frames_)
+    if (t.empty() || std::abs(t.back() - g.temperature_c) > 1e-9) t.push_back(g.temperature_c);
+  return t;
+}
+
+cv::Mat Dataset::load(const std::filesystem::path& file) const {
+  // The header is checked against the ROI's size before anything is decoded.
+  cv::Mat img = read_raw_image(file, roi_.size(), "the dataset's (ROI) size");
+  const int depth = img.depth() == CV_8U ? 8 : 16;
+  if (bit_depth_ == 0) bit_depth_ = depth;
+  if (depth != bit_depth_)
+    throw InputError(file.string() + ": " + std::to_string(depth) + "-bit image in a " +
+                     std::to_string(bit_depth_) + "-bit dataset");
+  return img;
+}
+
+cv::Mat Dataset::average(const FrameGroup& group) const {
+  cv::Mat sum = cv::Mat::zeros(height(), width(), CV_64F);
+  for (const auto& f : group.files) cv::add(sum, load(f), sum, cv::noArray(), CV_64F);
+  return sum / static_cast<double>(group.files.size());
+}
+
+}  // namespace pyrocam

@@ -1,0 +1,27 @@
+#include "pyrocam/core/locus.h"
+
+#include <cmath>
+
+namespace pyrocam {
+
+Eigen::VectorXd CameraModel::rates(double temperature_c, double emissivity) const {
+  return signal_rates(profile, system_qe, celsius_to_kelvin(temperature_c), emissivity)
+      .cwiseProduct(band_scale);
+}
+
+Locus make_locus(const CameraModel& camera, double min_c, double max_c, double step_c) {
+  const auto n = static_cast<Eigen::Index>(std::floor((max_c - min_c) / step_c + 1e-9)) + 1;
+  Locus l;
+  l.temperature_c.resize(n);
+  l.rates.resize(n, camera.profile.band_count());
+  l.ratios.resize(n, static_cast<Eigen::Index>(camera.profile.normalisation.numerators.size()));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    l.temperature_c[i] = min_c + static_cast<double>(i) * step_c;
+    const Eigen::VectorXd r = camera.rates(l.temperature_c[i]);
+    l.rates.row(i) = r.transpose();
+    l.ratios.row(i) = normalised_ratios(camera.profile.normalisation, r).transpose();
+  }
+  return l;
+}
+
+}  // namespace pyrocam

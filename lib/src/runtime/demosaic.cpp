@@ -1,0 +1,221 @@
+#include "pyrocam/runtime/demosaic.h"
+
+#include <array>
+
+#include "pyrocam/core/error.h"
+
+namespace pyrocam {
+namespace {
+
+void prepare_planes(std::vector<cv::Mat>& planes, int bands, cv::Size size) {
+  planes.resize(static_cast<std::size_t>(bands));
+  for (cv::Mat& p : planes) p.create(size, CV_32F);  // no-op when it already fits
+}
+
+// Each band is the mean of its pixels in each period cell.
+void bin_cells(const cv::Mat& in, const MosaicLayout& layout, std::vector<cv::Mat>& planes) {
+  const int pw = layout.period_width, ph = layout.period_height;
+  const int bands = layout.band_count();
+  std::vector<int> members(static_cast<std::size_t>(bands), 0);
+  for (int b : layout.band_map) ++members[static_cast<std::size_t>(b)];
+  const int out_w = planes[0].cols, out_h = planes[0].rows;
+  for (int y = 0; y < out_h; ++y) {
+    for (int b = 0; b < bands; ++b) {
+      float* o = planes[static_cast<std::size_t>(b)].ptr<float>(y);
+      const float scale = 1.0f / static_cast<float>(members[static_cast<std::size_t>(b)]);
+      bool first = true;
+      for (int cy = 0; cy < ph; ++cy) {
+        const float* row = in.ptr<float>(y * ph + cy);
+        for (int cx = 0; cx < pw; ++cx) {
+          if (layout.band_map[static_cast<std::size_t>(cy * pw + cx)] != b) continue;
+          const float* src = row + cx;
+          if (first) {
+            for (int x = 0; x < out_w; ++x) o[x] = src[x * pw];
+            first = false;
+          } else {
+            for (int x = 0; x < out_w; ++x) o[x] += src[x * pw];
+          }
+        }
+      }
+      if (scale != 1.0f)
+        for (int x = 0; x < out_w; ++x) o[x] *= scale;
+    }
+  }
+}
+
+// How a band is obtained at a pixel of a given parity.
+enum class Op { kSelf, kHorizontal, kVertical, kDiagonal, kCross };
+
+template <Op kOp>
+inline float eval(const float* up, const float* mid, const float* down, int x) {
+  switch (kOp) {
+    case Op::kSelf:
+      return mid[x];
+    case Op::kHorizontal:
+      return 0.5f * (mid[x - 1] + mid[x + 1]);
+    case Op::kVertical:
+      return 0.5f * (up[x] + down[x]);
+    case Op::kDiagonal:
+      return 0.25f * ((up[x - 1] + up[x + 1]) + (down[x - 1] + down[x + 1]));
+    case Op::kCross:
+      return 0.25f * ((up[x] + down[x]) + (mid[x - 1] + mid[x + 1]));
+  }
+  return 0.f;
+}
+
+// One output row of one band: even columns by kEven, odd ones by kOdd, in one contiguous pass.
+template <Op kEven, Op kOdd>
+void bilinear_row(const float* up, const float* mid, const float* down, float* o, int width) {
+  int x = 0;
+  for (; x + 1 < width; x += 2) {
+    o[x] = eval<kEven>(up, mid, down, x);
+    o[x + 1] = eval<kOdd>(up, mid, down, x + 1);
+  }
+  if (x < width) o[x] = eval<kEven>(up, mid, down, x);
+}
+
+using RowFn = void (*)(const float*, const float*, const float*, float*, int);
+
+template <Op kEven>
+RowFn row_fn(Op odd) {
+  switch (odd) {
+    case Op::kSelf:
+      return bilinear_row<kEven, Op::kSelf>;
+    case Op::kHorizontal:
+      return bilinear_row<kEven, Op::kHorizontal>;
+    case Op::kVertical:
+      return bilinear_row<kEven, Op::kVertical>;
+    case Op::kDiagonal:
+      return bilinear_row<kEven, Op::kDiagonal>;
+    case Op::kCross:
+      return bilinear_row<kEven, Op::kCross>;
+  }
+  return nullptr;
+}
+
+RowFn row_fn(Op even, Op odd) {
+  switch (even) {
+    case Op::kSelf:
+      return row_fn<Op::kSelf>(odd);
+    case Op::kHorizontal:
+      return row_fn<Op::kHorizontal>(odd);
+    case Op::kVertical:
+      return row_fn<Op::kVertical>(odd);
+    case Op::kDiagonal:
+      return row_fn<Op::kDiagonal>(odd);
+    case Op::kCross:
+      return row_fn<Op::kCross>(odd);
+  }
+  return nullptr;
+}
+
+// The same at column x of a row `width` wide, mirroring neighbours outside it (the first and last
+// columns).
+float eval_mirrored(Op op, const float* up, const float* mid, const float* down, int x, int width) {
+  const int left = x == 0 ? 1 : x - 1, right = x == width - 1 ? width - 2 : x + 1;
+  switch (op) {
+    case Op::kSelf:
+      return mid[x];
+    case Op::kHorizontal:
+      return 0.5f * (mid[left] + mid[right]);
+    case Op::kVertical:
+      return 0.5f * (up[x] + down[x]);
+    case Op::kDiagonal:
+      return 0.25f * ((up[left] + up[right]) + (down[left] + down[right]));
+    case Op::kCross:
+      return 0.25f * ((up[x] + down[x]) + (mid[left] + mid[right]));
+  }
+  return 0.f;
+}
+
+// Bilinear Bayer interpolation straight from the mosaic's rows: the inner loops cover the
+// columns 2 .. width-3, which need no bounds checks, and the two columns on each side are done
+// one by one with mirrored neighbours (rows above the first and below the last are mirrored by
+// choosing the row). The operation of each band, row parity and column parity is fixed by the
+// pattern and chosen once, outside the loops.
+class BayerBilinear {
+ public:
+  explicit BayerBilinear(const MosaicLayout& layout) {
+    for (int b = 0; b < 3; ++b)
+      for (int py = 0; py < 2; ++py) {
+        for (int px = 0; px < 2; ++px) ops_[b][py][px] = op_for(layout, b, px, py);
+        rows_[b][py] = row_fn(ops_[b][py][0], ops_[b][py][1]);
+      }
+  }
+
+  // Output rows [y0, y1) of a mosaic at least 2x2.
+  void run(const cv::Mat& mosaic, std::vector<cv::Mat>& planes, int y0, int y1) const {
+    const int width = mosaic.cols, height = mosaic.rows;
+    // Mirrored without repeating the edge.
+    auto row = [&](int y) {
+      return mosaic.ptr<float>(y < 0 ? -y : y >= height ? 2 * height - 2 - y : y);
+    };
+    const int inner_end = width >= 6 ? width - 2 : 0;  // inner columns [2, inner_end)
+    for (int y = y0; y < y1; ++y) {
+      const float* up = row(y - 1);
+      const float* mid = row(y);
+      const float* down = row(y + 1);
+      for (int b = 0; b < 3; ++b) {
+        float* out = planes[static_cast<std::size_t>(b)].ptr<float>(y);
+        const auto& ops = ops_[b][y & 1];
+        if (inner_end) rows_[b][y & 1](up + 2, mid + 2, down + 2, out + 2, inner_end - 2);
+        for (int x = 0; x < width; ++x) {
+          if (x == 2 && inner_end) x = inner_end;
+          out[x] = eval_mirrored(ops[x & 1], up, mid, down, x, width);
+        }
+      }
+    }
+  }
+
+ private:
+  static Op op_for(const MosaicLayout& layout, int band, int px, int py) {
+    auto is = [&](int x, int y) { return layout.band_at(x & 1, y & 1) == band; };
+    if (is(px, py)) return Op::kSelf;
+    if (is(px + 1, py)) return is(px, py + 1) ? Op::kCross : Op::kHorizontal;
+    if (is(px, py + 1)) return Op::kVertical;
+    return Op::kDiagonal;
+  }
+
+  std::array<std::array<RowFn, 2>, 3> rows_{};
+  std::array<std::array<std::array<Op, 2>, 2>, 3> ops_{};  // band, row parity, column parity
+};
+
+}  // namespace
+
+DemosaicMethod parse_demosaic_method(const std::string& name) {
+  if (name == "bilinear") return DemosaicMethod::kBilinear;
+  if (name == "bin2x2") return DemosaicMethod::kBinCells;
+  throw InputError("unknown demosaic method '" + name + "' (use bilinear or bin2x2)");
+}
+
+cv::Size demosaic_output_size(const MosaicLayout& layout, DemosaicMethod method, cv::Size input) {
+  if (method == DemosaicMethod::kBilinear && layout.kind == MosaicLayout::Kind::kBayer)
+    return input;
+  return {input.width / layout.period_width, input.height / layout.period_height};
+}
+
+void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod method,
+              std::vector<cv::Mat>& planes) {
+  if (mosaic.type() != CV_32F) throw InputError("demosaic: the mosaic must be CV_32F");
+  if (mosaic.cols < layout.period_width || mosaic.rows < layout.period_height)
+    throw InputError("demosaic: a " + std::to_string(mosaic.cols) + "x" +
+                     std::to_string(mosaic.rows) + " mosaic is smaller than one " + layout.pattern +
+                     " period");
+  const cv::Size out_size = demosaic_output_size(layout, method, mosaic.size());
+  prepare_planes(planes, layout.band_count(), out_size);
+  if (method == DemosaicMethod::kBinCells || layout.kind != MosaicLayout::Kind::kBayer) {
+    bin_cells(mosaic, layout, planes);
+    return;
+  }
+  const BayerBilinear bilinear(layout);
+  const int height = mosaic.rows;
+  if (static_cast<double>(mosaic.total()) < 512.0 * 512.0) {
+    bilinear.run(mosaic, planes, 0, height);
+    return;
+  }
+  cv::parallel_for_(
+      cv::Range(0, height),
+      [&](const cv::Range& r) { bilinear.run(mosaic, planes, r.start, r.end); }, 2.0);
+}
+
+}  // namespace pyrocam

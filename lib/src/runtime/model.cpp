@@ -1,0 +1,253 @@
+#include "pyrocam/runtime/model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "detail/json_input.h"
+#include "pyrocam/core/error.h"
+
+namespace pyrocam {
+namespace {
+
+using nlohmann::json;
+
+// A number in messages: "-5", "1e+300", "0.25".
+std::string to_text(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+json matrix_to_json(const Eigen::MatrixXd& m) {
+  json rows = json::array();
+  for (Eigen::Index r = 0; r < m.rows(); ++r) {
+    const Eigen::VectorXd row = m.row(r).transpose();
+    rows.push_back(std::vector<double>(row.data(), row.data() + row.size()));
+  }
+  return rows;
+}
+
+Eigen::MatrixXd matrix_from_json(const json& j, Eigen::Index rows, Eigen::Index cols,
+                                 const std::string& what) {
+  if (!j.is_array() || static_cast<Eigen::Index>(j.size()) != rows)
+    throw InputError(what + " must have " + std::to_string(rows) + " rows");
+  Eigen::MatrixXd m(rows, cols);
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const auto& row = j[static_cast<std::size_t>(r)];
+    if (!row.is_array() || static_cast<Eigen::Index>(row.size()) != cols)
+      throw InputError(what + " rows must have " + std::to_string(cols) + " values");
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      const json& v = row[static_cast<std::size_t>(c)];
+      if (!v.is_number()) throw InputError(what + " holds a value that is not a number");
+      m(r, c) = v.get<double>();
+      if (!std::isfinite(m(r, c)) || m(r, c) < 0)
+        throw InputError(what + "[" + std::to_string(r) + "][" + std::to_string(c) + "] is " +
+                         to_text(m(r, c)) + "; QE values must be finite and >= 0");
+    }
+  }
+  return m;
+}
+
+double interpolate(const std::vector<double>& x, const std::vector<double>& y, double at) {
+  if (x.empty()) return 0;
+  if (at <= x.front()) return y.front();
+  if (at >= x.back()) return y.back();
+  const auto it = std::upper_bound(x.begin(), x.end(), at);
+  const std::size_t i = static_cast<std::size_t>(it - x.begin());
+  const double f = (at - x[i - 1]) / (x[i] - x[i - 1]);
+  return y[i - 1] + f * (y[i] - y[i - 1]);
+}
+
+// A list of finite numbers, each within [lo, hi]; the message names the field and the value.
+std::vector<double> numbers_within(const json& j, const std::string& what, double lo, double hi) {
+  if (!j.is_array()) throw InputError(what + " must be a list of numbers");
+  std::vector<double> out;
+  out.reserve(j.size());
+  for (std::size_t i = 0; i < j.size(); ++i) {
+    if (!j[i].is_number()) throw InputError(what + "[" + std::to_string(i) + "] is not a number");
+    const double v = j[i].get<double>();
+    if (!(v >= lo && v <= hi))
+      throw InputError(what + "[" + std::to_string(i) + "] is " + to_text(v) + ", outside " +
+                       to_text(lo) + ".." + to_text(hi));
+    out.push_back(v);
+  }
+  return out;
+}
+
+double number_within(const json& j, const std::string& what, double lo, double hi) {
+  if (!j.is_number()) throw InputError(what + " is not a number");
+  const double v = j.get<double>();
+  if (!(v >= lo && v <= hi))
+    throw InputError(what + " is " + to_text(v) + ", outside " + to_text(lo) + ".." + to_text(hi));
+  return v;
+}
+
+}  // namespace
+
+double UncertaintyModel::systematic_u_c(double t) const {
+  const double a = interpolate(temperature_c, u_calibration_c, t);
+  const double b = interpolate(temperature_c, u_emissivity_c, t);
+  return std::sqrt(a * a + b * b);
+}
+
+std::string fnv1a_hex(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+void save_model(const ThermalModel& m, const std::filesystem::path& path) {
+  json payload;
+  payload["profile"] = profile_to_json(m.camera.profile);
+  payload["system_qe"] = matrix_to_json(m.camera.system_qe);
+  payload["datasheet_qe"] = matrix_to_json(m.datasheet_qe);
+  const Eigen::VectorXd& k = m.camera.band_scale;
+  payload["band_scale"] = std::vector<double>(k.data(), k.data() + k.size());
+  payload["qe_solver"] = m.qe_solver;
+  payload["temperature_range_c"] = {m.min_temperature_c, m.max_temperature_c};
+  payload["mlp"] = m.mlp.to_json();
+  const UncertaintyModel& u = m.uncertainty;
+  payload["uncertainty"] = {{"temperature_c", u.temperature_c},
+                            {"u_calibration_c", u.u_calibration_c},
+                            {"u_emissivity_c", u.u_emissivity_c},
+                            {"thermocouple_tolerance_c", u.thermocouple_tolerance_c},
+                            {"emissivity_slope_u", u.emissivity_slope_u},
+                            {"monte_carlo_refits", u.monte_carlo_refits},
+                            {"coverage_factor", u.coverage_factor}};
+  payload["provenance"] = m.provenance;
+  payload["summary"] = m.summary;
+  const std::string text = payload.dump();
+  json file = {{"format", kModelFormat},
+               {"version", kModelFormatVersion},
+               {"checksum_fnv1a64", fnv1a_hex(text)},
+               {"payload", payload}};
+  const auto tmp = path.string() + ".partial";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw InputError(path.string() + ": cannot write model file");
+    out << file.dump(1) << "\n";
+    if (!out) throw InputError(path.string() + ": write failed");
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+ThermalModel load_model(const std::filesystem::path& path) {
+  const std::string where = path.string();
+  require_regular_file(path, "model file");
+  std::error_code size_error;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, size_error);
+  if (!size_error && bytes > kModelMaxFileBytes)
+    throw InputError(where + ": model file is " + std::to_string(bytes >> 20) +
+                     " MB, more than any model (at most " +
+                     std::to_string(kModelMaxFileBytes >> 20) + " MB)");
+  std::ifstream in(path);
+  if (!in) throw InputError(where + ": model file unreadable");
+  json file;
+  try {
+    file = parse_bounded_json(in, where);
+  } catch (const json::exception& e) {
+    throw InputError(where +
+                     ": not a complete JSON model file (truncated or corrupt): " + e.what());
+  }
+  try {
+    if (!file.is_object() || file.value("format", std::string()) != kModelFormat)
+      throw InputError(where + ": not a pyrocam thermal model (format is not \"" +
+                       std::string(kModelFormat) + "\")");
+    const int version = file.value("version", -1);
+    if (version != kModelFormatVersion)
+      throw InputError(where + ": model format version " + std::to_string(version) +
+                       ", this build reads version " + std::to_string(kModelFormatVersion) +
+                       "; recalibrate with this pyrocam-calib");
+    const json& payload = file.at("payload");
+    if (fnv1a_hex(payload.dump()) != file.value("checksum_fnv1a64", std::string()))
+      throw InputError(where + ": checksum mismatch: the model file was edited or corrupted");
+
+    ThermalModel m;
+    m.camera.profile = profile_from_json(payload.at("profile"), path);
+    const CameraProfile& p = m.camera.profile;
+    const Eigen::Index bands = p.band_count(), wl = p.grid.size();
+    m.camera.system_qe =
+        matrix_from_json(payload.at("system_qe"), bands, wl, where + ": system_qe");
+    m.datasheet_qe =
+        matrix_from_json(payload.at("datasheet_qe"), bands, wl, where + ": datasheet_qe");
+    const auto k = numbers_within(payload.at("band_scale"), where + ": band_scale",
+                                  std::numeric_limits<double>::min(), kModelMaxBandScale);
+    if (static_cast<Eigen::Index>(k.size()) != bands)
+      throw InputError(where + ": band_scale must have one value per band");
+    m.camera.band_scale = Eigen::Map<const Eigen::VectorXd>(k.data(), bands);
+    m.qe_solver = payload.at("qe_solver").get<std::string>();
+    const auto range =
+        numbers_within(payload.at("temperature_range_c"), where + ": temperature_range_c",
+                       kModelMinTemperatureC, kModelMaxTemperatureC);
+    if (range.size() != 2 || !(range[0] < range[1]))
+      throw InputError(where + ": temperature_range_c must be [min, max] with min < max");
+    m.min_temperature_c = range[0];
+    m.max_temperature_c = range[1];
+    try {
+      m.mlp = Mlp::from_json(payload.at("mlp"));
+    } catch (const std::exception& e) {
+      throw InputError(where + ": MLP: " + e.what());
+    }
+    if (m.mlp.input_size() != static_cast<int>(p.normalisation.numerators.size()))
+      throw InputError(where + ": the MLP takes " + std::to_string(m.mlp.input_size()) +
+                       " inputs, the normalisation gives " +
+                       std::to_string(p.normalisation.numerators.size()));
+    const json& u = payload.at("uncertainty");
+    const std::string uw = where + ": uncertainty.";
+    UncertaintyModel& um = m.uncertainty;
+    um.temperature_c = numbers_within(u.at("temperature_c"), uw + "temperature_c",
+                                      kModelMinTemperatureC, kModelMaxTemperatureC);
+    um.u_calibration_c =
+        numbers_within(u.at("u_calibration_c"), uw + "u_calibration_c", 0, kModelMaxUncertaintyC);
+    um.u_emissivity_c =
+        numbers_within(u.at("u_emissivity_c"), uw + "u_emissivity_c", 0, kModelMaxUncertaintyC);
+    if (um.temperature_c.empty())
+      throw InputError(uw + "temperature_c is empty; the uncertainty table needs at least one row");
+    if (um.u_calibration_c.size() != um.temperature_c.size() ||
+        um.u_emissivity_c.size() != um.temperature_c.size())
+      throw InputError(uw + "temperature_c, u_calibration_c and u_emissivity_c differ in length (" +
+                       std::to_string(um.temperature_c.size()) + ", " +
+                       std::to_string(um.u_calibration_c.size()) + ", " +
+                       std::to_string(um.u_emissivity_c.size()) + ")");
+    for (std::size_t i = 1; i < um.temperature_c.size(); ++i)
+      if (!(um.temperature_c[i] > um.temperature_c[i - 1]))
+        throw InputError(uw + "temperature_c must increase (" + to_text(um.temperature_c[i - 1]) +
+                         " then " + to_text(um.temperature_c[i]) + ")");
+    um.thermocouple_tolerance_c =
+        number_within(u.at("thermocouple_tolerance_c"), uw + "thermocouple_tolerance_c", 0,
+                      kModelMaxUncertaintyC);
+    um.emissivity_slope_u =
+        number_within(u.at("emissivity_slope_u"), uw + "emissivity_slope_u", 0, 1);
+    if (!u.at("monte_carlo_refits").is_number_integer())
+      throw InputError(uw + "monte_carlo_refits must be a whole number");
+    um.monte_carlo_refits = static_cast<int>(
+        number_within(u.at("monte_carlo_refits"), uw + "monte_carlo_refits", 0, 1e6));
+    um.coverage_factor = number_within(u.at("coverage_factor"), uw + "coverage_factor",
+                                       kModelMinCoverageFactor, kModelMaxCoverageFactor);
+    m.provenance = payload.value("provenance", json::object());
+    m.summary = payload.value("summary", json::object());
+    return m;
+  } catch (const json::exception& e) {
+    throw InputError(where + ": malformed model (" + std::string(e.what()) + ")");
+  }
+}
+
+void check_model_layout(const ThermalModel& model, const std::string& pattern) {
+  std::string want = pattern, have = model.profile().mosaic.pattern;
+  std::transform(want.begin(), want.end(), want.begin(), ::tolower);
+  std::transform(have.begin(), have.end(), have.begin(), ::tolower);
+  if (want != have)
+    throw InputError("the model was calibrated for a " + have + " mosaic (" + model.profile().name +
+                     "), the stream is " + want);
+}
+
+}  // namespace pyrocam

@@ -1,0 +1,301 @@
+#include "pyrocam/simulation/simulator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <random>
+#include <sstream>
+
+#include "detail/portable_math.h"
+#include "pyrocam/core/dataset.h"
+#include "pyrocam/core/image_io.h"
+#include "detail/random.h"
+
+namespace pyrocam {
+namespace {
+
+constexpr double kTableStartC = 100.0;  // below this nothing glows visibly to these cameras
+constexpr double kTableStopC = 4200.0;
+
+// SplitMix64: decorrelated seeds for frames and stripes from one user seed.
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+Eigen::VectorXd shift_curve(const Eigen::VectorXd& curve, const WavelengthGrid& grid,
+                            double shift_nm) {
+  Eigen::VectorXd out(curve.size());
+  for (Eigen::Index i = 0; i < curve.size(); ++i) {
+    const double pos = (grid.nm()[i] - shift_nm - grid.start_nm()) / grid.step_nm();
+    const double clamped = std::clamp(pos, 0.0, static_cast<double>(curve.size() - 1));
+    const auto i0 = static_cast<Eigen::Index>(std::floor(clamped));
+    const auto i1 = std::min<Eigen::Index>(i0 + 1, curve.size() - 1);
+    const double f = clamped - static_cast<double>(i0);
+    out[i] = curve[i0] * (1 - f) + curve[i1] * f;
+  }
+  return out;
+}
+
+}  // namespace
+
+UnitPerturbation UnitPerturbation::parse(const std::string& name, std::uint64_t seed) {
+  if (name != "datasheet" && name != "typical")
+    throw InputError("unknown unit perturbation '" + name + "' (use datasheet or typical)");
+  return UnitPerturbation{name, seed};
+}
+
+Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbation& unit) {
+  if (unit.name == "datasheet") return profile.system_qe();
+  const UnitVariation& v = profile.unit_variation;
+  Random rng(mix(unit.seed));
+  const auto normal = [](Random& r) { return r.normal(); };
+  const auto uniform = [](Random& r) { return r.uniform(0.7, 1.3); };
+  const WavelengthGrid& grid = profile.grid;
+  const double centre_nm = 0.5 * (profile.filter_pass_band_nm[0] + profile.filter_pass_band_nm[1]);
+
+  // A filter leak adds transmission; what it adds to each band follows that band's sensor QE.
+  Eigen::VectorXd leak = Eigen::VectorXd::Zero(grid.size());
+  const double a = v.leak_range_nm[0], b = v.leak_range_nm[1];
+  for (Eigen::Index i = 0; i < grid.size(); ++i) {
+    const double x = grid.nm()[i];
+    if (x > a && x < b) leak[i] = 0.5 - 0.5 * portable::cos(2 * M_PI * (x - a) / (b - a));
+  }
+  double peak_qe = 0;
+  for (Eigen::Index i = 0; i < grid.size(); ++i)
+    if (leak[i] > 0) peak_qe = std::max(peak_qe, profile.sensor_qe.col(i).maxCoeff());
+  const double leak_level = peak_qe > 0 ? v.leak_system_qe * uniform(rng) / peak_qe : 0.0;
+
+  // The deviations no QE solver here models (its own random stream, so that the components
+  // above stay the same for a seed whatever these are set to).
+  Random unmodelled(mix(unit.seed ^ 0x5EC0DE5ull));
+  const auto unmodelled_normal = [](Random& r) { return r.normal(); };
+  const Eigen::VectorXd optics =
+      v.filter_shift_sigma_nm > 0
+          ? shift_curve(profile.optics_transmission, grid,
+                        v.filter_shift_sigma_nm * unmodelled_normal(unmodelled))
+          : profile.optics_transmission;
+  const auto ripple = [&]() {
+    // Three sinusoids of random period and phase, together of relative rms v.ripple_rms.
+    Eigen::VectorXd factor = Eigen::VectorXd::Ones(grid.size());
+    if (!(v.ripple_rms > 0)) return factor;
+    const auto period = [&](Random& r) {
+      return r.uniform(v.ripple_period_nm[0], v.ripple_period_nm[1]);
+    };
+    const auto phase = [](Random& r) { return r.uniform(0.0, 2 * M_PI); };
+    const double amplitude = v.ripple_rms * std::sqrt(2.0 / 3.0);
+    for (int k = 0; k < 3; ++k) {
+      const double p = period(unmodelled), f = phase(unmodelled);
+      for (Eigen::Index i = 0; i < grid.size(); ++i)
+        factor[i] += amplitude * portable::sin(2 * M_PI * grid.nm()[i] / p + f);
+    }
+    return Eigen::VectorXd(factor.cwiseMax(0.0));
+  };
+  const Eigen::VectorXd common_ripple = ripple();
+
+  Eigen::MatrixXd q(profile.band_count(), grid.size());
+  for (int band = 0; band < profile.band_count(); ++band) {
+    const double shift = v.shift_sigma_nm * normal(rng);
+    const double scale = 1.0 + v.scale_sigma * normal(rng);
+    const double tilt = v.tilt_sigma * normal(rng);
+    const Eigen::VectorXd sensor =
+        shift_curve(profile.sensor_qe.row(band).transpose(), grid, shift);
+    const Eigen::VectorXd band_ripple = ripple().cwiseProduct(common_ripple);
+    for (Eigen::Index i = 0; i < grid.size(); ++i) {
+      const double factor =
+          std::max(0.0, scale * (1.0 + tilt * (grid.nm()[i] - centre_nm) / 100.0));
+      const double value =
+          sensor[i] * optics[i] * band_ripple[i] * factor + leak_level * leak[i] * sensor[i];
+      q(band, i) = std::clamp(value, 0.0, 1.0);
+    }
+  }
+  return q;
+}
+
+Simulator::Simulator(CameraProfile profile, Eigen::MatrixXd system_qe, std::uint64_t noise_seed)
+    : profile_(std::move(profile)), system_qe_(std::move(system_qe)), seed_(noise_seed) {
+  if (system_qe_.rows() != profile_.band_count() || system_qe_.cols() != profile_.grid.size())
+    throw InputError("simulator: system QE shape does not match the profile " + profile_.name);
+  const int n = static_cast<int>(kTableStopC - kTableStartC) + 1;
+  rate_table_.resize(profile_.band_count(), n);
+  for (int i = 0; i < n; ++i)
+    rate_table_.col(i) = electron_rates(profile_, system_qe_, celsius_to_kelvin(kTableStartC + i));
+}
+
+double Simulator::electron_rate(int band, double temperature_c) const {
+  if (!(temperature_c >= kTableStartC)) return 0.0;
+  const double pos = std::min(temperature_c, kTableStopC) - kTableStartC;
+  const auto i0 = static_cast<Eigen::Index>(pos);
+  const auto i1 = std::min<Eigen::Index>(i0 + 1, rate_table_.cols() - 1);
+  const double f = pos - static_cast<double>(i0);
+  // Rates span many decades: interpolate the logarithm.
+  const double r0 = rate_table_(band, i0), r1 = rate_table_(band, i1);
+  if (r0 <= 0 || r1 <= 0) return r0 * (1 - f) + r1 * f;
+  return r0 * portable::pow(r1 / r0, f);
+}
+
+Eigen::VectorXd Simulator::mean_signal_dn(double temperature_c, double exposure_us,
+                                          double emissivity) const {
+  Eigen::VectorXd s(profile_.band_count());
+  for (int b = 0; b < profile_.band_count(); ++b)
+    s[b] = electron_rate(b, temperature_c) * exposure_us * 1e-6 * emissivity *
+           profile_.dn_per_electron()[b];
+  return s;
+}
+
+double Simulator::exposure_for(double temperature_c, double target_dn, double emissivity) const {
+  const double per_us = mean_signal_dn(temperature_c, 1.0, emissivity).maxCoeff();
+  if (!(per_us > 0))
+    throw InputError("simulator: no signal at " + std::to_string(temperature_c) + " degC");
+  return target_dn / per_us;
+}
+
+void Simulator::ensure_pixel_maps(int width, int height) {
+  if (dark_fpn_.cols == width && dark_fpn_.rows == height) return;
+  Random rng(mix(seed_ ^ 0xF1F0ull));
+  const auto normal = [](Random& r) { return static_cast<float>(r.normal()); };
+  dark_fpn_.create(height, width, CV_32F);
+  prnu_.create(height, width, CV_32F);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      dark_fpn_.at<float>(y, x) = static_cast<float>(profile_.noise.dark_fpn_dn) * normal(rng);
+      prnu_.at<float>(y, x) = 1.f + static_cast<float>(profile_.noise.prnu) * normal(rng);
+    }
+}
+
+cv::Mat Simulator::render(const cv::Mat& temperature_c, double exposure_us, double emissivity) {
+  if (temperature_c.type() != CV_32F) throw InputError("simulator: temperature map must be CV_32F");
+  const int width = temperature_c.cols, height = temperature_c.rows;
+  ensure_pixel_maps(width, height);
+  const int type = profile_.bit_depth == 8 ? CV_8U : CV_16U;
+  cv::Mat out(height, width, type);
+  const NoiseModel& nm = profile_.noise;
+  const Eigen::VectorXd k = profile_.dn_per_electron();
+  const double t_s = exposure_us * 1e-6;
+  const double max_dn = profile_.max_dn();
+  const std::uint64_t frame_seed = mix(seed_ + 0x1000003ull * ++frame_counter_);
+  constexpr int kStripe = 16;  // fixed stripes keep the noise independent of thread count
+
+  cv::parallel_for_(cv::Range(0, (height + kStripe - 1) / kStripe), [&](const cv::Range& r) {
+    for (int s = r.start; s < r.end; ++s) {
+      Random rng(mix(frame_seed ^ static_cast<std::uint64_t>(s)));
+      const auto normal = [](Random& r) { return r.normal(); };
+      // Scenes are mostly uniform regions: the last rate of each band is usually the next one.
+      std::vector<float> last_t(static_cast<std::size_t>(profile_.band_count()), NAN);
+      std::vector<double> last_rate(last_t.size(), 0.0);
+      for (int y = s * kStripe; y < std::min(height, (s + 1) * kStripe); ++y) {
+        const float* t_row = temperature_c.ptr<float>(y);
+        const float* fpn_row = dark_fpn_.ptr<float>(y);
+        const float* prnu_row = prnu_.ptr<float>(y);
+        for (int x = 0; x < width; ++x) {
+          const int band = profile_.mosaic.band_at(x, y);
+          const auto b = static_cast<std::size_t>(band);
+          if (!(t_row[x] == last_t[b])) {
+            last_t[b] = t_row[x];
+            last_rate[b] = electron_rate(band, t_row[x]);
+          }
+          const double mean_e =
+              last_rate[b] * t_s * emissivity * prnu_row[x] + nm.dark_current_e_per_s * t_s;
+          double e = mean_e;
+          if (noise_) {
+            if (mean_e < 30) {
+              e = static_cast<double>(rng.poisson(mean_e));
+            } else {
+              e = mean_e + std::sqrt(mean_e) * normal(rng);
+            }
+          }
+          e = std::clamp(e, 0.0, nm.full_well_e);
+          if (noise_) e += nm.read_noise_e * normal(rng);
+          const double dn = std::clamp(
+              std::round(k[band] * e + profile_.dark_offset_dn + fpn_row[x]), 0.0, max_dn);
+          if (type == CV_8U)
+            out.ptr<std::uint8_t>(y)[x] = static_cast<std::uint8_t>(dn);
+          else
+            out.ptr<std::uint16_t>(y)[x] = static_cast<std::uint16_t>(dn);
+        }
+      }
+    }
+  });
+  return out;
+}
+
+cv::Mat Simulator::render_dark(int width, int height, double exposure_us) {
+  return render(cv::Mat(height, width, CV_32F, cv::Scalar(0.f)), exposure_us);
+}
+
+void write_furnace_campaign(const std::filesystem::path& folder, Simulator& camera,
+                            CampaignSettings s, const Progress& progress) {
+  const bool colour = camera.profile().mosaic.kind == MosaicLayout::Kind::kBayer;
+  if (s.temperatures_c.empty())
+    for (double t = colour ? 700 : 800; t <= 1100 + 1e-9; t += 10) s.temperatures_c.push_back(t);
+  if (s.first_exposure_us <= 0) s.first_exposure_us = colour ? 100 : 10000;
+  if (s.exposure_count < 1 || s.frames_per_setting < 1 || s.width < 8 || s.height < 8)
+    throw InputError("campaign: needs at least one exposure and frame, and 8x8 pixels");
+  camera.profile().mosaic.check_whole_periods(s.width, s.height, "campaign frame size");
+  std::filesystem::create_directories(folder / "frames");
+  std::filesystem::create_directories(folder / "darks");
+
+  std::vector<double> exposures;
+  for (int k = 0; k < s.exposure_count; ++k)
+    exposures.push_back(
+        std::round(s.first_exposure_us * portable::pow(s.exposure_factor, k) * 1000) / 1000);
+
+  cv::Mat roi = cv::Mat::zeros(s.height, s.width, CV_8U);
+  const double aspect = 1.2;  // a plate seen at an angle
+  const double ry = std::sqrt(s.roi_area_px / (M_PI * aspect)), rx = aspect * ry;
+  if (rx > 0.48 * s.width || ry > 0.48 * s.height)
+    throw InputError("campaign: an ROI of " + std::to_string(s.roi_area_px) +
+                     " px does not fit a " + std::to_string(s.width) + "x" +
+                     std::to_string(s.height) + " frame");
+  for (int y = 0; y < s.height; ++y)
+    for (int x = 0; x < s.width; ++x) {
+      const double dx = (x + 0.5 - s.width / 2.0) / rx, dy = (y + 0.5 - s.height / 2.0) / ry;
+      if (dx * dx + dy * dy <= 1) roi.at<std::uint8_t>(y, x) = 255;
+    }
+  write_raw_image(folder / "roi.png", roi);
+
+  std::vector<ManifestRow> rows;
+  const std::size_t total = (s.temperatures_c.size() + 1) * exposures.size() *
+                            static_cast<std::size_t>(s.frames_per_setting);
+  std::size_t done = 0;
+  auto emit = [&](const std::string& rel, const cv::Mat& img, FrameKind kind, double t, double e) {
+    write_raw_image(folder / rel, img);
+    rows.push_back({rel, kind, t, e});
+    if (progress) progress(++done, total);
+  };
+  auto name = [&](const char* dir, const std::string& stem, std::size_t k, int f) {
+    std::ostringstream n;
+    n << dir << "/" << stem << "e" << std::setw(2) << std::setfill('0') << k << "_f" << f
+      << s.image_extension;
+    return n.str();
+  };
+  for (std::size_t k = 0; k < exposures.size(); ++k)
+    for (int f = 0; f < s.frames_per_setting; ++f)
+      emit(name("darks", "", k, f),
+           camera.render(cv::Mat(s.height, s.width, CV_32F, cv::Scalar(s.dark_temperature_c)),
+                         exposures[k]),
+           FrameKind::kDark, s.dark_temperature_c, exposures[k]);
+  Random furnace_rng(mix(s.furnace_seed));
+  const auto furnace_error = [](Random& r) { return r.normal(); };
+  std::ofstream truth(folder / "furnace-truth.csv");
+  truth << "nominal_c,true_c\n" << std::setprecision(10);
+  for (double t : s.temperatures_c) {
+    const double true_c = t + s.furnace_error_sigma_c * furnace_error(furnace_rng);
+    truth << t << "," << true_c << "\n";
+    const cv::Mat plate(s.height, s.width, CV_32F, cv::Scalar(static_cast<float>(true_c)));
+    std::ostringstream stem;
+    stem << "T" << std::setw(4) << std::setfill('0') << std::lround(t) << "_";
+    for (std::size_t k = 0; k < exposures.size(); ++k)
+      for (int f = 0; f < s.frames_per_setting; ++f)
+        emit(name("frames", stem.str(), k, f), camera.render(plate, exposures[k]),
+             FrameKind::kFrame, t, exposures[k]);
+  }
+  if (!truth) throw InputError((folder / "furnace-truth.csv").string() + ": cannot write");
+  write_manifest(folder / "manifest.csv", rows);
+  write_mosaic_pattern(folder, camera.profile().mosaic.pattern);
+}
+
+}  // namespace pyrocam

@@ -1,0 +1,198 @@
+// Raw image reading: sizes come from the header before any decoding, so that a file claiming an
+// absurd size is refused by name instead of overflowing arithmetic or allocating gigabytes.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "pyrocam/core/image_io.h"
+#include "pyrocam/core/error.h"
+#include "test_support.h"
+
+namespace pyrocam {
+namespace {
+
+using test::png_header;
+using test::ScratchDir;
+
+void write_bytes(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+// A little-endian TIFF whose first directory holds ImageWidth and ImageLength as LONGs.
+std::string tiff_header(std::uint32_t width, std::uint32_t height) {
+  auto le16 = [](std::uint16_t v) {
+    return std::string{static_cast<char>(v), static_cast<char>(v >> 8)};
+  };
+  auto le32 = [](std::uint32_t v) {
+    return std::string{static_cast<char>(v), static_cast<char>(v >> 8), static_cast<char>(v >> 16),
+                       static_cast<char>(v >> 24)};
+  };
+  std::string s = std::string("II*\0", 4) + le32(8) + le16(2);
+  s += le16(256) + le16(4) + le32(1) + le32(width);
+  s += le16(257) + le16(4) + le32(1) + le32(height);
+  return s + le32(0);
+}
+
+std::string rejection(const std::filesystem::path& path) {
+  try {
+    read_raw_image(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+void expect_rejected(const std::filesystem::path& path, const std::string& needle) {
+  const std::string message = rejection(path);
+  EXPECT_NE(message.find(path.string()), std::string::npos) << message;
+  EXPECT_NE(message.find(needle), std::string::npos) << message;
+}
+
+TEST(ImageHeader, sizes_agree_with_decoded_images) {
+  ScratchDir dir("image-io");
+  cv::Mat eight(32, 40, CV_8U), sixteen(18, 26, CV_16U);
+  cv::randu(eight, 0, 255);
+  cv::randu(sixteen, 0, 65535);
+  for (const char* ext : {".pgm", ".png", ".tif"}) {
+    for (const cv::Mat& image : {eight, sixteen}) {
+      const auto path = dir / (std::to_string(image.depth()) + ext);
+      write_raw_image(path, image);
+      EXPECT_EQ(read_image_size(path), image.size()) << path;
+      const cv::Mat back = read_raw_image(path);
+      EXPECT_EQ(cv::norm(back, image, cv::NORM_INF), 0) << path;
+    }
+  }
+}
+
+TEST(ImageHeader, pgm_with_comments_and_16_bit_samples_reads) {
+  ScratchDir dir("image-io");
+  std::string bytes = "P5\n# made by hand\n3 2\n# max\n1000\n";
+  for (int i = 0; i < 6; ++i) bytes += {0, static_cast<char>(i)};
+  write_bytes(dir / "a.pgm", bytes);
+  const cv::Mat image = read_raw_image(dir / "a.pgm");
+  ASSERT_EQ(image.size(), cv::Size(3, 2));
+  EXPECT_EQ(image.at<std::uint16_t>(1, 2), 5);
+}
+
+TEST(ImageHeader, rejects_pgm_declaring_2_pow_32_squared_n) {
+  ScratchDir dir("image-io");
+  write_bytes(dir / "a.pgm", "P5\n4294967296 4294967296\n255\n" + std::string(64, '\0'));
+  expect_rejected(dir / "a.pgm", "PGM header declares 4294967296x4294967296 pixels");
+}
+
+TEST(ImageHeader, rejects_pgm_whose_size_product_overflows_64_bits_n) {
+  ScratchDir dir("image-io");
+  // 3037000500^2 is just above 2^63: the old check multiplied in a signed long.
+  write_bytes(dir / "a.pgm", "P5\n3037000500 3037000500\n65535\n" + std::string(64, '\0'));
+  expect_rejected(dir / "a.pgm", "PGM header declares 3037000500x3037000500 pixels");
+}
+
+TEST(ImageHeader, rejects_pgm_with_an_overlong_number_n) {
+  ScratchDir dir("image-io");
+  write_bytes(dir / "a.pgm", "P5\n99999999999999999999999 2\n255\n" + std::string(64, '\0'));
+  expect_rejected(dir / "a.pgm", "malformed or truncated PGM header");
+}
+
+TEST(ImageHeader, rejects_pgm_with_maxval_above_16_bits_n) {
+  ScratchDir dir("image-io");
+  write_bytes(dir / "a.pgm", "P5\n2 2\n70000\n" + std::string(8, '\0'));
+  expect_rejected(dir / "a.pgm", "malformed or truncated PGM header");
+}
+
+TEST(ImageHeader, rejects_truncated_pgm_n) {
+  ScratchDir dir("image-io");
+  write_bytes(dir / "a.pgm", "P5\n100 100\n65535\n" + std::string(1000, '\0'));
+  expect_rejected(dir / "a.pgm", "truncated PGM (1000 of 20000 bytes of pixel data)");
+}
+
+TEST(ImageHeader, rejects_png_of_30000_squared_before_decoding_n) {
+  ScratchDir dir("image-io");
+  write_bytes(dir / "a.png", png_header(30000, 30000, 8));
+  expect_rejected(dir / "a.png", "PNG header declares 30000x30000 pixels");
+}
+
+TEST(ImageHeader, rejects_16_bit_png_of_32768_squared_before_decoding_n) {
+  ScratchDir dir("image-io");
+  write_bytes(dir / "a.png", png_header(32768, 32768, 16));
+  expect_rejected(dir / "a.png", "PNG header declares 32768x32768 pixels");
+}
+
+TEST(ImageHeader, rejects_png_wider_than_the_side_limit_n) {
+  ScratchDir dir("image-io");
+  write_bytes(dir / "a.png", png_header(70000, 1, 8));
+  expect_rejected(dir / "a.png", "PNG header declares 70000x1 pixels; raw frames are limited");
+}
+
+TEST(ImageHeader, rejects_tiff_of_40000_squared_before_decoding_n) {
+  ScratchDir dir("image-io");
+  write_bytes(dir / "a.tif", tiff_header(40000, 40000));
+  expect_rejected(dir / "a.tif", "TIFF header declares 40000x40000 pixels");
+}
+
+TEST(ImageHeader, rejects_truncated_png_n) {
+  ScratchDir dir("image-io");
+  cv::Mat image(64, 64, CV_16U);
+  cv::randu(image, 0, 65535);
+  write_raw_image(dir / "a.png", image);
+  std::filesystem::resize_file(dir / "a.png", std::filesystem::file_size(dir / "a.png") / 2);
+  expect_rejected(dir / "a.png", "unreadable or truncated image");
+}
+
+TEST(ImageHeader, rejects_truncated_tiff_n) {
+  ScratchDir dir("image-io");
+  cv::Mat image(64, 64, CV_16U);
+  cv::randu(image, 0, 65535);
+  write_raw_image(dir / "a.tif", image);
+  std::filesystem::resize_file(dir / "a.tif", std::filesystem::file_size(dir / "a.tif") / 2);
+  EXPECT_NE(rejection(dir / "a.tif").find(dir.path().string() + "/a.tif"), std::string::npos)
+      << rejection(dir / "a.tif");
+}
+
+TEST(ImageHeader, rejects_tiff_cut_inside_its_header_n) {
+  ScratchDir dir("image-io");
+  write_bytes(dir / "a.tif", tiff_header(40, 30).substr(0, 14));
+  expect_rejected(dir / "a.tif", "malformed or truncated TIFF header");
+}
+
+TEST(ImageHeader, rejects_other_formats_n) {
+  ScratchDir dir("image-io");
+  cv::imwrite((dir / "a.bmp").string(), cv::Mat::zeros(8, 8, CV_8U));
+  expect_rejected(dir / "a.bmp", "not a PGM, PNG or TIFF image");
+}
+
+TEST(ImageHeader, rejects_a_directory_n) {
+  ScratchDir dir("image-io");
+  std::filesystem::create_directory(dir / "frame.pgm");
+  expect_rejected(dir / "frame.pgm", "image is a directory");
+}
+
+TEST(ImageHeader, rejects_a_fifo_without_opening_it_n) {
+  ScratchDir dir("image-io");
+  ASSERT_EQ(mkfifo((dir / "frame.pgm").c_str(), 0600), 0);
+  // Opening a FIFO with no writer would block; the reader must refuse it first.
+  expect_rejected(dir / "frame.pgm", "image is not a regular file");
+}
+
+TEST(ImageHeader, rejects_a_missing_file_n) {
+  ScratchDir dir("image-io");
+  expect_rejected(dir / "none.pgm", "image not found");
+}
+
+TEST(ImageHeader, expected_size_is_checked_before_decoding_n) {
+  ScratchDir dir("image-io");
+  write_bytes(dir / "a.png", png_header(10000, 10000, 16));
+  try {
+    read_raw_image(dir / "a.png", cv::Size(40, 32), "the frame");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("a.png: image is 10000x10000, the frame is 40x32"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace pyrocam

@@ -1,0 +1,144 @@
+// False-colour mapping: palettes, lookup table, invalid and isotherm colours, auto range, ticks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "pyrocam/runtime/colormap.h"
+#include "pyrocam/core/error.h"
+
+namespace pyrocam {
+namespace {
+
+std::uint16_t code_of(double t_c) {
+  return static_cast<std::uint16_t>(std::lround((t_c + 273.15) * 10));
+}
+
+TEST(Colormap, palettes_run_from_dark_to_bright) {
+  for (Palette p : {Palette::kIron, Palette::kInferno, Palette::kGrey}) {
+    const auto& c = palette_colors(p);
+    EXPECT_LT(c[0].r + c[0].g + c[0].b, 30) << palette_name(p);
+    EXPECT_GT(c[255].r + c[255].g + c[255].b, 600) << palette_name(p);
+    EXPECT_EQ(parse_palette(palette_name(p)), p);
+  }
+  EXPECT_EQ(palette_colors(Palette::kRainbow)[0].b, 255);
+  EXPECT_EQ(palette_colors(Palette::kRainbow)[255].r, 255);
+  EXPECT_THROW(parse_palette("jet"), InputError);
+}
+
+TEST(Colormap, maps_range_ends_invalid_and_isotherm) {
+  ThermalColormap map;
+  ColormapSettings s;
+  s.palette = Palette::kGrey;
+  s.min_c = 1000;
+  s.max_c = 2000;
+  s.order = ChannelOrder::kBGRA;
+  s.invalid_argb = 0x80102030;
+  map.configure(s);
+  cv::Mat in = (cv::Mat_<std::uint16_t>(1, 4) << 0, code_of(900), code_of(1500), code_of(2500));
+  cv::Mat out;
+  map.apply(in, out);
+  ASSERT_EQ(out.type(), CV_8UC4);
+  const auto px = [&](int x) { return out.at<cv::Vec4b>(0, x); };
+  EXPECT_EQ(px(0), cv::Vec4b(0x30, 0x20, 0x10, 0x80));  // B G R A of 0x80102030
+  EXPECT_EQ(px(1), cv::Vec4b(0, 0, 0, 255));
+  EXPECT_NEAR(px(2)[0], 128, 1);
+  EXPECT_EQ(px(3), cv::Vec4b(255, 255, 255, 255));
+  s.isotherm_c = 1400;
+  s.isotherm_argb = 0xFFFF0000;  // red
+  map.configure(s);
+  map.apply(in, out);
+  EXPECT_EQ(px(2), cv::Vec4b(0, 0, 255, 255));
+  EXPECT_EQ(px(1), cv::Vec4b(0, 0, 0, 255));
+  EXPECT_EQ(map.pixel(0)[3], 0x80);
+  s.min_c = s.max_c;
+  EXPECT_THROW(map.configure(s), InputError);
+}
+
+TEST(Colormap, default_invalid_colour_is_transparent) {
+  ThermalColormap map;
+  map.configure({});
+  EXPECT_EQ(map.pixel(0), (std::array<std::uint8_t, 4>{0, 0, 0, 0}));
+  EXPECT_EQ(map.pixel(code_of(1500))[3], 255);
+}
+
+TEST(Colormap, valid_range_skips_no_reading) {
+  cv::Mat in = (cv::Mat_<std::uint16_t>(2, 2) << 0, code_of(1200), code_of(800), 0);
+  const auto r = valid_range_c(in);
+  ASSERT_TRUE(r);
+  EXPECT_NEAR(r->first, 800, 0.06);
+  EXPECT_NEAR(r->second, 1200, 0.06);
+  EXPECT_FALSE(valid_range_c(cv::Mat(2, 2, CV_16U, cv::Scalar(0))));
+}
+
+TEST(Colormap, auto_range_smooths_and_keeps_a_span) {
+  AutoRange r;
+  r.update(std::make_pair(1000.0, 2000.0), 0.5);
+  EXPECT_EQ(r.min_c(), 1000);
+  r.update(std::make_pair(1200.0, 2200.0), 0.5);
+  EXPECT_EQ(r.min_c(), 1100);
+  EXPECT_EQ(r.max_c(), 2100);
+  r.update(std::nullopt, 0.5);
+  EXPECT_EQ(r.max_c(), 2100);
+  AutoRange flat;
+  flat.update(std::make_pair(1500.0, 1500.0), 1);
+  EXPECT_DOUBLE_EQ(flat.max_c() - flat.min_c(), AutoRange::kMinSpanC);
+}
+
+TEST(Colormap, nice_ticks) {
+  EXPECT_EQ(nice_ticks(500, 2500, 5), (std::vector<double>{500, 1000, 1500, 2000, 2500}));
+  EXPECT_EQ(nice_ticks(1013, 1087, 4), (std::vector<double>{1020, 1040, 1060, 1080}));
+  EXPECT_TRUE(nice_ticks(5, 5).empty());
+}
+
+TEST(Colormap, nice_ticks_of_a_range_below_the_resolution_stay_bounded_n) {
+  // One ulp above 1000: adding the step to 1000 does not change it, so a loop by addition
+  // never ends.
+  const double hi = std::nextafter(1000.0, 2000.0);
+  EXPECT_LE(nice_ticks(1000, hi, 8).size(), 18u);
+  EXPECT_LE(nice_ticks(1e300, std::nextafter(1e300, 2e300), 5).size(), 12u);
+  EXPECT_TRUE(nice_ticks(0, std::numeric_limits<double>::infinity()).empty());
+  EXPECT_TRUE(nice_ticks(std::nan(""), 1).empty());
+  for (int target = 1; target <= 8; ++target)
+    EXPECT_LE(nice_ticks(-273.15, 10000, target).size(), 2u * target + 2u) << target;
+}
+
+TEST(Colormap, rejects_a_range_narrower_than_one_code) {
+  ThermalColormap map;
+  ColormapSettings s;
+  s.min_c = 1000;
+  s.max_c = std::nextafter(1000.0, 2000.0);
+  EXPECT_THROW(map.configure(s), InputError);
+  s.max_c = 1000 + kMinColormapSpanC / 2;
+  EXPECT_THROW(map.configure(s), InputError);
+  s.max_c = 1000 + kMinColormapSpanC;
+  EXPECT_NO_THROW(map.configure(s));
+  // The scale bar of a degenerate range is left out, not drawn forever.
+  cv::Mat img(240, 320, CV_8UC4, cv::Scalar(0, 0, 0, 0));
+  draw_scale_bar(img, Palette::kIron, 1000, std::nextafter(1000.0, 2000.0), ChannelOrder::kRGBA);
+  EXPECT_EQ(cv::countNonZero(img.reshape(1)), 0);
+  draw_scale_bar(img, Palette::kIron, 1000, 1000.1, ChannelOrder::kRGBA);
+  EXPECT_GT(cv::countNonZero(img.reshape(1)), 0);
+}
+
+TEST(Colormap, scale_bar_is_drawn_opaque_at_the_right_edge) {
+  cv::Mat img(240, 320, CV_8UC4, cv::Scalar(0, 0, 0, 0));
+  draw_scale_bar(img, Palette::kIron, 1000, 2000, ChannelOrder::kRGBA);
+  // The bar's hot end is bright and opaque; the left half of the image is untouched.
+  int opaque_right = 0;
+  for (int y = 0; y < 240; ++y)
+    for (int x = 0; x < 320; ++x) {
+      const auto& p = img.at<cv::Vec4b>(y, x);
+      if (x < 160) {
+        ASSERT_EQ(p[3], 0) << x << "," << y;
+      }
+      if (x >= 300 && p[3] == 255) ++opaque_right;
+    }
+  EXPECT_GT(opaque_right, 1000);
+  cv::Mat tiny(20, 20, CV_8UC4, cv::Scalar(0, 0, 0, 0));
+  draw_scale_bar(tiny, Palette::kIron, 1000, 2000, ChannelOrder::kRGBA);
+  EXPECT_EQ(cv::countNonZero(tiny.reshape(1)), 0);
+}
+
+}  // namespace
+}  // namespace pyrocam

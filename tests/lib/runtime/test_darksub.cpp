@@ -1,0 +1,90 @@
+// Dark subtraction: values, saturation marks, dark capture.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "pyrocam/runtime/darksub.h"
+#include "pyrocam/core/error.h"
+
+namespace pyrocam {
+namespace {
+
+TEST(DarkSub, default_saturation_is_220_of_255_of_full_scale) {
+  EXPECT_EQ(default_saturation_level(8), 220);
+  EXPECT_EQ(default_saturation_level(12), std::round(220.0 / 255.0 * 4095));
+  EXPECT_EQ(default_saturation_level(16), std::round(220.0 / 255.0 * 65535));
+  EXPECT_THROW(default_saturation_level(0), InputError);
+  EXPECT_THROW(default_saturation_level(17), InputError);
+}
+
+TEST(DarkSub, subtracts_and_marks_saturation_before_subtraction) {
+  cv::Mat raw = (cv::Mat_<std::uint8_t>(2, 3) << 50, 100, 219, 220, 255, 0);
+  cv::Mat dark = dark_from_level(3, 2, 50);
+  dark.at<float>(1, 2) = std::nanf("");
+  cv::Mat out;
+  subtract_dark(raw, dark, 220, out);
+  ASSERT_EQ(out.type(), CV_32F);
+  EXPECT_EQ(out.at<float>(0, 0), 0.f);
+  EXPECT_EQ(out.at<float>(0, 1), 50.f);
+  EXPECT_EQ(out.at<float>(0, 2), 169.f);
+  EXPECT_TRUE(std::isinf(out.at<float>(1, 0)) && out.at<float>(1, 0) > 0);
+  EXPECT_TRUE(std::isinf(out.at<float>(1, 1)));
+  EXPECT_TRUE(std::isnan(out.at<float>(1, 2)));
+}
+
+TEST(DarkSub, sixteen_bit_frames_and_caller_buffers) {
+  cv::Mat raw = (cv::Mat_<std::uint16_t>(1, 3) << 100, 4000, 3522);
+  cv::Mat dark = dark_from_image((cv::Mat_<std::uint16_t>(1, 3) << 60, 60, 60));
+  float buffer[3] = {1, 2, 3};
+  cv::Mat out(1, 3, CV_32F, buffer);
+  subtract_dark(raw, dark, default_saturation_level(12), out);
+  EXPECT_EQ(out.ptr<float>(), buffer);  // written in place
+  EXPECT_EQ(buffer[0], 40.f);
+  EXPECT_TRUE(std::isinf(buffer[1]));
+  EXPECT_EQ(buffer[2], 3462.f);  // 3522 < 3523 = round(220/255 * 4095)
+}
+
+TEST(DarkSub, constant_level_and_large_frames_match_the_dark_frame_path) {
+  cv::Mat raw(600, 700, CV_16U);
+  cv::randu(raw, 0, 4096);
+  cv::Mat dark = dark_from_level(700, 600, 64.5), a, b;
+  subtract_dark(raw, dark, 3533, a);
+  subtract_dark_level(raw, 64.5, 3533, b);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(cv::countNonZero(a != b), 0);  // +INF == +INF
+  for (int y : {0, 299, 599})
+    for (int x : {0, 350, 699}) {
+      const float v = raw.at<std::uint16_t>(y, x);
+      if (v >= 3533) {
+        EXPECT_TRUE(std::isinf(a.at<float>(y, x)));
+      } else {
+        EXPECT_EQ(a.at<float>(y, x), v - 64.5f);
+      }
+    }
+}
+
+TEST(DarkSub, rejects_a_dark_of_another_size_naming_both) {
+  cv::Mat raw(4, 6, CV_8U, cv::Scalar(10)), out;
+  try {
+    subtract_dark(raw, dark_from_level(8, 4, 0), 220, out);
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("8x4"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("6x4"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DarkSub, accumulator_averages_frames) {
+  DarkAccumulator acc;
+  EXPECT_THROW(acc.mean(), InputError);
+  acc.add(cv::Mat(2, 2, CV_8U, cv::Scalar(49)));
+  acc.add(cv::Mat(2, 2, CV_8U, cv::Scalar(52)));
+  EXPECT_EQ(acc.count(), 2);
+  EXPECT_FLOAT_EQ(acc.mean().at<float>(1, 1), 50.5f);
+  EXPECT_THROW(acc.add(cv::Mat(2, 4, CV_8U, cv::Scalar(1))), InputError);
+  acc.reset();
+  EXPECT_EQ(acc.count(), 0);
+}
+
+}  // namespace
+}  // namespace pyrocam

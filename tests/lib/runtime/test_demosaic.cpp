@@ -1,0 +1,138 @@
+// Demosaicking: bilinear Bayer, 2x2 binning, one reading per 5x5 macro-pixel, mark propagation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "pyrocam/runtime/demosaic.h"
+#include "pyrocam/core/error.h"
+
+namespace pyrocam {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// A mosaic whose band b at pixel (x, y) reads 100 b + x + 10 y: bilinear interpolation of a
+// linear ramp is exact away from the mirrored borders.
+cv::Mat ramp(const MosaicLayout& m, int w, int h) {
+  cv::Mat img(h, w, CV_32F);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) img.at<float>(y, x) = 100.f * m.band_at(x, y) + x + 10.f * y;
+  return img;
+}
+
+TEST(Demosaic, bilinear_is_exact_on_a_ramp_for_every_bayer_pattern) {
+  for (const char* p : {"RGGB", "BGGR", "GRBG", "GBRG"}) {
+    const MosaicLayout m = MosaicLayout::bayer(p);
+    std::vector<cv::Mat> planes;
+    demosaic(ramp(m, 8, 6), m, DemosaicMethod::kBilinear, planes);
+    ASSERT_EQ(planes.size(), 3u);
+    ASSERT_EQ(planes[0].size(), cv::Size(8, 6));
+    for (int b = 0; b < 3; ++b)
+      for (int y = 1; y < 5; ++y)
+        for (int x = 1; x < 7; ++x)
+          EXPECT_FLOAT_EQ(planes[b].at<float>(y, x), 100.f * b + x + 10.f * y)
+              << p << " band " << b << " at " << x << "," << y;
+  }
+}
+
+TEST(Demosaic, bilinear_borders_mirror_the_pattern) {
+  const MosaicLayout m = MosaicLayout::bayer("RGGB");
+  cv::Mat img = ramp(m, 4, 4);
+  std::vector<cv::Mat> planes;
+  demosaic(img, m, DemosaicMethod::kBilinear, planes);
+  // B at the R pixel (0,0): its only diagonal neighbour (1,1), mirrored 4 times.
+  EXPECT_FLOAT_EQ(planes[2].at<float>(0, 0), img.at<float>(1, 1));
+  // G at (0,0): (1,0) and (0,1), each twice.
+  EXPECT_FLOAT_EQ(planes[1].at<float>(0, 0), 0.5f * (img.at<float>(0, 1) + img.at<float>(1, 0)));
+}
+
+TEST(Demosaic, saturation_and_nan_marks_spread_to_every_value_computed_from_them) {
+  const MosaicLayout m = MosaicLayout::bayer("RGGB");
+  cv::Mat img(6, 6, CV_32F, cv::Scalar(10));
+  img.at<float>(2, 2) = kInf;           // an R pixel
+  img.at<float>(2, 3) = std::nanf("");  // a G pixel next to it
+  std::vector<cv::Mat> planes;
+  demosaic(img, m, DemosaicMethod::kBilinear, planes);
+  EXPECT_EQ(planes[0].at<float>(2, 2), kInf);
+  EXPECT_EQ(planes[0].at<float>(3, 3), kInf);  // R at the B pixel diagonal to it
+  EXPECT_EQ(planes[0].at<float>(2, 3), kInf);  // R at the NaN G pixel: mean of +INF and 10
+  EXPECT_TRUE(std::isnan(planes[1].at<float>(2, 3)));
+  EXPECT_EQ(planes[0].at<float>(0, 0), 10.f);
+  std::vector<cv::Mat> bins;
+  demosaic(img, m, DemosaicMethod::kBinCells, bins);
+  EXPECT_EQ(bins[0].at<float>(1, 1), kInf);
+  EXPECT_TRUE(std::isnan(bins[1].at<float>(1, 1)));
+  EXPECT_EQ(bins[2].at<float>(1, 1), 10.f);
+}
+
+TEST(Demosaic, bin2x2_gives_r_mean_g_b_per_cell) {
+  const MosaicLayout m = MosaicLayout::bayer("GRBG");
+  cv::Mat img = (cv::Mat_<float>(2, 4) << 1, 2, 5, 6, 3, 4, 7, 8);  // G R / B G cells
+  std::vector<cv::Mat> planes;
+  demosaic(img, m, DemosaicMethod::kBinCells, planes);
+  ASSERT_EQ(planes[0].size(), cv::Size(2, 1));
+  EXPECT_EQ(planes[0].at<float>(0, 0), 2.f);
+  EXPECT_EQ(planes[1].at<float>(0, 0), 2.5f);
+  EXPECT_EQ(planes[2].at<float>(0, 0), 3.f);
+  EXPECT_EQ(planes[1].at<float>(0, 1), 6.5f);
+}
+
+TEST(Demosaic, snapshot_gives_one_reading_per_macro_pixel_in_band_map_order) {
+  std::vector<int> map(25);
+  std::iota(map.begin(), map.end(), 0);
+  std::swap(map[0], map[24]);
+  const MosaicLayout m = MosaicLayout::snapshot(5, 5, map);
+  cv::Mat img(12, 11, CV_32F);  // 2x2 macro-pixels, a partial trailing cell
+  for (int y = 0; y < 12; ++y)
+    for (int x = 0; x < 11; ++x) img.at<float>(y, x) = 1000.f * y + x;
+  std::vector<cv::Mat> planes;
+  demosaic(img, m, DemosaicMethod::kBilinear, planes);  // the method is ignored
+  ASSERT_EQ(planes.size(), 25u);
+  ASSERT_EQ(planes[0].size(), cv::Size(2, 2));
+  EXPECT_EQ(planes[7].at<float>(1, 0), img.at<float>(5 + 1, 0 + 2));
+  EXPECT_EQ(planes[24].at<float>(0, 1), img.at<float>(0, 5));
+  EXPECT_EQ(planes[0].at<float>(0, 1), img.at<float>(4, 9));
+}
+
+TEST(Demosaic, writes_into_caller_planes) {
+  const MosaicLayout m = MosaicLayout::bayer("RGGB");
+  std::vector<float> buffer(3 * 2 * 2, -1.f);
+  std::vector<cv::Mat> planes;
+  for (int b = 0; b < 3; ++b) planes.emplace_back(2, 2, CV_32F, buffer.data() + 4 * b);
+  demosaic(ramp(m, 4, 4), m, DemosaicMethod::kBinCells, planes);
+  EXPECT_EQ(planes[2].ptr<float>(), buffer.data() + 8);
+  EXPECT_EQ(buffer[0], 0.f);    // R of the first cell: band 0 at (0,0)
+  EXPECT_EQ(buffer[8], 211.f);  // B at (1,1)
+}
+
+TEST(Demosaic, rejects_wrong_input_n) {
+  const MosaicLayout m = MosaicLayout::bayer("RGGB");
+  std::vector<cv::Mat> planes;
+  EXPECT_THROW(demosaic(cv::Mat(4, 4, CV_8U), m, DemosaicMethod::kBinCells, planes), InputError);
+  EXPECT_THROW(demosaic(cv::Mat(1, 4, CV_32F), m, DemosaicMethod::kBinCells, planes), InputError);
+  EXPECT_THROW(parse_demosaic_method("vng"), InputError);
+}
+
+TEST(Demosaic, large_frames_split_over_threads_give_the_same_result) {
+  const MosaicLayout m = MosaicLayout::bayer("BGGR");
+  cv::Mat img(520, 600, CV_32F);
+  cv::randu(img, 0, 200);
+  std::vector<cv::Mat> planes;
+  demosaic(img, m, DemosaicMethod::kBilinear, planes);
+  // Against a direct evaluation at a few interior points.
+  for (int y : {1, 259, 518})
+    for (int x : {1, 300, 598}) {
+      const float b = img.at<float>(y, x);
+      if (m.band_at(x, y) == 1)
+        EXPECT_EQ(planes[1].at<float>(y, x), b);
+      else
+        EXPECT_FLOAT_EQ(planes[1].at<float>(y, x),
+                        0.25f * ((img.at<float>(y - 1, x) + img.at<float>(y + 1, x)) +
+                                 (img.at<float>(y, x - 1) + img.at<float>(y, x + 1))));
+    }
+}
+
+}  // namespace
+}  // namespace pyrocam
