@@ -12,7 +12,7 @@
 #include "commands.h"
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/core/dataset.h"
-#include "pyrocam/core/difference_codes.h"
+#include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/core/image_io.h"
 
 namespace pyrocam::cli {
@@ -55,7 +55,7 @@ TruthScore compare_truth(const cv::Mat& t, const cv::Mat& truth_dk, const Mosaic
       ++s.pixels;
       const float est = t.at<float>(y, x);
       if (!std::isfinite(est)) continue;
-      const double e = est - (v / 10.0 - 273.15);
+      const double e = est - code_to_celsius(v);
       errors.push_back(e);
       sum2 += e * e;
     }

@@ -64,6 +64,7 @@
  *
  * Temperatures: video/x-raw, format=(string)GRAY16_LE, one value per pixel in units of 0.1 K
  *   (e.g. 14732 = 1473.2 K = 1200.05 degC); 0 means "no reading" (saturated, too dim, invalid).
+ *   The code and its conversions are defined once, in the library: pyrocam/core/temperature_codes.h.
  */
 #pragma once
 
@@ -108,6 +109,3 @@
 #define PYROCAM_TEMPERATURE_CAPS \
   "video/x-raw, format = (string) GRAY16_LE, " PYROCAM_SIZE_RANGE ", " PYROCAM_FRAMERATE_RANGE
 
-/* Temperature code: kelvin = code / PYROCAM_TEMPERATURE_CODES_PER_KELVIN; 0 = no reading. */
-#define PYROCAM_TEMPERATURE_CODES_PER_KELVIN 10
-#define PYROCAM_TEMPERATURE_NO_READING 0

@@ -115,7 +115,7 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
-#include "pyrocam/core/difference_codes.h"
+#include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/estimator_check.h"
 #include "pyrocam/runtime/measure.h"
 #include "pyrocam/runtime/model.h"

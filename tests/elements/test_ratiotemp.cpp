@@ -9,9 +9,9 @@
 #include <optional>
 
 #include "element_support.h"
+#include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/demosaic.h"
-#include "pyrocam/core/difference_codes.h"
 #include "pyrocam/runtime/estimator_check.h"
 #include "pyrocam/runtime/measure.h"
 #include "pyrocam/runtime/model.h"

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/temperature_codes.h"
 
 namespace pyrocam {
 namespace {
@@ -137,7 +138,7 @@ void ThermalColormap::configure(const ColormapSettings& s) {
   const double scale = 255.0 / (s.max_c - s.min_c);
   lut_[0] = invalid;
   for (std::uint32_t code = 1; code < 65536; ++code) {
-    const double t = decikelvin_to_celsius(static_cast<std::uint16_t>(code));
+    const double t = code_to_celsius(static_cast<std::uint16_t>(code));
     if (s.isotherm_c && t >= *s.isotherm_c) {
       lut_[code] = isotherm;
       continue;
@@ -180,8 +181,7 @@ std::optional<std::pair<double, double>> valid_range_c(const cv::Mat& decikelvin
     }
   }
   if (hi == 0) return std::nullopt;
-  return std::make_pair(decikelvin_to_celsius(static_cast<std::uint16_t>(lo + 1)),
-                        decikelvin_to_celsius(hi));
+  return std::make_pair(code_to_celsius(static_cast<std::uint16_t>(lo + 1)), code_to_celsius(hi));
 }
 
 void AutoRange::update(std::optional<std::pair<double, double>> frame_range, double weight) {

@@ -4,24 +4,11 @@
 #include <cmath>
 #include <cstdint>
 
-#include "pyrocam/runtime/darksub.h"
-#include "pyrocam/core/error.h"
 #include "detail/vector_clones.h"
+#include "pyrocam/core/error.h"
+#include "pyrocam/runtime/darksub.h"
 
 namespace pyrocam {
-
-namespace {
-
-// Compiled for x86-64-v3 too, where the rounding vectorises.
-PYROCAM_VECTOR_CLONES
-void encode_decikelvin_row(const float* __restrict in, std::uint16_t* __restrict out, int n) {
-  for (int x = 0; x < n; ++x) {
-    const double dk = std::round((in[x] + kZeroCelsius) * 10);
-    out[x] = dk >= 1 && dk <= 65535 ? static_cast<std::uint16_t>(dk) : 0;  // NaN fails both
-  }
-}
-
-}  // namespace
 
 PlaneEstimator::PlaneEstimator(const ThermalModel& model, Method method, double misfit_probability)
     : model_(model), estimator_(make_estimator(model, method)), misfit_(nullptr) {
@@ -87,7 +74,7 @@ void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat&
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
       estimator_->estimate(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
       if (misfit_) misfit_->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
-      encode_decikelvin_row(t.data(), codes.ptr<std::uint16_t>(y), size.width);
+      encode_temperature_row(t.data(), codes.ptr<std::uint16_t>(y), size.width);
     }
   });
 }
@@ -125,35 +112,6 @@ void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& te
   subtract_dark(raw, dark_f, options_.saturation_level_dn, signal_);
   demosaic(signal_, model_.profile().mosaic, options_.demosaic, planes_);
   planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);
-}
-
-void encode_decikelvin(const cv::Mat& t, cv::Mat& codes) {
-  if (t.type() != CV_32F) throw InputError("temperature images must be CV_32F");
-  codes.create(t.size(), CV_16U);
-  auto rows = [&](const cv::Range& r) {
-    for (int y = r.start; y < r.end; ++y)
-      encode_decikelvin_row(t.ptr<float>(y), codes.ptr<std::uint16_t>(y), t.cols);
-  };
-  if (t.total() < 512u * 512u)
-    rows(cv::Range(0, t.rows));
-  else
-    cv::parallel_for_(cv::Range(0, t.rows), rows, 2.0);
-}
-
-cv::Mat encode_decikelvin(const cv::Mat& t) {
-  cv::Mat out;
-  encode_decikelvin(t, out);
-  return out;
-}
-
-cv::Mat decode_decikelvin(const cv::Mat& dk) {
-  cv::Mat out(dk.size(), CV_32F);
-  for (int y = 0; y < dk.rows; ++y)
-    for (int x = 0; x < dk.cols; ++x) {
-      const std::uint16_t v = dk.at<std::uint16_t>(y, x);
-      out.at<float>(y, x) = v ? static_cast<float>(v / 10.0 - kZeroCelsius) : NAN;
-    }
-  return out;
 }
 
 RegionStats region_stats(const cv::Mat& t, const cv::Mat& mask) {

@@ -8,6 +8,7 @@
 #include "detail/portable_math.h"
 #include "pyrocam/core/dataset.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/core/temperature_codes.h"
 
 namespace pyrocam {
 namespace {
@@ -84,17 +85,6 @@ cv::Mat melt_pool_scene(int width, int height, int index, int count) {
   return m;
 }
 
-cv::Mat temperature_to_decikelvin(const cv::Mat& temperature_c) {
-  cv::Mat out(temperature_c.size(), CV_16U);
-  for (int y = 0; y < temperature_c.rows; ++y)
-    for (int x = 0; x < temperature_c.cols; ++x) {
-      const float t = temperature_c.at<float>(y, x);
-      out.at<std::uint16_t>(y, x) =
-          std::isfinite(t) ? static_cast<std::uint16_t>(std::lround((t + 273.15) * 10)) : 0;
-    }
-  return out;
-}
-
 void write_scene_sequence(const std::filesystem::path& folder, Simulator& camera,
                           SceneSequenceSettings s, const Progress& progress) {
   if (s.width < 16 || s.height < 16) throw InputError("scene: needs at least 16x16 pixels");
@@ -146,7 +136,7 @@ void write_scene_sequence(const std::filesystem::path& folder, Simulator& camera
     stem << std::setw(4) << std::setfill('0') << i;
     const std::string frame = "frames/" + stem.str() + s.image_extension;
     write_raw_image(folder / frame, camera.render(maps[i], exposure, s.emissivity));
-    write_raw_image(folder / ("truth/" + stem.str() + ".png"), temperature_to_decikelvin(maps[i]));
+    write_raw_image(folder / ("truth/" + stem.str() + ".png"), encode_decikelvin(maps[i]));
     rows.push_back({frame, FrameKind::kFrame, nominal[i], exposure});
     bool have_dark = false;
     for (double e : dark_exposures) have_dark |= same_exposure(e, exposure);

@@ -25,9 +25,6 @@ const std::array<Rgb, 256>& palette_colors(Palette palette);
 // Byte order of the 4-channel output pixels in memory.
 enum class ChannelOrder { kRGBA, kBGRA };
 
-// 0.1 K code <-> degC.
-inline double decikelvin_to_celsius(std::uint16_t code) { return code * 0.1 - 273.15; }
-
 // The narrowest temperature range a colour map accepts: one temperature code (0.1 K). A
 // narrower range cannot tell two readings apart, and its scale-bar ticks would be steps below
 // the resolution of a double.

@@ -41,7 +41,4 @@ struct SceneSequenceSettings {
 void write_scene_sequence(const std::filesystem::path& folder, Simulator& camera,
                           SceneSequenceSettings settings, const Progress& progress = {});
 
-// Truth image in 0.1 K units, 0 where the map is NaN.
-cv::Mat temperature_to_decikelvin(const cv::Mat& temperature_c);
-
 }  // namespace pyrocam
