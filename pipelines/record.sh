@@ -19,6 +19,7 @@
 #   DARK             darksub settings: dark-level=N or location=dark.pgm [dark-level=50]
 #   NUM_BUFFERS      frames to record; -1 records until Ctrl-C           [-1]
 #   WATCHDOG_MS      end with an error when the camera sends nothing this long; 0: never [5000]
+#   LATENCY_MS       how long the picture waits for its temperature overlay, ms [100]
 #   SEGMENT_SECONDS  length of one segment in seconds (decimals allowed) [10]
 #   SNAPSHOT_RATE    snapshots per second (at most the frame rate)       [1]
 #
@@ -33,17 +34,11 @@ here=$(cd "$(dirname "$0")" && pwd)
 # The build tree's plugin and `launch` (pyrocam-launch, which never hangs after an error).
 source "$here/lib/setup.sh"
 
-MODEL=${MODEL:-out/model-rgb.json}
+source "$here/lib/camera.sh"
 OUT=${OUT:-out/recording}
-SOURCE=${SOURCE:-pyrocamsrc is-live=true}
-CAPS=${CAPS:-video/x-bayer,width=320,height=240,framerate=30/1}
-DARK=${DARK:-dark-level=50}
-NUM_BUFFERS=${NUM_BUFFERS:--1}
-WATCHDOG_MS=${WATCHDOG_MS:-5000}
 SEGMENT_SECONDS=${SEGMENT_SECONDS:-10}
 SNAPSHOT_RATE=${SNAPSHOT_RATE:-1}
 
-[[ -f $MODEL ]] || { echo "record: no model file $MODEL (set MODEL, or run scripts/main-job.sh)" >&2; exit 1; }
 segment_ns=$(awk -v s="$SEGMENT_SECONDS" 'BEGIN { if (s + 0 <= 0) exit 1; printf "%.0f", s * 1e9 }') ||
   { echo "record: SEGMENT_SECONDS must be a positive number of seconds, not '$SEGMENT_SECONDS'" >&2; exit 2; }
 mkdir -p "$OUT"
@@ -61,24 +56,13 @@ fi
 # recording's time at the last 0.5 s cluster) and, in a first segment, 2.0 s estimated 1.0 s.
 # splitmuxsink sets muxer properties only with async-finalize=true. The snapshot branch keeps
 # SNAPSHOT_RATE frames a second, so PNG encoding costs little.
-# compositor, live: start-time-selection=first starts its output at the camera's first frame
-# (not at 0, which adds frames before it and can negotiate a 1x1 picture); latency=100 ms waits
-# that long for the slower temperature branch, so that no frame goes out without its overlay.
-# The queue after it keeps its thread free: in a live pipeline the first sink to get a frame
-# waits for the others, while compositor answers the tee's allocation queries from that thread,
-# so without the queue the start can deadlock (GStreamer 1.22).
-set -f # the fragments above split on spaces into the launcher's words
-exec "$launch" -e \
-  $SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! \
-    watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
-  camera. ! queue ! darksub $DARK ! demosaic25 ! ratiotemp "model=$MODEL" ! tee name=temperature \
+exec "$launch" -e "${camera_chain[@]}" \
+  "${thermal_chain[@]}" ! tee name=temperature \
   temperature. ! queue ! avenc_ffv1 gop-size=1 ! \
     splitmuxsink async-finalize=true muxer-factory=matroskamux \
       "muxer-properties=properties,min-cluster-duration=(guint64)0,offset-to-zero=true" \
       max-size-time="$segment_ns" "location=$OUT/temperature-%05d.mkv" \
-  temperature. ! queue ! thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1 \
-  camera. ! queue ! bayer2rgb ! video/x-raw,format=RGBA ! mix.sink_0 \
-  compositor name=mix start-time-selection=first latency=100000000 \
-    sink_0::zorder=0 sink_1::zorder=1 ! video/x-raw,format=RGBA ! queue ! \
+  temperature. ! queue ! "${colormap_to_mix[@]}" \
+  "${overlay_mix[@]}" ! \
     videorate drop-only=true max-rate="$SNAPSHOT_RATE" ! videoconvert ! video/x-raw,format=RGB ! \
     pngenc ! multifilesink "location=$OUT/view.png"
