@@ -10,10 +10,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include "commands.h"
-#include "pyrocam/runtime/darksub.h"
 #include "pyrocam/core/dataset.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/runtime/darksub.h"
 
 namespace pyrocam::cli {
 namespace {
@@ -76,23 +76,165 @@ std::string fmt(double v) {
   return buf;
 }
 
-}  // namespace
+// A frame to measure: its dark frame, its true temperatures (when the dataset has them) and
+// the setting it was taken at (NaN for a single --frame).
+struct Job {
+  std::filesystem::path frame, dark, truth;
+  double exposure_us = NAN, nominal_c = NAN;
+};
 
-void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& selected) {
-  static MeasureArgs a;
-  CLI::App* c = app.add_subcommand(
-      "measure", "Turn raw frames plus dark frames into temperature images (offline ratiotemp)");
-  c->footer(
-      "Output: <stem>_temperature.png (16-bit, 0.1 K units, 0 = no reading), optionally\n"
-      "<stem>_uncertainty.png (expanded, k=2, 0.1 K units), and stats.csv with ROI statistics\n"
-      "per frame (and errors against truth/<stem>.png when the dataset has true temperatures).\n"
-      "A raw frame does not say which mosaic it was taken through: --pattern names it, or\n"
-      "the dataset's mosaic.txt (written by `pyrocam-calib simulate`); it must match the\n"
-      "model's, else nothing is measured.\n"
-      "Examples:\n"
-      "  pyrocam-calib measure --model rgb-model.json --dataset pool --out pool-t\n"
-      "  pyrocam-calib measure --model rgb-model.json --frame raw.pgm --dark dark.pgm "
-      "--pattern rggb --out t --uncertainty");
+struct MeasureInputs {
+  std::vector<Job> jobs;
+  cv::Mat roi;
+  // The frames' layout, and where it came from, for messages.
+  std::string pattern, pattern_source = "--pattern";
+};
+
+// What CLI11 cannot check by itself: which inputs go together.
+void check_measure_args(const MeasureArgs& a) {
+  if (a.dataset.empty() && a.frame.empty())
+    throw CLI::ValidationError("measure", "give --dataset or --frame");
+  if (!a.frame.empty() && a.dark.empty())
+    throw CLI::ValidationError("--dark", "--frame needs --dark");
+  if (!a.frame.empty() && a.pattern.empty())
+    throw CLI::ValidationError("--pattern",
+                               "--frame needs --pattern: a raw frame does not say its mosaic "
+                               "layout (rggb, bggr, grbg, gbrg or e.g. 5x5)");
+}
+
+MeasureOptions measure_options(const MeasureArgs& a) {
+  MeasureOptions options;
+  options.method = parse_method(a.method);
+  options.demosaic = parse_demosaic_method(a.demosaic);
+  options.saturation_level_dn = a.saturation;
+  options.uncertainty = a.uncertainty;
+  options.misfit_probability = a.misfit_probability;
+  options.allow_partial = a.allow_partial;
+  return options;
+}
+
+// Every frame row of the dataset, with the dark frame of its exposure and its truth image if
+// there is one; the layout from mosaic.txt unless --pattern gave it (they must agree).
+void add_dataset_jobs(const MeasureArgs& a, MeasureInputs& in) {
+  const Dataset d = Dataset::open(a.dataset);
+  const std::string declared = d.mosaic_pattern();
+  const std::string mosaic_file = (d.folder() / kMosaicFile).string();
+  if (!declared.empty() && !in.pattern.empty() && declared != in.pattern)
+    throw InputError("--pattern " + in.pattern + " contradicts " + mosaic_file + " (" + declared +
+                     ")");
+  if (in.pattern.empty()) {
+    if (declared.empty())
+      throw InputError(a.dataset + ": the dataset does not say its frames' mosaic layout (no " +
+                       kMosaicFile + "); give --pattern (rggb, bggr, grbg, gbrg or e.g. 5x5)");
+    in.pattern = declared;
+    in.pattern_source = mosaic_file;
+  }
+  in.roi = d.roi();
+  for (const auto& row : d.rows()) {
+    if (row.kind != FrameKind::kFrame) continue;
+    Job j;
+    j.frame = d.path_of(row);
+    const auto& dark = d.dark_for(row.exposure_us);
+    j.dark = dark.files.front();
+    const auto truth = d.folder() / "truth" / (j.frame.stem().string() + ".png");
+    if (std::filesystem::exists(truth)) j.truth = truth;
+    j.exposure_us = row.exposure_us;
+    j.nominal_c = row.temperature_c;
+    in.jobs.push_back(j);
+  }
+}
+
+// The frames to measure (the dataset's or the one --frame), checked against the model's mosaic
+// layout, and the ROI the statistics are taken over.
+MeasureInputs measure_inputs(const MeasureArgs& a, const ThermalModel& model) {
+  MeasureInputs in;
+  if (!a.pattern.empty()) in.pattern = parse_mosaic_pattern(a.pattern, "--pattern");
+  if (!a.dataset.empty()) {
+    add_dataset_jobs(a, in);
+  } else {
+    in.jobs.push_back({a.frame, a.dark, {}, NAN, NAN});
+  }
+  std::string model_pattern = model.profile().mosaic.pattern;
+  std::transform(model_pattern.begin(), model_pattern.end(), model_pattern.begin(),
+                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  if (model_pattern != in.pattern)
+    throw InputError(a.model + ": the model was calibrated for a " + model_pattern +
+                     " mosaic (profile " + model.profile().name + "), the frames are " +
+                     in.pattern + " (" + in.pattern_source + ")");
+  const cv::Size frame_size = read_image_size(in.jobs.front().frame);
+  if (!a.roi.empty()) in.roi = read_raw_image(a.roi, frame_size, "the frame") != 0;
+  return in;
+}
+
+// The output folder, and stats.csv in it with its header line.
+std::ofstream open_stats_csv(const std::string& out) {
+  std::filesystem::create_directories(out);
+  std::ofstream csv(std::filesystem::path(out) / "stats.csv");
+  csv << "file,exposure_us,nominal_c,pixels,valid_fraction,min_c,max_c,mean_c,median_c,"
+         "truth_pixels,truth_valid,truth_rms_c,truth_median_error_c\n";
+  return csv;
+}
+
+// <stem>_temperature and, when asked for, <stem>_uncertainty, in 0.1 K (0 = no reading).
+void write_frame_images(const MeasureArgs& a, const std::string& stem, const cv::Mat& t,
+                        const cv::Mat& u) {
+  const std::string ext = a.format == "png" ? ".png" : ".tif";
+  write_raw_image(std::filesystem::path(a.out) / (stem + "_temperature" + ext),
+                  encode_decikelvin(t));
+  if (a.uncertainty) {
+    // Uncertainty as a temperature difference in 0.1 K, 0 = no reading.
+    write_raw_image(std::filesystem::path(a.out) / (stem + "_uncertainty" + ext),
+                    encode_decikelvin_difference(u));
+  }
+}
+
+// One frame measured: its images written and its row of stats.csv.
+void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
+                   const ThermalModel& model, const MeasureOptions& options,
+                   FrameMeasurer& measurer, std::ostream& csv) {
+  const cv::Mat raw = read_raw_image(j.frame);
+  const cv::Mat dark = read_raw_image(j.dark, raw.size(), "the frame " + j.frame.string());
+  cv::Mat t, u;
+  measurer.measure(raw, dark, t, a.uncertainty ? &u : nullptr);
+  write_frame_images(a, j.frame.stem().string(), t, u);
+  cv::Mat mask;
+  if (!in.roi.empty()) cv::resize(in.roi, mask, t.size(), 0, 0, cv::INTER_NEAREST);
+  const RegionStats s = region_stats(t, mask);
+  TruthScore ts;
+  if (!j.truth.empty()) {
+    const cv::Mat truth = read_raw_image(j.truth, raw.size(), "the frame");
+    if (truth.depth() != CV_16U)
+      throw InputError(j.truth.string() +
+                       ": true temperatures must be 16-bit (0.1 K units), this is 8-bit");
+    ts = compare_truth(t, truth, model.profile().mosaic, options.demosaic);
+  }
+  csv << j.frame.filename().string() << "," << fmt(j.exposure_us) << "," << fmt(j.nominal_c) << ","
+      << s.pixels << "," << fmt(s.valid_fraction) << "," << fmt(s.min_c) << "," << fmt(s.max_c)
+      << "," << fmt(s.mean_c) << "," << fmt(s.median_c) << "," << ts.pixels << "," << ts.valid
+      << "," << fmt(ts.rms_c) << "," << fmt(ts.median_error_c) << "\n";
+}
+
+// The whole subcommand once the arguments are checked.
+int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
+  const ThermalModel model = load_model(a.model);
+  const MeasureOptions options = measure_options(a);
+  FrameMeasurer measurer(model, options);
+  const MeasureInputs in = measure_inputs(a, model);
+  std::ofstream csv = open_stats_csv(a.out);
+  ProgressPrinter progress(global, "measuring");
+  for (std::size_t i = 0; i < in.jobs.size(); ++i) {
+    measure_frame(in.jobs[i], a, in, model, options, measurer, csv);
+    progress(i + 1, in.jobs.size());
+  }
+  if (!csv) throw InputError(a.out + "/stats.csv: write failed");
+  if (!global.quiet)
+    std::cout << in.jobs.size() << " frame(s) measured; images and stats.csv in " << a.out << "\n";
+  return kExitOk;
+}
+
+// What is measured: the model, the frames (a dataset or one frame and its dark), their layout
+// and the ROI.
+void add_input_options(CLI::App* c, MeasureArgs& a) {
   c->add_option("--model", a.model, "Model file from `pyrocam-calib calibrate`")->required();
   auto* ds = c->add_option("--dataset", a.dataset, "Dataset folder: every frame row is measured");
   auto* fr = c->add_option("--frame", a.frame, "One raw frame (PGM/PNG/TIFF)");
@@ -113,6 +255,10 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
   c->add_option(
       "--roi", a.roi,
       "ROI mask for the statistics, of the frames' size (default: the dataset's roi.png)");
+}
+
+// Where the results go and how they are read: output folder, estimator and image options.
+void add_output_options(CLI::App* c, MeasureArgs& a) {
   c->add_option("--out", a.out, "Output folder (created)")->required();
   c->add_option("--method", a.method, "Estimator: mlp, lut or likelihood")
       ->check(CLI::IsMember({"mlp", "lut", "likelihood"}))
@@ -135,118 +281,31 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
   c->add_flag("--allow-partial", a.allow_partial,
               "likelihood only: read pixels with some bands saturated or dim from the rest (at "
               "least two; ratiotemp's allow-partial); without it such pixels have no reading");
-  c->callback([&global, &selected, c] {
-    if (a.dataset.empty() && a.frame.empty())
-      throw CLI::ValidationError("measure", "give --dataset or --frame");
-    if (!a.frame.empty() && a.dark.empty())
-      throw CLI::ValidationError("--dark", "--frame needs --dark");
-    if (!a.frame.empty() && a.pattern.empty())
-      throw CLI::ValidationError("--pattern",
-                                 "--frame needs --pattern: a raw frame does not say its mosaic "
-                                 "layout (rggb, bggr, grbg, gbrg or e.g. 5x5)");
-    (void)c;
-    selected = [&global] {
-      const ThermalModel model = load_model(a.model);
-      MeasureOptions options;
-      options.method = parse_method(a.method);
-      options.demosaic = parse_demosaic_method(a.demosaic);
-      options.saturation_level_dn = a.saturation;
-      options.uncertainty = a.uncertainty;
-      options.misfit_probability = a.misfit_probability;
-      options.allow_partial = a.allow_partial;
-      FrameMeasurer measurer(model, options);
+}
 
-      struct Job {
-        std::filesystem::path frame, dark, truth;
-        double exposure_us = NAN, nominal_c = NAN;
-      };
-      std::vector<Job> jobs;
-      cv::Mat roi;
-      // The frames' layout, and where it came from, for messages.
-      std::string pattern, pattern_source = "--pattern";
-      if (!a.pattern.empty()) pattern = parse_mosaic_pattern(a.pattern, "--pattern");
-      if (!a.dataset.empty()) {
-        const Dataset d = Dataset::open(a.dataset);
-        const std::string declared = d.mosaic_pattern();
-        const std::string mosaic_file = (d.folder() / kMosaicFile).string();
-        if (!declared.empty() && !pattern.empty() && declared != pattern)
-          throw InputError("--pattern " + pattern + " contradicts " + mosaic_file + " (" +
-                           declared + ")");
-        if (pattern.empty()) {
-          if (declared.empty())
-            throw InputError(
-                a.dataset + ": the dataset does not say its frames' mosaic layout (no " +
-                kMosaicFile + "); give --pattern (rggb, bggr, grbg, gbrg or e.g. 5x5)");
-          pattern = declared;
-          pattern_source = mosaic_file;
-        }
-        roi = d.roi();
-        for (const auto& row : d.rows()) {
-          if (row.kind != FrameKind::kFrame) continue;
-          Job j;
-          j.frame = d.path_of(row);
-          const auto& dark = d.dark_for(row.exposure_us);
-          j.dark = dark.files.front();
-          const auto truth = d.folder() / "truth" / (j.frame.stem().string() + ".png");
-          if (std::filesystem::exists(truth)) j.truth = truth;
-          j.exposure_us = row.exposure_us;
-          j.nominal_c = row.temperature_c;
-          jobs.push_back(j);
-        }
-      } else {
-        jobs.push_back({a.frame, a.dark, {}, NAN, NAN});
-      }
-      std::string model_pattern = model.profile().mosaic.pattern;
-      std::transform(model_pattern.begin(), model_pattern.end(), model_pattern.begin(),
-                     [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-      if (model_pattern != pattern)
-        throw InputError(a.model + ": the model was calibrated for a " + model_pattern +
-                         " mosaic (profile " + model.profile().name + "), the frames are " +
-                         pattern + " (" + pattern_source + ")");
-      const cv::Size frame_size = read_image_size(jobs.front().frame);
-      if (!a.roi.empty()) roi = read_raw_image(a.roi, frame_size, "the frame") != 0;
-      std::filesystem::create_directories(a.out);
-      std::ofstream csv(std::filesystem::path(a.out) / "stats.csv");
-      csv << "file,exposure_us,nominal_c,pixels,valid_fraction,min_c,max_c,mean_c,median_c,"
-             "truth_pixels,truth_valid,truth_rms_c,truth_median_error_c\n";
-      ProgressPrinter progress(global, "measuring");
-      const std::string ext = a.format == "png" ? ".png" : ".tif";
-      for (std::size_t i = 0; i < jobs.size(); ++i) {
-        const Job& j = jobs[i];
-        const cv::Mat raw = read_raw_image(j.frame);
-        const cv::Mat dark = read_raw_image(j.dark, raw.size(), "the frame " + j.frame.string());
-        cv::Mat t, u;
-        measurer.measure(raw, dark, t, a.uncertainty ? &u : nullptr);
-        const std::string stem = j.frame.stem().string();
-        write_raw_image(std::filesystem::path(a.out) / (stem + "_temperature" + ext),
-                        encode_decikelvin(t));
-        if (a.uncertainty) {
-          // Uncertainty as a temperature difference in 0.1 K, 0 = no reading.
-          write_raw_image(std::filesystem::path(a.out) / (stem + "_uncertainty" + ext),
-                          encode_decikelvin_difference(u));
-        }
-        cv::Mat mask;
-        if (!roi.empty()) cv::resize(roi, mask, t.size(), 0, 0, cv::INTER_NEAREST);
-        const RegionStats s = region_stats(t, mask);
-        TruthScore ts;
-        if (!j.truth.empty()) {
-          const cv::Mat truth = read_raw_image(j.truth, raw.size(), "the frame");
-          if (truth.depth() != CV_16U)
-            throw InputError(j.truth.string() +
-                             ": true temperatures must be 16-bit (0.1 K units), this is 8-bit");
-          ts = compare_truth(t, truth, model.profile().mosaic, options.demosaic);
-        }
-        csv << j.frame.filename().string() << "," << fmt(j.exposure_us) << "," << fmt(j.nominal_c)
-            << "," << s.pixels << "," << fmt(s.valid_fraction) << "," << fmt(s.min_c) << ","
-            << fmt(s.max_c) << "," << fmt(s.mean_c) << "," << fmt(s.median_c) << "," << ts.pixels
-            << "," << ts.valid << "," << fmt(ts.rms_c) << "," << fmt(ts.median_error_c) << "\n";
-        progress(i + 1, jobs.size());
-      }
-      if (!csv) throw InputError(a.out + "/stats.csv: write failed");
-      if (!global.quiet)
-        std::cout << jobs.size() << " frame(s) measured; images and stats.csv in " << a.out << "\n";
-      return kExitOk;
-    };
+}  // namespace
+
+void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& selected) {
+  static MeasureArgs a;
+  CLI::App* c = app.add_subcommand(
+      "measure", "Turn raw frames plus dark frames into temperature images (offline ratiotemp)");
+  c->footer(
+      "Output: <stem>_temperature.png (16-bit, 0.1 K units, 0 = no reading), optionally\n"
+      "<stem>_uncertainty.png (expanded, k=2, 0.1 K units), and stats.csv with ROI statistics\n"
+      "per frame (and errors against truth/<stem>.png when the dataset has true temperatures).\n"
+      "A raw frame does not say which mosaic it was taken through: --pattern names it, or\n"
+      "the dataset's mosaic.txt (written by `pyrocam-calib simulate`); it must match the\n"
+      "model's, else nothing is measured.\n"
+      "Examples:\n"
+      "  pyrocam-calib measure --model rgb-model.json --dataset pool --out pool-t\n"
+      "  pyrocam-calib measure --model rgb-model.json --frame raw.pgm --dark dark.pgm "
+      "--pattern rggb --out t --uncertainty");
+  add_input_options(c, a);
+  add_output_options(c, a);
+  c->callback([&global, &selected, c] {
+    check_measure_args(a);
+    (void)c;
+    selected = [&global] { return run_measure(a, global); };
   });
 }
 

@@ -1,0 +1,63 @@
+// What a calibration is asked for and what it gives back: the options, the stages' reports and
+// the outcome that calibrate() (calibrate.h) assembles stage by stage.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "pyrocam/calibration/noisy_locus.h"
+#include "pyrocam/calibration/rate_extraction.h"
+#include "pyrocam/runtime/model.h"
+
+namespace pyrocam {
+
+struct CalibrationOptions {
+  std::string qe_solver = "auto";  // paper, regularised, auto (lower held-out error), datasheet
+  double min_temperature_c = 500, max_temperature_c = 3500, locus_step_c = 1;
+  MlpTrainingOptions mlp;
+  // Noisy copies of the locus the network is trained on besides it (copies 0: none).
+  NoisyLocusOptions noisy_locus;
+  int monte_carlo_refits = 8;
+  double thermocouple_tolerance_c = 4.4;
+  std::uint64_t seed = 1;
+  unsigned threads = 2;
+};
+
+// Temperature errors of one estimator over the calibration settings (paper Table 4).
+struct EstimatorScore {
+  std::string name;
+  std::vector<double> true_c, estimate_c;  // settings where the estimator gave a reading
+  int missing = 0;                         // settings with all bands valid but no reading
+  double mean = NAN, std = NAN, rms = NAN;
+  // Mean over temperatures of the spread across exposures (paper Table 3).
+  double exposure_spread = NAN;
+};
+
+struct QeSolverReport {
+  std::string solver;
+  double calibration_residual = NAN;  // rms relative error of normalised rates, all T
+  double held_out_residual = NAN;     // the same on temperatures left out of the fit
+  double qe_change_rms = NAN;         // rms(Q - Q_datasheet)
+  double seconds = 0;
+};
+
+struct CalibrationOutcome {
+  ThermalModel model;
+  RateTable rates;
+  std::vector<QeSolverReport> solvers;  // every solver tried; model.qe_solver is the choice
+  Eigen::MatrixXd qe_spread;            // bands x wavelengths, cross-validation std (may be empty)
+  Eigen::MatrixXd rate_residual_datasheet, rate_residual_optimised;  // T x bands, relative
+  MlpTrainingReport mlp_report;
+  double mlp_locus_max_error_c = NAN;  // over the whole noise-free locus
+  double mlp_locus_rms_error_c = NAN;
+  std::vector<EstimatorScore> table4;
+  std::vector<std::string> warnings;
+  std::string verdict;
+  double seconds = 0;
+};
+
+using StageProgress =
+    std::function<void(const std::string& stage, std::size_t done, std::size_t total)>;
+
+}  // namespace pyrocam

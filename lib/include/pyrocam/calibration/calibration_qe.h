@@ -1,0 +1,35 @@
+// Calibration stage 2 (METHOD.md section 4): the system QE the model is built on, chosen among
+// the requested solvers by their held-out (cross-validation) residual, with the datasheet's as
+// the fallback; and the rate residuals that show how well a QE explains the furnace rates.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "pyrocam/calibration/calibration_outcome.h"
+
+namespace pyrocam {
+
+struct QeChoice {
+  std::string solver = "datasheet";     // the chosen solver, or "datasheet" if none beat it
+  Eigen::MatrixXd system_qe;            // bands x wavelengths
+  Eigen::VectorXd band_scale;           // k_b
+  std::vector<QeSolverReport> reports;  // every solver tried, in the order tried
+  Eigen::MatrixXd qe_spread;            // the chosen fit's cross-validation std (may be empty)
+};
+
+// qe_solver: "paper", "regularised", "datasheet" or "auto" (paper and regularised). rates:
+// temperatures x bands, DN/s (NaN missing), at the temperatures t_c.
+QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& datasheet_qe,
+                          const std::vector<double>& t_c, const Eigen::MatrixXd& rates,
+                          const std::string& qe_solver, const StageProgress& progress = {});
+
+// k_b = measured / modelled rate at the hottest temperature the band has a slope for.
+Eigen::VectorXd band_scale(const CameraProfile& p, const Eigen::MatrixXd& q,
+                           const std::vector<double>& t_c, const Eigen::MatrixXd& rates);
+
+// Relative error of modelled vs measured rates after the scale k_b (T x bands, NaN missing).
+Eigen::MatrixXd rate_residuals(const CameraModel& cam, const std::vector<double>& t_c,
+                               const Eigen::MatrixXd& rates);
+
+}  // namespace pyrocam

@@ -1,0 +1,36 @@
+// Calibration stage 6 (METHOD.md section 7): the model's systematic uncertainty as a function of
+// temperature, from an emissivity slope the ratios do not cancel and from the thermocouple's
+// tolerance (Monte-Carlo refits of the QE with perturbed furnace temperatures).
+#pragma once
+
+#include <vector>
+
+#include "pyrocam/calibration/calibration_outcome.h"
+
+namespace pyrocam {
+
+// The uncertainty table of a model whose camera, network and qe_solver are set: every 50 degC
+// over the model's range. rates: temperatures x bands, DN/s, at the furnace temperatures t_c.
+// Refits only for fitted QE (none for "datasheet"); without refits u_calibration is the
+// thermocouple's own standard uncertainty.
+UncertaintyModel uncertainty_model(const ThermalModel& model, const std::vector<double>& t_c,
+                                   const Eigen::MatrixXd& rates, const CalibrationOptions& options,
+                                   const StageProgress& progress = {});
+
+// Spectral emissivity eps(lambda) = 1 + alpha (lambda - centre) / 100 nm folded into Q.
+Eigen::MatrixXd with_emissivity_slope(const CameraProfile& p, const Eigen::MatrixXd& q,
+                                      double alpha);
+
+// |network reading - T| for a graybody whose emissivity has the slope u.emissivity_slope_u, at
+// every u.temperature_c.
+std::vector<double> emissivity_uncertainty(const ThermalModel& model, const UncertaintyModel& u);
+
+// Standard uncertainty at every u.temperature_c of the temperature the model's rates imply,
+// over u.monte_carlo_refits QE refits (solver model.qe_solver) with furnace temperatures off by
+// up to +-u.thermocouple_tolerance_c (uniform; drawn from `seed`).
+std::vector<double> thermocouple_uncertainty(const ThermalModel& model, const UncertaintyModel& u,
+                                             const std::vector<double>& t_c,
+                                             const Eigen::MatrixXd& rates, std::uint64_t seed,
+                                             const StageProgress& progress = {});
+
+}  // namespace pyrocam

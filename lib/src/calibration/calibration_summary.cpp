@@ -1,0 +1,104 @@
+#include "pyrocam/calibration/calibration_summary.h"
+
+#include <cmath>
+#include <ctime>
+#include <fstream>
+#include <sstream>
+
+namespace pyrocam {
+namespace {
+
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+// Manifest text and ROI size: enough to tell datasets apart in a model's provenance.
+std::string dataset_fingerprint(const Dataset& d) {
+  std::ifstream in(d.folder() / "manifest.csv");
+  std::string text(std::istreambuf_iterator<char>(in), {});
+  return fnv1a_hex(text + std::to_string(d.width()) + "x" + std::to_string(d.height()));
+}
+
+}  // namespace
+
+double rms_finite(const Eigen::MatrixXd& m) {
+  double s = 0;
+  int n = 0;
+  for (Eigen::Index i = 0; i < m.size(); ++i)
+    if (std::isfinite(m.data()[i])) s += m.data()[i] * m.data()[i], ++n;
+  return n ? std::sqrt(s / n) : NAN;
+}
+
+nlohmann::json model_provenance(const Dataset& dataset, const CameraProfile& profile,
+                                std::uint64_t seed) {
+  return {{"tool", "pyrocam-calib"},
+          {"tool_version", PYROCAM_VERSION},
+          {"created_utc", utc_now()},
+          {"profile_source", profile.source.string()},
+          {"profile_name", profile.name},
+          {"dataset_path", std::filesystem::absolute(dataset.folder()).string()},
+          {"dataset_manifest_fnv1a64", dataset_fingerprint(dataset)},
+          {"seed", seed}};
+}
+
+std::string calibration_verdict(const CalibrationOutcome& out) {
+  // Verdict in plain words.
+  std::ostringstream v;
+  v.precision(2);
+  v << std::fixed << "calibration residual " << 100 * rms_finite(out.rate_residual_optimised)
+    << " % rms (datasheet QE: " << 100 * rms_finite(out.rate_residual_datasheet) << " %)";
+  if (!out.table4.empty() && std::isfinite(out.table4[0].rms))
+    v << "; MLP " << out.table4[0].rms << " degC rms on " << out.table4[0].true_c.size()
+      << " calibration settings";
+  int skipped_sat = 0, skipped_dim = 0;
+  for (const auto& st : out.rates.status)
+    for (PointStatus s : st)
+      skipped_sat += s == PointStatus::kSaturated, skipped_dim += s == PointStatus::kDim;
+  v << "; " << skipped_sat << " band points skipped as saturated, " << skipped_dim << " as dim";
+  if (!out.warnings.empty()) v << "; " << out.warnings.size() << " warnings";
+  return v.str();
+}
+
+nlohmann::json outcome_summary(const CalibrationOutcome& o) {
+  using nlohmann::json;
+  json j;
+  j["verdict"] = o.verdict;
+  j["qe_solver"] = o.model.qe_solver;
+  json solvers = json::array();
+  for (const auto& s : o.solvers)
+    solvers.push_back({{"solver", s.solver},
+                       {"calibration_residual_rms", s.calibration_residual},
+                       {"held_out_residual_rms", s.held_out_residual},
+                       {"qe_change_rms", s.qe_change_rms},
+                       {"seconds", s.seconds}});
+  j["solvers"] = solvers;
+  j["rate_residual_rms"] = {{"datasheet", rms_finite(o.rate_residual_datasheet)},
+                            {"optimised", rms_finite(o.rate_residual_optimised)}};
+  json t4 = json::array();
+  for (const auto& s : o.table4)
+    t4.push_back({{"estimator", s.name},
+                  {"n", s.true_c.size()},
+                  {"missing", s.missing},
+                  {"mean_c", s.mean},
+                  {"std_c", s.std},
+                  {"rms_c", s.rms},
+                  {"exposure_spread_c", s.exposure_spread}});
+  j["table4"] = t4;
+  j["mlp"] = {{"final_train_rmse_c", o.mlp_report.final_train_rmse},
+              {"final_test_rmse_c", o.mlp_report.final_test_rmse},
+              {"locus_max_error_c", o.mlp_locus_max_error_c},
+              {"locus_rms_error_c", o.mlp_locus_rms_error_c},
+              {"polish_iterations", o.mlp_report.polish_iterations_done},
+              {"noisy_copies", o.mlp_report.augmented_samples},
+              {"noisy_copies_rmse_c", o.mlp_report.augmented_rmse},
+              {"noisy_copies_median_abs_error_c", o.mlp_report.augmented_median_abs_error},
+              {"seconds", o.mlp_report.seconds}};
+  j["warnings"] = o.warnings;
+  j["seconds"] = o.seconds;
+  return j;
+}
+
+}  // namespace pyrocam

@@ -1,0 +1,91 @@
+// The summary stage: the verdict line, the JSON summary and the provenance.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "pyrocam/calibration/calibrate.h"
+#include "pyrocam/calibration/calibration_summary.h"
+#include "pyrocam/simulation/simulator.h"
+#include "test_support.h"
+
+namespace pyrocam {
+namespace {
+
+TEST(RmsFinite, skips_nan_and_is_nan_with_nothing_finite) {
+  Eigen::MatrixXd m(2, 2);
+  m << 3, NAN, -4, INFINITY;
+  EXPECT_NEAR(rms_finite(m), std::sqrt(12.5), 1e-12);
+  EXPECT_TRUE(std::isnan(rms_finite(Eigen::MatrixXd::Constant(2, 3, NAN))));
+}
+
+CalibrationOutcome small_outcome() {
+  CalibrationOutcome o;
+  o.rate_residual_optimised = Eigen::MatrixXd::Constant(2, 3, 0.01);
+  o.rate_residual_datasheet = Eigen::MatrixXd::Constant(2, 3, -0.05);
+  o.rate_residual_datasheet(1, 1) = NAN;
+  EstimatorScore mlp;
+  mlp.name = "MLP";
+  mlp.true_c = {1000, 1100};
+  mlp.estimate_c = {1001, 1099.5};
+  mlp.rms = 0.79;
+  o.table4 = {mlp};
+  o.rates.status = {{PointStatus::kUsed, PointStatus::kSaturated, PointStatus::kDim},
+                    {PointStatus::kSaturated, PointStatus::kSaturated, PointStatus::kUsed}};
+  o.warnings = {"1100 degC band R: 1 usable point"};
+  o.model.qe_solver = "regularised";
+  return o;
+}
+
+TEST(CalibrationVerdict, says_residuals_the_mlps_rms_skipped_points_and_warnings) {
+  EXPECT_EQ(calibration_verdict(small_outcome()),
+            "calibration residual 1.00 % rms (datasheet QE: 5.00 %); MLP 0.79 degC rms on 2 "
+            "calibration settings; 3 band points skipped as saturated, 1 as dim; 1 warnings");
+  CalibrationOutcome no_readings = small_outcome();
+  no_readings.table4[0].rms = NAN;
+  no_readings.warnings.clear();
+  EXPECT_EQ(calibration_verdict(no_readings),
+            "calibration residual 1.00 % rms (datasheet QE: 5.00 %); 3 band points skipped as "
+            "saturated, 1 as dim");
+}
+
+TEST(OutcomeSummary, holds_the_verdict_solver_residuals_and_table4) {
+  CalibrationOutcome o = small_outcome();
+  o.verdict = calibration_verdict(o);
+  o.solvers.push_back({"regularised", 0.01, 0.02, 0.03, 1.5});
+  const nlohmann::json j = outcome_summary(o);
+  EXPECT_EQ(j["verdict"], o.verdict);
+  EXPECT_EQ(j["qe_solver"], "regularised");
+  EXPECT_EQ(j["solvers"][0]["held_out_residual_rms"], 0.02);
+  EXPECT_NEAR(j["rate_residual_rms"]["datasheet"].get<double>(), 0.05, 1e-15);
+  EXPECT_EQ(j["table4"][0]["estimator"], "MLP");
+  EXPECT_EQ(j["table4"][0]["n"], 2);
+  EXPECT_EQ(j["warnings"].size(), 1u);
+}
+
+TEST(ModelProvenance, names_the_tool_profile_dataset_and_seed) {
+  test::ScratchDir dir("provenance");
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  Simulator camera(p, UnitPerturbation{"datasheet", 1});
+  CampaignSettings s;
+  s.temperatures_c = {900, 1000};
+  s.exposure_count = 2;
+  s.frames_per_setting = 1;
+  s.width = s.height = 16;
+  s.roi_area_px = 60;
+  write_furnace_campaign(dir.path(), camera, s);
+  const Dataset d = Dataset::open(dir.path());
+  const nlohmann::json j = model_provenance(d, p, 42);
+  EXPECT_EQ(j["tool"], "pyrocam-calib");
+  EXPECT_EQ(j["profile_name"], "rgb-reference");
+  EXPECT_EQ(j["seed"], 42);
+  EXPECT_EQ(j["dataset_path"], std::filesystem::absolute(dir.path()).string());
+  // The manifest's text and the frame size, hashed.
+  std::ifstream in(dir / "manifest.csv");
+  const std::string manifest(std::istreambuf_iterator<char>(in), {});
+  EXPECT_EQ(j["dataset_manifest_fnv1a64"], fnv1a_hex(manifest + "16x16"));
+  EXPECT_EQ(j["created_utc"].get<std::string>().size(), 20u);  // e.g. 2024-01-31T12:00:00Z
+}
+
+}  // namespace
+}  // namespace pyrocam

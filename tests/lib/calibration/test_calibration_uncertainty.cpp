@@ -1,0 +1,107 @@
+// The uncertainty stage: the emissivity tilt, the thermocouple Monte Carlo and the table.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "calibration/synthetic_calibration.h"
+#include "pyrocam/calibration/calibration_uncertainty.h"
+
+namespace pyrocam {
+namespace {
+
+const std::vector<double> kFurnaceC = {800, 900, 1000, 1100, 1200, 1300, 1400};
+
+TEST(WithEmissivitySlope, tilts_q_linearly_about_the_pass_band_centre) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  const Eigen::MatrixXd q = p.system_qe();
+  EXPECT_EQ(with_emissivity_slope(p, q, 0), q);
+  const double centre = 0.5 * (p.filter_pass_band_nm[0] + p.filter_pass_band_nm[1]);
+  const Eigen::MatrixXd tilted = with_emissivity_slope(p, q, 0.1);
+  for (Eigen::Index i = 0; i < p.grid.size(); i += 7)
+    for (Eigen::Index b = 0; b < q.rows(); ++b)
+      EXPECT_NEAR(tilted(b, i), q(b, i) * (1 + 0.1 * (p.grid.nm()[i] - centre) / 100), 1e-15);
+}
+
+// A model of the datasheet camera (fitted QE: refits allowed), its range 800-1400 degC, no MLP.
+ThermalModel camera_only_model(const CameraProfile& p) {
+  ThermalModel m;
+  m.qe_solver = "regularised";
+  m.min_temperature_c = 800;
+  m.max_temperature_c = 1400;
+  m.camera = CameraModel{p, p.system_qe(), Eigen::VectorXd::Ones(p.band_count())};
+  return m;
+}
+
+UncertaintyModel table_at(std::vector<double> t_c, double tolerance_c, int refits) {
+  UncertaintyModel u;
+  u.temperature_c = std::move(t_c);
+  u.thermocouple_tolerance_c = tolerance_c;
+  u.monte_carlo_refits = refits;
+  return u;
+}
+
+TEST(ThermocoupleUncertainty, grows_with_the_tolerance_and_is_zero_without_it) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  const ThermalModel m = camera_only_model(p);
+  const Eigen::MatrixXd rates = test::furnace_rates(m.camera, kFurnaceC);
+  const std::vector<double> grid = {900, 1300};
+  std::size_t reports = 0;
+  const auto exact =
+      thermocouple_uncertainty(m, table_at(grid, 0, 3), kFurnaceC, rates, 1,
+                               [&](const std::string& stage, std::size_t, std::size_t) {
+                                 EXPECT_EQ(stage, "Monte-Carlo refits");
+                                 ++reports;
+                               });
+  EXPECT_EQ(reports, 4u);  // one per refit and the last
+  const auto loose = thermocouple_uncertainty(m, table_at(grid, 5, 3), kFurnaceC, rates, 1);
+  const auto looser = thermocouple_uncertainty(m, table_at(grid, 20, 3), kFurnaceC, rates, 1);
+  ASSERT_EQ(exact.size(), 2u);
+  ASSERT_EQ(loose.size(), 2u);
+  ASSERT_EQ(looser.size(), 2u);
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    SCOPED_TRACE(grid[i]);
+    EXPECT_NEAR(exact[i], 0, 1e-6);  // every refit sees the same temperatures
+    EXPECT_GT(loose[i], 0.01);
+    EXPECT_GT(looser[i], loose[i]);
+  }
+}
+
+TEST(ThermocoupleUncertainty, without_refits_is_the_tolerances_standard_uncertainty) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  const ThermalModel m = camera_only_model(p);
+  const Eigen::MatrixXd rates = test::furnace_rates(m.camera, kFurnaceC);
+  const auto u =
+      thermocouple_uncertainty(m, table_at({900, 1000, 1100}, 6, 0), kFurnaceC, rates, 1);
+  EXPECT_EQ(u, std::vector<double>(3, 6 / std::sqrt(3.0)));
+}
+
+TEST(UncertaintyModel, tabulates_every_50_degc_and_the_emissivity_term_grows_with_the_slope) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  ThermalModel m = test::small_model(p, 800, 1400);
+  m.qe_solver = "datasheet";  // no refits: the table's calibration term is the floor
+  const Eigen::MatrixXd rates = test::furnace_rates(m.camera, kFurnaceC);
+  CalibrationOptions opt;
+  opt.min_temperature_c = 800;
+  opt.max_temperature_c = 1400;
+  opt.thermocouple_tolerance_c = 3;
+  const UncertaintyModel u = uncertainty_model(m, kFurnaceC, rates, opt);
+  ASSERT_EQ(u.temperature_c.size(), 13u);
+  EXPECT_EQ(u.temperature_c.front(), 800);
+  EXPECT_EQ(u.temperature_c.back(), 1400);
+  EXPECT_EQ(u.monte_carlo_refits, 0);
+  EXPECT_EQ(u.thermocouple_tolerance_c, 3);
+  EXPECT_EQ(u.u_calibration_c, std::vector<double>(13, 3 / std::sqrt(3.0)));
+  ASSERT_EQ(u.u_emissivity_c.size(), 13u);
+
+  UncertaintyModel steeper = u;
+  steeper.emissivity_slope_u = 0.1;
+  const std::vector<double> shifted = emissivity_uncertainty(m, steeper);
+  ASSERT_EQ(shifted.size(), 13u);
+  for (std::size_t i = 0; i < shifted.size(); ++i) {
+    SCOPED_TRACE(u.temperature_c[i]);
+    EXPECT_GT(shifted[i], u.u_emissivity_c[i]);
+  }
+}
+
+}  // namespace
+}  // namespace pyrocam
