@@ -272,7 +272,7 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
     stage("training MLP", std::min(static_cast<std::size_t>(pass), passes), passes);
     if (user_progress) user_progress(pass, train, test);
   };
-  m.mlp = Mlp::train(locus.ratios, locus.temperature_c, mo, &out.mlp_report);
+  m.mlp = train_mlp(locus.ratios, locus.temperature_c, mo, &out.mlp_report);
   stage("training MLP", passes, passes);
   const Eigen::VectorXd locus_error = m.mlp.predict(locus.ratios) - locus.temperature_c;
   out.mlp_locus_max_error_c = locus_error.cwiseAbs().maxCoeff();
