@@ -19,11 +19,11 @@
 #include <string>
 #include <vector>
 
-#include "pyrocam/core/locus.h"
-#include "pyrocam/runtime/mlp.h"
-#include "pyrocam/runtime/model.h"
+#include "pyrocam/calibration/mlp_training.h"
 #include "pyrocam/calibration/noisy_locus.h"
+#include "pyrocam/core/locus.h"
 #include "pyrocam/core/profile.h"
+#include "pyrocam/runtime/model.h"
 
 namespace {
 
@@ -96,7 +96,7 @@ void bench(const std::string& name, const Locus& locus, pyrocam::MlpTrainingOpti
     };
   }
   pyrocam::MlpTrainingReport report;
-  const pyrocam::Mlp model = pyrocam::Mlp::train(locus.ratios, locus.temperature_c, o, &report);
+  const pyrocam::Mlp model = pyrocam::train_mlp(locus.ratios, locus.temperature_c, o, &report);
   const Eigen::VectorXd error = model.predict(locus.ratios) - locus.temperature_c;
   Eigen::Index worst = 0;
   const double max_error = error.cwiseAbs().maxCoeff(&worst);

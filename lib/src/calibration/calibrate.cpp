@@ -82,7 +82,7 @@ void train_network(const Locus& locus, const CalibrationOptions& opt, const Stag
                  passes);
     if (user_progress) user_progress(pass, train, test);
   };
-  m.mlp = Mlp::train(locus.ratios, locus.temperature_c, mo, &out.mlp_report);
+  m.mlp = train_mlp(locus.ratios, locus.temperature_c, mo, &out.mlp_report);
   report_stage(progress, "training MLP", passes, passes);
   const Eigen::VectorXd locus_error = m.mlp.predict(locus.ratios) - locus.temperature_c;
   out.mlp_locus_max_error_c = locus_error.cwiseAbs().maxCoeff();

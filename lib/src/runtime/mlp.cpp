@@ -1,408 +1,28 @@
-// Over 600 lines: the network's inference, its JSON form and its training (validation, split,
-// augmentation, Adam, L-BFGS polish) in one file; splitting training into stage files is planned
-// with the architecture issue.
+// The network at inference: the output transforms, standardisation, the forward passes (single
+// sample, batch, with gradient) and the JSON form. Training is in pyrocam-calibration
+// (pyrocam/calibration/mlp_training.h).
 #include "pyrocam/runtime/mlp.h"
 
-#include <Eigen/QR>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <nlohmann/json.hpp>
-#include <random>
-#include <sstream>
 #include <string>
 #include <utility>
 
 #include "detail/portable_math.h"
 #include "pyrocam/core/physics.h"
-#include "detail/random.h"
 
 namespace pyrocam {
 namespace {
 
 using json = nlohmann::json;
 
-// Training runs in single precision: twice the speed of double where Eigen has only SSE2. Its
-// rounding stops the polish near a training rmse of 0.02-0.03 degC on the locus, far below the
-// half-degree target; the output layer's least squares run in double.
-using TrainingScalar = float;
-
 constexpr double kKelvinOffset = kZeroCelsius;
-
-// Target (degC) -> the network's output quantity.
-double to_network_units(MlpOutputTransform t, double y) {
-  switch (t) {
-    case MlpOutputTransform::kInverseKelvin:
-      return 1.0 / (y + kKelvinOffset);
-    case MlpOutputTransform::kLogKelvin:
-      return portable::log(y + kKelvinOffset);
-    case MlpOutputTransform::kNone:
-      break;
-  }
-  return y;
-}
-
-// The inverse of to_network_units; NaN where v is outside its range.
-double from_network_units(MlpOutputTransform t, double v) {
-  switch (t) {
-    case MlpOutputTransform::kInverseKelvin:
-      return v > 0 ? 1.0 / v - kKelvinOffset : std::numeric_limits<double>::quiet_NaN();
-    case MlpOutputTransform::kLogKelvin: {
-      const double y = portable::exp(v) - kKelvinOffset;
-      return std::isfinite(y) ? y : std::numeric_limits<double>::quiet_NaN();
-    }
-    case MlpOutputTransform::kNone:
-      break;
-  }
-  return v;
-}
-
-// d from_network_units / d v.
-double target_slope(MlpOutputTransform t, double v) {
-  switch (t) {
-    case MlpOutputTransform::kInverseKelvin:
-      return -1.0 / (v * v);
-    case MlpOutputTransform::kLogKelvin:
-      return portable::exp(v);
-    case MlpOutputTransform::kNone:
-      break;
-  }
-  return 1.0;
-}
-
-const char* to_string(MlpInputTransform t) { return t == MlpInputTransform::kLog ? "log" : "none"; }
-
-const char* to_string(MlpOutputTransform t) {
-  switch (t) {
-    case MlpOutputTransform::kInverseKelvin:
-      return "inverse_kelvin";
-    case MlpOutputTransform::kLogKelvin:
-      return "log_kelvin";
-    case MlpOutputTransform::kNone:
-      break;
-  }
-  return "none";
-}
 
 // Samples per chunk in the batch inference path: activations of the widest layer stay in L2.
 constexpr Eigen::Index kInferenceChunk = 256;
-// The training curve gets a point every this many polish iterations (and at the last).
-constexpr int kPolishReportInterval = 10;
-
-template <class S>
-struct Network {
-  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
-  using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
-  std::vector<Matrix> weights;  // outputs x inputs
-  std::vector<Vector> bias;
-  std::size_t layer_count() const { return weights.size(); }
-};
-
-// Forward pass of columns of inputs into preallocated per-layer activations (acts[0] is the
-// input block); returns the output row. Hidden layers ReLU, output linear.
-template <class S>
-void forward(const Network<S>& net, std::vector<typename Network<S>::Matrix>& acts,
-             Eigen::Index cols, std::size_t first_layer = 0,
-             std::size_t end_layer = std::numeric_limits<std::size_t>::max()) {
-  const std::size_t layers = net.layer_count();
-  for (std::size_t l = first_layer; l < std::min(layers, end_layer); ++l) {
-    auto out = acts[l + 1].leftCols(cols);
-    out.noalias() = net.weights[l] * acts[l].leftCols(cols);
-    out.colwise() += net.bias[l];
-    if (l + 1 < layers) out = out.cwiseMax(S(0));
-  }
-}
-
-template <class S>
-std::vector<typename Network<S>::Matrix> make_activations(const Network<S>& net,
-                                                          Eigen::Index cols) {
-  std::vector<typename Network<S>::Matrix> acts;
-  acts.emplace_back(net.weights.front().cols(), cols);
-  for (const auto& w : net.weights) acts.emplace_back(w.rows(), cols);
-  return acts;
-}
-
-// Predictions (standardised units) for the columns of inputs.
-template <class S>
-Eigen::Matrix<S, 1, Eigen::Dynamic> evaluate(const Network<S>& net,
-                                             const typename Network<S>::Matrix& inputs,
-                                             std::vector<typename Network<S>::Matrix>& acts) {
-  const Eigen::Index chunk = acts[0].cols();
-  Eigen::Matrix<S, 1, Eigen::Dynamic> out(inputs.cols());
-  for (Eigen::Index start = 0; start < inputs.cols(); start += chunk) {
-    const Eigen::Index n = std::min(chunk, inputs.cols() - start);
-    acts[0].leftCols(n) = inputs.middleCols(start, n);
-    forward(net, acts, n);
-    out.segment(start, n) = acts.back().row(0).leftCols(n);
-  }
-  return out;
-}
-
-// Backward pass after forward(): the gradient of the weighted mean squared error
-// mean(w e^2) over the n columns into grad (same shapes as net); deltas has the activations'
-// shapes. Returns the weighted sum of squared errors, sum(w e^2).
-template <class S>
-double backward(const Network<S>& net, const std::vector<typename Network<S>::Matrix>& acts,
-                std::vector<typename Network<S>::Matrix>& deltas,
-                const Eigen::Matrix<S, 1, Eigen::Dynamic>& targets,
-                const Eigen::Matrix<S, 1, Eigen::Dynamic>& weights, Eigen::Index n,
-                Network<S>& grad) {
-  const std::size_t layers = net.layer_count();
-  auto top = deltas[layers].leftCols(n);
-  top = acts[layers].leftCols(n) - targets.leftCols(n);
-  const double squared_error_sum =
-      static_cast<double>((top.array().square() * weights.leftCols(n).array()).sum());
-  // d mean(w e^2) / d output
-  top.array() *= weights.leftCols(n).array() * (S(2) / static_cast<S>(n));
-  for (std::size_t l = layers; l-- > 0;) {
-    const auto delta = deltas[l + 1].leftCols(n);
-    grad.weights[l].noalias() = delta * acts[l].leftCols(n).transpose();
-    grad.bias[l] = delta.rowwise().sum();
-    if (l > 0) {
-      auto below = deltas[l].leftCols(n);
-      below.noalias() = net.weights[l].transpose() * delta;
-      // ReLU passes the gradient where its output was positive.
-      below.array() *= (acts[l].leftCols(n).array() > S(0)).template cast<S>();
-    }
-  }
-  return squared_error_sum;
-}
-
-template <class S>
-Eigen::Index parameter_count(const Network<S>& net) {
-  Eigen::Index count = 0;
-  for (std::size_t l = 0; l < net.layer_count(); ++l) {
-    count += net.weights[l].size() + net.bias[l].size();
-  }
-  return count;
-}
-
-// All parameters in one vector (double whatever the network's scalar), layer by layer: weights
-// column-major, then biases.
-template <class S>
-void flatten(const Network<S>& net, Eigen::VectorXd& theta) {
-  theta.resize(parameter_count(net));
-  Eigen::Index at = 0;
-  for (std::size_t l = 0; l < net.layer_count(); ++l) {
-    theta.segment(at, net.weights[l].size()) = net.weights[l].reshaped().template cast<double>();
-    at += net.weights[l].size();
-    theta.segment(at, net.bias[l].size()) = net.bias[l].template cast<double>();
-    at += net.bias[l].size();
-  }
-}
-
-template <class S>
-void unflatten(const Eigen::VectorXd& theta, Network<S>& net) {
-  Eigen::Index at = 0;
-  for (std::size_t l = 0; l < net.layer_count(); ++l) {
-    net.weights[l].reshaped() = theta.segment(at, net.weights[l].size()).template cast<S>();
-    at += net.weights[l].size();
-    net.bias[l] = theta.segment(at, net.bias[l].size()).template cast<S>();
-    at += net.bias[l].size();
-  }
-}
-
-// What the polish minimises: the weighted mean squared error of the network on the training set
-// (standardised units) plus weight_decay times the sum of squared weights (biases free).
-struct PolishProblem {
-  Eigen::MatrixXf inputs;            // standardised, one column per sample
-  Eigen::RowVectorXd targets;        // standardised network outputs
-  Eigen::RowVectorXd weights;        // per sample; mean 1 over the reported samples
-  Eigen::RowVectorXd slope_squared;  // (target units per standardised output)^2, for reports
-  double weight_decay = 0;
-  // The training rmse is reported over the first this many samples (the training rows; the
-  // augmented samples follow them).
-  Eigen::Index reported = 0;
-};
-
-// The output layer (weights and bias) that minimises the polish's loss given the last hidden
-// layer's activations (one column per sample): ridge least squares in double precision.
-void fit_output_layer(Network<float>& net, const Eigen::MatrixXf& hidden,
-                      const PolishProblem& problem) {
-  const Eigen::Index n = problem.targets.size(), features = hidden.rows();
-  const Eigen::VectorXd root_w = problem.weights.transpose().cwiseSqrt();
-  const Eigen::Index ridge_rows = problem.weight_decay > 0 ? features : 0;
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n + ridge_rows, features + 1);
-  a.topLeftCorner(n, features) =
-      root_w.asDiagonal() * hidden.leftCols(n).transpose().cast<double>();
-  a.topRightCorner(n, 1) = root_w;
-  if (ridge_rows > 0) {
-    // mean(w e^2) + decay |W|^2 = (|sqrt(w) e|^2 + |sqrt(n decay) W|^2) / n
-    a.bottomLeftCorner(features, features)
-        .diagonal()
-        .setConstant(std::sqrt(static_cast<double>(n) * problem.weight_decay));
-  }
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(n + ridge_rows);
-  b.head(n) = root_w.cwiseProduct(problem.targets.transpose());
-  // Column pivoting copes with dead units (zero columns).
-  const Eigen::VectorXd solution = a.colPivHouseholderQr().solve(b);
-  net.weights.back().row(0) = solution.head(features).transpose().cast<float>();
-  net.bias.back()[0] = static_cast<float>(solution[features]);
-}
-
-// Full-batch L-BFGS (two-loop recursion, Armijo backtracking) from the network as it is, in
-// single precision. The output layer is refitted by least squares at every evaluation
-// (variable projection), so that L-BFGS moves the hidden layers only, against a loss in which
-// the output layer is always optimal: far better conditioned than moving all layers at once.
-// Calls on_iteration(train_rmse) after every iteration, the network at the new point, the rmse
-// in target units to first order. Returns the number of iterations done: fewer than asked when
-// no step lowers the loss any more (the limit of single precision).
-template <class OnIteration>
-int polish_with_lbfgs(Network<float>& net, const PolishProblem& problem, int iterations,
-                      OnIteration on_iteration) {
-  constexpr int kMemory = 30;
-  constexpr double kArmijo = 1e-4;
-  const Eigen::Index n = problem.inputs.cols();
-  const std::size_t layers = net.layer_count();
-  auto acts = make_activations(net, n);
-  auto deltas = make_activations(net, n);
-  acts[0] = problem.inputs;
-  const Eigen::RowVectorXf targets = problem.targets.cast<float>();
-  const Eigen::RowVectorXf weights = problem.weights.cast<float>();
-  Network<float> grad = net;
-  const Eigen::Index output_params = net.weights.back().size() + 1;
-  const Eigen::Index output_at = parameter_count(net) - output_params;
-  double train_rmse = 0;
-  // Sets the output layer (in net and theta), returns the loss, its gradient into g.
-  auto loss_and_gradient = [&](Eigen::VectorXd& theta, Eigen::VectorXd& g) {
-    unflatten(theta, net);
-    forward(net, acts, n, 0, layers - 1);
-    fit_output_layer(net, acts[layers - 1], problem);
-    theta.segment(output_at, output_params - 1) = net.weights.back().reshaped().cast<double>();
-    theta[output_at + output_params - 1] = static_cast<double>(net.bias.back()[0]);
-    forward(net, acts, n, layers - 1);
-    const Eigen::Index reported = problem.reported;
-    const Eigen::ArrayXd residual =
-        (acts[layers].row(0).leftCols(reported) - targets.leftCols(reported))
-            .transpose()
-            .cast<double>()
-            .array();
-    train_rmse = std::sqrt(
-        (residual.square() * problem.slope_squared.leftCols(reported).transpose().array()).mean());
-    const double sse = backward(net, acts, deltas, targets, weights, n, grad);
-    double penalty = 0;
-    if (problem.weight_decay > 0) {
-      const auto decay = static_cast<float>(problem.weight_decay);
-      for (std::size_t l = 0; l < layers; ++l) {
-        penalty += problem.weight_decay * static_cast<double>(net.weights[l].squaredNorm());
-        grad.weights[l] += 2 * decay * net.weights[l];
-      }
-    }
-    flatten(grad, g);
-    // The output layer is at its optimum: its gradient is zero but for rounding.
-    g.segment(output_at, output_params).setZero();
-    return sse / static_cast<double>(n) + penalty;
-  };
-
-  Eigen::VectorXd x, g, x_next, g_next, direction;
-  flatten(net, x);
-  double loss = loss_and_gradient(x, g);
-  std::vector<Eigen::VectorXd> s_history, y_history;
-  std::vector<double> rho_history;
-  std::vector<double> alpha(kMemory);
-  int done = 0;
-  for (; done < iterations; ++done) {
-    // Two-loop recursion: direction = -H g with H from the last kMemory steps.
-    direction = -g;
-    const int stored = static_cast<int>(s_history.size());
-    for (int i = stored - 1; i >= 0; --i) {
-      alpha[i] = rho_history[i] * s_history[i].dot(direction);
-      direction -= alpha[i] * y_history[i];
-    }
-    if (stored > 0) {
-      direction *= s_history.back().dot(y_history.back()) / y_history.back().squaredNorm();
-    } else {
-      direction *= 1e-3 / std::max(1e-300, g.lpNorm<Eigen::Infinity>());  // cautious first step
-    }
-    for (int i = 0; i < stored; ++i) {
-      const double beta = rho_history[i] * y_history[i].dot(direction);
-      direction += (alpha[i] - beta) * s_history[i];
-    }
-    double slope = g.dot(direction);
-    if (!(slope < 0)) {  // not a descent direction: forget the history, go downhill
-      s_history.clear(), y_history.clear(), rho_history.clear();
-      direction = -g * (1e-3 / std::max(1e-300, g.lpNorm<Eigen::Infinity>()));
-      slope = g.dot(direction);
-    }
-    double step = 1, next_loss = 0;
-    bool accepted = false;
-    for (int halving = 0; halving < 30 && !accepted; ++halving, step *= 0.5) {
-      x_next = x + step * direction;
-      next_loss = loss_and_gradient(x_next, g_next);
-      accepted = next_loss <= loss + kArmijo * step * slope;
-    }
-    if (!accepted) break;
-    Eigen::VectorXd s = x_next - x, y = g_next - g;
-    s.segment(output_at, output_params).setZero();  // set by least squares, not by the step
-    const double sy = s.dot(y);
-    if (sy > 1e-12 * s.norm() * y.norm()) {  // keep H positive definite
-      if (static_cast<int>(s_history.size()) == kMemory) {
-        s_history.erase(s_history.begin());
-        y_history.erase(y_history.begin());
-        rho_history.erase(rho_history.begin());
-      }
-      s_history.push_back(std::move(s));
-      y_history.push_back(std::move(y));
-      rho_history.push_back(1 / sy);
-    }
-    x.swap(x_next);
-    g.swap(g_next);
-    loss = next_loss;
-    on_iteration(train_rmse);
-  }
-  unflatten(x, net);
-  return done;
-}
-
-double learning_rate_at(const MlpTrainingOptions& o, long step, long total_steps) {
-  const long warmup = std::max(1L, std::lround(o.warmup_fraction * total_steps));
-  if (step < warmup) return o.learning_rate * static_cast<double>(step + 1) / warmup;
-  const long decay_steps = std::max(1L, total_steps - warmup);
-  const double progress = std::min(1.0, static_cast<double>(step - warmup) / decay_steps);
-  return o.final_learning_rate +
-         0.5 * (o.learning_rate - o.final_learning_rate) * (1.0 + portable::cos(M_PI * progress));
-}
-
-void check_options(const MlpTrainingOptions& o) {
-  if (o.hidden.size() + 1 > static_cast<std::size_t>(kMlpMaxLayers)) {
-    throw MlpError("mlp: " + std::to_string(o.hidden.size()) + " hidden layers; at most " +
-                   std::to_string(kMlpMaxLayers - 1));
-  }
-  for (int width : o.hidden) {
-    if (width < 1 || width > kMlpMaxLayerWidth) {
-      throw MlpError("mlp: hidden layer width " + std::to_string(width) + " outside 1.." +
-                     std::to_string(kMlpMaxLayerWidth));
-    }
-  }
-  if (o.epochs < 0) throw MlpError("mlp: epochs must be >= 0");
-  if (o.polish_iterations < 0) throw MlpError("mlp: polish_iterations must be >= 0");
-  if (o.polish_rounds < 1) throw MlpError("mlp: polish_rounds must be at least 1");
-  if (!(o.polish_weight_decay >= 0)) throw MlpError("mlp: polish_weight_decay must be >= 0");
-  if (o.batch_size < 1) throw MlpError("mlp: batch_size must be at least 1");
-  if (!(o.learning_rate > 0) || !(o.final_learning_rate >= 0) ||
-      !(o.final_learning_rate <= o.learning_rate)) {
-    throw MlpError("mlp: need 0 <= final_learning_rate <= learning_rate, learning_rate > 0");
-  }
-  if (!(o.warmup_fraction >= 0 && o.warmup_fraction < 1)) {
-    throw MlpError("mlp: warmup_fraction must be in [0, 1)");
-  }
-  if (!(o.l2_weight_decay >= 0)) throw MlpError("mlp: l2_weight_decay must be >= 0");
-  if (!(o.test_fraction >= 0 && o.test_fraction < 1)) {
-    throw MlpError("mlp: test_fraction must be in [0, 1)");
-  }
-}
-
-// One Adam step on a parameter block (AdamW decay when decay > 0).
-template <class Param, class Grad, class S>
-void adam_step(Param& p, const Grad& g, Param& m, Param& v, S lr, S bias1, S bias2, S decay) {
-  constexpr S kBeta1 = S(0.9), kBeta2 = S(0.999), kEpsilon = S(1e-8);
-  m.array() = kBeta1 * m.array() + (1 - kBeta1) * g.array();
-  v.array() = kBeta2 * v.array() + (1 - kBeta2) * g.array().square();
-  if (decay > 0) p.array() *= 1 - lr * decay;
-  p.array() -= lr * (m.array() / bias1) / ((v.array() / bias2).sqrt() + kEpsilon);
-}
 
 // A number in messages: "1e+06", "1e+308", "0.5".
 std::string to_text(double v) {
@@ -470,6 +90,63 @@ json to_json_array(const Eigen::VectorXd& v) {
 
 }  // namespace
 
+// ---------------------------------------------------------------- output transforms
+
+// Target (degC) -> the network's output quantity.
+double to_network_units(MlpOutputTransform t, double y) {
+  switch (t) {
+    case MlpOutputTransform::kInverseKelvin:
+      return 1.0 / (y + kKelvinOffset);
+    case MlpOutputTransform::kLogKelvin:
+      return portable::log(y + kKelvinOffset);
+    case MlpOutputTransform::kNone:
+      break;
+  }
+  return y;
+}
+
+// The inverse of to_network_units; NaN where v is outside its range.
+double from_network_units(MlpOutputTransform t, double v) {
+  switch (t) {
+    case MlpOutputTransform::kInverseKelvin:
+      return v > 0 ? 1.0 / v - kKelvinOffset : std::numeric_limits<double>::quiet_NaN();
+    case MlpOutputTransform::kLogKelvin: {
+      const double y = portable::exp(v) - kKelvinOffset;
+      return std::isfinite(y) ? y : std::numeric_limits<double>::quiet_NaN();
+    }
+    case MlpOutputTransform::kNone:
+      break;
+  }
+  return v;
+}
+
+// d from_network_units / d v.
+double target_slope(MlpOutputTransform t, double v) {
+  switch (t) {
+    case MlpOutputTransform::kInverseKelvin:
+      return -1.0 / (v * v);
+    case MlpOutputTransform::kLogKelvin:
+      return portable::exp(v);
+    case MlpOutputTransform::kNone:
+      break;
+  }
+  return 1.0;
+}
+
+const char* to_string(MlpInputTransform t) { return t == MlpInputTransform::kLog ? "log" : "none"; }
+
+const char* to_string(MlpOutputTransform t) {
+  switch (t) {
+    case MlpOutputTransform::kInverseKelvin:
+      return "inverse_kelvin";
+    case MlpOutputTransform::kLogKelvin:
+      return "log_kelvin";
+    case MlpOutputTransform::kNone:
+      break;
+  }
+  return "none";
+}
+
 // ---------------------------------------------------------------- Standardizer
 
 Standardizer Standardizer::fit(const Eigen::MatrixXd& samples) {
@@ -491,415 +168,6 @@ Eigen::MatrixXd Standardizer::apply(const Eigen::MatrixXd& samples) const {
 Eigen::MatrixXd Standardizer::invert(const Eigen::MatrixXd& standardized) const {
   return (standardized.array().rowwise() * scale.transpose().array()).matrix().rowwise() +
          mean.transpose();
-}
-
-// ---------------------------------------------------------------- training
-
-Mlp Mlp::train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
-               const MlpTrainingOptions& options, MlpTrainingReport* report) {
-  using S = TrainingScalar;
-  using Matrix = Network<S>::Matrix;
-  using Row = Eigen::Matrix<S, 1, Eigen::Dynamic>;
-  const auto started = std::chrono::steady_clock::now();
-  check_options(options);
-  if (X.rows() != y.size()) {
-    throw MlpError("mlp: " + std::to_string(X.rows()) + " input rows but " +
-                   std::to_string(y.size()) + " targets");
-  }
-  if (X.cols() < 1 || X.cols() > kMlpMaxLayerWidth) {
-    throw MlpError("mlp: input size " + std::to_string(X.cols()) + " outside 1.." +
-                   std::to_string(kMlpMaxLayerWidth));
-  }
-  if (!X.allFinite() || !y.allFinite()) throw MlpError("mlp: training data has NaN or inf");
-  Eigen::MatrixXd transformed = X;
-  if (options.input_transform == MlpInputTransform::kLog) {
-    for (Eigen::Index c = 0; c < X.cols(); ++c) {
-      for (Eigen::Index r = 0; r < X.rows(); ++r) {
-        if (!(X(r, c) > 0)) {
-          throw MlpError("mlp: the log input transform needs inputs > 0; sample " +
-                         std::to_string(r) + " input " + std::to_string(c) + " is " +
-                         std::to_string(X(r, c)));
-        }
-        transformed(r, c) = portable::log(X(r, c));
-      }
-    }
-  }
-  Eigen::VectorXd y_network(y.size());
-  for (Eigen::Index r = 0; r < y.size(); ++r) {
-    if (options.output_transform != MlpOutputTransform::kNone && !(y[r] > -kKelvinOffset)) {
-      throw MlpError("mlp: the output transform \"" +
-                     std::string(to_string(options.output_transform)) +
-                     "\" needs targets above absolute zero (-273.15 degC); target " +
-                     std::to_string(r) + " is " + std::to_string(y[r]));
-    }
-    y_network[r] = to_network_units(options.output_transform, y[r]);
-  }
-  const Eigen::Index samples = X.rows();
-  const auto test_count =
-      static_cast<Eigen::Index>(std::lround(options.test_fraction * static_cast<double>(samples)));
-  const Eigen::Index train_count = samples - test_count;
-  if (train_count < 1) throw MlpError("mlp: no training samples left after the test split");
-
-  Random random(options.seed);
-  std::vector<Eigen::Index> order(static_cast<std::size_t>(samples));
-  for (Eigen::Index i = 0; i < samples; ++i) order[static_cast<std::size_t>(i)] = i;
-  if (options.stratified_split && test_count > 0 && test_count <= samples - 2) {
-    // Held-out samples evenly spaced in target order from a random phase, never the first or
-    // the last: the ends are trained on, held-out samples lie between training ones.
-    std::vector<Eigen::Index> by_target = order;
-    std::stable_sort(by_target.begin(), by_target.end(),
-                     [&y](Eigen::Index a, Eigen::Index b) { return y[a] < y[b]; });
-    const double spacing =
-        static_cast<double>(samples - 2) / static_cast<double>(test_count);  // >= 1
-    const double phase = random.uniform();
-    std::vector<char> held_out(static_cast<std::size_t>(samples), 0);
-    for (Eigen::Index k = 0; k < test_count; ++k) {
-      const auto rank = 1 + static_cast<std::size_t>((static_cast<double>(k) + phase) * spacing);
-      held_out[std::min(rank, by_target.size() - 2)] = 1;
-    }
-    std::size_t next_test = 0, next_train = static_cast<std::size_t>(test_count);
-    for (std::size_t i = 0; i < by_target.size(); ++i) {
-      order[held_out[i] ? next_test++ : next_train++] = by_target[i];
-    }
-  } else {
-    random.shuffle(order);
-  }
-  // Raw inputs and targets for the final report, transformed ones for training.
-  Eigen::MatrixXd x_train(train_count, X.cols()), x_test(test_count, X.cols());
-  Eigen::MatrixXd v_train(train_count, X.cols()), v_test(test_count, X.cols());
-  Eigen::VectorXd y_train(train_count), y_test(test_count), w_train(train_count);
-  for (Eigen::Index i = 0; i < samples; ++i) {
-    const Eigen::Index src = order[static_cast<std::size_t>(i)];
-    if (i < test_count) {
-      x_test.row(i) = X.row(src);
-      v_test.row(i) = transformed.row(src);
-      y_test[i] = y[src];
-    } else {
-      x_train.row(i - test_count) = X.row(src);
-      v_train.row(i - test_count) = transformed.row(src);
-      y_train[i - test_count] = y[src];
-      w_train[i - test_count] = y_network[src];
-    }
-  }
-  // Standardise on the training rows only, so that the test set stays unseen.
-  const Standardizer input = Standardizer::fit(v_train);
-  const Standardizer output = Standardizer::fit(w_train);
-  const double y_mean = output.mean[0], y_scale = output.scale[0];
-  // Samples as columns: each layer is then one matrix product per batch.
-  const Eigen::MatrixXd z_train = input.apply(v_train).transpose();
-  const Eigen::RowVectorXd t_train = ((w_train.array() - y_mean) / y_scale).matrix().transpose();
-  const Matrix z_train_s = z_train.cast<S>();
-  const Matrix z_test_s = input.apply(v_test).transpose().cast<S>();
-  const Row t_train_s = t_train.cast<S>();
-  // (d target / d standardised output)^2 per training sample: what turns a squared error of the
-  // network into one in target units. The loss weights are these over their mean (or 1).
-  Eigen::RowVectorXd slope_squared(train_count);
-  for (Eigen::Index i = 0; i < train_count; ++i) {
-    const double slope = target_slope(options.output_transform, w_train[i]) * y_scale;
-    slope_squared[i] = slope * slope;
-  }
-  const double mean_slope_squared = slope_squared.mean();
-  const Eigen::RowVectorXd loss_weights =
-      options.loss_in_target_units ? Eigen::RowVectorXd(slope_squared / mean_slope_squared)
-                                   : Eigen::RowVectorXd::Ones(train_count);
-  // Per-sample factors from a weighted squared error (w e^2) to one in target units^2.
-  const Eigen::RowVectorXd to_target_units =
-      options.loss_in_target_units ? Eigen::RowVectorXd::Constant(train_count, mean_slope_squared)
-                                   : slope_squared;
-  const Row loss_weights_s = loss_weights.cast<S>();
-
-  // Augmented samples, prepared as the training rows are: standardised inputs (columns) and
-  // targets, loss weights, and the factors to target units.
-  struct Augmented {
-    Eigen::MatrixXd inputs;  // raw, one row each
-    Eigen::VectorXd targets;
-    Matrix z;
-    Row t;
-    Row weights;
-    Eigen::RowVectorXd t_double, weights_double, slope_squared;
-    Eigen::Index size() const { return targets.size(); }
-  };
-  const std::vector<Eigen::Index> training_rows(order.begin() + test_count, order.end());
-  const bool augmenting = static_cast<bool>(options.augment);
-  auto make_augmented = [&](std::uint64_t augment_seed) {
-    Augmented a;
-    MlpSamples samples = options.augment(training_rows, augment_seed);
-    const Eigen::Index count = samples.inputs.rows();
-    if (samples.targets.size() != count || (count > 0 && samples.inputs.cols() != X.cols())) {
-      throw MlpError("mlp: augmentation gave " + std::to_string(count) + " samples of " +
-                     std::to_string(samples.inputs.cols()) + " inputs and " +
-                     std::to_string(samples.targets.size()) + " targets; need " +
-                     std::to_string(X.cols()) + " inputs and one target each");
-    }
-    if (!samples.inputs.allFinite() || !samples.targets.allFinite()) {
-      throw MlpError("mlp: augmented samples have NaN or inf");
-    }
-    Eigen::MatrixXd v = samples.inputs;
-    if (options.input_transform == MlpInputTransform::kLog) {
-      if (!(samples.inputs.array() > 0).all()) {
-        throw MlpError(
-            "mlp: the log input transform needs inputs > 0; an augmented sample has "
-            "an input <= 0");
-      }
-      v = samples.inputs.unaryExpr([](double x) { return portable::log(x); });
-    }
-    a.z = input.apply(v).transpose().cast<S>();
-    a.t_double.resize(count), a.weights_double.resize(count), a.slope_squared.resize(count);
-    for (Eigen::Index i = 0; i < count; ++i) {
-      const double target = samples.targets[i];
-      if (options.output_transform != MlpOutputTransform::kNone && !(target > -kKelvinOffset)) {
-        throw MlpError("mlp: augmented target " + std::to_string(target) +
-                       " degC is below absolute zero");
-      }
-      const double network = to_network_units(options.output_transform, target);
-      a.t_double[i] = (network - y_mean) / y_scale;
-      const double slope = target_slope(options.output_transform, network) * y_scale;
-      a.slope_squared[i] = slope * slope;
-      a.weights_double[i] =
-          options.augmented_weight *
-          (options.loss_in_target_units ? a.slope_squared[i] / mean_slope_squared : 1.0);
-    }
-    a.t = a.t_double.cast<S>();
-    a.weights = a.weights_double.cast<S>();
-    a.inputs = std::move(samples.inputs);
-    a.targets = std::move(samples.targets);
-    return a;
-  };
-  Augmented augmented;  // the last set made: the report's
-
-  // He initialisation for ReLU layers, variance 1/fan_in for the linear output.
-  Network<S> net;
-  std::vector<int> widths{static_cast<int>(X.cols())};
-  widths.insert(widths.end(), options.hidden.begin(), options.hidden.end());
-  widths.push_back(1);
-  for (std::size_t l = 0; l + 1 < widths.size(); ++l) {
-    const bool is_output = l + 2 == widths.size();
-    const double sd = std::sqrt((is_output ? 1.0 : 2.0) / widths[l]);
-    Matrix w(widths[l + 1], widths[l]);
-    // Row by row, the order the JSON lists them.
-    for (Eigen::Index r = 0; r < w.rows(); ++r) {
-      for (Eigen::Index c = 0; c < w.cols(); ++c) w(r, c) = static_cast<S>(sd * random.normal());
-    }
-    net.weights.push_back(std::move(w));
-    net.bias.push_back(Network<S>::Vector::Zero(widths[l + 1]));
-  }
-  const std::size_t layers = net.layer_count();
-  // Data-dependent hidden biases: each hidden unit's kink passes through a random training
-  // sample, so that the kinks spread along the data instead of all crossing the origin, and no
-  // unit starts dead. The output bias stays 0 (the target mean).
-  {
-    Matrix a = z_train_s;
-    for (std::size_t l = 0; l + 1 < layers; ++l) {
-      Matrix z = net.weights[l] * a;
-      for (Eigen::Index i = 0; i < z.rows(); ++i) {
-        const auto sample =
-            static_cast<Eigen::Index>(random.below(static_cast<std::size_t>(train_count)));
-        net.bias[l][i] = -z(i, sample);
-      }
-      z.colwise() += net.bias[l];
-      a = z.cwiseMax(S(0));
-    }
-  }
-
-  Network<S> grad = net, adam_m = net, adam_v = net;
-  for (std::size_t l = 0; l < layers; ++l) {
-    adam_m.weights[l].setZero(), adam_m.bias[l].setZero();
-    adam_v.weights[l].setZero(), adam_v.bias[l].setZero();
-  }
-  const Eigen::Index batch = std::min<Eigen::Index>(options.batch_size, train_count);
-  auto acts = make_activations(net, batch);
-  auto deltas = make_activations(net, batch);  // d loss / d pre-activation, same shapes
-  auto eval_acts = make_activations(net, kInferenceChunk);
-  Row batch_targets(batch), batch_weights(batch);
-
-  // The first epoch's augmented samples fix the schedule's length (later epochs have about as
-  // many; the schedule holds its final rate should they have more).
-  if (augmenting && options.epochs > 0) augmented = make_augmented(random.bits());
-  const long steps_per_epoch =
-      static_cast<long>((train_count + augmented.size() + batch - 1) / batch);
-  const long total_steps = steps_per_epoch * options.epochs;
-  long step = 0;
-  // Indices below train_count are training rows, the rest augmented samples.
-  std::vector<Eigen::Index> train_order(static_cast<std::size_t>(train_count));
-  for (Eigen::Index i = 0; i < train_count; ++i) train_order[static_cast<std::size_t>(i)] = i;
-  std::vector<int> pass;
-  std::vector<double> train_rmse, test_rmse;
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  const MlpOutputTransform output_transform = options.output_transform;
-  auto test_set_rmse = [&](const auto& network, auto& activations, const auto& z_test) {
-    if (test_count == 0) return nan;
-    const auto predicted = evaluate(network, z_test, activations);
-    double squared_error_sum = 0;
-    for (Eigen::Index i = 0; i < test_count; ++i) {
-      const double v = static_cast<double>(predicted[i]) * y_scale + y_mean;
-      const double error = from_network_units(output_transform, v) - y_test[i];
-      squared_error_sum += error * error;
-    }
-    return std::sqrt(squared_error_sum / static_cast<double>(test_count));
-  };
-
-  for (int epoch = 0; epoch < options.epochs; ++epoch) {
-    if (augmenting) {
-      if (epoch > 0) augmented = make_augmented(random.bits());
-      train_order.resize(static_cast<std::size_t>(train_count + augmented.size()));
-      for (std::size_t i = 0; i < train_order.size(); ++i) {
-        train_order[i] = static_cast<Eigen::Index>(i);
-      }
-    }
-    random.shuffle(train_order);
-    const auto epoch_count = static_cast<Eigen::Index>(train_order.size());
-    double squared_error_sum = 0;  // in target units, to first order, of the training rows
-    for (Eigen::Index start = 0; start < epoch_count; start += batch, ++step) {
-      const Eigen::Index n = std::min(batch, epoch_count - start);
-      double factor_sum = 0;
-      for (Eigen::Index k = 0; k < n; ++k) {
-        const Eigen::Index src = train_order[static_cast<std::size_t>(start + k)];
-        if (src < train_count) {
-          acts[0].col(k) = z_train_s.col(src);
-          batch_targets[k] = t_train_s[src];
-          batch_weights[k] = loss_weights_s[src];
-          factor_sum += to_target_units[src];
-        } else {
-          const Eigen::Index a = src - train_count;
-          acts[0].col(k) = augmented.z.col(a);
-          batch_targets[k] = augmented.t[a];
-          batch_weights[k] = augmented.weights[a];
-        }
-      }
-      forward(net, acts, n);
-      if (augmenting) {
-        for (Eigen::Index k = 0; k < n; ++k) {
-          const Eigen::Index src = train_order[static_cast<std::size_t>(start + k)];
-          if (src >= train_count) continue;
-          const double error = static_cast<double>(acts[layers](0, k) - batch_targets[k]);
-          squared_error_sum += error * error * slope_squared[src];
-        }
-      }
-      const double weighted_sum =
-          backward(net, acts, deltas, batch_targets, batch_weights, n, grad);
-      // Exact when the factor is the same for all samples (weighted loss), approximate else.
-      if (!augmenting) squared_error_sum += weighted_sum * factor_sum / static_cast<double>(n);
-      const S lr = static_cast<S>(learning_rate_at(options, step, total_steps));
-      const S bias1 = static_cast<S>(1 - portable::pow(0.9, static_cast<double>(step + 1)));
-      const S bias2 = static_cast<S>(1 - portable::pow(0.999, static_cast<double>(step + 1)));
-      const S decay = static_cast<S>(options.l2_weight_decay);
-      for (std::size_t l = 0; l < layers; ++l) {
-        adam_step(net.weights[l], grad.weights[l], adam_m.weights[l], adam_v.weights[l], lr, bias1,
-                  bias2, decay);
-        adam_step(net.bias[l], grad.bias[l], adam_m.bias[l], adam_v.bias[l], lr, bias1, bias2,
-                  S(0));
-      }
-    }
-    const double epoch_train_rmse = std::sqrt(squared_error_sum / static_cast<double>(train_count));
-    if (!std::isfinite(epoch_train_rmse)) {
-      throw MlpError("mlp: training diverged at epoch " + std::to_string(epoch + 1) +
-                     "; lower learning_rate");
-    }
-    const double epoch_test_rmse = test_set_rmse(net, eval_acts, z_test_s);
-    pass.push_back(epoch + 1);
-    train_rmse.push_back(epoch_train_rmse);
-    test_rmse.push_back(epoch_test_rmse);
-    if (options.progress) options.progress(epoch + 1, epoch_train_rmse, epoch_test_rmse);
-  }
-
-  // The polish, in rounds; between rounds each sample's weight is multiplied by its absolute
-  // error (Lawson's iteration: the weighted least-squares fit tends to the minimax fit), with a
-  // floor of a twentieth of the largest error so that no sample drops out.
-  PolishProblem problem{
-      z_train_s, t_train, loss_weights, slope_squared, options.polish_weight_decay, train_count};
-  if (augmenting && options.polish_iterations > 0) {
-    augmented = make_augmented(random.bits());
-    const Eigen::Index total = train_count + augmented.size();
-    problem.inputs.conservativeResize(Eigen::NoChange, total);
-    problem.inputs.rightCols(augmented.size()) = augmented.z;
-    problem.targets.conservativeResize(total);
-    problem.targets.tail(augmented.size()) = augmented.t_double;
-    problem.weights.conservativeResize(total);
-    problem.weights.tail(augmented.size()) = augmented.weights_double;
-    problem.slope_squared.conservativeResize(total);
-    problem.slope_squared.tail(augmented.size()) = augmented.slope_squared;
-  }
-  int polish_done = 0;
-  const int pass_before_polish = options.epochs;
-  auto record_polish_point = [&](double train) {
-    const double test = test_set_rmse(net, eval_acts, z_test_s);
-    if (!std::isfinite(train)) throw MlpError("mlp: the polish diverged");
-    pass.push_back(pass_before_polish + polish_done);
-    train_rmse.push_back(train);
-    test_rmse.push_back(test);
-    if (options.progress) options.progress(pass.back(), train, test);
-  };
-  double last_train = 0;
-  for (int round = 0; round < options.polish_rounds && options.polish_iterations > 0; ++round) {
-    const int budget = options.polish_iterations * (round + 1) / options.polish_rounds -
-                       options.polish_iterations * round / options.polish_rounds;
-    polish_with_lbfgs(net, problem, budget, [&](double train) {
-      ++polish_done;
-      last_train = train;
-      if (polish_done % kPolishReportInterval == 0) record_polish_point(train);
-    });
-    if (round + 1 < options.polish_rounds) {
-      const Eigen::RowVectorXf predicted = evaluate(net, z_train_s, eval_acts);
-      Eigen::ArrayXd error(train_count);
-      for (Eigen::Index i = 0; i < train_count; ++i) {
-        const double v = static_cast<double>(predicted[i]) * y_scale + y_mean;
-        error[i] = std::abs(from_network_units(output_transform, v) - y_train[i]);
-      }
-      const double floor = error.maxCoeff() / 20;
-      if (!(floor > 0)) break;  // exact fit (or NaN): nothing to reweight
-      for (Eigen::Index i = 0; i < train_count; ++i) {
-        problem.weights[i] *= std::max(error[i], floor);
-      }
-      problem.weights.head(train_count) /= problem.weights.head(train_count).mean();
-    }
-  }
-  if (polish_done % kPolishReportInterval != 0) record_polish_point(last_train);  // the last
-
-  std::vector<MlpLayer> model_layers;
-  for (std::size_t l = 0; l < layers; ++l) {
-    model_layers.push_back(
-        {net.weights[l].template cast<double>(), net.bias[l].template cast<double>()});
-  }
-  Mlp model(options.input_transform, input, options.output_transform, y_mean, y_scale,
-            std::move(model_layers));
-
-  if (report) {
-    report->pass = std::move(pass);
-    report->train_rmse = std::move(train_rmse);
-    report->test_rmse = std::move(test_rmse);
-    report->train_samples = static_cast<int>(train_count);
-    report->test_samples = static_cast<int>(test_count);
-    report->epochs = options.epochs;
-    report->polish_iterations_done = polish_done;
-    const Eigen::VectorXd train_error = model.predict(x_train) - y_train;
-    report->final_train_rmse =
-        std::sqrt(train_error.squaredNorm() / static_cast<double>(train_count));
-    report->max_abs_train_error = train_error.cwiseAbs().maxCoeff();
-    if (test_count > 0) {
-      const Eigen::VectorXd test_error = model.predict(x_test) - y_test;
-      report->final_test_rmse =
-          std::sqrt(test_error.squaredNorm() / static_cast<double>(test_count));
-      report->max_abs_test_error = test_error.cwiseAbs().maxCoeff();
-    } else {
-      report->final_test_rmse = report->max_abs_test_error = nan;
-    }
-    report->augmented_samples = static_cast<int>(augmented.size());
-    if (augmented.size() > 0) {
-      const Eigen::VectorXd error = model.predict(augmented.inputs) - augmented.targets;
-      report->augmented_rmse =
-          std::sqrt(error.squaredNorm() / static_cast<double>(augmented.size()));
-      std::vector<double> abs_error(error.data(), error.data() + error.size());
-      for (double& e : abs_error) e = std::abs(e);
-      const auto middle = abs_error.begin() + static_cast<std::ptrdiff_t>(abs_error.size() / 2);
-      std::nth_element(abs_error.begin(), middle, abs_error.end());
-      report->augmented_median_abs_error = *middle;
-    } else {
-      report->augmented_rmse = report->augmented_median_abs_error = nan;
-    }
-    report->seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  }
-  return model;
 }
 
 // ---------------------------------------------------------------- model

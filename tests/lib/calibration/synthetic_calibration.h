@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "pyrocam/calibration/calibration_outcome.h"
+#include "pyrocam/calibration/mlp_training.h"
 #include "pyrocam/core/locus.h"
 #include "pyrocam/core/profile.h"
 
@@ -32,7 +33,7 @@ inline ThermalModel small_model(const CameraProfile& profile, double min_c, doub
   options.hidden = {16, 12};
   options.epochs = 20;
   options.polish_iterations = 200;
-  m.mlp = Mlp::train(locus.ratios, locus.temperature_c, options);
+  m.mlp = train_mlp(locus.ratios, locus.temperature_c, options);
   return m;
 }
 

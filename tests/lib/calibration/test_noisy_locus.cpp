@@ -8,8 +8,8 @@
 #include <numeric>
 #include <vector>
 
-#include "pyrocam/runtime/estimators.h"
 #include "pyrocam/calibration/noisy_locus.h"
+#include "pyrocam/runtime/estimators.h"
 
 namespace pyrocam {
 namespace {
@@ -142,9 +142,9 @@ TEST(NoisyLocus, network_trained_on_copies_reads_noisy_5x5_pixels_as_the_likelih
   options.augment = [&noisy](const std::vector<Eigen::Index>& rows, std::uint64_t seed) {
     return noisy.sample(rows, seed);
   };
-  const Mlp trained = Mlp::train(locus.ratios, locus.temperature_c, options);
+  const Mlp trained = train_mlp(locus.ratios, locus.temperature_c, options);
   options.augment = nullptr;
-  const Mlp locus_only = Mlp::train(locus.ratios, locus.temperature_c, options);
+  const Mlp locus_only = train_mlp(locus.ratios, locus.temperature_c, options);
 
   NoisyLocusOptions single_pixels;
   single_pixels.copies = 200;

@@ -9,9 +9,9 @@
 #include <memory>
 #include <vector>
 
-#include "pyrocam/runtime/estimators.h"
+#include "pyrocam/calibration/mlp_training.h"
 #include "pyrocam/core/locus.h"
-#include "pyrocam/runtime/mlp.h"
+#include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/model.h"
 
 namespace pyrocam {
