@@ -47,8 +47,8 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
-#include "pyrocam/runtime/darksub.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/runtime/darksub.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_dark_sub_debug);
 #define GST_CAT_DEFAULT gst_dark_sub_debug
@@ -158,19 +158,7 @@ static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
 static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
     "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_MOSAIC_CAPS));
 
-static Settings copy_settings(GstDarkSub* self) {
-  GST_OBJECT_LOCK(self);
-  Settings s = *self->settings;
-  GST_OBJECT_UNLOCK(self);
-  return s;
-}
-
-static void copy_dimensions(const GstStructure* from, GstStructure* to) {
-  for (const char* field : {"width", "height", "framerate"}) {
-    const GValue* v = gst_structure_get_value(from, field);
-    if (v) gst_structure_set_value(to, field, v);
-  }
-}
+static Settings copy_settings(GstDarkSub* self) { return pg::locked_copy(self, *self->settings); }
 
 static GstCaps* gst_dark_sub_transform_caps(GstBaseTransform* trans, GstPadDirection direction,
                                             GstCaps* caps, GstCaps* filter) {
@@ -184,7 +172,7 @@ static GstCaps* gst_dark_sub_transform_caps(GstBaseTransform* trans, GstPadDirec
     if (direction == GST_PAD_SINK) {
       GstStructure* out =
           gst_structure_new(PYROCAM_MOSAIC_MEDIA_TYPE, "format", G_TYPE_STRING, "F32LE", nullptr);
-      copy_dimensions(s, out);
+      pg::copy_dimensions(s, out);
       if (gst_structure_has_name(s, "video/x-bayer")) {
         const GValue* format = gst_structure_get_value(s, "format");
         if (format)
@@ -197,17 +185,13 @@ static GstCaps* gst_dark_sub_transform_caps(GstBaseTransform* trans, GstPadDirec
          * property's, and with neither any pattern: set_caps refuses it. */
         const GValue* caps_pattern = gst_structure_get_value(s, PYROCAM_FIELD_PATTERN);
         const char* property_pattern = pattern_name(settings.pattern);
-        const GValue* band_map = gst_structure_get_value(s, PYROCAM_FIELD_BAND_MAP);
-        if (band_map) gst_structure_set_value(out, PYROCAM_FIELD_BAND_MAP, band_map);
+        pg::copy_fields(s, out, {PYROCAM_FIELD_BAND_MAP});
         if (caps_pattern) {
           gst_structure_set_value(out, "pattern", caps_pattern);
         } else if (property_pattern) {
           gst_structure_set(out, "pattern", G_TYPE_STRING, property_pattern, nullptr);
         } else {
-          GValue all = G_VALUE_INIT;
-          g_value_init(&all, GST_TYPE_LIST);
-          gst_value_deserialize(&all, PYROCAM_PATTERNS);
-          gst_structure_take_value(out, "pattern", &all);
+          pg::set_list_field(out, "pattern", PYROCAM_PATTERNS);
         }
         const char* format = gst_structure_get_string(s, "format");
         if (format && g_str_equal(format, "GRAY8")) {
@@ -264,9 +248,9 @@ static GstCaps* gst_dark_sub_transform_caps(GstBaseTransform* trans, GstPadDirec
         }
         g_value_unset(&all);
       }
-      if (b) copy_dimensions(s, b);
+      if (b) pg::copy_dimensions(s, b);
       GstCaps* gray = gst_caps_from_string(PYROCAM_RAW_GRAY_CAPS);
-      copy_dimensions(s, gst_caps_get_structure(gray, 0));
+      pg::copy_dimensions(s, gst_caps_get_structure(gray, 0));
       result = gst_caps_merge(result, bayer);
       result = gst_caps_merge(result, gray);
     }
@@ -448,20 +432,6 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
   return check_dark(self);
 }
 
-static gboolean gst_dark_sub_decide_allocation(GstBaseTransform* trans, GstQuery* query) {
-  GstCaps* caps = nullptr;
-  gst_query_parse_allocation(query, &caps, nullptr);
-  gsize size = 0;
-  if (caps) {
-    const GstStructure* s = gst_caps_get_structure(caps, 0);
-    size = static_cast<gsize>(pg::structure_int(s, "width", 0)) *
-           static_cast<gsize>(pg::structure_int(s, "height", 0)) *
-           static_cast<gsize>(pg::structure_int(s, "bands", 1)) * sizeof(float);
-  }
-  pg::ensure_buffer_pool(query, size);
-  return GST_BASE_TRANSFORM_CLASS(gst_dark_sub_parent_class)->decide_allocation(trans, query);
-}
-
 static gboolean gst_dark_sub_start(GstBaseTransform* trans) {
   GstDarkSub* self = GST_DARK_SUB(trans);
   const Settings settings = copy_settings(self);
@@ -499,9 +469,8 @@ static gboolean gst_dark_sub_start(GstBaseTransform* trans) {
 static gboolean gst_dark_sub_stop(GstBaseTransform* trans) {
   GstDarkSub* self = GST_DARK_SUB(trans);
   *self->state = State();  // releases the dark frames
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   self->settings->capture_requests = 0;
-  GST_OBJECT_UNLOCK(self);
   return TRUE;
 }
 
@@ -571,46 +540,48 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
 }
 
 static void gst_dark_sub_capture_dark(GstDarkSub* self) {
-  GST_OBJECT_LOCK(self);
-  ++self->settings->capture_requests;
-  GST_OBJECT_UNLOCK(self);
+  {
+    pg::ObjectLock lock(self);
+    ++self->settings->capture_requests;
+  }
   GST_INFO_OBJECT(self, "dark capture requested");
 }
 
 static void gst_dark_sub_set_property(GObject* object, guint prop_id, const GValue* value,
                                       GParamSpec* pspec) {
   GstDarkSub* self = GST_DARK_SUB(object);
-  GST_OBJECT_LOCK(self);
-  Settings& s = *self->settings;
-  switch (prop_id) {
-    case PROP_LOCATION:
-      if (GST_STATE(self) > GST_STATE_READY) {
-        GST_WARNING_OBJECT(self, "location can only change in NULL or READY");
-      } else {
-        const char* v = g_value_get_string(value);
-        s.location = v ? v : "";
-      }
-      break;
-    case PROP_DARK_LEVEL:
-      s.dark_level = g_value_get_double(value);
-      break;
-    case PROP_SATURATION_LEVEL:
-      s.saturation_level = g_value_get_double(value);
-      break;
-    case PROP_CAPTURE_FRAMES:
-      s.capture_frames = g_value_get_int(value);
-      break;
-    case PROP_PATTERN:
-      s.pattern = static_cast<GstDarkSubPattern>(g_value_get_enum(value));
-      break;
-    case PROP_BIT_DEPTH:
-      s.bit_depth = g_value_get_int(value);
-      break;
-    default:
-      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
-      break;
+  {
+    pg::ObjectLock lock(self);
+    Settings& s = *self->settings;
+    switch (prop_id) {
+      case PROP_LOCATION:
+        if (GST_STATE(self) > GST_STATE_READY) {
+          GST_WARNING_OBJECT(self, "location can only change in NULL or READY");
+        } else {
+          const char* v = g_value_get_string(value);
+          s.location = v ? v : "";
+        }
+        break;
+      case PROP_DARK_LEVEL:
+        s.dark_level = g_value_get_double(value);
+        break;
+      case PROP_SATURATION_LEVEL:
+        s.saturation_level = g_value_get_double(value);
+        break;
+      case PROP_CAPTURE_FRAMES:
+        s.capture_frames = g_value_get_int(value);
+        break;
+      case PROP_PATTERN:
+        s.pattern = static_cast<GstDarkSubPattern>(g_value_get_enum(value));
+        break;
+      case PROP_BIT_DEPTH:
+        s.bit_depth = g_value_get_int(value);
+        break;
+      default:
+        G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+        break;
+    }
   }
-  GST_OBJECT_UNLOCK(self);
   /* The saturation level is in the output caps: renegotiate, so that ratiotemp sees it. */
   if (prop_id == PROP_SATURATION_LEVEL)
     gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
@@ -619,7 +590,7 @@ static void gst_dark_sub_set_property(GObject* object, guint prop_id, const GVal
 static void gst_dark_sub_get_property(GObject* object, guint prop_id, GValue* value,
                                       GParamSpec* pspec) {
   GstDarkSub* self = GST_DARK_SUB(object);
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   const Settings& s = *self->settings;
   switch (prop_id) {
     case PROP_LOCATION:
@@ -644,7 +615,6 @@ static void gst_dark_sub_get_property(GObject* object, guint prop_id, GValue* va
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_dark_sub_finalize(GObject* object) {
@@ -737,7 +707,7 @@ static void gst_dark_sub_class_init(GstDarkSubClass* klass) {
   trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_dark_sub_transform_caps);
   trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_dark_sub_transform_size);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_dark_sub_set_caps);
-  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(gst_dark_sub_decide_allocation);
+  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(pg::decide_allocation);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_dark_sub_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_dark_sub_stop);
   trans_class->sink_event = GST_DEBUG_FUNCPTR(gst_dark_sub_sink_event);

@@ -150,10 +150,7 @@ static GstStaticPadTemplate src_template =
     GST_STATIC_PAD_TEMPLATE("src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_RAW_CAPS));
 
 static Settings copy_settings(GstPyrocamSrc* self) {
-  GST_OBJECT_LOCK(self);
-  Settings s = *self->settings;
-  GST_OBJECT_UNLOCK(self);
-  return s;
+  return pg::locked_copy(self, *self->settings);
 }
 
 /* The caps the loaded profile can produce. */
@@ -187,9 +184,7 @@ static GstCaps* profile_caps(const pyrocam::CameraProfile& profile) {
 static GstCaps* gst_pyrocam_src_get_caps(GstBaseSrc* src, GstCaps* filter) {
   GstPyrocamSrc* self = GST_PYROCAM_SRC(src);
   GstCaps* caps;
-  GST_OBJECT_LOCK(self);
-  const bool have = self->state->camera != nullptr;
-  GST_OBJECT_UNLOCK(self);
+  const bool have = pg::locked_copy(self, self->state->camera != nullptr);
   if (have)
     caps = profile_caps(self->state->camera->profile());
   else
@@ -259,18 +254,16 @@ static gboolean gst_pyrocam_src_start(GstBaseSrc* src) {
   if (!ok) return FALSE;
   GST_INFO_OBJECT(self, "camera profile %s, %s unit", camera->profile().name.c_str(),
                   settings.unit == GST_PYROCAM_SRC_UNIT_TYPICAL ? "typical" : "datasheet");
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   *self->state = State();
   self->state->camera = std::move(camera);
-  GST_OBJECT_UNLOCK(self);
   return TRUE;
 }
 
 static gboolean gst_pyrocam_src_stop(GstBaseSrc* src) {
   GstPyrocamSrc* self = GST_PYROCAM_SRC(src);
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   *self->state = State();
-  GST_OBJECT_UNLOCK(self);
   return TRUE;
 }
 
@@ -353,7 +346,7 @@ static void gst_pyrocam_src_set_property(GObject* object, guint prop_id, const G
     gst_base_src_set_live(GST_BASE_SRC(self), g_value_get_boolean(value));
     return;
   }
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   Settings& s = *self->settings;
   const bool running = GST_STATE(self) > GST_STATE_READY;
   switch (prop_id) {
@@ -390,7 +383,6 @@ static void gst_pyrocam_src_set_property(GObject* object, guint prop_id, const G
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_pyrocam_src_get_property(GObject* object, guint prop_id, GValue* value,
@@ -400,7 +392,7 @@ static void gst_pyrocam_src_get_property(GObject* object, guint prop_id, GValue*
     g_value_set_boolean(value, gst_base_src_is_live(GST_BASE_SRC(self)));
     return;
   }
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   const Settings& s = *self->settings;
   switch (prop_id) {
     case PROP_SCENE:
@@ -425,7 +417,6 @@ static void gst_pyrocam_src_get_property(GObject* object, guint prop_id, GValue*
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_pyrocam_src_finalize(GObject* object) {

@@ -345,23 +345,11 @@ static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
 static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
     "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_TEMPERATURE_CAPS));
 
-static Settings copy_settings(GstRatioTemp* self) {
-  GST_OBJECT_LOCK(self);
-  Settings s = *self->settings;
-  GST_OBJECT_UNLOCK(self);
-  return s;
-}
+static Settings copy_settings(GstRatioTemp* self) { return pg::locked_copy(self, *self->settings); }
 
 static void reset_state(GstRatioTemp* self) {
   delete self->state;  // estimators first, then the model
   self->state = new State();
-}
-
-static void copy_dimensions(const GstStructure* from, GstStructure* to) {
-  for (const char* field : {"width", "height", "framerate"}) {
-    const GValue* v = gst_structure_get_value(from, field);
-    if (v) gst_structure_set_value(to, field, v);
-  }
 }
 
 static GstCaps* gst_ratio_temp_transform_caps(GstBaseTransform* trans, GstPadDirection direction,
@@ -373,7 +361,7 @@ static GstCaps* gst_ratio_temp_transform_caps(GstBaseTransform* trans, GstPadDir
   GstCaps* result = gst_caps_new_empty();
   for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
     GstStructure* out = gst_structure_copy(gst_caps_get_structure(templ, 0));
-    copy_dimensions(gst_caps_get_structure(caps, i), out);
+    pg::copy_dimensions(gst_caps_get_structure(caps, i), out);
     result = gst_caps_merge_structure(result, out);
   }
   gst_caps_unref(templ);
@@ -472,15 +460,6 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
   GST_INFO_OBJECT(self, "%d bands of %dx%d (%s) -> GRAY16_LE", st.bands, st.width, st.height,
                   layout);
   return TRUE;
-}
-
-static gboolean gst_ratio_temp_decide_allocation(GstBaseTransform* trans, GstQuery* query) {
-  GstCaps* caps = nullptr;
-  gst_query_parse_allocation(query, &caps, nullptr);
-  GstVideoInfo info;
-  if (caps && gst_video_info_from_caps(&info, caps))
-    pg::ensure_buffer_pool(query, GST_VIDEO_INFO_SIZE(&info));
-  return GST_BASE_TRANSFORM_CLASS(gst_ratio_temp_parent_class)->decide_allocation(trans, query);
 }
 
 static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
@@ -708,7 +687,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
 static void gst_ratio_temp_set_property(GObject* object, guint prop_id, const GValue* value,
                                         GParamSpec* pspec) {
   GstRatioTemp* self = GST_RATIO_TEMP(object);
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   Settings& s = *self->settings;
   const bool running = GST_STATE(self) > GST_STATE_READY;
   switch (prop_id) {
@@ -752,13 +731,12 @@ static void gst_ratio_temp_set_property(GObject* object, guint prop_id, const GV
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_ratio_temp_get_property(GObject* object, guint prop_id, GValue* value,
                                         GParamSpec* pspec) {
   GstRatioTemp* self = GST_RATIO_TEMP(object);
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   const Settings& s = *self->settings;
   switch (prop_id) {
     case PROP_MODEL:
@@ -786,7 +764,6 @@ static void gst_ratio_temp_get_property(GObject* object, guint prop_id, GValue* 
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_ratio_temp_finalize(GObject* object) {
@@ -873,7 +850,7 @@ static void gst_ratio_temp_class_init(GstRatioTempClass* klass) {
   trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_ratio_temp_transform_caps);
   trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_ratio_temp_transform_size);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_ratio_temp_set_caps);
-  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(gst_ratio_temp_decide_allocation);
+  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(pg::decide_allocation);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_ratio_temp_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_ratio_temp_stop);
   trans_class->sink_event = GST_DEBUG_FUNCPTR(gst_ratio_temp_sink_event);
