@@ -176,6 +176,14 @@ gboolean decide_allocation(GstBaseTransform* trans, GstQuery* query) {
   return base->decide_allocation(trans, query);
 }
 
+void sync_controlled_properties(GstBaseTransform* trans, GstBuffer* buffer) {
+  if (trans->segment.format != GST_FORMAT_TIME || !GST_BUFFER_PTS_IS_VALID(buffer)) return;
+  const GstClockTime stream_time =
+      gst_segment_to_stream_time(&trans->segment, GST_FORMAT_TIME, GST_BUFFER_PTS(buffer));
+  GST_TRACE_OBJECT(trans, "stream time %" GST_TIME_FORMAT, GST_TIME_ARGS(stream_time));
+  if (GST_CLOCK_TIME_IS_VALID(stream_time)) gst_object_sync_values(GST_OBJECT(trans), stream_time);
+}
+
 int structure_int(const GstStructure* s, const char* field, int fallback) {
   int v;
   return gst_structure_get_int(s, field, &v) ? v : fallback;

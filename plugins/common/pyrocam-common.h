@@ -1,5 +1,6 @@
 /* Helpers shared by the pyrocam elements: buffer <-> library image views, caps field access,
- * the object lock, buffer pools, and the mapping of library exceptions to bus errors. */
+ * the object lock, buffer pools, controlled properties, and the mapping of library exceptions
+ * to bus errors. */
 #pragma once
 
 #include <gst/base/gstbasetransform.h>
@@ -100,6 +101,12 @@ gsize frame_size_of_caps(GstCaps* caps);
  * directly: a pool of output frames (ensure_buffer_pool) when downstream offers none, then
  * GstBaseTransform's own choice. */
 gboolean decide_allocation(GstBaseTransform* trans, GstQuery* query);
+
+/* GstBaseTransform::before_transform of elements with GST_PARAM_CONTROLLABLE properties: brings
+ * those a control binding drives to their values at the buffer's stream time (as videobalance
+ * does), so that a controller changes them frame by frame. Buffers without a timestamp keep the
+ * current values. */
+void sync_controlled_properties(GstBaseTransform* trans, GstBuffer* buffer);
 
 /* Integer field of a structure when fixed, else `fallback`. */
 int structure_int(const GstStructure* s, const char* field, int fallback);

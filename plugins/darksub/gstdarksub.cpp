@@ -708,6 +708,7 @@ static void gst_dark_sub_class_init(GstDarkSubClass* klass) {
   trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_dark_sub_transform_size);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_dark_sub_set_caps);
   trans_class->decide_allocation = GST_DEBUG_FUNCPTR(pg::decide_allocation);
+  trans_class->before_transform = GST_DEBUG_FUNCPTR(pg::sync_controlled_properties);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_dark_sub_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_dark_sub_stop);
   trans_class->sink_event = GST_DEBUG_FUNCPTR(gst_dark_sub_sink_event);

@@ -286,6 +286,11 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
   GstPyrocamSrc* self = GST_PYROCAM_SRC(push);
   State& st = *self->state;
   if (!st.camera || st.width == 0) return GST_FLOW_NOT_NEGOTIATED;
+  const GstClockTime pts = gst_util_uint64_scale(
+      st.frame, static_cast<guint64>(st.fps_d) * GST_SECOND, static_cast<guint64>(st.fps_n));
+  // Controlled properties (scene, exposure, temperature) take their values at the frame's time;
+  // the segment starts at 0, so that is its stream time.
+  gst_object_sync_values(GST_OBJECT(self), pts);
   const Settings settings = copy_settings(self);
   const double emissivity = emissivity_of(settings.scene);
   const bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "Could not render a frame", [&] {
@@ -326,8 +331,6 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
   });
   if (!ok) return GST_FLOW_ERROR;
 
-  const GstClockTime pts = gst_util_uint64_scale(
-      st.frame, static_cast<guint64>(st.fps_d) * GST_SECOND, static_cast<guint64>(st.fps_n));
   const GstClockTime next = gst_util_uint64_scale(
       st.frame + 1, static_cast<guint64>(st.fps_d) * GST_SECOND, static_cast<guint64>(st.fps_n));
   GST_BUFFER_PTS(buffer) = pts;

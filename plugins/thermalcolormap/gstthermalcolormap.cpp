@@ -440,6 +440,7 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
   trans_class->start = GST_DEBUG_FUNCPTR(gst_thermal_colormap_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_thermal_colormap_stop);
   trans_class->transform = GST_DEBUG_FUNCPTR(gst_thermal_colormap_transform);
+  trans_class->before_transform = GST_DEBUG_FUNCPTR(pg::sync_controlled_properties);
   filter_class->set_info = GST_DEBUG_FUNCPTR(gst_thermal_colormap_set_info);
   filter_class->transform_frame = GST_DEBUG_FUNCPTR(gst_thermal_colormap_transform_frame);
 
