@@ -10,10 +10,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "commands.h"
-#include "pyrocam/runtime/darksub.h"
 #include "pyrocam/core/dataset.h"
 #include "pyrocam/core/difference_codes.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/runtime/darksub.h"
+#include "pyrocam/runtime/estimator_selection.h"
 
 namespace pyrocam::cli {
 namespace {
@@ -114,8 +115,11 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       "--roi", a.roi,
       "ROI mask for the statistics, of the frames' size (default: the dataset's roi.png)");
   c->add_option("--out", a.out, "Output folder (created)")->required();
-  c->add_option("--method", a.method, "Estimator: mlp, lut or likelihood")
-      ->check(CLI::IsMember({"mlp", "lut", "likelihood"}))
+  c->add_option("--method", a.method,
+                "Estimator: mlp, lut, likelihood or auto (as ratiotemp's: lut where the model "
+                "has two ratios and its table passes the check against the network, else "
+                "likelihood)")
+      ->check(CLI::IsMember({"mlp", "lut", "likelihood", "auto"}))
       ->capture_default_str();
   c->add_option("--demosaic", a.demosaic, "Bayer demosaicking: bilinear or bin2x2")
       ->check(CLI::IsMember({"bilinear", "bin2x2"}))
@@ -148,7 +152,11 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
     selected = [&global] {
       const ThermalModel model = load_model(a.model);
       MeasureOptions options;
-      options.method = parse_method(a.method);
+      std::string not_lut;  // auto: why the lookup table is not used
+      options.method = a.method == "auto" ? choose_method(model, MethodRequest::kAuto, &not_lut)
+                                          : parse_method(a.method);
+      if (!not_lut.empty() && !global.quiet)
+        std::cerr << "warning: method auto uses likelihood, not lut: " << not_lut << "\n";
       options.demosaic = parse_demosaic_method(a.demosaic);
       options.saturation_level_dn = a.saturation;
       options.uncertainty = a.uncertainty;

@@ -106,7 +106,6 @@
  */
 #include "gstratiotemp.h"
 
-#include <array>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -116,7 +115,7 @@
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
 #include "pyrocam/core/difference_codes.h"
-#include "pyrocam/runtime/estimator_check.h"
+#include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/measure.h"
 #include "pyrocam/runtime/model.h"
 
@@ -145,10 +144,6 @@ constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
 constexpr double DEFAULT_MISFIT_PROBABILITY = 0.0;
 constexpr double MAX_MISFIT_PROBABILITY = 0.5;
 constexpr const char* STATS_MESSAGE = "pyrocam-temperature-stats";
-/* The lookup table is used only where it gives the network's answer: within this many degC at
- * every 1 degC sample of the model's locus, and reading where the network reads at all but 1 %
- * of them (the range ends). */
-constexpr double LUT_TOLERANCE_C = 1.0;
 
 /* A rectangle of output pixels. */
 struct Region {
@@ -190,13 +185,11 @@ struct Settings {
 struct State {
   std::unique_ptr<const pyrocam::ThermalModel> model;
   std::string model_path;
-  std::array<std::unique_ptr<pyrocam::PlaneEstimator>, 3> estimators;  // by pyrocam::Method
-  pyrocam::Method method = pyrocam::Method::kMlp;                      // in use
-  GstRatioTempMethod method_request = DEFAULT_METHOD;   // the property value it came from
-  GstRatioTempMethod refused_request = DEFAULT_METHOD;  // last property value warned about
+  std::unique_ptr<pyrocam::EstimatorSelector> estimators;  // builds and keeps them per method
+  pyrocam::Method method = pyrocam::Method::kMlp;          // in use
+  GstRatioTempMethod method_request = DEFAULT_METHOD;      // the property value it came from
+  GstRatioTempMethod refused_request = DEFAULT_METHOD;     // last property value warned about
   bool refused = false;
-  bool lut_checked = false;
-  std::string lut_problem;  // why the lookup table is not used for this model, if it is not
   bool configured = false;
   int width = 0, height = 0, bands = 0;
   GstVideoInfo out_info{};
@@ -213,67 +206,17 @@ const char* layout_name(const pyrocam::ThermalModel& model) {
              : "bayer";
 }
 
-pyrocam::Method to_library(GstRatioTempMethod m) {
+pyrocam::MethodRequest to_library(GstRatioTempMethod m) {
   switch (m) {
     case GST_RATIO_TEMP_METHOD_MLP:
-      return pyrocam::Method::kMlp;
+      return pyrocam::MethodRequest::kMlp;
     case GST_RATIO_TEMP_METHOD_LUT:
-      return pyrocam::Method::kLut;
+      return pyrocam::MethodRequest::kLut;
+    case GST_RATIO_TEMP_METHOD_LIKELIHOOD:
+      return pyrocam::MethodRequest::kLikelihood;
     default:
-      return pyrocam::Method::kLikelihood;
+      return pyrocam::MethodRequest::kAuto;
   }
-}
-
-/* Builds the estimator of a method unless it exists; for the lookup table, also checks it
- * against the network on the model's locus (once). Returns "" when it can be used, else why
- * not. */
-std::string prepare_estimator(State& st, pyrocam::Method m) {
-  if (m == pyrocam::Method::kLut && st.lut_checked && !st.lut_problem.empty())
-    return st.lut_problem;
-  auto& slot = st.estimators[static_cast<std::size_t>(m)];
-  try {
-    if (!slot) slot = std::make_unique<pyrocam::PlaneEstimator>(*st.model, m);
-    if (m != pyrocam::Method::kLut || st.lut_checked) return "";
-    const auto mlp = pyrocam::make_estimator(*st.model, pyrocam::Method::kMlp);
-    const pyrocam::LocusAgreement a = pyrocam::compare_on_locus(*st.model, slot->estimator(), *mlp);
-    st.lut_checked = true;
-    if (a.max_difference_c > LUT_TOLERANCE_C || a.validity_differs * 100 > a.samples) {
-      char what[256];
-      g_snprintf(what, sizeof what,
-                 "its lookup table differs from its network by up to %.1f degC (at %.0f degC "
-                 "on the model's locus; one reads where the other does not at %zu of %zu "
-                 "samples)",
-                 a.max_difference_c, a.worst_temperature_c, a.validity_differs, a.samples);
-      st.lut_problem = what;
-      slot.reset();
-      return st.lut_problem;
-    }
-    return "";
-  } catch (const std::exception& e) {
-    slot.reset();
-    return e.what();
-  }
-}
-
-/* Picks and builds the estimator for a property value: auto is the lookup table for two-ratio
- * models when it passes its check, likelihood otherwise (`fallback` then says why). Returns ""
- * or why the method cannot be used. */
-std::string choose_estimator(State& st, GstRatioTempMethod request, pyrocam::Method* chosen,
-                             std::string* fallback) {
-  if (request == GST_RATIO_TEMP_METHOD_AUTO) {
-    if (st.model->profile().normalisation.numerators.size() == 2) {
-      const std::string why = prepare_estimator(st, pyrocam::Method::kLut);
-      if (why.empty()) {
-        *chosen = pyrocam::Method::kLut;
-        return "";
-      }
-      *fallback = why;
-    }
-    *chosen = pyrocam::Method::kLikelihood;
-  } else {
-    *chosen = to_library(request);
-  }
-  return prepare_estimator(st, *chosen);
 }
 
 /* An output buffer mapped as a GRAY16_LE frame (rows at the video info's stride); unmaps when
@@ -494,19 +437,21 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
   });
   if (!ok) return FALSE;
   st.model_path = settings.model;
-  std::string fallback;
-  const std::string problem = choose_estimator(st, settings.method, &st.method, &fallback);
-  if (!problem.empty()) {
+  st.estimators = std::make_unique<pyrocam::EstimatorSelector>(*st.model);
+  const pyrocam::EstimatorSelector::Choice choice =
+      st.estimators->select(to_library(settings.method));
+  st.method = choice.method;
+  if (!choice.problem.empty()) {
     PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
                        "Method " + pyrocam::method_name(st.method) + " cannot be used with model " +
-                           settings.model + ": " + problem,
+                           settings.model + ": " + choice.problem,
                        "estimator construction or its check failed in start");
     return FALSE;
   }
-  if (!fallback.empty())
+  if (!choice.fallback.empty())
     GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
                         ("method auto uses likelihood, not lut, for model %s: %s",
-                         settings.model.c_str(), fallback.c_str()),
+                         settings.model.c_str(), choice.fallback.c_str()),
                         ("lookup table refused in start"));
   st.method_request = settings.method;
   st.region_serial_seen = settings.region_serial;
@@ -540,13 +485,13 @@ static void apply_method(GstRatioTemp* self, GstRatioTempMethod request) {
     return;
   }
   if (st.refused && st.refused_request == request) return;
-  pyrocam::Method chosen = st.method;
-  std::string fallback;
-  const std::string problem = choose_estimator(st, request, &chosen, &fallback);
+  const pyrocam::EstimatorSelector::Choice choice = st.estimators->select(to_library(request));
+  const pyrocam::Method chosen = choice.method;
+  const std::string& problem = choice.problem;
   if (problem.empty()) {
     GST_INFO_OBJECT(self, "method %s -> %s%s%s", pyrocam::method_name(st.method).c_str(),
                     pyrocam::method_name(chosen).c_str(),
-                    fallback.empty() ? "" : ", not lut: ", fallback.c_str());
+                    choice.fallback.empty() ? "" : ", not lut: ", choice.fallback.c_str());
     st.method = chosen;
     st.method_request = request;
     st.refused = false;
@@ -652,7 +597,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         in.map_float(inbuf, st.width, st.height, st.bands, GST_MAP_READ);
         for (int b = 0; b < st.bands; ++b)
           st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
-        pyrocam::PlaneEstimator& chosen = *st.estimators[static_cast<std::size_t>(st.method)];
+        pyrocam::PlaneEstimator& chosen = st.estimators->estimator(st.method);
         chosen.set_misfit_probability(settings.misfit_probability);
         chosen.set_allow_partial(settings.allow_partial);
         const pyrocam::PlaneEstimator& estimator = chosen;
