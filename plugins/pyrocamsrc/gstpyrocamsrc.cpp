@@ -18,7 +18,7 @@
  * The melt pool crosses the frame every 100 frames, its peak swinging between 1500 and
  * 2500 degC; the plate and the filament glow at #GstPyrocamSrc:temperature. Emissivities are
  * those of the calibration tool's scenes (plate 0.7, filament 0.4, melt pool 0.35). With
- * #GstPyrocamSrc:exposure 0 the exposure puts the brightest band 150 DN above the dark level at
+ * #GstPyrocamSrc:exposure 0 the exposure puts the brightest band 140 DN above the dark level at
  * the scene's nominal temperature (plate, filament) or at 2000 degC (melt pool, as the
  * calibration tool's scene sequences: the hottest frames saturate, the coolest are dim).
  *
@@ -69,8 +69,15 @@ constexpr guint64 DEFAULT_SEED = 1;
 constexpr gboolean DEFAULT_IS_LIVE = FALSE;
 constexpr int DEFAULT_WIDTH = 320, DEFAULT_HEIGHT = 240, DEFAULT_FPS = 30;
 constexpr int kMeltPoolFrames = 100;
-constexpr double kMeltPoolExposureC = 2000.0;  // as pyrocam-calib's scene sequences
-constexpr double kTargetDn = 150.0;
+// Exposure and emissivities as pyrocam-calib's scene sequences (pyrocam::kSceneDefaults); the
+// exposure property's description and the documentation above give these numbers.
+constexpr pyrocam::SceneDefaults kScene = pyrocam::kSceneDefaults;
+static_assert(kScene.target_dn == 140 && kScene.melt_pool_exposure_c == 2000,
+              "update the exposure property's description, the element documentation and "
+              "tests/elements/inspect/pyrocamsrc.txt");
+static_assert(kScene.plate_emissivity == 0.7 && kScene.filament_emissivity == 0.4 &&
+                  kScene.melt_pool_emissivity == 0.35,
+              "update the element documentation");
 
 struct Settings {
   GstPyrocamSrcScene scene = DEFAULT_SCENE;
@@ -93,14 +100,14 @@ struct State {
   double scene_temperature = NAN;
 };
 
-double emissivity_of(GstPyrocamSrcScene scene) {
+pyrocam::SceneKind scene_kind(GstPyrocamSrcScene scene) {
   switch (scene) {
     case GST_PYROCAM_SRC_SCENE_PLATE:
-      return 0.7;
+      return pyrocam::SceneKind::kPlate;
     case GST_PYROCAM_SRC_SCENE_FILAMENT:
-      return 0.4;
+      return pyrocam::SceneKind::kFilament;
     default:
-      return 0.35;
+      return pyrocam::SceneKind::kMeltPool;
   }
 }
 
@@ -292,7 +299,7 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
   // the segment starts at 0, so that is its stream time.
   gst_object_sync_values(GST_OBJECT(self), pts);
   const Settings settings = copy_settings(self);
-  const double emissivity = emissivity_of(settings.scene);
+  const double emissivity = kScene.emissivity(scene_kind(settings.scene));
   const bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "Could not render a frame", [&] {
     const cv::Mat* map;
     cv::Mat pool;
@@ -301,7 +308,7 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
       const int index = static_cast<int>(st.frame % kMeltPoolFrames);
       pool = pyrocam::melt_pool_scene(st.width, st.height, index, kMeltPoolFrames);
       map = &pool;
-      nominal_c = kMeltPoolExposureC;
+      nominal_c = kScene.melt_pool_exposure_c;
     } else {
       if (st.scene_map.empty() || st.scene_kind != settings.scene ||
           st.scene_temperature != settings.temperature_c) {
@@ -315,7 +322,7 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
     }
     const double exposure = settings.exposure_us > 0
                                 ? settings.exposure_us
-                                : st.camera->exposure_for(nominal_c, kTargetDn, emissivity);
+                                : st.camera->exposure_for(nominal_c, kScene.target_dn, emissivity);
     const cv::Mat raw = st.camera->render(*map, exposure, emissivity);
     GstMapInfo info;
     if (!gst_buffer_map(buffer, &info, GST_MAP_WRITE))
@@ -465,7 +472,7 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
       gobject_class, PROP_EXPOSURE,
       g_param_spec_double("exposure", "Exposure",
                           "Exposure time in microseconds (0..10000000); 0: automatic, the "
-                          "brightest band 150 DN above dark at the scene's nominal temperature "
+                          "brightest band 140 DN above dark at the scene's nominal temperature "
                           "(melt pool: 2000 degC)",
                           0.0, 1e7, DEFAULT_EXPOSURE, playing));
   g_object_class_install_property(

@@ -106,7 +106,7 @@ TEST_F(PyrocamSrc, controlled_temperature_follows_the_controller_by_frame_time) 
   // an order of magnitude dimmer.
   const Simulator camera(load_profile_by_name("rgb-reference"),
                          UnitPerturbation::parse("datasheet", 1));
-  const double exposure = camera.exposure_for(1100, 140, 0.7);  // the plate's emissivity
+  const double exposure = camera.exposure_for(1100, 140, kSceneDefaults.plate_emissivity);
   h = gst_harness_new_parse(
       ("pyrocamsrc scene=plate unit=datasheet temperature=900 exposure=" + std::to_string(exposure))
           .c_str());
