@@ -1,5 +1,3 @@
-/* Over 600 lines: estimator selection, uncertainty output, statistics messages and region
- * handling; estimator selection is to move into the library with the architecture issue. */
 /**
  * SECTION:element-ratiotemp
  * @title: ratiotemp
@@ -104,6 +102,8 @@
  *     filesink location=u.mkv
  * ]|
  */
+/* The negotiation, the estimator switching and the streaming; the properties
+ * (ratiotemp-properties.cpp) and the statistics message (ratiotemp-stats.cpp) are beside it. */
 #include "gstratiotemp.h"
 
 #include <cmath>
@@ -118,87 +118,16 @@
 #include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/measure.h"
 #include "pyrocam/runtime/model.h"
+#include "ratiotemp-private.h"
 
-GST_DEBUG_CATEGORY_STATIC(gst_ratio_temp_debug);
+GST_DEBUG_CATEGORY(gst_ratio_temp_debug);
 #define GST_CAT_DEFAULT gst_ratio_temp_debug
 
 namespace pg = pyrocam::gst;
+namespace rt = pyrocam::gst::ratiotemp;
+using rt::Settings;
 
 namespace {
-
-enum {
-  PROP_0,
-  PROP_MODEL,
-  PROP_METHOD,
-  PROP_OUTPUT,
-  PROP_STATS_INTERVAL,
-  PROP_REGION,
-  PROP_ALLOW_PARTIAL,
-  PROP_MISFIT_PROBABILITY,
-};
-
-constexpr GstRatioTempMethod DEFAULT_METHOD = GST_RATIO_TEMP_METHOD_AUTO;
-constexpr GstRatioTempOutput DEFAULT_OUTPUT = GST_RATIO_TEMP_OUTPUT_TEMPERATURE;
-constexpr guint64 DEFAULT_STATS_INTERVAL = GST_SECOND;
-constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
-constexpr double DEFAULT_MISFIT_PROBABILITY = 0.0;
-constexpr double MAX_MISFIT_PROBABILITY = 0.5;
-constexpr const char* STATS_MESSAGE = "pyrocam-temperature-stats";
-
-/* A rectangle of output pixels. */
-struct Region {
-  int x = 0, y = 0, width = 0, height = 0;
-};
-
-/* "x,y,width,height" (non-negative integers, width and height at least 1); false otherwise. */
-bool parse_region(const std::string& text, Region* out) {
-  gchar** parts = g_strsplit(text.c_str(), ",", -1);
-  bool ok = g_strv_length(parts) == 4;
-  gint64 v[4] = {0, 0, 0, 0};
-  for (int i = 0; ok && i < 4; ++i)
-    ok = g_ascii_string_to_signed(g_strstrip(parts[i]), 10, 0, G_MAXINT, &v[i], nullptr) &&
-         (i < 2 || v[i] >= 1);
-  g_strfreev(parts);
-  if (ok)
-    *out = {static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]),
-            static_cast<int>(v[3])};
-  return ok;
-}
-
-/* Property values; read and written under GST_OBJECT_LOCK, copied once per buffer. */
-struct Settings {
-  std::string model;
-  GstRatioTempMethod method = DEFAULT_METHOD;
-  GstRatioTempOutput output = DEFAULT_OUTPUT;
-  guint64 stats_interval = DEFAULT_STATS_INTERVAL;
-  gboolean allow_partial = DEFAULT_ALLOW_PARTIAL;
-  double misfit_probability = DEFAULT_MISFIT_PROBABILITY;
-  std::string region_text;   // as set; empty: no region
-  bool region_valid = true;  // region_text is empty or parsed into region
-  Region region;
-  guint region_serial = 0;  // bumped by every change of region
-};
-
-/* Streaming state: the model and its estimators are built in start(), the format in set_caps(),
- * all dropped in stop(). The estimators refer to the model: they are declared after it, so
- * they go first. */
-struct State {
-  std::unique_ptr<const pyrocam::ThermalModel> model;
-  std::string model_path;
-  std::unique_ptr<pyrocam::EstimatorSelector> estimators;  // builds and keeps them per method
-  pyrocam::Method method = pyrocam::Method::kMlp;          // in use
-  GstRatioTempMethod method_request = DEFAULT_METHOD;      // the property value it came from
-  GstRatioTempMethod refused_request = DEFAULT_METHOD;     // last property value warned about
-  bool refused = false;
-  bool configured = false;
-  int width = 0, height = 0, bands = 0;
-  GstVideoInfo out_info{};
-  std::vector<cv::Mat> planes;  // headers onto the input buffer
-  cv::Mat temperature_c, uncertainty_c;
-  GstClockTime last_stats = GST_CLOCK_TIME_NONE;
-  guint64 frames = 0;  // since start or the last flush
-  guint region_serial_seen = 0;
-};
 
 const char* layout_name(const pyrocam::ThermalModel& model) {
   return model.profile().mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot
@@ -241,47 +170,31 @@ struct MappedFrame {
 
 }  // namespace
 
-struct _GstRatioTemp {
-  GstBaseTransform parent;
-  Settings* settings;
-  State* state;
+/* Streaming state: the model and its estimators are built in start(), the format in set_caps(),
+ * all dropped in stop(). The estimators refer to the model: they are declared after it, so
+ * they go first. */
+struct pyrocam::gst::ratiotemp::State {
+  std::unique_ptr<const pyrocam::ThermalModel> model;
+  std::string model_path;
+  std::unique_ptr<pyrocam::EstimatorSelector> estimators;   // builds and keeps them per method
+  pyrocam::Method method = pyrocam::Method::kMlp;           // in use
+  GstRatioTempMethod method_request = rt::DEFAULT_METHOD;   // the property value it came from
+  GstRatioTempMethod refused_request = rt::DEFAULT_METHOD;  // last property value warned about
+  bool refused = false;
+  bool configured = false;
+  int width = 0, height = 0, bands = 0;
+  GstVideoInfo out_info{};
+  std::vector<cv::Mat> planes;  // headers onto the input buffer
+  cv::Mat temperature_c, uncertainty_c;
+  GstClockTime last_stats = GST_CLOCK_TIME_NONE;
+  guint64 frames = 0;  // since start or the last flush
+  guint region_serial_seen = 0;
 };
+
+using rt::State;
 
 G_DEFINE_TYPE(GstRatioTemp, gst_ratio_temp, GST_TYPE_BASE_TRANSFORM);
 GST_ELEMENT_REGISTER_DEFINE(ratiotemp, "ratiotemp", GST_RANK_NONE, GST_TYPE_RATIO_TEMP);
-
-GType gst_ratio_temp_method_get_type(void) {
-  static GType type = 0;
-  static const GEnumValue values[] = {
-      {GST_RATIO_TEMP_METHOD_AUTO,
-       "lut for two-ratio (colour) models when it passes its check, likelihood otherwise", "auto"},
-      {GST_RATIO_TEMP_METHOD_MLP, "The paper's network on band ratios (reference, slow)", "mlp"},
-      {GST_RATIO_TEMP_METHOD_LUT, "2-D lookup table of the network (colour models only)", "lut"},
-      {GST_RATIO_TEMP_METHOD_LIKELIHOOD, "Maximum-likelihood fit along the Planckian locus",
-       "likelihood"},
-      {0, nullptr, nullptr},
-  };
-  if (g_once_init_enter(&type)) {
-    GType t = g_enum_register_static("GstRatioTempMethod", values);
-    g_once_init_leave(&type, t);
-  }
-  return type;
-}
-
-GType gst_ratio_temp_output_get_type(void) {
-  static GType type = 0;
-  static const GEnumValue values[] = {
-      {GST_RATIO_TEMP_OUTPUT_TEMPERATURE, "Temperature, 0.1 K per code", "temperature"},
-      {GST_RATIO_TEMP_OUTPUT_UNCERTAINTY,
-       "Expanded uncertainty (k = 2) of the temperature, 0.1 K per code", "uncertainty"},
-      {0, nullptr, nullptr},
-  };
-  if (g_once_init_enter(&type)) {
-    GType t = g_enum_register_static("GstRatioTempOutput", values);
-    g_once_init_leave(&type, t);
-  }
-  return type;
-}
 
 static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
     "sink", GST_PAD_SINK, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_BANDS_CAPS));
@@ -516,50 +429,11 @@ static GstClockTime frame_position(const State& st, GstBuffer* buffer) {
                                static_cast<guint64>(fps_n));
 }
 
-static void set_stats_fields(GstStructure* s, const std::string& prefix,
-                             const pyrocam::RegionStats& r) {
-  gst_structure_set(s, (prefix + "pixels").c_str(), G_TYPE_UINT64, static_cast<guint64>(r.pixels),
-                    (prefix + "valid").c_str(), G_TYPE_UINT64, static_cast<guint64>(r.valid),
-                    (prefix + "valid-fraction").c_str(), G_TYPE_DOUBLE, r.valid_fraction, nullptr);
-  if (r.valid == 0) return;
-  gst_structure_set(s, (prefix + "min-c").c_str(), G_TYPE_DOUBLE, r.min_c,
-                    (prefix + "max-c").c_str(), G_TYPE_DOUBLE, r.max_c, (prefix + "mean-c").c_str(),
-                    G_TYPE_DOUBLE, r.mean_c, (prefix + "median-c").c_str(), G_TYPE_DOUBLE,
-                    r.median_c, nullptr);
-}
-
 static void post_stats(GstRatioTemp* self, const Settings& settings, GstBuffer* buffer) {
   const State& st = *self->state;
-  const GstSegment* segment = &GST_BASE_TRANSFORM(self)->segment;
-  const GstClockTime pts = GST_BUFFER_PTS(buffer);
-  GstClockTime stream_time = GST_CLOCK_TIME_NONE, running_time = GST_CLOCK_TIME_NONE;
-  if (GST_CLOCK_TIME_IS_VALID(pts) && segment->format == GST_FORMAT_TIME) {
-    stream_time = gst_segment_to_stream_time(segment, GST_FORMAT_TIME, pts);
-    running_time = gst_segment_to_running_time(segment, GST_FORMAT_TIME, pts);
-  }
-  // The statistics first: nothing to free should they throw.
-  const pyrocam::RegionStats whole = pyrocam::region_stats(st.temperature_c);
-  const bool with_region = !settings.region_text.empty() && settings.region_valid;
-  cv::Rect r;
-  pyrocam::RegionStats region;
-  if (with_region) {
-    const cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,
-                          settings.region.height);
-    r = wanted & cv::Rect(0, 0, st.width, st.height);
-    if (!r.empty()) region = pyrocam::region_stats(st.temperature_c(r));
-  }
   GstStructure* s =
-      gst_structure_new(STATS_MESSAGE, "timestamp", G_TYPE_UINT64, static_cast<guint64>(pts),
-                        "stream-time", G_TYPE_UINT64, static_cast<guint64>(stream_time),
-                        "running-time", G_TYPE_UINT64, static_cast<guint64>(running_time), "method",
-                        G_TYPE_STRING, pyrocam::method_name(st.method).c_str(), "width", G_TYPE_INT,
-                        st.width, "height", G_TYPE_INT, st.height, nullptr);
-  set_stats_fields(s, "", whole);
-  if (with_region) {
-    gst_structure_set(s, "region-x", G_TYPE_INT, r.x, "region-y", G_TYPE_INT, r.y, "region-width",
-                      G_TYPE_INT, r.width, "region-height", G_TYPE_INT, r.height, nullptr);
-    set_stats_fields(s, "region-", region);
-  }
+      rt::stats_structure(st.temperature_c, settings, &GST_BASE_TRANSFORM(self)->segment,
+                          GST_BUFFER_PTS(buffer), st.method);
   gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), s));
 }
 
@@ -629,88 +503,6 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
   return GST_FLOW_OK;
 }
 
-static void gst_ratio_temp_set_property(GObject* object, guint prop_id, const GValue* value,
-                                        GParamSpec* pspec) {
-  GstRatioTemp* self = GST_RATIO_TEMP(object);
-  pg::ObjectLock lock(self);
-  Settings& s = *self->settings;
-  const bool running = GST_STATE(self) > GST_STATE_READY;
-  switch (prop_id) {
-    case PROP_MODEL:
-      if (running) {
-        GST_WARNING_OBJECT(self, "model can only change in NULL or READY");
-      } else {
-        const char* v = g_value_get_string(value);
-        s.model = v ? v : "";
-      }
-      break;
-    case PROP_METHOD:
-      s.method = static_cast<GstRatioTempMethod>(g_value_get_enum(value));
-      break;
-    case PROP_OUTPUT:
-      if (running)
-        GST_WARNING_OBJECT(self, "output can only change in NULL or READY");
-      else
-        s.output = static_cast<GstRatioTempOutput>(g_value_get_enum(value));
-      break;
-    case PROP_STATS_INTERVAL:
-      s.stats_interval = g_value_get_uint64(value);
-      break;
-    case PROP_ALLOW_PARTIAL:
-      s.allow_partial = g_value_get_boolean(value);
-      break;
-    case PROP_MISFIT_PROBABILITY:
-      s.misfit_probability = g_value_get_double(value);
-      break;
-    case PROP_REGION: {
-      const char* v = g_value_get_string(value);
-      s.region_text = v ? v : "";
-      s.region = Region();
-      s.region_valid = s.region_text.empty() || parse_region(s.region_text, &s.region);
-      ++s.region_serial;
-      if (!s.region_valid)
-        GST_WARNING_OBJECT(self, "region '%s' is not x,y,width,height", s.region_text.c_str());
-      break;
-    }
-    default:
-      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
-      break;
-  }
-}
-
-static void gst_ratio_temp_get_property(GObject* object, guint prop_id, GValue* value,
-                                        GParamSpec* pspec) {
-  GstRatioTemp* self = GST_RATIO_TEMP(object);
-  pg::ObjectLock lock(self);
-  const Settings& s = *self->settings;
-  switch (prop_id) {
-    case PROP_MODEL:
-      g_value_set_string(value, s.model.empty() ? nullptr : s.model.c_str());
-      break;
-    case PROP_METHOD:
-      g_value_set_enum(value, s.method);
-      break;
-    case PROP_OUTPUT:
-      g_value_set_enum(value, s.output);
-      break;
-    case PROP_STATS_INTERVAL:
-      g_value_set_uint64(value, s.stats_interval);
-      break;
-    case PROP_ALLOW_PARTIAL:
-      g_value_set_boolean(value, s.allow_partial);
-      break;
-    case PROP_MISFIT_PROBABILITY:
-      g_value_set_double(value, s.misfit_probability);
-      break;
-    case PROP_REGION:
-      g_value_set_string(value, s.region_text.empty() ? nullptr : s.region_text.c_str());
-      break;
-    default:
-      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
-      break;
-  }
-}
-
 static void gst_ratio_temp_finalize(GObject* object) {
   GstRatioTemp* self = GST_RATIO_TEMP(object);
   delete self->settings;
@@ -726,63 +518,11 @@ static void gst_ratio_temp_class_init(GstRatioTempClass* klass) {
   GST_DEBUG_CATEGORY_INIT(gst_ratio_temp_debug, "ratiotemp", 0,
                           "pyrocam band planes to temperature");
 
-  gobject_class->set_property = gst_ratio_temp_set_property;
-  gobject_class->get_property = gst_ratio_temp_get_property;
+  gobject_class->set_property = rt::set_property;
+  gobject_class->get_property = rt::get_property;
   gobject_class->finalize = gst_ratio_temp_finalize;
 
-  const auto ready = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
-                                              GST_PARAM_MUTABLE_READY);
-  const auto playing = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
-                                                GST_PARAM_MUTABLE_PLAYING);
-  g_object_class_install_property(
-      gobject_class, PROP_MODEL,
-      g_param_spec_string("model", "Thermal model file",
-                          "Thermal model (JSON) written by pyrocam-calib calibrate for this "
-                          "camera; required",
-                          nullptr, ready));
-  g_object_class_install_property(
-      gobject_class, PROP_METHOD,
-      g_param_spec_enum("method", "Estimator",
-                        "Per-pixel temperature estimator: mlp (the paper's network, the "
-                        "reference, slow), lut (lookup table of the network, colour models "
-                        "only, checked against the network at start), likelihood (fit along the "
-                        "Planckian locus), auto (lut for colour models when it passes its check, "
-                        "likelihood otherwise)",
-                        GST_TYPE_RATIO_TEMP_METHOD, DEFAULT_METHOD, playing));
-  g_object_class_install_property(
-      gobject_class, PROP_OUTPUT,
-      g_param_spec_enum("output", "Output",
-                        "What the GRAY16_LE pixels hold, in 0.1 K per code with 0 = no "
-                        "reading: the temperature (kelvin) or its expanded uncertainty (k = 2)",
-                        GST_TYPE_RATIO_TEMP_OUTPUT, DEFAULT_OUTPUT, ready));
-  g_object_class_install_property(
-      gobject_class, PROP_STATS_INTERVAL,
-      g_param_spec_uint64("stats-interval", "Statistics interval",
-                          "Nanoseconds of stream time between pyrocam-temperature-stats "
-                          "element messages (0 = none; the first frame always posts)",
-                          0, G_MAXUINT64, DEFAULT_STATS_INTERVAL, playing));
-  g_object_class_install_property(
-      gobject_class, PROP_REGION,
-      g_param_spec_string("region", "Statistics region",
-                          "Region of output pixels for the statistics message, "
-                          "\"x,y,width,height\" (clipped to the frame); empty: frame only",
-                          nullptr, playing));
-
-  g_object_class_install_property(
-      gobject_class, PROP_ALLOW_PARTIAL,
-      g_param_spec_boolean("allow-partial", "Allow partial readings",
-                           "likelihood only: fit pixels where some bands are saturated, "
-                           "missing or below the dim threshold from the remaining bands (at "
-                           "least two); off: such pixels have no reading with every method",
-                           DEFAULT_ALLOW_PARTIAL, playing));
-  g_object_class_install_property(
-      gobject_class, PROP_MISFIT_PROBABILITY,
-      g_param_spec_double("misfit-probability", "Band-consistency false-rejection probability",
-                          "Band-consistency check: no reading where the bands fit no graybody "
-                          "within 1 % of the estimated temperature; the chance (0 to 0.5, "
-                          "unitless, e.g. 1e-6) that a true graybody pixel is dropped; 0 = no "
-                          "check",
-                          0.0, MAX_MISFIT_PROBABILITY, DEFAULT_MISFIT_PROBABILITY, playing));
+  rt::install_properties(gobject_class);
 
   gst_element_class_set_static_metadata(
       element_class, "Band planes to temperature", "Filter/Converter/Video",
