@@ -11,9 +11,10 @@
 
 #include "commands.h"
 #include "pyrocam/core/dataset.h"
-#include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/darksub.h"
+#include "pyrocam/runtime/estimator_selection.h"
 
 namespace pyrocam::cli {
 namespace {
@@ -102,9 +103,15 @@ void check_measure_args(const MeasureArgs& a) {
                                "layout (rggb, bggr, grbg, gbrg or e.g. 5x5)");
 }
 
-MeasureOptions measure_options(const MeasureArgs& a) {
+// auto chooses as ratiotemp does, and says on stderr (unless -q) why it did not take the table.
+MeasureOptions measure_options(const MeasureArgs& a, const ThermalModel& model,
+                               const GlobalOptions& global) {
   MeasureOptions options;
-  options.method = parse_method(a.method);
+  std::string not_lut;
+  options.method = a.method == "auto" ? choose_method(model, MethodRequest::kAuto, &not_lut)
+                                      : parse_method(a.method);
+  if (!not_lut.empty() && !global.quiet)
+    std::cerr << "warning: method auto uses likelihood, not lut: " << not_lut << "\n";
   options.demosaic = parse_demosaic_method(a.demosaic);
   options.saturation_level_dn = a.saturation;
   options.uncertainty = a.uncertainty;
@@ -217,7 +224,7 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
 // The whole subcommand once the arguments are checked.
 int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
   const ThermalModel model = load_model(a.model);
-  const MeasureOptions options = measure_options(a);
+  const MeasureOptions options = measure_options(a, model, global);
   FrameMeasurer measurer(model, options);
   const MeasureInputs in = measure_inputs(a, model);
   std::ofstream csv = open_stats_csv(a.out);
@@ -260,8 +267,11 @@ void add_input_options(CLI::App* c, MeasureArgs& a) {
 // Where the results go and how they are read: output folder, estimator and image options.
 void add_output_options(CLI::App* c, MeasureArgs& a) {
   c->add_option("--out", a.out, "Output folder (created)")->required();
-  c->add_option("--method", a.method, "Estimator: mlp, lut or likelihood")
-      ->check(CLI::IsMember({"mlp", "lut", "likelihood"}))
+  c->add_option("--method", a.method,
+                "Estimator: mlp, lut, likelihood or auto (as ratiotemp's: lut where the model "
+                "has two ratios and its table passes the check against the network, else "
+                "likelihood)")
+      ->check(CLI::IsMember({"mlp", "lut", "likelihood", "auto"}))
       ->capture_default_str();
   c->add_option("--demosaic", a.demosaic, "Bayer demosaicking: bilinear or bin2x2")
       ->check(CLI::IsMember({"bilinear", "bin2x2"}))

@@ -148,9 +148,65 @@ void ensure_buffer_pool(GstQuery* query, gsize size) {
   gst_object_unref(pool);
 }
 
+gsize frame_size_of_caps(GstCaps* caps) {
+  if (!caps || gst_caps_get_size(caps) < 1) return 0;
+  const GstStructure* s = gst_caps_get_structure(caps, 0);
+  if (gst_structure_has_name(s, "video/x-raw")) {
+    GstVideoInfo info;
+    return gst_video_info_from_caps(&info, caps) ? GST_VIDEO_INFO_SIZE(&info) : 0;
+  }
+  const int width = structure_int(s, "width", 0), height = structure_int(s, "height", 0);
+  // x-pyrocam-mosaic carries no bands field: one plane.
+  const int planes = gst_structure_has_name(s, PYROCAM_BANDS_MEDIA_TYPE)
+                         ? structure_int(s, "bands", 0)
+                     : gst_structure_has_name(s, PYROCAM_MOSAIC_MEDIA_TYPE) ? 1
+                                                                            : 0;
+  if (width < 1 || height < 1 || planes < 1) return 0;
+  return static_cast<gsize>(width) * static_cast<gsize>(height) * static_cast<gsize>(planes) *
+         sizeof(float);
+}
+
+gboolean decide_allocation(GstBaseTransform* trans, GstQuery* query) {
+  GstCaps* caps = nullptr;
+  gst_query_parse_allocation(query, &caps, nullptr);
+  ensure_buffer_pool(query, frame_size_of_caps(caps));
+  // The elements are GstBaseTransform's direct subclasses: its class holds their parent's
+  // decide_allocation.
+  auto* base = static_cast<GstBaseTransformClass*>(g_type_class_peek(GST_TYPE_BASE_TRANSFORM));
+  return base->decide_allocation(trans, query);
+}
+
+void sync_controlled_properties(GstBaseTransform* trans, GstBuffer* buffer) {
+  if (trans->segment.format != GST_FORMAT_TIME || !GST_BUFFER_PTS_IS_VALID(buffer)) return;
+  const GstClockTime stream_time =
+      gst_segment_to_stream_time(&trans->segment, GST_FORMAT_TIME, GST_BUFFER_PTS(buffer));
+  GST_TRACE_OBJECT(trans, "stream time %" GST_TIME_FORMAT, GST_TIME_ARGS(stream_time));
+  if (GST_CLOCK_TIME_IS_VALID(stream_time)) gst_object_sync_values(GST_OBJECT(trans), stream_time);
+}
+
 int structure_int(const GstStructure* s, const char* field, int fallback) {
   int v;
   return gst_structure_get_int(s, field, &v) ? v : fallback;
+}
+
+void copy_fields(const GstStructure* from, GstStructure* to,
+                 std::initializer_list<const char*> fields) {
+  for (const char* field : fields) {
+    const GValue* v = gst_structure_get_value(from, field);
+    if (v) gst_structure_set_value(to, field, v);
+  }
+}
+
+void copy_dimensions(const GstStructure* from, GstStructure* to) {
+  copy_fields(from, to, {"width", "height", "framerate"});
+}
+
+void set_list_field(GstStructure* s, const char* field, const char* list_text) {
+  GValue list = G_VALUE_INIT;
+  g_value_init(&list, GST_TYPE_LIST);
+  if (!gst_value_deserialize(&list, list_text))
+    g_critical("pyrocam: '%s' is not a caps list", list_text);  // a programming error
+  gst_structure_take_value(s, field, &list);
 }
 
 ErrorKind profile_error_kind(const std::string& name) {

@@ -1,17 +1,20 @@
 /* Helpers shared by the pyrocam elements: buffer <-> library image views, caps field access,
- * and the mapping of library exceptions to bus errors. */
+ * the object lock, buffer pools, controlled properties, and the mapping of library exceptions
+ * to bus errors. */
 #pragma once
 
+#include <gst/base/gstbasetransform.h>
 #include <gst/gst.h>
 #include <gst/video/video.h>
 
+#include <initializer_list>
 #include <opencv2/core.hpp>
 #include <string>
 #include <utility>
 
 #include "pyrocam-caps.h"
-#include "pyrocam/core/mosaic.h"
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/mosaic.h"
 
 namespace pyrocam::gst {
 
@@ -65,13 +68,56 @@ class MappedImage {
   cv::Mat image_;
 };
 
-/* For GstBaseTransform::decide_allocation: when downstream offers no buffer pool, adds one of
- * `size`-byte buffers, so that large frames are not allocated (and page-faulted) anew each
- * time. */
+/* Holds an object's GST_OBJECT_LOCK for the scope it lives in, so that no return (or
+ * exception) path can leave the object locked. */
+class ObjectLock {
+ public:
+  explicit ObjectLock(gpointer object) : object_(GST_OBJECT(object)) { GST_OBJECT_LOCK(object_); }
+  ~ObjectLock() { GST_OBJECT_UNLOCK(object_); }
+  ObjectLock(const ObjectLock&) = delete;
+  ObjectLock& operator=(const ObjectLock&) = delete;
+
+ private:
+  GstObject* object_;
+};
+
+/* A copy of `value` taken under the object's lock (the elements' per-buffer settings). */
+template <typename T>
+T locked_copy(gpointer object, const T& value) {
+  ObjectLock lock(object);
+  return value;
+}
+
+/* When downstream offers no buffer pool, adds one of `size`-byte buffers, so that large frames
+ * are not allocated (and page-faulted) anew each time. Nothing for size 0. */
 void ensure_buffer_pool(GstQuery* query, gsize size);
+
+/* Bytes of one frame as fixed caps describe it: x-pyrocam-mosaic (one float32 plane),
+ * x-pyrocam-bands (`bands` float32 planes) or video/x-raw (GstVideoInfo, with its strides); 0
+ * when the caps do not say. */
+gsize frame_size_of_caps(GstCaps* caps);
+
+/* GstBaseTransform::decide_allocation of the pyrocam filters, which derive from GstBaseTransform
+ * directly: a pool of output frames (ensure_buffer_pool) when downstream offers none, then
+ * GstBaseTransform's own choice. */
+gboolean decide_allocation(GstBaseTransform* trans, GstQuery* query);
+
+/* GstBaseTransform::before_transform of elements with GST_PARAM_CONTROLLABLE properties: brings
+ * those a control binding drives to their values at the buffer's stream time (as videobalance
+ * does), so that a controller changes them frame by frame. Buffers without a timestamp keep the
+ * current values. */
+void sync_controlled_properties(GstBaseTransform* trans, GstBuffer* buffer);
 
 /* Integer field of a structure when fixed, else `fallback`. */
 int structure_int(const GstStructure* s, const char* field, int fallback);
+
+/* Copies those of `fields` that `from` has onto `to`; absent ones are left as they are. */
+void copy_fields(const GstStructure* from, GstStructure* to,
+                 std::initializer_list<const char*> fields);
+/* The fields that size a video frame: width, height, framerate. */
+void copy_dimensions(const GstStructure* from, GstStructure* to);
+/* Sets `field` to the list `list_text` serialises, e.g. PYROCAM_BAYER_FORMATS. */
+void set_list_field(GstStructure* s, const char* field, const char* list_text);
 
 /* How a failure is reported on the bus (STYLE.md: errors carry a domain, a user message and a
  * debug message). */

@@ -1,5 +1,3 @@
-/* Over 600 lines: dark capture, the layout and saturation fields of the caps and the GObject
- * boilerplate; the caps-field copying is to move to plugins/common with the architecture issue. */
 /**
  * SECTION:element-darksub
  * @title: darksub
@@ -38,6 +36,8 @@
  * gst-launch-1.0 aravissrc ! video/x-bayer,format=rggb ! darksub capture-frames=20 ! ...
  * ]| with capture-dark emitted by the application.
  */
+/* The streaming: dark capture and subtraction, set_caps' checks; the caps it makes
+ * (darksub-caps.cpp) and its properties (darksub-properties.cpp) are beside it. */
 #include "gstdarksub.h"
 
 #include <cmath>
@@ -45,68 +45,28 @@
 #include <limits>
 #include <string>
 
+#include "darksub-private.h"
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
-#include "pyrocam/runtime/darksub.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/runtime/darksub.h"
 
-GST_DEBUG_CATEGORY_STATIC(gst_dark_sub_debug);
+GST_DEBUG_CATEGORY(gst_dark_sub_debug);
 #define GST_CAT_DEFAULT gst_dark_sub_debug
 
 namespace pg = pyrocam::gst;
+namespace ds = pyrocam::gst::darksub;
+using ds::Settings;
 
 namespace {
-
-enum {
-  PROP_0,
-  PROP_LOCATION,
-  PROP_DARK_LEVEL,
-  PROP_SATURATION_LEVEL,
-  PROP_CAPTURE_FRAMES,
-  PROP_PATTERN,
-  PROP_BIT_DEPTH,
-};
 
 enum { SIGNAL_CAPTURE_DARK, LAST_SIGNAL };
 guint gst_dark_sub_signals[LAST_SIGNAL] = {0};
 
-constexpr double DEFAULT_DARK_LEVEL = -1.0;
-constexpr double DEFAULT_SATURATION_LEVEL = -1.0;
-constexpr int DEFAULT_CAPTURE_FRAMES = 10;
-constexpr GstDarkSubPattern DEFAULT_PATTERN = GST_DARK_SUB_PATTERN_AUTO;
-constexpr int DEFAULT_BIT_DEPTH = 0;  // from the caps
-
-const char* pattern_name(GstDarkSubPattern p) {
-  switch (p) {
-    case GST_DARK_SUB_PATTERN_RGGB:
-      return "rggb";
-    case GST_DARK_SUB_PATTERN_BGGR:
-      return "bggr";
-    case GST_DARK_SUB_PATTERN_GRBG:
-      return "grbg";
-    case GST_DARK_SUB_PATTERN_GBRG:
-      return "gbrg";
-    case GST_DARK_SUB_PATTERN_5X5:
-      return PYROCAM_SNAPSHOT_PATTERN_NAME;
-    case GST_DARK_SUB_PATTERN_AUTO:
-      return nullptr;
-  }
-  return nullptr;
-}
-
-/* Property values; read and written under GST_OBJECT_LOCK, copied once per buffer. */
-struct Settings {
-  std::string location;
-  double dark_level = DEFAULT_DARK_LEVEL;
-  double saturation_level = DEFAULT_SATURATION_LEVEL;
-  int capture_frames = DEFAULT_CAPTURE_FRAMES;
-  GstDarkSubPattern pattern = DEFAULT_PATTERN;
-  int bit_depth = DEFAULT_BIT_DEPTH;
-  guint capture_requests = 0;  // incremented by capture-dark
-};
+}  // namespace
 
 /* Streaming state: built in start()/set_caps(), dropped in stop(). */
-struct State {
+struct pyrocam::gst::darksub::State {
   pg::RawFormat format;
   bool have_format = false;
   int bit_depth = 8;
@@ -122,154 +82,29 @@ struct State {
   int capture_target = 0;
   guint capture_requests_seen = 0;
 };
-
-}  // namespace
-
-struct _GstDarkSub {
-  GstBaseTransform parent;
-  Settings* settings;
-  State* state;
-};
+using ds::State;
 
 G_DEFINE_TYPE(GstDarkSub, gst_dark_sub, GST_TYPE_BASE_TRANSFORM);
 GST_ELEMENT_REGISTER_DEFINE(darksub, "darksub", GST_RANK_NONE, GST_TYPE_DARK_SUB);
-
-GType gst_dark_sub_pattern_get_type(void) {
-  static GType type = 0;
-  static const GEnumValue values[] = {
-      {GST_DARK_SUB_PATTERN_RGGB, "Bayer, R G / G B", "rggb"},
-      {GST_DARK_SUB_PATTERN_BGGR, "Bayer, B G / G R", "bggr"},
-      {GST_DARK_SUB_PATTERN_GRBG, "Bayer, G R / B G", "grbg"},
-      {GST_DARK_SUB_PATTERN_GBRG, "Bayer, G B / R G", "gbrg"},
-      {GST_DARK_SUB_PATTERN_5X5, "5x5 snapshot mosaic", "5x5"},
-      {GST_DARK_SUB_PATTERN_AUTO, "From the caps (video/x-bayer format, gray video's pattern)",
-       "auto"},
-      {0, nullptr, nullptr},
-  };
-  if (g_once_init_enter(&type)) {
-    GType t = g_enum_register_static("GstDarkSubPattern", values);
-    g_once_init_leave(&type, t);
-  }
-  return type;
-}
 
 static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
     "sink", GST_PAD_SINK, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_RAW_CAPS));
 static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
     "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_MOSAIC_CAPS));
 
-static Settings copy_settings(GstDarkSub* self) {
-  GST_OBJECT_LOCK(self);
-  Settings s = *self->settings;
-  GST_OBJECT_UNLOCK(self);
-  return s;
-}
-
-static void copy_dimensions(const GstStructure* from, GstStructure* to) {
-  for (const char* field : {"width", "height", "framerate"}) {
-    const GValue* v = gst_structure_get_value(from, field);
-    if (v) gst_structure_set_value(to, field, v);
-  }
-}
+static Settings copy_settings(GstDarkSub* self) { return pg::locked_copy(self, *self->settings); }
 
 static GstCaps* gst_dark_sub_transform_caps(GstBaseTransform* trans, GstPadDirection direction,
                                             GstCaps* caps, GstCaps* filter) {
   GstDarkSub* self = GST_DARK_SUB(trans);
   const Settings settings = copy_settings(self);
-  /* Bit depth of 8-bit input: the property when it fits (set_caps refuses one that does not). */
-  const int shallow = settings.bit_depth > 0 && settings.bit_depth <= 8 ? settings.bit_depth : 8;
   GstCaps* result = gst_caps_new_empty();
   for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
     const GstStructure* s = gst_caps_get_structure(caps, i);
-    if (direction == GST_PAD_SINK) {
-      GstStructure* out =
-          gst_structure_new(PYROCAM_MOSAIC_MEDIA_TYPE, "format", G_TYPE_STRING, "F32LE", nullptr);
-      copy_dimensions(s, out);
-      if (gst_structure_has_name(s, "video/x-bayer")) {
-        const GValue* format = gst_structure_get_value(s, "format");
-        if (format)
-          gst_structure_set_value(out, "pattern", format);
-        else
-          gst_structure_set(out, "pattern", G_TYPE_STRING, "rggb", nullptr);
-        gst_structure_set(out, "bit-depth", G_TYPE_INT, shallow, nullptr);
-      } else {
-        /* The caps' pattern wins (set_caps refuses a property that disagrees); without one the
-         * property's, and with neither any pattern: set_caps refuses it. */
-        const GValue* caps_pattern = gst_structure_get_value(s, PYROCAM_FIELD_PATTERN);
-        const char* property_pattern = pattern_name(settings.pattern);
-        const GValue* band_map = gst_structure_get_value(s, PYROCAM_FIELD_BAND_MAP);
-        if (band_map) gst_structure_set_value(out, PYROCAM_FIELD_BAND_MAP, band_map);
-        if (caps_pattern) {
-          gst_structure_set_value(out, "pattern", caps_pattern);
-        } else if (property_pattern) {
-          gst_structure_set(out, "pattern", G_TYPE_STRING, property_pattern, nullptr);
-        } else {
-          GValue all = G_VALUE_INIT;
-          g_value_init(&all, GST_TYPE_LIST);
-          gst_value_deserialize(&all, PYROCAM_PATTERNS);
-          gst_structure_take_value(out, "pattern", &all);
-        }
-        const char* format = gst_structure_get_string(s, "format");
-        if (format && g_str_equal(format, "GRAY8")) {
-          gst_structure_set(out, "bit-depth", G_TYPE_INT, shallow, nullptr);
-        } else if (format && g_str_equal(format, "GRAY16_LE")) {
-          const int caps_bits = pg::structure_int(s, PYROCAM_FIELD_BIT_DEPTH, 0);
-          gst_structure_set(out, "bit-depth", G_TYPE_INT,
-                            caps_bits > 0            ? caps_bits
-                            : settings.bit_depth > 0 ? settings.bit_depth
-                                                     : 16,
-                            nullptr);
-        } else {
-          GValue list = G_VALUE_INIT, v = G_VALUE_INIT;
-          gst_value_list_init(&list, 2);
-          g_value_init(&v, G_TYPE_INT);
-          g_value_set_int(&v, shallow);
-          gst_value_list_append_value(&list, &v);
-          const int deep = settings.bit_depth > 0 ? settings.bit_depth : 16;
-          if (deep != shallow) {
-            g_value_set_int(&v, deep);
-            gst_value_list_append_value(&list, &v);
-          }
-          gst_structure_take_value(out, "bit-depth", &list);
-          g_value_unset(&v);
-        }
-      }
-      /* The raw level at and above which pixels are marked +INF, when it is known here. */
-      int bits = 0;
-      const int caps_level = pg::structure_int(s, PYROCAM_FIELD_SATURATION_LEVEL, -1);
-      if (settings.saturation_level >= 0)
-        gst_structure_set(out, PYROCAM_FIELD_SATURATION_LEVEL, G_TYPE_INT,
-                          static_cast<int>(std::ceil(settings.saturation_level)), nullptr);
-      else if (caps_level >= 0)
-        gst_structure_set(out, PYROCAM_FIELD_SATURATION_LEVEL, G_TYPE_INT, caps_level, nullptr);
-      else if (gst_structure_get_int(out, "bit-depth", &bits) && bits >= 1 && bits <= 16)
-        gst_structure_set(out, PYROCAM_FIELD_SATURATION_LEVEL, G_TYPE_INT,
-                          static_cast<int>(std::ceil(pyrocam::default_saturation_level(bits))),
-                          nullptr);
-      result = gst_caps_merge_structure(result, out);
-    } else {
-      /* Mosaic -> raw: Bayer caps of the pattern, and gray video. */
-      const GValue* pattern = gst_structure_get_value(s, "pattern");
-      GstCaps* bayer = gst_caps_from_string(PYROCAM_RAW_BAYER_CAPS);
-      GstStructure* b = gst_caps_get_structure(bayer, 0);
-      if (pattern) {
-        GValue all = G_VALUE_INIT, common = G_VALUE_INIT;
-        g_value_init(&all, GST_TYPE_LIST);
-        gst_value_deserialize(&all, PYROCAM_BAYER_FORMATS);
-        if (gst_value_intersect(&common, pattern, &all)) {
-          gst_structure_take_value(b, "format", &common);
-        } else {
-          gst_caps_remove_structure(bayer, 0);
-          b = nullptr;
-        }
-        g_value_unset(&all);
-      }
-      if (b) copy_dimensions(s, b);
-      GstCaps* gray = gst_caps_from_string(PYROCAM_RAW_GRAY_CAPS);
-      copy_dimensions(s, gst_caps_get_structure(gray, 0));
-      result = gst_caps_merge(result, bayer);
-      result = gst_caps_merge(result, gray);
-    }
+    if (direction == GST_PAD_SINK)
+      result = gst_caps_merge_structure(result, ds::mosaic_structure(s, settings));
+    else
+      result = gst_caps_merge(result, ds::raw_caps(s));
   }
   if (filter) {
     GstCaps* tmp = gst_caps_intersect_full(filter, result, GST_CAPS_INTERSECT_FIRST);
@@ -383,7 +218,7 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
   const GstStructure* in = gst_caps_get_structure(incaps, 0);
   const char* caps_pattern =
       f.bayer_caps ? f.pattern.c_str() : gst_structure_get_string(in, PYROCAM_FIELD_PATTERN);
-  const char* property_pattern = pattern_name(settings.pattern);
+  const char* property_pattern = ds::pattern_name(settings.pattern);
   if (!caps_pattern && !property_pattern) {
     PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation,
                        raw_format_name(f) +
@@ -448,20 +283,6 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
   return check_dark(self);
 }
 
-static gboolean gst_dark_sub_decide_allocation(GstBaseTransform* trans, GstQuery* query) {
-  GstCaps* caps = nullptr;
-  gst_query_parse_allocation(query, &caps, nullptr);
-  gsize size = 0;
-  if (caps) {
-    const GstStructure* s = gst_caps_get_structure(caps, 0);
-    size = static_cast<gsize>(pg::structure_int(s, "width", 0)) *
-           static_cast<gsize>(pg::structure_int(s, "height", 0)) *
-           static_cast<gsize>(pg::structure_int(s, "bands", 1)) * sizeof(float);
-  }
-  pg::ensure_buffer_pool(query, size);
-  return GST_BASE_TRANSFORM_CLASS(gst_dark_sub_parent_class)->decide_allocation(trans, query);
-}
-
 static gboolean gst_dark_sub_start(GstBaseTransform* trans) {
   GstDarkSub* self = GST_DARK_SUB(trans);
   const Settings settings = copy_settings(self);
@@ -499,9 +320,8 @@ static gboolean gst_dark_sub_start(GstBaseTransform* trans) {
 static gboolean gst_dark_sub_stop(GstBaseTransform* trans) {
   GstDarkSub* self = GST_DARK_SUB(trans);
   *self->state = State();  // releases the dark frames
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   self->settings->capture_requests = 0;
-  GST_OBJECT_UNLOCK(self);
   return TRUE;
 }
 
@@ -571,80 +391,11 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
 }
 
 static void gst_dark_sub_capture_dark(GstDarkSub* self) {
-  GST_OBJECT_LOCK(self);
-  ++self->settings->capture_requests;
-  GST_OBJECT_UNLOCK(self);
+  {
+    pg::ObjectLock lock(self);
+    ++self->settings->capture_requests;
+  }
   GST_INFO_OBJECT(self, "dark capture requested");
-}
-
-static void gst_dark_sub_set_property(GObject* object, guint prop_id, const GValue* value,
-                                      GParamSpec* pspec) {
-  GstDarkSub* self = GST_DARK_SUB(object);
-  GST_OBJECT_LOCK(self);
-  Settings& s = *self->settings;
-  switch (prop_id) {
-    case PROP_LOCATION:
-      if (GST_STATE(self) > GST_STATE_READY) {
-        GST_WARNING_OBJECT(self, "location can only change in NULL or READY");
-      } else {
-        const char* v = g_value_get_string(value);
-        s.location = v ? v : "";
-      }
-      break;
-    case PROP_DARK_LEVEL:
-      s.dark_level = g_value_get_double(value);
-      break;
-    case PROP_SATURATION_LEVEL:
-      s.saturation_level = g_value_get_double(value);
-      break;
-    case PROP_CAPTURE_FRAMES:
-      s.capture_frames = g_value_get_int(value);
-      break;
-    case PROP_PATTERN:
-      s.pattern = static_cast<GstDarkSubPattern>(g_value_get_enum(value));
-      break;
-    case PROP_BIT_DEPTH:
-      s.bit_depth = g_value_get_int(value);
-      break;
-    default:
-      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
-      break;
-  }
-  GST_OBJECT_UNLOCK(self);
-  /* The saturation level is in the output caps: renegotiate, so that ratiotemp sees it. */
-  if (prop_id == PROP_SATURATION_LEVEL)
-    gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
-}
-
-static void gst_dark_sub_get_property(GObject* object, guint prop_id, GValue* value,
-                                      GParamSpec* pspec) {
-  GstDarkSub* self = GST_DARK_SUB(object);
-  GST_OBJECT_LOCK(self);
-  const Settings& s = *self->settings;
-  switch (prop_id) {
-    case PROP_LOCATION:
-      g_value_set_string(value, s.location.empty() ? nullptr : s.location.c_str());
-      break;
-    case PROP_DARK_LEVEL:
-      g_value_set_double(value, s.dark_level);
-      break;
-    case PROP_SATURATION_LEVEL:
-      g_value_set_double(value, s.saturation_level);
-      break;
-    case PROP_CAPTURE_FRAMES:
-      g_value_set_int(value, s.capture_frames);
-      break;
-    case PROP_PATTERN:
-      g_value_set_enum(value, s.pattern);
-      break;
-    case PROP_BIT_DEPTH:
-      g_value_set_int(value, s.bit_depth);
-      break;
-    default:
-      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
-      break;
-  }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_dark_sub_finalize(GObject* object) {
@@ -661,58 +412,11 @@ static void gst_dark_sub_class_init(GstDarkSubClass* klass) {
 
   GST_DEBUG_CATEGORY_INIT(gst_dark_sub_debug, "darksub", 0, "pyrocam dark subtraction");
 
-  gobject_class->set_property = gst_dark_sub_set_property;
-  gobject_class->get_property = gst_dark_sub_get_property;
+  gobject_class->set_property = ds::set_property;
+  gobject_class->get_property = ds::get_property;
   gobject_class->finalize = gst_dark_sub_finalize;
 
-  const auto ready = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
-                                              GST_PARAM_MUTABLE_READY);
-  const auto playing = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
-                                                GST_PARAM_MUTABLE_PLAYING | GST_PARAM_CONTROLLABLE);
-  g_object_class_install_property(
-      gobject_class, PROP_LOCATION,
-      g_param_spec_string("location", "Dark frame file",
-                          "Dark frame image (PGM, PNG or TIFF of the frame's size and sample "
-                          "depth: 8 bit for 8-bit input, 16 bit for GRAY16_LE) "
-                          "taken at the same exposure with the lens covered; empty: none",
-                          nullptr, ready));
-  g_object_class_install_property(
-      gobject_class, PROP_DARK_LEVEL,
-      g_param_spec_double("dark-level", "Constant dark level",
-                          "Dark level in DN subtracted from every pixel when there is no dark "
-                          "frame (0..65535); -1: a dark frame is required",
-                          -1.0, 65535.0, DEFAULT_DARK_LEVEL, playing));
-  g_object_class_install_property(
-      gobject_class, PROP_SATURATION_LEVEL,
-      g_param_spec_double("saturation-level", "Saturation level",
-                          "Raw value in DN (before dark subtraction) at and above which a "
-                          "pixel is marked saturated (+INF) (0..65535); -1: the caps' "
-                          "saturation-level (pyrocamsrc: the camera profile's inference "
-                          "threshold), else 220/255 of the full scale of the bit depth (220 for "
-                          "8 bit)",
-                          -1.0, 65535.0, DEFAULT_SATURATION_LEVEL, playing));
-  g_object_class_install_property(
-      gobject_class, PROP_CAPTURE_FRAMES,
-      g_param_spec_int("capture-frames", "Dark capture frames",
-                       "Number of frames capture-dark averages into a dark frame (1..1000)", 1,
-                       1000, DEFAULT_CAPTURE_FRAMES,
-                       static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
-                                                GST_PARAM_MUTABLE_PLAYING)));
-  g_object_class_install_property(
-      gobject_class, PROP_PATTERN,
-      g_param_spec_enum("pattern", "Mosaic pattern",
-                        "Mosaic layout of the input. auto: from the caps (the format of "
-                        "video/x-bayer, the pattern field of GRAY8/GRAY16_LE); gray input "
-                        "without a pattern field must be told one. A pattern that differs from "
-                        "the caps' is refused (CORE NEGOTIATION)",
-                        GST_TYPE_DARK_SUB_PATTERN, DEFAULT_PATTERN, ready));
-  g_object_class_install_property(
-      gobject_class, PROP_BIT_DEPTH,
-      g_param_spec_int("bit-depth", "Bit depth",
-                       "Significant bits of the input samples, e.g. 12 for a 12-bit camera "
-                       "carried as GRAY16_LE (0..16; at most 8 for GRAY8 and video/x-bayer, "
-                       "which are refused otherwise; 0: the full sample size, 8 or 16)",
-                       0, 16, DEFAULT_BIT_DEPTH, ready));
+  ds::install_properties(gobject_class);
 
   /**
    * GstDarkSub::capture-dark:
@@ -737,7 +441,8 @@ static void gst_dark_sub_class_init(GstDarkSubClass* klass) {
   trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_dark_sub_transform_caps);
   trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_dark_sub_transform_size);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_dark_sub_set_caps);
-  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(gst_dark_sub_decide_allocation);
+  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(pg::decide_allocation);
+  trans_class->before_transform = GST_DEBUG_FUNCPTR(pg::sync_controlled_properties);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_dark_sub_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_dark_sub_stop);
   trans_class->sink_event = GST_DEBUG_FUNCPTR(gst_dark_sub_sink_event);

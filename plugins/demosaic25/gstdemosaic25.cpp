@@ -32,8 +32,8 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
-#include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/core/profile.h"
+#include "pyrocam/runtime/demosaic.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_demosaic25_debug);
 #define GST_CAT_DEFAULT gst_demosaic25_debug
@@ -104,10 +104,7 @@ static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
     "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_BANDS_CAPS));
 
 static Settings copy_settings(GstDemosaic25* self) {
-  GST_OBJECT_LOCK(self);
-  Settings s = *self->settings;
-  GST_OBJECT_UNLOCK(self);
-  return s;
+  return pg::locked_copy(self, *self->settings);
 }
 
 /* A dimension scaled by 1/divisor (forward) or by divisor (backward, any remainder allowed). */
@@ -130,19 +127,12 @@ static void scale_dimension(const GstStructure* from, GstStructure* to, const ch
   }
 }
 
-static void copy_framerate(const GstStructure* from, GstStructure* to) {
-  const GValue* v = gst_structure_get_value(from, "framerate");
-  if (v) gst_structure_set_value(to, "framerate", v);
-}
-
 static GstCaps* gst_demosaic25_transform_caps(GstBaseTransform* trans, GstPadDirection direction,
                                               GstCaps* caps, GstCaps* filter) {
   GstDemosaic25* self = GST_DEMOSAIC25(trans);
   const Settings settings = copy_settings(self);
   const int bayer_divisor = settings.method == GST_DEMOSAIC25_METHOD_BIN2X2 ? 2 : 1;
-  GST_OBJECT_LOCK(self);
-  const std::string profile_band_map = self->state->profile_band_map;
-  GST_OBJECT_UNLOCK(self);
+  const std::string profile_band_map = pg::locked_copy(self, self->state->profile_band_map);
   const bool forward = direction == GST_PAD_SINK;
   GstCaps* result = gst_caps_new_empty();
   for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
@@ -178,19 +168,13 @@ static GstCaps* gst_demosaic25_transform_caps(GstBaseTransform* trans, GstPadDir
         if (snap) {
           gst_structure_set(out, "pattern", G_TYPE_STRING, PYROCAM_SNAPSHOT_PATTERN_NAME, nullptr);
         } else {
-          GValue formats = G_VALUE_INIT;
-          g_value_init(&formats, GST_TYPE_LIST);
-          gst_value_deserialize(&formats, PYROCAM_BAYER_FORMATS);
-          gst_structure_take_value(out, "pattern", &formats);
+          pg::set_list_field(out, "pattern", PYROCAM_BAYER_FORMATS);
         }
       }
-      if (forward) {
-        const GValue* level = gst_structure_get_value(s, PYROCAM_FIELD_SATURATION_LEVEL);
-        if (level) gst_structure_set_value(out, PYROCAM_FIELD_SATURATION_LEVEL, level);
-      }
+      if (forward) pg::copy_fields(s, out, {PYROCAM_FIELD_SATURATION_LEVEL});
       scale_dimension(s, out, "width", divisor, forward);
       scale_dimension(s, out, "height", divisor, forward);
-      copy_framerate(s, out);
+      pg::copy_fields(s, out, {"framerate"});
       result = gst_caps_merge_structure(result, out);
     }
   }
@@ -274,27 +258,14 @@ static gboolean gst_demosaic25_set_caps(GstBaseTransform* trans, GstCaps* incaps
   return TRUE;
 }
 
-static gboolean gst_demosaic25_decide_allocation(GstBaseTransform* trans, GstQuery* query) {
-  GstCaps* caps = nullptr;
-  gst_query_parse_allocation(query, &caps, nullptr);
-  gsize size = 0;
-  if (caps) {
-    const GstStructure* s = gst_caps_get_structure(caps, 0);
-    size = static_cast<gsize>(pg::structure_int(s, "width", 0)) *
-           static_cast<gsize>(pg::structure_int(s, "height", 0)) *
-           static_cast<gsize>(pg::structure_int(s, "bands", 1)) * sizeof(float);
-  }
-  pg::ensure_buffer_pool(query, size);
-  return GST_BASE_TRANSFORM_CLASS(gst_demosaic25_parent_class)->decide_allocation(trans, query);
-}
-
 static gboolean gst_demosaic25_start(GstBaseTransform* trans) {
   GstDemosaic25* self = GST_DEMOSAIC25(trans);
   const Settings settings = copy_settings(self);
   State& st = *self->state;
-  GST_OBJECT_LOCK(self);
-  st = State();
-  GST_OBJECT_UNLOCK(self);
+  {
+    pg::ObjectLock lock(self);
+    st = State();
+  }
   if (settings.profile.empty()) return TRUE;
   pyrocam::CameraProfile profile;
   const bool ok = PYROCAM_GUARDED(self, pg::profile_error_kind(settings.profile),
@@ -312,9 +283,10 @@ static gboolean gst_demosaic25_start(GstBaseTransform* trans) {
     }
     st.snapshot_layout = profile.mosaic;
     st.have_snapshot_layout = true;
-    GST_OBJECT_LOCK(self);
-    st.profile_band_map = pg::band_map_text(profile.mosaic);
-    GST_OBJECT_UNLOCK(self);
+    {
+      pg::ObjectLock lock(self);
+      st.profile_band_map = pg::band_map_text(profile.mosaic);
+    }
     st.profile_pattern = PYROCAM_SNAPSHOT_PATTERN_NAME;
   } else {
     st.profile_pattern = profile.mosaic.pattern;
@@ -327,9 +299,8 @@ static gboolean gst_demosaic25_start(GstBaseTransform* trans) {
 }
 
 static gboolean gst_demosaic25_stop(GstBaseTransform* trans) {
-  GST_OBJECT_LOCK(trans);
+  pg::ObjectLock lock(trans);
   *GST_DEMOSAIC25(trans)->state = State();
-  GST_OBJECT_UNLOCK(trans);
   return TRUE;
 }
 
@@ -357,7 +328,7 @@ static GstFlowReturn gst_demosaic25_transform(GstBaseTransform* trans, GstBuffer
 static void gst_demosaic25_set_property(GObject* object, guint prop_id, const GValue* value,
                                         GParamSpec* pspec) {
   GstDemosaic25* self = GST_DEMOSAIC25(object);
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   Settings& s = *self->settings;
   const bool running = GST_STATE(self) > GST_STATE_READY;
   switch (prop_id) {
@@ -379,13 +350,12 @@ static void gst_demosaic25_set_property(GObject* object, guint prop_id, const GV
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_demosaic25_get_property(GObject* object, guint prop_id, GValue* value,
                                         GParamSpec* pspec) {
   GstDemosaic25* self = GST_DEMOSAIC25(object);
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   const Settings& s = *self->settings;
   switch (prop_id) {
     case PROP_METHOD:
@@ -398,7 +368,6 @@ static void gst_demosaic25_get_property(GObject* object, guint prop_id, GValue* 
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_demosaic25_finalize(GObject* object) {
@@ -447,7 +416,7 @@ static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
   trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_transform_caps);
   trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_demosaic25_transform_size);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_set_caps);
-  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(gst_demosaic25_decide_allocation);
+  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(pg::decide_allocation);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_demosaic25_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_demosaic25_stop);
   trans_class->transform = GST_DEBUG_FUNCPTR(gst_demosaic25_transform);

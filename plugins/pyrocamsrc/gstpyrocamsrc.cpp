@@ -18,7 +18,7 @@
  * The melt pool crosses the frame every 100 frames, its peak swinging between 1500 and
  * 2500 degC; the plate and the filament glow at #GstPyrocamSrc:temperature. Emissivities are
  * those of the calibration tool's scenes (plate 0.7, filament 0.4, melt pool 0.35). With
- * #GstPyrocamSrc:exposure 0 the exposure puts the brightest band 150 DN above the dark level at
+ * #GstPyrocamSrc:exposure 0 the exposure puts the brightest band 140 DN above the dark level at
  * the scene's nominal temperature (plate, filament) or at 2000 degC (melt pool, as the
  * calibration tool's scene sequences: the hottest frames saturate, the coolest are dim).
  *
@@ -69,8 +69,15 @@ constexpr guint64 DEFAULT_SEED = 1;
 constexpr gboolean DEFAULT_IS_LIVE = FALSE;
 constexpr int DEFAULT_WIDTH = 320, DEFAULT_HEIGHT = 240, DEFAULT_FPS = 30;
 constexpr int kMeltPoolFrames = 100;
-constexpr double kMeltPoolExposureC = 2000.0;  // as pyrocam-calib's scene sequences
-constexpr double kTargetDn = 150.0;
+// Exposure and emissivities as pyrocam-calib's scene sequences (pyrocam::kSceneDefaults); the
+// exposure property's description and the documentation above give these numbers.
+constexpr pyrocam::SceneDefaults kScene = pyrocam::kSceneDefaults;
+static_assert(kScene.target_dn == 140 && kScene.melt_pool_exposure_c == 2000,
+              "update the exposure property's description, the element documentation and "
+              "tests/elements/inspect/pyrocamsrc.txt");
+static_assert(kScene.plate_emissivity == 0.7 && kScene.filament_emissivity == 0.4 &&
+                  kScene.melt_pool_emissivity == 0.35,
+              "update the element documentation");
 
 struct Settings {
   GstPyrocamSrcScene scene = DEFAULT_SCENE;
@@ -93,14 +100,14 @@ struct State {
   double scene_temperature = NAN;
 };
 
-double emissivity_of(GstPyrocamSrcScene scene) {
+pyrocam::SceneKind scene_kind(GstPyrocamSrcScene scene) {
   switch (scene) {
     case GST_PYROCAM_SRC_SCENE_PLATE:
-      return 0.7;
+      return pyrocam::SceneKind::kPlate;
     case GST_PYROCAM_SRC_SCENE_FILAMENT:
-      return 0.4;
+      return pyrocam::SceneKind::kFilament;
     default:
-      return 0.35;
+      return pyrocam::SceneKind::kMeltPool;
   }
 }
 
@@ -150,10 +157,7 @@ static GstStaticPadTemplate src_template =
     GST_STATIC_PAD_TEMPLATE("src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_RAW_CAPS));
 
 static Settings copy_settings(GstPyrocamSrc* self) {
-  GST_OBJECT_LOCK(self);
-  Settings s = *self->settings;
-  GST_OBJECT_UNLOCK(self);
-  return s;
+  return pg::locked_copy(self, *self->settings);
 }
 
 /* The caps the loaded profile can produce. */
@@ -187,9 +191,7 @@ static GstCaps* profile_caps(const pyrocam::CameraProfile& profile) {
 static GstCaps* gst_pyrocam_src_get_caps(GstBaseSrc* src, GstCaps* filter) {
   GstPyrocamSrc* self = GST_PYROCAM_SRC(src);
   GstCaps* caps;
-  GST_OBJECT_LOCK(self);
-  const bool have = self->state->camera != nullptr;
-  GST_OBJECT_UNLOCK(self);
+  const bool have = pg::locked_copy(self, self->state->camera != nullptr);
   if (have)
     caps = profile_caps(self->state->camera->profile());
   else
@@ -259,18 +261,16 @@ static gboolean gst_pyrocam_src_start(GstBaseSrc* src) {
   if (!ok) return FALSE;
   GST_INFO_OBJECT(self, "camera profile %s, %s unit", camera->profile().name.c_str(),
                   settings.unit == GST_PYROCAM_SRC_UNIT_TYPICAL ? "typical" : "datasheet");
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   *self->state = State();
   self->state->camera = std::move(camera);
-  GST_OBJECT_UNLOCK(self);
   return TRUE;
 }
 
 static gboolean gst_pyrocam_src_stop(GstBaseSrc* src) {
   GstPyrocamSrc* self = GST_PYROCAM_SRC(src);
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   *self->state = State();
-  GST_OBJECT_UNLOCK(self);
   return TRUE;
 }
 
@@ -293,8 +293,13 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
   GstPyrocamSrc* self = GST_PYROCAM_SRC(push);
   State& st = *self->state;
   if (!st.camera || st.width == 0) return GST_FLOW_NOT_NEGOTIATED;
+  const GstClockTime pts = gst_util_uint64_scale(
+      st.frame, static_cast<guint64>(st.fps_d) * GST_SECOND, static_cast<guint64>(st.fps_n));
+  // Controlled properties (scene, exposure, temperature) take their values at the frame's time;
+  // the segment starts at 0, so that is its stream time.
+  gst_object_sync_values(GST_OBJECT(self), pts);
   const Settings settings = copy_settings(self);
-  const double emissivity = emissivity_of(settings.scene);
+  const double emissivity = kScene.emissivity(scene_kind(settings.scene));
   const bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "Could not render a frame", [&] {
     const cv::Mat* map;
     cv::Mat pool;
@@ -303,7 +308,7 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
       const int index = static_cast<int>(st.frame % kMeltPoolFrames);
       pool = pyrocam::melt_pool_scene(st.width, st.height, index, kMeltPoolFrames);
       map = &pool;
-      nominal_c = kMeltPoolExposureC;
+      nominal_c = kScene.melt_pool_exposure_c;
     } else {
       if (st.scene_map.empty() || st.scene_kind != settings.scene ||
           st.scene_temperature != settings.temperature_c) {
@@ -317,7 +322,7 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
     }
     const double exposure = settings.exposure_us > 0
                                 ? settings.exposure_us
-                                : st.camera->exposure_for(nominal_c, kTargetDn, emissivity);
+                                : st.camera->exposure_for(nominal_c, kScene.target_dn, emissivity);
     const cv::Mat raw = st.camera->render(*map, exposure, emissivity);
     GstMapInfo info;
     if (!gst_buffer_map(buffer, &info, GST_MAP_WRITE))
@@ -333,8 +338,6 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
   });
   if (!ok) return GST_FLOW_ERROR;
 
-  const GstClockTime pts = gst_util_uint64_scale(
-      st.frame, static_cast<guint64>(st.fps_d) * GST_SECOND, static_cast<guint64>(st.fps_n));
   const GstClockTime next = gst_util_uint64_scale(
       st.frame + 1, static_cast<guint64>(st.fps_d) * GST_SECOND, static_cast<guint64>(st.fps_n));
   GST_BUFFER_PTS(buffer) = pts;
@@ -353,7 +356,7 @@ static void gst_pyrocam_src_set_property(GObject* object, guint prop_id, const G
     gst_base_src_set_live(GST_BASE_SRC(self), g_value_get_boolean(value));
     return;
   }
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   Settings& s = *self->settings;
   const bool running = GST_STATE(self) > GST_STATE_READY;
   switch (prop_id) {
@@ -390,7 +393,6 @@ static void gst_pyrocam_src_set_property(GObject* object, guint prop_id, const G
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_pyrocam_src_get_property(GObject* object, guint prop_id, GValue* value,
@@ -400,7 +402,7 @@ static void gst_pyrocam_src_get_property(GObject* object, guint prop_id, GValue*
     g_value_set_boolean(value, gst_base_src_is_live(GST_BASE_SRC(self)));
     return;
   }
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   const Settings& s = *self->settings;
   switch (prop_id) {
     case PROP_SCENE:
@@ -425,7 +427,6 @@ static void gst_pyrocam_src_get_property(GObject* object, guint prop_id, GValue*
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_pyrocam_src_finalize(GObject* object) {
@@ -471,7 +472,7 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
       gobject_class, PROP_EXPOSURE,
       g_param_spec_double("exposure", "Exposure",
                           "Exposure time in microseconds (0..10000000); 0: automatic, the "
-                          "brightest band 150 DN above dark at the scene's nominal temperature "
+                          "brightest band 140 DN above dark at the scene's nominal temperature "
                           "(melt pool: 2000 degC)",
                           0.0, 1e7, DEFAULT_EXPOSURE, playing));
   g_object_class_install_property(

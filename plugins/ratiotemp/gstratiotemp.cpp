@@ -1,5 +1,3 @@
-/* Over 600 lines: estimator selection, uncertainty output, statistics messages and region
- * handling; estimator selection is to move into the library with the architecture issue. */
 /**
  * SECTION:element-ratiotemp
  * @title: ratiotemp
@@ -104,9 +102,10 @@
  *     filesink location=u.mkv
  * ]|
  */
+/* The negotiation, the estimator switching and the streaming; the properties
+ * (ratiotemp-properties.cpp) and the statistics message (ratiotemp-stats.cpp) are beside it. */
 #include "gstratiotemp.h"
 
-#include <array>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -116,96 +115,19 @@
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
 #include "pyrocam/core/temperature_codes.h"
-#include "pyrocam/runtime/estimator_check.h"
+#include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/measure.h"
 #include "pyrocam/runtime/model.h"
+#include "ratiotemp-private.h"
 
-GST_DEBUG_CATEGORY_STATIC(gst_ratio_temp_debug);
+GST_DEBUG_CATEGORY(gst_ratio_temp_debug);
 #define GST_CAT_DEFAULT gst_ratio_temp_debug
 
 namespace pg = pyrocam::gst;
+namespace rt = pyrocam::gst::ratiotemp;
+using rt::Settings;
 
 namespace {
-
-enum {
-  PROP_0,
-  PROP_MODEL,
-  PROP_METHOD,
-  PROP_OUTPUT,
-  PROP_STATS_INTERVAL,
-  PROP_REGION,
-  PROP_ALLOW_PARTIAL,
-  PROP_MISFIT_PROBABILITY,
-};
-
-constexpr GstRatioTempMethod DEFAULT_METHOD = GST_RATIO_TEMP_METHOD_AUTO;
-constexpr GstRatioTempOutput DEFAULT_OUTPUT = GST_RATIO_TEMP_OUTPUT_TEMPERATURE;
-constexpr guint64 DEFAULT_STATS_INTERVAL = GST_SECOND;
-constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
-constexpr double DEFAULT_MISFIT_PROBABILITY = 0.0;
-constexpr double MAX_MISFIT_PROBABILITY = 0.5;
-constexpr const char* STATS_MESSAGE = "pyrocam-temperature-stats";
-/* The lookup table is used only where it gives the network's answer: within this many degC at
- * every 1 degC sample of the model's locus, and reading where the network reads at all but 1 %
- * of them (the range ends). */
-constexpr double LUT_TOLERANCE_C = 1.0;
-
-/* A rectangle of output pixels. */
-struct Region {
-  int x = 0, y = 0, width = 0, height = 0;
-};
-
-/* "x,y,width,height" (non-negative integers, width and height at least 1); false otherwise. */
-bool parse_region(const std::string& text, Region* out) {
-  gchar** parts = g_strsplit(text.c_str(), ",", -1);
-  bool ok = g_strv_length(parts) == 4;
-  gint64 v[4] = {0, 0, 0, 0};
-  for (int i = 0; ok && i < 4; ++i)
-    ok = g_ascii_string_to_signed(g_strstrip(parts[i]), 10, 0, G_MAXINT, &v[i], nullptr) &&
-         (i < 2 || v[i] >= 1);
-  g_strfreev(parts);
-  if (ok)
-    *out = {static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]),
-            static_cast<int>(v[3])};
-  return ok;
-}
-
-/* Property values; read and written under GST_OBJECT_LOCK, copied once per buffer. */
-struct Settings {
-  std::string model;
-  GstRatioTempMethod method = DEFAULT_METHOD;
-  GstRatioTempOutput output = DEFAULT_OUTPUT;
-  guint64 stats_interval = DEFAULT_STATS_INTERVAL;
-  gboolean allow_partial = DEFAULT_ALLOW_PARTIAL;
-  double misfit_probability = DEFAULT_MISFIT_PROBABILITY;
-  std::string region_text;   // as set; empty: no region
-  bool region_valid = true;  // region_text is empty or parsed into region
-  Region region;
-  guint region_serial = 0;  // bumped by every change of region
-};
-
-/* Streaming state: the model and its estimators are built in start(), the format in set_caps(),
- * all dropped in stop(). The estimators refer to the model: they are declared after it, so
- * they go first. */
-struct State {
-  std::unique_ptr<const pyrocam::ThermalModel> model;
-  std::string model_path;
-  std::array<std::unique_ptr<pyrocam::PlaneEstimator>, 3> estimators;  // by pyrocam::Method
-  pyrocam::Method method = pyrocam::Method::kMlp;                      // in use
-  GstRatioTempMethod method_request = DEFAULT_METHOD;   // the property value it came from
-  GstRatioTempMethod refused_request = DEFAULT_METHOD;  // last property value warned about
-  bool refused = false;
-  bool lut_checked = false;
-  std::string lut_problem;  // why the lookup table is not used for this model, if it is not
-  bool configured = false;
-  int width = 0, height = 0, bands = 0;
-  GstVideoInfo out_info{};
-  std::vector<cv::Mat> planes;  // headers onto the input buffer
-  cv::Mat temperature_c, uncertainty_c;
-  GstClockTime last_stats = GST_CLOCK_TIME_NONE;
-  guint64 frames = 0;  // since start or the last flush
-  guint region_serial_seen = 0;
-};
 
 const char* layout_name(const pyrocam::ThermalModel& model) {
   return model.profile().mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot
@@ -213,67 +135,17 @@ const char* layout_name(const pyrocam::ThermalModel& model) {
              : "bayer";
 }
 
-pyrocam::Method to_library(GstRatioTempMethod m) {
+pyrocam::MethodRequest to_library(GstRatioTempMethod m) {
   switch (m) {
     case GST_RATIO_TEMP_METHOD_MLP:
-      return pyrocam::Method::kMlp;
+      return pyrocam::MethodRequest::kMlp;
     case GST_RATIO_TEMP_METHOD_LUT:
-      return pyrocam::Method::kLut;
+      return pyrocam::MethodRequest::kLut;
+    case GST_RATIO_TEMP_METHOD_LIKELIHOOD:
+      return pyrocam::MethodRequest::kLikelihood;
     default:
-      return pyrocam::Method::kLikelihood;
+      return pyrocam::MethodRequest::kAuto;
   }
-}
-
-/* Builds the estimator of a method unless it exists; for the lookup table, also checks it
- * against the network on the model's locus (once). Returns "" when it can be used, else why
- * not. */
-std::string prepare_estimator(State& st, pyrocam::Method m) {
-  if (m == pyrocam::Method::kLut && st.lut_checked && !st.lut_problem.empty())
-    return st.lut_problem;
-  auto& slot = st.estimators[static_cast<std::size_t>(m)];
-  try {
-    if (!slot) slot = std::make_unique<pyrocam::PlaneEstimator>(*st.model, m);
-    if (m != pyrocam::Method::kLut || st.lut_checked) return "";
-    const auto mlp = pyrocam::make_estimator(*st.model, pyrocam::Method::kMlp);
-    const pyrocam::LocusAgreement a = pyrocam::compare_on_locus(*st.model, slot->estimator(), *mlp);
-    st.lut_checked = true;
-    if (a.max_difference_c > LUT_TOLERANCE_C || a.validity_differs * 100 > a.samples) {
-      char what[256];
-      g_snprintf(what, sizeof what,
-                 "its lookup table differs from its network by up to %.1f degC (at %.0f degC "
-                 "on the model's locus; one reads where the other does not at %zu of %zu "
-                 "samples)",
-                 a.max_difference_c, a.worst_temperature_c, a.validity_differs, a.samples);
-      st.lut_problem = what;
-      slot.reset();
-      return st.lut_problem;
-    }
-    return "";
-  } catch (const std::exception& e) {
-    slot.reset();
-    return e.what();
-  }
-}
-
-/* Picks and builds the estimator for a property value: auto is the lookup table for two-ratio
- * models when it passes its check, likelihood otherwise (`fallback` then says why). Returns ""
- * or why the method cannot be used. */
-std::string choose_estimator(State& st, GstRatioTempMethod request, pyrocam::Method* chosen,
-                             std::string* fallback) {
-  if (request == GST_RATIO_TEMP_METHOD_AUTO) {
-    if (st.model->profile().normalisation.numerators.size() == 2) {
-      const std::string why = prepare_estimator(st, pyrocam::Method::kLut);
-      if (why.empty()) {
-        *chosen = pyrocam::Method::kLut;
-        return "";
-      }
-      *fallback = why;
-    }
-    *chosen = pyrocam::Method::kLikelihood;
-  } else {
-    *chosen = to_library(request);
-  }
-  return prepare_estimator(st, *chosen);
 }
 
 /* An output buffer mapped as a GRAY16_LE frame (rows at the video info's stride); unmaps when
@@ -298,70 +170,42 @@ struct MappedFrame {
 
 }  // namespace
 
-struct _GstRatioTemp {
-  GstBaseTransform parent;
-  Settings* settings;
-  State* state;
+/* Streaming state: the model and its estimators are built in start(), the format in set_caps(),
+ * all dropped in stop(). The estimators refer to the model: they are declared after it, so
+ * they go first. */
+struct pyrocam::gst::ratiotemp::State {
+  std::unique_ptr<const pyrocam::ThermalModel> model;
+  std::string model_path;
+  std::unique_ptr<pyrocam::EstimatorSelector> estimators;   // builds and keeps them per method
+  pyrocam::Method method = pyrocam::Method::kMlp;           // in use
+  GstRatioTempMethod method_request = rt::DEFAULT_METHOD;   // the property value it came from
+  GstRatioTempMethod refused_request = rt::DEFAULT_METHOD;  // last property value warned about
+  bool refused = false;
+  bool configured = false;
+  int width = 0, height = 0, bands = 0;
+  GstVideoInfo out_info{};
+  std::vector<cv::Mat> planes;  // headers onto the input buffer
+  cv::Mat temperature_c, uncertainty_c;
+  GstClockTime last_stats = GST_CLOCK_TIME_NONE;
+  guint64 frames = 0;  // since start or the last flush
+  guint region_serial_seen = 0;
 };
+
+using rt::State;
 
 G_DEFINE_TYPE(GstRatioTemp, gst_ratio_temp, GST_TYPE_BASE_TRANSFORM);
 GST_ELEMENT_REGISTER_DEFINE(ratiotemp, "ratiotemp", GST_RANK_NONE, GST_TYPE_RATIO_TEMP);
-
-GType gst_ratio_temp_method_get_type(void) {
-  static GType type = 0;
-  static const GEnumValue values[] = {
-      {GST_RATIO_TEMP_METHOD_AUTO,
-       "lut for two-ratio (colour) models when it passes its check, likelihood otherwise", "auto"},
-      {GST_RATIO_TEMP_METHOD_MLP, "The paper's network on band ratios (reference, slow)", "mlp"},
-      {GST_RATIO_TEMP_METHOD_LUT, "2-D lookup table of the network (colour models only)", "lut"},
-      {GST_RATIO_TEMP_METHOD_LIKELIHOOD, "Maximum-likelihood fit along the Planckian locus",
-       "likelihood"},
-      {0, nullptr, nullptr},
-  };
-  if (g_once_init_enter(&type)) {
-    GType t = g_enum_register_static("GstRatioTempMethod", values);
-    g_once_init_leave(&type, t);
-  }
-  return type;
-}
-
-GType gst_ratio_temp_output_get_type(void) {
-  static GType type = 0;
-  static const GEnumValue values[] = {
-      {GST_RATIO_TEMP_OUTPUT_TEMPERATURE, "Temperature, 0.1 K per code", "temperature"},
-      {GST_RATIO_TEMP_OUTPUT_UNCERTAINTY,
-       "Expanded uncertainty (k = 2) of the temperature, 0.1 K per code", "uncertainty"},
-      {0, nullptr, nullptr},
-  };
-  if (g_once_init_enter(&type)) {
-    GType t = g_enum_register_static("GstRatioTempOutput", values);
-    g_once_init_leave(&type, t);
-  }
-  return type;
-}
 
 static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
     "sink", GST_PAD_SINK, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_BANDS_CAPS));
 static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
     "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_TEMPERATURE_CAPS));
 
-static Settings copy_settings(GstRatioTemp* self) {
-  GST_OBJECT_LOCK(self);
-  Settings s = *self->settings;
-  GST_OBJECT_UNLOCK(self);
-  return s;
-}
+static Settings copy_settings(GstRatioTemp* self) { return pg::locked_copy(self, *self->settings); }
 
 static void reset_state(GstRatioTemp* self) {
   delete self->state;  // estimators first, then the model
   self->state = new State();
-}
-
-static void copy_dimensions(const GstStructure* from, GstStructure* to) {
-  for (const char* field : {"width", "height", "framerate"}) {
-    const GValue* v = gst_structure_get_value(from, field);
-    if (v) gst_structure_set_value(to, field, v);
-  }
 }
 
 static GstCaps* gst_ratio_temp_transform_caps(GstBaseTransform* trans, GstPadDirection direction,
@@ -373,7 +217,7 @@ static GstCaps* gst_ratio_temp_transform_caps(GstBaseTransform* trans, GstPadDir
   GstCaps* result = gst_caps_new_empty();
   for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
     GstStructure* out = gst_structure_copy(gst_caps_get_structure(templ, 0));
-    copy_dimensions(gst_caps_get_structure(caps, i), out);
+    pg::copy_dimensions(gst_caps_get_structure(caps, i), out);
     result = gst_caps_merge_structure(result, out);
   }
   gst_caps_unref(templ);
@@ -474,15 +318,6 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
   return TRUE;
 }
 
-static gboolean gst_ratio_temp_decide_allocation(GstBaseTransform* trans, GstQuery* query) {
-  GstCaps* caps = nullptr;
-  gst_query_parse_allocation(query, &caps, nullptr);
-  GstVideoInfo info;
-  if (caps && gst_video_info_from_caps(&info, caps))
-    pg::ensure_buffer_pool(query, GST_VIDEO_INFO_SIZE(&info));
-  return GST_BASE_TRANSFORM_CLASS(gst_ratio_temp_parent_class)->decide_allocation(trans, query);
-}
-
 static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
   GstRatioTemp* self = GST_RATIO_TEMP(trans);
   const Settings settings = copy_settings(self);
@@ -515,19 +350,21 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
   });
   if (!ok) return FALSE;
   st.model_path = settings.model;
-  std::string fallback;
-  const std::string problem = choose_estimator(st, settings.method, &st.method, &fallback);
-  if (!problem.empty()) {
+  st.estimators = std::make_unique<pyrocam::EstimatorSelector>(*st.model);
+  const pyrocam::EstimatorSelector::Choice choice =
+      st.estimators->select(to_library(settings.method));
+  st.method = choice.method;
+  if (!choice.problem.empty()) {
     PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
                        "Method " + pyrocam::method_name(st.method) + " cannot be used with model " +
-                           settings.model + ": " + problem,
+                           settings.model + ": " + choice.problem,
                        "estimator construction or its check failed in start");
     return FALSE;
   }
-  if (!fallback.empty())
+  if (!choice.fallback.empty())
     GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
                         ("method auto uses likelihood, not lut, for model %s: %s",
-                         settings.model.c_str(), fallback.c_str()),
+                         settings.model.c_str(), choice.fallback.c_str()),
                         ("lookup table refused in start"));
   st.method_request = settings.method;
   st.region_serial_seen = settings.region_serial;
@@ -561,13 +398,13 @@ static void apply_method(GstRatioTemp* self, GstRatioTempMethod request) {
     return;
   }
   if (st.refused && st.refused_request == request) return;
-  pyrocam::Method chosen = st.method;
-  std::string fallback;
-  const std::string problem = choose_estimator(st, request, &chosen, &fallback);
+  const pyrocam::EstimatorSelector::Choice choice = st.estimators->select(to_library(request));
+  const pyrocam::Method chosen = choice.method;
+  const std::string& problem = choice.problem;
   if (problem.empty()) {
     GST_INFO_OBJECT(self, "method %s -> %s%s%s", pyrocam::method_name(st.method).c_str(),
                     pyrocam::method_name(chosen).c_str(),
-                    fallback.empty() ? "" : ", not lut: ", fallback.c_str());
+                    choice.fallback.empty() ? "" : ", not lut: ", choice.fallback.c_str());
     st.method = chosen;
     st.method_request = request;
     st.refused = false;
@@ -592,50 +429,11 @@ static GstClockTime frame_position(const State& st, GstBuffer* buffer) {
                                static_cast<guint64>(fps_n));
 }
 
-static void set_stats_fields(GstStructure* s, const std::string& prefix,
-                             const pyrocam::RegionStats& r) {
-  gst_structure_set(s, (prefix + "pixels").c_str(), G_TYPE_UINT64, static_cast<guint64>(r.pixels),
-                    (prefix + "valid").c_str(), G_TYPE_UINT64, static_cast<guint64>(r.valid),
-                    (prefix + "valid-fraction").c_str(), G_TYPE_DOUBLE, r.valid_fraction, nullptr);
-  if (r.valid == 0) return;
-  gst_structure_set(s, (prefix + "min-c").c_str(), G_TYPE_DOUBLE, r.min_c,
-                    (prefix + "max-c").c_str(), G_TYPE_DOUBLE, r.max_c, (prefix + "mean-c").c_str(),
-                    G_TYPE_DOUBLE, r.mean_c, (prefix + "median-c").c_str(), G_TYPE_DOUBLE,
-                    r.median_c, nullptr);
-}
-
 static void post_stats(GstRatioTemp* self, const Settings& settings, GstBuffer* buffer) {
   const State& st = *self->state;
-  const GstSegment* segment = &GST_BASE_TRANSFORM(self)->segment;
-  const GstClockTime pts = GST_BUFFER_PTS(buffer);
-  GstClockTime stream_time = GST_CLOCK_TIME_NONE, running_time = GST_CLOCK_TIME_NONE;
-  if (GST_CLOCK_TIME_IS_VALID(pts) && segment->format == GST_FORMAT_TIME) {
-    stream_time = gst_segment_to_stream_time(segment, GST_FORMAT_TIME, pts);
-    running_time = gst_segment_to_running_time(segment, GST_FORMAT_TIME, pts);
-  }
-  // The statistics first: nothing to free should they throw.
-  const pyrocam::RegionStats whole = pyrocam::region_stats(st.temperature_c);
-  const bool with_region = !settings.region_text.empty() && settings.region_valid;
-  cv::Rect r;
-  pyrocam::RegionStats region;
-  if (with_region) {
-    const cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,
-                          settings.region.height);
-    r = wanted & cv::Rect(0, 0, st.width, st.height);
-    if (!r.empty()) region = pyrocam::region_stats(st.temperature_c(r));
-  }
   GstStructure* s =
-      gst_structure_new(STATS_MESSAGE, "timestamp", G_TYPE_UINT64, static_cast<guint64>(pts),
-                        "stream-time", G_TYPE_UINT64, static_cast<guint64>(stream_time),
-                        "running-time", G_TYPE_UINT64, static_cast<guint64>(running_time), "method",
-                        G_TYPE_STRING, pyrocam::method_name(st.method).c_str(), "width", G_TYPE_INT,
-                        st.width, "height", G_TYPE_INT, st.height, nullptr);
-  set_stats_fields(s, "", whole);
-  if (with_region) {
-    gst_structure_set(s, "region-x", G_TYPE_INT, r.x, "region-y", G_TYPE_INT, r.y, "region-width",
-                      G_TYPE_INT, r.width, "region-height", G_TYPE_INT, r.height, nullptr);
-    set_stats_fields(s, "region-", region);
-  }
+      rt::stats_structure(st.temperature_c, settings, &GST_BASE_TRANSFORM(self)->segment,
+                          GST_BUFFER_PTS(buffer), st.method);
   gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), s));
 }
 
@@ -673,7 +471,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         in.map_float(inbuf, st.width, st.height, st.bands, GST_MAP_READ);
         for (int b = 0; b < st.bands; ++b)
           st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
-        pyrocam::PlaneEstimator& chosen = *st.estimators[static_cast<std::size_t>(st.method)];
+        pyrocam::PlaneEstimator& chosen = st.estimators->estimator(st.method);
         chosen.set_misfit_probability(settings.misfit_probability);
         chosen.set_allow_partial(settings.allow_partial);
         const pyrocam::PlaneEstimator& estimator = chosen;
@@ -705,90 +503,6 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
   return GST_FLOW_OK;
 }
 
-static void gst_ratio_temp_set_property(GObject* object, guint prop_id, const GValue* value,
-                                        GParamSpec* pspec) {
-  GstRatioTemp* self = GST_RATIO_TEMP(object);
-  GST_OBJECT_LOCK(self);
-  Settings& s = *self->settings;
-  const bool running = GST_STATE(self) > GST_STATE_READY;
-  switch (prop_id) {
-    case PROP_MODEL:
-      if (running) {
-        GST_WARNING_OBJECT(self, "model can only change in NULL or READY");
-      } else {
-        const char* v = g_value_get_string(value);
-        s.model = v ? v : "";
-      }
-      break;
-    case PROP_METHOD:
-      s.method = static_cast<GstRatioTempMethod>(g_value_get_enum(value));
-      break;
-    case PROP_OUTPUT:
-      if (running)
-        GST_WARNING_OBJECT(self, "output can only change in NULL or READY");
-      else
-        s.output = static_cast<GstRatioTempOutput>(g_value_get_enum(value));
-      break;
-    case PROP_STATS_INTERVAL:
-      s.stats_interval = g_value_get_uint64(value);
-      break;
-    case PROP_ALLOW_PARTIAL:
-      s.allow_partial = g_value_get_boolean(value);
-      break;
-    case PROP_MISFIT_PROBABILITY:
-      s.misfit_probability = g_value_get_double(value);
-      break;
-    case PROP_REGION: {
-      const char* v = g_value_get_string(value);
-      s.region_text = v ? v : "";
-      s.region = Region();
-      s.region_valid = s.region_text.empty() || parse_region(s.region_text, &s.region);
-      ++s.region_serial;
-      if (!s.region_valid)
-        GST_WARNING_OBJECT(self, "region '%s' is not x,y,width,height", s.region_text.c_str());
-      break;
-    }
-    default:
-      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
-      break;
-  }
-  GST_OBJECT_UNLOCK(self);
-}
-
-static void gst_ratio_temp_get_property(GObject* object, guint prop_id, GValue* value,
-                                        GParamSpec* pspec) {
-  GstRatioTemp* self = GST_RATIO_TEMP(object);
-  GST_OBJECT_LOCK(self);
-  const Settings& s = *self->settings;
-  switch (prop_id) {
-    case PROP_MODEL:
-      g_value_set_string(value, s.model.empty() ? nullptr : s.model.c_str());
-      break;
-    case PROP_METHOD:
-      g_value_set_enum(value, s.method);
-      break;
-    case PROP_OUTPUT:
-      g_value_set_enum(value, s.output);
-      break;
-    case PROP_STATS_INTERVAL:
-      g_value_set_uint64(value, s.stats_interval);
-      break;
-    case PROP_ALLOW_PARTIAL:
-      g_value_set_boolean(value, s.allow_partial);
-      break;
-    case PROP_MISFIT_PROBABILITY:
-      g_value_set_double(value, s.misfit_probability);
-      break;
-    case PROP_REGION:
-      g_value_set_string(value, s.region_text.empty() ? nullptr : s.region_text.c_str());
-      break;
-    default:
-      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
-      break;
-  }
-  GST_OBJECT_UNLOCK(self);
-}
-
 static void gst_ratio_temp_finalize(GObject* object) {
   GstRatioTemp* self = GST_RATIO_TEMP(object);
   delete self->settings;
@@ -804,63 +518,11 @@ static void gst_ratio_temp_class_init(GstRatioTempClass* klass) {
   GST_DEBUG_CATEGORY_INIT(gst_ratio_temp_debug, "ratiotemp", 0,
                           "pyrocam band planes to temperature");
 
-  gobject_class->set_property = gst_ratio_temp_set_property;
-  gobject_class->get_property = gst_ratio_temp_get_property;
+  gobject_class->set_property = rt::set_property;
+  gobject_class->get_property = rt::get_property;
   gobject_class->finalize = gst_ratio_temp_finalize;
 
-  const auto ready = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
-                                              GST_PARAM_MUTABLE_READY);
-  const auto playing = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
-                                                GST_PARAM_MUTABLE_PLAYING);
-  g_object_class_install_property(
-      gobject_class, PROP_MODEL,
-      g_param_spec_string("model", "Thermal model file",
-                          "Thermal model (JSON) written by pyrocam-calib calibrate for this "
-                          "camera; required",
-                          nullptr, ready));
-  g_object_class_install_property(
-      gobject_class, PROP_METHOD,
-      g_param_spec_enum("method", "Estimator",
-                        "Per-pixel temperature estimator: mlp (the paper's network, the "
-                        "reference, slow), lut (lookup table of the network, colour models "
-                        "only, checked against the network at start), likelihood (fit along the "
-                        "Planckian locus), auto (lut for colour models when it passes its check, "
-                        "likelihood otherwise)",
-                        GST_TYPE_RATIO_TEMP_METHOD, DEFAULT_METHOD, playing));
-  g_object_class_install_property(
-      gobject_class, PROP_OUTPUT,
-      g_param_spec_enum("output", "Output",
-                        "What the GRAY16_LE pixels hold, in 0.1 K per code with 0 = no "
-                        "reading: the temperature (kelvin) or its expanded uncertainty (k = 2)",
-                        GST_TYPE_RATIO_TEMP_OUTPUT, DEFAULT_OUTPUT, ready));
-  g_object_class_install_property(
-      gobject_class, PROP_STATS_INTERVAL,
-      g_param_spec_uint64("stats-interval", "Statistics interval",
-                          "Nanoseconds of stream time between pyrocam-temperature-stats "
-                          "element messages (0 = none; the first frame always posts)",
-                          0, G_MAXUINT64, DEFAULT_STATS_INTERVAL, playing));
-  g_object_class_install_property(
-      gobject_class, PROP_REGION,
-      g_param_spec_string("region", "Statistics region",
-                          "Region of output pixels for the statistics message, "
-                          "\"x,y,width,height\" (clipped to the frame); empty: frame only",
-                          nullptr, playing));
-
-  g_object_class_install_property(
-      gobject_class, PROP_ALLOW_PARTIAL,
-      g_param_spec_boolean("allow-partial", "Allow partial readings",
-                           "likelihood only: fit pixels where some bands are saturated, "
-                           "missing or below the dim threshold from the remaining bands (at "
-                           "least two); off: such pixels have no reading with every method",
-                           DEFAULT_ALLOW_PARTIAL, playing));
-  g_object_class_install_property(
-      gobject_class, PROP_MISFIT_PROBABILITY,
-      g_param_spec_double("misfit-probability", "Band-consistency false-rejection probability",
-                          "Band-consistency check: no reading where the bands fit no graybody "
-                          "within 1 % of the estimated temperature; the chance (0 to 0.5, "
-                          "unitless, e.g. 1e-6) that a true graybody pixel is dropped; 0 = no "
-                          "check",
-                          0.0, MAX_MISFIT_PROBABILITY, DEFAULT_MISFIT_PROBABILITY, playing));
+  rt::install_properties(gobject_class);
 
   gst_element_class_set_static_metadata(
       element_class, "Band planes to temperature", "Filter/Converter/Video",
@@ -873,7 +535,7 @@ static void gst_ratio_temp_class_init(GstRatioTempClass* klass) {
   trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_ratio_temp_transform_caps);
   trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_ratio_temp_transform_size);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_ratio_temp_set_caps);
-  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(gst_ratio_temp_decide_allocation);
+  trans_class->decide_allocation = GST_DEBUG_FUNCPTR(pg::decide_allocation);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_ratio_temp_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_ratio_temp_stop);
   trans_class->sink_event = GST_DEBUG_FUNCPTR(gst_ratio_temp_sink_event);

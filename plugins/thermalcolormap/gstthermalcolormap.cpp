@@ -151,10 +151,7 @@ static GstCaps* gst_thermal_colormap_transform_caps(GstBaseTransform* trans,
     GstStructure* s = gst_structure_copy(gst_caps_get_structure(caps, i));
     gst_structure_remove_fields(s, "format", "colorimetry", "chroma-site", nullptr);
     if (direction == GST_PAD_SINK) {
-      GValue formats = G_VALUE_INIT;
-      g_value_init(&formats, GST_TYPE_LIST);
-      gst_value_deserialize(&formats, "{ RGBA, BGRA, RGBx, BGRx }");
-      gst_structure_take_value(s, "format", &formats);
+      pg::set_list_field(s, "format", "{ RGBA, BGRA, RGBx, BGRx }");
     } else {
       gst_structure_set(s, "format", G_TYPE_STRING, "GRAY16_LE", nullptr);
     }
@@ -229,9 +226,7 @@ static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter
                                                           GstVideoFrame* in_frame,
                                                           GstVideoFrame* out_frame) {
   GstThermalColormap* self = GST_THERMAL_COLORMAP(filter);
-  GST_OBJECT_LOCK(self);
-  const Settings settings = *self->settings;
-  GST_OBJECT_UNLOCK(self);
+  const Settings settings = pg::locked_copy(self, *self->settings);
   State& st = *self->state;
   const int width = GST_VIDEO_FRAME_WIDTH(in_frame), height = GST_VIDEO_FRAME_HEIGHT(in_frame);
   const cv::Mat in(height, width, CV_16U, GST_VIDEO_FRAME_PLANE_DATA(in_frame, 0),
@@ -284,7 +279,7 @@ static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter
 static void gst_thermal_colormap_set_property(GObject* object, guint prop_id, const GValue* value,
                                               GParamSpec* pspec) {
   GstThermalColormap* self = GST_THERMAL_COLORMAP(object);
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   Settings& s = *self->settings;
   switch (prop_id) {
     case PROP_PALETTE:
@@ -318,13 +313,12 @@ static void gst_thermal_colormap_set_property(GObject* object, guint prop_id, co
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_thermal_colormap_get_property(GObject* object, guint prop_id, GValue* value,
                                               GParamSpec* pspec) {
   GstThermalColormap* self = GST_THERMAL_COLORMAP(object);
-  GST_OBJECT_LOCK(self);
+  pg::ObjectLock lock(self);
   const Settings& s = *self->settings;
   switch (prop_id) {
     case PROP_PALETTE:
@@ -358,7 +352,6 @@ static void gst_thermal_colormap_get_property(GObject* object, guint prop_id, GV
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
-  GST_OBJECT_UNLOCK(self);
 }
 
 static void gst_thermal_colormap_finalize(GObject* object) {
@@ -447,6 +440,7 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
   trans_class->start = GST_DEBUG_FUNCPTR(gst_thermal_colormap_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_thermal_colormap_stop);
   trans_class->transform = GST_DEBUG_FUNCPTR(gst_thermal_colormap_transform);
+  trans_class->before_transform = GST_DEBUG_FUNCPTR(pg::sync_controlled_properties);
   filter_class->set_info = GST_DEBUG_FUNCPTR(gst_thermal_colormap_set_info);
   filter_class->transform_frame = GST_DEBUG_FUNCPTR(gst_thermal_colormap_transform_frame);
 

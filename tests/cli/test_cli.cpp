@@ -8,9 +8,11 @@
 #include <cstdlib>
 #include <fstream>
 #include <opencv2/core.hpp>
+#include <utility>
 
 #include "pyrocam/core/dataset.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/simulation/scenes.h"
 #include "pyrocam/simulation/simulator.h"
 #include "test_support.h"
@@ -293,6 +295,22 @@ TEST_F(CliMeasure, measure_reads_the_plate_with_the_matching_model) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string stats = read_text(out / "stats.csv");
   EXPECT_NE(stats.find("0000.pgm,"), std::string::npos) << stats;
+}
+
+TEST_F(CliMeasure, measure_method_auto_reads_with_the_method_the_library_chooses) {
+  const auto model = test_model("test-model-rgb.json");
+  const std::string chosen =
+      method_name(choose_method(load_model(model.string()), MethodRequest::kAuto));
+  const std::filesystem::path by_name = dir / "by-name";
+  for (const auto& [method, folder] :
+       {std::pair{std::string("auto"), out}, std::pair{chosen, by_name}}) {
+    const ToolRun r =
+        run_tool("-q measure --model " + quoted(model) + " --dataset " + quoted(data) +
+                     " --method " + method + " --out " + quoted(folder),
+                 dir);
+    ASSERT_EQ(r.exit_code, 0) << method << ": " << r.err;
+  }
+  EXPECT_EQ(read_text(out / "stats.csv"), read_text(by_name / "stats.csv"));
 }
 
 }  // namespace

@@ -1,5 +1,8 @@
 #include "element_support.h"
 
+#include <gst/controller/gstdirectcontrolbinding.h>
+#include <gst/controller/gstinterpolationcontrolsource.h>
+
 namespace pyrocam::test {
 
 bool have_element(const char* name) {
@@ -70,6 +73,19 @@ std::string sink_caps(GstHarness* h) {
 
 GstElement* find_element(GstHarness* h, const char* factory) {
   return gst_harness_find_element(h, factory);
+}
+
+bool control_property(GstElement* element, const char* property,
+                      const std::vector<std::pair<GstClockTime, double>>& points) {
+  GstControlSource* source = gst_interpolation_control_source_new();
+  g_object_set(source, "mode", GST_INTERPOLATION_MODE_NONE, nullptr);
+  for (const auto& [time, value] : points)
+    gst_timed_value_control_source_set(GST_TIMED_VALUE_CONTROL_SOURCE(source), time, value);
+  const gboolean added = gst_object_add_control_binding(
+      GST_OBJECT(element),
+      gst_direct_control_binding_new_absolute(GST_OBJECT(element), property, source));
+  gst_object_unref(source);
+  return added;
 }
 
 }  // namespace pyrocam::test

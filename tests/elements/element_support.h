@@ -8,6 +8,7 @@
 
 #include <cstring>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace pyrocam::test {
@@ -56,5 +57,12 @@ std::string sink_caps(GstHarness* h);
 
 // An element of the harness by factory name (a new reference; unref it).
 GstElement* find_element(GstHarness* h, const char* factory);
+
+// Drives a numeric property by a controller: an interpolation control source in step mode
+// (each value holds until the next point) with an absolute direct binding, so that the property
+// takes value v from stream time t for each (t, v). Returns false if the element refused the
+// binding (a property that is not GST_PARAM_CONTROLLABLE).
+bool control_property(GstElement* element, const char* property,
+                      const std::vector<std::pair<GstClockTime, double>>& points);
 
 }  // namespace pyrocam::test

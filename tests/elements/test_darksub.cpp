@@ -6,8 +6,8 @@
 #include <limits>
 
 #include "element_support.h"
-#include "pyrocam/runtime/darksub.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/runtime/darksub.h"
 #include "test_support.h"
 
 namespace pyrocam::test {
@@ -144,6 +144,33 @@ TEST_F(DarkSub, property_changes_apply_while_playing) {
   const auto v = push_pull();
   EXPECT_EQ(v, expected(raw, 6, 4, 60, 200));
   EXPECT_EQ(v[8], kInf);  // 219 >= 200 now
+  gst_object_unref(e);
+}
+
+TEST_F(DarkSub, controlled_levels_follow_the_controller_by_buffer_time) {
+  h = gst_harness_new_parse("darksub dark-level=50");
+  gst_harness_set_src_caps_str(h, "video/x-bayer,format=rggb,width=6,height=4,framerate=30/1");
+  GstElement* e = find_element(h, "darksub");
+  // dark-level 50 until 1 s, then 70; saturation-level 220 until 1 s, then 200.
+  ASSERT_TRUE(control_property(e, "dark-level", {{0, 50.0}, {GST_SECOND, 70.0}}));
+  ASSERT_TRUE(control_property(e, "saturation-level", {{0, 220.0}, {GST_SECOND, 200.0}}));
+  const auto raw = frame6x4();
+  auto push_pull = [&](GstClockTime pts) {
+    GstBuffer* in = buffer_from(padded(raw, 6, 4, 8));
+    GST_BUFFER_PTS(in) = pts;
+    EXPECT_EQ(gst_harness_push(h, in), GST_FLOW_OK);
+    GstBuffer* out = gst_harness_try_pull(h);
+    std::vector<float> v = out ? values_of<float>(out) : std::vector<float>{};
+    if (out) gst_buffer_unref(out);
+    return v;
+  };
+  EXPECT_EQ(push_pull(GST_SECOND / 2), expected(raw, 6, 4, 50, 220));
+  const auto later = push_pull(GST_SECOND + GST_SECOND / 2);
+  EXPECT_EQ(later, expected(raw, 6, 4, 70, 200));
+  EXPECT_EQ(later.at(8), kInf);  // 219 >= 200 from 1 s on
+  double level = 0;
+  g_object_get(e, "dark-level", &level, nullptr);
+  EXPECT_EQ(level, 70.0);
   gst_object_unref(e);
 }
 

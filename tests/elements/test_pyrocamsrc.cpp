@@ -1,6 +1,9 @@
 // pyrocamsrc: caps per profile, negotiated sizes, timestamps, determinism, live property
 // changes, bus errors, and the smoke pipeline through darksub and demosaic25.
 #include "element_support.h"
+#include "pyrocam/core/profile.h"
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
 #include "test_support.h"
 
 namespace pyrocam::test {
@@ -96,6 +99,37 @@ TEST_F(PyrocamSrc, exposure_change_while_playing_brightens_frames) {
   double bright = 0;
   for (int i = 0; i < 5 && bright < dim + 20; ++i) bright = centre_mean();
   EXPECT_GT(bright, dim + 20);
+}
+
+TEST_F(PyrocamSrc, controlled_temperature_follows_the_controller_by_frame_time) {
+  // A fixed exposure that puts a 1100 degC plate's brightest band at 140 DN: 900 degC is then
+  // an order of magnitude dimmer.
+  const Simulator camera(load_profile_by_name("rgb-reference"),
+                         UnitPerturbation::parse("datasheet", 1));
+  const double exposure = camera.exposure_for(1100, 140, kSceneDefaults.plate_emissivity);
+  h = gst_harness_new_parse(
+      ("pyrocamsrc scene=plate unit=datasheet temperature=900 exposure=" + std::to_string(exposure))
+          .c_str());
+  gst_harness_set_sink_caps_str(h, "video/x-bayer,width=40,height=20,framerate=10/1");
+  GstElement* e = find_element(h, "pyrocamsrc");
+  // 900 degC for the first two frames (0 and 0.1 s), 1100 degC from 0.2 s on.
+  ASSERT_TRUE(control_property(e, "temperature", {{0, 900.0}, {GST_SECOND / 5, 1100.0}}));
+  gst_object_unref(e);
+  gst_harness_play(h);
+  std::vector<double> means;
+  for (int i = 0; i < 4; ++i) {
+    GstBuffer* b = gst_harness_pull(h);
+    ASSERT_NE(b, nullptr);
+    const auto v = values_of<std::uint8_t>(b);
+    gst_buffer_unref(b);
+    double sum = 0;
+    for (int y = 8; y < 12; ++y)
+      for (int x = 16; x < 24; ++x) sum += v[y * 40 + x];
+    means.push_back(sum / 32);
+  }
+  EXPECT_NEAR(means[1], means[0], 5);
+  EXPECT_GT(means[2], means[1] + 20);  // the hotter plate
+  EXPECT_NEAR(means[3], means[2], 5);
 }
 
 TEST(PyrocamSrcPipeline, smoke_runs_through_darksub_and_demosaic25_to_eos) {

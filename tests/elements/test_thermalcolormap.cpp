@@ -121,6 +121,30 @@ TEST_F(ThermalColormap, isotherm_marks_hot_pixels) {
   EXPECT_NE(out[4 * 3 + 0], 0);  // 1300 degC in the iron palette has red
 }
 
+TEST_F(ThermalColormap, controlled_isotherm_follows_the_controller_by_buffer_time) {
+  start("thermalcolormap range-mode=fixed isotherm-color=0xFF0000FF", "RGBx");
+  GstElement* e = find_element(h, "thermalcolormap");
+  // No isotherm until 1 s, then one at 1500 degC.
+  ASSERT_TRUE(control_property(e, "isotherm-threshold", {{0, -273.15}, {GST_SECOND, 1500.0}}));
+  gst_object_unref(e);
+  auto run_at = [&](GstClockTime pts) {
+    GstBuffer* in = buffer_from(kCodes);
+    GST_BUFFER_PTS(in) = pts;
+    EXPECT_EQ(gst_harness_push(h, in), GST_FLOW_OK);
+    GstBuffer* out = gst_harness_try_pull(h);
+    auto v = out ? values_of<std::uint8_t>(out) : std::vector<std::uint8_t>(kCodes.size() * 4);
+    if (out) gst_buffer_unref(out);
+    return v;
+  };
+  const auto before = run_at(0);
+  EXPECT_NE(before[4 * 5 + 2], 255);  // 1700 degC in the iron palette, not the isotherm's blue
+  const auto after = run_at(GST_SECOND);
+  for (int i : {4, 5, 6}) {
+    EXPECT_EQ(after[4 * i + 0], 0) << i;
+    EXPECT_EQ(after[4 * i + 2], 255) << i;
+  }
+}
+
 TEST_F(ThermalColormap, auto_range_follows_the_frames_smoothly) {
   start("thermalcolormap range-mode=auto auto-smoothing=0.5 palette=grey", nullptr, 2, 1);
   // First frame: its own range, so the hot end is white and the cold end black.

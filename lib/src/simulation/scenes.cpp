@@ -89,8 +89,7 @@ void write_scene_sequence(const std::filesystem::path& folder, Simulator& camera
                           SceneSequenceSettings s, const Progress& progress) {
   if (s.width < 16 || s.height < 16) throw InputError("scene: needs at least 16x16 pixels");
   camera.profile().mosaic.check_whole_periods(s.width, s.height, "scene frame size");
-  if (s.emissivity <= 0)
-    s.emissivity = s.kind == SceneKind::kPlate ? 0.7 : s.kind == SceneKind::kFilament ? 0.4 : 0.35;
+  if (s.emissivity <= 0) s.emissivity = kSceneDefaults.emissivity(s.kind);
   if (s.temperatures_c.empty()) {
     if (s.kind == SceneKind::kPlate)
       for (double t = 705; t <= 1095; t += 30) s.temperatures_c.push_back(t);
@@ -123,7 +122,8 @@ void write_scene_sequence(const std::filesystem::path& folder, Simulator& camera
   // A melt pool is filmed at one exposure; plates and filaments are each exposed for themselves.
   double fixed_exposure = s.exposure_us;
   if (s.kind == SceneKind::kMeltPool && fixed_exposure <= 0)
-    fixed_exposure = camera.exposure_for(2000.0, s.target_dn, s.emissivity);
+    fixed_exposure =
+        camera.exposure_for(kSceneDefaults.melt_pool_exposure_c, s.target_dn, s.emissivity);
 
   std::vector<ManifestRow> rows;
   std::vector<double> dark_exposures;

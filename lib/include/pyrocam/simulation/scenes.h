@@ -23,14 +23,34 @@ cv::Mat filament_scene(int width, int height, double t_c);
 cv::Mat melt_pool_scene(int width, int height, int index, int count);
 double melt_pool_peak_c(int index, int count);
 
+// How the scenes are filmed unless told otherwise: by `pyrocam-calib simulate` (scene sequences)
+// and by the pyrocamsrc element alike.
+struct SceneDefaults {
+  // Automatic exposure puts the brightest band this far above the dark level at the scene's
+  // nominal temperature: with the shipped profiles' 50 DN dark offset the raw peak stays under
+  // their 220 DN inference saturation threshold, noise included.
+  double target_dn = 140;
+  // A melt pool is filmed at one exposure, set for this temperature: its hottest frames
+  // saturate, its coolest are dim.
+  double melt_pool_exposure_c = 2000;
+  double plate_emissivity = 0.7, filament_emissivity = 0.4, melt_pool_emissivity = 0.35;
+
+  constexpr double emissivity(SceneKind kind) const {
+    return kind == SceneKind::kPlate      ? plate_emissivity
+           : kind == SceneKind::kFilament ? filament_emissivity
+                                          : melt_pool_emissivity;
+  }
+};
+inline constexpr SceneDefaults kSceneDefaults{};
+
 struct SceneSequenceSettings {
   SceneKind kind = SceneKind::kMeltPool;
   int frames = 20;                     // melt pool only; plate/filament: one per temperature
   std::vector<double> temperatures_c;  // plate/filament (default: a sweep suited to the kind)
   int width = 256, height = 256;
   double exposure_us = 0;  // 0: each frame exposed so its hottest band reaches target_dn
-  double target_dn = 140;  // brightest band above the dark level, under the 220 DN raw limit
-  double emissivity = 0;  // 0: the kind's default (plate 0.7, filament 0.4, melt pool 0.35)
+  double target_dn = kSceneDefaults.target_dn;  // brightest band above the dark level
+  double emissivity = 0;                        // 0: kSceneDefaults.emissivity(kind)
   std::string image_extension = ".pgm";
 };
 

@@ -1,0 +1,66 @@
+// Which per-pixel estimator reads a model's images (METHOD.md section 5): the rule behind
+// ratiotemp's method=auto and `pyrocam-calib measure --method auto`, and the check the lookup
+// table must pass against the network before it is trusted.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <string>
+
+#include "pyrocam/runtime/estimator_check.h"
+#include "pyrocam/runtime/estimators.h"
+#include "pyrocam/runtime/measure.h"
+
+namespace pyrocam {
+
+// A method, or auto: the lookup table where the model has two ratios (colour cameras) and the
+// table passes its check, else the likelihood fit.
+enum class MethodRequest { kAuto, kMlp, kLut, kLikelihood };
+// "auto", "mlp", "lut", "likelihood"; throws InputError for anything else.
+MethodRequest parse_method_request(const std::string& name);
+std::string method_request_name(MethodRequest request);
+
+// The lookup table is used only where it gives the network's answer: within this many degC at
+// every 1 degC sample of the model's locus (brightest band at 150 DN, noise-free) ...
+constexpr double kLutToleranceC = 1.0;
+// ... and reading where the network reads (or not) at all but 1 % of them (the range ends).
+constexpr std::size_t kLutValidityPercent = 1;
+
+// "" when a lookup table's agreement with its network (compare_on_locus(model, lut, mlp)) is
+// within the limits above, else why not: by how much and where it differs.
+std::string lut_disagreement(const LocusAgreement& agreement);
+
+// Builds a model's estimators as they are asked for and keeps them, so that switching back is
+// free and the lookup table is checked once. The model must outlive the selector; not
+// thread-safe.
+class EstimatorSelector {
+ public:
+  struct Choice {
+    Method method = Method::kLikelihood;  // what the request resolves to
+    std::string problem;                  // why that method cannot be used; "" when it can
+    std::string fallback;  // auto: why not the lookup table, when the model has two ratios
+  };
+
+  explicit EstimatorSelector(const ThermalModel& model);
+  // Resolves a request and builds its estimator (the lookup table: and checks it, once).
+  // Never throws for a method that does not fit the model: Choice::problem says why.
+  Choice select(MethodRequest request);
+  // The estimator of a method that select() returned without a problem.
+  PlaneEstimator& estimator(Method method);
+
+ private:
+  std::string prepare(Method method);
+
+  const ThermalModel& model_;
+  std::array<std::unique_ptr<PlaneEstimator>, 3> estimators_;  // by Method
+  bool lut_checked_ = false;
+  std::string lut_problem_;  // why the lookup table is not used, once checked
+};
+
+// For one-shot tools: the method a request resolves to for a model (auto builds and checks the
+// lookup table; `fallback`, when given, receives why it is not used). Throws InputError when
+// the method cannot be used with the model.
+Method choose_method(const ThermalModel& model, MethodRequest request,
+                     std::string* fallback = nullptr);
+
+}  // namespace pyrocam

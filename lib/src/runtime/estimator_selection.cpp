@@ -1,0 +1,108 @@
+#include "pyrocam/runtime/estimator_selection.h"
+
+#include <cstdio>
+#include <stdexcept>
+
+#include "pyrocam/core/error.h"
+
+namespace pyrocam {
+
+MethodRequest parse_method_request(const std::string& name) {
+  if (name == "auto") return MethodRequest::kAuto;
+  if (name == "mlp") return MethodRequest::kMlp;
+  if (name == "lut") return MethodRequest::kLut;
+  if (name == "likelihood") return MethodRequest::kLikelihood;
+  throw InputError("unknown method '" + name + "' (use auto, mlp, lut or likelihood)");
+}
+
+std::string method_request_name(MethodRequest request) {
+  switch (request) {
+    case MethodRequest::kAuto:
+      return "auto";
+    case MethodRequest::kMlp:
+      return "mlp";
+    case MethodRequest::kLut:
+      return "lut";
+    case MethodRequest::kLikelihood:
+      return "likelihood";
+  }
+  return "?";
+}
+
+std::string lut_disagreement(const LocusAgreement& a) {
+  if (!(a.max_difference_c > kLutToleranceC ||
+        a.validity_differs * 100 > kLutValidityPercent * a.samples))
+    return "";
+  char what[256];
+  std::snprintf(what, sizeof what,
+                "its lookup table differs from its network by up to %.1f degC (at %.0f degC on "
+                "the model's locus; one reads where the other does not at %zu of %zu samples)",
+                a.max_difference_c, a.worst_temperature_c, a.validity_differs, a.samples);
+  return what;
+}
+
+EstimatorSelector::EstimatorSelector(const ThermalModel& model) : model_(model) {}
+
+std::string EstimatorSelector::prepare(Method m) {
+  if (m == Method::kLut && lut_checked_ && !lut_problem_.empty()) return lut_problem_;
+  auto& slot = estimators_[static_cast<std::size_t>(m)];
+  try {
+    if (!slot) slot = std::make_unique<PlaneEstimator>(model_, m);
+    if (m != Method::kLut || lut_checked_) return "";
+    const auto mlp = make_estimator(model_, Method::kMlp);
+    lut_problem_ = lut_disagreement(compare_on_locus(model_, slot->estimator(), *mlp));
+    lut_checked_ = true;
+    if (!lut_problem_.empty()) slot.reset();
+    return lut_problem_;
+  } catch (const std::exception& e) {
+    // A method that does not fit the model (the table needs two ratios) is a choice's problem,
+    // not an error of the caller.
+    slot.reset();
+    return e.what();
+  }
+}
+
+EstimatorSelector::Choice EstimatorSelector::select(MethodRequest request) {
+  Choice c;
+  switch (request) {
+    case MethodRequest::kMlp:
+      c.method = Method::kMlp;
+      break;
+    case MethodRequest::kLut:
+      c.method = Method::kLut;
+      break;
+    case MethodRequest::kLikelihood:
+      c.method = Method::kLikelihood;
+      break;
+    case MethodRequest::kAuto:
+      if (model_.profile().normalisation.numerators.size() == 2) {
+        c.fallback = prepare(Method::kLut);
+        if (c.fallback.empty()) {
+          c.method = Method::kLut;
+          return c;
+        }
+      }
+      c.method = Method::kLikelihood;
+      break;
+  }
+  c.problem = prepare(c.method);
+  return c;
+}
+
+PlaneEstimator& EstimatorSelector::estimator(Method m) {
+  const auto& slot = estimators_[static_cast<std::size_t>(m)];
+  if (!slot) throw std::logic_error("estimator " + method_name(m) + " was not selected");
+  return *slot;
+}
+
+Method choose_method(const ThermalModel& model, MethodRequest request, std::string* fallback) {
+  EstimatorSelector selector(model);
+  const EstimatorSelector::Choice c = selector.select(request);
+  if (!c.problem.empty())
+    throw InputError("method " + method_name(c.method) +
+                     " cannot be used with this model: " + c.problem);
+  if (fallback) *fallback = c.fallback;
+  return c.method;
+}
+
+}  // namespace pyrocam

@@ -1,0 +1,66 @@
+/* ratiotemp's parts shared by its source files: the property values (ratiotemp-properties.cpp),
+ * the statistics message (ratiotemp-stats.cpp) and the element struct; gstratiotemp.cpp has the
+ * negotiation, the estimator switching and the streaming. */
+#pragma once
+
+#include <gst/gst.h>
+
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "gstratiotemp.h"
+#include "pyrocam/runtime/estimators.h"
+
+GST_DEBUG_CATEGORY_EXTERN(gst_ratio_temp_debug);
+
+namespace pyrocam::gst::ratiotemp {
+
+constexpr GstRatioTempMethod DEFAULT_METHOD = GST_RATIO_TEMP_METHOD_AUTO;
+constexpr GstRatioTempOutput DEFAULT_OUTPUT = GST_RATIO_TEMP_OUTPUT_TEMPERATURE;
+constexpr guint64 DEFAULT_STATS_INTERVAL = GST_SECOND;
+constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
+constexpr double DEFAULT_MISFIT_PROBABILITY = 0.0;
+constexpr double MAX_MISFIT_PROBABILITY = 0.5;
+
+/* A rectangle of output pixels. */
+struct Region {
+  int x = 0, y = 0, width = 0, height = 0;
+};
+
+/* "x,y,width,height" (non-negative integers, width and height at least 1); false otherwise. */
+bool parse_region(const std::string& text, Region* out);
+
+/* Property values; read and written under GST_OBJECT_LOCK, copied once per buffer. */
+struct Settings {
+  std::string model;
+  GstRatioTempMethod method = DEFAULT_METHOD;
+  GstRatioTempOutput output = DEFAULT_OUTPUT;
+  guint64 stats_interval = DEFAULT_STATS_INTERVAL;
+  gboolean allow_partial = DEFAULT_ALLOW_PARTIAL;
+  double misfit_probability = DEFAULT_MISFIT_PROBABILITY;
+  std::string region_text;   // as set; empty: no region
+  bool region_valid = true;  // region_text is empty or parsed into region
+  Region region;
+  guint region_serial = 0;  // bumped by every change of region
+};
+
+struct State;  // streaming state, gstratiotemp.cpp
+
+/* The "pyrocam-temperature-stats" element message's structure for a frame's temperatures
+ * (CV_32F degC, NaN = no reading) at `pts`, with the settings' region when it is valid. Throws
+ * (from the library) before it allocates anything. */
+GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& settings,
+                              const GstSegment* segment, GstClockTime pts, Method method);
+
+/* GObject properties: installed by class_init, read and written under the object lock. */
+void install_properties(GObjectClass* klass);
+void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpec* pspec);
+void get_property(GObject* object, guint prop_id, GValue* value, GParamSpec* pspec);
+
+}  // namespace pyrocam::gst::ratiotemp
+
+struct _GstRatioTemp {
+  GstBaseTransform parent;
+  pyrocam::gst::ratiotemp::Settings* settings;
+  pyrocam::gst::ratiotemp::State* state;
+};

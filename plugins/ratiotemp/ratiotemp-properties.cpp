@@ -1,0 +1,207 @@
+/* ratiotemp's GObject properties and the region they parse. */
+#include "pyrocam-common.h"
+#include "ratiotemp-private.h"
+
+#define GST_CAT_DEFAULT gst_ratio_temp_debug
+
+namespace pyrocam::gst::ratiotemp {
+namespace {
+
+enum {
+  PROP_0,
+  PROP_MODEL,
+  PROP_METHOD,
+  PROP_OUTPUT,
+  PROP_STATS_INTERVAL,
+  PROP_REGION,
+  PROP_ALLOW_PARTIAL,
+  PROP_MISFIT_PROBABILITY,
+};
+
+}  // namespace
+
+/* "x,y,width,height" (non-negative integers, width and height at least 1); false otherwise. */
+bool parse_region(const std::string& text, Region* out) {
+  gchar** parts = g_strsplit(text.c_str(), ",", -1);
+  bool ok = g_strv_length(parts) == 4;
+  gint64 v[4] = {0, 0, 0, 0};
+  for (int i = 0; ok && i < 4; ++i)
+    ok = g_ascii_string_to_signed(g_strstrip(parts[i]), 10, 0, G_MAXINT, &v[i], nullptr) &&
+         (i < 2 || v[i] >= 1);
+  g_strfreev(parts);
+  if (ok)
+    *out = {static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]),
+            static_cast<int>(v[3])};
+  return ok;
+}
+
+void install_properties(GObjectClass* gobject_class) {
+  const auto ready = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                              GST_PARAM_MUTABLE_READY);
+  const auto playing = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                                GST_PARAM_MUTABLE_PLAYING);
+  g_object_class_install_property(
+      gobject_class, PROP_MODEL,
+      g_param_spec_string("model", "Thermal model file",
+                          "Thermal model (JSON) written by pyrocam-calib calibrate for this "
+                          "camera; required",
+                          nullptr, ready));
+  g_object_class_install_property(
+      gobject_class, PROP_METHOD,
+      g_param_spec_enum("method", "Estimator",
+                        "Per-pixel temperature estimator: mlp (the paper's network, the "
+                        "reference, slow), lut (lookup table of the network, colour models "
+                        "only, checked against the network at start), likelihood (fit along the "
+                        "Planckian locus), auto (lut for colour models when it passes its check, "
+                        "likelihood otherwise)",
+                        GST_TYPE_RATIO_TEMP_METHOD, DEFAULT_METHOD, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_OUTPUT,
+      g_param_spec_enum("output", "Output",
+                        "What the GRAY16_LE pixels hold, in 0.1 K per code with 0 = no "
+                        "reading: the temperature (kelvin) or its expanded uncertainty (k = 2)",
+                        GST_TYPE_RATIO_TEMP_OUTPUT, DEFAULT_OUTPUT, ready));
+  g_object_class_install_property(
+      gobject_class, PROP_STATS_INTERVAL,
+      g_param_spec_uint64("stats-interval", "Statistics interval",
+                          "Nanoseconds of stream time between pyrocam-temperature-stats "
+                          "element messages (0 = none; the first frame always posts)",
+                          0, G_MAXUINT64, DEFAULT_STATS_INTERVAL, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_REGION,
+      g_param_spec_string("region", "Statistics region",
+                          "Region of output pixels for the statistics message, "
+                          "\"x,y,width,height\" (clipped to the frame); empty: frame only",
+                          nullptr, playing));
+
+  g_object_class_install_property(
+      gobject_class, PROP_ALLOW_PARTIAL,
+      g_param_spec_boolean("allow-partial", "Allow partial readings",
+                           "likelihood only: fit pixels where some bands are saturated, "
+                           "missing or below the dim threshold from the remaining bands (at "
+                           "least two); off: such pixels have no reading with every method",
+                           DEFAULT_ALLOW_PARTIAL, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_MISFIT_PROBABILITY,
+      g_param_spec_double("misfit-probability", "Band-consistency false-rejection probability",
+                          "Band-consistency check: no reading where the bands fit no graybody "
+                          "within 1 % of the estimated temperature; the chance (0 to 0.5, "
+                          "unitless, e.g. 1e-6) that a true graybody pixel is dropped; 0 = no "
+                          "check",
+                          0.0, MAX_MISFIT_PROBABILITY, DEFAULT_MISFIT_PROBABILITY, playing));
+}
+
+void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpec* pspec) {
+  GstRatioTemp* self = GST_RATIO_TEMP(object);
+  ObjectLock lock(self);
+  Settings& s = *self->settings;
+  const bool running = GST_STATE(self) > GST_STATE_READY;
+  switch (prop_id) {
+    case PROP_MODEL:
+      if (running) {
+        GST_WARNING_OBJECT(self, "model can only change in NULL or READY");
+      } else {
+        const char* v = g_value_get_string(value);
+        s.model = v ? v : "";
+      }
+      break;
+    case PROP_METHOD:
+      s.method = static_cast<GstRatioTempMethod>(g_value_get_enum(value));
+      break;
+    case PROP_OUTPUT:
+      if (running)
+        GST_WARNING_OBJECT(self, "output can only change in NULL or READY");
+      else
+        s.output = static_cast<GstRatioTempOutput>(g_value_get_enum(value));
+      break;
+    case PROP_STATS_INTERVAL:
+      s.stats_interval = g_value_get_uint64(value);
+      break;
+    case PROP_ALLOW_PARTIAL:
+      s.allow_partial = g_value_get_boolean(value);
+      break;
+    case PROP_MISFIT_PROBABILITY:
+      s.misfit_probability = g_value_get_double(value);
+      break;
+    case PROP_REGION: {
+      const char* v = g_value_get_string(value);
+      s.region_text = v ? v : "";
+      s.region = Region();
+      s.region_valid = s.region_text.empty() || parse_region(s.region_text, &s.region);
+      ++s.region_serial;
+      if (!s.region_valid)
+        GST_WARNING_OBJECT(self, "region '%s' is not x,y,width,height", s.region_text.c_str());
+      break;
+    }
+    default:
+      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+      break;
+  }
+}
+
+void get_property(GObject* object, guint prop_id, GValue* value, GParamSpec* pspec) {
+  GstRatioTemp* self = GST_RATIO_TEMP(object);
+  ObjectLock lock(self);
+  const Settings& s = *self->settings;
+  switch (prop_id) {
+    case PROP_MODEL:
+      g_value_set_string(value, s.model.empty() ? nullptr : s.model.c_str());
+      break;
+    case PROP_METHOD:
+      g_value_set_enum(value, s.method);
+      break;
+    case PROP_OUTPUT:
+      g_value_set_enum(value, s.output);
+      break;
+    case PROP_STATS_INTERVAL:
+      g_value_set_uint64(value, s.stats_interval);
+      break;
+    case PROP_ALLOW_PARTIAL:
+      g_value_set_boolean(value, s.allow_partial);
+      break;
+    case PROP_MISFIT_PROBABILITY:
+      g_value_set_double(value, s.misfit_probability);
+      break;
+    case PROP_REGION:
+      g_value_set_string(value, s.region_text.empty() ? nullptr : s.region_text.c_str());
+      break;
+    default:
+      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+      break;
+  }
+}
+
+}  // namespace pyrocam::gst::ratiotemp
+
+GType gst_ratio_temp_method_get_type(void) {
+  static GType type = 0;
+  static const GEnumValue values[] = {
+      {GST_RATIO_TEMP_METHOD_AUTO,
+       "lut for two-ratio (colour) models when it passes its check, likelihood otherwise", "auto"},
+      {GST_RATIO_TEMP_METHOD_MLP, "The paper's network on band ratios (reference, slow)", "mlp"},
+      {GST_RATIO_TEMP_METHOD_LUT, "2-D lookup table of the network (colour models only)", "lut"},
+      {GST_RATIO_TEMP_METHOD_LIKELIHOOD, "Maximum-likelihood fit along the Planckian locus",
+       "likelihood"},
+      {0, nullptr, nullptr},
+  };
+  if (g_once_init_enter(&type)) {
+    GType t = g_enum_register_static("GstRatioTempMethod", values);
+    g_once_init_leave(&type, t);
+  }
+  return type;
+}
+
+GType gst_ratio_temp_output_get_type(void) {
+  static GType type = 0;
+  static const GEnumValue values[] = {
+      {GST_RATIO_TEMP_OUTPUT_TEMPERATURE, "Temperature, 0.1 K per code", "temperature"},
+      {GST_RATIO_TEMP_OUTPUT_UNCERTAINTY,
+       "Expanded uncertainty (k = 2) of the temperature, 0.1 K per code", "uncertainty"},
+      {0, nullptr, nullptr},
+  };
+  if (g_once_init_enter(&type)) {
+    GType t = g_enum_register_static("GstRatioTempOutput", values);
+    g_once_init_leave(&type, t);
+  }
+  return type;
+}

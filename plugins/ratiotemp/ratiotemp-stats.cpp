@@ -1,0 +1,55 @@
+/* ratiotemp's statistics message: frame and region statistics of the temperatures. */
+#include "pyrocam/runtime/measure.h"
+#include "ratiotemp-private.h"
+
+namespace pyrocam::gst::ratiotemp {
+namespace {
+
+constexpr const char* STATS_MESSAGE = "pyrocam-temperature-stats";
+
+void set_stats_fields(GstStructure* s, const std::string& prefix, const RegionStats& r) {
+  gst_structure_set(s, (prefix + "pixels").c_str(), G_TYPE_UINT64, static_cast<guint64>(r.pixels),
+                    (prefix + "valid").c_str(), G_TYPE_UINT64, static_cast<guint64>(r.valid),
+                    (prefix + "valid-fraction").c_str(), G_TYPE_DOUBLE, r.valid_fraction, nullptr);
+  if (r.valid == 0) return;
+  gst_structure_set(s, (prefix + "min-c").c_str(), G_TYPE_DOUBLE, r.min_c,
+                    (prefix + "max-c").c_str(), G_TYPE_DOUBLE, r.max_c, (prefix + "mean-c").c_str(),
+                    G_TYPE_DOUBLE, r.mean_c, (prefix + "median-c").c_str(), G_TYPE_DOUBLE,
+                    r.median_c, nullptr);
+}
+
+}  // namespace
+
+GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& settings,
+                              const GstSegment* segment, GstClockTime pts, Method method) {
+  GstClockTime stream_time = GST_CLOCK_TIME_NONE, running_time = GST_CLOCK_TIME_NONE;
+  if (GST_CLOCK_TIME_IS_VALID(pts) && segment->format == GST_FORMAT_TIME) {
+    stream_time = gst_segment_to_stream_time(segment, GST_FORMAT_TIME, pts);
+    running_time = gst_segment_to_running_time(segment, GST_FORMAT_TIME, pts);
+  }
+  // The statistics first: nothing to free should they throw.
+  const RegionStats whole = region_stats(temperature_c);
+  const bool with_region = !settings.region_text.empty() && settings.region_valid;
+  cv::Rect r;
+  RegionStats region;
+  if (with_region) {
+    const cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,
+                          settings.region.height);
+    r = wanted & cv::Rect(0, 0, temperature_c.cols, temperature_c.rows);
+    if (!r.empty()) region = region_stats(temperature_c(r));
+  }
+  GstStructure* s = gst_structure_new(
+      STATS_MESSAGE, "timestamp", G_TYPE_UINT64, static_cast<guint64>(pts), "stream-time",
+      G_TYPE_UINT64, static_cast<guint64>(stream_time), "running-time", G_TYPE_UINT64,
+      static_cast<guint64>(running_time), "method", G_TYPE_STRING, method_name(method).c_str(),
+      "width", G_TYPE_INT, temperature_c.cols, "height", G_TYPE_INT, temperature_c.rows, nullptr);
+  set_stats_fields(s, "", whole);
+  if (with_region) {
+    gst_structure_set(s, "region-x", G_TYPE_INT, r.x, "region-y", G_TYPE_INT, r.y, "region-width",
+                      G_TYPE_INT, r.width, "region-height", G_TYPE_INT, r.height, nullptr);
+    set_stats_fields(s, "region-", region);
+  }
+  return s;
+}
+
+}  // namespace pyrocam::gst::ratiotemp
