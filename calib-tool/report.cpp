@@ -57,12 +57,12 @@ void write_report_json(const CalibrationOutcome& o, const std::filesystem::path&
   if (!out) throw InputError(path.string() + ": cannot write report");
 }
 
-void write_report_html(const CalibrationOutcome& o, const std::filesystem::path& path) {
+namespace {
+
+// The page head, title, verdict and what was calibrated from what.
+void html_head(const CalibrationOutcome& o, std::ostream& h) {
   const ThermalModel& m = o.model;
-  const CameraProfile& p = m.profile();
-  const auto& t_c = o.rates.temperatures_c;
-  const Eigen::MatrixXd measured = o.rates.rates();
-  std::ostringstream h;
+  const CameraProfile& p = o.model.profile();
   h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>pyrocam calibration: "
     << html_escape(p.name)
     << "</title><style>body{font-family:sans-serif;max-width:1100px;"
@@ -76,8 +76,10 @@ void write_report_html(const CalibrationOutcome& o, const std::filesystem::path&
     << num(m.min_temperature_c, 0) << "–" << num(m.max_temperature_c, 0) << " °C. Calibration took "
     << num(o.seconds, 1) << " s. Created " << html_escape(m.provenance.value("created_utc", ""))
     << " from <code>" << html_escape(m.provenance.value("dataset_path", "")) << "</code>.</p>";
+}
 
-  // Table 4.
+// Paper Table 4: every estimator on the calibration data.
+void table4_section(const CalibrationOutcome& o, std::ostream& h) {
   h << "<h2>Temperature error on the calibration data (paper Table 4)</h2><table><tr>"
        "<th>estimator</th><th>settings</th><th>mean °C</th><th>std °C</th><th>rms °C</th>"
        "<th>exposure spread °C</th></tr>";
@@ -88,8 +90,13 @@ void write_report_html(const CalibrationOutcome& o, const std::filesystem::path&
       << num(s.exposure_spread) << "</td></tr>";
   h << "</table><p>Paper (colour camera): MLP 3.7 °C rms, Ohno with optimised QE 6.0 °C, "
        "two-colour 35.5 °C, Ohno with datasheet QE about 100× worse.</p>";
+}
 
-  // QE solvers.
+// The QE solvers and the datasheet vs optimised QE (and its cross-validation spread).
+void qe_section(const CalibrationOutcome& o, std::ostream& h) {
+  const ThermalModel& m = o.model;
+  const CameraProfile& p = o.model.profile();
+  const auto bands = plotted_bands(p.band_count());
   h << "<h2>QE optimisation</h2><table><tr><th>solver</th><th>calibration residual</th>"
        "<th>held-out residual</th><th>rms(Q − Q<sub>datasheet</sub>)</th><th>time s</th></tr>";
   for (const auto& s : o.solvers)
@@ -99,7 +106,6 @@ void write_report_html(const CalibrationOutcome& o, const std::filesystem::path&
       << "</td></tr>";
   h << "</table>";
   std::vector<Series> qe;
-  const auto bands = plotted_bands(p.band_count());
   for (std::size_t i = 0; i < bands.size(); ++i) {
     const int b = bands[i];
     qe.push_back({p.band_names[b] + " datasheet", to_vec(p.grid.nm()),
@@ -119,8 +125,14 @@ void write_report_html(const CalibrationOutcome& o, const std::filesystem::path&
                    "wavelength (nm)", "std of system QE", false, 1000, 320},
                   spread);
   }
+}
 
-  // Measured vs simulated rates.
+// Measured vs simulated signal rates, their residuals and the slope fits.
+void rates_section(const CalibrationOutcome& o, std::ostream& h) {
+  const CameraProfile& p = o.model.profile();
+  const auto& t_c = o.rates.temperatures_c;
+  const auto bands = plotted_bands(p.band_count());
+  const Eigen::MatrixXd measured = o.rates.rates();
   std::vector<Series> rates, resid;
   for (std::size_t i = 0; i < bands.size(); ++i) {
     const int b = bands[i];
@@ -152,8 +164,10 @@ void write_report_html(const CalibrationOutcome& o, const std::filesystem::path&
   }
   h << svg_plot(
       {"Slope fits of ROI signal vs exposure: R²", "temperature (°C)", "R²", false, 1000, 280}, r2);
+}
 
-  // MLP.
+// The temperature network: locus error and training curve.
+void network_section(const CalibrationOutcome& o, std::ostream& h) {
   // One pass per Adam epoch, then per L-BFGS iteration of the polish.
   const std::vector<double> passes(o.mlp_report.pass.begin(), o.mlp_report.pass.end());
   h << "<h2>Temperature network</h2><p>Max error over the noise-free locus: "
@@ -174,8 +188,11 @@ void write_report_html(const CalibrationOutcome& o, const std::filesystem::path&
             "pass over the training set", "rmse (°C, log)", true, 1000, 320},
            {{"train", passes, o.mlp_report.train_rmse, colour(2)},
             {"test", passes, o.mlp_report.test_rmse, colour(0)}});
+}
 
-  // Uncertainty.
+// The systematic GUM terms over the model range.
+void uncertainty_section(const CalibrationOutcome& o, std::ostream& h) {
+  const ThermalModel& m = o.model;
   const UncertaintyModel& u = m.uncertainty;
   std::vector<double> total;
   for (double t : u.temperature_c) total.push_back(u.coverage_factor * u.systematic_u_c(t));
@@ -187,12 +204,28 @@ void write_report_html(const CalibrationOutcome& o, const std::filesystem::path&
                 {{"u calibration (k=1)", u.temperature_c, u.u_calibration_c, colour(0)},
                  {"u emissivity (k=1)", u.temperature_c, u.u_emissivity_c, colour(1)},
                  {"expanded (k=2)", u.temperature_c, total, colour(2)}});
+}
 
+// What the calibration warned about.
+void warnings_section(const CalibrationOutcome& o, std::ostream& h) {
   if (!o.warnings.empty()) {
     h << "<h2>Warnings</h2><ul>";
     for (const auto& w : o.warnings) h << "<li>" << html_escape(w) << "</li>";
     h << "</ul>";
   }
+}
+
+}  // namespace
+
+void write_report_html(const CalibrationOutcome& o, const std::filesystem::path& path) {
+  std::ostringstream h;
+  html_head(o, h);
+  table4_section(o, h);
+  qe_section(o, h);
+  rates_section(o, h);
+  network_section(o, h);
+  uncertainty_section(o, h);
+  warnings_section(o, h);
   h << "</body></html>\n";
   std::ofstream out(path);
   out << h.str();

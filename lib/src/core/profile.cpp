@@ -135,7 +135,29 @@ class ProfileReader {
     p.source = path_;
     p.name = require(j, "name", "profile").get<std::string>();
     p.description = j.value("description", std::string());
+    read_grid(j, p);
+    try {
+      p.mosaic = read_mosaic(require(j, "mosaic", "profile"));
+    } catch (const InputError& e) {
+      if (std::string(e.what()).rfind(path_.string(), 0) == 0) throw;
+      fail(e.what());
+    }
+    read_bands(require(j, "bands", "profile"), p);
+    if (p.band_count() != p.mosaic.band_count())
+      fail("mosaic uses " + std::to_string(p.mosaic.band_count()) + " bands, " +
+           std::to_string(p.band_count()) + " are described");
+    read_optics(j, p);
+    read_sensor(j, p);
+    read_noise(j, p);
+    read_thresholds(j, p);
+    read_normalisation(j, p);
+    read_unit_variation(j, p);
+    return p;
+  }
 
+ private:
+  // The wavelength grid every curve is resampled onto.
+  void read_grid(const json& j, CameraProfile& p) const {
     const json& g = require(j, "wavelength_grid_nm", "profile");
     try {
       const double start = number(g, "start", "wavelength_grid_nm", 0, true);
@@ -151,19 +173,10 @@ class ProfileReader {
     } catch (const std::invalid_argument& e) {
       fail(e.what());
     }
+  }
 
-    try {
-      p.mosaic = read_mosaic(require(j, "mosaic", "profile"));
-    } catch (const InputError& e) {
-      if (std::string(e.what()).rfind(path_.string(), 0) == 0) throw;
-      fail(e.what());
-    }
-
-    read_bands(require(j, "bands", "profile"), p);
-    if (p.band_count() != p.mosaic.band_count())
-      fail("mosaic uses " + std::to_string(p.mosaic.band_count()) + " bands, " +
-           std::to_string(p.band_count()) + " are described");
-
+  // Lens and filter transmissions, and the filter pass band.
+  void read_optics(const json& j, CameraProfile& p) {
     p.optics_transmission = Eigen::VectorXd::Ones(p.grid.size());
     if (j.contains("optics")) {
       for (const auto& o : j.at("optics"))
@@ -177,14 +190,20 @@ class ProfileReader {
     } else {
       p.filter_pass_band_nm = {p.grid.start_nm(), p.grid.stop_nm()};
     }
+  }
 
+  // Bit depth, dark offset and etendue.
+  void read_sensor(const json& j, CameraProfile& p) const {
     p.bit_depth = integer(j, "bit_depth", "profile", 8, 8, 16);
     p.dark_offset_dn = number(j, "dark_offset_dn", "profile", 0);
     if (p.dark_offset_dn < 0 || p.dark_offset_dn >= p.max_dn())
       fail("dark_offset_dn must lie within 0.." + std::to_string(p.max_dn()));
     p.etendue_m2_sr = number(j, "etendue_m2_sr", "profile", p.etendue_m2_sr);
     if (!(p.etendue_m2_sr > 0)) fail("etendue_m2_sr must be > 0");
+  }
 
+  // EMVA 1288 noise terms (defaults where absent).
+  void read_noise(const json& j, CameraProfile& p) const {
     if (j.contains("noise")) {
       const json& n = j.at("noise");
       NoiseModel& nm = p.noise;
@@ -198,6 +217,10 @@ class ProfileReader {
           nm.dark_current_e_per_s < 0 || nm.dark_fpn_dn < 0 || nm.prnu < 0)
         fail("noise: gain and full well must be > 0, the other terms >= 0");
     }
+  }
+
+  // Dim and saturation thresholds, checked against the bit depth.
+  void read_thresholds(const json& j, CameraProfile& p) const {
     if (j.contains("thresholds")) {
       const json& t = j.at("thresholds");
       Thresholds& th = p.thresholds;
@@ -223,13 +246,19 @@ class ProfileReader {
              std::to_string(th.inference_dim_dn) + ", " +
              std::to_string(th.inference_saturation_dn) + ")");
     }
+  }
 
+  // Which bands are numerators and which the reference of the ratios.
+  void read_normalisation(const json& j, CameraProfile& p) const {
     const json& norm = require(j, "normalisation", "profile");
     p.normalisation.numerators = band_list(require(norm, "numerators", "normalisation"), p);
     p.normalisation.reference = band_list(require(norm, "reference", "normalisation"), p);
     if (p.normalisation.numerators.empty() || p.normalisation.reference.empty())
       fail("normalisation needs at least one numerator and one reference band");
+  }
 
+  // How a simulated unit may differ from the datasheet.
+  void read_unit_variation(const json& j, CameraProfile& p) const {
     if (j.contains("unit_variation")) {
       const json& u = j.at("unit_variation");
       UnitVariation& uv = p.unit_variation;
@@ -258,10 +287,8 @@ class ProfileReader {
                            uv.filter_shift_sigma_nm, uv.ripple_rms})
         if (!(sigma >= 0)) fail("unit_variation: every size must be >= 0");
     }
-    return p;
   }
 
- private:
   MosaicLayout read_mosaic(const json& m) const {
     const std::string type = require(m, "type", "mosaic").get<std::string>();
     if (type == "bayer") {
