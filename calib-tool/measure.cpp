@@ -1,19 +1,20 @@
 // `pyrocam-calib measure`: raw frames and dark frames to temperature images offline, through the
 // same library code as the ratiotemp element.
-#include "pyrocam/runtime/measure.h"
-
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <opencv2/imgproc.hpp>
 
 #include "commands.h"
-#include "pyrocam/runtime/darksub.h"
 #include "pyrocam/core/dataset.h"
-#include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/core/temperature_codes.h"
+#include "pyrocam/runtime/darksub.h"
+#include "pyrocam/runtime/frame_measurer.h"
+#include "pyrocam/runtime/region_stats.h"
 
 namespace pyrocam::cli {
 namespace {
@@ -146,7 +147,8 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
                                  "layout (rggb, bggr, grbg, gbrg or e.g. 5x5)");
     (void)c;
     selected = [&global] {
-      const ThermalModel model = load_model(a.model);
+      const auto shared_model = std::make_shared<const ThermalModel>(load_model(a.model));
+      const ThermalModel& model = *shared_model;
       MeasureOptions options;
       options.method = parse_method(a.method);
       options.demosaic = parse_demosaic_method(a.demosaic);
@@ -154,7 +156,7 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       options.uncertainty = a.uncertainty;
       options.misfit_probability = a.misfit_probability;
       options.allow_partial = a.allow_partial;
-      FrameMeasurer measurer(model, options);
+      FrameMeasurer measurer(shared_model, options);
 
       struct Job {
         std::filesystem::path frame, dark, truth;

@@ -117,7 +117,8 @@
 #include "pyrocam-common.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/estimator_check.h"
-#include "pyrocam/runtime/measure.h"
+#include "pyrocam/runtime/plane_estimator.h"
+#include "pyrocam/runtime/region_stats.h"
 #include "pyrocam/runtime/model.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_ratio_temp_debug);
@@ -185,10 +186,9 @@ struct Settings {
 };
 
 /* Streaming state: the model and its estimators are built in start(), the format in set_caps(),
- * all dropped in stop(). The estimators refer to the model: they are declared after it, so
- * they go first. */
+ * all dropped in stop(). The estimators share the model. */
 struct State {
-  std::unique_ptr<const pyrocam::ThermalModel> model;
+  std::shared_ptr<const pyrocam::ThermalModel> model;
   std::string model_path;
   std::array<std::unique_ptr<pyrocam::PlaneEstimator>, 3> estimators;  // by pyrocam::Method
   pyrocam::Method method = pyrocam::Method::kMlp;                      // in use
@@ -232,9 +232,9 @@ std::string prepare_estimator(State& st, pyrocam::Method m) {
     return st.lut_problem;
   auto& slot = st.estimators[static_cast<std::size_t>(m)];
   try {
-    if (!slot) slot = std::make_unique<pyrocam::PlaneEstimator>(*st.model, m);
+    if (!slot) slot = std::make_unique<pyrocam::PlaneEstimator>(st.model, m);
     if (m != pyrocam::Method::kLut || st.lut_checked) return "";
-    const auto mlp = pyrocam::make_estimator(*st.model, pyrocam::Method::kMlp);
+    const auto mlp = pyrocam::make_estimator(st.model, pyrocam::Method::kMlp);
     const pyrocam::LocusAgreement a = pyrocam::compare_on_locus(*st.model, slot->estimator(), *mlp);
     st.lut_checked = true;
     if (a.max_difference_c > LUT_TOLERANCE_C || a.validity_differs * 100 > a.samples) {
@@ -511,7 +511,7 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
     return FALSE;
   }
   bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kRead, "Could not read the thermal model", [&] {
-    st.model = std::make_unique<const pyrocam::ThermalModel>(pyrocam::load_model(settings.model));
+    st.model = std::make_shared<const pyrocam::ThermalModel>(pyrocam::load_model(settings.model));
   });
   if (!ok) return FALSE;
   st.model_path = settings.model;

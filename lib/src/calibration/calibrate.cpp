@@ -281,8 +281,9 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   // Table 4: every estimator on the calibration settings' ROI means.
   stage("evaluating", 0, 1);
   const auto settings = evaluable_settings(out.rates, profile);
-  const auto mlp_est = make_estimator(m, Method::kMlp);
-  const auto ml_est = make_estimator(m, Method::kLikelihood);
+  const auto evaluated = std::make_shared<const ThermalModel>(m);  // a copy the estimators share
+  const auto mlp_est = make_estimator(evaluated, Method::kMlp);
+  const auto ml_est = make_estimator(evaluated, Method::kLikelihood);
   auto call = [](const TemperatureEstimator& e) {
     return [&e](const Eigen::VectorXd& s) { return e.temperature_c(s.data()); };
   };

@@ -8,7 +8,6 @@
 #include <numeric>
 #include <vector>
 
-#include "pyrocam/runtime/estimators.h"
 #include "pyrocam/calibration/noisy_locus.h"
 
 namespace pyrocam {
