@@ -15,13 +15,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "bench_support.h"
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/demosaic.h"
-#include "pyrocam/runtime/measure.h"
+#include "pyrocam/runtime/plane_estimator.h"
 
 namespace {
 
@@ -141,30 +142,34 @@ int main(int argc, char** argv) {
   cv::Mat t, codes;
 
   if (only.empty() || only == "colour") {
-    const pyrocam::ThermalModel m = pyrocam::load_model(rgb_model);
+    const auto model =
+        std::make_shared<const pyrocam::ThermalModel>(pyrocam::load_model(rgb_model));
+    const pyrocam::ThermalModel& m = *model;
     const auto scene = pyrocam::bench::make_scene(scene_spec, 2048, 2048);
     const auto planes = band_planes(m, pyrocam::bench::render(m, scene));
     std::printf(
         "\ncolour camera, 2048x2048 band planes (3 bands), %.0f %% of the frame on the hot "
         "object, model %s\n",
         100 * pyrocam::bench::hot_fraction(scene), rgb_model.c_str());
-    const pyrocam::PlaneEstimator lut(m, Method::kLut);
+    const pyrocam::PlaneEstimator lut(model, Method::kLut);
     print_timing("lut estimate", time_frames(frames, [&] { lut.estimate(planes, t); }));
     print_timing("lut estimate_codes",
                  time_frames(frames, [&] { lut.estimate_codes(planes, codes); }));
     std::printf("    lookup table in memory: %.1f MB\n",
                 static_cast<double>(lut.estimator().memory_bytes()) / 1048576.0);
-    const pyrocam::PlaneEstimator likelihood(m, Method::kLikelihood);
+    const pyrocam::PlaneEstimator likelihood(model, Method::kLikelihood);
     print_timing("likelihood estimate",
                  time_frames(std::max(1, frames / 10), [&] { likelihood.estimate(planes, t); }));
-    const pyrocam::PlaneEstimator mlp(m, Method::kMlp);
+    const pyrocam::PlaneEstimator mlp(model, Method::kMlp);
     cv::Mat t_mlp, t_lut;
     print_timing("mlp estimate", time_frames(0, [&] { mlp.estimate(planes, t_mlp); }));
     lut.estimate(planes, t_lut);
     print_agreement("lut against mlp", t_mlp, t_lut, 0.5);
   }
   if (only.empty() || only == "5x5") {
-    const pyrocam::ThermalModel m = pyrocam::load_model(nir_model);
+    const auto model =
+        std::make_shared<const pyrocam::ThermalModel>(pyrocam::load_model(nir_model));
+    const pyrocam::ThermalModel& m = *model;
     const auto scene = pyrocam::bench::make_scene(scene_spec, 2045, 1085);
     const auto planes = band_planes(m, pyrocam::bench::render(m, scene));
     std::printf(
@@ -172,14 +177,14 @@ int main(int argc, char** argv) {
         "object, model %s\n",
         planes[0].cols, planes[0].rows, 100 * pyrocam::bench::hot_fraction(scene),
         nir_model.c_str());
-    const pyrocam::PlaneEstimator likelihood(m, Method::kLikelihood);
+    const pyrocam::PlaneEstimator likelihood(model, Method::kLikelihood);
     cv::Mat t_fast, t_exhaustive, t_mlp;
     print_timing("likelihood estimate (fast)",
                  time_frames(frames, [&] { likelihood.estimate(planes, t_fast); }));
     print_timing("likelihood estimate_codes (fast)",
                  time_frames(frames, [&] { likelihood.estimate_codes(planes, codes); }));
     // The exhaustive scan as a per-pixel estimator, on the same rows.
-    const auto exhaustive = pyrocam::make_exhaustive_likelihood_estimator(m);
+    const auto exhaustive = pyrocam::make_exhaustive_likelihood_estimator(model);
     print_timing("likelihood, exhaustive scan (reference)", time_frames(0, [&] {
                    t_exhaustive.create(planes[0].size(), CV_32F);
                    cv::parallel_for_(cv::Range(0, planes[0].rows), [&](const cv::Range& r) {
@@ -192,7 +197,7 @@ int main(int argc, char** argv) {
                      }
                    });
                  }));
-    const pyrocam::PlaneEstimator mlp(m, Method::kMlp);
+    const pyrocam::PlaneEstimator mlp(model, Method::kMlp);
     print_timing("mlp estimate", time_frames(0, [&] { mlp.estimate(planes, t_mlp); }));
     print_agreement("fast likelihood against exhaustive", t_exhaustive, t_fast, 0.01);
   }

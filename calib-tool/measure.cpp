@@ -1,12 +1,11 @@
 // `pyrocam-calib measure`: raw frames and dark frames to temperature images offline, through the
 // same library code as the ratiotemp element.
-#include "pyrocam/runtime/measure.h"
-
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <opencv2/imgproc.hpp>
 
 #include "commands.h"
@@ -15,6 +14,8 @@
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/estimator_selection.h"
+#include "pyrocam/runtime/frame_measurer.h"
+#include "pyrocam/runtime/region_stats.h"
 
 namespace pyrocam::cli {
 namespace {
@@ -104,7 +105,8 @@ void check_measure_args(const MeasureArgs& a) {
 }
 
 // auto chooses as ratiotemp does, and says on stderr (unless -q) why it did not take the table.
-MeasureOptions measure_options(const MeasureArgs& a, const ThermalModel& model,
+MeasureOptions measure_options(const MeasureArgs& a,
+                               const std::shared_ptr<const ThermalModel>& model,
                                const GlobalOptions& global) {
   MeasureOptions options;
   std::string not_lut;
@@ -223,9 +225,10 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
 
 // The whole subcommand once the arguments are checked.
 int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
-  const ThermalModel model = load_model(a.model);
-  const MeasureOptions options = measure_options(a, model, global);
-  FrameMeasurer measurer(model, options);
+  const auto shared_model = std::make_shared<const ThermalModel>(load_model(a.model));
+  const ThermalModel& model = *shared_model;
+  const MeasureOptions options = measure_options(a, shared_model, global);
+  FrameMeasurer measurer(shared_model, options);
   const MeasureInputs in = measure_inputs(a, model);
   std::ofstream csv = open_stats_csv(a.out);
   ProgressPrinter progress(global, "measuring");

@@ -116,8 +116,9 @@
 #include "pyrocam-common.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/estimator_selection.h"
-#include "pyrocam/runtime/measure.h"
 #include "pyrocam/runtime/model.h"
+#include "pyrocam/runtime/plane_estimator.h"
+#include "pyrocam/runtime/region_stats.h"
 #include "ratiotemp-private.h"
 
 GST_DEBUG_CATEGORY(gst_ratio_temp_debug);
@@ -171,10 +172,9 @@ struct MappedFrame {
 }  // namespace
 
 /* Streaming state: the model and its estimators are built in start(), the format in set_caps(),
- * all dropped in stop(). The estimators refer to the model: they are declared after it, so
- * they go first. */
+ * all dropped in stop(). The estimators share the model. */
 struct pyrocam::gst::ratiotemp::State {
-  std::unique_ptr<const pyrocam::ThermalModel> model;
+  std::shared_ptr<const pyrocam::ThermalModel> model;
   std::string model_path;
   std::unique_ptr<pyrocam::EstimatorSelector> estimators;   // builds and keeps them per method
   pyrocam::Method method = pyrocam::Method::kMlp;           // in use
@@ -346,11 +346,11 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
     return FALSE;
   }
   bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kRead, "Could not read the thermal model", [&] {
-    st.model = std::make_unique<const pyrocam::ThermalModel>(pyrocam::load_model(settings.model));
+    st.model = std::make_shared<const pyrocam::ThermalModel>(pyrocam::load_model(settings.model));
   });
   if (!ok) return FALSE;
   st.model_path = settings.model;
-  st.estimators = std::make_unique<pyrocam::EstimatorSelector>(*st.model);
+  st.estimators = std::make_unique<pyrocam::EstimatorSelector>(st.model);
   const pyrocam::EstimatorSelector::Choice choice =
       st.estimators->select(to_library(settings.method));
   st.method = choice.method;

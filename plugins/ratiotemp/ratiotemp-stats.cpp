@@ -1,5 +1,5 @@
 /* ratiotemp's statistics message: frame and region statistics of the temperatures. */
-#include "pyrocam/runtime/measure.h"
+#include "pyrocam/runtime/region_stats.h"
 #include "ratiotemp-private.h"
 
 namespace pyrocam::gst::ratiotemp {

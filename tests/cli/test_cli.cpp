@@ -299,8 +299,8 @@ TEST_F(CliMeasure, measure_reads_the_plate_with_the_matching_model) {
 
 TEST_F(CliMeasure, measure_method_auto_reads_with_the_method_the_library_chooses) {
   const auto model = test_model("test-model-rgb.json");
-  const std::string chosen =
-      method_name(choose_method(load_model(model.string()), MethodRequest::kAuto));
+  const std::string chosen = method_name(choose_method(
+      std::make_shared<const ThermalModel>(load_model(model.string())), MethodRequest::kAuto));
   const std::filesystem::path by_name = dir / "by-name";
   for (const auto& [method, folder] :
        {std::pair{std::string("auto"), out}, std::pair{chosen, by_name}}) {

@@ -44,7 +44,7 @@ std::vector<std::uint8_t> padded(const std::vector<std::uint8_t>& v, int w, int 
 std::vector<float> expected(const std::vector<std::uint8_t>& raw, int w, int h, double dark,
                             double saturation) {
   cv::Mat in(h, w, CV_8U, const_cast<std::uint8_t*>(raw.data())), out;
-  subtract_dark(in, dark_from_level(w, h, dark), saturation, out);
+  subtract_dark(in, cv::Mat(h, w, CV_32F, cv::Scalar(dark)), saturation, out);
   return std::vector<float>(out.begin<float>(), out.end<float>());
 }
 

@@ -13,8 +13,9 @@
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/estimator_check.h"
-#include "pyrocam/runtime/measure.h"
 #include "pyrocam/runtime/model.h"
+#include "pyrocam/runtime/plane_estimator.h"
+#include "pyrocam/runtime/region_stats.h"
 #include "test_support.h"
 
 namespace pyrocam::test {
@@ -30,22 +31,22 @@ std::string rgb_model_path() { return model_path("test-model-rgb.json"); }
 std::string nir_model_path() { return model_path("test-model-nir5x5.json"); }
 
 // The test models, loaded once per binary.
-const ThermalModel& rgb_model() {
-  static const ThermalModel m = load_model(rgb_model_path());
+const std::shared_ptr<const ThermalModel>& rgb_model() {
+  static const auto m = std::make_shared<const ThermalModel>(load_model(rgb_model_path()));
   return m;
 }
-const ThermalModel& nir_model() {
-  static const ThermalModel m = load_model(nir_model_path());
+const std::shared_ptr<const ThermalModel>& nir_model() {
+  static const auto m = std::make_shared<const ThermalModel>(load_model(nir_model_path()));
   return m;
 }
 
 // What the element's auto method is for a model (its documented rule): the lookup table for
 // two-ratio models when it gives the network's answer on the model's locus (within 1 degC, and
 // reading where the network does at all but 1 % of the samples), else likelihood.
-bool lut_passes_its_check(const ThermalModel& m) {
+bool lut_passes_its_check(const std::shared_ptr<const ThermalModel>& m) {
   const auto lut = make_estimator(m, Method::kLut);
   const auto mlp = make_estimator(m, Method::kMlp);
-  const LocusAgreement a = compare_on_locus(m, *lut, *mlp);
+  const LocusAgreement a = compare_on_locus(*m, *lut, *mlp);
   return a.max_difference_c <= 1.0 && a.validity_differs * 100 <= a.samples;
 }
 Method rgb_auto_method() {
@@ -90,10 +91,12 @@ std::vector<cv::Mat> plane_views(const std::vector<float>& planes, int bands, in
 struct LibraryResult {
   cv::Mat t, u;
 };
-LibraryResult library(const ThermalModel& m, Method method, const std::vector<cv::Mat>& planes,
-                      bool uncertainty = false, bool partial = false) {
+LibraryResult library(const std::shared_ptr<const ThermalModel>& model, Method method,
+                      const std::vector<cv::Mat>& planes, bool uncertainty = false,
+                      bool partial = false) {
+  const ThermalModel& m = *model;
   LibraryResult r;
-  PlaneEstimator est(m, method);
+  PlaneEstimator est(model, method);
   est.set_allow_partial(partial);
   est.estimate(planes, r.t, uncertainty ? &r.u : nullptr);
   if (!partial) {
@@ -114,9 +117,10 @@ LibraryResult library(const ThermalModel& m, Method method, const std::vector<cv
   }
   return r;
 }
-LibraryResult library(const ThermalModel& m, Method method, const std::vector<float>& planes, int w,
-                      int h, bool uncertainty = false, bool partial = false) {
-  return library(m, method, plane_views(planes, m.profile().band_count(), w, h), uncertainty,
+LibraryResult library(const std::shared_ptr<const ThermalModel>& m, Method method,
+                      const std::vector<float>& planes, int w, int h, bool uncertainty = false,
+                      bool partial = false) {
+  return library(m, method, plane_views(planes, m->profile().band_count(), w, h), uncertainty,
                  partial);
 }
 
@@ -126,9 +130,9 @@ std::vector<std::uint16_t> codes_of(const cv::Mat& codes) {
     v.insert(v.end(), codes.ptr<std::uint16_t>(y), codes.ptr<std::uint16_t>(y) + codes.cols);
   return v;
 }
-std::vector<std::uint16_t> library_codes(const ThermalModel& m, Method method,
-                                         const std::vector<float>& planes, int w, int h,
-                                         bool partial = false) {
+std::vector<std::uint16_t> library_codes(const std::shared_ptr<const ThermalModel>& m,
+                                         Method method, const std::vector<float>& planes, int w,
+                                         int h, bool partial = false) {
   return codes_of(encode_decikelvin(library(m, method, planes, w, h, false, partial).t));
 }
 
@@ -219,7 +223,7 @@ void free_all(std::vector<GstStructure*>& v) {
 
 TEST_F(RatioTemp, bayer_bands_negotiate_to_gray16_of_the_same_size) {
   start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 7, 5));
-  const auto planes = graybody_planes(rgb_model(), 7, 5, 900, 1600);
+  const auto planes = graybody_planes(*rgb_model(), 7, 5, 900, 1600);
   const auto out = run(planes, 7, 5);  // odd width: rows padded to 16 bytes
   EXPECT_EQ(out, library_codes(rgb_model(), rgb_auto_method(), planes, 7, 5));
   EXPECT_GT(count_nonzero(out), 30u);
@@ -231,7 +235,7 @@ TEST_F(RatioTemp, bayer_bands_negotiate_to_gray16_of_the_same_size) {
 
 TEST_F(RatioTemp, snapshot_bands_negotiate_with_the_5x5_model) {
   start("ratiotemp model=" + nir_model_path(), bands_caps(25, "5x5", 4, 3));
-  const auto planes = graybody_planes(nir_model(), 4, 3, 1000, 2000);
+  const auto planes = graybody_planes(*nir_model(), 4, 3, 1000, 2000);
   const auto out = run(planes, 4, 3);
   // auto is likelihood for a 25-band model.
   EXPECT_EQ(out, library_codes(nir_model(), Method::kLikelihood, planes, 4, 3));
@@ -257,14 +261,15 @@ TEST_F(RatioTemp, every_method_gives_the_library_codes) {
   if (rgb_auto_method() == Method::kLut) cases.push_back(Case{"lut", Method::kLut, true});
   for (const Case& c : cases) {
     SCOPED_TRACE(std::string(c.method) + (c.colour ? " colour" : " 5x5"));
-    const ThermalModel& m = c.colour ? rgb_model() : nir_model();
+    const std::shared_ptr<const ThermalModel>& model = c.colour ? rgb_model() : nir_model();
+    const ThermalModel& m = *model;
     const int w = 6, hh = 4;
     start(std::string("ratiotemp method=") + c.method +
               " model=" + (c.colour ? rgb_model_path() : nir_model_path()),
           bands_caps(m.profile().band_count(), c.colour ? "bayer" : "5x5", w, hh));
     const auto planes = graybody_planes(m, w, hh, 800, 2400);
     const auto out = run(planes, w, hh);
-    EXPECT_EQ(out, library_codes(m, c.library_method, planes, w, hh));
+    EXPECT_EQ(out, library_codes(model, c.library_method, planes, w, hh));
     EXPECT_GT(count_nonzero(out), 12u);
     TearDown();
     h = nullptr, bus = nullptr, element = nullptr;
@@ -273,7 +278,7 @@ TEST_F(RatioTemp, every_method_gives_the_library_codes) {
 
 TEST_F(RatioTemp, uncertainty_output_gives_the_library_uncertainty) {
   start("ratiotemp output=uncertainty model=" + rgb_model_path(), bands_caps(3, "bayer", 5, 4));
-  auto planes = graybody_planes(rgb_model(), 5, 4, 900, 1500);
+  auto planes = graybody_planes(*rgb_model(), 5, 4, 900, 1500);
   for (int b = 0; b < 3; ++b) planes[b * 20 + 3] = kInf;  // pixel 3 saturated: no reading
   const auto out = run(planes, 5, 4);
   const LibraryResult lib = library(rgb_model(), rgb_auto_method(), planes, 5, 4, true);
@@ -299,7 +304,7 @@ TEST_F(RatioTemp, uncertainty_output_gives_the_library_uncertainty) {
 
 TEST_F(RatioTemp, saturated_nan_and_dim_bands_give_no_reading) {
   start("ratiotemp method=mlp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 2));
-  auto planes = graybody_planes(rgb_model(), 4, 2, 1200, 1200);
+  auto planes = graybody_planes(*rgb_model(), 4, 2, 1200, 1200);
   const int n = 8;
   const float nan = std::nanf("");
   planes[0 * n + 0] = kInf;                             // R saturated
@@ -335,7 +340,7 @@ TEST_F(RatioTemp, saturated_nan_and_dim_bands_give_no_reading) {
 // in part, as at an edge) has no reading, while the graybody pixels keep theirs, for every
 // method and for the statistics path as for the codes path.
 TEST_F(RatioTemp, mixed_pixel_has_no_reading_with_the_misfit_check) {
-  const ThermalModel& m = rgb_model();
+  const ThermalModel& m = *rgb_model();
   const Eigen::VectorXd rates = m.camera.rates(1000);
   const Eigen::VectorXd s = rates * (200 / rates.maxCoeff());
   std::vector<float> planes(3 * 4);
@@ -400,7 +405,7 @@ TEST_F(RatioTemp, saturated_pixel_stays_no_reading_through_darksub_and_demosaic2
   REQUIRE_ELEMENT("demosaic25");
   start("darksub dark-level=50 ! demosaic25 ! ratiotemp method=mlp model=" + rgb_model_path(),
         "video/x-bayer,format=rggb,width=8,height=8,framerate=30/1");
-  auto raw = raw_bayer_frame(rgb_model(), 1300);
+  auto raw = raw_bayer_frame(*rgb_model(), 1300);
   raw[4 * 8 + 4] = 255;  // an R pixel, saturated
   const auto out = run(raw, 8, 8);
   ASSERT_EQ(out.size(), 64u);
@@ -418,7 +423,7 @@ TEST_F(RatioTemp, saturated_area_has_no_reading_with_the_default_method) {
   REQUIRE_ELEMENT("demosaic25");
   start("darksub dark-level=50 ! demosaic25 ! ratiotemp model=" + rgb_model_path(),
         "video/x-bayer,format=rggb,width=8,height=8,framerate=30/1");
-  auto raw = raw_bayer_frame(rgb_model(), 1300);
+  auto raw = raw_bayer_frame(*rgb_model(), 1300);
   for (int y = 2; y < 6; ++y)
     for (int x = 2; x < 6; ++x) raw[y * 8 + x] = 255;
   const auto out = run(raw, 8, 8);
@@ -434,7 +439,7 @@ TEST_F(RatioTemp, saturated_area_has_no_reading_with_the_default_method) {
 TEST_F(RatioTemp, method_and_region_change_while_playing) {
   start("ratiotemp method=likelihood stats-interval=0 model=" + rgb_model_path(),
         bands_caps(3, "bayer", 6, 4));
-  const auto planes = graybody_planes(rgb_model(), 6, 4, 900, 1800);
+  const auto planes = graybody_planes(*rgb_model(), 6, 4, 900, 1800);
   EXPECT_EQ(run(planes, 6, 4), library_codes(rgb_model(), Method::kLikelihood, planes, 6, 4));
   gst_util_set_object_arg(G_OBJECT(element), "method", "mlp");
   const auto mlp = library_codes(rgb_model(), Method::kMlp, planes, 6, 4);
@@ -482,7 +487,7 @@ TEST_F(RatioTemp, method_and_region_change_while_playing) {
 
 TEST_F(RatioTemp, auto_uses_the_lookup_table_only_when_it_passes_its_check) {
   start("ratiotemp stats-interval=1 model=" + rgb_model_path(), bands_caps(3, "bayer", 3, 2));
-  const auto planes = graybody_planes(rgb_model(), 3, 2, 1100, 1300);
+  const auto planes = graybody_planes(*rgb_model(), 3, 2, 1100, 1300);
   EXPECT_EQ(run(planes, 3, 2, 0), library_codes(rgb_model(), rgb_auto_method(), planes, 3, 2));
   auto s = stats();
   ASSERT_EQ(s.size(), 1u);
@@ -501,7 +506,7 @@ TEST_F(RatioTemp, auto_uses_the_lookup_table_only_when_it_passes_its_check) {
 
 TEST_F(RatioTemp, lut_asked_for_while_playing_with_the_5x5_model_is_refused_n) {
   start("ratiotemp model=" + nir_model_path(), bands_caps(25, "5x5", 3, 2));
-  const auto planes = graybody_planes(nir_model(), 3, 2, 1200, 1800);
+  const auto planes = graybody_planes(*nir_model(), 3, 2, 1200, 1800);
   const auto expected = library_codes(nir_model(), Method::kLikelihood, planes, 3, 2);
   EXPECT_EQ(run(planes, 3, 2), expected);
   gst_util_set_object_arg(G_OBJECT(element), "method", "lut");
@@ -543,7 +548,7 @@ void expect_stats(const GstStructure* s, const std::string& prefix, const Region
 TEST_F(RatioTemp, stats_message_matches_region_stats_of_the_frame) {
   start("ratiotemp stats-interval=1000000000 region=4,2,10,10 model=" + rgb_model_path(),
         bands_caps(3, "bayer", 7, 5));
-  auto planes = graybody_planes(rgb_model(), 7, 5, 900, 1700);
+  auto planes = graybody_planes(*rgb_model(), 7, 5, 900, 1700);
   for (int b = 0; b < 3; ++b) {  // two pixels without a reading, whatever the method
     planes[b * 35 + 0] = kInf;
     planes[b * 35 + 33] = NAN;
@@ -595,7 +600,7 @@ TEST_F(RatioTemp, stats_message_matches_region_stats_of_the_frame) {
 
 TEST_F(RatioTemp, survives_flush_and_eos) {
   start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 4));
-  const auto planes = graybody_planes(rgb_model(), 4, 4, 1000, 1400);
+  const auto planes = graybody_planes(*rgb_model(), 4, 4, 1000, 1400);
   const auto expected = library_codes(rgb_model(), rgb_auto_method(), planes, 4, 4);
   EXPECT_EQ(run(planes, 4, 4, 0), expected);
   EXPECT_EQ(run(planes, 4, 4, GST_SECOND / 10), expected);

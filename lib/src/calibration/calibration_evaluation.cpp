@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "pyrocam/calibration/baselines.h"
 #include "pyrocam/runtime/estimators.h"
@@ -72,8 +73,9 @@ std::vector<EstimatorScore> evaluate_estimators(const ThermalModel& m, const Rat
   const CameraProfile& profile = m.profile();
   std::vector<EstimatorScore> table4;
   const auto settings = evaluable_settings(rates, profile);
-  const auto mlp_est = make_estimator(m, Method::kMlp);
-  const auto ml_est = make_estimator(m, Method::kLikelihood);
+  const auto evaluated = std::make_shared<const ThermalModel>(m);  // a copy the estimators share
+  const auto mlp_est = make_estimator(evaluated, Method::kMlp);
+  const auto ml_est = make_estimator(evaluated, Method::kLikelihood);
   auto call = [](const TemperatureEstimator& e) {
     return [&e](const Eigen::VectorXd& s) { return e.temperature_c(s.data()); };
   };

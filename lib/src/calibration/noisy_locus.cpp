@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <utility>
 
 #include "detail/random.h"
+#include "pyrocam/core/noise_model.h"
 
 namespace pyrocam {
 namespace {
@@ -20,16 +23,18 @@ constexpr int kAttempts = 8;
 
 NoisyLocus::NoisyLocus(const ThermalModel& model, const Locus& locus,
                        const NoisyLocusOptions& options)
-    : model_(std::make_unique<ThermalModel>()), locus_(locus), options_(options) {
+    : locus_(locus), options_(options) {
   if (options.copies < 0) throw InputError("noisy locus: copies must be >= 0");
   if (!(options.min_noise_scale >= 0 && options.min_noise_scale <= options.max_noise_scale)) {
     throw InputError("noisy locus: need 0 <= min_noise_scale <= max_noise_scale");
   }
-  model_->camera = model.camera;
-  model_->min_temperature_c = std::max(kLowestFitC, model.min_temperature_c - kFitMarginC);
-  model_->max_temperature_c = model.max_temperature_c + kFitMarginC;
+  auto wide = std::make_shared<ThermalModel>();
+  wide->camera = model.camera;
+  wide->min_temperature_c = std::max(kLowestFitC, model.min_temperature_c - kFitMarginC);
+  wide->max_temperature_c = model.max_temperature_c + kFitMarginC;
+  model_ = std::move(wide);
   if (options.target == NoisyLocusTarget::kLikelihoodFit) {
-    likelihood_ = make_estimator(*model_, Method::kLikelihood);
+    likelihood_ = make_estimator(model_, Method::kLikelihood);
   }
 }
 

@@ -112,10 +112,6 @@ cv::Mat dark_from_image(const cv::Mat& image) {
   return dark;
 }
 
-cv::Mat dark_from_level(int width, int height, double level_dn) {
-  return cv::Mat(height, width, CV_32F, cv::Scalar(level_dn));
-}
-
 void DarkAccumulator::reset() {
   sum_.release();
   count_ = 0;

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "pyrocam/core/error.h"
+#include "runtime/shared_model.h"
 
 namespace pyrocam {
 
@@ -41,7 +42,10 @@ std::string lut_disagreement(const LocusAgreement& a) {
   return what;
 }
 
-EstimatorSelector::EstimatorSelector(const ThermalModel& model) : model_(model) {}
+EstimatorSelector::EstimatorSelector(std::shared_ptr<const ThermalModel> model)
+    : model_(std::move(model)) {
+  require_model(model_, "estimator selection");
+}
 
 std::string EstimatorSelector::prepare(Method m) {
   if (m == Method::kLut && lut_checked_ && !lut_problem_.empty()) return lut_problem_;
@@ -50,7 +54,7 @@ std::string EstimatorSelector::prepare(Method m) {
     if (!slot) slot = std::make_unique<PlaneEstimator>(model_, m);
     if (m != Method::kLut || lut_checked_) return "";
     const auto mlp = make_estimator(model_, Method::kMlp);
-    lut_problem_ = lut_disagreement(compare_on_locus(model_, slot->estimator(), *mlp));
+    lut_problem_ = lut_disagreement(compare_on_locus(*model_, slot->estimator(), *mlp));
     lut_checked_ = true;
     if (!lut_problem_.empty()) slot.reset();
     return lut_problem_;
@@ -75,7 +79,7 @@ EstimatorSelector::Choice EstimatorSelector::select(MethodRequest request) {
       c.method = Method::kLikelihood;
       break;
     case MethodRequest::kAuto:
-      if (model_.profile().normalisation.numerators.size() == 2) {
+      if (model_->profile().normalisation.numerators.size() == 2) {
         c.fallback = prepare(Method::kLut);
         if (c.fallback.empty()) {
           c.method = Method::kLut;
@@ -95,8 +99,9 @@ PlaneEstimator& EstimatorSelector::estimator(Method m) {
   return *slot;
 }
 
-Method choose_method(const ThermalModel& model, MethodRequest request, std::string* fallback) {
-  EstimatorSelector selector(model);
+Method choose_method(std::shared_ptr<const ThermalModel> model, MethodRequest request,
+                     std::string* fallback) {
+  EstimatorSelector selector(std::move(model));
   const EstimatorSelector::Choice c = selector.select(request);
   if (!c.problem.empty())
     throw InputError("method " + method_name(c.method) +

@@ -5,12 +5,14 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "detail/portable_math.h"
-#include "pyrocam/runtime/estimators.h"
-#include "pyrocam/core/physics.h"
-#include "pyrocam/core/error.h"
 #include "detail/vector_clones.h"
+#include "pyrocam/core/error.h"
+#include "pyrocam/core/noise_model.h"
+#include "pyrocam/core/physics.h"
+#include "runtime/shared_model.h"
 
 namespace pyrocam {
 namespace {
@@ -237,11 +239,13 @@ double chi2_upper_quantile(int dof, double probability) {
   return 0.5 * (lo + hi);
 }
 
-MisfitCheck::MisfitCheck(const ThermalModel& model, double probability, double model_error)
-    : model_(model),
-      bands_(model.profile().band_count()),
+MisfitCheck::MisfitCheck(std::shared_ptr<const ThermalModel> shared_model, double probability,
+                         double model_error)
+    : model_(std::move(shared_model)),
+      bands_(require_model(model_, "misfit check").profile().band_count()),
       model_error_(model_error),
-      dim_dn_(static_cast<float>(model.profile().thresholds.inference_dim_dn)) {
+      dim_dn_(static_cast<float>(model_->profile().thresholds.inference_dim_dn)) {
+  const ThermalModel& model = *model_;
   if (bands_ > kMaxBands) throw InputError("at most 64 bands are supported");
   if (!(model_error >= 0) || !std::isfinite(model_error))
     throw InputError("misfit check: the model error must be a finite fraction >= 0");
@@ -297,7 +301,7 @@ double MisfitCheck::threshold(int counted) const {
 double MisfitCheck::chi2(const double* s, double t_c, int* counted_out) const {
   int counted = 0;
   if (counted_out) *counted_out = 0;
-  if (!(t_c >= model_.min_temperature_c && t_c <= model_.max_temperature_c)) return NAN;
+  if (!(t_c >= model_->min_temperature_c && t_c <= model_->max_temperature_c)) return NAN;
   const double u = std::clamp((t_c - t0_c_) / step_c_, 0.0, static_cast<double>(samples_ - 1));
   const int i = std::min(static_cast<int>(u), samples_ - 2);
   const double f = u - i;
@@ -310,7 +314,7 @@ double MisfitCheck::chi2(const double* s, double t_c, int* counted_out) const {
     w[b] = 0;
     if (!reads) continue;
     const double e = model_error_ * s[b];
-    w[b] = 1 / (signal_variance_dn2(model_.profile(), b, s[b]) + e * e);
+    w[b] = 1 / (signal_variance_dn2(model_->profile(), b, s[b]) + e * e);
     sm += w[b] * s[b] * m[b];
     mm += w[b] * m[b] * m[b];
     sd += w[b] * s[b] * d[b];

@@ -1,6 +1,5 @@
 #include "pyrocam/runtime/model.h"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -239,15 +238,6 @@ ThermalModel load_model(const std::filesystem::path& path) {
   } catch (const json::exception& e) {
     throw InputError(where + ": malformed model (" + std::string(e.what()) + ")");
   }
-}
-
-void check_model_layout(const ThermalModel& model, const std::string& pattern) {
-  std::string want = pattern, have = model.profile().mosaic.pattern;
-  std::transform(want.begin(), want.end(), want.begin(), ::tolower);
-  std::transform(have.begin(), have.end(), have.begin(), ::tolower);
-  if (want != have)
-    throw InputError("the model was calibrated for a " + have + " mosaic (" + model.profile().name +
-                     "), the stream is " + want);
 }
 
 }  // namespace pyrocam

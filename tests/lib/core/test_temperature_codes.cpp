@@ -70,5 +70,23 @@ TEST(DifferenceCodes, works_on_views_with_row_padding) {
   EXPECT_EQ(cv::countNonZero(codes == 25), 6);
 }
 
+TEST(Decikelvin, encodes_tenths_of_kelvin_with_zero_for_no_reading) {
+  const cv::Mat t =
+      (cv::Mat_<float>(1, 6) << 1200.05f, -273.15f, std::numeric_limits<float>::quiet_NaN(),
+       6281.0f, 25.0f, std::numeric_limits<float>::infinity());
+  const cv::Mat code = encode_decikelvin(t);
+  ASSERT_EQ(code.type(), CV_16U);
+  EXPECT_EQ(code.at<std::uint16_t>(0, 0), 14732);  // 1473.2 K
+  EXPECT_EQ(code.at<std::uint16_t>(0, 1), 0);      // 0 K is no temperature
+  EXPECT_EQ(code.at<std::uint16_t>(0, 2), 0);      // NaN: no reading
+  EXPECT_EQ(code.at<std::uint16_t>(0, 3), 0);      // above 6553.5 K: no reading, not clipped
+  EXPECT_EQ(code.at<std::uint16_t>(0, 4), 2982);
+  EXPECT_EQ(code.at<std::uint16_t>(0, 5), 0);
+  const cv::Mat back = decode_decikelvin(code);
+  EXPECT_NEAR(back.at<float>(0, 0), 1200.05f, 1e-3);
+  EXPECT_TRUE(std::isnan(back.at<float>(0, 2)));
+  EXPECT_NEAR(back.at<float>(0, 4), 25.05f, 1e-3);
+}
+
 }  // namespace
 }  // namespace pyrocam

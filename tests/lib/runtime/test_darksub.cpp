@@ -3,8 +3,8 @@
 
 #include <cmath>
 
-#include "pyrocam/runtime/darksub.h"
 #include "pyrocam/core/error.h"
+#include "pyrocam/runtime/darksub.h"
 
 namespace pyrocam {
 namespace {
@@ -17,9 +17,14 @@ TEST(DarkSub, default_saturation_is_220_of_255_of_full_scale) {
   EXPECT_THROW(default_saturation_level(17), InputError);
 }
 
+// A dark frame of one level everywhere (CV_32F).
+cv::Mat level_dark(int width, int height, double level_dn) {
+  return cv::Mat(height, width, CV_32F, cv::Scalar(level_dn));
+}
+
 TEST(DarkSub, subtracts_and_marks_saturation_before_subtraction) {
   cv::Mat raw = (cv::Mat_<std::uint8_t>(2, 3) << 50, 100, 219, 220, 255, 0);
-  cv::Mat dark = dark_from_level(3, 2, 50);
+  cv::Mat dark = level_dark(3, 2, 50);
   dark.at<float>(1, 2) = std::nanf("");
   cv::Mat out;
   subtract_dark(raw, dark, 220, out);
@@ -47,7 +52,7 @@ TEST(DarkSub, sixteen_bit_frames_and_caller_buffers) {
 TEST(DarkSub, constant_level_and_large_frames_match_the_dark_frame_path) {
   cv::Mat raw(600, 700, CV_16U);
   cv::randu(raw, 0, 4096);
-  cv::Mat dark = dark_from_level(700, 600, 64.5), a, b;
+  cv::Mat dark = level_dark(700, 600, 64.5), a, b;
   subtract_dark(raw, dark, 3533, a);
   subtract_dark_level(raw, 64.5, 3533, b);
   ASSERT_EQ(a.size(), b.size());
@@ -66,7 +71,7 @@ TEST(DarkSub, constant_level_and_large_frames_match_the_dark_frame_path) {
 TEST(DarkSub, rejects_a_dark_of_another_size_naming_both) {
   cv::Mat raw(4, 6, CV_8U, cv::Scalar(10)), out;
   try {
-    subtract_dark(raw, dark_from_level(8, 4, 0), 220, out);
+    subtract_dark(raw, level_dark(8, 4, 0), 220, out);
     FAIL() << "no exception";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("8x4"), std::string::npos) << e.what();

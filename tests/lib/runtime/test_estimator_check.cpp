@@ -3,16 +3,18 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <memory>
 
 #include "pyrocam/runtime/estimator_check.h"
 
 namespace pyrocam {
 namespace {
 
-const ThermalModel& test_model() {
-  static const ThermalModel m = [] {
+const std::shared_ptr<const ThermalModel>& test_model() {
+  static const auto m = [] {
     const char* dir = std::getenv("PYROCAM_TEST_MODEL_DIR");
-    return load_model(std::string(dir ? dir : ".") + "/test-model-rgb.json");
+    return std::make_shared<const ThermalModel>(
+        load_model(std::string(dir ? dir : ".") + "/test-model-rgb.json"));
   }();
   return m;
 }
@@ -20,7 +22,7 @@ const ThermalModel& test_model() {
 // The network, 10 degC hot from 2000 degC up and blind below 600 degC.
 class FaultyEstimator : public TemperatureEstimator {
  public:
-  explicit FaultyEstimator(const ThermalModel& m)
+  explicit FaultyEstimator(const std::shared_ptr<const ThermalModel>& m)
       : TemperatureEstimator(m), reference_(make_estimator(m, Method::kMlp)) {}
   double temperature_c(const double* s) const override {
     const double t = reference_->temperature_c(s);
@@ -34,7 +36,7 @@ class FaultyEstimator : public TemperatureEstimator {
 
 TEST(EstimatorCheck, an_estimator_agrees_with_itself) {
   const auto mlp = make_estimator(test_model(), Method::kMlp);
-  const LocusAgreement r = compare_on_locus(test_model(), *mlp, *mlp, 5);
+  const LocusAgreement r = compare_on_locus(*test_model(), *mlp, *mlp, 5);
   EXPECT_EQ(r.samples, 601u);  // 500..3500 degC every 5
   EXPECT_GT(r.both_valid, 550u);
   EXPECT_EQ(r.validity_differs, 0u);
@@ -44,7 +46,7 @@ TEST(EstimatorCheck, an_estimator_agrees_with_itself) {
 TEST(EstimatorCheck, finds_the_size_and_place_of_a_disagreement) {
   const auto mlp = make_estimator(test_model(), Method::kMlp);
   const FaultyEstimator faulty(test_model());
-  const LocusAgreement r = compare_on_locus(test_model(), *mlp, faulty, 5);
+  const LocusAgreement r = compare_on_locus(*test_model(), *mlp, faulty, 5);
   EXPECT_NEAR(r.max_difference_c, 10, 1e-9);
   EXPECT_GE(r.worst_temperature_c, 1950);  // the network's own error may place 2000 a step off
   // The blind part: the locus samples below about 600 degC that the network reads.

@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <map>
+#include <memory>
 #include <utility>
 
 #include "pyrocam/core/error.h"
@@ -13,24 +14,27 @@
 namespace pyrocam {
 namespace {
 
-const ThermalModel& model(const std::string& file) {
-  static std::map<std::string, ThermalModel> models;
+std::shared_ptr<const ThermalModel> model(const std::string& file) {
+  static std::map<std::string, std::shared_ptr<const ThermalModel>> models;
   auto it = models.find(file);
   if (it == models.end()) {
     const char* dir = std::getenv("PYROCAM_TEST_MODEL_DIR");
-    it = models.emplace(file, load_model(std::string(dir ? dir : ".") + "/" + file)).first;
+    it = models
+             .emplace(file, std::make_shared<const ThermalModel>(
+                                load_model(std::string(dir ? dir : ".") + "/" + file)))
+             .first;
   }
   return it->second;
 }
-const ThermalModel& rgb() { return model("test-model-rgb.json"); }
-const ThermalModel& nir() { return model("test-model-nir5x5.json"); }
+std::shared_ptr<const ThermalModel> rgb() { return model("test-model-rgb.json"); }
+std::shared_ptr<const ThermalModel> nir() { return model("test-model-nir5x5.json"); }
 
 // The rule written out: the table where it is within 1 degC of the network everywhere on the
 // locus and reads where the network does at all but 1 % of the samples.
 bool rgb_lut_passes() {
   const auto lut = make_estimator(rgb(), Method::kLut);
   const auto mlp = make_estimator(rgb(), Method::kMlp);
-  const LocusAgreement a = compare_on_locus(rgb(), *lut, *mlp);
+  const LocusAgreement a = compare_on_locus(*rgb(), *lut, *mlp);
   return a.max_difference_c <= 1.0 && a.validity_differs * 100 <= a.samples;
 }
 

@@ -8,38 +8,29 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <map>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "pyrocam/core/noise_model.h"
 #include "pyrocam/runtime/estimators.h"
-#include "pyrocam/runtime/measure.h"
+#include "pyrocam/runtime/frame_measurer.h"
 #include "pyrocam/runtime/misfit.h"
 #include "pyrocam/runtime/model.h"
+#include "pyrocam/runtime/plane_estimator.h"
+#include "pyrocam/runtime/region_stats.h"
 #include "pyrocam/simulation/scenes.h"
 #include "pyrocam/simulation/simulator.h"
+#include "runtime/estimator_test_support.h"
 
 namespace pyrocam {
 namespace {
 
-const ThermalModel& test_model(const std::string& name) {
-  static std::map<std::string, ThermalModel> loaded;
-  auto it = loaded.find(name);
-  if (it == loaded.end()) {
-    const char* dir = std::getenv("PYROCAM_TEST_MODEL_DIR");
-    it = loaded
-             .emplace(name, load_model(std::filesystem::path(
-                                           dir && *dir ? dir : PYROCAM_TEST_MODEL_DIR_DEFAULT) /
-                                       name))
-             .first;
-  }
-  return it->second;
-}
-const ThermalModel& rgb() { return test_model("test-model-rgb.json"); }
-const ThermalModel& nir() { return test_model("test-model-nir5x5.json"); }
+std::shared_ptr<const ThermalModel> rgb() { return test::test_model("test-model-rgb.json"); }
+std::shared_ptr<const ThermalModel> nir() { return test::test_model("test-model-nir5x5.json"); }
 
 // Pixels as band planes (CV_32F, one row).
 std::vector<cv::Mat> planes_of(const std::vector<std::vector<double>>& pixels, int bands) {
@@ -132,25 +123,25 @@ TEST(MisfitCheck, thresholds_have_bands_minus_two_degrees_of_freedom) {
 // probability 0.05.
 TEST(MisfitCheck, keeps_noisy_graybody_pixels_at_the_expected_rate) {
   struct Case {
-    const ThermalModel* m;
+    std::shared_ptr<const ThermalModel> m;
     Method method;
     int count;
   };
-  for (const Case& c : {Case{&rgb(), Method::kLikelihood, 10000}, Case{&rgb(), Method::kLut, 10000},
-                        Case{&rgb(), Method::kMlp, 3000}, Case{&nir(), Method::kLikelihood, 1000},
-                        Case{&nir(), Method::kMlp, 1000}}) {
+  for (const Case& c : {Case{rgb(), Method::kLikelihood, 10000}, Case{rgb(), Method::kLut, 10000},
+                        Case{rgb(), Method::kMlp, 3000}, Case{nir(), Method::kLikelihood, 1000},
+                        Case{nir(), Method::kMlp, 1000}}) {
     SCOPED_TRACE(method_name(c.method) + " " + c.m->profile().name);
     const auto px = noisy_graybody(*c.m, c.count, 700, 2000, 40, 220, 5);
     const auto planes = planes_of(px, c.m->profile().band_count());
     cv::Mat without, with, fit;
-    PlaneEstimator estimator(*c.m, c.method, 0.0);  // one: the lookup table fills once
+    PlaneEstimator estimator(c.m, c.method, 0.0);  // one: the lookup table fills once
     estimator.estimate(planes, without);
     estimator.set_misfit_probability(1e-6);
     estimator.estimate(planes, with);
     if (c.method == Method::kLikelihood)
       fit = without;
     else
-      PlaneEstimator(*c.m, Method::kLikelihood, 0.0).estimate(planes, fit);
+      PlaneEstimator(c.m, Method::kLikelihood, 0.0).estimate(planes, fit);
     const int read = count_finite(without);
     EXPECT_GT(read, c.count / 2);
     int dropped_agreeing = 0, dropped_misread = 0;
@@ -167,16 +158,16 @@ TEST(MisfitCheck, keeps_noisy_graybody_pixels_at_the_expected_rate) {
     EXPECT_LE(dropped_agreeing, 2);
     EXPECT_LE(dropped_misread, c.count / 50);
   }
-  for (const ThermalModel* m : {&rgb(), &nir()}) {
+  for (const auto& m : {rgb(), nir()}) {
     SCOPED_TRACE(m->profile().name);
     const int count = m->profile().band_count() == 3 ? 4000 : 2000;
     const auto px = noisy_graybody(*m, count, 700, 2000, 40, 220, 9);
     const auto planes = planes_of(px, m->profile().band_count());
     cv::Mat t;
-    PlaneEstimator fit(*m, Method::kLikelihood, 0.0);
+    PlaneEstimator fit(m, Method::kLikelihood, 0.0);
     fit.set_allow_partial(true);  // pixels with dim bands read too: the check skips those bands
     fit.estimate(planes, t);
-    const MisfitCheck pure_noise(*m, 0.05, 0.0);
+    const MisfitCheck pure_noise(m, 0.05, 0.0);
     int read = 0, dropped = 0;
     for (int i = 0; i < count; ++i) {
       const double tc = t.at<float>(0, i);
@@ -197,7 +188,7 @@ TEST(MisfitCheck, keeps_noisy_graybody_pixels_at_the_expected_rate) {
 
 // The batch (single precision, vectorised) and the definition (double) agree on dropping.
 TEST(MisfitCheck, batch_drops_what_the_definition_drops) {
-  for (const ThermalModel* m : {&rgb(), &nir()}) {
+  for (const auto& m : {rgb(), nir()}) {
     SCOPED_TRACE(m->profile().name);
     const int bands = m->profile().band_count();
     auto px = noisy_graybody(*m, 3000, 700, 2000, 40, 220, 13);
@@ -206,10 +197,10 @@ TEST(MisfitCheck, batch_drops_what_the_definition_drops) {
       for (int b = 0; b < bands; b += 2) px[i][static_cast<std::size_t>(b)] *= 0.3 + 0.1 * (i % 5);
     const auto planes = planes_of(px, bands);
     cv::Mat t;
-    PlaneEstimator fit(*m, Method::kLikelihood, 0.0);
+    PlaneEstimator fit(m, Method::kLikelihood, 0.0);
     fit.set_allow_partial(true);  // pixels with dim bands read too: the check skips those bands
     fit.estimate(planes, t);
-    const MisfitCheck check(*m, 1e-3);
+    const MisfitCheck check(m, 1e-3);
     cv::Mat checked = t.clone();
     std::vector<const float*> rows;
     for (const auto& p : planes) rows.push_back(p.ptr<float>(0));
@@ -243,7 +234,8 @@ TEST(MisfitCheck, batch_drops_what_the_definition_drops) {
 // beyond the noise; every method still reads them, the check drops them, in the float and the
 // code outputs.
 TEST(MisfitCheck, drops_mixed_pixels_that_leave_the_locus) {
-  const ThermalModel& m = rgb();
+  const auto model = rgb();
+  const ThermalModel& m = *model;
   const Eigen::VectorXd rates = m.camera.rates(1000);
   const Eigen::VectorXd s = rates * (200 / rates.maxCoeff());
   std::vector<std::vector<double>> mixed;
@@ -254,9 +246,9 @@ TEST(MisfitCheck, drops_mixed_pixels_that_leave_the_locus) {
   for (Method method : {Method::kMlp, Method::kLut, Method::kLikelihood}) {
     SCOPED_TRACE(method_name(method));
     cv::Mat without, with, codes;
-    PlaneEstimator(m, method, 0.0).estimate(planes, without);
-    PlaneEstimator(m, method, 1e-6).estimate(planes, with);
-    PlaneEstimator(m, method, 1e-6).estimate_codes(planes, codes);
+    PlaneEstimator(model, method, 0.0).estimate(planes, without);
+    PlaneEstimator(model, method, 1e-6).estimate(planes, with);
+    PlaneEstimator(model, method, 1e-6).estimate_codes(planes, codes);
     EXPECT_GE(count_finite(without), static_cast<int>(mixed.size()) - 1);
     EXPECT_EQ(count_finite(with), 0);
     EXPECT_EQ(cv::countNonZero(codes), 0);
@@ -268,7 +260,8 @@ TEST(MisfitCheck, drops_mixed_pixels_that_leave_the_locus) {
 // are then far from the plate's temperature. (Most of the far-off edge readings of a colour
 // camera stay: their mixed bands land on the locus at another temperature; see misfit.h.)
 TEST(MisfitCheck, simulated_plate_keeps_its_inside_and_loses_edge_readings) {
-  const ThermalModel& m = rgb();
+  const auto model = rgb();
+  const ThermalModel& m = *model;
   const double plate_c = 735;
   Simulator camera(m.profile(), UnitPerturbation::parse("typical", 1), 7);
   const int size = 128;
@@ -291,8 +284,8 @@ TEST(MisfitCheck, simulated_plate_keeps_its_inside_and_loses_edge_readings) {
     MeasureOptions without_check{method}, with_check{method};
     with_check.misfit_probability = 1e-6;
     cv::Mat t_without, t_with;
-    FrameMeasurer(m, without_check).measure(raw, dark, t_without);
-    FrameMeasurer(m, with_check).measure(raw, dark, t_with);
+    FrameMeasurer(model, without_check).measure(raw, dark, t_without);
+    FrameMeasurer(model, with_check).measure(raw, dark, t_with);
     const RegionStats in_with = region_stats(t_with, inside);
     EXPECT_GT(in_with.valid_fraction, 0.98);
     EXPECT_EQ(in_with.valid, region_stats(t_without, inside).valid);

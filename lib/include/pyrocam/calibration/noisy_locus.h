@@ -53,7 +53,7 @@ class NoisyLocus {
                     Eigen::VectorXd* drawn_at_c = nullptr) const;
 
  private:
-  std::unique_ptr<ThermalModel> model_;  // the camera, over a wider range for the fit
+  std::shared_ptr<const ThermalModel> model_;  // the camera, over a wider range for the fit
   std::unique_ptr<TemperatureEstimator> likelihood_;
   Locus locus_;
   NoisyLocusOptions options_;

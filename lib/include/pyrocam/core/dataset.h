@@ -71,8 +71,8 @@ class Dataset {
   mutable int bit_depth_ = 0;
 };
 
-// A mosaic layout name, trimmed and in lower case, as check_model_layout compares them: a
-// Bayer pattern or a snapshot period "WxH". Throws InputError "<where>: ..." for anything else.
+// A mosaic layout name, trimmed and in lower case, as `pyrocam-calib measure` compares it with
+// the model's: a Bayer pattern or a snapshot period "WxH". Throws InputError "<where>: ..." for anything else.
 std::string parse_mosaic_pattern(const std::string& text, const std::string& where);
 // Writes `pattern` to folder/mosaic.txt.
 void write_mosaic_pattern(const std::filesystem::path& folder, const std::string& pattern);

@@ -23,10 +23,8 @@ void subtract_dark(const cv::Mat& raw, const cv::Mat& dark, double saturation_le
 void subtract_dark_level(const cv::Mat& raw, double level_dn, double saturation_level,
                          cv::Mat& out);
 
-// Converts a dark image read from a file (CV_8U/CV_16U) or a constant level to the CV_32F dark
-// subtract_dark takes.
+// Converts a dark image read from a file (CV_8U/CV_16U) to the CV_32F dark subtract_dark takes.
 cv::Mat dark_from_image(const cv::Mat& image);
-cv::Mat dark_from_level(int width, int height, double level_dn);
 
 // Averages raw frames into a dark frame (lens cap on). All frames must have the size of the first.
 class DarkAccumulator {

@@ -9,7 +9,7 @@
 
 #include "pyrocam/runtime/estimator_check.h"
 #include "pyrocam/runtime/estimators.h"
-#include "pyrocam/runtime/measure.h"
+#include "pyrocam/runtime/plane_estimator.h"
 
 namespace pyrocam {
 
@@ -31,8 +31,7 @@ constexpr std::size_t kLutValidityPercent = 1;
 std::string lut_disagreement(const LocusAgreement& agreement);
 
 // Builds a model's estimators as they are asked for and keeps them, so that switching back is
-// free and the lookup table is checked once. The model must outlive the selector; not
-// thread-safe.
+// free and the lookup table is checked once. They share the model; not thread-safe.
 class EstimatorSelector {
  public:
   struct Choice {
@@ -41,7 +40,7 @@ class EstimatorSelector {
     std::string fallback;  // auto: why not the lookup table, when the model has two ratios
   };
 
-  explicit EstimatorSelector(const ThermalModel& model);
+  explicit EstimatorSelector(std::shared_ptr<const ThermalModel> model);
   // Resolves a request and builds its estimator (the lookup table: and checks it, once).
   // Never throws for a method that does not fit the model: Choice::problem says why.
   Choice select(MethodRequest request);
@@ -51,7 +50,7 @@ class EstimatorSelector {
  private:
   std::string prepare(Method method);
 
-  const ThermalModel& model_;
+  std::shared_ptr<const ThermalModel> model_;
   std::array<std::unique_ptr<PlaneEstimator>, 3> estimators_;  // by Method
   bool lut_checked_ = false;
   std::string lut_problem_;  // why the lookup table is not used, once checked
@@ -60,7 +59,7 @@ class EstimatorSelector {
 // For one-shot tools: the method a request resolves to for a model (auto builds and checks the
 // lookup table; `fallback`, when given, receives why it is not used). Throws InputError when
 // the method cannot be used with the model.
-Method choose_method(const ThermalModel& model, MethodRequest request,
+Method choose_method(std::shared_ptr<const ThermalModel> model, MethodRequest request,
                      std::string* fallback = nullptr);
 
 }  // namespace pyrocam

@@ -19,7 +19,8 @@ std::string method_name(Method m);
 
 class TemperatureEstimator {
  public:
-  explicit TemperatureEstimator(const ThermalModel& model);
+  // Shares the model; throws InputError without one.
+  explicit TemperatureEstimator(std::shared_ptr<const ThermalModel> model);
   virtual ~TemperatureEstimator() = default;
 
   // signals: one value per band, DN after dark subtraction; +inf marks a saturated band, NaN
@@ -30,7 +31,7 @@ class TemperatureEstimator {
   // Band-planar batch: planes[b][i] for i < n. Writes degC or NaN.
   virtual void estimate(const float* const* planes, std::size_t n, float* out_c) const;
 
-  const ThermalModel& model() const { return model_; }
+  const ThermalModel& model() const { return *model_; }
 
   // Whether the likelihood fit may read a pixel from the bands left when some are saturated,
   // missing or dim (at least two of them). Off (the default) such a pixel has no reading with
@@ -49,38 +50,21 @@ class TemperatureEstimator {
   bool all_bands_valid(const double* signals) const;
   double in_range(double t_c) const;
 
-  const ThermalModel& model_;
+  std::shared_ptr<const ThermalModel> model_;  // never null
   int bands_;
   double dim_dn_;
   int min_bands_;  // bands the likelihood fit needs (set_allow_partial)
 };
 
-// The model must outlive the estimator. Throws InputError when the method does not fit the
-// model (the lookup table needs exactly two ratios).
-std::unique_ptr<TemperatureEstimator> make_estimator(const ThermalModel& model, Method method);
+// Throws InputError without a model or when the method does not fit the model (the lookup table
+// needs exactly two ratios).
+std::unique_ptr<TemperatureEstimator> make_estimator(std::shared_ptr<const ThermalModel> model,
+                                                     Method method);
 
 // The likelihood fit by its definition, scanning every coarse and every 1 degC locus sample:
 // slow, the reference that the fast fit of make_estimator(model, Method::kLikelihood) is tested
 // and benchmarked against (same answers to 0.01 degC, same no-reading decisions).
 std::unique_ptr<TemperatureEstimator> make_exhaustive_likelihood_estimator(
-    const ThermalModel& model);
-
-// Signal noise variance of one band reading (EMVA 1288), DN^2, averaged over `frames` frames;
-// the dark frame's noise is included.
-double signal_variance_dn2(const CameraProfile& profile, int band, double signal_dn,
-                           int frames = 1);
-
-// The same for a single frame as shot_gain * max(signal, 0) + floor (shot noise; read noise and
-// quantisation of the frame and of its dark), for loops that weigh many pixels.
-struct SignalNoise {
-  double shot_gain;  // DN per electron
-  double floor_dn2;
-};
-SignalNoise signal_noise(const CameraProfile& profile, int band);
-
-// Expanded uncertainty (k from the model, 2 by default) of an estimate, degC: GUM with band
-// sensitivities by central differences (dS = 1 DN) and the model's systematic terms.
-double expanded_uncertainty_c(const TemperatureEstimator& estimator, const double* signals,
-                              double t_c, int frames = 1);
+    std::shared_ptr<const ThermalModel> model);
 
 }  // namespace pyrocam

@@ -23,6 +23,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "pyrocam/runtime/model.h"
@@ -44,8 +45,9 @@ double chi2_upper_tail(int dof, double x);
 class MisfitCheck {
  public:
   // probability 0 disables the check; otherwise 0 < probability < 1 (InputError outside).
-  // model_error: relative, >= 0. The model must outlive the check.
-  explicit MisfitCheck(const ThermalModel& model, double probability = kTypicalMisfitProbability,
+  // model_error: relative, >= 0. Shares the model; throws InputError without one.
+  explicit MisfitCheck(std::shared_ptr<const ThermalModel> model,
+                       double probability = kTypicalMisfitProbability,
                        double model_error = kDefaultMisfitModelError);
 
   void set_probability(double probability);
@@ -65,7 +67,7 @@ class MisfitCheck {
   void apply(const float* const* planes, std::size_t n, float* t_c) const;
 
  private:
-  const ThermalModel& model_;
+  std::shared_ptr<const ThermalModel> model_;  // never null
   int bands_;
   double probability_ = 0, model_error_;
   float dim_dn_;

@@ -61,9 +61,6 @@ void save_model(const ThermalModel& model, const std::filesystem::path& path);
 // version, or inconsistent content.
 ThermalModel load_model(const std::filesystem::path& path);
 
-// Throws InputError unless the model's mosaic is `pattern` ("rggb", ..., "5x5"; case-insensitive).
-void check_model_layout(const ThermalModel& model, const std::string& pattern);
-
 // FNV-1a 64-bit of a text, as 16 hex digits (for checksums and provenance, not for security).
 std::string fnv1a_hex(const std::string& text);
 

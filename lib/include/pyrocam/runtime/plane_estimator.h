@@ -1,13 +1,11 @@
-// From raw mosaic frames to temperature images: dark subtraction, demosaicking and per-pixel
-// estimation, the same code path for the ratiotemp element and `pyrocam-calib measure`.
+// Per-pixel estimation over band planes, the same code path for the ratiotemp element and
+// `pyrocam-calib measure` (through FrameMeasurer).
 #pragma once
 
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "pyrocam/core/temperature_codes.h"
-#include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/misfit.h"
 
@@ -19,8 +17,10 @@ namespace pyrocam {
 // (misfit.h): a pixel whose bands fit no graybody near its temperature gets no reading.
 class PlaneEstimator {
  public:
+  // Shares the model; throws InputError without one.
   // misfit_probability: the check's false-rejection probability, 0 = no check.
-  PlaneEstimator(const ThermalModel& model, Method method, double misfit_probability = 0);
+  PlaneEstimator(std::shared_ptr<const ThermalModel> model, Method method,
+                 double misfit_probability = 0);
   void estimate(const std::vector<cv::Mat>& planes, cv::Mat& temperature_c,
                 cv::Mat* uncertainty_c = nullptr) const;
   // The temperature codes (CV_16U, 0.1 K, 0 = no reading) straight from the planes: the same
@@ -34,43 +34,10 @@ class PlaneEstimator {
   void set_misfit_probability(double probability);
 
  private:
-  const ThermalModel& model_;
+  std::shared_ptr<const ThermalModel> model_;
   std::unique_ptr<TemperatureEstimator> estimator_;
   // Made when the check is first turned on (its tables cost a locus).
   std::unique_ptr<MisfitCheck> misfit_;
 };
-
-struct MeasureOptions {
-  Method method = Method::kMlp;
-  DemosaicMethod demosaic = DemosaicMethod::kBilinear;
-  double saturation_level_dn = -1;  // raw DN; -1: the profile's inference saturation threshold
-  bool uncertainty = false;
-  double misfit_probability = 0;  // band-consistency check (misfit.h); 0: none
-  bool allow_partial = false;     // TemperatureEstimator::set_allow_partial
-};
-
-// One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.
-class FrameMeasurer {
- public:
-  FrameMeasurer(const ThermalModel& model, const MeasureOptions& options);
-  void measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& temperature_c,
-               cv::Mat* uncertainty_c = nullptr);
-  cv::Size output_size(cv::Size raw) const;
-
- private:
-  const ThermalModel& model_;
-  MeasureOptions options_;
-  PlaneEstimator planes_estimator_;
-  cv::Mat signal_;
-  std::vector<cv::Mat> planes_;
-};
-
-struct RegionStats {
-  std::size_t pixels = 0, valid = 0;
-  double valid_fraction = 0;
-  double min_c = NAN, max_c = NAN, mean_c = NAN, median_c = NAN;
-};
-// Statistics of the finite pixels of a CV_32F temperature image inside mask (empty = all).
-RegionStats region_stats(const cv::Mat& temperature_c, const cv::Mat& mask = cv::Mat());
 
 }  // namespace pyrocam

@@ -1,0 +1,22 @@
+// Signal noise of one band reading (EMVA 1288): what the likelihood fit, the band-consistency
+// check, the GUM uncertainty and the noisy locus copies weigh or draw signals by.
+#pragma once
+
+#include "pyrocam/core/profile.h"
+
+namespace pyrocam {
+
+// Signal noise variance of one band reading (EMVA 1288), DN^2, averaged over `frames` frames;
+// the dark frame's noise is included.
+double signal_variance_dn2(const CameraProfile& profile, int band, double signal_dn,
+                           int frames = 1);
+
+// The same for a single frame as shot_gain * max(signal, 0) + floor (shot noise; read noise and
+// quantisation of the frame and of its dark), for loops that weigh many pixels.
+struct SignalNoise {
+  double shot_gain;  // DN per electron
+  double floor_dn2;
+};
+SignalNoise signal_noise(const CameraProfile& profile, int band);
+
+}  // namespace pyrocam

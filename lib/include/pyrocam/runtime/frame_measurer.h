@@ -1,0 +1,41 @@
+// From raw mosaic frames to temperature images: dark subtraction, demosaicking and per-pixel
+// estimation (PlaneEstimator), for `pyrocam-calib measure`.
+#pragma once
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "pyrocam/runtime/demosaic.h"
+#include "pyrocam/runtime/estimators.h"
+#include "pyrocam/runtime/plane_estimator.h"
+
+namespace pyrocam {
+
+struct MeasureOptions {
+  Method method = Method::kMlp;
+  DemosaicMethod demosaic = DemosaicMethod::kBilinear;
+  double saturation_level_dn = -1;  // raw DN; -1: the profile's inference saturation threshold
+  bool uncertainty = false;
+  double misfit_probability = 0;  // band-consistency check (misfit.h); 0: none
+  bool allow_partial = false;     // TemperatureEstimator::set_allow_partial
+};
+
+// One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.
+class FrameMeasurer {
+ public:
+  // Shares the model; throws InputError without one.
+  FrameMeasurer(std::shared_ptr<const ThermalModel> model, const MeasureOptions& options);
+  void measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& temperature_c,
+               cv::Mat* uncertainty_c = nullptr);
+  cv::Size output_size(cv::Size raw) const;
+
+ private:
+  std::shared_ptr<const ThermalModel> model_;
+  MeasureOptions options_;
+  PlaneEstimator planes_estimator_;
+  cv::Mat signal_;
+  std::vector<cv::Mat> planes_;
+};
+
+}  // namespace pyrocam

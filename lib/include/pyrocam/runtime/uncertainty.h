@@ -1,0 +1,13 @@
+// Per-pixel GUM uncertainty of a temperature reading (METHOD.md section 7).
+#pragma once
+
+#include "pyrocam/runtime/estimators.h"
+
+namespace pyrocam {
+
+// Expanded uncertainty (k from the model, 2 by default) of an estimate, degC: GUM with band
+// sensitivities by central differences (dS = 1 DN) and the model's systematic terms.
+double expanded_uncertainty_c(const TemperatureEstimator& estimator, const double* signals,
+                              double t_c, int frames = 1);
+
+}  // namespace pyrocam

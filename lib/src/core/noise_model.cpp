@@ -1,0 +1,18 @@
+#include "pyrocam/core/noise_model.h"
+
+#include <algorithm>
+
+namespace pyrocam {
+
+SignalNoise signal_noise(const CameraProfile& p, int band) {
+  const double k = p.band_gain[band] * p.noise.system_gain_dn_per_e;
+  const double read = k * p.noise.read_noise_e;
+  return {k, 2 * (read * read + 1.0 / 12)};
+}
+
+double signal_variance_dn2(const CameraProfile& p, int band, double signal_dn, int frames) {
+  const SignalNoise n = signal_noise(p, band);
+  return (n.shot_gain * std::max(signal_dn, 0.0) + n.floor_dn2) / std::max(frames, 1);
+}
+
+}  // namespace pyrocam

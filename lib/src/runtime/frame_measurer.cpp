@@ -1,0 +1,47 @@
+#include "pyrocam/runtime/frame_measurer.h"
+
+#include <string>
+#include <utility>
+
+#include "pyrocam/core/error.h"
+#include "pyrocam/runtime/darksub.h"
+
+namespace pyrocam {
+
+FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
+                             const MeasureOptions& options)
+    : model_(std::move(model)),
+      options_(options),
+      planes_estimator_(model_, options.method, options.misfit_probability) {
+  planes_estimator_.set_allow_partial(options.allow_partial);
+  if (options_.saturation_level_dn < 0)
+    options_.saturation_level_dn = model_->profile().thresholds.inference_saturation_dn;
+}
+
+cv::Size FrameMeasurer::output_size(cv::Size raw) const {
+  return demosaic_output_size(model_->profile().mosaic, options_.demosaic, raw);
+}
+
+void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& temperature_c,
+                            cv::Mat* uncertainty_c) {
+  // A frame of another camera would still give numbers, and plausible ones: refuse what can be
+  // told from the frame alone.
+  const CameraProfile& profile = model_->profile();
+  profile.mosaic.check_whole_periods(raw.cols, raw.rows,
+                                     "raw frame for a model of " + profile.name);
+  const int depth = profile.bit_depth <= 8 ? CV_8U : CV_16U;
+  if (raw.channels() != 1 || raw.depth() != depth)
+    throw InputError("raw frame: " +
+                     std::string(raw.depth() == CV_8U    ? "8-bit"
+                                 : raw.depth() == CV_16U ? "16-bit"
+                                                         : cv::depthToString(raw.depth())) +
+                     " " + std::to_string(raw.channels()) +
+                     "-channel image, but the model's camera (" + profile.name + ") gives " +
+                     std::to_string(profile.bit_depth) + "-bit single-channel frames");
+  const cv::Mat dark_f = dark.type() == CV_32F ? dark : dark_from_image(dark);
+  subtract_dark(raw, dark_f, options_.saturation_level_dn, signal_);
+  demosaic(signal_, model_->profile().mosaic, options_.demosaic, planes_);
+  planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);
+}
+
+}  // namespace pyrocam

@@ -1,0 +1,368 @@
+// The lookup-table estimator (Method::kLut): the network tabulated over a colour camera's two
+// ratios, with its per-pixel passes (compiled for AVX2 too).
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "detail/portable_math.h"
+#include "detail/vector_clones.h"
+#include "pyrocam/core/error.h"
+#include "pyrocam/core/locus.h"
+#include "pyrocam/core/spectrum.h"
+#include "runtime/estimator_kinds.h"
+
+namespace pyrocam {
+namespace {
+
+// The lookup table's per-pixel passes (see LutEstimator::estimate), compiled for AVX2 too.
+namespace lut {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kInTable = 0.0f, kOffTable = -1.0f;  // pixel status codes; NaN: no reading
+
+struct Grid {
+  float dim, inv_h, offset_x, offset_y, cells_x, cells_y;
+};
+
+// Status and table coordinates (cells) of m pixels from their two numerators a, b and their
+// reference r; `others_read` (may be null) flags pixels whose other bands are all readable.
+// Coordinates are 0 where the status is not kInTable. Selects the compiler turns into vector
+// masks: NaN fails every comparison, +INF the upper ones. Returns whether any pixel reads.
+PYROCAM_VECTOR_CLONES
+bool coordinates(const float* __restrict a, const float* __restrict b, const float* __restrict r,
+                 const float* __restrict others_read, std::size_t m, Grid g,
+                 float* __restrict status, float* __restrict fx, float* __restrict fy) {
+  for (std::size_t k = 0; k < m; ++k) {
+    const float av = a[k], bv = b[k], rv = r[k];
+    const float scale = g.inv_h / rv;
+    const float x = av * scale - g.offset_x, y = bv * scale - g.offset_y;
+    const bool inside = x >= 0.f && x < g.cells_x && y >= 0.f && y < g.cells_y;
+    const float place = inside ? kInTable : kOffTable;
+    const float unsaturated = av < kInf && bv < kInf && rv < kInf ? place : NAN;
+    status[k] = av >= g.dim && bv >= g.dim && rv >= g.dim ? unsaturated : NAN;
+    fx[k] = inside ? x : 0.f;
+    fy[k] = inside ? y : 0.f;
+  }
+  if (others_read)
+    for (std::size_t k = 0; k < m; ++k) status[k] = others_read[k] != 0.f ? status[k] : NAN;
+  std::int32_t reads = 0;
+  for (std::size_t k = 0; k < m; ++k) reads |= status[k] == status[k] ? 1 : 0;
+  return reads != 0;
+}
+
+// Block and cell of each pixel and its position in the cell.
+PYROCAM_VECTOR_CLONES
+void cells(const float* __restrict fx, const float* __restrict fy, std::size_t m, int shift,
+           std::int32_t blocks_x, std::int32_t* __restrict block, std::int32_t* __restrict cell,
+           float* __restrict wx, float* __restrict wy) {
+  const std::int32_t mask = (1 << shift) - 1;
+  for (std::size_t k = 0; k < m; ++k) {
+    const auto ix = static_cast<std::int32_t>(fx[k]), iy = static_cast<std::int32_t>(fy[k]);
+    block[k] = (iy >> shift) * blocks_x + (ix >> shift);
+    cell[k] = ((iy & mask) << shift) + (ix & mask);
+    wx[k] = fx[k] - static_cast<float>(ix);
+    wy[k] = fy[k] - static_cast<float>(iy);
+  }
+}
+
+// Bilinear interpolation from each pixel's four cell corners (NaN where the status is not
+// kInTable), then `special` = 1 for the pixels the network answers: off the table, or near or
+// beyond a range end. Returns whether there are any.
+PYROCAM_VECTOR_CLONES
+bool interpolate(const float* __restrict corners, const float* __restrict wx,
+                 const float* __restrict wy, const float* __restrict status, std::size_t m,
+                 MlpOutputTransform space, float lowest, float highest, float* __restrict out,
+                 float* __restrict special) {
+  for (std::size_t k = 0; k < m; ++k) {
+    const float* c = corners + 4 * k;
+    const float below = c[0] + wx[k] * (c[1] - c[0]);
+    const float above = c[2] + wx[k] * (c[3] - c[2]);
+    const float v = below + wy[k] * (above - below);
+    out[k] = status[k] == kInTable ? v : NAN;
+  }
+  // Back from the network's output space to degC (a value <= 0 of 1/T leaves the range).
+  constexpr float kZeroCelsiusF = static_cast<float>(kZeroCelsius);
+  if (space == MlpOutputTransform::kInverseKelvin) {
+    for (std::size_t k = 0; k < m; ++k) out[k] = 1.f / out[k] - kZeroCelsiusF;
+  } else if (space == MlpOutputTransform::kLogKelvin) {
+    for (std::size_t k = 0; k < m; ++k) out[k] = portable::exp(out[k]) - kZeroCelsiusF;
+  }
+  // Selects in a separate loop, which the compiler vectorises.
+  for (std::size_t k = 0; k < m; ++k) {
+    const float t = out[k], st = status[k];
+    const float outside_range = t >= lowest && t <= highest ? 0.f : 1.f;
+    const float off_table = st == kOffTable ? 1.f : outside_range;
+    special[k] = st == kInTable || st == kOffTable ? off_table : 0.f;
+  }
+  std::int32_t any = 0;
+  for (std::size_t k = 0; k < m; ++k) any |= static_cast<std::int32_t>(special[k]);
+  return any != 0;
+}
+
+}  // namespace lut
+
+// The network tabulated over the colour camera's two ratios x = (s_n0 / ref, s_n1 / ref)
+// themselves, on a uniform grid. A ReLU network is piecewise affine in its inputs (log ratios,
+// when it takes their logarithms, which are close to affine over a cell) and a grid cell is a
+// rectangle in x, so bilinear interpolation of the cell's corners, in the space of the network's
+// output unit, is exact or nearly so wherever one linear piece covers the cell and off only by
+// the cell's share of a kink elsewhere. The spacing follows the network's steepest slope along
+// the locus (kCellChangeC per cell there); off the locus the network can be steeper, which is
+// why the change per cell is well under the 0.5 degC tolerance's ten-fold; the unit tests
+// measure the agreement on noisy pixels.
+//
+// Ratios do not follow the temperature monotonically (R/G of a camera behind a visible band-pass
+// rises, then falls), so no coordinate along the locus is used: the grid covers the box of the
+// locus widened by a factor e^kMarginLn in each ratio, which holds noisy pixels down to the dim
+// threshold and most mixed-temperature pixels at edges. It is filled in blocks of kBlockCells^2
+// cells the first time a pixel needs one, so a scene pays only for the ratios it shows; at most
+// kMaxBlocks are filled (the band around the locus that noisy pixels of every temperature reach
+// takes about a quarter of them). Pixels outside the box or in a block beyond that budget, and
+// estimates within kGuardC of the model's range ends, go to the network itself: the no-reading
+// decisions are the network's.
+class LutEstimator : public TemperatureEstimator {
+ public:
+  static constexpr int kBlockShift = 4, kBlockCells = 1 << kBlockShift;
+  static constexpr int kBlockNodes = kBlockCells + 1;  // per side; edges stored in both blocks
+  static constexpr double kMarginLn = 1.0;
+  static constexpr double kCellChangeC = 4.0;
+  static constexpr double kGuardC = 2.0;
+  static constexpr std::size_t kMaxCells = std::size_t{1} << 26;  // in the box
+  static constexpr std::size_t kMaxBlocks = 8192;                 // filled: 32 MB
+
+  explicit LutEstimator(std::shared_ptr<const ThermalModel> model)
+      : TemperatureEstimator(std::move(model)), mlp_(model_) {
+    const ThermalModel& m = *model_;
+    const Normalisation& n = m.profile().normalisation;
+    if (n.numerators.size() != 2)
+      throw InputError(
+          "method lut needs a model with exactly two ratios (colour camera); this "
+          "model has " +
+          std::to_string(n.numerators.size()));
+    num0_ = n.numerators[0];
+    num1_ = n.numerators[1];
+    ref_ = n.reference;
+    const Locus locus = make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 1.0);
+    // Steepest slope of the network along the locus, degC per unit ratio (L1 over both).
+    double slope = 0;
+    for (Eigen::Index i = 0; i < locus.size(); i += 5) {
+      const double x[2] = {locus.ratios(i, 0), locus.ratios(i, 1)};
+      double g[2];
+      m.mlp.predict_with_gradient(x, g);
+      slope = std::max(slope, std::abs(g[0]) + std::abs(g[1]));
+    }
+    const double widen = portable::exp(kMarginLn);
+    const double x_lo = locus.ratios.col(0).minCoeff() / widen;
+    const double x_hi = locus.ratios.col(0).maxCoeff() * widen;
+    const double y_lo = locus.ratios.col(1).minCoeff() / widen;
+    const double y_hi = locus.ratios.col(1).maxCoeff() * widen;
+    if (!(x_lo > 0) || !(y_lo > 0) || !std::isfinite(x_hi) || !std::isfinite(y_hi) ||
+        !(slope > 0) || !std::isfinite(slope))
+      throw InputError("method lut: the model's locus or network is degenerate");
+    h_ = kCellChangeC / slope;
+    // A coarser grid rather than an unbounded one for extreme models.
+    const double area_cells = (x_hi - x_lo) * (y_hi - y_lo) / (h_ * h_);
+    if (area_cells > static_cast<double>(kMaxCells))
+      h_ *= std::sqrt(area_cells / static_cast<double>(kMaxCells));
+    x0_ = x_lo;
+    y0_ = y_lo;
+    blocks_x_ = static_cast<int>(std::ceil((x_hi - x_lo) / h_ / kBlockCells));
+    blocks_y_ = static_cast<int>(std::ceil((y_hi - y_lo) / h_ / kBlockCells));
+    cells_x_ = static_cast<float>(blocks_x_ * kBlockCells);
+    cells_y_ = static_cast<float>(blocks_y_ * kBlockCells);
+    inv_h_ = static_cast<float>(1 / h_);
+    offset_x_ = static_cast<float>(x0_ / h_);
+    offset_y_ = static_cast<float>(y0_ / h_);
+    inv_ref_count_ = 1.0f / static_cast<float>(ref_.size());
+    lowest_ = static_cast<float>(m.min_temperature_c + kGuardC);
+    highest_ = static_cast<float>(m.max_temperature_c - kGuardC);
+    const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
+    blocks_.reset(new std::atomic<float*>[slots]);
+    for (std::size_t i = 0; i < slots; ++i) blocks_[i].store(nullptr, std::memory_order_relaxed);
+  }
+
+  ~LutEstimator() override {
+    const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
+    for (std::size_t i = 0; i < slots; ++i) delete[] blocks_[i].load(std::memory_order_relaxed);
+  }
+  LutEstimator(const LutEstimator&) = delete;
+  LutEstimator& operator=(const LutEstimator&) = delete;
+
+  double temperature_c(const double* s) const override {
+    if (!all_bands_valid(s)) return NAN;
+    float f[kMaxBands];
+    const float* planes[kMaxBands];
+    for (int b = 0; b < bands_; ++b) {
+      f[b] = static_cast<float>(s[b]);
+      planes[b] = &f[b];
+    }
+    float out;
+    estimate(planes, 1, &out);
+    return out;
+  }
+
+  // In chunks of pixels, in passes: the arithmetic of every pixel (branch-free, vectorised),
+  // the table reads, the interpolation (vectorised), then the few pixels the network answers.
+  // A chunk without a reading (background) stops after the first pass.
+  void estimate(const float* const* planes, std::size_t n, float* out) const override {
+    constexpr std::size_t kChunk = 256;
+    alignas(64) float status[kChunk], fx[kChunk], fy[kChunk], wx[kChunk], wy[kChunk];
+    alignas(64) float special[kChunk], others_read[kChunk];
+    alignas(64) float corners[4 * kChunk];  // per pixel: its cell's four corners
+    alignas(64) std::int32_t block[kChunk], cell[kChunk];
+    const lut::Grid grid{dim_f(), inv_h_, offset_x_, offset_y_, cells_x_, cells_y_};
+    const bool three_bands = bands_ == 3 && ref_.size() == 1;
+    for (std::size_t start = 0; start < n; start += kChunk) {
+      const std::size_t m = std::min(kChunk, n - start);
+      float* __restrict o = out + start;
+      const float* reference = planes[ref_[0]] + start;
+      if (!three_bands) {
+        // Every band must read; the reference is the mean of its bands.
+        float* mean = wx;  // scratch until the cells pass
+        for (std::size_t k = 0; k < m; ++k) {
+          float s[kMaxBands];
+          bool read = true;
+          for (int band = 0; band < bands_; ++band) {
+            s[band] = planes[band][start + k];
+            read &= s[band] >= grid.dim && s[band] < lut::kInf;
+          }
+          mean[k] = this->reference(s);
+          others_read[k] = read ? 1.f : 0.f;
+        }
+        reference = mean;
+      }
+      if (!lut::coordinates(planes[num0_] + start, planes[num1_] + start, reference,
+                            three_bands ? nullptr : others_read, m, grid, status, fx, fy)) {
+        std::fill(o, o + m, NAN);
+        continue;
+      }
+      lut::cells(fx, fy, m, kBlockShift, blocks_x_, block, cell, wx, wy);
+      for (std::size_t k = 0; k < m; ++k) {
+        float* c = corners + 4 * k;
+        if (status[k] != lut::kInTable) {
+          c[0] = c[1] = c[2] = c[3] = 0;
+          continue;
+        }
+        const float* blk =
+            blocks_[static_cast<std::size_t>(block[k])].load(std::memory_order_acquire);
+        if (!blk) blk = build_block(block[k] % blocks_x_, block[k] / blocks_x_);
+        if (!blk) {  // over the memory budget
+          status[k] = lut::kOffTable;
+          c[0] = c[1] = c[2] = c[3] = 0;
+          continue;
+        }
+        std::memcpy(c, blk + 4 * cell[k], 4 * sizeof(float));
+      }
+      if (!lut::interpolate(corners, wx, wy, status, m, space_, lowest_, highest_, o, special))
+        continue;
+      for (std::size_t k = 0; k < m; ++k) {
+        if (special[k] == 0.f) continue;
+        const float t = o[k];
+        // Well beyond a range end there is no reading; near one, or off the table, the
+        // network decides.
+        const bool far_out =
+            status[k] == lut::kInTable && (t < lowest_ - 2 * static_cast<float>(kGuardC) ||
+                                           t > highest_ + 2 * static_cast<float>(kGuardC));
+        o[k] = far_out ? NAN : static_cast<float>(network(planes, start + k));
+      }
+    }
+  }
+
+  std::size_t memory_bytes() const override {
+    return built_.load(std::memory_order_relaxed) * kBlockCells * kBlockCells * 4 * sizeof(float) +
+           static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_) *
+               sizeof(std::atomic<float*>);
+  }
+
+ private:
+  float dim_f() const { return static_cast<float>(dim_dn_); }
+
+  float reference(const float* s) const {
+    if (ref_.size() == 1) return s[ref_[0]];
+    float sum = 0;
+    for (int b : ref_) sum += s[b];
+    return sum * inv_ref_count_;
+  }
+
+  double network(const float* const* planes, std::size_t i) const {
+    double s[kMaxBands];
+    for (int b = 0; b < bands_; ++b) s[b] = planes[b][i];
+    return mlp_.temperature_c(s);
+  }
+
+  // Fills a block with the network at its nodes and publishes it; two threads that need the same
+  // block at once both compute it (the same values) and one copy is kept. Null once kMaxBlocks
+  // are filled.
+  const float* build_block(int bx, int by) const {
+    if (built_.load(std::memory_order_relaxed) >= kMaxBlocks) return nullptr;
+    Eigen::MatrixXd x(kBlockNodes * kBlockNodes, 2);
+    for (int j = 0; j < kBlockNodes; ++j)
+      for (int i = 0; i < kBlockNodes; ++i) {
+        x(j * kBlockNodes + i, 0) = x0_ + (bx * kBlockCells + i) * h_;
+        x(j * kBlockNodes + i, 1) = y0_ + (by * kBlockCells + j) * h_;
+      }
+    const Eigen::VectorXd t = to_output_space(model_->mlp.predict(x));
+    // Cell after cell, each with its four corners (one 16-byte read per pixel).
+    std::unique_ptr<float[]> values(new float[4 * kBlockCells * kBlockCells]);
+    for (int j = 0; j < kBlockCells; ++j)
+      for (int i = 0; i < kBlockCells; ++i) {
+        float* c = &values[static_cast<std::size_t>(4 * (j * kBlockCells + i))];
+        c[0] = static_cast<float>(t[j * kBlockNodes + i]);
+        c[1] = static_cast<float>(t[j * kBlockNodes + i + 1]);
+        c[2] = static_cast<float>(t[(j + 1) * kBlockNodes + i]);
+        c[3] = static_cast<float>(t[(j + 1) * kBlockNodes + i + 1]);
+      }
+    std::atomic<float*>& slot = blocks_[static_cast<std::size_t>(by * blocks_x_ + bx)];
+    float* expected = nullptr;
+    if (slot.compare_exchange_strong(expected, values.get(), std::memory_order_acq_rel)) {
+      built_.fetch_add(1, std::memory_order_relaxed);
+      return values.release();
+    }
+    return expected;  // another thread was first
+  }
+
+  // The table holds the network's answer in the space of its output unit (1/T for an
+  // inverse-kelvin output): there the network is piecewise affine in its (log) inputs and close
+  // to affine in the ratios themselves; degC would curve steeply at the hot end.
+  Eigen::VectorXd to_output_space(const Eigen::VectorXd& t_c) const {
+    switch (space_) {
+      case MlpOutputTransform::kInverseKelvin:
+        return (t_c.array() + kZeroCelsius).inverse().matrix();
+      case MlpOutputTransform::kLogKelvin:
+        return (t_c.array() + kZeroCelsius)
+            .unaryExpr([](double v) { return portable::log(v); })
+            .matrix();
+      case MlpOutputTransform::kNone:
+        break;
+    }
+    return t_c;
+  }
+
+  MlpEstimator mlp_;
+  MlpOutputTransform space_ = model_->mlp.output_transform();
+  int num0_ = 0, num1_ = 1;
+  std::vector<int> ref_;
+  double x0_ = 0, y0_ = 0, h_ = 1;
+  int blocks_x_ = 0, blocks_y_ = 0;
+  float cells_x_ = 0, cells_y_ = 0, inv_h_ = 1, offset_x_ = 0, offset_y_ = 0;
+  float inv_ref_count_ = 1, lowest_ = 0, highest_ = 0;
+  std::unique_ptr<std::atomic<float*>[]> blocks_;
+  mutable std::atomic<std::size_t> built_{0};
+};
+
+}  // namespace
+
+std::unique_ptr<TemperatureEstimator> make_lut_estimator(
+    std::shared_ptr<const ThermalModel> model) {
+  return std::make_unique<LutEstimator>(std::move(model));
+}
+
+}  // namespace pyrocam

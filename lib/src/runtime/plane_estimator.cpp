@@ -1,0 +1,84 @@
+#include "pyrocam/runtime/plane_estimator.h"
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <utility>
+
+#include "pyrocam/core/error.h"
+#include "pyrocam/core/temperature_codes.h"
+#include "pyrocam/runtime/uncertainty.h"
+
+namespace pyrocam {
+
+PlaneEstimator::PlaneEstimator(std::shared_ptr<const ThermalModel> model, Method method,
+                               double misfit_probability)
+    : model_(std::move(model)), estimator_(make_estimator(model_, method)), misfit_(nullptr) {
+  set_misfit_probability(misfit_probability);
+}
+
+void PlaneEstimator::set_misfit_probability(double probability) {
+  if (misfit_)
+    misfit_->set_probability(probability);
+  else if (probability != 0)  // the check's constructor refuses what set_probability refuses
+    misfit_ = std::make_unique<MisfitCheck>(model_, probability);
+}
+
+void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv::Mat* u) const {
+  const int bands = model_->profile().band_count();
+  if (static_cast<int>(planes.size()) != bands)
+    throw InputError("the stream has " + std::to_string(planes.size()) + " bands, the model " +
+                     std::to_string(bands) + " (" + model_->profile().name + ")");
+  const cv::Size size = planes[0].size();
+  for (const auto& p : planes)
+    if (p.type() != CV_32F || p.size() != size)
+      throw InputError("band planes must be CV_32F of equal size");
+  t.create(size, CV_32F);
+  if (u) u->create(size, CV_32F);
+  // Rows in parallel: each estimator call is const and thread-safe.
+  cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
+    std::vector<const float*> row_ptrs(static_cast<std::size_t>(bands));
+    std::vector<double> s(static_cast<std::size_t>(bands));
+    for (int y = rows.start; y < rows.end; ++y) {
+      for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
+      float* out = t.ptr<float>(y);
+      estimator_->estimate(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
+      if (misfit_) misfit_->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
+      if (!u) continue;
+      float* uo = u->ptr<float>(y);
+      for (int x = 0; x < size.width; ++x) {
+        if (!std::isfinite(out[x])) {
+          uo[x] = NAN;
+          continue;
+        }
+        for (int b = 0; b < bands; ++b) s[b] = row_ptrs[b][x];
+        uo[x] = static_cast<float>(expanded_uncertainty_c(*estimator_, s.data(), out[x]));
+      }
+    }
+  });
+}
+
+void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat& codes) const {
+  const int bands = model_->profile().band_count();
+  if (static_cast<int>(planes.size()) != bands)
+    throw InputError("the stream has " + std::to_string(planes.size()) + " bands, the model " +
+                     std::to_string(bands) + " (" + model_->profile().name + ")");
+  const cv::Size size = planes[0].size();
+  for (const auto& p : planes)
+    if (p.type() != CV_32F || p.size() != size)
+      throw InputError("band planes must be CV_32F of equal size");
+  codes.create(size, CV_16U);
+  // Row by row: a row's temperatures are encoded while they are in cache.
+  cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
+    std::vector<const float*> row_ptrs(static_cast<std::size_t>(bands));
+    std::vector<float> t(static_cast<std::size_t>(size.width));
+    for (int y = rows.start; y < rows.end; ++y) {
+      for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
+      estimator_->estimate(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
+      if (misfit_) misfit_->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
+      encode_temperature_row(t.data(), codes.ptr<std::uint16_t>(y), size.width);
+    }
+  });
+}
+
+}  // namespace pyrocam
