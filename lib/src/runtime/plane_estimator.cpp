@@ -24,7 +24,7 @@ void PlaneEstimator::set_misfit_probability(double probability) {
     misfit_ = std::make_unique<MisfitCheck>(model_, probability);
 }
 
-void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv::Mat* u) const {
+cv::Size PlaneEstimator::checked_size(const std::vector<cv::Mat>& planes) const {
   const int bands = model_->profile().band_count();
   if (static_cast<int>(planes.size()) != bands)
     throw InputError("the stream has " + std::to_string(planes.size()) + " bands, the model " +
@@ -33,6 +33,12 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
   for (const auto& p : planes)
     if (p.type() != CV_32F || p.size() != size)
       throw InputError("band planes must be CV_32F of equal size");
+  return size;
+}
+
+void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv::Mat* u) const {
+  const int bands = model_->profile().band_count();
+  const cv::Size size = checked_size(planes);
   t.create(size, CV_32F);
   if (u) u->create(size, CV_32F);
   // Rows in parallel: each estimator call is const and thread-safe.
@@ -60,13 +66,7 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
 
 void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat& codes) const {
   const int bands = model_->profile().band_count();
-  if (static_cast<int>(planes.size()) != bands)
-    throw InputError("the stream has " + std::to_string(planes.size()) + " bands, the model " +
-                     std::to_string(bands) + " (" + model_->profile().name + ")");
-  const cv::Size size = planes[0].size();
-  for (const auto& p : planes)
-    if (p.type() != CV_32F || p.size() != size)
-      throw InputError("band planes must be CV_32F of equal size");
+  const cv::Size size = checked_size(planes);
   codes.create(size, CV_16U);
   // Row by row: a row's temperatures are encoded while they are in cache.
   cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {

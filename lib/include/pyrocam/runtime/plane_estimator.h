@@ -34,6 +34,9 @@ class PlaneEstimator {
   void set_misfit_probability(double probability);
 
  private:
+  // The planes' common size; throws InputError unless they are the model's bands, CV_32F, of
+  // one size.
+  cv::Size checked_size(const std::vector<cv::Mat>& planes) const;
   std::shared_ptr<const ThermalModel> model_;
   std::unique_ptr<TemperatureEstimator> estimator_;
   // Made when the check is first turned on (its tables cost a locus).
