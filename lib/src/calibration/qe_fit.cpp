@@ -1,4 +1,4 @@
-// Over 600 lines (625): the two QE solvers (the paper's and the regularised one) share the
+// Over 600 lines (627): the two QE solvers (the paper's and the regularised one) share the
 // residual, Jacobian and line-search code here.
 #include "pyrocam/calibration/qe_fit.h"
 
