@@ -86,6 +86,9 @@ struct BadHeader {
   const char* message;
 };
 
+// gtest prints a case by its label, not its bytes.
+void PrintTo(const BadHeader& c, std::ostream* os) { *os << c.label; }
+
 class ImageHeaderRejects : public ::testing::TestWithParam<BadHeader> {};
 
 TEST_P(ImageHeaderRejects, by_name_n) {
