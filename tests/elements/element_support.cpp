@@ -61,6 +61,48 @@ BusResult run_pipeline(const std::string& description, GstClockTime timeout) {
   return r;
 }
 
+void expect_error(const BusResult& r, GQuark domain, int code,
+                  std::initializer_list<std::string> parts) {
+  ASSERT_TRUE(r.error) << "no error; eos " << r.eos << ", timed out " << r.timed_out;
+  EXPECT_EQ(r.domain, domain) << g_quark_to_string(r.domain) << ": " << r.message;
+  EXPECT_EQ(r.code, code) << r.message;
+  for (const std::string& part : parts)
+    EXPECT_NE(r.message.find(part), std::string::npos) << part << " in " << r.message;
+}
+
+void expect_eos(const BusResult& r, int buffers) {
+  EXPECT_TRUE(r.eos) << r.message << " " << r.debug;
+  EXPECT_EQ(r.buffers, buffers);
+}
+
+GstBuffer* with_pts(GstBuffer* buffer, GstClockTime pts) {
+  GST_BUFFER_PTS(buffer) = pts;
+  return buffer;
+}
+
+GstBuffer* push_pull_buffer(GstHarness* h, GstBuffer* in) {
+  EXPECT_EQ(gst_harness_push(h, in), GST_FLOW_OK);
+  return gst_harness_try_pull(h);
+}
+
+void push_flush(GstHarness* h) {
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_start()));
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_stop(TRUE)));
+  GstSegment segment;
+  gst_segment_init(&segment, GST_FORMAT_TIME);
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_segment(&segment)));
+}
+
+bool eos_passes(GstHarness* h) {
+  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_eos()));
+  bool eos = false;
+  while (GstEvent* ev = gst_harness_try_pull_event(h)) {
+    eos |= GST_EVENT_TYPE(ev) == GST_EVENT_EOS;
+    gst_event_unref(ev);
+  }
+  return eos;
+}
+
 std::string sink_caps(GstHarness* h) {
   GstCaps* caps = gst_pad_get_current_caps(h->sinkpad);
   if (!caps) return "";
@@ -86,6 +128,26 @@ bool control_property(GstElement* element, const char* property,
       gst_direct_control_binding_new_absolute(GST_OBJECT(element), property, source));
   gst_object_unref(source);
   return added;
+}
+
+void HarnessTest::TearDown() {
+  if (bus) {
+    gst_element_set_bus(h->element, nullptr);
+    gst_object_unref(bus);
+    bus = nullptr;
+  }
+  if (h) gst_harness_teardown(h);
+  h = nullptr;
+}
+
+void HarnessTest::start(const std::string& launch, const std::string& src_caps) {
+  h = gst_harness_new_parse(launch.c_str());
+  gst_harness_set_src_caps_str(h, src_caps.c_str());
+}
+
+void HarnessTest::attach_bus() {
+  bus = gst_bus_new();
+  gst_element_set_bus(h->element, bus);
 }
 
 }  // namespace pyrocam::test

@@ -7,11 +7,16 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <initializer_list>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace pyrocam::test {
+
+// What darksub writes for a saturated pixel, and what follows from it downstream.
+inline constexpr float kInf = std::numeric_limits<float>::infinity();
 
 bool have_element(const char* name);
 
@@ -52,6 +57,31 @@ std::vector<T> values_of(GstBuffer* buffer) {
   return v;
 }
 
+// Checks that a pipeline ended in an error of `domain` and `code` whose message holds every one
+// of `parts`.
+void expect_error(const BusResult& r, GQuark domain, int code,
+                  std::initializer_list<std::string> parts);
+// Checks that a pipeline ran to EOS with `buffers` buffers at the sink named "sink".
+void expect_eos(const BusResult& r, int buffers);
+
+// A buffer with a presentation time stamp.
+GstBuffer* with_pts(GstBuffer* buffer, GstClockTime pts);
+// Pushes `in`, which must flow, and returns the buffer that comes out (nullptr if none; unref it).
+GstBuffer* push_pull_buffer(GstHarness* h, GstBuffer* in);
+// The same, as the values of the output buffer (none if no buffer came out).
+template <typename T>
+std::vector<T> push_pull(GstHarness* h, GstBuffer* in) {
+  GstBuffer* out = push_pull_buffer(h, in);
+  if (!out) return {};
+  std::vector<T> v = values_of<T>(out);
+  gst_buffer_unref(out);
+  return v;
+}
+// Pushes flush-start, flush-stop and a new time segment, as a flushing seek does.
+void push_flush(GstHarness* h);
+// Pushes EOS and says whether it came out of the element.
+bool eos_passes(GstHarness* h);
+
 // The caps on the harness's sink pad as a string ("" if none).
 std::string sink_caps(GstHarness* h);
 
@@ -64,5 +94,25 @@ GstElement* find_element(GstHarness* h, const char* factory);
 // binding (a property that is not GST_PARAM_CONTROLLABLE).
 bool control_property(GstElement* element, const char* property,
                       const std::vector<std::pair<GstClockTime, double>>& points);
+
+// The fixture of an element's harness tests: fails them where the element is not registered, and
+// tears down the harness `h` and the bus on it that the test made.
+class HarnessTest : public ::testing::Test {
+ protected:
+  explicit HarnessTest(const char* element) : element_(element) {}
+  void SetUp() override { REQUIRE_ELEMENT(element_); }
+  // Also called between the cases of one test: everything is released and null again after.
+  void TearDown() override;
+  // The harness around a parsed launch line, fed caps `src_caps`.
+  void start(const std::string& launch, const std::string& src_caps);
+  // A bus on the harnessed element, to see its messages.
+  void attach_bus();
+
+  GstHarness* h = nullptr;
+  GstBus* bus = nullptr;
+
+ private:
+  const char* element_;
+};
 
 }  // namespace pyrocam::test

@@ -1,7 +1,7 @@
 // demosaic25: caps in both directions, planes against the library, marks through darksub and
 // demosaic25, 5x5 macro-pixels, profile band map, flush/EOS, bus errors.
+#include <cctype>
 #include <cmath>
-#include <limits>
 #include <numeric>
 
 #include "element_support.h"
@@ -10,24 +10,14 @@
 namespace pyrocam::test {
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
-
-class Demosaic25 : public ::testing::Test {
+class Demosaic25 : public HarnessTest {
  protected:
-  void SetUp() override { REQUIRE_ELEMENT("demosaic25"); }
-  void TearDown() override {
-    if (h) gst_harness_teardown(h);
-  }
+  Demosaic25() : HarnessTest("demosaic25") {}
   // Pushes one float mosaic and returns the output planes (empty on failure).
   std::vector<float> run(const std::vector<float>& mosaic) {
-    EXPECT_EQ(gst_harness_push(h, buffer_from(mosaic)), GST_FLOW_OK);
-    GstBuffer* out = gst_harness_try_pull(h);
-    if (!out) return {};
-    auto v = values_of<float>(out);
-    gst_buffer_unref(out);
-    return v;
+    return push_pull<float>(h, buffer_from(mosaic));
   }
-  GstHarness* h = nullptr;
+  void expect_library_planes(const char* launch, const std::string& pattern, DemosaicMethod method);
 };
 
 std::vector<float> ramp(int w, int h) {
@@ -63,12 +53,19 @@ void expect_same(const std::vector<float>& a, const std::vector<float>& b) {
   }
 }
 
-TEST_F(Demosaic25, bilinear_keeps_full_resolution) {
-  h = gst_harness_new_parse("demosaic25");
-  gst_harness_set_src_caps_str(h, mosaic_caps("gbrg", 8, 6).c_str());
+// Starts a demosaic25 (its launch words) on an 8x6 Bayer mosaic of `pattern` (lower case, as in
+// caps) and checks its planes of a ramp against the library's for `method`.
+void Demosaic25::expect_library_planes(const char* launch, const std::string& pattern,
+                                       DemosaicMethod method) {
+  start(launch, mosaic_caps(pattern.c_str(), 8, 6));
+  std::string upper = pattern;
+  for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   const auto mosaic = ramp(8, 6);
-  expect_same(run(mosaic),
-              library(mosaic, 8, 6, MosaicLayout::bayer("GBRG"), DemosaicMethod::kBilinear));
+  expect_same(run(mosaic), library(mosaic, 8, 6, MosaicLayout::bayer(upper), method));
+}
+
+TEST_F(Demosaic25, bilinear_keeps_full_resolution) {
+  expect_library_planes("demosaic25", "gbrg", DemosaicMethod::kBilinear);
   const std::string caps = sink_caps(h);
   for (const char* part : {"video/x-pyrocam-bands", "bands=(int)3", "width=(int)8", "height=(int)6",
                            "layout=(string)bayer", "format=(string)F32LE"})
@@ -76,19 +73,14 @@ TEST_F(Demosaic25, bilinear_keeps_full_resolution) {
 }
 
 TEST_F(Demosaic25, bin2x2_halves_resolution) {
-  h = gst_harness_new_parse("demosaic25 method=bin2x2");
-  gst_harness_set_src_caps_str(h, mosaic_caps("rggb", 8, 6).c_str());
-  const auto mosaic = ramp(8, 6);
-  expect_same(run(mosaic),
-              library(mosaic, 8, 6, MosaicLayout::bayer("RGGB"), DemosaicMethod::kBinCells));
+  expect_library_planes("demosaic25 method=bin2x2", "rggb", DemosaicMethod::kBinCells);
   const std::string caps = sink_caps(h);
   EXPECT_NE(caps.find("width=(int)4"), std::string::npos) << caps;
   EXPECT_NE(caps.find("height=(int)3"), std::string::npos) << caps;
 }
 
 TEST_F(Demosaic25, snapshot_gives_25_bands_per_macro_pixel) {
-  h = gst_harness_new_parse("demosaic25 profile=nir5x5-reference");
-  gst_harness_set_src_caps_str(h, mosaic_caps("5x5", 10, 15).c_str());
+  start("demosaic25 profile=nir5x5-reference", mosaic_caps("5x5", 10, 15));
   auto mosaic = ramp(10, 15);
   mosaic[3] = kInf;                    // band 3 of macro-pixel (0,0)
   mosaic[10 * 5 + 7] = std::nanf("");  // band 2 of macro-pixel (1,1)
@@ -107,15 +99,11 @@ TEST_F(Demosaic25, snapshot_gives_25_bands_per_macro_pixel) {
 
 TEST_F(Demosaic25, saturated_pixel_stays_marked_through_darksub_and_demosaic25) {
   REQUIRE_ELEMENT("darksub");
-  h = gst_harness_new_parse("darksub dark-level=50 ! demosaic25");
-  gst_harness_set_src_caps_str(h, "video/x-bayer,format=rggb,width=8,height=8,framerate=30/1");
+  start("darksub dark-level=50 ! demosaic25",
+        "video/x-bayer,format=rggb,width=8,height=8,framerate=30/1");
   std::vector<std::uint8_t> raw(64, 120);
   raw[2 * 8 + 2] = 255;  // an R pixel
-  ASSERT_EQ(gst_harness_push(h, buffer_from(raw)), GST_FLOW_OK);
-  GstBuffer* out = gst_harness_try_pull(h);
-  ASSERT_NE(out, nullptr);
-  const auto v = values_of<float>(out);
-  gst_buffer_unref(out);
+  const auto v = push_pull<float>(h, buffer_from(raw));
   ASSERT_EQ(v.size(), 3u * 64);
   EXPECT_EQ(v[2 * 8 + 2], kInf);       // R at the saturated pixel
   EXPECT_EQ(v[3 * 8 + 3], kInf);       // R interpolated from it at the B pixel
@@ -125,86 +113,65 @@ TEST_F(Demosaic25, saturated_pixel_stays_marked_through_darksub_and_demosaic25) 
 }
 
 TEST_F(Demosaic25, survives_flush_and_eos) {
-  h = gst_harness_new_parse("demosaic25 method=bin2x2");
-  gst_harness_set_src_caps_str(h, mosaic_caps("bggr", 4, 4).c_str());
+  start("demosaic25 method=bin2x2", mosaic_caps("bggr", 4, 4));
   const auto mosaic = ramp(4, 4);
   EXPECT_EQ(run(mosaic).size(), 12u);
-  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_start()));
-  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_stop(TRUE)));
-  GstSegment segment;
-  gst_segment_init(&segment, GST_FORMAT_TIME);
-  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_segment(&segment)));
+  push_flush(h);
   expect_same(run(mosaic),
               library(mosaic, 4, 4, MosaicLayout::bayer("BGGR"), DemosaicMethod::kBinCells));
-  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_eos()));
-  bool eos = false;
-  while (GstEvent* ev = gst_harness_try_pull_event(h)) {
-    eos |= GST_EVENT_TYPE(ev) == GST_EVENT_EOS;
-    gst_event_unref(ev);
-  }
-  EXPECT_TRUE(eos);
+  EXPECT_TRUE(eos_passes(h));
 }
+
+// A Bayer camera's frames, darks subtracted, up to demosaic25.
+const std::string kColourChain =
+    "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! ";
 
 TEST(Demosaic25Errors, rejects_a_missing_profile) {
   REQUIRE_ELEMENT("demosaic25");
   REQUIRE_ELEMENT("pyrocamsrc");
-  const auto r = run_pipeline(
-      "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! "
-      "demosaic25 profile=/nonexistent/camera.json ! fakesink");
-  ASSERT_TRUE(r.error);
-  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
-  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_NOT_FOUND);
-  EXPECT_NE(r.message.find("/nonexistent/camera.json"), std::string::npos) << r.message;
+  const auto r =
+      run_pipeline(kColourChain + "demosaic25 profile=/nonexistent/camera.json ! fakesink");
+  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_NOT_FOUND, {"/nonexistent/camera.json"});
 }
 
 TEST(Demosaic25Errors, rejects_a_stream_that_is_not_the_profiles_mosaic) {
   REQUIRE_ELEMENT("demosaic25");
   REQUIRE_ELEMENT("pyrocamsrc");
-  const auto r = run_pipeline(
-      "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! "
-      "demosaic25 profile=nir5x5-reference ! fakesink");
-  ASSERT_TRUE(r.error);
-  EXPECT_EQ(r.domain, GST_CORE_ERROR);
-  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
-  EXPECT_NE(r.message.find("nir5x5-reference has a 5x5 mosaic"), std::string::npos) << r.message;
-  EXPECT_NE(r.message.find("rggb mosaic"), std::string::npos) << r.message;
+  const auto r = run_pipeline(kColourChain + "demosaic25 profile=nir5x5-reference ! fakesink");
+  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION,
+               {"nir5x5-reference has a 5x5 mosaic", "rggb mosaic"});
 }
 
 // A 5x5 stream whose camera orders bands 0 and 1 the other way round than row * 5 + column.
 const char* kSwappedBandMap = "1,0,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24";
+// Its frames, darks subtracted, up to demosaic25.
+const std::string kSwappedChain =
+    std::string(
+        "videotestsrc num-buffers=1 ! "
+        "video/x-raw,format=GRAY8,width=20,height=10,pattern=5x5,band-map=(string)\"") +
+    kSwappedBandMap + "\" ! darksub dark-level=5 ! ";
 
 TEST(Demosaic25Errors, rejects_a_profile_whose_band_map_differs_from_the_streams) {
   REQUIRE_ELEMENT("demosaic25");
-  const auto r = run_pipeline(
-      std::string("videotestsrc num-buffers=1 ! "
-                  "video/x-raw,format=GRAY8,width=20,height=10,pattern=5x5,band-map=(string)\"") +
-      kSwappedBandMap +
-      "\" ! darksub dark-level=5 ! demosaic25 profile=nir5x5-reference ! fakesink");
-  ASSERT_TRUE(r.error);
-  EXPECT_EQ(r.domain, GST_CORE_ERROR);
-  EXPECT_EQ(r.code, GST_CORE_ERROR_NEGOTIATION);
-  EXPECT_NE(r.message.find("orders the 5x5 bands 0,1,2"), std::string::npos) << r.message;
-  EXPECT_NE(r.message.find(kSwappedBandMap), std::string::npos) << r.message;
+  const auto r = run_pipeline(kSwappedChain + "demosaic25 profile=nir5x5-reference ! fakesink");
+  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION,
+               {"orders the 5x5 bands 0,1,2", kSwappedBandMap});
 }
 
 TEST(Demosaic25Pipeline, orders_the_bands_by_the_streams_band_map_and_says_so) {
   REQUIRE_ELEMENT("demosaic25");
-  const auto r = run_pipeline(
-      std::string("videotestsrc num-buffers=1 ! "
-                  "video/x-raw,format=GRAY8,width=20,height=10,pattern=5x5,band-map=(string)\"") +
-      kSwappedBandMap + "\" ! darksub dark-level=5 ! demosaic25 ! " +
-      "video/x-pyrocam-bands,band-map=(string)\"" + kSwappedBandMap + "\" ! fakesink name=sink");
-  EXPECT_TRUE(r.eos) << r.message << " " << r.debug;
-  EXPECT_EQ(r.buffers, 1);
+  const auto r =
+      run_pipeline(kSwappedChain + "demosaic25 ! video/x-pyrocam-bands,band-map=(string)\"" +
+                   kSwappedBandMap + "\" ! fakesink name=sink");
+  expect_eos(r, 1);
 }
 
 TEST(Demosaic25Errors, rejects_caps_it_cannot_produce_n) {
   REQUIRE_ELEMENT("demosaic25");
   REQUIRE_ELEMENT("pyrocamsrc");
   // 25 bands cannot come from a Bayer camera: negotiation fails with an error, no crash.
-  const auto r = run_pipeline(
-      "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! "
-      "demosaic25 ! video/x-pyrocam-bands,bands=25 ! fakesink");
+  const auto r =
+      run_pipeline(kColourChain + "demosaic25 ! video/x-pyrocam-bands,bands=25 ! fakesink");
   EXPECT_TRUE(r.error);
   EXPECT_FALSE(r.timed_out);
 }

@@ -9,14 +9,18 @@
 namespace pyrocam::test {
 namespace {
 
-class PyrocamSrc : public ::testing::Test {
+class PyrocamSrc : public HarnessTest {
  protected:
-  void SetUp() override { REQUIRE_ELEMENT("pyrocamsrc"); }
-  void TearDown() override {
-    if (h) gst_harness_teardown(h);
-  }
-  GstHarness* h = nullptr;
+  PyrocamSrc() : HarnessTest("pyrocamsrc") {}
 };
+
+// The mean of the central 8x4 pixels of a 40x20 frame.
+double centre_mean(const std::vector<std::uint8_t>& v) {
+  double sum = 0;
+  for (int y = 8; y < 12; ++y)
+    for (int x = 16; x < 24; ++x) sum += v[y * 40 + x];
+  return sum / 32;
+}
 
 TEST_F(PyrocamSrc, colour_profile_gives_bayer_frames_with_timestamps) {
   h = gst_harness_new_parse("pyrocamsrc scene=plate temperature=1100");
@@ -84,20 +88,17 @@ TEST_F(PyrocamSrc, exposure_change_while_playing_brightens_frames) {
   gst_harness_set_sink_caps_str(h, "video/x-bayer,width=40,height=20");
   gst_harness_set_blocking_push_mode(h);  // the source waits for each pull
   gst_harness_play(h);
-  auto centre_mean = [&] {
+  auto next_centre_mean = [&] {
     GstBuffer* b = gst_harness_pull(h);
     const auto v = b ? values_of<std::uint8_t>(b) : std::vector<std::uint8_t>(40 * 20, 0);
     if (b) gst_buffer_unref(b);
-    double sum = 0;
-    for (int y = 8; y < 12; ++y)
-      for (int x = 16; x < 24; ++x) sum += v[y * 40 + x];
-    return sum / 32;
+    return centre_mean(v);
   };
-  const double dim = centre_mean();
+  const double dim = next_centre_mean();
   gst_harness_set(h, "pyrocamsrc", "exposure", 200.0, nullptr);
   // Frames rendered before the change may still be queued in the harness.
   double bright = 0;
-  for (int i = 0; i < 5 && bright < dim + 20; ++i) bright = centre_mean();
+  for (int i = 0; i < 5 && bright < dim + 20; ++i) bright = next_centre_mean();
   EXPECT_GT(bright, dim + 20);
 }
 
@@ -120,12 +121,8 @@ TEST_F(PyrocamSrc, controlled_temperature_follows_the_controller_by_frame_time) 
   for (int i = 0; i < 4; ++i) {
     GstBuffer* b = gst_harness_pull(h);
     ASSERT_NE(b, nullptr);
-    const auto v = values_of<std::uint8_t>(b);
+    means.push_back(centre_mean(values_of<std::uint8_t>(b)));
     gst_buffer_unref(b);
-    double sum = 0;
-    for (int y = 8; y < 12; ++y)
-      for (int x = 16; x < 24; ++x) sum += v[y * 40 + x];
-    means.push_back(sum / 32);
   }
   EXPECT_NEAR(means[1], means[0], 5);
   EXPECT_GT(means[2], means[1] + 20);  // the hotter plate
@@ -138,8 +135,7 @@ TEST(PyrocamSrcPipeline, smoke_runs_through_darksub_and_demosaic25_to_eos) {
   REQUIRE_ELEMENT("demosaic25");
   const auto r = run_pipeline(
       "pyrocamsrc num-buffers=5 ! darksub dark-level=50 ! demosaic25 ! fakesink name=sink");
-  EXPECT_TRUE(r.eos) << r.message << " " << r.debug;
-  EXPECT_EQ(r.buffers, 5);
+  expect_eos(r, 5);
 }
 
 TEST(PyrocamSrcPipeline, live_snapshot_camera_through_the_chain) {
@@ -148,17 +144,13 @@ TEST(PyrocamSrcPipeline, live_snapshot_camera_through_the_chain) {
       "pyrocamsrc is-live=true num-buffers=3 profile=nir5x5-reference ! "
       "video/x-raw,framerate=50/1 ! darksub dark-level=50 pattern=5x5 ! demosaic25 ! "
       "fakesink name=sink sync=true");
-  EXPECT_TRUE(r.eos) << r.message << " " << r.debug;
-  EXPECT_EQ(r.buffers, 3);
+  expect_eos(r, 3);
 }
 
 TEST(PyrocamSrcErrors, rejects_a_missing_profile) {
   REQUIRE_ELEMENT("pyrocamsrc");
   const auto r = run_pipeline("pyrocamsrc profile=/nonexistent/camera.json ! fakesink");
-  ASSERT_TRUE(r.error);
-  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
-  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_NOT_FOUND);
-  EXPECT_NE(r.message.find("/nonexistent/camera.json"), std::string::npos) << r.message;
+  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_NOT_FOUND, {"/nonexistent/camera.json"});
 }
 
 TEST(PyrocamSrcErrors, rejects_a_corrupt_profile) {
@@ -167,10 +159,7 @@ TEST(PyrocamSrcErrors, rejects_a_corrupt_profile) {
   write_text(dir / "camera.json", "{ \"format\": \"pyrocam-camera-profile\", ");
   const auto r =
       run_pipeline("pyrocamsrc profile=" + (dir / "camera.json").string() + " ! fakesink");
-  ASSERT_TRUE(r.error);
-  EXPECT_EQ(r.domain, GST_RESOURCE_ERROR);
-  EXPECT_EQ(r.code, GST_RESOURCE_ERROR_READ);
-  EXPECT_NE(r.message.find("camera.json"), std::string::npos) << r.message;
+  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_READ, {"camera.json"});
 }
 
 TEST(PyrocamSrcErrors, rejects_a_size_that_is_not_whole_macro_pixels) {

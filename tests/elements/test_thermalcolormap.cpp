@@ -12,21 +12,9 @@ std::uint16_t code_of(double t_c) {
   return static_cast<std::uint16_t>(std::lround((t_c + 273.15) * 10));
 }
 
-class ThermalColormap : public ::testing::Test {
+class ThermalColormap : public HarnessTest {
  protected:
-  void SetUp() override { REQUIRE_ELEMENT("thermalcolormap"); }
-  void TearDown() override {
-    if (bus) {
-      gst_element_set_bus(h->element, nullptr);
-      gst_object_unref(bus);
-    }
-    if (h) gst_harness_teardown(h);
-  }
-  // A bus on the harnessed element, to see its errors and warnings.
-  void attach_bus() {
-    bus = gst_bus_new();
-    gst_element_set_bus(h->element, bus);
-  }
+  ThermalColormap() : HarnessTest("thermalcolormap") {}
   // The first message of a type on the bus: its domain, code and message ("" if none).
   std::string first(GstMessageType type, GQuark* domain = nullptr, int* code = nullptr) {
     GstMessage* m = gst_bus_pop_filtered(bus, type);
@@ -43,24 +31,16 @@ class ThermalColormap : public ::testing::Test {
     gst_message_unref(m);
     return text;
   }
+  // The harness fed GRAY16_LE codes of w x h_, its output format fixed where `out_format`.
   void start(const char* launch, const char* out_format, int w = 4, int h_ = 2) {
-    h = gst_harness_new_parse(launch);
-    gst_harness_set_src_caps_str(h, ("video/x-raw,format=GRAY16_LE,width=" + std::to_string(w) +
-                                     ",height=" + std::to_string(h_) + ",framerate=30/1")
-                                        .c_str());
+    HarnessTest::start(launch, "video/x-raw,format=GRAY16_LE,width=" + std::to_string(w) +
+                                   ",height=" + std::to_string(h_) + ",framerate=30/1");
     if (out_format)
       gst_harness_set_sink_caps_str(h, (std::string("video/x-raw,format=") + out_format).c_str());
   }
   std::vector<std::uint8_t> run(const std::vector<std::uint16_t>& codes) {
-    EXPECT_EQ(gst_harness_push(h, buffer_from(codes)), GST_FLOW_OK);
-    GstBuffer* out = gst_harness_try_pull(h);
-    if (!out) return {};
-    auto v = values_of<std::uint8_t>(out);
-    gst_buffer_unref(out);
-    return v;
+    return push_pull<std::uint8_t>(h, buffer_from(codes));
   }
-  GstHarness* h = nullptr;
-  GstBus* bus = nullptr;
 };
 
 // The library's bytes for codes under given settings.
@@ -128,17 +108,13 @@ TEST_F(ThermalColormap, controlled_isotherm_follows_the_controller_by_buffer_tim
   ASSERT_TRUE(control_property(e, "isotherm-threshold", {{0, -273.15}, {GST_SECOND, 1500.0}}));
   gst_object_unref(e);
   auto run_at = [&](GstClockTime pts) {
-    GstBuffer* in = buffer_from(kCodes);
-    GST_BUFFER_PTS(in) = pts;
-    EXPECT_EQ(gst_harness_push(h, in), GST_FLOW_OK);
-    GstBuffer* out = gst_harness_try_pull(h);
-    auto v = out ? values_of<std::uint8_t>(out) : std::vector<std::uint8_t>(kCodes.size() * 4);
-    if (out) gst_buffer_unref(out);
-    return v;
+    return push_pull<std::uint8_t>(h, with_pts(buffer_from(kCodes), pts));
   };
   const auto before = run_at(0);
+  ASSERT_EQ(before.size(), kCodes.size() * 4);
   EXPECT_NE(before[4 * 5 + 2], 255);  // 1700 degC in the iron palette, not the isotherm's blue
   const auto after = run_at(GST_SECOND);
+  ASSERT_EQ(after.size(), kCodes.size() * 4);
   for (int i : {4, 5, 6}) {
     EXPECT_EQ(after[4 * i + 0], 0) << i;
     EXPECT_EQ(after[4 * i + 2], 255) << i;
@@ -219,19 +195,9 @@ TEST_F(ThermalColormap, rejects_a_too_short_buffer) {
 TEST_F(ThermalColormap, survives_flush_and_eos) {
   start("thermalcolormap range-mode=fixed", nullptr);
   EXPECT_EQ(run(kCodes).size(), kCodes.size() * 4);
-  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_start()));
-  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_flush_stop(TRUE)));
-  GstSegment segment;
-  gst_segment_init(&segment, GST_FORMAT_TIME);
-  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_segment(&segment)));
+  push_flush(h);
   EXPECT_EQ(run(kCodes), library(kCodes, ColormapSettings{}));
-  EXPECT_TRUE(gst_harness_push_event(h, gst_event_new_eos()));
-  bool eos = false;
-  while (GstEvent* ev = gst_harness_try_pull_event(h)) {
-    eos |= GST_EVENT_TYPE(ev) == GST_EVENT_EOS;
-    gst_event_unref(ev);
-  }
-  EXPECT_TRUE(eos);
+  EXPECT_TRUE(eos_passes(h));
 }
 
 TEST(ThermalColormapPipeline, overlays_on_a_camera_image_with_compositor) {
@@ -242,8 +208,7 @@ TEST(ThermalColormapPipeline, overlays_on_a_camera_image_with_compositor) {
       "videotestsrc num-buffers=3 pattern=gradient ! "
       "video/x-raw,format=GRAY16_LE,width=64,height=48,framerate=10/1 ! "
       "thermalcolormap scale-bar=true ! mix.");
-  EXPECT_TRUE(r.eos) << r.message << " " << r.debug;
-  EXPECT_EQ(r.buffers, 3);
+  expect_eos(r, 3);
 }
 
 }  // namespace

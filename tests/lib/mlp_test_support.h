@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <initializer_list>
+#include <limits>
 #include <string>
 
 #include "pyrocam/calibration/mlp_training.h"
@@ -13,6 +14,8 @@
 #include "pyrocam/runtime/mlp.h"
 
 namespace pyrocam::test {
+
+inline constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 
 // The noise-free locus of a shipped camera profile with its datasheet QE: normalised ratios
 // (2 for the colour camera, 25 for the 5x5 one) for T in [low_c, high_c] every step_c.

@@ -14,15 +14,8 @@
 #include "pyrocam/calibration/mlp_training.h"
 #include "pyrocam/core/locus.h"
 
-namespace pyrocam {
+namespace pyrocam::test {
 namespace {
-
-using test::expect_mlp_error;
-using test::profile_locus;
-using test::same_weights;
-using test::small_options;
-
-constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 
 TEST(MlpLocus, short_training_of_the_paper_architecture_fits_loosely) {
   // The colour camera's locus every 4 degC, the full 250-200-150-100-50 network, the default
@@ -132,14 +125,26 @@ TEST(MlpTraining, rejects_data_outside_the_transforms_domain_n) {
   EXPECT_NO_THROW(train_mlp(locus.ratios, below_absolute_zero, options));
 }
 
-TEST(MlpTraining, no_test_set_is_allowed) {
-  const Locus locus = profile_locus("rgb-reference", 500, 3500, 50);
-  MlpTrainingOptions options = small_options();
-  options.test_fraction = 0;
+// The colour camera's locus every 50 degC: enough for the reports' bookkeeping.
+const Locus& colour_locus_every_50c() {
+  static const Locus locus = profile_locus("rgb-reference", 500, 3500, 50);
+  return locus;
+}
+
+// The report of a training on that locus.
+MlpTrainingReport report_of_training(const MlpTrainingOptions& options) {
+  const Locus& locus = colour_locus_every_50c();
   MlpTrainingReport report;
   train_mlp(locus.ratios, locus.temperature_c, options, &report);
+  return report;
+}
+
+TEST(MlpTraining, no_test_set_is_allowed) {
+  MlpTrainingOptions options = small_options();
+  options.test_fraction = 0;
+  const MlpTrainingReport report = report_of_training(options);
   EXPECT_EQ(report.test_samples, 0);
-  EXPECT_EQ(report.train_samples, locus.ratios.rows());
+  EXPECT_EQ(report.train_samples, colour_locus_every_50c().ratios.rows());
   EXPECT_TRUE(std::isnan(report.final_test_rmse));
   EXPECT_TRUE(std::isfinite(report.final_train_rmse));
   for (double rmse : report.test_rmse) EXPECT_TRUE(std::isnan(rmse));
@@ -164,18 +169,16 @@ TEST(MlpTraining, rejects_options_outside_their_ranges_n) {
 }
 
 TEST(MlpTraining, adam_only_and_polish_only_report_their_own_passes) {
-  const Locus locus = profile_locus("rgb-reference", 500, 3500, 50);
   MlpTrainingOptions options = small_options();
   options.polish_iterations = 0;
-  MlpTrainingReport report;
-  train_mlp(locus.ratios, locus.temperature_c, options, &report);
+  MlpTrainingReport report = report_of_training(options);
   EXPECT_EQ(report.pass, (std::vector<int>{1, 2, 3, 4}));
   EXPECT_EQ(report.polish_iterations_done, 0);
 
   options = small_options();
   options.epochs = 0;
   options.polish_iterations = 25;
-  train_mlp(locus.ratios, locus.temperature_c, options, &report);
+  report = report_of_training(options);
   EXPECT_EQ(report.epochs, 0);
   ASSERT_EQ(report.polish_iterations_done, 25);
   EXPECT_EQ(report.pass, (std::vector<int>{10, 20, 25}));
@@ -257,4 +260,4 @@ TEST(MlpAugmentation, rejects_samples_of_the_wrong_shape_or_domain_n) {
 }
 
 }  // namespace
-}  // namespace pyrocam
+}  // namespace pyrocam::test

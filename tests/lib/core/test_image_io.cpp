@@ -6,8 +6,8 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
-#include "pyrocam/core/image_io.h"
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/image_io.h"
 #include "test_support.h"
 
 namespace pyrocam {
@@ -77,84 +77,74 @@ TEST(ImageHeader, pgm_with_comments_and_16_bit_samples_reads) {
   EXPECT_EQ(image.at<std::uint16_t>(1, 2), 5);
 }
 
-TEST(ImageHeader, rejects_pgm_declaring_2_pow_32_squared_n) {
+// A file whose header alone is refused: its name, bytes and what the refusal says besides the
+// file's path.
+struct BadHeader {
+  const char* label;
+  const char* file;
+  std::string bytes;
+  const char* message;
+};
+
+// gtest prints a case by its label, not its bytes.
+void PrintTo(const BadHeader& c, std::ostream* os) { *os << c.label; }
+
+class ImageHeaderRejects : public ::testing::TestWithParam<BadHeader> {};
+
+TEST_P(ImageHeaderRejects, by_name_n) {
   ScratchDir dir("image-io");
-  write_bytes(dir / "a.pgm", "P5\n4294967296 4294967296\n255\n" + std::string(64, '\0'));
-  expect_rejected(dir / "a.pgm", "PGM header declares 4294967296x4294967296 pixels");
+  write_bytes(dir / GetParam().file, GetParam().bytes);
+  expect_rejected(dir / GetParam().file, GetParam().message);
 }
 
-TEST(ImageHeader, rejects_pgm_whose_size_product_overflows_64_bits_n) {
-  ScratchDir dir("image-io");
-  // 3037000500^2 is just above 2^63: the old check multiplied in a signed long.
-  write_bytes(dir / "a.pgm", "P5\n3037000500 3037000500\n65535\n" + std::string(64, '\0'));
-  expect_rejected(dir / "a.pgm", "PGM header declares 3037000500x3037000500 pixels");
-}
+INSTANTIATE_TEST_SUITE_P(
+    ImageHeader, ImageHeaderRejects,
+    ::testing::Values(
+        BadHeader{"pgm_declaring_2_pow_32_squared_n", "a.pgm",
+                  "P5\n4294967296 4294967296\n255\n" + std::string(64, '\0'),
+                  "PGM header declares 4294967296x4294967296 pixels"},
+        // 3037000500^2 is just above 2^63: the old check multiplied in a signed long.
+        BadHeader{"pgm_whose_size_product_overflows_64_bits_n", "a.pgm",
+                  "P5\n3037000500 3037000500\n65535\n" + std::string(64, '\0'),
+                  "PGM header declares 3037000500x3037000500 pixels"},
+        BadHeader{"pgm_with_an_overlong_number_n", "a.pgm",
+                  "P5\n99999999999999999999999 2\n255\n" + std::string(64, '\0'),
+                  "malformed or truncated PGM header"},
+        BadHeader{"pgm_with_maxval_above_16_bits_n", "a.pgm",
+                  "P5\n2 2\n70000\n" + std::string(8, '\0'), "malformed or truncated PGM header"},
+        BadHeader{"truncated_pgm_n", "a.pgm", "P5\n100 100\n65535\n" + std::string(1000, '\0'),
+                  "truncated PGM (1000 of 20000 bytes of pixel data)"},
+        BadHeader{"png_of_30000_squared_before_decoding_n", "a.png", png_header(30000, 30000, 8),
+                  "PNG header declares 30000x30000 pixels"},
+        BadHeader{"16_bit_png_of_32768_squared_before_decoding_n", "a.png",
+                  png_header(32768, 32768, 16), "PNG header declares 32768x32768 pixels"},
+        BadHeader{"png_wider_than_the_side_limit_n", "a.png", png_header(70000, 1, 8),
+                  "PNG header declares 70000x1 pixels; raw frames are limited"},
+        BadHeader{"tiff_of_40000_squared_before_decoding_n", "a.tif", tiff_header(40000, 40000),
+                  "TIFF header declares 40000x40000 pixels"},
+        BadHeader{"tiff_cut_inside_its_header_n", "a.tif", tiff_header(40, 30).substr(0, 14),
+                  "malformed or truncated TIFF header"}),
+    [](const ::testing::TestParamInfo<BadHeader>& info) { return std::string(info.param.label); });
 
-TEST(ImageHeader, rejects_pgm_with_an_overlong_number_n) {
-  ScratchDir dir("image-io");
-  write_bytes(dir / "a.pgm", "P5\n99999999999999999999999 2\n255\n" + std::string(64, '\0'));
-  expect_rejected(dir / "a.pgm", "malformed or truncated PGM header");
-}
-
-TEST(ImageHeader, rejects_pgm_with_maxval_above_16_bits_n) {
-  ScratchDir dir("image-io");
-  write_bytes(dir / "a.pgm", "P5\n2 2\n70000\n" + std::string(8, '\0'));
-  expect_rejected(dir / "a.pgm", "malformed or truncated PGM header");
-}
-
-TEST(ImageHeader, rejects_truncated_pgm_n) {
-  ScratchDir dir("image-io");
-  write_bytes(dir / "a.pgm", "P5\n100 100\n65535\n" + std::string(1000, '\0'));
-  expect_rejected(dir / "a.pgm", "truncated PGM (1000 of 20000 bytes of pixel data)");
-}
-
-TEST(ImageHeader, rejects_png_of_30000_squared_before_decoding_n) {
-  ScratchDir dir("image-io");
-  write_bytes(dir / "a.png", png_header(30000, 30000, 8));
-  expect_rejected(dir / "a.png", "PNG header declares 30000x30000 pixels");
-}
-
-TEST(ImageHeader, rejects_16_bit_png_of_32768_squared_before_decoding_n) {
-  ScratchDir dir("image-io");
-  write_bytes(dir / "a.png", png_header(32768, 32768, 16));
-  expect_rejected(dir / "a.png", "PNG header declares 32768x32768 pixels");
-}
-
-TEST(ImageHeader, rejects_png_wider_than_the_side_limit_n) {
-  ScratchDir dir("image-io");
-  write_bytes(dir / "a.png", png_header(70000, 1, 8));
-  expect_rejected(dir / "a.png", "PNG header declares 70000x1 pixels; raw frames are limited");
-}
-
-TEST(ImageHeader, rejects_tiff_of_40000_squared_before_decoding_n) {
-  ScratchDir dir("image-io");
-  write_bytes(dir / "a.tif", tiff_header(40000, 40000));
-  expect_rejected(dir / "a.tif", "TIFF header declares 40000x40000 pixels");
+// A random 64x64 16-bit image written to `path`, then cut off half way.
+void write_cut_in_half(const std::filesystem::path& path) {
+  cv::Mat image(64, 64, CV_16U);
+  cv::randu(image, 0, 65535);
+  write_raw_image(path, image);
+  std::filesystem::resize_file(path, std::filesystem::file_size(path) / 2);
 }
 
 TEST(ImageHeader, rejects_truncated_png_n) {
   ScratchDir dir("image-io");
-  cv::Mat image(64, 64, CV_16U);
-  cv::randu(image, 0, 65535);
-  write_raw_image(dir / "a.png", image);
-  std::filesystem::resize_file(dir / "a.png", std::filesystem::file_size(dir / "a.png") / 2);
+  write_cut_in_half(dir / "a.png");
   expect_rejected(dir / "a.png", "unreadable or truncated image");
 }
 
 TEST(ImageHeader, rejects_truncated_tiff_n) {
   ScratchDir dir("image-io");
-  cv::Mat image(64, 64, CV_16U);
-  cv::randu(image, 0, 65535);
-  write_raw_image(dir / "a.tif", image);
-  std::filesystem::resize_file(dir / "a.tif", std::filesystem::file_size(dir / "a.tif") / 2);
+  write_cut_in_half(dir / "a.tif");
   EXPECT_NE(rejection(dir / "a.tif").find(dir.path().string() + "/a.tif"), std::string::npos)
       << rejection(dir / "a.tif");
-}
-
-TEST(ImageHeader, rejects_tiff_cut_inside_its_header_n) {
-  ScratchDir dir("image-io");
-  write_bytes(dir / "a.tif", tiff_header(40, 30).substr(0, 14));
-  expect_rejected(dir / "a.tif", "malformed or truncated TIFF header");
 }
 
 TEST(ImageHeader, rejects_other_formats_n) {

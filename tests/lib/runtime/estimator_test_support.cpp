@@ -22,6 +22,10 @@ std::shared_ptr<const ThermalModel> test_model(const std::string& name) {
   return m;
 }
 
+double saturation_signal_dn(const ThermalModel& m) {
+  return m.profile().thresholds.inference_saturation_dn - m.profile().dark_offset_dn;
+}
+
 NoisyPixels noisy_pixels(const ThermalModel& m, const std::vector<double>& temperatures_c,
                          int per_temperature, double peak_lo_dn, double peak_hi_dn,
                          double saturation_dn, double damaged_fraction, std::uint64_t seed) {

@@ -17,6 +17,9 @@ namespace pyrocam::test {
 // $PYROCAM_TEST_MODEL_DIR (set by meson test), else the build tree's tests/data; loaded once.
 std::shared_ptr<const ThermalModel> test_model(const std::string& name);
 
+// The signal above the dark offset at which the model's camera saturates.
+double saturation_signal_dn(const ThermalModel& m);
+
 // Noisy band signals of a graybody: the brightest band at a random level, EMVA 1288 noise, bands
 // at or above `saturation_dn` saturated (+INF), and now and then a band made NaN or dim.
 struct NoisyPixels {

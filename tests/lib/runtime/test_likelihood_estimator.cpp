@@ -11,15 +11,8 @@
 #include "pyrocam/runtime/estimators.h"
 #include "runtime/estimator_test_support.h"
 
-namespace pyrocam {
+namespace pyrocam::test {
 namespace {
-
-using test::Agreement;
-using test::as_planes;
-using test::compare;
-using test::kSweepC;
-using test::noisy_pixels;
-using test::NoisyPixels;
 
 // With saturated, NaN and dim bands among them: the fit drops bands (partial readings allowed),
 // and with two left the locus may pass the same ratios twice (an ambiguous reading). Without
@@ -27,9 +20,7 @@ using test::NoisyPixels;
 void expect_fast_fit_is_exhaustive_fit(const std::shared_ptr<const ThermalModel>& model,
                                        std::uint64_t seed) {
   const ThermalModel& m = *model;
-  const double saturation =
-      m.profile().thresholds.inference_saturation_dn - m.profile().dark_offset_dn;
-  const NoisyPixels px = noisy_pixels(m, kSweepC, 400, 8, 400, saturation, 0.1, seed);
+  const NoisyPixels px = noisy_pixels(m, kSweepC, 400, 8, 400, saturation_signal_dn(m), 0.1, seed);
   const auto fast = make_estimator(model, Method::kLikelihood);
   const auto exhaustive = make_exhaustive_likelihood_estimator(model);
   const auto strict = make_estimator(model, Method::kLikelihood);
@@ -67,15 +58,15 @@ void expect_fast_fit_is_exhaustive_fit(const std::shared_ptr<const ThermalModel>
 }
 
 TEST(LikelihoodEstimator, fast_fit_gives_the_exhaustive_fits_answer_colour) {
-  expect_fast_fit_is_exhaustive_fit(test::test_model("test-model-rgb.json"), 5);
+  expect_fast_fit_is_exhaustive_fit(test_model("test-model-rgb.json"), 5);
 }
 
 TEST(LikelihoodEstimator, fast_fit_gives_the_exhaustive_fits_answer_5x5) {
-  expect_fast_fit_is_exhaustive_fit(test::test_model("test-model-nir5x5.json"), 6);
+  expect_fast_fit_is_exhaustive_fit(test_model("test-model-nir5x5.json"), 6);
 }
 
 TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {
-  const auto fast = make_estimator(test::test_model("test-model-nir5x5.json"), Method::kLikelihood);
+  const auto fast = make_estimator(test_model("test-model-nir5x5.json"), Method::kLikelihood);
   fast->set_allow_partial(true);
   std::vector<double> s(25, INFINITY);
   s[3] = 100;
@@ -85,4 +76,4 @@ TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {
 }
 
 }  // namespace
-}  // namespace pyrocam
+}  // namespace pyrocam::test

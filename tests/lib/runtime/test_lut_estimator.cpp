@@ -10,22 +10,13 @@
 #include "pyrocam/runtime/plane_estimator.h"
 #include "runtime/estimator_test_support.h"
 
-namespace pyrocam {
+namespace pyrocam::test {
 namespace {
 
-using test::Agreement;
-using test::as_planes;
-using test::compare;
-using test::kSweepC;
-using test::noisy_pixels;
-using test::NoisyPixels;
-
 TEST(LutEstimator, gives_the_networks_answer_on_noisy_pixels) {
-  const auto model = test::test_model("test-model-rgb.json");
+  const auto model = test_model("test-model-rgb.json");
   const ThermalModel& m = *model;
-  const double saturation =
-      m.profile().thresholds.inference_saturation_dn - m.profile().dark_offset_dn;
-  const NoisyPixels px = noisy_pixels(m, kSweepC, 1500, 15, 200, saturation, 0.02, 11);
+  const NoisyPixels px = noisy_pixels(m, kSweepC, 1500, 15, 200, saturation_signal_dn(m), 0.02, 11);
   const std::vector<cv::Mat> planes = as_planes(px);
   // Rows of band planes go to two threads: the table is filled from both at once.
   cv::Mat mlp, lut;
@@ -62,7 +53,7 @@ TEST(LutEstimator, gives_the_networks_answer_on_noisy_pixels) {
 }
 
 TEST(LutEstimator, answers_with_the_network_far_from_the_locus) {
-  const auto model = test::test_model("test-model-rgb.json");
+  const auto model = test_model("test-model-rgb.json");
   const auto mlp = make_estimator(model, Method::kMlp);
   const auto lut = make_estimator(model, Method::kLut);
   // Ratios no graybody gives (edges of hot objects, mixed pixels): outside the table.
@@ -77,7 +68,7 @@ TEST(LutEstimator, answers_with_the_network_far_from_the_locus) {
 }
 
 TEST(LutEstimator, rejects_saturated_dim_and_invalid_bands_n) {
-  const auto model = test::test_model("test-model-rgb.json");
+  const auto model = test_model("test-model-rgb.json");
   const auto lut = make_estimator(model, Method::kLut);
   const double ok[3] = {100, 120, 60}, saturated[3] = {INFINITY, 120, 60}, dim[3] = {100, 12, 60},
                nan[3] = {100, NAN, 60}, negative[3] = {100, -5, 60};
@@ -89,4 +80,4 @@ TEST(LutEstimator, rejects_saturated_dim_and_invalid_bands_n) {
 }
 
 }  // namespace
-}  // namespace pyrocam
+}  // namespace pyrocam::test

@@ -17,15 +17,8 @@
 #include "pyrocam/core/locus.h"
 #include "pyrocam/runtime/mlp.h"
 
-namespace pyrocam {
+namespace pyrocam::test {
 namespace {
-
-using test::expect_mlp_error;
-using test::profile_locus;
-using test::same_weights;
-using test::small_options;
-
-constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 
 const Locus& colour_locus_every_10c() {
   static const Locus locus = profile_locus("rgb-reference", 500, 3500, 10);
@@ -330,4 +323,4 @@ TEST(MlpPredict, empty_model_predicts_nan) {
 }
 
 }  // namespace
-}  // namespace pyrocam
+}  // namespace pyrocam::test

@@ -10,23 +10,15 @@
 #include "pyrocam/runtime/plane_estimator.h"
 #include "runtime/estimator_test_support.h"
 
-namespace pyrocam {
+namespace pyrocam::test {
 namespace {
 
-using test::Agreement;
-using test::as_planes;
-using test::compare;
-using test::kSweepC;
-using test::noisy_pixels;
-using test::NoisyPixels;
-
 TEST(PlaneEstimator, codes_straight_from_the_planes_are_the_encoded_temperatures) {
-  const auto model = test::test_model("test-model-rgb.json");
+  const auto model = test_model("test-model-rgb.json");
   const ThermalModel& m = *model;
-  const double saturation =
-      m.profile().thresholds.inference_saturation_dn - m.profile().dark_offset_dn;
   // A few hundred rows of a realistic width, so that rows go to several threads.
-  const NoisyPixels px = noisy_pixels(m, {900, 1500, 2400}, 600, 15, 200, saturation, 0.05, 3);
+  const NoisyPixels px =
+      noisy_pixels(m, {900, 1500, 2400}, 600, 15, 200, saturation_signal_dn(m), 0.05, 3);
   std::vector<cv::Mat> planes;
   for (const cv::Mat& p : as_planes(px)) planes.push_back(p.reshape(1, 450));
   for (Method method : {Method::kLut, Method::kLikelihood}) {
@@ -47,7 +39,7 @@ TEST(PlaneEstimator, refuses_no_model_n) {
 }
 
 TEST(PlaneEstimator, keeps_the_model_it_shares_alive) {
-  auto model = std::make_shared<const ThermalModel>(*test::test_model("test-model-rgb.json"));
+  auto model = std::make_shared<const ThermalModel>(*test_model("test-model-rgb.json"));
   const PlaneEstimator estimator(model, Method::kLikelihood, 1e-6);
   std::weak_ptr<const ThermalModel> watch = model;
   model.reset();
@@ -60,4 +52,4 @@ TEST(PlaneEstimator, keeps_the_model_it_shares_alive) {
 }
 
 }  // namespace
-}  // namespace pyrocam
+}  // namespace pyrocam::test
