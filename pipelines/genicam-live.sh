@@ -15,6 +15,7 @@
 #   GAIN_DB      gain in dB                                           [the camera's setting]
 #   WATCHDOG_MS  longest wait for a frame, in ms                      [2000]
 #   NUM_BUFFERS  frames before the view ends; -1 runs until Ctrl-C    [-1]
+#   LATENCY_MS   how long the picture waits for its temperature overlay, ms [100]
 #   SINK         where the view goes                                  [autovideosink]
 #
 # Example:
@@ -46,12 +47,8 @@ camera=(aravissrc num-buffers="$NUM_BUFFERS")
 [[ -n $EXPOSURE_US ]] && camera+=("exposure=$EXPOSURE_US")
 [[ -n $GAIN_DB ]] && camera+=("gain=$GAIN_DB")
 
-# compositor, live: start-time-selection=first starts its output at the camera's first frame
-# (not at 0, which adds frames before it and can negotiate a 1x1 picture); latency=100 ms waits
-# that long for the slower temperature branch, so that no frame goes out without its overlay.
-# The queue after it keeps its thread free: in a live pipeline the first sink to get a frame
-# waits for the others, while compositor answers the tee's allocation queries from that thread,
-# so without the queue the start can deadlock (GStreamer 1.22).
+# The chain and the overlay compositor as in live-view.sh (pipelines/lib/camera.sh).
+source "$here/lib/camera.sh"
 set -f # the fragments above split on spaces into the launcher's words
 set +e
 # The launcher's messages pass through a filter that adds a plain diagnosis to the watchdog's
@@ -59,11 +56,8 @@ set +e
 # ignores Ctrl-C so that the launcher can still print while it stops.
 "$launch" \
   "${camera[@]}" ! $CAPS ! watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
-  camera. ! queue ! bayer2rgb ! video/x-raw,format=RGBA ! mix.sink_0 \
-  camera. ! queue ! darksub $DARK ! demosaic25 ! ratiotemp "model=$MODEL" ! \
-    thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1 \
-  compositor name=mix start-time-selection=first latency=100000000 \
-    sink_0::zorder=0 sink_1::zorder=1 ! video/x-raw,format=RGBA ! queue ! videoconvert ! $SINK \
+  "${thermal_chain[@]}" ! "${colormap_to_mix[@]}" \
+  "${overlay_mix[@]}" ! videoconvert ! $SINK \
   2>&1 | (
   trap '' INT
   stopped=0

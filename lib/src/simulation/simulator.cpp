@@ -4,7 +4,6 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
-#include <random>
 #include <sstream>
 
 #include "detail/portable_math.h"
