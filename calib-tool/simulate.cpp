@@ -46,6 +46,13 @@ void default_size(const Simulator& camera, int side, int& w, int& h) {
       m.period_height;
 }
 
+// --format: the image file type the simulator writes.
+void add_format_option(CLI::App* cmd, std::string& extension) {
+  cmd->add_option("--format", extension, "Image file type")
+      ->check(CLI::IsMember({".pgm", ".png", ".tif"}))
+      ->capture_default_str();
+}
+
 void parse_size(const std::string& text, int& w, int& h) {
   if (std::sscanf(text.c_str(), "%dx%d", &w, &h) != 2 || w < 1 || h < 1)
     throw CLI::ValidationError("--size", "expected WIDTHxHEIGHT, e.g. 128x128");
@@ -90,9 +97,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
                 "whole periods: 130x130 for 5x5)");
   c->add_option("--roi-area", campaign.roi_area_px, "Elliptical ROI area, pixels")
       ->capture_default_str();
-  c->add_option("--format", campaign.image_extension, "Image file type")
-      ->check(CLI::IsMember({".pgm", ".png", ".tif"}))
-      ->capture_default_str();
+  add_format_option(c, campaign.image_extension);
   c->callback([&global, &selected] {
     if (!campaign_size.empty()) parse_size(campaign_size, campaign.width, campaign.height);
     selected = [&global] {
@@ -133,9 +138,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
       ->capture_default_str();
   s->add_option("--emissivity", scene.emissivity, "Graybody emissivity (0: the scene's default)")
       ->check(CLI::Range(0.0, 1.0));
-  s->add_option("--format", scene.image_extension, "Image file type")
-      ->check(CLI::IsMember({".pgm", ".png", ".tif"}))
-      ->capture_default_str();
+  add_format_option(s, scene.image_extension);
   s->callback([&global, &selected] {
     if (!scene_size.empty()) parse_size(scene_size, scene.width, scene.height);
     selected = [&global] {
