@@ -21,6 +21,8 @@ constexpr guint64 DEFAULT_STATS_INTERVAL = GST_SECOND;
 constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
 constexpr double DEFAULT_MISFIT_PROBABILITY = 0.0;
 constexpr double MAX_MISFIT_PROBABILITY = 0.5;
+constexpr guint DEFAULT_PEAK_WINDOW = 5;  // pyrocam::kDefaultPeakWindow
+constexpr guint MAX_PEAK_WINDOW = 255;    // pyrocam::kMaxPeakWindow
 
 /* A rectangle of output pixels. */
 struct Region {
@@ -41,14 +43,23 @@ struct Settings {
   std::string region_text;   // as set; empty: no region
   bool region_valid = true;  // region_text is empty or parsed into region
   Region region;
-  guint region_serial = 0;  // bumped by every change of region
+  guint region_serial = 0;                  // bumped by every change of region
+  guint peak_window = DEFAULT_PEAK_WINDOW;  // odd, or 0 = no peak
+  bool peak_window_set = false;             // set by the user: warn when it does not fit
 };
+
+/* Whether the statistics of a frame (or region) of this size carry a peak. */
+inline bool peak_fits(const Settings& settings, int width, int height) {
+  const int w = static_cast<int>(settings.peak_window);
+  return w > 0 && w <= width && w <= height;
+}
 
 struct State;  // streaming state, gstratiotemp.cpp
 
 /* The "pyrocam-temperature-stats" element message's structure for a frame's temperatures
  * (CV_32F degC, NaN = no reading) at `pts`, with the settings' region when it is valid. Throws
- * (from the library) before it allocates anything. */
+ * (from the library) before it allocates anything. The peak fields are there only where
+ * peak_fits(). */
 GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& settings,
                               const GstSegment* segment, GstClockTime pts, Method method);
 

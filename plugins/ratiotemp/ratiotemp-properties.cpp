@@ -16,6 +16,7 @@ enum {
   PROP_REGION,
   PROP_ALLOW_PARTIAL,
   PROP_MISFIT_PROBABILITY,
+  PROP_PEAK_WINDOW,
 };
 
 }  // namespace
@@ -89,6 +90,14 @@ void install_properties(GObjectClass* gobject_class) {
                           "unitless, e.g. 1e-6) that a true graybody pixel is dropped; 0 = no "
                           "check",
                           0.0, MAX_MISFIT_PROBABILITY, DEFAULT_MISFIT_PROBABILITY, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_PEAK_WINDOW,
+      g_param_spec_uint("peak-window", "Peak window",
+                        "Side (output pixels, odd, 1 to 255) of the square window whose "
+                        "largest median the statistics report as peak-c at peak-x, peak-y: "
+                        "robust to single wild pixels, unlike max-c; an even value is refused; "
+                        "0 = no peak",
+                        0, MAX_PEAK_WINDOW, DEFAULT_PEAK_WINDOW, playing));
 }
 
 void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpec* pspec) {
@@ -123,6 +132,16 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
     case PROP_MISFIT_PROBABILITY:
       s.misfit_probability = g_value_get_double(value);
       break;
+    case PROP_PEAK_WINDOW: {
+      const guint v = g_value_get_uint(value);
+      if (v % 2 == 0 && v != 0) {
+        GST_WARNING_OBJECT(self, "peak-window %u is even; keeping %u", v, s.peak_window);
+      } else {
+        s.peak_window = v;
+        s.peak_window_set = true;
+      }
+      break;
+    }
     case PROP_REGION: {
       const char* v = g_value_get_string(value);
       s.region_text = v ? v : "";
@@ -161,6 +180,9 @@ void get_property(GObject* object, guint prop_id, GValue* value, GParamSpec* psp
       break;
     case PROP_MISFIT_PROBABILITY:
       g_value_set_double(value, s.misfit_probability);
+      break;
+    case PROP_PEAK_WINDOW:
+      g_value_set_uint(value, s.peak_window);
       break;
     case PROP_REGION:
       g_value_set_string(value, s.region_text.empty() ? nullptr : s.region_text.c_str());

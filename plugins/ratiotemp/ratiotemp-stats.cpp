@@ -18,6 +18,21 @@ void set_stats_fields(GstStructure* s, const std::string& prefix, const RegionSt
                     r.median_c, nullptr);
 }
 
+// Peak fields with the window centre in frame pixels (`offset`: the region's corner).
+void set_peak_fields(GstStructure* s, const std::string& prefix, const RegionPeak& p,
+                     cv::Point offset) {
+  if (!p.found()) return;
+  gst_structure_set(s, (prefix + "peak-c").c_str(), G_TYPE_DOUBLE, p.c, (prefix + "peak-x").c_str(),
+                    G_TYPE_INT, p.x + offset.x, (prefix + "peak-y").c_str(), G_TYPE_INT,
+                    p.y + offset.y, nullptr);
+}
+
+RegionPeak peak_of(const cv::Mat& t, const Settings& settings) {
+  return peak_fits(settings, t.cols, t.rows)
+             ? region_peak(t, static_cast<int>(settings.peak_window))
+             : RegionPeak();
+}
+
 }  // namespace
 
 GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& settings,
@@ -29,14 +44,19 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& sett
   }
   // The statistics first: nothing to free should they throw.
   const RegionStats whole = region_stats(temperature_c);
+  const RegionPeak whole_peak = peak_of(temperature_c, settings);
   const bool with_region = !settings.region_text.empty() && settings.region_valid;
   cv::Rect r;
   RegionStats region;
+  RegionPeak part_peak;
   if (with_region) {
     const cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,
                           settings.region.height);
     r = wanted & cv::Rect(0, 0, temperature_c.cols, temperature_c.rows);
-    if (!r.empty()) region = region_stats(temperature_c(r));
+    if (!r.empty()) {
+      region = region_stats(temperature_c(r));
+      part_peak = peak_of(temperature_c(r), settings);
+    }
   }
   GstStructure* s = gst_structure_new(
       STATS_MESSAGE, "timestamp", G_TYPE_UINT64, static_cast<guint64>(pts), "stream-time",
@@ -44,10 +64,12 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& sett
       static_cast<guint64>(running_time), "method", G_TYPE_STRING, method_name(method).c_str(),
       "width", G_TYPE_INT, temperature_c.cols, "height", G_TYPE_INT, temperature_c.rows, nullptr);
   set_stats_fields(s, "", whole);
+  set_peak_fields(s, "", whole_peak, cv::Point());
   if (with_region) {
     gst_structure_set(s, "region-x", G_TYPE_INT, r.x, "region-y", G_TYPE_INT, r.y, "region-width",
                       G_TYPE_INT, r.width, "region-height", G_TYPE_INT, r.height, nullptr);
     set_stats_fields(s, "region-", region);
+    set_peak_fields(s, "region-", part_peak, r.tl());
   }
   return s;
 }

@@ -5,7 +5,9 @@
  * Paints temperature images (video/x-raw GRAY16_LE in 0.1 K, 0 = no reading) in false colour
  * for display: RGBA/BGRA (or RGBx/BGRx) with the chosen #GstThermalColormap:palette between
  * #GstThermalColormap:min-temperature and #GstThermalColormap:max-temperature (fixed), or the
- * frame's own valid range smoothed over time (auto, see #GstThermalColormap:auto-smoothing).
+ * frame's own valid range smoothed over time (auto, see #GstThermalColormap:auto-smoothing),
+ * without the #GstThermalColormap:auto-trim percent hottest and coldest readings of each frame
+ * (the wild mixed pixels at sharp edges would otherwise stretch it).
  * Pixels without a reading get #GstThermalColormap:invalid-color, fully transparent by default,
  * so the output overlays cleanly on the camera image with compositor. Pixels at or above
  * #GstThermalColormap:isotherm-threshold get #GstThermalColormap:isotherm-color (an alarm).
@@ -46,6 +48,7 @@ enum {
   PROP_MIN_TEMPERATURE,
   PROP_MAX_TEMPERATURE,
   PROP_AUTO_SMOOTHING,
+  PROP_AUTO_TRIM,
   PROP_SCALE_BAR,
   PROP_INVALID_COLOR,
   PROP_ISOTHERM_THRESHOLD,
@@ -57,6 +60,9 @@ constexpr GstThermalColormapRangeMode DEFAULT_RANGE_MODE = GST_THERMAL_COLORMAP_
 constexpr double DEFAULT_MIN_TEMPERATURE = 500.0;
 constexpr double DEFAULT_MAX_TEMPERATURE = 2500.0;
 constexpr double DEFAULT_AUTO_SMOOTHING = 0.1;
+// Enough to drop the wild mixed pixels along a plate's edges, little enough that a melt pool
+// covering 1 % of the readings still sets the top of the range.
+constexpr double DEFAULT_AUTO_TRIM = 0.5;
 constexpr gboolean DEFAULT_SCALE_BAR = FALSE;
 constexpr guint DEFAULT_INVALID_COLOR = 0x00000000u;
 constexpr double ISOTHERM_OFF = -273.15;
@@ -68,6 +74,7 @@ struct Settings {
   GstThermalColormapRangeMode range_mode = DEFAULT_RANGE_MODE;
   double min_c = DEFAULT_MIN_TEMPERATURE, max_c = DEFAULT_MAX_TEMPERATURE;
   double auto_smoothing = DEFAULT_AUTO_SMOOTHING;
+  double auto_trim = DEFAULT_AUTO_TRIM;
   gboolean scale_bar = DEFAULT_SCALE_BAR;
   guint invalid_color = DEFAULT_INVALID_COLOR;
   double isotherm_c = DEFAULT_ISOTHERM_THRESHOLD;
@@ -242,7 +249,8 @@ static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter
   cs.order = st.order;
   const bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kNumeric, "Could not colour the frame", [&] {
     if (settings.range_mode == GST_THERMAL_COLORMAP_RANGE_AUTO) {
-      st.auto_range.update(pyrocam::valid_range_c(in), settings.auto_smoothing);
+      st.auto_range.update(pyrocam::trimmed_range_c(in, settings.auto_trim),
+                           settings.auto_smoothing);
       cs.min_c = st.auto_range.valid() ? st.auto_range.min_c() : settings.min_c;
       cs.max_c = st.auto_range.valid() ? st.auto_range.max_c() : settings.max_c;
     } else {
@@ -297,6 +305,9 @@ static void gst_thermal_colormap_set_property(GObject* object, guint prop_id, co
     case PROP_AUTO_SMOOTHING:
       s.auto_smoothing = g_value_get_double(value);
       break;
+    case PROP_AUTO_TRIM:
+      s.auto_trim = g_value_get_double(value);
+      break;
     case PROP_SCALE_BAR:
       s.scale_bar = g_value_get_boolean(value);
       break;
@@ -335,6 +346,9 @@ static void gst_thermal_colormap_get_property(GObject* object, guint prop_id, GV
       break;
     case PROP_AUTO_SMOOTHING:
       g_value_set_double(value, s.auto_smoothing);
+      break;
+    case PROP_AUTO_TRIM:
+      g_value_set_double(value, s.auto_trim);
       break;
     case PROP_SCALE_BAR:
       g_value_set_boolean(value, s.scale_bar);
@@ -382,11 +396,12 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
                         GST_TYPE_THERMAL_COLORMAP_PALETTE, DEFAULT_PALETTE, display));
   g_object_class_install_property(
       gobject_class, PROP_RANGE_MODE,
-      g_param_spec_enum("range-mode", "Range mode",
-                        "fixed: min-temperature..max-temperature; auto: the valid range of the "
-                        "frames, smoothed by auto-smoothing (min/max-temperature until a frame "
-                        "has a reading)",
-                        GST_TYPE_THERMAL_COLORMAP_RANGE_MODE, DEFAULT_RANGE_MODE, display));
+      g_param_spec_enum(
+          "range-mode", "Range mode",
+          "fixed: min-temperature..max-temperature; auto: the valid range of the "
+          "frames less auto-trim, smoothed by auto-smoothing (min/max-temperature until a frame "
+          "has a reading)",
+          GST_TYPE_THERMAL_COLORMAP_RANGE_MODE, DEFAULT_RANGE_MODE, display));
   g_object_class_install_property(
       gobject_class, PROP_MIN_TEMPERATURE,
       g_param_spec_double("min-temperature", "Minimum temperature",
@@ -406,6 +421,14 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
                           "average of each frame's min and max (0.001..1; 1 = no smoothing, "
                           "0.1 settles in about 20 frames)",
                           0.001, 1.0, DEFAULT_AUTO_SMOOTHING, display));
+  g_object_class_install_property(
+      gobject_class, PROP_AUTO_TRIM,
+      g_param_spec_double("auto-trim", "Auto range trim",
+                          "Percent of each frame's readings left out at each end of its auto "
+                          "range, so that a few wild pixels do not stretch it (0..10; 0 = the "
+                          "frame's min and max; an object hotter than the rest covering more "
+                          "than this share of the readings still sets the top)",
+                          0.0, pyrocam::kMaxTrimPercent, DEFAULT_AUTO_TRIM, display));
   g_object_class_install_property(
       gobject_class, PROP_SCALE_BAR,
       g_param_spec_boolean("scale-bar", "Scale bar",

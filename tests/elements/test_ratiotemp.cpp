@@ -855,5 +855,95 @@ TEST(RatioTempErrors, rejects_an_invalid_region_n) {
   expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS, {"10,10,0,5"});
 }
 
+// A plate at 1000 degC with a 7x7 hot spot at 1400 centred on (12, 7) and one wild pixel at
+// 1750 (a mixed pixel at an edge), as band planes of the colour model.
+std::vector<float> plate_with_spot_and_outlier(int w, int h) {
+  const ThermalModel& m = *rgb_model();
+  const auto plate = graybody_planes(m, w, h, 1000, 1000),
+             spot = graybody_planes(m, w, h, 1400, 1400),
+             wild = graybody_planes(m, w, h, 1750, 1750);
+  std::vector<float> v = plate;
+  const int n = w * h;
+  for (int b = 0; b < m.profile().band_count(); ++b)
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const std::size_t i = static_cast<std::size_t>(b * n + y * w + x);
+        if (std::abs(x - 12) <= 3 && std::abs(y - 7) <= 3) v[i] = spot[i];
+        if (x == 3 && y == 12) v[i] = wild[i];
+      }
+  return v;
+}
+
+TEST_F(RatioTemp, stats_peak_is_the_hot_spot_not_a_wild_pixel) {
+  const int w = 24, h = 16;
+  start("ratiotemp stats-interval=1 region=8,2,12,12 model=" + rgb_model_path(),
+        bands_caps(3, "bayer", w, h));
+  guint window = 0;
+  g_object_get(element, "peak-window", &window, nullptr);
+  EXPECT_EQ(window, 5u);
+  const auto planes = plate_with_spot_and_outlier(w, h);
+  run(planes, w, h, 0);
+  auto s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  const cv::Mat t = library(rgb_model(), rgb_auto_method(), planes, w, h).t;
+  EXPECT_NEAR(field_double(s[0], "max-c"), 1750, 30);  // the wild pixel
+  const RegionPeak want = region_peak(t, 5);
+  EXPECT_DOUBLE_EQ(field_double(s[0], "peak-c"), want.c);
+  EXPECT_NEAR(field_double(s[0], "peak-c"), 1400, 30);
+  int x = -1, y = -1;
+  EXPECT_TRUE(gst_structure_get_int(s[0], "peak-x", &x));
+  EXPECT_TRUE(gst_structure_get_int(s[0], "peak-y", &y));
+  EXPECT_LE(std::abs(x - 12), 1);
+  EXPECT_LE(std::abs(y - 7), 1);
+  // The region's peak: windows inside it, the position in frame pixels.
+  const RegionPeak in_region = region_peak(t(cv::Rect(8, 2, 12, 12)), 5);
+  EXPECT_DOUBLE_EQ(field_double(s[0], "region-peak-c"), in_region.c);
+  EXPECT_TRUE(gst_structure_get_int(s[0], "region-peak-x", &x));
+  EXPECT_TRUE(gst_structure_get_int(s[0], "region-peak-y", &y));
+  EXPECT_EQ(x, in_region.x + 8);
+  EXPECT_EQ(y, in_region.y + 2);
+  free_all(s);
+  // peak-window 0: no peak; even values are refused.
+  g_object_set(element, "peak-window", 4u, nullptr);
+  g_object_get(element, "peak-window", &window, nullptr);
+  EXPECT_EQ(window, 5u);
+  g_object_set(element, "peak-window", 0u, nullptr);
+  run(planes, w, h, GST_SECOND);
+  s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_FALSE(gst_structure_has_field(s[0], "peak-c"));
+  EXPECT_FALSE(gst_structure_has_field(s[0], "region-peak-c"));
+  EXPECT_TRUE(gst_structure_has_field(s[0], "max-c"));
+  free_all(s);
+  EXPECT_TRUE(warnings.empty());
+}
+
+TEST_F(RatioTemp, peak_window_larger_than_the_frame_warns_once_and_gives_no_peak) {
+  const int w = 24, h = 16;
+  start("ratiotemp name=rt0 stats-interval=1 peak-window=17 model=" + rgb_model_path(),
+        bands_caps(3, "bayer", w, h));
+  const auto planes = plate_with_spot_and_outlier(w, h);
+  run(planes, w, h, 0);
+  run(planes, w, h, GST_SECOND);
+  auto s = stats();
+  ASSERT_EQ(s.size(), 2u);
+  for (const GstStructure* m : s) {
+    EXPECT_FALSE(gst_structure_has_field(m, "peak-c"));
+    EXPECT_TRUE(gst_structure_has_field(m, "median-c"));
+  }
+  free_all(s);
+  ASSERT_EQ(warnings.size(), 1u);  // once, not per message
+  EXPECT_NE(warnings[0].find("rt0"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("peak-window 17"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("24x16"), std::string::npos) << warnings[0];
+  // A window that fits again: the peak is back.
+  g_object_set(element, "peak-window", 15u, nullptr);
+  run(planes, w, h, 2 * GST_SECOND);
+  s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_TRUE(gst_structure_has_field(s[0], "peak-c"));
+  free_all(s);
+}
+
 }  // namespace
 }  // namespace pyrocam::test

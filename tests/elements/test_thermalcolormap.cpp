@@ -211,5 +211,35 @@ TEST(ThermalColormapPipeline, overlays_on_a_camera_image_with_compositor) {
   expect_eos(r, 3);
 }
 
+TEST_F(ThermalColormap, auto_range_leaves_out_a_few_wild_pixels) {
+  start("thermalcolormap range-mode=auto auto-smoothing=1 palette=grey", nullptr, 40, 25);
+  // A plate at 730..740 degC with 3 wild pixels of 1000 (0.3 %) at 3000 degC.
+  std::vector<std::uint16_t> codes(40 * 25);
+  for (std::size_t i = 0; i < codes.size(); ++i) codes[i] = code_of(730.0 + (i % 40) / 3.9);
+  for (std::size_t i : {5u, 400u, 999u}) codes[i] = code_of(3000);
+  GstElement* e = find_element(h, "thermalcolormap");
+  double trim = 0;
+  g_object_get(e, "auto-trim", &trim, nullptr);
+  EXPECT_DOUBLE_EQ(trim, 0.5);
+  auto out = run(codes);
+  const cv::Mat frame(25, 40, CV_16U, codes.data());
+  const auto trimmed = pyrocam::trimmed_range_c(frame, 0.5);
+  ASSERT_TRUE(trimmed);
+  EXPECT_NEAR(trimmed->first, 730, 0.1);
+  EXPECT_NEAR(trimmed->second, 740, 0.1);
+  ColormapSettings s;
+  s.palette = Palette::kGrey;
+  s.min_c = trimmed->first;
+  s.max_c = trimmed->second;
+  EXPECT_EQ(out, library(codes, s));  // the plate spans the palette; the outliers clamp
+  // auto-trim=0: the frame's min and max, as before.
+  g_object_set(e, "auto-trim", 0.0, nullptr);
+  gst_object_unref(e);
+  out = run(codes);
+  s.max_c = pyrocam::valid_range_c(frame)->second;
+  EXPECT_NEAR(s.max_c, 3000, 0.1);
+  EXPECT_EQ(out, library(codes, s));
+}
+
 }  // namespace
 }  // namespace pyrocam::test

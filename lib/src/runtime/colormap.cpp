@@ -6,6 +6,8 @@
 #include <iomanip>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/temperature_codes.h"
@@ -182,6 +184,36 @@ std::optional<std::pair<double, double>> valid_range_c(const cv::Mat& decikelvin
   }
   if (hi == 0) return std::nullopt;
   return std::make_pair(code_to_celsius(static_cast<std::uint16_t>(lo + 1)), code_to_celsius(hi));
+}
+
+std::optional<std::pair<double, double>> trimmed_range_c(const cv::Mat& decikelvin,
+                                                         double trim_percent) {
+  if (decikelvin.type() != CV_16U) throw InputError("trimmed range: input must be CV_16U");
+  if (!(trim_percent >= 0 && trim_percent <= kMaxTrimPercent))
+    throw InputError("trimmed range: trim must be 0.." + std::to_string(kMaxTrimPercent) +
+                     " percent");
+  if (trim_percent == 0) return valid_range_c(decikelvin);
+  std::vector<std::uint32_t> histogram(65536, 0);
+  for (int y = 0; y < decikelvin.rows; ++y) {
+    const std::uint16_t* in = decikelvin.ptr<std::uint16_t>(y);
+    for (int x = 0; x < decikelvin.cols; ++x) ++histogram[in[x]];
+  }
+  std::uint64_t n = 0;
+  for (std::size_t c = 1; c < histogram.size(); ++c) n += histogram[c];
+  if (n == 0) return std::nullopt;
+  const auto k =
+      static_cast<std::uint64_t>(std::floor(static_cast<double>(n) * trim_percent / 100));
+  std::size_t lo = 1, hi = 65535;
+  for (std::uint64_t below = 0;; ++lo) {  // the first code with more than k readings at or below
+    below += histogram[lo];
+    if (below > k) break;
+  }
+  for (std::uint64_t above = 0;; --hi) {
+    above += histogram[hi];
+    if (above > k) break;
+  }
+  return std::make_pair(code_to_celsius(static_cast<std::uint16_t>(lo)),
+                        code_to_celsius(static_cast<std::uint16_t>(hi)));
 }
 
 void AutoRange::update(std::optional<std::pair<double, double>> frame_range, double weight) {

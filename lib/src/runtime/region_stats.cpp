@@ -3,9 +3,89 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <queue>
+#include <string>
+#include <utility>
 #include <vector>
 
+#include "pyrocam/core/error.h"
+
 namespace pyrocam {
+namespace {
+
+// Median of values (reordered); the mean of the middle two for an even count.
+double median_of(std::vector<float>& values) {
+  auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  double median = *mid;
+  if (values.size() % 2 == 0) median = 0.5 * (median + *std::max_element(values.begin(), mid));
+  return median;
+}
+
+// The peak search over one image: `valid` is 1 where a pixel has a reading inside the mask.
+class PeakSearch {
+ public:
+  PeakSearch(const cv::Mat& t, const cv::Mat& valid, int window)
+      : t_(t), valid_(valid), half_(window / 2), area_(window * window) {
+    cv::boxFilter(valid_, valid_counts_, CV_16U, cv::Size(window, window), cv::Point(-1, -1), false,
+                  cv::BORDER_CONSTANT);
+  }
+
+  // Window centred on pixel index i: the best so far unless its median is larger.
+  void evaluate(int i) {
+    const int cx = i % t_.cols, cy = i / t_.cols;
+    values_.clear();
+    for (int y = std::max(0, cy - half_); y <= std::min(t_.rows - 1, cy + half_); ++y) {
+      const float* row = t_.ptr<float>(y);
+      const std::uint8_t* ok = valid_.ptr<std::uint8_t>(y);
+      for (int x = std::max(0, cx - half_); x <= std::min(t_.cols - 1, cx + half_); ++x)
+        if (ok[x]) values_.push_back(row[x]);
+    }
+    if (2 * static_cast<int>(values_.size()) < area_) return;
+    const double m = median_of(values_);
+    if (!best_.found() || m > best_.c) best_ = {m, cx, cy};
+  }
+
+  // Centres of the windows that may have a median above the best so far: with k readings and
+  // at least half the window valid, a median above L needs its upper middle value above L, so at
+  // least k - k / 2 readings above L (exactly the windows with a larger median when k is odd).
+  std::vector<int> candidates() {
+    cv::Mat above;
+    if (best_.found()) {
+      cv::compare(t_, best_.c, above, cv::CMP_GT);  // NaN compares false
+      cv::bitwise_and(above, valid_, above);        // 255 & 1 = 1: counts, not bytes
+    } else {
+      above = valid_;
+    }
+    cv::Mat counts;
+    cv::boxFilter(above, counts, CV_16U, cv::Size(2 * half_ + 1, 2 * half_ + 1), cv::Point(-1, -1),
+                  false, cv::BORDER_CONSTANT);
+    std::vector<int> out;
+    for (int y = 0; y < t_.rows; ++y) {
+      const std::uint16_t* k = valid_counts_.ptr<std::uint16_t>(y);
+      const std::uint16_t* c = counts.ptr<std::uint16_t>(y);
+      for (int x = 0; x < t_.cols; ++x)
+        if (2 * k[x] >= area_ && c[x] > 0 && c[x] >= k[x] - k[x] / 2)
+          out.push_back(y * t_.cols + x);
+    }
+    return out;
+  }
+
+  const RegionPeak& best() const { return best_; }
+
+ private:
+  const cv::Mat& t_;
+  const cv::Mat& valid_;
+  const int half_, area_;
+  cv::Mat valid_counts_;
+  std::vector<float> values_;
+  RegionPeak best_;
+};
+
+}  // namespace
 
 RegionStats region_stats(const cv::Mat& t, const cv::Mat& mask) {
   RegionStats s;
@@ -26,14 +106,58 @@ RegionStats region_stats(const cv::Mat& t, const cv::Mat& mask) {
   const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
   s.min_c = *lo;
   s.max_c = *hi;
-  auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  s.median_c = *mid;
-  if (values.size() % 2 == 0) {
-    const float below = *std::max_element(values.begin(), mid);
-    s.median_c = 0.5 * (s.median_c + below);
-  }
+  s.median_c = median_of(values);
   return s;
+}
+
+RegionPeak region_peak(const cv::Mat& t, int window, const cv::Mat& mask) {
+  if (t.type() != CV_32F) throw InputError("peak: temperature image must be CV_32F");
+  if (!mask.empty() && (mask.type() != CV_8U || mask.size() != t.size()))
+    throw InputError("peak: mask must be CV_8U and the image's size");
+  if (window < 1 || window % 2 == 0 || window > kMaxPeakWindow || window > t.cols ||
+      window > t.rows)
+    throw InputError("peak: window " + std::to_string(window) + " must be odd, 1.." +
+                     std::to_string(kMaxPeakWindow) + " and fit in the " + std::to_string(t.cols) +
+                     "x" + std::to_string(t.rows) + " image");
+  // One pass: the readings inside the mask, and the hottest few pixels as first guesses (a hot
+  // spot's window is usually among them, and any qualifying window gives a bound to prune by).
+  constexpr std::size_t kSeeds = 16;
+  using Hot = std::pair<float, int>;
+  std::priority_queue<Hot, std::vector<Hot>, std::greater<Hot>> hottest;
+  cv::Mat valid(t.size(), CV_8U);
+  for (int y = 0; y < t.rows; ++y) {
+    const float* row = t.ptr<float>(y);
+    const std::uint8_t* m = mask.empty() ? nullptr : mask.ptr<std::uint8_t>(y);
+    std::uint8_t* ok = valid.ptr<std::uint8_t>(y);
+    for (int x = 0; x < t.cols; ++x) {
+      ok[x] = std::isfinite(row[x]) && (!m || m[x]);
+      if (!ok[x]) continue;
+      if (hottest.size() < kSeeds) {
+        hottest.emplace(row[x], y * t.cols + x);
+      } else if (row[x] > hottest.top().first) {
+        hottest.pop();
+        hottest.emplace(row[x], y * t.cols + x);
+      }
+    }
+  }
+  PeakSearch search(t, valid, window);
+  for (; !hottest.empty(); hottest.pop()) search.evaluate(hottest.top().second);
+  // Raise the bound on a sample of the windows that could beat it until few are left, then
+  // evaluate those exactly. On a noisy plate this takes two or three rounds.
+  constexpr std::size_t kEvaluateAll = 8192, kSample = 1024;
+  constexpr int kMaxRounds = 8;
+  for (int round = 0;; ++round) {
+    const std::vector<int> c = search.candidates();
+    const RegionPeak before = search.best();
+    if (c.size() > kEvaluateAll && round < kMaxRounds) {
+      const std::size_t step = c.size() / kSample;
+      for (std::size_t i = 0; i < c.size(); i += step) search.evaluate(c[i]);
+      const RegionPeak& now = search.best();
+      if (now.found() && (!before.found() || now.c > before.c)) continue;
+    }
+    for (int i : c) search.evaluate(i);
+    return search.best();
+  }
 }
 
 }  // namespace pyrocam

@@ -2,10 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
-#include "pyrocam/runtime/colormap.h"
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/temperature_codes.h"
+#include "pyrocam/runtime/colormap.h"
 
 namespace pyrocam {
 namespace {
@@ -138,6 +140,59 @@ TEST(Colormap, scale_bar_is_drawn_opaque_at_the_right_edge) {
   cv::Mat tiny(20, 20, CV_8UC4, cv::Scalar(0, 0, 0, 0));
   draw_scale_bar(tiny, Palette::kIron, 1000, 2000, ChannelOrder::kRGBA);
   EXPECT_EQ(cv::countNonZero(tiny.reshape(1)), 0);
+}
+
+// Codes of a plate at 730..740 degC over a w x h frame, the top rows without a reading.
+cv::Mat plate_codes(int w, int h) {
+  cv::Mat codes(h, w, CV_16U, cv::Scalar(0));
+  for (int y = 2; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      codes.at<std::uint16_t>(y, x) = temperature_code(730.0 + 10.0 * x / (w - 1));
+  return codes;
+}
+
+TEST(Colormap, trimmed_range_ignores_a_few_wild_pixels) {
+  cv::Mat codes = plate_codes(200, 102);  // 20000 readings
+  for (int i = 0; i < 20; ++i) {          // 0.1 %: mixed pixels at 3000 and 300 degC
+    codes.at<std::uint16_t>(10 + i, 7 * i) = temperature_code(3000);
+    codes.at<std::uint16_t>(50 + i, 7 * i) = temperature_code(300);
+  }
+  const auto raw = valid_range_c(codes);
+  ASSERT_TRUE(raw);
+  EXPECT_NEAR(raw->second, 3000, 0.1);
+  const auto trimmed = trimmed_range_c(codes, 0.5);
+  ASSERT_TRUE(trimmed);
+  EXPECT_NEAR(trimmed->first, 730, 0.2);
+  EXPECT_NEAR(trimmed->second, 740, 0.2);
+  // The auto range follows the plate, not the outliers.
+  AutoRange range;
+  for (int frame = 0; frame < 30; ++frame) range.update(trimmed_range_c(codes, 0.5), 0.1);
+  EXPECT_NEAR(range.min_c(), 730, 0.3);
+  EXPECT_NEAR(range.max_c(), 740, 0.3);
+  // 0: the valid range itself; no reading: none; trims beyond 0..10 % are refused.
+  EXPECT_EQ(trimmed_range_c(codes, 0), raw);
+  EXPECT_FALSE(trimmed_range_c(cv::Mat(4, 4, CV_16U, cv::Scalar(0)), 0.5));
+  EXPECT_THROW(trimmed_range_c(codes, -1), InputError);
+  EXPECT_THROW(trimmed_range_c(codes, 10.5), InputError);
+  EXPECT_THROW(trimmed_range_c(cv::Mat(4, 4, CV_32F), 0.5), InputError);
+}
+
+TEST(Colormap, trimmed_range_keeps_a_melt_pool_of_one_percent_at_the_top) {
+  cv::Mat codes = plate_codes(200, 102);
+  // A melt pool of 200 readings (1 % of them, fewer of the frame) at 1700..1900 degC.
+  for (int i = 0; i < 200; ++i)
+    codes.at<std::uint16_t>(40 + i / 20, 90 + i % 20) = temperature_code(1700.0 + i);
+  const auto r = trimmed_range_c(codes, 0.5);
+  ASSERT_TRUE(r);
+  // The hottest 0.5 % are trimmed: the top lies in the pool, at its median.
+  EXPECT_GE(r->second, 1700);
+  EXPECT_NEAR(r->second, 1800, 1);
+  EXPECT_NEAR(r->first, 730, 0.2);
+  // With the most trim allowed, a pool of over 10 % still sets it.
+  cv::Mat big = plate_codes(20, 12);  // 200 readings, 21 of them in the pool
+  for (int x = 0; x < 20; ++x) big.at<std::uint16_t>(11, x) = temperature_code(1800);
+  big.at<std::uint16_t>(10, 0) = temperature_code(1800);
+  EXPECT_NEAR(trimmed_range_c(big, 10)->second, 1800, 0.1);
 }
 
 }  // namespace

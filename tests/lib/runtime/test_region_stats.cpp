@@ -1,10 +1,16 @@
 // Region statistics of a temperature image: median, extremes, mean and valid fraction in a mask.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
+#include <opencv2/imgproc.hpp>
+#include <vector>
 
+#include "pyrocam/core/error.h"
 #include "pyrocam/runtime/region_stats.h"
 
 namespace pyrocam {
@@ -30,6 +36,155 @@ TEST(RegionStats, median_min_max_mean_and_valid_fraction_inside_a_mask) {
   const RegionStats none = region_stats(cv::Mat(2, 2, CV_32F, cv::Scalar(kNaN)));
   EXPECT_EQ(none.valid, 0u);
   EXPECT_TRUE(std::isnan(none.median_c));
+}
+
+// The definition, window by window: the reference the fast search must match.
+double naive_window_median(const cv::Mat& t, int w, const cv::Mat& mask, int cx, int cy) {
+  std::vector<float> v;
+  const int h = w / 2;
+  for (int y = std::max(0, cy - h); y <= std::min(t.rows - 1, cy + h); ++y)
+    for (int x = std::max(0, cx - h); x <= std::min(t.cols - 1, cx + h); ++x)
+      if (std::isfinite(t.at<float>(y, x)) && (mask.empty() || mask.at<std::uint8_t>(y, x)))
+        v.push_back(t.at<float>(y, x));
+  if (2 * static_cast<int>(v.size()) < w * w) return kNaN;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (static_cast<double>(v[n / 2 - 1]) + v[n / 2]);
+}
+
+RegionPeak naive_peak(const cv::Mat& t, int w, const cv::Mat& mask = cv::Mat()) {
+  RegionPeak best;
+  for (int cy = 0; cy < t.rows; ++cy)
+    for (int cx = 0; cx < t.cols; ++cx) {
+      const double m = naive_window_median(t, w, mask, cx, cy);
+      if (!std::isnan(m) && (!best.found() || m > best.c)) best = {m, cx, cy};
+    }
+  return best;
+}
+
+cv::Mat noisy_plate(int width, int height, float plate_c, float noise_c, unsigned seed) {
+  cv::Mat t(height, width, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(t, cv::RNG::NORMAL, plate_c, noise_c);
+  return t;
+}
+
+TEST(RegionPeak, wild_edge_pixels_do_not_make_the_peak) {
+  cv::Mat t(80, 100, CV_32F, cv::Scalar(kNaN));
+  noisy_plate(60, 40, 735, 2, 1).copyTo(t(cv::Rect(20, 20, 60, 40)));
+  // Mixed pixels along the plate's edges: single wild readings, hot and cold.
+  for (int x : {20, 33, 50, 79}) t.at<float>(20, x) = 2500;
+  for (int y : {25, 40, 59}) t.at<float>(y, 79) = 2283;
+  t.at<float>(59, 40) = 503;
+  t.at<float>(19, 50) = 2500;  // a stray reading outside the plate
+  const RegionStats s = region_stats(t);
+  EXPECT_DOUBLE_EQ(s.max_c, 2500);
+  const RegionPeak p = region_peak(t);
+  ASSERT_TRUE(p.found());
+  EXPECT_NEAR(p.c, 735, 3);
+  EXPECT_GE(p.x, 20);
+  EXPECT_LT(p.x, 80);
+  EXPECT_GE(p.y, 20);
+  EXPECT_LT(p.y, 60);
+}
+
+TEST(RegionPeak, finds_a_hot_spot_where_it_is) {
+  cv::Mat t = noisy_plate(120, 90, 1000, 3, 2);
+  for (int y = 0; y < t.rows; ++y)
+    for (int x = 0; x < t.cols; ++x)
+      t.at<float>(y, x) += 800.0f * std::exp(-((x - 37) * (x - 37) + (y - 61) * (y - 61)) / 32.0f);
+  t.at<float>(5, 100) = 3000;  // an outlier hotter than the spot
+  const RegionPeak p = region_peak(t, 5);
+  ASSERT_TRUE(p.found());
+  EXPECT_LE(std::abs(p.x - 37), 1);
+  EXPECT_LE(std::abs(p.y - 61), 1);
+  // The 13th-nearest of 25 pixels lies 2 px from the centre: 1000 + 800 exp(-4 / 32).
+  EXPECT_NEAR(p.c, 1706, 15);
+  const RegionPeak one = region_peak(t, 1);  // a 1-pixel window is the hottest pixel
+  EXPECT_EQ(one.x, 100);
+  EXPECT_EQ(one.y, 5);
+  EXPECT_DOUBLE_EQ(one.c, 3000);
+}
+
+TEST(RegionPeak, windows_with_under_half_their_pixels_valid_do_not_count) {
+  cv::Mat t(40, 40, CV_32F, cv::Scalar(kNaN));
+  t(cv::Rect(2, 2, 3, 3)) = 2000;    // 9 readings: under half of 25 in any window
+  t(cv::Rect(20, 10, 4, 4)) = 1200;  // 16 readings: windows over most of it count
+  RegionPeak p = region_peak(t);
+  EXPECT_DOUBLE_EQ(p.c, 1200);
+  EXPECT_GE(p.x, 20);
+  EXPECT_LE(p.x, 23);
+  p = region_peak(t, 3);  // 3 x 3: the small block counts now
+  EXPECT_DOUBLE_EQ(p.c, 2000);
+  EXPECT_LE(std::abs(p.x - 3), 1);  // 2000 in any window holding 5 of the 9
+  EXPECT_LE(std::abs(p.y - 3), 1);
+  // A mask leaving the block under half of its window: no peak.
+  cv::Mat mask(t.size(), CV_8U, cv::Scalar(0));
+  mask(cv::Rect(20, 10, 2, 4)) = 1;
+  p = region_peak(t, 5, mask);
+  EXPECT_FALSE(p.found());
+  EXPECT_TRUE(std::isnan(p.c));
+  EXPECT_FALSE(region_peak(cv::Mat(9, 9, CV_32F, cv::Scalar(kNaN))).found());
+}
+
+TEST(RegionPeak, window_must_be_odd_positive_and_fit_in_the_image) {
+  const cv::Mat t(20, 30, CV_32F, cv::Scalar(900));
+  EXPECT_THROW(region_peak(t, 4), InputError);
+  EXPECT_THROW(region_peak(t, 0), InputError);
+  EXPECT_THROW(region_peak(t, -3), InputError);
+  EXPECT_THROW(region_peak(t, 21), InputError);  // taller than the image
+  EXPECT_THROW(region_peak(cv::Mat(300, 300, CV_32F, cv::Scalar(900)), 257), InputError);
+  EXPECT_THROW(region_peak(cv::Mat(20, 30, CV_64F, cv::Scalar(900))), InputError);
+  EXPECT_THROW(region_peak(t, 5, cv::Mat(20, 29, CV_8U, cv::Scalar(1))), InputError);
+  const RegionPeak p = region_peak(t, 19);
+  EXPECT_DOUBLE_EQ(p.c, 900);
+}
+
+TEST(RegionPeak, matches_the_window_by_window_definition) {
+  cv::RNG rng(7);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int w = 1 + 2 * (trial % 4);
+    cv::Mat t = noisy_plate(37 + trial, 23 + trial % 5, 1000, trial % 2 ? 50 : 0.5f, trial);
+    for (int i = 0; i < t.rows * t.cols * 3 / 10; ++i)  // holes and wild pixels
+      t.at<float>(rng.uniform(0, t.rows), rng.uniform(0, t.cols)) = i % 7 ? kNaN : 2500;
+    cv::Mat mask;
+    if (trial % 3 == 0) {
+      mask = cv::Mat(t.size(), CV_8U, cv::Scalar(1));
+      mask(cv::Rect(0, 0, t.cols / 2, t.rows)) = 0;
+    }
+    const RegionPeak want = naive_peak(t, w, mask), got = region_peak(t, w, mask);
+    ASSERT_EQ(got.found(), want.found()) << trial;
+    if (!want.found()) continue;
+    EXPECT_DOUBLE_EQ(got.c, want.c) << trial;
+    // Ties may pick another window of the same median.
+    EXPECT_DOUBLE_EQ(naive_window_median(t, w, mask, got.x, got.y), want.c) << trial;
+  }
+  // A large noisy plate: many windows could beat the first guesses (the sampling rounds).
+  const cv::Mat plate = noisy_plate(400, 300, 735, 5, 11);
+  EXPECT_DOUBLE_EQ(region_peak(plate).c, naive_peak(plate, 5).c);
+}
+
+// Cost on a camera-sized frame: run with --gtest_also_run_disabled_tests.
+TEST(RegionPeak, DISABLED_timing_2048x2048) {
+  cv::Mat t = noisy_plate(2048, 2048, 735, 5, 3);
+  for (int i = 0; i < 4000; ++i) t.at<float>((i * 7919) % 2048, (i * 104729) % 2048) = 2500;
+  cv::circle(t, cv::Point(1200, 900), 20, cv::Scalar(1800), -1);
+  for (int run = 0; run < 3; ++run) {
+    const auto start = std::chrono::steady_clock::now();
+    const RegionPeak p = region_peak(t);
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    std::printf("region_peak 2048x2048, window 5: %.1f ms (peak %.1f at %d,%d)\n", ms, p.c, p.x,
+                p.y);
+    EXPECT_NEAR(p.c, 1800, 1);
+  }
+  const cv::Mat plate = noisy_plate(2048, 2048, 735, 5, 4);
+  const auto start = std::chrono::steady_clock::now();
+  const RegionPeak p = region_peak(plate);
+  std::printf(
+      "region_peak 2048x2048 noisy plate: %.1f ms (peak %.1f)\n",
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count(),
+      p.c);
 }
 
 }  // namespace

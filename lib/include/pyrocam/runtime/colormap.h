@@ -70,6 +70,16 @@ std::uint32_t pack_argb(std::uint32_t argb, ChannelOrder order);
 // Lowest and highest valid (non-zero) temperature in degC; nullopt when no pixel is valid.
 std::optional<std::pair<double, double>> valid_range_c(const cv::Mat& decikelvin);
 
+// The valid range without its extremes: `trim_percent` (0..kMaxTrimPercent) of the valid
+// readings cut at each end, so that a few wild pixels (mixed pixels at sharp edges) do not
+// stretch an auto range; 0 = valid_range_c. With n readings and k = floor(n * trim / 100), the
+// ends are the (k+1)-th lowest and highest codes: an object hotter than the rest that covers
+// more than trim_percent of the readings still sets the top. One pass and a histogram of the
+// 65536 codes. Throws InputError for a trim outside 0..kMaxTrimPercent or non-CV_16U input.
+inline constexpr double kMaxTrimPercent = 10;
+std::optional<std::pair<double, double>> trimmed_range_c(const cv::Mat& decikelvin,
+                                                         double trim_percent);
+
 // Auto range that does not flicker: an exponential moving average of each frame's valid range;
 // `weight` (0..1] is the share of the newest frame (1 = no smoothing). The range is kept at
 // least min_span_c wide.
