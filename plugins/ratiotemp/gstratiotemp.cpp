@@ -28,7 +28,7 @@
  * on the locus at another temperature (a simulated 735 degC plate still reads up to 2294 degC
  * at its edge with the check on), so it is no edge detector for colour cameras.
  *
- * #GstRatioTemp:method chooses the per-pixel estimator (METHOD.md section 5):
+ * #GstRatioTemp:method chooses the per-pixel estimator:
  * - mlp: the paper's network on the normalised band ratios, the reference. Far too slow for
  *   live video at 100 000 pixels and more; use it for checks and offline work.
  * - lut: a 2-D lookup table of the same network over the colour camera's two ratios (built
@@ -65,7 +65,7 @@
  * - valid-fraction (double): valid / pixels;
  * - min-c, max-c, mean-c, median-c (double, degC): of the pixels with a reading; absent when
  *   there are none. Prefer the median for a region's temperature: noise biases the mean of
- *   per-pixel temperatures upward (METHOD.md section 7);
+ *   per-pixel temperatures upward;
  * - peak-c (double, degC), peak-x, peak-y (int, output pixels): the object's peak, robust to
  *   the wild mixed pixels at sharp edges that make max-c: the largest median of the
  *   #GstRatioTemp:peak-window square windows with at least half their pixels read, and that

@@ -9,7 +9,7 @@ G_BEGIN_DECLS
 #define GST_TYPE_RATIO_TEMP (gst_ratio_temp_get_type())
 G_DECLARE_FINAL_TYPE(GstRatioTemp, gst_ratio_temp, GST, RATIO_TEMP, GstBaseTransform)
 
-/* The per-pixel estimator (METHOD.md section 5). */
+/* The per-pixel estimator (docs/elements.md). */
 typedef enum {
   GST_RATIO_TEMP_METHOD_AUTO,
   GST_RATIO_TEMP_METHOD_MLP,
