@@ -12,9 +12,20 @@
 namespace pyrocam {
 
 // Measured signal rates s_b(T_i) (DN/s after dark subtraction, slopes of ROI mean vs exposure).
+// A reference source beyond the furnace (a fixed-point cell, a strip lamp, a source read by a
+// reference pyrometer): its temperature is known, its absolute scale (aperture, distance,
+// emissivity) is not, so it constrains the band ratios only.
+struct ReferenceRates {
+  std::string name;                        // for messages and the report, e.g. "Pt-C 1738 degC"
+  double temperature_c = 0;                // degC
+  double temperature_uncertainty_c = 0.5;  // standard uncertainty (k=1), degC; > 0
+  Eigen::VectorXd rates;                   // per band, DN/s; NaN (or <= 0) = no usable points
+};
+
 struct CalibrationRates {
   std::vector<double> temperatures_c;  // calibration temperatures, degC (any order)
   Eigen::MatrixXd rates;               // bands x temperatures; NaN (or <= 0) = no usable points
+  std::vector<ReferenceRates> references;  // optional; scale-free constraints on the ratios
 };
 
 enum class QeSolver { kPaper, kRegularised };
