@@ -52,7 +52,7 @@ std::vector<double> thermocouple_uncertainty(const ThermalModel& m, const Uncert
     QeFitOptions qo;
     qo.solver = m.qe_solver == "paper" ? QeSolver::kPaper : QeSolver::kRegularised;
     const QeFitResult fit =
-        fit_qe(m.profile(), CalibrationRates{t_perturbed, rates.transpose()}, qo);
+        fit_qe(m.profile(), CalibrationRates{t_perturbed, rates.transpose(), {}}, qo);
     const CameraModel cam{m.profile(), fit.system_qe, fit.gains};
     const OhnoEstimator inv(
         make_locus(cam, m.min_temperature_c - 100, m.max_temperature_c + 100, 1));
