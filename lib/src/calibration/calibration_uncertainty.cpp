@@ -21,6 +21,29 @@ Eigen::MatrixXd with_emissivity_slope(const CameraProfile& p, const Eigen::Matri
   return out;
 }
 
+std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
+                                         const std::vector<QeSample>& posterior,
+                                         const std::vector<double>& temperatures_c) {
+  std::vector<double> u;
+  if (posterior.size() < 2) return u;
+  const double lo = *std::min_element(temperatures_c.begin(), temperatures_c.end());
+  const double hi = *std::max_element(temperatures_c.begin(), temperatures_c.end());
+  const OhnoEstimator inverse(make_locus(fitted, lo - 300, hi + 300, 1));
+  for (double t : temperatures_c) {
+    double sum = 0, sum2 = 0;
+    int n = 0;
+    for (const QeSample& s : posterior) {
+      const CameraModel plausible{fitted.profile, s.system_qe, s.gains};
+      const double d = inverse.temperature_c(plausible.rates(t)) - t;
+      if (!std::isfinite(d)) continue;
+      sum += d, sum2 += d * d, ++n;
+    }
+    const double mean = n > 0 ? sum / n : 0;
+    u.push_back(n > 1 ? std::sqrt(std::max(0.0, (sum2 - n * mean * mean) / (n - 1))) : NAN);
+  }
+  return u;
+}
+
 std::vector<double> emissivity_uncertainty(const ThermalModel& m, const UncertaintyModel& u) {
   const CameraProfile& profile = m.profile();
   const CameraModel tilted{profile,

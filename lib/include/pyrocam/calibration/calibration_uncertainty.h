@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "pyrocam/calibration/calibration_outcome.h"
+#include "pyrocam/calibration/qe_fit.h"
 
 namespace pyrocam {
 
@@ -16,6 +17,14 @@ namespace pyrocam {
 UncertaintyModel uncertainty_model(const ThermalModel& model, const std::vector<double>& t_c,
                                    const Eigen::MatrixXd& rates, const CalibrationOptions& options,
                                    const StageProgress& progress = {});
+
+// Standard uncertainty at every temperature of what the QE leaves open: the spread (std) of the
+// readings that `fitted`'s locus gives for the rates of each plausible camera in `posterior`
+// (QeFitResult::posterior). Small inside the furnace range, growing where the data do not
+// constrain the QE. Empty without samples.
+std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
+                                         const std::vector<QeSample>& posterior,
+                                         const std::vector<double>& temperatures_c);
 
 // Spectral emissivity eps(lambda) = 1 + alpha (lambda - centre) / 100 nm folded into Q.
 Eigen::MatrixXd with_emissivity_slope(const CameraProfile& p, const Eigen::MatrixXd& q,

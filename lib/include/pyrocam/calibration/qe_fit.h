@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -40,11 +41,15 @@ struct PaperSearchOptions {
   double taper_nm = 100;           // log-linear taper from one to the other outside the band
 };
 
-// The regularised solve. Q_b = shift(S_b, h_b) * optics * (1 + t_b x + u_b x^2) + S_b * leak, with
-// x = (l - pass band centre) / 100 nm, S_b the band's sensor QE, leak >= 0 a smooth sum of
-// bumps in the optical filter's blocking region shared by all bands (one filter), and a free
-// gain per band. Each sigma is a prior standard deviation (a Gaussian penalty); 0 fixes the
-// parameter at the datasheet's.
+// The regularised solve. Q_b = shift(S_b, h_b) * optics(d_lo, d_hi) * (1 + t_b x + u_b x^2) *
+// (1 + tau x) + S_b * leak, with x = (l - pass band centre) / 100 nm, S_b the band's sensor QE,
+// optics(d_lo, d_hi) the lens and filters with the filter's pass-band edges moved by d_lo and
+// d_hi nm, tau a slope common to all bands (a neutral-density glass or window), leak >= 0 a
+// smooth sum of bumps in the optical filter's blocking region shared by all bands (one filter),
+// and a free gain per band. The furnace plate's true temperature at each step and each
+// reference's are parameters too, near their nominal values; each reference has a free scale.
+// Each sigma is a prior standard deviation (a Gaussian penalty); 0 fixes the parameter at the
+// datasheet's.
 struct RegularisedOptions {
   double relative_noise = 0.005;       // expected relative rms error of a measured rate (the start)
   int noise_passes = 3;                // refits weighting the data by the misfit reached, at most
@@ -53,6 +58,9 @@ struct RegularisedOptions {
   double curvature_sigma = 0.0;        // per (100 nm)^2; off: trades against the leak, worse highs
   double shift_sigma_nm = 3.0;         // only for bands narrower than narrow_band_fwhm_nm:
   double narrow_band_fwhm_nm = 60;     // for broad bands a shift is a tilt the data cannot tell
+  double common_tilt_sigma = 0.1;      // per 100 nm: ND glass, windows (+-30 % over 300 nm)
+  double edge_shift_sigma_nm = 5.0;    // each pass-band edge of the optical filter
+  double furnace_temperature_sigma_c = 1.5;  // true plate temperature against the nominal
   double leak_spacing_nm = 25;         // bump spacing (and half width)
   double leak_sigma = 0.05;            // absolute filter transmission added by a leak
   double leak_curvature_sigma = 0.01;  // second difference between neighbouring bumps
@@ -60,11 +68,13 @@ struct RegularisedOptions {
   // the hottest calibration temperature to the hottest of use_temperatures_c has its prior
   // sigma divided by L: the furnace barely sees it, the high range would depend on it.
   std::vector<double> use_temperatures_c{1500, 2000, 2500, 3000};
-  // Optional penalty on the change of each band's rate at use_temperatures_c relative to the
-  // hottest calibration rate, against the datasheet's. Off: when the datasheet is wrong (a
-  // leak) the true change is large and this fights the data (worse fits and highs in tests).
-  double use_change_sigma = 0.0;
   int max_iterations = 100;
+  // Draws from the Laplace approximation of the posterior at the solution (QeFitResult::
+  // posterior): QE solutions that fit the data and the priors about equally well. Where the
+  // furnace and references leave the QE unconstrained they spread, which is how the model's
+  // uncertainty knows that it extrapolates.
+  int posterior_samples = 0;
+  std::uint64_t posterior_seed = 5;
 };
 
 struct QeFitOptions {
@@ -79,8 +89,18 @@ struct QeFitDiagnostics {
   Eigen::VectorXd residual_before;  // datasheet QE
   Eigen::VectorXd residual_after;   // fitted QE
   Eigen::VectorXd qe_change_rms;    // per band rms(Q - Q_datasheet) over the grid
+  // Per reference (CalibrationRates::references): its reading by the scale-free fit of its
+  // rates (reference_reading_c) minus its temperature, with the datasheet QE (least-squares
+  // gains on the furnace) and with the fitted QE.
+  std::vector<double> reference_error_before_c, reference_error_after_c;
   int iterations = 0;               // sweeps (paper) or Gauss-Newton iterations (regularised)
   double wall_time_s = 0;
+};
+
+// One plausible camera: a system QE and its band gains.
+struct QeSample {
+  Eigen::MatrixXd system_qe;
+  Eigen::VectorXd gains;
 };
 
 struct QeFitResult {
@@ -91,6 +111,7 @@ struct QeFitResult {
   // over all temperatures.
   Eigen::VectorXd gains;
   QeFitDiagnostics diagnostics;
+  std::vector<QeSample> posterior;  // regularised only, RegularisedOptions::posterior_samples
 };
 
 // Fits the QE. Throws InputError when shapes disagree, or naming the band when a band has fewer
@@ -105,6 +126,12 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
 // The calibrated model's signal rates, DN/s: gains .* signal_rates(profile, system_qe, T).
 Eigen::VectorXd fitted_signal_rates(const CameraProfile& profile, const QeFitResult& fit,
                                     double temperature_k, double emissivity = 1.0);
+
+// The temperature whose modelled rates gains .* signal_rates(profile, system_qe, T) best match
+// `rates` up to one common scale (least squares in log rate over the usable bands), degC over
+// 300-4000; NaN with fewer than two usable bands.
+double reference_reading_c(const CameraProfile& profile, const Eigen::MatrixXd& system_qe,
+                           const Eigen::VectorXd& gains, const Eigen::VectorXd& rates);
 
 // Per band rms of the normalised-rate residual (see QeFitDiagnostics) for any system QE.
 Eigen::VectorXd normalised_rate_residuals(const CameraProfile& profile,

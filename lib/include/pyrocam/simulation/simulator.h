@@ -16,14 +16,19 @@ namespace pyrocam {
 
 // A named, seeded deviation of a real unit from its datasheet.
 struct UnitPerturbation {
-  std::string name = "datasheet";  // "datasheet" (none) or "typical" (profile's unit_variation)
+  // "datasheet" (none), "typical" (the profile's unit_variation) or "hostile": typical plus
+  // what no solver here is built around: the filter's pass-band edges moved 3-10 nm, narrow
+  // leaks within 50 nm outside an edge at 0.2-3 % transmission, a neutral-density glass sloping
+  // +-30 % over 700-1000 nm, and per-band shape changes (curvature, skew, a bump) of ~5 %.
+  std::string name = "datasheet";
   std::uint64_t seed = 1;
 
   static UnitPerturbation parse(const std::string& name, std::uint64_t seed);
 };
 
 // System QE (bands x wavelengths) of the unit: the datasheet's, or perturbed by a filter leak,
-// per-band scale and tilt, and per-band wavelength shift, all drawn from `seed`.
+// per-band scale and tilt, and per-band wavelength shift (and the hostile changes), all drawn
+// from `seed`.
 Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbation& unit);
 
 class Simulator {

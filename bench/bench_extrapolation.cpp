@@ -1,0 +1,155 @@
+// Benchmark: how the QE fit extrapolates beyond the furnace, per unit family and seeded unit, at
+// the level of signal rates (furnace rates of the true QE with 0.3 % noise, the fit, and the
+// likelihood reading of the fitted model at 700-2600 degC). Prints the error against temperature.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "pyrocam/calibration/calibration_uncertainty.h"
+#include "pyrocam/calibration/extrapolation_study.h"
+#include "pyrocam/runtime/model.h"
+#include "pyrocam/simulation/simulator.h"
+
+using namespace pyrocam;
+
+int main(int argc, char** argv) {
+  CLI::App app{"QE fit extrapolation per unit family"};
+  std::vector<std::string> profiles{"rgb-reference", "nir5x5-reference"};
+  std::vector<std::string> families{"typical", "hostile"};
+  int units = 6;
+  std::vector<double> references;
+  RateCampaign base;
+  app.add_option("--profile", profiles, "camera profiles");
+  app.add_option("--family", families, "unit families");
+  app.add_option("--units", units, "seeded units per family");
+  app.add_option("--reference", references, "reference temperatures, degC")->delimiter(',');
+  app.add_option("--noise", base.relative_noise, "relative rms noise of a furnace rate");
+  app.add_option("--furnace-sigma", base.furnace_error_sigma_c, "furnace temperature error, degC");
+  std::string model_file;
+  std::uint64_t unit_seed = 1;
+  app.add_option("--model", model_file,
+                 "evaluate this calibrated model against unit --unit-seed of the first family");
+  app.add_option("--unit-seed", unit_seed, "seed of the unit the model was calibrated on");
+  std::vector<std::string> settings;
+  app.add_option("--set", settings,
+                 "regularised solver options, e.g. --set tilt_sigma=0.05 (see RegularisedOptions)");
+  std::vector<std::string> variations;
+  app.add_option("--vary", variations, "change the profile's unit variation (study), e.g. leak=0");
+  bool coverage = false;
+  app.add_flag("--coverage", coverage,
+               "also the QE model uncertainty from posterior samples, and how often the k=2 "
+               "interval covers the error at 1500-2600 degC");
+  CLI11_PARSE(app, argc, argv);
+  QeFitOptions fit_options;
+  RegularisedOptions& ro = fit_options.regularised;
+  for (const std::string& setting : settings) {
+    const auto eq = setting.find('=');
+    const std::string key = setting.substr(0, eq);
+    const double value = eq == std::string::npos ? NAN : std::atof(setting.c_str() + eq + 1);
+    if (key == "tilt_sigma")
+      ro.tilt_sigma = value;
+    else if (key == "curvature_sigma")
+      ro.curvature_sigma = value;
+    else if (key == "shift_sigma_nm")
+      ro.shift_sigma_nm = value;
+    else if (key == "leak_sigma")
+      ro.leak_sigma = value;
+    else if (key == "leak_spacing_nm")
+      ro.leak_spacing_nm = value;
+    else if (key == "leak_curvature_sigma")
+      ro.leak_curvature_sigma = value;
+    else if (key == "common_tilt_sigma")
+      ro.common_tilt_sigma = value;
+    else if (key == "edge_shift_sigma_nm")
+      ro.edge_shift_sigma_nm = value;
+    else if (key == "furnace_temperature_sigma_c")
+      ro.furnace_temperature_sigma_c = value;
+    else if (key == "relative_noise")
+      ro.relative_noise = value;
+    else if (key == "leverage") {
+      if (value == 0) ro.use_temperatures_c.clear();
+    } else {
+      std::fprintf(stderr, "unknown --set %s\n", key.c_str());
+      return 2;
+    }
+  }
+  std::vector<double> temps;
+  for (double t = 700; t <= 2600; t += 100) temps.push_back(t);
+  if (!model_file.empty()) {
+    const ThermalModel m = load_model(model_file);
+    const Eigen::MatrixXd truth =
+        true_system_qe(m.profile(), UnitPerturbation::parse(families.front(), unit_seed));
+    const std::vector<double> e = extrapolation_errors(m.profile(), truth, m.camera, temps);
+    for (std::size_t i = 0; i < temps.size(); ++i) std::printf("%6.0f %7.2f\n", temps[i], e[i]);
+    return 0;
+  }
+  for (const auto& name : profiles) {
+    CameraProfile profile = load_profile_by_name(name);
+    for (const std::string& v : variations) {
+      const auto eq = v.find('=');
+      const std::string key = v.substr(0, eq);
+      const double value = std::atof(v.c_str() + eq + 1);
+      UnitVariation& u = profile.unit_variation;
+      if (key == "leak")
+        u.leak_system_qe = value;
+      else if (key == "scale")
+        u.scale_sigma = value;
+      else if (key == "tilt")
+        u.tilt_sigma = value;
+      else if (key == "shift")
+        u.shift_sigma_nm = value;
+      else if (key == "filter_shift")
+        u.filter_shift_sigma_nm = value;
+      else if (key == "ripple")
+        u.ripple_rms = value;
+    }
+    for (const auto& family : families) {
+      std::printf("\n== %s, %s units%s\n   unit", name.c_str(), family.c_str(),
+                  references.empty() ? "" : ", with reference rows");
+      for (double t : temps) std::printf(" %6.0f", t);
+      std::printf("   rms:in  1000-1400 1800-2600 800-2600\n");
+      int covered = 0, counted = 0;
+      for (int u = 1; u <= units; ++u) {
+        const Eigen::MatrixXd truth =
+            true_system_qe(profile, UnitPerturbation::parse(family, static_cast<std::uint64_t>(u)));
+        RateCampaign campaign = base;
+        campaign.reference_temperatures_c = references;
+        campaign.seed = 100 + static_cast<std::uint64_t>(u);
+        const CalibrationRates data = simulate_calibration_rates(profile, truth, campaign);
+        QeFitOptions options = fit_options;
+        options.regularised.posterior_samples = coverage ? 48 : 0;
+        const QeFitResult fit = fit_qe(profile, data, options);
+        const CameraModel model{profile, fit.system_qe, fit.gains};
+        const std::vector<double> e = extrapolation_errors(profile, truth, model, temps);
+        const auto rms = [&](double lo, double hi) {
+          double ss = 0;
+          int n = 0;
+          for (std::size_t i = 0; i < temps.size(); ++i)
+            if (temps[i] >= lo && temps[i] <= hi) ss += e[i] * e[i], ++n;
+          return std::sqrt(ss / n);
+        };
+        std::printf("   %4d", u);
+        for (double v : e) std::printf(" %6.1f", v);
+        if (coverage) {
+          const std::vector<double> u = qe_model_uncertainty(model, fit.posterior, temps);
+          std::printf("   u(k=1)");
+          for (std::size_t i = 0; i < temps.size(); ++i) {
+            std::printf(" %6.1f", u[i]);
+            if (temps[i] >= 1500) covered += std::abs(e[i]) <= 2 * u[i], ++counted;
+          }
+          std::printf("\n       ");
+        }
+        std::printf("   %5.2f %8.2f %9.2f %8.2f   (fit %.1f s)\n", rms(700, 1100), rms(1000, 1400),
+                    rms(1800, 2600), rms(800, 2600), fit.diagnostics.wall_time_s);
+      }
+      if (coverage)
+        std::printf("   k=2 coverage at 1500-2600 degC: %d of %d (%.1f %%)\n", covered, counted,
+                    100.0 * covered / std::max(1, counted));
+    }
+  }
+  return 0;
+}

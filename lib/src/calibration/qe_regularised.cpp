@@ -1,0 +1,452 @@
+// The regularised QE solve (see RegularisedOptions): a physical model of how a unit differs from
+// its datasheet, fitted by Levenberg-Marquardt to the furnace rates and the reference sources.
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "calibration/qe_problem.h"
+#include "detail/portable_math.h"
+#include "detail/random.h"
+
+namespace pyrocam {
+namespace {
+
+using namespace qe_detail;
+
+// curve(w) by linear interpolation at source wavelengths w (one per grid sample), clamped.
+Eigen::VectorXd resampled(const Eigen::VectorXd& curve, const WavelengthGrid& grid,
+                          const Eigen::ArrayXd& source_nm) {
+  Eigen::VectorXd out(curve.size());
+  const double last = static_cast<double>(curve.size() - 1);
+  for (Eigen::Index i = 0; i < curve.size(); ++i) {
+    const double pos = std::clamp((source_nm[i] - grid.start_nm()) / grid.step_nm(), 0.0, last);
+    const auto i0 = static_cast<Eigen::Index>(std::floor(pos));
+    const auto i1 = std::min<Eigen::Index>(i0 + 1, curve.size() - 1);
+    const double f = pos - static_cast<double>(i0);
+    out[i] = curve[i0] * (1 - f) + curve[i1] * f;
+  }
+  return out;
+}
+
+Eigen::VectorXd shifted(const Eigen::VectorXd& curve, const WavelengthGrid& grid, double shift) {
+  return resampled(curve, grid, grid.nm().array() - shift);
+}
+
+// Leak bumps: raised cosines of half width `spacing` stepping away from the pass band edges,
+// zero inside the pass band (a leak is what the filter lets through where it should block).
+// `side` marks which blocking region each bump is in, for the smoothness penalty.
+Eigen::MatrixXd leak_basis(const CameraProfile& profile, double spacing, std::vector<int>& side) {
+  const auto& nm = profile.grid.nm();
+  const double lo = profile.filter_pass_band_nm[0], hi = profile.filter_pass_band_nm[1];
+  std::vector<Eigen::VectorXd> cols;
+  side.clear();
+  auto add = [&](double centre, int s) {
+    Eigen::VectorXd c = Eigen::VectorXd::Zero(nm.size());
+    for (Eigen::Index j = 0; j < nm.size(); ++j) {
+      const double x = (nm[j] - centre) / spacing;
+      if (std::abs(x) < 1 && (nm[j] < lo || nm[j] > hi)) c[j] = 0.5 + 0.5 * portable::cos(M_PI * x);
+    }
+    if (c.maxCoeff() > 0) cols.push_back(c), side.push_back(s);
+  };
+  if (spacing > 0) {
+    for (double c = lo; c + spacing > profile.grid.start_nm(); c -= spacing) add(c, -1);
+    for (double c = hi; c - spacing < profile.grid.stop_nm(); c += spacing) add(c, +1);
+  }
+  Eigen::MatrixXd basis(nm.size(), static_cast<Eigen::Index>(cols.size()));
+  for (std::size_t k = 0; k < cols.size(); ++k) basis.col(static_cast<Eigen::Index>(k)) = cols[k];
+  return basis;
+}
+
+// Parameter layout: log gains | per band (tilt, curvature, shift) | common (tilt, lower edge,
+// upper edge) | leak bumps | furnace temperature offsets | per reference (log scale, offset).
+class RegularisedModel {
+ public:
+  static constexpr int kPerBand = 3, kCommon = 3;
+
+  RegularisedModel(const CameraProfile& profile, const CalibrationRates& data, const Problem& p,
+                   const RegularisedOptions& o)
+      : profile_(profile), data_(data), p_(p), o_(o), q0_(profile.system_qe()) {
+    nb_ = profile.band_count();
+    leak_ = leak_basis(profile, o.leak_spacing_nm, side_);
+    nk_ = leak_.cols();
+    nt_ = static_cast<Eigen::Index>(data.temperatures_c.size());
+    nr_ = static_cast<Eigen::Index>(data.references.size());
+    const double lo = profile.filter_pass_band_nm[0], hi = profile.filter_pass_band_nm[1];
+    const Eigen::ArrayXd nm = profile.grid.nm().array();
+    x_ = (nm - 0.5 * (lo + hi)) / 100.0;
+    edge_weight_ = ((nm - lo) / (hi - lo)).min(1.0).max(0.0);
+    for (const ReferenceRates& r : data.references) ref_t_.push_back(r.temperature_c);
+    gain0_ = least_squares_gains(profile, p, q0_, data);
+    set_priors(data);
+  }
+
+  Eigen::Index size() const { return common_offset() + kCommon + nk_ + nt_ + 2 * nr_; }
+  Eigen::Index common_offset() const { return nb_ + nb_ * kPerBand; }
+  Eigen::Index leak_offset() const { return common_offset() + kCommon; }
+  Eigen::Index furnace_offset() const { return leak_offset() + nk_; }
+  Eigen::Index reference_offset() const { return furnace_offset() + nt_; }
+  bool fixed(Eigen::Index k) const { return sigma_[k] == 0; }
+  int band_count() const { return nb_; }
+  Eigen::Index wavelengths() const { return q0_.cols(); }
+  bool bounded(Eigen::Index k) const { return k >= leak_offset() && k < furnace_offset(); }
+
+  Eigen::VectorXd start() const {
+    Eigen::VectorXd th = Eigen::VectorXd::Zero(size());
+    const Eigen::MatrixXd rad = radiance_rows(profile_, ref_t_);
+    for (Eigen::Index r = 0; r < nr_; ++r) {  // each reference's scale from the datasheet
+      double measured = 0, modelled = 0;
+      for (int b = 0; b < nb_; ++b)
+        if (usable(data_.references[r].rates[b]))
+          measured += data_.references[r].rates[b],
+              modelled += gain0_[b] * g(b) * rad.row(r).dot(q0_.row(b));
+      th[reference_offset() + 2 * r] = portable::log(measured / modelled);
+    }
+    return th;
+  }
+
+  // The optics with moved pass-band edges, and its derivatives by the two edge shifts.
+  Eigen::VectorXd optics(const Eigen::VectorXd& th, Eigen::MatrixXd* d = nullptr) const {
+    const double d_lo = th[common_offset() + 1], d_hi = th[common_offset() + 2];
+    const auto warp = [&](double a, double b) {
+      return resampled(profile_.optics_transmission, profile_.grid,
+                       profile_.grid.nm().array() - (a * (1 - edge_weight_) + b * edge_weight_));
+    };
+    if (d) {
+      const double eps = 0.5 * profile_.grid.step_nm();
+      d->resize(profile_.grid.size(), 2);
+      d->col(0) = (warp(d_lo + eps, d_hi) - warp(d_lo - eps, d_hi)) / (2 * eps);
+      d->col(1) = (warp(d_lo, d_hi + eps) - warp(d_lo, d_hi - eps)) / (2 * eps);
+    }
+    return d_lo == 0 && d_hi == 0 ? Eigen::VectorXd(profile_.optics_transmission)
+                                  : warp(d_lo, d_hi);
+  }
+
+  // Q_b(theta) and its derivatives: wavelengths x [per band, common, leak bumps].
+  Eigen::VectorXd qe(int b, const Eigen::VectorXd& th, const Eigen::VectorXd& opt,
+                     const Eigen::MatrixXd* dopt, Eigen::MatrixXd* dq = nullptr) const {
+    const double* pb = th.data() + nb_ + b * kPerBand;
+    const double tau = th[common_offset()];
+    const Eigen::VectorXd sensor = profile_.sensor_qe.row(b).transpose();
+    const Eigen::ArrayXd s_shifted =
+        (pb[2] != 0 ? shifted(sensor, profile_.grid, pb[2]) : sensor).array();
+    const Eigen::ArrayXd band = 1.0 + pb[0] * x_ + pb[1] * x_.square();
+    const Eigen::ArrayXd common = 1.0 + tau * x_;
+    const Eigen::ArrayXd s = s_shifted * opt.array();
+    const Eigen::VectorXd leak = leak_ * th.segment(leak_offset(), nk_);
+    Eigen::VectorXd q = (s * band * common).matrix() + sensor.cwiseProduct(leak);
+    const Eigen::ArrayXd positive = (q.array() > 0).cast<double>();  // Q >= 0 by clamping
+    q = q.cwiseMax(0.0);
+    if (dq) {
+      dq->resize(q.size(), kPerBand + kCommon + nk_);
+      dq->col(0) = (s * x_ * common * positive).matrix();
+      dq->col(1) = (s * x_.square() * common * positive).matrix();
+      const double eps = 0.5 * profile_.grid.step_nm();
+      dq->col(2) = ((shifted(sensor, profile_.grid, pb[2] + eps) -
+                     shifted(sensor, profile_.grid, pb[2] - eps))
+                        .array() /
+                    (2 * eps) * opt.array() * band * common * positive)
+                       .matrix();
+      dq->col(3) = (s * band * x_ * positive).matrix();
+      for (int e = 0; e < 2; ++e)
+        dq->col(4 + e) = (s_shifted * dopt->col(e).array() * band * common * positive).matrix();
+      dq->rightCols(nk_) = (leak_.array().colwise() * (sensor.array() * positive)).matrix();
+    }
+    return q;
+  }
+
+  Eigen::VectorXd qe(int b, const Eigen::VectorXd& th) const {
+    return qe(b, th, optics(th), nullptr);
+  }
+
+  // Residual vector and Jacobian at theta (gain k_b = gain0_b * exp(theta_b)).
+  void evaluate(const Eigen::VectorXd& th, Eigen::VectorXd& res, Eigen::MatrixXd* jac) const {
+    std::vector<double> rv;
+    std::vector<Eigen::RowVectorXd> jr;
+    const Eigen::Index n = size();
+    auto row = [&](double value, Eigen::RowVectorXd&& j) {
+      rv.push_back(value);
+      if (jac) jr.push_back(std::move(j));
+    };
+    Eigen::MatrixXd rad, drad, rrad, drrad, dopt, dq;
+    radiance(data_.temperatures_c, th.segment(furnace_offset(), nt_), rad, drad);
+    Eigen::VectorXd ref_offsets(nr_);
+    for (Eigen::Index r = 0; r < nr_; ++r) ref_offsets[r] = th[reference_offset() + 2 * r + 1];
+    radiance(ref_t_, ref_offsets, rrad, drrad);
+    const Eigen::VectorXd opt = optics(th, jac ? &dopt : nullptr);
+    for (int b = 0; b < nb_; ++b) {
+      const Eigen::VectorXd q = qe(b, th, opt, &dopt, jac ? &dq : nullptr);
+      const double kg = gain(b, th) * g(b);
+      const Eigen::Index off = nb_ + b * kPerBand;
+      // One observation: value = kg * scale * w.q against `measured`, in units of its noise.
+      const auto observe = [&](const Eigen::RowVectorXd& w, const Eigen::RowVectorXd& dw,
+                               double scale, double measured, Eigen::Index t_param,
+                               Eigen::Index scale_param) {
+        const double value = kg * scale * w.dot(q), unit = 1.0 / (o_.relative_noise * measured);
+        Eigen::RowVectorXd j;
+        if (jac) {
+          j = Eigen::RowVectorXd::Zero(n);
+          const Eigen::RowVectorXd d = kg * scale * unit * (w * dq);
+          j[b] = value * unit;
+          j.segment(off, kPerBand) = d.head(kPerBand);
+          j.segment(common_offset(), kCommon) = d.segment(kPerBand, kCommon);
+          j.segment(leak_offset(), nk_) = d.tail(nk_);
+          j[t_param] = kg * scale * unit * dw.dot(q);
+          if (scale_param >= 0) j[scale_param] = value * unit;
+        }
+        row((value - measured) * unit, std::move(j));
+      };
+      for (Eigen::Index i : p_.valid[b])
+        observe(rad.row(i), drad.row(i), 1.0, data_.rates(b, i), furnace_offset() + i, -1);
+      for (Eigen::Index r = 0; r < nr_; ++r) {
+        const double m = data_.references[r].rates[b];
+        if (!usable(m)) continue;
+        const Eigen::Index c = reference_offset() + 2 * r;
+        observe(rrad.row(r), drrad.row(r), portable::exp(th[c]), m, c + 1, c);
+      }
+    }
+    priors(th, n, jac != nullptr, row);
+    res = Eigen::Map<Eigen::VectorXd>(rv.data(), static_cast<Eigen::Index>(rv.size()));
+    if (jac) {
+      jac->resize(static_cast<Eigen::Index>(jr.size()), n);
+      for (std::size_t r = 0; r < jr.size(); ++r) jac->row(static_cast<Eigen::Index>(r)) = jr[r];
+    }
+  }
+
+  double gain(int b, const Eigen::VectorXd& th) const { return gain0_[b] * portable::exp(th[b]); }
+
+  // rms relative misfit of the furnace rates.
+  double data_rms(const Eigen::VectorXd& th) const {
+    Eigen::MatrixXd rad, drad;
+    radiance(data_.temperatures_c, th.segment(furnace_offset(), nt_), rad, drad);
+    const Eigen::VectorXd opt = optics(th);
+    double ss = 0;
+    std::size_t count = 0;
+    for (int b = 0; b < nb_; ++b) {
+      const Eigen::VectorXd sim = gain(b, th) * g(b) * (rad * qe(b, th, opt, nullptr));
+      for (Eigen::Index i : p_.valid[b]) {
+        const double e = sim[i] / data_.rates(b, i) - 1;
+        ss += e * e, ++count;
+      }
+    }
+    return std::sqrt(ss / static_cast<double>(count));
+  }
+
+ private:
+  double g(int b) const { return profile_.dn_per_electron()[b]; }
+
+  // Radiance rows at nominal + offset temperatures, and their derivatives per degC.
+  void radiance(const std::vector<double>& nominal_c, const Eigen::VectorXd& offset_c,
+                Eigen::MatrixXd& rad, Eigen::MatrixXd& drad) const {
+    std::vector<double> t(nominal_c), up(nominal_c), down(nominal_c);
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      t[i] += offset_c[static_cast<Eigen::Index>(i)];
+      up[i] = t[i] + 0.05, down[i] = t[i] - 0.05;
+    }
+    rad = radiance_rows(profile_, t);
+    drad = (radiance_rows(profile_, up) - radiance_rows(profile_, down)) / 0.1;
+  }
+
+  void set_priors(const CalibrationRates& data) {
+    // Prior sigmas, one per parameter (0 = fixed, infinity = free). Shift only for narrow bands.
+    sigma_ = Eigen::VectorXd::Zero(size());
+    for (int b = 0; b < nb_; ++b) {
+      const Eigen::VectorXd q = q0_.row(b).transpose();
+      const double fwhm =
+          static_cast<double>((q.array() >= 0.5 * q.maxCoeff()).count()) * profile_.grid.step_nm();
+      const Eigen::Index off = nb_ + b * kPerBand;
+      sigma_[b] = std::numeric_limits<double>::infinity();  // gains: free, no prior
+      sigma_[off] = o_.tilt_sigma;
+      sigma_[off + 1] = o_.curvature_sigma;
+      sigma_[off + 2] = fwhm < o_.narrow_band_fwhm_nm ? o_.shift_sigma_nm : 0.0;
+    }
+    sigma_[common_offset()] = o_.common_tilt_sigma;
+    sigma_[common_offset() + 1] = sigma_[common_offset() + 2] = o_.edge_shift_sigma_nm;
+    // Leak bumps: sigma divided by their leverage on the high range (see the options).
+    const Eigen::MatrixXd use = radiance_rows(profile_, o_.use_temperatures_c);
+    Eigen::Index hottest_use = 0;
+    for (Eigen::Index e = 0; e < use.rows(); ++e)
+      if (o_.use_temperatures_c[e] > o_.use_temperatures_c[hottest_use]) hottest_use = e;
+    const Eigen::Index hot_cal = *std::max_element(
+        p_.reference.begin(), p_.reference.end(),
+        [&](auto a, auto c) { return data.temperatures_c[a] < data.temperatures_c[c]; });
+    for (Eigen::Index k = 0; k < nk_; ++k) {
+      double leverage = 1;
+      for (int b = 0; b < nb_ && use.rows() > 0; ++b) {
+        const Eigen::VectorXd bump =
+            profile_.sensor_qe.row(b).transpose().cwiseProduct(leak_.col(k));
+        const Eigen::VectorXd q = q0_.row(b).transpose();
+        const double cal = p_.radiance.row(hot_cal).dot(bump) / p_.radiance.row(hot_cal).dot(q);
+        const double u = use.row(hottest_use).dot(bump) / use.row(hottest_use).dot(q);
+        if (cal > 0) leverage = std::max(leverage, u / cal);
+      }
+      sigma_[leak_offset() + k] = o_.leak_sigma / leverage;
+    }
+    sigma_.segment(furnace_offset(), nt_).setConstant(o_.furnace_temperature_sigma_c);
+    for (Eigen::Index r = 0; r < nr_; ++r) {
+      sigma_[reference_offset() + 2 * r] = std::numeric_limits<double>::infinity();
+      sigma_[reference_offset() + 2 * r + 1] = data.references[r].temperature_uncertainty_c;
+    }
+  }
+
+  template <class Row>
+  void priors(const Eigen::VectorXd& th, Eigen::Index n, bool with_jacobian, Row& row) const {
+    // Gaussian priors on everything but the free gains and scales.
+    for (Eigen::Index k = nb_; k < n; ++k) {
+      if (fixed(k) || !std::isfinite(sigma_[k])) continue;
+      Eigen::RowVectorXd j;
+      if (with_jacobian) j = Eigen::RowVectorXd::Zero(n), j[k] = 1 / sigma_[k];
+      row(th[k] / sigma_[k], std::move(j));
+    }
+    // Leaks are smooth along each blocking region.
+    const Eigen::Index lo = leak_offset();
+    for (Eigen::Index k = 1; k + 1 < nk_; ++k) {
+      if (side_[k - 1] != side_[k] || side_[k + 1] != side_[k]) continue;
+      const double s = 1 / o_.leak_curvature_sigma;
+      Eigen::RowVectorXd j;
+      if (with_jacobian) {
+        j = Eigen::RowVectorXd::Zero(n);
+        j[lo + k - 1] = s, j[lo + k] = -2 * s, j[lo + k + 1] = s;
+      }
+      row((th[lo + k - 1] - 2 * th[lo + k] + th[lo + k + 1]) * s, std::move(j));
+    }
+  }
+
+  const CameraProfile& profile_;
+  const CalibrationRates& data_;
+  const Problem& p_;
+  const RegularisedOptions& o_;
+  Eigen::MatrixXd q0_, leak_;
+  Eigen::ArrayXd x_, edge_weight_;
+  Eigen::VectorXd gain0_, sigma_;
+  std::vector<double> ref_t_;
+  std::vector<int> side_;
+  int nb_ = 0;
+  Eigen::Index nk_ = 0, nt_ = 0, nr_ = 0;
+};
+
+// Levenberg-Marquardt with the leak bumps bounded below by zero: a bump at its bound whose
+// gradient points outwards is held there (active set), and steps are projected. Returns the
+// iterations taken.
+int levenberg_marquardt(const RegularisedModel& model, Eigen::VectorXd& th, int max_iterations) {
+  const Eigen::Index n = model.size();
+  Eigen::VectorXd res, res_new;
+  Eigen::MatrixXd jac;
+  model.evaluate(th, res, &jac);
+  double cost = res.squaredNorm(), mu = 1e-3;
+  int it = 0;
+  bool converged = false;
+  for (; it < max_iterations && !converged; ++it) {
+    const Eigen::VectorXd grad = jac.transpose() * res;
+    std::vector<Eigen::Index> free;
+    for (Eigen::Index k = 0; k < n; ++k)
+      if (!model.fixed(k) && (!model.bounded(k) || th[k] > 0 || grad[k] < 0)) free.push_back(k);
+    const auto nf = static_cast<Eigen::Index>(free.size());
+    Eigen::MatrixXd jf(jac.rows(), nf);
+    Eigen::VectorXd gf(nf);
+    for (Eigen::Index c = 0; c < nf; ++c) jf.col(c) = jac.col(free[c]), gf[c] = grad[free[c]];
+    const Eigen::MatrixXd h = jf.transpose() * jf;
+    bool improved = false;
+    for (int tries = 0; tries < 12 && !improved; ++tries) {
+      Eigen::MatrixXd a = h;
+      a.diagonal() += mu * (h.diagonal().array() + 1e-12).matrix();
+      const Eigen::VectorXd step = a.ldlt().solve(-gf);
+      Eigen::VectorXd trial = th;
+      for (Eigen::Index c = 0; c < nf; ++c) trial[free[c]] += step[c];
+      for (Eigen::Index k = 0; k < n; ++k)
+        if (model.bounded(k)) trial[k] = std::max(trial[k], 0.0);
+      model.evaluate(trial, res_new, nullptr);
+      const double c_new = res_new.squaredNorm();
+      if (c_new < cost) {
+        const double gain = cost - c_new;
+        th = trial, mu = std::max(mu / 3, 1e-9);
+        improved = true;
+        converged = gain < 1e-10 * cost + 1e-14;
+        cost = c_new;
+        model.evaluate(th, res, &jac);
+      } else {
+        mu *= 4;
+      }
+    }
+    if (!improved) break;
+  }
+  return it;
+}
+
+// Draws theta ~ N(theta*, (J^T J)^-1) over the free parameters (leak bumps clamped at zero).
+std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eigen::VectorXd& th,
+                                        const RegularisedOptions& o) {
+  std::vector<QeSample> out;
+  if (o.posterior_samples <= 0) return out;
+  Eigen::VectorXd res;
+  Eigen::MatrixXd jac;
+  model.evaluate(th, res, &jac);
+  std::vector<Eigen::Index> free;
+  // Leak bumps held at their bound stay there: sampling them and clamping would break the
+  // correlations that keep a sample on the data.
+  for (Eigen::Index k = 0; k < model.size(); ++k)
+    if (!model.fixed(k) && !(model.bounded(k) && th[k] <= 0)) free.push_back(k);
+  const auto nf = static_cast<Eigen::Index>(free.size());
+  Eigen::MatrixXd jf(jac.rows(), nf);
+  for (Eigen::Index c = 0; c < nf; ++c) jf.col(c) = jac.col(free[c]);
+  Eigen::MatrixXd h = jf.transpose() * jf;
+  h.diagonal().array() += 1e-9 * (h.diagonal().array() + 1e-12);
+  const Eigen::LLT<Eigen::MatrixXd> llt(h);
+  if (llt.info() != Eigen::Success) return out;
+  Random rng(mix(o.posterior_seed));
+  const int bands = static_cast<int>(model.band_count());
+  for (int s = 0; s < o.posterior_samples; ++s) {
+    Eigen::VectorXd z(nf);
+    for (Eigen::Index c = 0; c < nf; ++c) z[c] = rng.normal();
+    const Eigen::VectorXd delta = llt.matrixU().solve(z);  // covariance (U^T U)^-1
+    Eigen::VectorXd sample = th;
+    for (Eigen::Index c = 0; c < nf; ++c) sample[free[c]] += delta[c];
+    for (Eigen::Index k = 0; k < model.size(); ++k)
+      if (model.bounded(k)) sample[k] = std::max(sample[k], 0.0);
+    QeSample q;
+    q.system_qe.resize(bands, model.wavelengths());
+    q.gains.resize(bands);
+    for (int b = 0; b < bands; ++b) {
+      q.system_qe.row(b) = model.qe(b, sample).cwiseMin(1.0).transpose();
+      q.gains[b] = model.gain(b, sample);
+    }
+    out.push_back(std::move(q));
+  }
+  return out;
+}
+
+}  // namespace
+
+QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRates& data,
+                               const RegularisedOptions& options) {
+  const auto start = Clock::now();
+  const Problem p = prepare(profile, data);
+  RegularisedOptions o = options;
+  Eigen::VectorXd th;
+  int iterations = 0;
+  // Reweighting: the data's weight against the priors is 1 / relative_noise; refit with the
+  // misfit actually reached (noise-free data earn tighter fits, noisy data stronger priors).
+  for (int pass = 0; pass < std::max(1, options.noise_passes); ++pass) {
+    const RegularisedModel model(profile, data, p, o);
+    if (th.size() == 0) th = model.start();
+    iterations += levenberg_marquardt(model, th, o.max_iterations);
+    const double misfit = std::clamp(model.data_rms(th), options.min_relative_noise, 0.05);
+    if (std::abs(portable::log(misfit / o.relative_noise)) < portable::log(1.5)) break;
+    o.relative_noise = misfit;
+  }
+  const RegularisedModel model(profile, data, p, o);
+  QeFitResult r;
+  r.solver = QeSolver::kRegularised;
+  r.system_qe.resize(profile.band_count(), profile.grid.size());
+  r.gains.resize(profile.band_count());
+  for (int b = 0; b < profile.band_count(); ++b) {
+    r.system_qe.row(b) = model.qe(b, th).cwiseMin(1.0).transpose();
+    r.gains[b] = model.gain(b, th);
+  }
+  r.diagnostics.iterations = iterations;
+  r.posterior = posterior_samples(model, th, options);
+  finish(profile, p, data, start, r);
+  return r;
+}
+
+}  // namespace pyrocam
