@@ -72,7 +72,8 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
       "Write a furnace calibration dataset like the paper's (Sala et al. 2025, section 3)");
   c->footer(
       "Example:\n  pyrocam-calib simulate campaign --profile rgb-reference --unit typical "
-      "--frames 10 --out furnace-rgb");
+      "--frames 10 --out furnace-rgb\n  pyrocam-calib simulate campaign --profile "
+      "nir5x5-reference --reference 1324,1738,2474 --out furnace-nir");
   add_camera_options(c, campaign_camera);
   c->add_option("--out", campaign_out, "Output folder (created)")->required();
   c->add_option("--temperatures", campaign.temperatures_c,
@@ -91,6 +92,18 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
                 "Standard deviation, degC, of the plate's true temperature about the nominal one "
                 "at each step (furnace and thermocouple; 0: exact; truth in furnace-truth.csv)")
       ->check(CLI::Range(0.0, 50.0))
+      ->capture_default_str();
+  c->add_option("--reference", campaign.reference_temperatures_c,
+                "Reference sources beyond the furnace, nominal degC, comma separated (e.g. "
+                "1324,1738,2474: fixed-point cells): manifest rows of kind reference, each with "
+                "its own exposure sweep and darks, an unknown scale (aperture, distance) and a "
+                "true temperature off the nominal (truth in furnace-truth.csv)")
+      ->delimiter(',')
+      ->check(CLI::Range(100.0, 4000.0));
+  c->add_option("--reference-uncertainty", campaign.reference_uncertainty_c,
+                "Standard uncertainty of the reference temperatures, degC (k=1): the manifest's "
+                "temperature_uncertainty_c and the spread of their true values")
+      ->check(CLI::Range(0.001, 100.0))
       ->capture_default_str();
   c->add_option("--size", campaign_size,
                 "Image size WIDTHxHEIGHT, whole mosaic periods (default 128x128 rounded to "

@@ -192,6 +192,104 @@ TEST_F(CliDataset, calibrate_rejects_a_huge_png_dark_frame_before_decoding_n) {
   expect_failed(calibrate(), {"huge.png: image is 30000x30000, the dataset's (ROI) size is 32x32"});
 }
 
+// The same kind of campaign, written by `simulate campaign --reference`: Pt-C and Re-C cells
+// beyond the furnace, each with its own 16-exposure sweep and darks.
+class CliReferenceDataset : public CliDataset {
+ protected:
+  void SetUp() override {
+    const ToolRun r = run_tool(
+        "-q simulate campaign --profile rgb-reference --unit typical --unit-seed 5 "
+        "--temperatures 1000 1025 1050 1075 1100 --exposures 16 --frames 1 --size 32x32 "
+        "--roi-area 200 --reference 1738,2474 --out " +
+            quoted(data),
+        dir);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  ToolRun calibrate_with(const std::string& extra) {
+    return run_tool("-q calibrate --dataset " + quoted(data) + " --out " + quoted(model) +
+                        " --epochs 1 --polish-iterations 0 --mc-refits 0 " + extra,
+                    dir);
+  }
+  // Keeps the manifest lines for which `keep` is true.
+  template <typename Keep>
+  void filter_manifest(const Keep& keep) {
+    std::string kept;
+    std::ifstream in(data / "manifest.csv");
+    for (std::string line; std::getline(in, line);)
+      if (keep(line)) kept += line + "\n";
+    in.close();
+    write_text(data / "manifest.csv", kept);
+  }
+  const std::string first_reference = "references/R1738_e00_f0.pgm";
+};
+
+TEST_F(CliReferenceDataset, simulate_writes_reference_rows_with_their_uncertainty) {
+  const std::string manifest = read_text(data / "manifest.csv");
+  EXPECT_EQ(manifest.rfind(std::string(kManifestHeaderWithUncertainty) + "\n", 0), 0u);
+  const Dataset d = Dataset::open(data);
+  ASSERT_EQ(d.references().size(), 32u);  // 2 references x 16 exposures
+  for (const FrameGroup& g : d.references()) {
+    EXPECT_TRUE(g.temperature_c == 1738 || g.temperature_c == 2474) << g.temperature_c;
+    EXPECT_DOUBLE_EQ(g.temperature_uncertainty_c, 0.5);
+  }
+  EXPECT_EQ(d.temperatures_c(), (std::vector<double>{1000, 1025, 1050, 1075, 1100}));
+  EXPECT_GT(line_of(first_reference), 1);
+  // The furnace steps, then the references' true temperatures.
+  const std::string truth = read_text(data / "furnace-truth.csv");
+  EXPECT_EQ(std::count(truth.begin(), truth.end(), '\n'), 8);
+}
+
+TEST_F(CliReferenceDataset, calibrate_writes_a_model_from_a_dataset_with_references) {
+  const ToolRun r = calibrate_with("");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(model));
+}
+
+TEST_F(CliReferenceDataset, calibrate_rejects_a_reference_outside_the_models_range_n) {
+  const int line = line_of("references/R2474_e00_f0.pgm");
+  expect_failed(calibrate_with("--max-temperature 2000"),
+                {"manifest.csv line " + std::to_string(line) +
+                 ": reference at 2474 degC is outside the model's range 500-2000 degC"});
+}
+
+TEST_F(CliReferenceDataset, calibrate_rejects_a_negative_reference_uncertainty_n) {
+  const int line = line_of(first_reference);
+  std::string text = read_text(data / "manifest.csv");
+  const auto row = text.find(first_reference + ",");
+  const auto end = text.find('\n', row);
+  ASSERT_EQ(text.substr(end - 4, 4), ",0.5");
+  text.replace(end - 4, 4, ",-0.5");
+  write_text(data / "manifest.csv", text);
+  expect_failed(calibrate(), {"manifest.csv:" + std::to_string(line) +
+                              ": temperature_uncertainty_c must be > 0"});
+}
+
+TEST_F(CliReferenceDataset, calibrate_rejects_a_reference_exposure_without_its_dark_n) {
+  const std::string dark = "darks/R1738_e03_f0.pgm";
+  ASSERT_GT(line_of(dark), 0);
+  filter_manifest([&](const std::string& l) { return l.rfind(dark + ",", 0) != 0; });
+  const int line = line_of("references/R1738_e03_f0.pgm");
+  expect_failed(calibrate(), {"R1738_e03_f0.pgm (manifest.csv line " + std::to_string(line) +
+                                  "): reference at 1738 degC, exposure",
+                              "has no dark row of that exposure"});
+}
+
+TEST_F(CliReferenceDataset, calibrate_rejects_a_reference_dim_at_every_exposure_n) {
+  // Only the sweep's first two exposures are left: the brightest band is below the dim level.
+  filter_manifest([](const std::string& l) {
+    return l.rfind("references/R1738_e", 0) != 0 || l.rfind("references/R1738_e00", 0) == 0 ||
+           l.rfind("references/R1738_e01", 0) == 0;
+  });
+  const int line = line_of(first_reference);
+  expect_failed(calibrate(), {"reference 1738 degC (manifest line " + std::to_string(line) +
+                              "): every band is dim or saturated at every one of its 2"});
+}
+
+TEST_F(CliReferenceDataset, calibrate_rejects_an_empty_reference_roi_n) {
+  write_raw_image(data / kReferenceRoiFile, cv::Mat::zeros(32, 32, CV_8U));
+  expect_failed(calibrate(), {"reference-roi.png: the reference ROI is empty"});
+}
+
 TEST(Cli, measure_rejects_a_model_path_that_is_a_directory_n) {
   ScratchDir dir("cli");
   std::filesystem::create_directory(dir / "model.json");

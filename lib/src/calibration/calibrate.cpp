@@ -57,6 +57,15 @@ void check_calibration_inputs(const Dataset& dataset, const CameraProfile& profi
       << opt.max_temperature_c << " degC (--min-temperature, --max-temperature)";
     throw InputError(m.str());
   }
+  // A reference the model cannot read would pull the QE towards a temperature it never serves.
+  for (const FrameGroup& r : dataset.references())
+    if (r.temperature_c < opt.min_temperature_c || r.temperature_c > opt.max_temperature_c) {
+      std::ostringstream m;
+      m << (dataset.folder() / "manifest.csv").string() << " line " << r.line << ": reference at "
+        << r.temperature_c << " degC is outside the model's range " << opt.min_temperature_c << "-"
+        << opt.max_temperature_c << " degC (--min-temperature, --max-temperature)";
+      throw InputError(m.str());
+    }
 }
 
 // The network on the model camera's locus (and on noisy copies of it when asked for): sets
@@ -106,7 +115,10 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   const Eigen::MatrixXd rates = out.rates.rates();
   const Eigen::MatrixXd datasheet = profile.system_qe();
 
-  QeChoice qe = choose_system_qe(profile, datasheet, t_c, rates, opt.qe_solver, progress);
+  // Reference sources beyond the furnace: scale-free constraints on the band ratios.
+  const std::vector<ReferenceRates> references = out.rates.reference_rates();
+  QeChoice qe =
+      choose_system_qe(profile, datasheet, t_c, rates, opt.qe_solver, progress, references);
   out.solvers = std::move(qe.reports);
   out.qe_spread = std::move(qe.qe_spread);
   ThermalModel& m = out.model;
@@ -128,7 +140,7 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   out.table4 = evaluate_estimators(m, out.rates, locus, sheet_camera, opt.locus_step_c);
   report_stage(progress, "evaluating", 1, 1);
 
-  m.uncertainty = uncertainty_model(m, t_c, rates, opt, progress);
+  m.uncertainty = uncertainty_model(m, t_c, rates, opt, progress, references);
   m.provenance = model_provenance(dataset, profile, opt.seed);
   out.seconds = since(t_start);
   out.verdict = calibration_verdict(out);

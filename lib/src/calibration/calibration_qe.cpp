@@ -38,14 +38,15 @@ Eigen::MatrixXd rate_residuals(const CameraModel& cam, const std::vector<double>
 
 QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& datasheet,
                           const std::vector<double>& t_c, const Eigen::MatrixXd& rates,
-                          const std::string& qe_solver, const StageProgress& progress) {
+                          const std::string& qe_solver, const StageProgress& progress,
+                          const std::vector<ReferenceRates>& references) {
   // QE optimisation: every requested solver, chosen by held-out (cross-validation) residual.
   std::vector<std::string> solvers;
   if (qe_solver == "auto")
     solvers = {"paper", "regularised"};
   else
     solvers = {qe_solver};
-  const CalibrationRates data{t_c, rates.transpose(), {}};
+  const CalibrationRates data{t_c, rates.transpose(), references};
   QeChoice best;
   best.system_qe = datasheet;
   best.band_scale = band_scale(profile, datasheet, t_c, rates);

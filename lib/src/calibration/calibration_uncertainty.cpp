@@ -61,9 +61,12 @@ std::vector<double> emissivity_uncertainty(const ThermalModel& m, const Uncertai
 std::vector<double> thermocouple_uncertainty(const ThermalModel& m, const UncertaintyModel& u,
                                              const std::vector<double>& t_c,
                                              const Eigen::MatrixXd& rates, std::uint64_t seed,
-                                             const StageProgress& progress) {
+                                             const StageProgress& progress,
+                                             const std::vector<ReferenceRates>& references) {
   std::vector<std::vector<double>> refit_t(u.temperature_c.size());
   Random rng(seed ^ 0x7C0FFEEull);
+  Random reference_rng(seed ^ 0x8EFE8E4CEull);
+  const auto reference_error = [](Random& r) { return r.normal(); };
   const auto tc_error = [&](Random& r) {
     return r.uniform(-u.thermocouple_tolerance_c, u.thermocouple_tolerance_c);
   };
@@ -72,10 +75,13 @@ std::vector<double> thermocouple_uncertainty(const ThermalModel& m, const Uncert
                  static_cast<std::size_t>(u.monte_carlo_refits));
     std::vector<double> t_perturbed = t_c;
     for (double& t : t_perturbed) t += tc_error(rng);
+    std::vector<ReferenceRates> references_perturbed = references;
+    for (ReferenceRates& r : references_perturbed)
+      r.temperature_c += r.temperature_uncertainty_c * reference_error(reference_rng);
     QeFitOptions qo;
     qo.solver = m.qe_solver == "paper" ? QeSolver::kPaper : QeSolver::kRegularised;
-    const QeFitResult fit =
-        fit_qe(m.profile(), CalibrationRates{t_perturbed, rates.transpose(), {}}, qo);
+    const QeFitResult fit = fit_qe(
+        m.profile(), CalibrationRates{t_perturbed, rates.transpose(), references_perturbed}, qo);
     const CameraModel cam{m.profile(), fit.system_qe, fit.gains};
     const OhnoEstimator inv(
         make_locus(cam, m.min_temperature_c - 100, m.max_temperature_c + 100, 1));
@@ -101,7 +107,8 @@ std::vector<double> thermocouple_uncertainty(const ThermalModel& m, const Uncert
 
 UncertaintyModel uncertainty_model(const ThermalModel& m, const std::vector<double>& t_c,
                                    const Eigen::MatrixXd& rates, const CalibrationOptions& opt,
-                                   const StageProgress& progress) {
+                                   const StageProgress& progress,
+                                   const std::vector<ReferenceRates>& references) {
   // Uncertainty model: emissivity slope and thermocouple tolerance as functions of T.
   UncertaintyModel u;
   u.thermocouple_tolerance_c = opt.thermocouple_tolerance_c;
@@ -109,7 +116,7 @@ UncertaintyModel uncertainty_model(const ThermalModel& m, const std::vector<doub
   for (double t = opt.min_temperature_c; t <= opt.max_temperature_c + 1e-9; t += 50)
     u.temperature_c.push_back(t);
   u.u_emissivity_c = emissivity_uncertainty(m, u);
-  u.u_calibration_c = thermocouple_uncertainty(m, u, t_c, rates, opt.seed, progress);
+  u.u_calibration_c = thermocouple_uncertainty(m, u, t_c, rates, opt.seed, progress, references);
   return u;
 }
 

@@ -1,8 +1,10 @@
 #include "pyrocam/calibration/rate_extraction.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
 #include "pyrocam/core/error.h"
@@ -75,7 +77,7 @@ struct GroupMeans {
 };
 
 GroupMeans group_means(const Dataset& d, const FrameGroup& g, const RoiAccumulator& acc,
-                       const CameraProfile& profile, int bands) {
+                       const std::string& roi_name, const CameraProfile& profile, int bands) {
   GroupMeans out{Eigen::VectorXd::Zero(bands), Eigen::VectorXd::Zero(bands)};
   for (const auto& f : g.files) {
     const cv::Mat img = d.load(f);
@@ -88,8 +90,7 @@ GroupMeans group_means(const Dataset& d, const FrameGroup& g, const RoiAccumulat
                                   : acc.sums<std::uint16_t>(img, profile.max_dn());
     for (int b = 0; b < bands; ++b) {
       if (s.count[b] == 0)
-        throw InputError(d.folder().string() + ": the ROI holds no pixel of band " +
-                         profile.band_names[b]);
+        throw InputError(roi_name + " holds no pixel of band " + profile.band_names[b]);
       out.mean[b] += s.sum[b] / s.count[b];
       out.saturated_fraction[b] = std::max(out.saturated_fraction[b], s.saturated[b] / s.count[b]);
     }
@@ -98,7 +99,82 @@ GroupMeans group_means(const Dataset& d, const FrameGroup& g, const RoiAccumulat
   return out;
 }
 
+std::vector<PointStatus> classify_setting(const CameraProfile& profile, const SettingMeans& s,
+                                          double saturated_limit) {
+  std::vector<PointStatus> st(static_cast<std::size_t>(profile.band_count()));
+  for (int b = 0; b < profile.band_count(); ++b)
+    st[b] = classify_point(profile, s.raw_mean_dn[b], s.net_mean_dn[b], s.saturated_fraction[b],
+                           saturated_limit);
+  return st;
+}
+
+std::string format_c(double t) {
+  std::ostringstream o;
+  o << t;
+  return o.str();
+}
+
+// The slopes of one reference over its exposures; throws InputError unless 2 or more bands
+// have one (the reference's scale is unknown, only its band ratios count).
+void fit_reference(const Dataset& d, const CameraProfile& profile, ReferenceSweep& ref,
+                   std::vector<std::string>& warnings) {
+  const int bands = profile.band_count();
+  std::vector<std::string> with_slope;
+  bool any_used = false;
+  for (int b = 0; b < bands; ++b) {
+    std::vector<double> x, y;
+    for (std::size_t i = 0; i < ref.settings.size(); ++i)
+      if (ref.status[i][b] == PointStatus::kUsed) {
+        x.push_back(ref.settings[i].exposure_us);
+        y.push_back(ref.settings[i].net_mean_dn[b]);
+      }
+    any_used = any_used || !x.empty();
+    SlopeFit f = fit_line(x, y);
+    if (f.points < 2) {
+      warnings.push_back(ref.name + " band " + profile.band_names[b] + ": " +
+                         std::to_string(f.points) + " usable point(s), no slope");
+      f.rate_dn_per_s = NAN;
+    } else {
+      with_slope.push_back(profile.band_names[b]);
+    }
+    ref.fits.push_back(f);
+  }
+  const std::string where = (d.folder() / "manifest.csv").string() + ": " + ref.name + ": ";
+  const std::string levels = "between " + format_c(profile.thresholds.calibration_dim_dn) +
+                             " DN net and " +
+                             format_c(profile.thresholds.calibration_saturation_dn) + " DN raw";
+  if (!any_used)
+    throw InputError(where + "every band is dim or saturated at every one of its " +
+                     std::to_string(ref.settings.size()) + " exposure(s) (" +
+                     format_c(ref.settings.front().exposure_us) + "-" +
+                     format_c(ref.settings.back().exposure_us) +
+                     " us); choose exposures that put the bands " + levels);
+  if (with_slope.size() < 2) {
+    std::string names;
+    for (const auto& n : with_slope) names += (names.empty() ? "" : ", ") + n;
+    throw InputError(where + std::to_string(with_slope.size()) + " band(s) " +
+                     (names.empty() ? "" : "(" + names + ") ") +
+                     "with 2 or more usable exposures " + levels +
+                     "; a reference needs 2 or more such bands, only its band ratios count");
+  }
+}
+
 }  // namespace
+
+std::vector<ReferenceRates> RateTable::reference_rates() const {
+  std::vector<ReferenceRates> out;
+  for (const auto& r : references) {
+    ReferenceRates rr;
+    rr.name = r.name;
+    rr.temperature_c = r.temperature_c;
+    rr.temperature_uncertainty_c = r.temperature_uncertainty_c;
+    rr.rates.resize(static_cast<Eigen::Index>(r.fits.size()));
+    for (std::size_t b = 0; b < r.fits.size(); ++b)
+      rr.rates[static_cast<Eigen::Index>(b)] = r.fits[b].rate_dn_per_s;
+    out.push_back(std::move(rr));
+  }
+  return out;
+}
 
 Eigen::MatrixXd RateTable::rates() const {
   Eigen::MatrixXd r(static_cast<Eigen::Index>(temperatures_c.size()),
@@ -150,13 +226,33 @@ RateTable extract_rates(const Dataset& d, const CameraProfile& profile,
                      std::to_string(d.height()) + " are not whole " + profile.mosaic.pattern +
                      " mosaic periods (profile " + profile.name + ")");
 
-  // Darks and frames alike are reduced to per-band ROI means, in parallel over settings.
-  std::vector<const FrameGroup*> work;
-  for (const auto& g : d.darks()) work.push_back(&g);
-  for (const auto& g : d.frames()) work.push_back(&g);
+  // Darks, frames and references alike are reduced to per-band ROI means, in parallel over
+  // settings; references (and the darks they subtract) in reference-roi.png when there is one.
+  const bool own_reference_roi = d.has_reference_roi() && !d.references().empty();
+  const RoiAccumulator ref_acc =
+      own_reference_roi ? RoiAccumulator(d.reference_roi(), profile.mosaic, bands) : acc;
+  const std::string roi_name = d.folder().string() + ": the ROI";
+  const std::string ref_roi_name =
+      own_reference_roi ? (d.folder() / kReferenceRoiFile).string() + ": the reference ROI"
+                        : roi_name;
+  struct Work {
+    const FrameGroup* group;
+    bool reference_roi;
+  };
+  std::vector<Work> work;
+  for (const auto& g : d.darks()) work.push_back({&g, false});
+  for (const auto& g : d.frames()) work.push_back({&g, false});
+  for (const auto& g : d.references()) work.push_back({&g, true});
+  const std::size_t first_ref_dark = work.size();
+  if (own_reference_roi)
+    for (const auto& g : d.darks())
+      if (std::any_of(d.references().begin(), d.references().end(), [&](const FrameGroup& r) {
+            return same_exposure(r.exposure_us, g.exposure_us);
+          }))
+        work.push_back({&g, true});
   std::vector<GroupMeans> means(work.size());
   std::size_t total_files = 0;
-  for (const auto* g : work) total_files += g->files.size();
+  for (const auto& w : work) total_files += w.group->files.size();
 
   std::atomic<std::size_t> next{0}, files_done{0};
   std::mutex error_mutex, progress_mutex;
@@ -164,13 +260,15 @@ RateTable extract_rates(const Dataset& d, const CameraProfile& profile,
   auto worker = [&] {
     for (std::size_t i; (i = next++) < work.size();) {
       try {
-        means[i] = group_means(d, *work[i], acc, profile, bands);
+        means[i] = work[i].reference_roi
+                       ? group_means(d, *work[i].group, ref_acc, ref_roi_name, profile, bands)
+                       : group_means(d, *work[i].group, acc, roi_name, profile, bands);
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(error_mutex);
         if (error.empty()) error = e.what();
         next = work.size();
       }
-      files_done += work[i]->files.size();
+      files_done += work[i].group->files.size();
       if (progress) {
         std::lock_guard<std::mutex> lock(progress_mutex);
         progress(files_done, total_files);
@@ -183,28 +281,35 @@ RateTable extract_rates(const Dataset& d, const CameraProfile& profile,
   for (auto& th : pool) th.join();
   if (!error.empty()) throw InputError(error);
 
-  RateTable table;
-  table.band_names = profile.band_names;
-  table.temperatures_c = d.temperatures_c();
+  // The means of the dark of `exposure_us` in the furnace ROI or the reference's.
   const std::size_t n_dark = d.darks().size();
-  for (std::size_t i = 0; i < d.frames().size(); ++i) {
-    const FrameGroup& g = d.frames()[i];
-    std::size_t dark_index = 0;
-    for (std::size_t k = 0; k < n_dark; ++k)
-      if (same_exposure(d.darks()[k].exposure_us, g.exposure_us)) dark_index = k;
+  auto dark_mean = [&](double exposure_us, bool reference_roi) -> const Eigen::VectorXd& {
+    const std::size_t from = reference_roi && own_reference_roi ? first_ref_dark : 0;
+    const std::size_t to = reference_roi && own_reference_roi ? work.size() : n_dark;
+    std::size_t index = from;
+    for (std::size_t k = from; k < to; ++k)
+      if (same_exposure(work[k].group->exposure_us, exposure_us)) index = k;
+    return means[index].mean;
+  };
+  auto setting_means = [&](std::size_t i) {
+    const FrameGroup& g = *work[i].group;
     SettingMeans s;
     s.temperature_c = g.temperature_c;
     s.exposure_us = g.exposure_us;
     s.frames = static_cast<int>(g.files.size());
-    s.raw_mean_dn = means[n_dark + i].mean;
-    s.net_mean_dn = s.raw_mean_dn - means[dark_index].mean;
-    s.saturated_fraction = means[n_dark + i].saturated_fraction;
-    std::vector<PointStatus> st(static_cast<std::size_t>(bands));
-    for (int b = 0; b < bands; ++b)
-      st[b] = classify_point(profile, s.raw_mean_dn[b], s.net_mean_dn[b], s.saturated_fraction[b],
-                             options.saturated_pixel_fraction);
+    s.raw_mean_dn = means[i].mean;
+    s.net_mean_dn = s.raw_mean_dn - dark_mean(g.exposure_us, work[i].reference_roi);
+    s.saturated_fraction = means[i].saturated_fraction;
+    return s;
+  };
+
+  RateTable table;
+  table.band_names = profile.band_names;
+  table.temperatures_c = d.temperatures_c();
+  for (std::size_t i = 0; i < d.frames().size(); ++i) {
+    SettingMeans s = setting_means(n_dark + i);
+    table.status.push_back(classify_setting(profile, s, options.saturated_pixel_fraction));
     table.settings.push_back(std::move(s));
-    table.status.push_back(std::move(st));
   }
 
   std::vector<int> usable_per_band(static_cast<std::size_t>(bands), 0);
@@ -236,6 +341,30 @@ RateTable extract_rates(const Dataset& d, const CameraProfile& profile,
                        " has no temperature with 2 usable points between " +
                        std::to_string(profile.thresholds.calibration_dim_dn) + " and " +
                        std::to_string(profile.thresholds.calibration_saturation_dn) + " DN");
+
+  // Each reference temperature is one source; its settings come sorted by exposure.
+  const std::size_t first_ref = n_dark + d.frames().size();
+  for (std::size_t i = 0; i < d.references().size(); ++i) {
+    const FrameGroup& g = d.references()[i];
+    if (table.references.empty() ||
+        std::abs(table.references.back().temperature_c - g.temperature_c) > 1e-6) {
+      ReferenceSweep r;
+      r.temperature_c = g.temperature_c;
+      r.temperature_uncertainty_c = g.temperature_uncertainty_c;
+      r.line = g.line;
+      table.references.push_back(std::move(r));
+    }
+    ReferenceSweep& r = table.references.back();
+    r.line = std::min(r.line, g.line);
+    SettingMeans s = setting_means(first_ref + i);
+    r.status.push_back(classify_setting(profile, s, options.saturated_pixel_fraction));
+    r.settings.push_back(std::move(s));
+  }
+  for (auto& r : table.references) {
+    r.name = "reference " + format_c(r.temperature_c) + " degC (manifest line " +
+             std::to_string(r.line) + ")";
+    fit_reference(d, profile, r, table.warnings);
+  }
   return table;
 }
 

@@ -8,9 +8,11 @@
 #include <iomanip>
 #include <map>
 #include <sstream>
+#include <tuple>
+#include <utility>
 
-#include "pyrocam/core/image_io.h"
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/image_io.h"
 
 namespace pyrocam {
 namespace {
@@ -50,6 +52,42 @@ void check_relative_file_name(const std::string& name, const std::string& where)
     throw InputError(where + ": file '" + name + "' leaves the dataset folder");
 }
 
+const char* kind_name(FrameKind kind) {
+  switch (kind) {
+    case FrameKind::kDark:
+      return "dark";
+    case FrameKind::kReference:
+      return "reference";
+    case FrameKind::kFrame:
+      break;
+  }
+  return "frame";
+}
+
+FrameKind parse_kind(const std::string& text, const std::string& where) {
+  for (const FrameKind k : {FrameKind::kFrame, FrameKind::kDark, FrameKind::kReference})
+    if (text == kind_name(k)) return k;
+  throw InputError(where + ": kind '" + text + "' must be 'frame', 'dark' or 'reference'");
+}
+
+// Comma-separated fields, trimmed. An empty last field is kept only when `keep_empty_last`: a
+// 4-column manifest has always accepted a trailing comma.
+std::vector<std::string> split_fields(const std::string& line, bool keep_empty_last) {
+  std::vector<std::string> f;
+  std::size_t start = 0;
+  bool last_empty = false;
+  for (;;) {
+    const std::size_t comma = line.find(',', start);
+    const std::string raw = line.substr(start, comma == std::string::npos ? comma : comma - start);
+    last_empty = raw.empty();
+    f.push_back(trim(raw));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (!keep_empty_last && f.size() > 1 && last_empty) f.pop_back();
+  return f;
+}
+
 }  // namespace
 
 bool same_exposure(double a_us, double b_us) {
@@ -61,33 +99,38 @@ std::vector<ManifestRow> read_manifest(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path.string() + ": manifest unreadable");
   std::string line;
-  if (!std::getline(in, line) || trim(line) != kManifestHeader)
-    throw InputError(path.string() + ": first line must be '" + kManifestHeader + "'");
+  if (!std::getline(in, line)) line.clear();
+  const std::string header = trim(line);
+  const bool with_uncertainty = header == kManifestHeaderWithUncertainty;
+  if (header != kManifestHeader && !with_uncertainty)
+    throw InputError(path.string() + ": first line must be '" + kManifestHeader + "' or '" +
+                     kManifestHeaderWithUncertainty + "'");
   std::vector<ManifestRow> rows;
   int line_no = 1;
   while (std::getline(in, line)) {
     ++line_no;
     if (trim(line).empty()) continue;
     const std::string where = path.string() + ":" + std::to_string(line_no);
-    std::vector<std::string> f;
-    std::stringstream ss(line);
-    for (std::string field; std::getline(ss, field, ',');) f.push_back(trim(field));
-    if (f.size() != 4)
-      throw InputError(where + ": " + std::to_string(f.size()) + " fields, expected 4 (" +
-                       kManifestHeader + ")");
+    const std::vector<std::string> f = split_fields(line, with_uncertainty);
+    if (with_uncertainty ? f.size() != 4 && f.size() != 5 : f.size() != 4)
+      throw InputError(where + ": " + std::to_string(f.size()) + " fields, expected " +
+                       (with_uncertainty ? "5" : "4") + " (" + header + ")");
     ManifestRow row;
     row.file = f[0];
     row.line = line_no;
     check_relative_file_name(row.file, where);
-    if (f[1] == "frame")
-      row.kind = FrameKind::kFrame;
-    else if (f[1] == "dark")
-      row.kind = FrameKind::kDark;
-    else
-      throw InputError(where + ": kind '" + f[1] + "' must be 'frame' or 'dark'");
+    row.kind = parse_kind(f[1], where);
     row.temperature_c = parse_number(f[2], where + " temperature_c");
     row.exposure_us = parse_number(f[3], where + " exposure_us");
     if (!(row.exposure_us > 0)) throw InputError(where + ": exposure_us must be > 0");
+    if (f.size() == 5 && !f[4].empty()) {
+      row.temperature_uncertainty_c = parse_number(f[4], where + " temperature_uncertainty_c");
+      if (!(row.temperature_uncertainty_c > 0))
+        throw InputError(where +
+                         ": temperature_uncertainty_c must be > 0 (a standard "
+                         "uncertainty in degC), not " +
+                         f[4]);
+    }
     rows.push_back(std::move(row));
   }
   if (rows.empty()) throw InputError(path.string() + ": no rows");
@@ -97,10 +140,19 @@ std::vector<ManifestRow> read_manifest(const std::filesystem::path& path) {
 void write_manifest(const std::filesystem::path& path, const std::vector<ManifestRow>& rows) {
   std::ofstream out(path);
   if (!out) throw InputError(path.string() + ": cannot write manifest");
-  out << kManifestHeader << "\n" << std::setprecision(10);
-  for (const auto& r : rows)
-    out << r.file << "," << (r.kind == FrameKind::kDark ? "dark" : "frame") << ","
-        << r.temperature_c << "," << r.exposure_us << "\n";
+  const bool with_uncertainty = std::any_of(rows.begin(), rows.end(), [](const ManifestRow& r) {
+    return std::isfinite(r.temperature_uncertainty_c);
+  });
+  out << (with_uncertainty ? kManifestHeaderWithUncertainty : kManifestHeader) << "\n"
+      << std::setprecision(10);
+  for (const auto& r : rows) {
+    out << r.file << "," << kind_name(r.kind) << "," << r.temperature_c << "," << r.exposure_us;
+    if (with_uncertainty) {
+      out << ",";
+      if (std::isfinite(r.temperature_uncertainty_c)) out << r.temperature_uncertainty_c;
+    }
+    out << "\n";
+  }
   if (!out) throw InputError(path.string() + ": write failed");
 }
 
@@ -150,8 +202,16 @@ Dataset Dataset::open(const std::filesystem::path& folder) {
   d.roi_ = roi != 0;
   if (cv::countNonZero(d.roi_) == 0)
     throw InputError(roi_path.string() + ": the ROI is empty (no nonzero pixel)");
+  if (const auto ref_path = folder / kReferenceRoiFile; std::filesystem::exists(ref_path)) {
+    d.reference_roi_ = read_raw_image(ref_path, d.roi_.size(), "the ROI's size") != 0;
+    if (cv::countNonZero(d.reference_roi_) == 0)
+      throw InputError(ref_path.string() + ": the reference ROI is empty (no nonzero pixel)");
+  }
 
   std::map<std::tuple<int, double, double>, FrameGroup> groups;
+  // The first stated uncertainty per (kind, temperature) and its line: the rows of one source
+  // must agree (a dark's temperature is informational, so is its uncertainty).
+  std::map<std::pair<int, double>, std::pair<double, int>> stated;
   std::error_code ec;
   const auto canonical_folder = std::filesystem::weakly_canonical(folder, ec);
   if (ec)
@@ -174,17 +234,50 @@ Dataset Dataset::open(const std::filesystem::path& folder) {
       throw InputError(row + ": resolves to " + resolved.string() + ", outside the dataset folder");
     // Rounded keys merge rows whose numbers differ only by text formatting.
     const double t_key = r.kind == FrameKind::kDark ? 0.0 : std::round(r.temperature_c * 1e6);
+    if (r.kind != FrameKind::kDark && std::isfinite(r.temperature_uncertainty_c)) {
+      const auto [it, first] = stated.try_emplace({static_cast<int>(r.kind), t_key},
+                                                  r.temperature_uncertainty_c, r.line);
+      const double u = it->second.first;
+      if (!first && std::abs(u - r.temperature_uncertainty_c) > 1e-9 * u) {
+        std::ostringstream m;
+        m << row << ": temperature_uncertainty_c " << r.temperature_uncertainty_c
+          << " differs from the " << u << " that line " << it->second.second
+          << " states for the same " << kind_name(r.kind) << " temperature";
+        throw InputError(m.str());
+      }
+    }
     const auto key =
         std::make_tuple(static_cast<int>(r.kind), t_key, std::round(r.exposure_us * 1e3));
     FrameGroup& g = groups[key];
+    if (g.files.empty()) g.line = r.line;
     g.kind = r.kind;
     g.temperature_c = r.temperature_c;
     g.exposure_us = r.exposure_us;
     g.files.push_back(file);
   }
-  for (auto& [key, g] : groups) (g.kind == FrameKind::kDark ? d.darks_ : d.frames_).push_back(g);
+  for (auto& [key, g] : groups) {
+    const auto u = stated.find({std::get<0>(key), std::get<1>(key)});
+    if (u != stated.end())
+      g.temperature_uncertainty_c = u->second.first;
+    else if (g.kind == FrameKind::kReference)
+      g.temperature_uncertainty_c = kDefaultReferenceUncertaintyC;
+    (g.kind == FrameKind::kDark        ? d.darks_
+     : g.kind == FrameKind::kReference ? d.references_
+                                       : d.frames_)
+        .push_back(g);
+  }
   if (d.frames_.empty()) throw InputError(folder.string() + ": manifest lists no frames");
   for (const auto& f : d.frames_) d.dark_for(f.exposure_us);  // throws if missing
+  for (const auto& g : d.references_)
+    if (!std::any_of(d.darks_.begin(), d.darks_.end(), [&](const FrameGroup& k) {
+          return same_exposure(k.exposure_us, g.exposure_us);
+        })) {
+      std::ostringstream m;
+      m << g.files.front().string() << " (manifest.csv line " << g.line << "): reference at "
+        << g.temperature_c << " degC, exposure " << g.exposure_us
+        << " us has no dark row of that exposure";
+      throw InputError(m.str());
+    }
   return d;
 }
 

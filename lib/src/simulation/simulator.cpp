@@ -7,9 +7,9 @@
 #include <sstream>
 
 #include "detail/portable_math.h"
+#include "detail/random.h"
 #include "pyrocam/core/dataset.h"
 #include "pyrocam/core/image_io.h"
-#include "detail/random.h"
 
 namespace pyrocam {
 namespace {
@@ -130,6 +130,47 @@ cv::Mat Simulator::render_dark(int width, int height, double exposure_us) {
   return render(cv::Mat(height, width, CV_32F, cv::Scalar(0.f)), exposure_us);
 }
 
+namespace {
+
+// A reference source of a campaign (CampaignSettings::reference_temperatures_c) as drawn.
+struct ReferencePlan {
+  double nominal_c = 0, true_c = 0, scale = 1;
+  std::vector<double> exposures;
+  std::vector<bool> new_dark;  // per exposure: no earlier sweep has a dark of it
+};
+
+// The references' own random stream, so that the furnace's part of the dataset is the same with
+// references or without (their frames are also rendered after the furnace's).
+template <typename Sweep>
+std::vector<ReferencePlan> plan_references(const CampaignSettings& s, const Simulator& camera,
+                                           const std::vector<double>& furnace_exposures,
+                                           const Sweep& sweep) {
+  Random rng(mix(s.reference_seed ^ 0x8EFE8E4CEull));
+  const auto scale_draw = [](Random& r) { return r.uniform(0.05, 0.5); };
+  const auto error_draw = [](Random& r) { return r.normal(); };
+  std::vector<double> dark_exposures = furnace_exposures;
+  std::vector<ReferencePlan> plans;
+  for (double t : s.reference_temperatures_c) {
+    ReferencePlan p;
+    p.nominal_c = t;
+    p.scale = scale_draw(rng);
+    p.true_c = t + s.reference_uncertainty_c * error_draw(rng);
+    // The operator sees the source's brightness, not its scale and true temperature apart.
+    p.exposures = sweep(
+        camera.exposure_for(t, 0.5 * camera.profile().thresholds.calibration_dim_dn, p.scale));
+    for (double e : p.exposures) {
+      const bool seen = std::any_of(dark_exposures.begin(), dark_exposures.end(),
+                                    [&](double d) { return same_exposure(d, e); });
+      p.new_dark.push_back(!seen);
+      if (!seen) dark_exposures.push_back(e);
+    }
+    plans.push_back(std::move(p));
+  }
+  return plans;
+}
+
+}  // namespace
+
 void write_furnace_campaign(const std::filesystem::path& folder, Simulator& camera,
                             CampaignSettings s, const Progress& progress) {
   const bool colour = camera.profile().mosaic.kind == MosaicLayout::Kind::kBayer;
@@ -138,14 +179,23 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
   if (s.first_exposure_us <= 0) s.first_exposure_us = colour ? 100 : 10000;
   if (s.exposure_count < 1 || s.frames_per_setting < 1 || s.width < 8 || s.height < 8)
     throw InputError("campaign: needs at least one exposure and frame, and 8x8 pixels");
+  if (!s.reference_temperatures_c.empty() &&
+      !(s.reference_uncertainty_c > 0 && std::isfinite(s.reference_uncertainty_c)))
+    throw InputError("campaign: the reference temperature uncertainty must be a number > 0 degC");
   camera.profile().mosaic.check_whole_periods(s.width, s.height, "campaign frame size");
   std::filesystem::create_directories(folder / "frames");
   std::filesystem::create_directories(folder / "darks");
+  if (!s.reference_temperatures_c.empty())
+    std::filesystem::create_directories(folder / "references");
 
-  std::vector<double> exposures;
-  for (int k = 0; k < s.exposure_count; ++k)
-    exposures.push_back(
-        std::round(s.first_exposure_us * portable::pow(s.exposure_factor, k) * 1000) / 1000);
+  const auto sweep = [&s](double first_us) {
+    std::vector<double> e;
+    for (int k = 0; k < s.exposure_count; ++k)
+      e.push_back(
+          std::max(1e-3, std::round(first_us * portable::pow(s.exposure_factor, k) * 1000) / 1000));
+    return e;
+  };
+  const std::vector<double> exposures = sweep(s.first_exposure_us);
 
   cv::Mat roi = cv::Mat::zeros(s.height, s.width, CV_8U);
   const double aspect = 1.2;  // a plate seen at an angle
@@ -161,13 +211,18 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
     }
   write_raw_image(folder / "roi.png", roi);
 
+  const std::vector<ReferencePlan> references = plan_references(s, camera, exposures, sweep);
   std::vector<ManifestRow> rows;
-  const std::size_t total = (s.temperatures_c.size() + 1) * exposures.size() *
-                            static_cast<std::size_t>(s.frames_per_setting);
+  std::size_t settings = (s.temperatures_c.size() + 1) * exposures.size();
+  for (const auto& r : references)
+    settings += r.exposures.size() +
+                static_cast<std::size_t>(std::count(r.new_dark.begin(), r.new_dark.end(), true));
+  const std::size_t total = settings * static_cast<std::size_t>(s.frames_per_setting);
   std::size_t done = 0;
-  auto emit = [&](const std::string& rel, const cv::Mat& img, FrameKind kind, double t, double e) {
+  auto emit = [&](const std::string& rel, const cv::Mat& img, FrameKind kind, double t, double e,
+                  double u = NAN) {
     write_raw_image(folder / rel, img);
-    rows.push_back({rel, kind, t, e});
+    rows.push_back({rel, kind, t, e, u});
     if (progress) progress(++done, total);
   };
   auto name = [&](const char* dir, const std::string& stem, std::size_t k, int f) {
@@ -196,6 +251,22 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
       for (int f = 0; f < s.frames_per_setting; ++f)
         emit(name("frames", stem.str(), k, f), camera.render(plate, exposures[k]),
              FrameKind::kFrame, t, exposures[k]);
+  }
+  for (const ReferencePlan& r : references) {
+    truth << r.nominal_c << "," << r.true_c << "\n";
+    std::ostringstream stem;
+    stem << "R" << std::setw(4) << std::setfill('0') << std::lround(r.nominal_c) << "_";
+    for (std::size_t k = 0; k < r.exposures.size(); ++k)
+      for (int f = 0; r.new_dark[k] && f < s.frames_per_setting; ++f)
+        emit(name("darks", stem.str(), k, f),
+             camera.render(cv::Mat(s.height, s.width, CV_32F, cv::Scalar(s.dark_temperature_c)),
+                           r.exposures[k]),
+             FrameKind::kDark, s.dark_temperature_c, r.exposures[k]);
+    const cv::Mat source(s.height, s.width, CV_32F, cv::Scalar(static_cast<float>(r.true_c)));
+    for (std::size_t k = 0; k < r.exposures.size(); ++k)
+      for (int f = 0; f < s.frames_per_setting; ++f)
+        emit(name("references", stem.str(), k, f), camera.render(source, r.exposures[k], r.scale),
+             FrameKind::kReference, r.nominal_c, r.exposures[k], s.reference_uncertainty_c);
   }
   if (!truth) throw InputError((folder / "furnace-truth.csv").string() + ": cannot write");
   write_manifest(folder / "manifest.csv", rows);

@@ -2,8 +2,11 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
 
 #include "pyrocam/core/dataset.h"
 #include "pyrocam/core/image_io.h"
@@ -125,7 +128,7 @@ TEST_F(DatasetFiles, rejects_non_numeric_exposure_n) {
 
 TEST_F(DatasetFiles, rejects_unknown_kind_n) {
   rewrite_manifest(",frame,900,", ",flat,900,");
-  expect_rejected("kind 'flat' must be 'frame' or 'dark'");
+  expect_rejected("kind 'flat' must be 'frame', 'dark' or 'reference'");
 }
 
 TEST_F(DatasetFiles, rejects_missing_image_n) {
@@ -201,6 +204,194 @@ TEST(Manifest, rows_sharing_a_setting_are_grouped_and_texts_round_trip) {
   ASSERT_EQ(back.size(), 3u);
   EXPECT_EQ(back[2].kind, FrameKind::kDark);
   EXPECT_DOUBLE_EQ(back[1].exposure_us, 125.99);
+}
+
+TEST(Manifest, without_uncertainties_the_four_column_form_is_written_as_before) {
+  ScratchDir dir("manifest4");
+  write_manifest(dir / "manifest.csv", {{"a.pgm", FrameKind::kFrame, 1000, 125.99},
+                                        {"c.pgm", FrameKind::kDark, 100, 125.99}});
+  std::ifstream in(dir / "manifest.csv");
+  const std::string text(std::istreambuf_iterator<char>(in), {});
+  EXPECT_EQ(
+      text,
+      "file,kind,temperature_c,exposure_us\na.pgm,frame,1000,125.99\nc.pgm,dark,100,125.99\n");
+  for (const auto& r : read_manifest(dir / "manifest.csv"))
+    EXPECT_TRUE(std::isnan(r.temperature_uncertainty_c));
+}
+
+TEST(Manifest, the_uncertainty_column_round_trips_and_may_be_empty) {
+  ScratchDir dir("manifest5");
+  write_manifest(dir / "manifest.csv", {{"a.pgm", FrameKind::kFrame, 1000, 125.99},
+                                        {"r.pgm", FrameKind::kReference, 1738, 2.5, 0.3},
+                                        {"c.pgm", FrameKind::kDark, 100, 2.5}});
+  std::ifstream in(dir / "manifest.csv");
+  const std::string text(std::istreambuf_iterator<char>(in), {});
+  EXPECT_EQ(text,
+            "file,kind,temperature_c,exposure_us,temperature_uncertainty_c\n"
+            "a.pgm,frame,1000,125.99,\nr.pgm,reference,1738,2.5,0.3\nc.pgm,dark,100,2.5,\n");
+  const auto back = read_manifest(dir / "manifest.csv");
+  ASSERT_EQ(back.size(), 3u);
+  EXPECT_EQ(back[1].kind, FrameKind::kReference);
+  EXPECT_DOUBLE_EQ(back[1].temperature_c, 1738);
+  EXPECT_DOUBLE_EQ(back[1].temperature_uncertainty_c, 0.3);
+  EXPECT_EQ(back[1].line, 3);
+  EXPECT_TRUE(std::isnan(back[0].temperature_uncertainty_c));
+  EXPECT_TRUE(std::isnan(back[2].temperature_uncertainty_c));
+  // Under the five-column header a row may also leave the column out.
+  write_text(dir / "manifest.csv",
+             "file,kind,temperature_c,exposure_us,temperature_uncertainty_c\na.pgm,frame,1000,"
+             "125.99\nr.pgm,reference,1738,2.5,1.5\n");
+  EXPECT_DOUBLE_EQ(read_manifest(dir / "manifest.csv")[1].temperature_uncertainty_c, 1.5);
+}
+
+TEST(Manifest, rejects_an_uncertainty_that_is_not_a_number_above_zero_n) {
+  ScratchDir dir("manifest-u");
+  const std::string header = "file,kind,temperature_c,exposure_us,temperature_uncertainty_c\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"-0.5", "manifest.csv:3: temperature_uncertainty_c must be > 0"},
+      {"0", "manifest.csv:3: temperature_uncertainty_c must be > 0"},
+      {"nan", "manifest.csv:3 temperature_uncertainty_c: 'nan' is not a number"},
+      {"abc", "manifest.csv:3 temperature_uncertainty_c: 'abc' is not a number"},
+      {"0.5,1", "manifest.csv:3: 6 fields, expected 5"}};
+  for (const auto& [value, needle] : cases) {
+    write_text(dir / "manifest.csv",
+               header + "a.pgm,frame,1000,100,\nr.pgm,reference,1738,2.5," + value + "\n");
+    try {
+      read_manifest(dir / "manifest.csv");
+      ADD_FAILURE() << "accepted " << value;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  }
+}
+
+// The same tiny campaign with one reference source, a Pt-C cell at 1738 degC.
+class ReferenceDatasetFiles : public DatasetFiles {
+ protected:
+  void SetUp() override {
+    Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 3});
+    CampaignSettings s = tiny_campaign();
+    s.reference_temperatures_c = {1738};
+    write_furnace_campaign(dir.path(), camera, s);
+  }
+  // Rewrites the manifest through read_manifest/write_manifest.
+  template <typename Edit>
+  void edit_rows(const Edit& edit) {
+    std::vector<ManifestRow> rows = read_manifest(dir / "manifest.csv");
+    edit(rows);
+    write_manifest(dir / "manifest.csv", rows);
+  }
+  // The manifest line of the first row of kind reference at `exposure_us` (-1: none).
+  int first_reference_line(double exposure_us) {
+    for (const auto& r : read_manifest(dir / "manifest.csv"))
+      if (r.kind == FrameKind::kReference && same_exposure(r.exposure_us, exposure_us))
+        return r.line;
+    return -1;
+  }
+};
+
+TEST_F(ReferenceDatasetFiles, references_are_grouped_apart_from_the_frames) {
+  const Dataset d = Dataset::open(dir.path());
+  ASSERT_EQ(d.references().size(), 3u);  // 3 exposures
+  for (const FrameGroup& g : d.references()) {
+    EXPECT_EQ(g.kind, FrameKind::kReference);
+    EXPECT_DOUBLE_EQ(g.temperature_c, 1738);
+    EXPECT_DOUBLE_EQ(g.temperature_uncertainty_c, 0.5);
+    EXPECT_EQ(g.files.size(), 2u);
+    EXPECT_GT(g.line, 1);
+    EXPECT_DOUBLE_EQ(d.dark_for(g.exposure_us).exposure_us, g.exposure_us);
+  }
+  EXPECT_LT(d.references()[0].exposure_us, d.references()[1].exposure_us);
+  ASSERT_EQ(d.frames().size(), 6u);
+  for (const FrameGroup& g : d.frames()) EXPECT_TRUE(std::isnan(g.temperature_uncertainty_c));
+  EXPECT_EQ(d.temperatures_c(), (std::vector<double>{900, 1000}));
+  EXPECT_EQ(d.darks().size(), 6u);  // the furnace's 3 exposures and the reference's 3
+  EXPECT_FALSE(d.has_reference_roi());
+  EXPECT_EQ(cv::countNonZero(d.reference_roi() != d.roi()), 0);
+}
+
+TEST_F(ReferenceDatasetFiles, the_furnace_part_is_the_same_without_references) {
+  ScratchDir plain("dataset-plain");
+  Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 3});
+  write_furnace_campaign(plain.path(), camera, tiny_campaign());
+  const auto text = [](const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  // Every row of the plain manifest is a row of the other, there with an empty fifth column.
+  std::istringstream plain_rows(text(plain / "manifest.csv"));
+  const std::string with_refs = text(dir / "manifest.csv");
+  std::string line;
+  std::getline(plain_rows, line);
+  EXPECT_EQ(line, kManifestHeader);
+  EXPECT_EQ(with_refs.rfind(std::string(kManifestHeaderWithUncertainty) + "\n", 0), 0u);
+  int rows = 0;
+  while (std::getline(plain_rows, line)) {
+    ++rows;
+    EXPECT_NE(with_refs.find(line + ",\n"), std::string::npos) << line;
+    const std::string file = line.substr(0, line.find(','));
+    EXPECT_EQ(text(plain / file), text(dir / file)) << file;
+  }
+  EXPECT_EQ(rows, 18);  // (2 temperatures + darks) x 3 exposures x 2 frames
+  const std::string truth = text(plain / "furnace-truth.csv");
+  EXPECT_EQ(text(dir / "furnace-truth.csv").rfind(truth, 0), 0u);
+  EXPECT_EQ(text(plain / "roi.png"), text(dir / "roi.png"));
+}
+
+TEST_F(ReferenceDatasetFiles, an_empty_uncertainty_means_half_a_degree) {
+  edit_rows([](std::vector<ManifestRow>& rows) {
+    for (auto& r : rows) r.temperature_uncertainty_c = NAN;  // written in the 4-column form
+  });
+  EXPECT_DOUBLE_EQ(Dataset::open(dir.path()).references()[0].temperature_uncertainty_c,
+                   kDefaultReferenceUncertaintyC);
+  edit_rows([](std::vector<ManifestRow>& rows) {
+    for (auto& r : rows)
+      if (r.kind == FrameKind::kReference) r.temperature_uncertainty_c = 1.5;
+  });
+  const Dataset d = Dataset::open(dir.path());
+  for (const auto& g : d.references())
+    EXPECT_DOUBLE_EQ(g.temperature_uncertainty_c, 1.5);
+}
+
+TEST_F(ReferenceDatasetFiles, rejects_a_reference_exposure_without_its_dark_n) {
+  const double exposure = Dataset::open(dir.path()).references()[1].exposure_us;
+  edit_rows([&](std::vector<ManifestRow>& rows) {
+    rows.erase(std::remove_if(rows.begin(), rows.end(),
+                              [&](const ManifestRow& r) {
+                                return r.kind == FrameKind::kDark &&
+                                       same_exposure(r.exposure_us, exposure);
+                              }),
+               rows.end());
+  });
+  std::ostringstream e;
+  e << "(manifest.csv line " << first_reference_line(exposure)
+    << "): reference at 1738 degC, exposure " << exposure << " us has no dark row of that exposure";
+  expect_rejected(e.str());
+}
+
+TEST_F(ReferenceDatasetFiles, rejects_rows_of_one_reference_stating_different_uncertainties_n) {
+  const double exposure = Dataset::open(dir.path()).references()[2].exposure_us;
+  edit_rows([&](std::vector<ManifestRow>& rows) {
+    for (auto& r : rows)
+      if (r.kind == FrameKind::kReference && same_exposure(r.exposure_us, exposure))
+        r.temperature_uncertainty_c = 2;
+  });
+  expect_rejected("(manifest.csv line " + std::to_string(first_reference_line(exposure)) +
+                  "): temperature_uncertainty_c 2 differs from the 0.5 that line");
+}
+
+TEST_F(ReferenceDatasetFiles, rejects_an_empty_or_misfit_reference_roi_n) {
+  write_raw_image(dir / kReferenceRoiFile, cv::Mat::zeros(32, 40, CV_8U));
+  expect_rejected("reference-roi.png: the reference ROI is empty (no nonzero pixel)");
+  write_raw_image(dir / kReferenceRoiFile, cv::Mat(30, 40, CV_8U, cv::Scalar(255)));
+  expect_rejected("reference-roi.png: image is 40x30, the ROI's size is 40x32");
+  cv::Mat small = cv::Mat::zeros(32, 40, CV_8U);
+  small(cv::Rect(10, 10, 6, 6)) = 1;
+  write_raw_image(dir / kReferenceRoiFile, small);
+  const Dataset d = Dataset::open(dir.path());
+  EXPECT_TRUE(d.has_reference_roi());
+  EXPECT_EQ(cv::countNonZero(d.reference_roi()), 36);
+  EXPECT_EQ(d.reference_roi().at<std::uint8_t>(12, 12), 255);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pyrocam/calibration/calibration_outcome.h"
+#include "pyrocam/calibration/qe_fit.h"
 
 namespace pyrocam {
 
@@ -19,10 +20,12 @@ struct QeChoice {
 };
 
 // qe_solver: "paper", "regularised", "datasheet" or "auto" (paper and regularised). rates:
-// temperatures x bands, DN/s (NaN missing), at the temperatures t_c.
+// temperatures x bands, DN/s (NaN missing), at the temperatures t_c. references: the dataset's
+// reference sources (RateTable::reference_rates()), handed to every fit with the furnace rates.
 QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& datasheet_qe,
                           const std::vector<double>& t_c, const Eigen::MatrixXd& rates,
-                          const std::string& qe_solver, const StageProgress& progress = {});
+                          const std::string& qe_solver, const StageProgress& progress = {},
+                          const std::vector<ReferenceRates>& references = {});
 
 // k_b = measured / modelled rate at the hottest temperature the band has a slope for.
 Eigen::VectorXd band_scale(const CameraProfile& p, const Eigen::MatrixXd& q,

@@ -11,12 +11,14 @@
 namespace pyrocam {
 
 // The uncertainty table of a model whose camera, network and qe_solver are set: every 50 degC
-// over the model's range. rates: temperatures x bands, DN/s, at the furnace temperatures t_c.
+// over the model's range. rates: temperatures x bands, DN/s, at the furnace temperatures t_c;
+// references: the dataset's reference sources, in every refit as in the model's fit.
 // Refits only for fitted QE (none for "datasheet"); without refits u_calibration is the
 // thermocouple's own standard uncertainty.
 UncertaintyModel uncertainty_model(const ThermalModel& model, const std::vector<double>& t_c,
                                    const Eigen::MatrixXd& rates, const CalibrationOptions& options,
-                                   const StageProgress& progress = {});
+                                   const StageProgress& progress = {},
+                                   const std::vector<ReferenceRates>& references = {});
 
 // Standard uncertainty at every temperature of what the QE leaves open: the spread (std) of the
 // readings that `fitted`'s locus gives for the rates of each plausible camera in `posterior`
@@ -36,10 +38,13 @@ std::vector<double> emissivity_uncertainty(const ThermalModel& model, const Unce
 
 // Standard uncertainty at every u.temperature_c of the temperature the model's rates imply,
 // over u.monte_carlo_refits QE refits (solver model.qe_solver) with furnace temperatures off by
-// up to +-u.thermocouple_tolerance_c (uniform; drawn from `seed`).
+// up to +-u.thermocouple_tolerance_c (uniform; drawn from `seed`) and each reference's
+// temperature off by a normal draw of its temperature_uncertainty_c (a stream of its own, so
+// that the furnace draws do not depend on the references).
 std::vector<double> thermocouple_uncertainty(const ThermalModel& model, const UncertaintyModel& u,
                                              const std::vector<double>& t_c,
                                              const Eigen::MatrixXd& rates, std::uint64_t seed,
-                                             const StageProgress& progress = {});
+                                             const StageProgress& progress = {},
+                                             const std::vector<ReferenceRates>& references = {});
 
 }  // namespace pyrocam

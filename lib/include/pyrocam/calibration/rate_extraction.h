@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "pyrocam/calibration/qe_fit.h"
 #include "pyrocam/core/dataset.h"
 #include "pyrocam/core/profile.h"
 
@@ -32,6 +33,19 @@ struct SlopeFit {
   int points = 0;
 };
 
+// One reference source (the manifest rows of kind reference at one temperature, in
+// reference-roi.png when the dataset has one, else in the ROI): its settings over exposure, why
+// points were left out, one slope per band. Its absolute scale is unknown.
+struct ReferenceSweep {
+  std::string name;  // "reference 1738 degC (manifest line 12)"
+  double temperature_c = 0;
+  double temperature_uncertainty_c = kDefaultReferenceUncertaintyC;  // k=1, degC
+  int line = 0;                                  // the source's first manifest line
+  std::vector<SettingMeans> settings;            // sorted by exposure
+  std::vector<std::vector<PointStatus>> status;  // [setting][band]
+  std::vector<SlopeFit> fits;                    // [band]; NaN rate below 2 usable points
+};
+
 struct RateTable {
   std::vector<double> temperatures_c;
   std::vector<std::string> band_names;
@@ -39,9 +53,14 @@ struct RateTable {
   std::vector<std::vector<SlopeFit>> fits;       // [temperature][band]
   std::vector<std::vector<PointStatus>> status;  // [setting][band]
   std::vector<std::string> warnings;             // e.g. "1100 degC band R: 1 usable point"
+  // The reference sources, sorted by temperature; apart from the furnace settings above, which
+  // they never enter (temperatures_c, settings, fits and rates() are the furnace's alone).
+  std::vector<ReferenceSweep> references;
 
   // temperatures x bands; NaN where a fit is missing.
   Eigen::MatrixXd rates() const;
+  // The references as the QE fit takes them (CalibrationRates::references), in the same order.
+  std::vector<ReferenceRates> reference_rates() const;
 };
 
 struct ExtractOptions {
@@ -51,8 +70,10 @@ struct ExtractOptions {
 
 using ProgressFn = std::function<void(std::size_t done, std::size_t total)>;
 
-// Streams every image once. Throws InputError when the profile does not match the images
-// (bit depth, mosaic period) or a band has no usable points at all.
+// Streams every image once (a dark twice when reference-roi.png needs its means there too).
+// Throws InputError when the profile does not match the images (bit depth, mosaic period), a
+// band has no usable furnace points at all, or a reference has fewer than 2 bands with 2 usable
+// exposures (all dim or saturated, say), naming the reference's manifest line.
 RateTable extract_rates(const Dataset& dataset, const CameraProfile& profile,
                         const ExtractOptions& options = {}, const ProgressFn& progress = {});
 

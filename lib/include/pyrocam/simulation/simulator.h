@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "pyrocam/core/dataset.h"
 #include "pyrocam/core/profile.h"
 
 namespace pyrocam {
@@ -80,6 +81,19 @@ struct CampaignSettings {
   // true values are written to furnace-truth.csv beside the manifest.
   double furnace_error_sigma_c = 1.0;
   std::uint64_t furnace_seed = 11;
+  // Reference sources beyond the furnace (fixed-point cells such as Co-C 1324, Pt-C 1738, Re-C
+  // 2474 degC), nominal degC; none by default. Each gets manifest rows of kind reference: its own
+  // sweep of exposure_count exposures exposure_factor apart, the first putting the brightest band
+  // at half the profile's calibration_dim_dn, frames_per_setting frames each, and dark frames of
+  // every exposure the dataset has no dark of yet. Its absolute scale is unknown to the
+  // calibration (aperture, distance): rendered with an emissivity drawn in [0.05, 0.5]. Its true
+  // temperature is off the nominal by a normal draw of reference_uncertainty_c (the manifest's
+  // temperature_uncertainty_c); scale and error come from reference_seed, and the true
+  // temperatures follow the furnace steps in furnace-truth.csv. Without references the campaign
+  // is the same, byte for byte, as before references existed.
+  std::vector<double> reference_temperatures_c;
+  double reference_uncertainty_c = kDefaultReferenceUncertaintyC;
+  std::uint64_t reference_seed = 13;
   int width = 128, height = 128;
   double roi_area_px = 6000;  // elliptical, centred
   std::string image_extension = ".pgm";
@@ -87,7 +101,9 @@ struct CampaignSettings {
 
 using Progress = std::function<void(std::size_t done, std::size_t total)>;
 
-// Writes manifest.csv, frames, dark frames for every exposure and roi.png into `folder`.
+// Writes manifest.csv, frames, dark frames for every exposure, the reference sweeps and roi.png
+// into `folder`. Throws InputError for settings it cannot render (no exposure or frame, a frame
+// too small for the ROI, a reference uncertainty <= 0 or a reference without signal).
 void write_furnace_campaign(const std::filesystem::path& folder, Simulator& camera,
                             CampaignSettings settings, const Progress& progress = {});
 
