@@ -45,7 +45,7 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
     solvers = {"paper", "regularised"};
   else
     solvers = {qe_solver};
-  const CalibrationRates data{t_c, rates.transpose()};
+  const CalibrationRates data{t_c, rates.transpose(), {}};
   QeChoice best;
   best.system_qe = datasheet;
   best.band_scale = band_scale(profile, datasheet, t_c, rates);
