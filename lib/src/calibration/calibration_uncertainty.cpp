@@ -12,15 +12,6 @@ namespace pyrocam {
 
 using calibration_detail::report_stage;
 
-Eigen::MatrixXd with_emissivity_slope(const CameraProfile& p, const Eigen::MatrixXd& q,
-                                      double alpha) {
-  const double centre = 0.5 * (p.filter_pass_band_nm[0] + p.filter_pass_band_nm[1]);
-  Eigen::MatrixXd out = q;
-  for (Eigen::Index i = 0; i < p.grid.size(); ++i)
-    out.col(i) *= std::max(0.0, 1 + alpha * (p.grid.nm()[i] - centre) / 100.0);
-  return out;
-}
-
 std::vector<double> emissivity_uncertainty(const ThermalModel& m, const UncertaintyModel& u) {
   const CameraProfile& profile = m.profile();
   const CameraModel tilted{profile,

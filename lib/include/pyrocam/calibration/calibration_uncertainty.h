@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "pyrocam/calibration/calibration_outcome.h"
+#include "pyrocam/runtime/emissivity.h"  // with_emissivity_slope
 
 namespace pyrocam {
 
@@ -16,10 +17,6 @@ namespace pyrocam {
 UncertaintyModel uncertainty_model(const ThermalModel& model, const std::vector<double>& t_c,
                                    const Eigen::MatrixXd& rates, const CalibrationOptions& options,
                                    const StageProgress& progress = {});
-
-// Spectral emissivity eps(lambda) = 1 + alpha (lambda - centre) / 100 nm folded into Q.
-Eigen::MatrixXd with_emissivity_slope(const CameraProfile& p, const Eigen::MatrixXd& q,
-                                      double alpha);
 
 // |network reading - T| for a graybody whose emissivity has the slope u.emissivity_slope_u, at
 // every u.temperature_c.
