@@ -27,8 +27,8 @@ CalibrationRates furnace_rates(const CameraProfile& p, const Eigen::MatrixXd& q_
                                std::uint64_t seed = 3) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
-  CalibrationRates d{temps_c,
-                     Eigen::MatrixXd(p.band_count(), static_cast<Eigen::Index>(temps_c.size()))};
+  CalibrationRates d{
+      temps_c, Eigen::MatrixXd(p.band_count(), static_cast<Eigen::Index>(temps_c.size())), {}};
   for (std::size_t i = 0; i < temps_c.size(); ++i) {
     d.rates.col(static_cast<Eigen::Index>(i)) =
         kUnknownGain * signal_rates(p, q_true, celsius_to_kelvin(temps_c[i]));
