@@ -49,7 +49,7 @@
  * #GstRatioTemp:e-slope (percent per 100 nm, -50 to 50, default 0 = grey; changeable while
  * playing) reads a surface whose emissivity is 1 + slope (wavelength - middle of the filter pass
  * band): ratios cancel a grey emissivity, not a slope. Each band is divided by its factor at the
- * temperature read and read again until the reading settles (two or three estimates per pixel).
+ * temperature read and read again until the reading settles (2 to 12 estimates per pixel).
  * The emissivity term of the uncertainty is then |dT/d slope| at that slope times
  * #GstRatioTemp:e-slope-uncertainty (default: the model's, 1 %/100 nm).
  *
