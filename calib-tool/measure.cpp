@@ -25,6 +25,7 @@ struct MeasureArgs {
   std::string method = "mlp", demosaic = "bilinear", format = "png";
   double saturation = -1;
   double misfit_probability = 0;
+  double e_slope = 0, e_slope_uncertainty = -1;  // %/100 nm
   bool allow_partial = false;
   bool uncertainty = false;
 };
@@ -119,6 +120,8 @@ MeasureOptions measure_options(const MeasureArgs& a,
   options.uncertainty = a.uncertainty;
   options.misfit_probability = a.misfit_probability;
   options.allow_partial = a.allow_partial;
+  options.emissivity_slope = a.e_slope / 100;
+  options.emissivity_slope_u = a.e_slope_uncertainty / 100;
   return options;
 }
 
@@ -286,6 +289,17 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
                 "estimate; the chance that a true graybody pixel is dropped (0 = no check, "
                 "e.g. 1e-6)")
       ->check(CLI::Range(0.0, 0.5))
+      ->capture_default_str();
+  c->add_option("--e-slope", a.e_slope,
+                "Emissivity slope of the surface, %/100 nm (-50 to 50; ratiotemp's e-slope): "
+                "emissivity 1 + slope (wavelength - middle of the filter pass band), positive "
+                "rising with wavelength; readings are corrected for it (0 = grey)")
+      ->check(CLI::Range(-50.0, 50.0))
+      ->capture_default_str();
+  c->add_option("--e-slope-uncertainty", a.e_slope_uncertainty,
+                "Standard uncertainty of --e-slope, %/100 nm (0 to 100), for the emissivity "
+                "term of --uncertainty; negative: the model's (1 %/100 nm from calibrate)")
+      ->check(CLI::Range(-1.0, 100.0))
       ->capture_default_str();
   c->add_option("--format", a.format, "Image type: png or tiff")
       ->check(CLI::IsMember({"png", "tiff"}))

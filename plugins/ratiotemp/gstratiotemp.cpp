@@ -46,6 +46,13 @@
  * streaming thread before the next frame. A method that cannot be used is refused with a
  * warning on the bus and the previous one stays.
  *
+ * #GstRatioTemp:e-slope (percent per 100 nm, -50 to 50, default 0 = grey; changeable while
+ * playing) reads a surface whose emissivity is 1 + slope (wavelength - middle of the filter pass
+ * band): ratios cancel a grey emissivity, not a slope. Each band is divided by its factor at the
+ * temperature read and read again until the reading settles (2 to 12 estimates per pixel).
+ * The emissivity term of the uncertainty is then |dT/d slope| at that slope times
+ * #GstRatioTemp:e-slope-uncertainty (default: the model's, 1 %/100 nm).
+ *
  * #GstRatioTemp:output uncertainty outputs the expanded uncertainty (k = 2, GUM: signal noise
  * propagated per pixel plus the model's calibration and emissivity terms) instead of the
  * temperature, in the same encoding: 0.1 K per code (a temperature difference, no offset),
@@ -487,6 +494,11 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
       settings.stats_interval > 0 &&
       (!GST_CLOCK_TIME_IS_VALID(position) || !GST_CLOCK_TIME_IS_VALID(st.last_stats) ||
        position < st.last_stats || position - st.last_stats >= settings.stats_interval);
+  if (!PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "e-slope refused", [&] {
+        st.estimators->estimator(st.method).set_emissivity_slope(
+            settings.e_slope / 100, settings.e_slope_uncertainty / 100);
+      }))
+    return GST_FLOW_ERROR;  // the property's range leaves only a pass band over 400 nm wide
   const bool ok =
       PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not estimate temperatures", [&] {
         pg::MappedImage in;

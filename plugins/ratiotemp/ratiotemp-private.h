@@ -21,8 +21,11 @@ constexpr guint64 DEFAULT_STATS_INTERVAL = GST_SECOND;
 constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
 constexpr double DEFAULT_MISFIT_PROBABILITY = 0.0;
 constexpr double MAX_MISFIT_PROBABILITY = 0.5;
-constexpr guint DEFAULT_PEAK_WINDOW = 5;  // pyrocam::kDefaultPeakWindow
-constexpr guint MAX_PEAK_WINDOW = 255;    // pyrocam::kMaxPeakWindow
+constexpr guint DEFAULT_PEAK_WINDOW = 5;              // pyrocam::kDefaultPeakWindow
+constexpr guint MAX_PEAK_WINDOW = 255;                // pyrocam::kMaxPeakWindow
+constexpr double DEFAULT_E_SLOPE = 0.0;               // %/100 nm: grey
+constexpr double MAX_E_SLOPE = 50.0;                  // pyrocam::kMaxEmissivitySlope, in %/100 nm
+constexpr double DEFAULT_E_SLOPE_UNCERTAINTY = -1.0;  // the model's
 
 /* A rectangle of output pixels. */
 struct Region {
@@ -46,6 +49,8 @@ struct Settings {
   guint region_serial = 0;                  // bumped by every change of region
   guint peak_window = DEFAULT_PEAK_WINDOW;  // odd, or 0 = no peak
   bool peak_window_set = false;             // set by the user: warn when it does not fit
+  double e_slope = DEFAULT_E_SLOPE;         // %/100 nm, never NaN
+  double e_slope_uncertainty = DEFAULT_E_SLOPE_UNCERTAINTY;  // %/100 nm; negative: the model's
 };
 
 /* Whether the statistics of a frame (or region) of this size carry a peak. */

@@ -1,4 +1,6 @@
 /* ratiotemp's GObject properties and the region they parse. */
+#include <cmath>
+
 #include "pyrocam-common.h"
 #include "ratiotemp-private.h"
 
@@ -17,6 +19,8 @@ enum {
   PROP_ALLOW_PARTIAL,
   PROP_MISFIT_PROBABILITY,
   PROP_PEAK_WINDOW,
+  PROP_E_SLOPE,
+  PROP_E_SLOPE_UNCERTAINTY,
 };
 
 }  // namespace
@@ -98,6 +102,21 @@ void install_properties(GObjectClass* gobject_class) {
                         "robust to single wild pixels, unlike max-c; an even value is refused; "
                         "0 = no peak",
                         0, MAX_PEAK_WINDOW, DEFAULT_PEAK_WINDOW, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_E_SLOPE,
+      g_param_spec_double("e-slope", "Emissivity slope",
+                          "Spectral emissivity slope of the surface, percent per 100 nm (-50 to "
+                          "50): emissivity 1 + e-slope/100 * (wavelength - middle of the filter "
+                          "pass band) / 100 nm, positive when it rises with wavelength; the "
+                          "readings are corrected for it; 0 = grey (ratios need no correction)",
+                          -MAX_E_SLOPE, MAX_E_SLOPE, DEFAULT_E_SLOPE, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_E_SLOPE_UNCERTAINTY,
+      g_param_spec_double("e-slope-uncertainty", "Emissivity slope uncertainty",
+                          "Standard uncertainty of e-slope, percent per 100 nm (0 to 100), for "
+                          "the emissivity term of output=uncertainty; negative (default -1) = "
+                          "the model's (1 %/100 nm for models from pyrocam-calib)",
+                          -1.0, 100.0, DEFAULT_E_SLOPE_UNCERTAINTY, playing));
 }
 
 void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpec* pspec) {
@@ -132,6 +151,16 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
     case PROP_MISFIT_PROBABILITY:
       s.misfit_probability = g_value_get_double(value);
       break;
+    case PROP_E_SLOPE:
+    case PROP_E_SLOPE_UNCERTAINTY: {
+      const double v = g_value_get_double(value);  // NaN passes the GParamSpec's range check
+      double& to = prop_id == PROP_E_SLOPE ? s.e_slope : s.e_slope_uncertainty;
+      if (std::isnan(v))
+        GST_WARNING_OBJECT(self, "%s NaN refused; keeping %g", pspec->name, to);
+      else
+        to = v;
+      break;
+    }
     case PROP_PEAK_WINDOW: {
       const guint v = g_value_get_uint(value);
       if (v % 2 == 0 && v != 0) {
@@ -183,6 +212,12 @@ void get_property(GObject* object, guint prop_id, GValue* value, GParamSpec* psp
       break;
     case PROP_PEAK_WINDOW:
       g_value_set_uint(value, s.peak_window);
+      break;
+    case PROP_E_SLOPE:
+      g_value_set_double(value, s.e_slope);
+      break;
+    case PROP_E_SLOPE_UNCERTAINTY:
+      g_value_set_double(value, s.e_slope_uncertainty);
       break;
     case PROP_REGION:
       g_value_set_string(value, s.region_text.empty() ? nullptr : s.region_text.c_str());

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <opencv2/core.hpp>
+#include <sstream>
 #include <utility>
 
 #include "pyrocam/core/dataset.h"
@@ -409,6 +410,61 @@ TEST_F(CliMeasure, measure_method_auto_reads_with_the_method_the_library_chooses
     ASSERT_EQ(r.exit_code, 0) << method << ": " << r.err;
   }
   EXPECT_EQ(read_text(out / "stats.csv"), read_text(by_name / "stats.csv"));
+}
+
+// The median_c column of the first frame's row of a measure stats.csv (NaN without one).
+double first_median_c(const std::filesystem::path& stats_csv) {
+  std::istringstream lines(read_text(stats_csv));
+  std::string line;
+  std::getline(lines, line);  // header
+  if (!std::getline(lines, line)) return NAN;
+  std::istringstream fields(line);
+  std::string field;
+  for (int i = 0; i <= 8 && std::getline(fields, field, ','); ++i) {
+  }
+  return field.empty() ? NAN : std::stod(field);
+}
+
+// The median code of a 16-bit image over its nonzero pixels.
+double median_nonzero(const std::filesystem::path& image) {
+  const cv::Mat m = read_raw_image(image);
+  std::vector<int> v;
+  for (int y = 0; y < m.rows; ++y)
+    for (int x = 0; x < m.cols; ++x)
+      if (m.at<std::uint16_t>(y, x) != 0) v.push_back(m.at<std::uint16_t>(y, x));
+  if (v.empty()) return NAN;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+TEST_F(CliMeasure, measure_e_slope_moves_the_reading_and_its_uncertainty) {
+  const std::string base = "-q measure --model " + quoted(test_model("test-model-rgb.json")) +
+                           " --dataset " + quoted(data) + " --method likelihood --uncertainty";
+  const std::filesystem::path grey = dir / "grey", sloped = dir / "sloped";
+  ASSERT_EQ(run_tool(base + " --out " + quoted(grey), dir).exit_code, 0);
+  const ToolRun r =
+      run_tool(base + " --e-slope -20 --e-slope-uncertainty 5 --out " + quoted(sloped), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The simulated plate is grey: read as a surface whose emissivity falls 20 %/100 nm towards
+  // the red (which would read hotter uncorrected), it reads cooler.
+  const double t_grey = first_median_c(grey / "stats.csv"),
+               t_sloped = first_median_c(sloped / "stats.csv");
+  EXPECT_GT(t_grey - t_sloped, 20) << t_grey << " " << t_sloped;
+  // u(alpha) 5 %/100 nm instead of the model's 1 %/100 nm: a larger emissivity term.
+  const double u_grey = median_nonzero(grey / "0000_uncertainty.png"),
+               u_sloped = median_nonzero(sloped / "0000_uncertainty.png");
+  EXPECT_GT(u_sloped, 2 * u_grey) << u_grey << " " << u_sloped;
+}
+
+TEST_F(CliMeasure, measure_rejects_an_e_slope_out_of_range_n) {
+  for (const std::string bad : {"60", "-50.5", "nan"}) {
+    const ToolRun r =
+        run_tool("-q measure --model " + quoted(test_model("test-model-rgb.json")) + " --dataset " +
+                     quoted(data) + " --e-slope " + bad + " --out " + quoted(out),
+                 dir);
+    EXPECT_NE(r.exit_code, 0) << bad;
+    EXPECT_NE(r.err.find("e-slope"), std::string::npos) << bad << ": " << r.err;
+  }
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/demosaic.h"
+#include "pyrocam/runtime/emissivity.h"
 #include "pyrocam/runtime/estimator_check.h"
 #include "pyrocam/runtime/model.h"
 #include "pyrocam/runtime/plane_estimator.h"
@@ -364,6 +365,55 @@ TEST_F(RatioTemp, mixed_pixel_has_no_reading_with_the_misfit_check) {
     EXPECT_EQ(run(planes, 4, 1), on);
     TearDown();
   }
+}
+
+// e-slope: a surface whose emissivity falls 30 %/100 nm reads far off as grey, and at its true
+// temperature with e-slope=-30 set while playing; values outside -50..50 and NaN never get in.
+TEST_F(RatioTemp, e_slope_reads_a_tilted_surface_at_its_temperature) {
+  const ThermalModel& m = *nir_model();
+  const CameraModel tilted{m.profile(),
+                           with_emissivity_slope(m.profile(), m.camera.system_qe, -0.3),
+                           m.camera.band_scale};
+  const std::vector<double> truth = {1000, 1300, 1600, 2000};
+  const int n = static_cast<int>(truth.size()), bands = m.profile().band_count();
+  std::vector<float> planes(static_cast<std::size_t>(bands * n));
+  for (int i = 0; i < n; ++i) {
+    const Eigen::VectorXd r = tilted.rates(truth[static_cast<std::size_t>(i)]);
+    for (int b = 0; b < bands; ++b)
+      planes[static_cast<std::size_t>(b * n + i)] = static_cast<float>(r[b] * 100 / r.minCoeff());
+  }
+  start("ratiotemp method=likelihood model=" + nir_model_path(), bands_caps(bands, "5x5", n, 1));
+  double slope = NAN;
+  g_object_get(element, "e-slope", &slope, nullptr);
+  EXPECT_EQ(slope, 0.0);
+  const auto grey = run(planes, n, 1);
+  g_object_set(element, "e-slope", -30.0, nullptr);
+  const auto corrected = run(planes, n, 1);
+  ASSERT_EQ(grey.size(), truth.size());
+  ASSERT_EQ(corrected.size(), truth.size());
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    EXPECT_TRUE(grey[i] == 0 || std::abs(grey[i] / 10.0 - 273.15 - truth[i]) > 20) << truth[i];
+    EXPECT_NEAR(corrected[i] / 10.0 - 273.15, truth[i], 0.1) << truth[i];
+  }
+  // The property's range: GLib refuses what is outside it (and NaN), the value stays.
+  GParamSpec* spec = g_object_class_find_property(G_OBJECT_GET_CLASS(element), "e-slope");
+  ASSERT_TRUE(spec && G_IS_PARAM_SPEC_DOUBLE(spec));
+  EXPECT_EQ(G_PARAM_SPEC_DOUBLE(spec)->minimum, -50.0);
+  EXPECT_EQ(G_PARAM_SPEC_DOUBLE(spec)->maximum, 50.0);
+  EXPECT_EQ(G_PARAM_SPEC_DOUBLE(spec)->default_value, 0.0);
+  for (double bad : {60.0, -50.5, static_cast<double>(NAN)}) {
+    g_object_set(element, "e-slope", bad, nullptr);  // GLib warns on stderr
+    g_object_get(element, "e-slope", &slope, nullptr);
+    EXPECT_EQ(slope, -30.0) << bad;
+  }
+  // The uncertainty of the slope: the model's by default (negative).
+  double u = 0;
+  g_object_get(element, "e-slope-uncertainty", &u, nullptr);
+  EXPECT_LT(u, 0);
+  EXPECT_EQ(run(planes, n, 1), corrected);
+  // Back to grey while playing: the readings of the start.
+  g_object_set(element, "e-slope", 0.0, nullptr);
+  EXPECT_EQ(run(planes, n, 1), grey);
 }
 
 // A raw 8x8 RGGB frame of a graybody at t_c whose brightest band is 120 DN above the dark

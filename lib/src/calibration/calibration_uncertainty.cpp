@@ -12,15 +12,6 @@ namespace pyrocam {
 
 using calibration_detail::report_stage;
 
-Eigen::MatrixXd with_emissivity_slope(const CameraProfile& p, const Eigen::MatrixXd& q,
-                                      double alpha) {
-  const double centre = 0.5 * (p.filter_pass_band_nm[0] + p.filter_pass_band_nm[1]);
-  Eigen::MatrixXd out = q;
-  for (Eigen::Index i = 0; i < p.grid.size(); ++i)
-    out.col(i) *= std::max(0.0, 1 + alpha * (p.grid.nm()[i] - centre) / 100.0);
-  return out;
-}
-
 std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
                                          const std::vector<QeSample>& posterior,
                                          const std::vector<double>& temperatures_c) {

@@ -51,6 +51,10 @@ double TemperatureEstimator::in_range(double t_c) const {
   return t_c >= model_->min_temperature_c && t_c <= model_->max_temperature_c ? t_c : NAN;
 }
 
+double TemperatureEstimator::systematic_u_c(double t_c) const {
+  return model_->uncertainty.systematic_u_c(t_c);
+}
+
 void TemperatureEstimator::estimate(const float* const* planes, std::size_t n, float* out) const {
   double s[kMaxBands];
   for (std::size_t i = 0; i < n; ++i) {

@@ -14,6 +14,7 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
       options_(options),
       planes_estimator_(model_, options.method, options.misfit_probability) {
   planes_estimator_.set_allow_partial(options.allow_partial);
+  planes_estimator_.set_emissivity_slope(options.emissivity_slope, options.emissivity_slope_u);
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model_->profile().thresholds.inference_saturation_dn;
 }

@@ -8,6 +8,7 @@
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/uncertainty.h"
+#include "runtime/estimator_kinds.h"
 
 namespace pyrocam {
 
@@ -22,6 +23,40 @@ void PlaneEstimator::set_misfit_probability(double probability) {
     misfit_->set_probability(probability);
   else if (probability != 0)  // the check's constructor refuses what set_probability refuses
     misfit_ = std::make_unique<MisfitCheck>(model_, probability);
+}
+
+void PlaneEstimator::set_emissivity_slope(double alpha, double alpha_u) {
+  const bool grey = alpha == 0 && alpha_u < 0;
+  if (sloped_ ? alpha == sloped_->alpha() && alpha_u == alpha_u_ : grey) return;
+  if (grey) {
+    sloped_.reset();
+  } else {  // built before anything changes: a refused value keeps the previous ones
+    auto sloped = std::make_unique<EmissivitySlopeEstimator>(estimator_, alpha, alpha_u);
+    sloped_ = std::move(sloped);
+  }
+  alpha_u_ = alpha_u;
+}
+
+void PlaneEstimator::estimate_row(const float* const* rows, std::size_t n, float* out) const {
+  if (!sloped_) {
+    estimator_->estimate(rows, n, out);
+    if (misfit_) misfit_->apply(rows, n, out);
+    return;
+  }
+  sloped_->estimate(rows, n, out);
+  if (!misfit_) return;
+  // The check sees the signals of the grey surface that the reading corrected them to.
+  const auto bands = static_cast<std::size_t>(model_->profile().band_count());
+  std::vector<float> corrected(bands * n);
+  std::vector<const float*> corrected_rows(bands);
+  for (std::size_t b = 0; b < bands; ++b) corrected_rows[b] = corrected.data() + b * n;
+  double s[kMaxBands], c[kMaxBands];
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t b = 0; b < bands; ++b) s[b] = rows[b][i];
+    sloped_->corrected_signals(s, out[i], c);
+    for (std::size_t b = 0; b < bands; ++b) corrected[b * n + i] = static_cast<float>(c[b]);
+  }
+  misfit_->apply(corrected_rows.data(), n, out);
 }
 
 cv::Size PlaneEstimator::checked_size(const std::vector<cv::Mat>& planes) const {
@@ -48,8 +83,7 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
     for (int y = rows.start; y < rows.end; ++y) {
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
       float* out = t.ptr<float>(y);
-      estimator_->estimate(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
-      if (misfit_) misfit_->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
+      estimate_row(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
       if (!u) continue;
       float* uo = u->ptr<float>(y);
       for (int x = 0; x < size.width; ++x) {
@@ -58,7 +92,7 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
           continue;
         }
         for (int b = 0; b < bands; ++b) s[b] = row_ptrs[b][x];
-        uo[x] = static_cast<float>(expanded_uncertainty_c(*estimator_, s.data(), out[x]));
+        uo[x] = static_cast<float>(expanded_uncertainty_c(estimator(), s.data(), out[x]));
       }
     }
   });
@@ -74,8 +108,7 @@ void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat&
     std::vector<float> t(static_cast<std::size_t>(size.width));
     for (int y = rows.start; y < rows.end; ++y) {
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
-      estimator_->estimate(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
-      if (misfit_) misfit_->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
+      estimate_row(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
       encode_temperature_row(t.data(), codes.ptr<std::uint16_t>(y), size.width);
     }
   });

@@ -34,7 +34,7 @@ double expanded_uncertainty_c(const TemperatureEstimator& est, const double* sig
       continue;
     var += dt_ds * dt_ds * signal_variance_dn2(m.profile(), b, keep, frames);
   }
-  const double sys = m.uncertainty.systematic_u_c(t_c);
+  const double sys = est.systematic_u_c(t_c);
   return m.uncertainty.coverage_factor * std::sqrt(var + sys * sys);
 }
 

@@ -7,6 +7,7 @@
 
 #include "pyrocam/calibration/calibration_outcome.h"
 #include "pyrocam/calibration/qe_fit.h"
+#include "pyrocam/runtime/emissivity.h"  // with_emissivity_slope
 
 namespace pyrocam {
 
@@ -27,10 +28,6 @@ UncertaintyModel uncertainty_model(const ThermalModel& model, const std::vector<
 std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
                                          const std::vector<QeSample>& posterior,
                                          const std::vector<double>& temperatures_c);
-
-// Spectral emissivity eps(lambda) = 1 + alpha (lambda - centre) / 100 nm folded into Q.
-Eigen::MatrixXd with_emissivity_slope(const CameraProfile& p, const Eigen::MatrixXd& q,
-                                      double alpha);
 
 // |network reading - T| for a graybody whose emissivity has the slope u.emissivity_slope_u, at
 // every u.temperature_c.

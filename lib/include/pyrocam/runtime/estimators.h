@@ -32,6 +32,12 @@ class TemperatureEstimator {
   virtual void estimate(const float* const* planes, std::size_t n, float* out_c) const;
 
   const ThermalModel& model() const { return *model_; }
+  const std::shared_ptr<const ThermalModel>& shared_model() const { return model_; }
+
+  // Combined systematic standard uncertainty of a reading at t_c, degC (calibration and
+  // emissivity terms): the model's table (UncertaintyModel::systematic_u_c); a reading corrected
+  // for an emissivity slope has its own emissivity term (emissivity.h).
+  virtual double systematic_u_c(double t_c) const;
 
   // Whether the likelihood fit may read a pixel from the bands left when some are saturated,
   // missing or dim (at least two of them). Off (the default) such a pixel has no reading with

@@ -19,6 +19,10 @@ struct MeasureOptions {
   bool uncertainty = false;
   double misfit_probability = 0;  // band-consistency check (misfit.h); 0: none
   bool allow_partial = false;     // TemperatureEstimator::set_allow_partial
+  // PlaneEstimator::set_emissivity_slope: per 100 nm (0 = grey), and its standard uncertainty
+  // (negative: the model's).
+  double emissivity_slope = 0;
+  double emissivity_slope_u = -1;
 };
 
 // One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.

@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "pyrocam/runtime/emissivity.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/misfit.h"
 
@@ -27,18 +28,35 @@ class PlaneEstimator {
   // values as encode_decikelvin(estimate()), without the float image in memory. `codes` may wrap
   // a caller's buffer (written in place when its size and type fit).
   void estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat& codes) const;
-  const TemperatureEstimator& estimator() const { return *estimator_; }
+  // What reads the pixels: the method's estimator, or with an emissivity slope its
+  // EmissivitySlopeEstimator.
+  const TemperatureEstimator& estimator() const {
+    return sloped_ ? static_cast<const TemperatureEstimator&>(*sloped_) : *estimator_;
+  }
   // See TemperatureEstimator::set_allow_partial (off by default).
   void set_allow_partial(bool allow) { estimator_->set_allow_partial(allow); }
   // Not while an estimate runs. Throws InputError outside 0 or (0, 1).
   void set_misfit_probability(double probability);
+  // The surface's emissivity slope, per 100 nm (0.01 = 1 %/100 nm, positive rising with
+  // wavelength; 0 = grey, the default), and that slope's standard uncertainty for the
+  // uncertainty output (per 100 nm; negative: the model's). See EmissivitySlopeEstimator; the
+  // band-consistency check then sees the corrected signals. Not while an estimate runs; rebuilt
+  // only when a value changes (a few ms). Throws InputError for a value it refuses and keeps
+  // the previous ones.
+  void set_emissivity_slope(double alpha, double alpha_u = -1);
+  double emissivity_slope() const { return sloped_ ? sloped_->alpha() : 0.0; }
 
  private:
   // The planes' common size; throws InputError unless they are the model's bands, CV_32F, of
   // one size.
   cv::Size checked_size(const std::vector<cv::Mat>& planes) const;
+  // Both estimates: the rows' temperatures into `out` (and the misfit check).
+  void estimate_row(const float* const* rows, std::size_t n, float* out) const;
+
   std::shared_ptr<const ThermalModel> model_;
-  std::unique_ptr<TemperatureEstimator> estimator_;
+  std::shared_ptr<TemperatureEstimator> estimator_;
+  std::unique_ptr<EmissivitySlopeEstimator> sloped_;  // null for a grey surface
+  double alpha_u_ = -1;                               // as set
   // Made when the check is first turned on (its tables cost a locus).
   std::unique_ptr<MisfitCheck> misfit_;
 };

@@ -1,0 +1,115 @@
+// Surfaces that are not grey: a linear spectral emissivity slope (what two-colour pyrometers call
+// e-slope) that the band ratios do not cancel, and reading such a surface with any estimator.
+//
+// eps(lambda) = 1 + alpha (lambda - centre) / 100 nm, centre the middle of the profile's filter
+// pass band; alpha = 0.01 is a slope of 1 % per 100 nm, positive when the emissivity rises with
+// wavelength. A grey surface (alpha = 0) reads exactly as without this file.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+#include "pyrocam/core/locus.h"
+#include "pyrocam/core/profile.h"
+#include "pyrocam/runtime/estimators.h"
+#include "pyrocam/runtime/model.h"
+
+namespace pyrocam {
+
+// The steepest slope accepted, per 100 nm (50 %/100 nm).
+inline constexpr double kMaxEmissivitySlope = 0.5;
+// The corrected reading stops when a pass moves it by at most this, degC ...
+inline constexpr double kEmissivitySlopeToleranceC = 1e-3;
+// ... or after this many readings of the inner estimator (the first included).
+inline constexpr int kEmissivitySlopeMaxPasses = 12;
+// ... when it did not settle, the reading whose corrected signals read closest to it, if that is
+// within this, degC; else no reading.
+inline constexpr double kEmissivitySlopeAcceptC = 0.5;
+
+// The wavelength the slope pivots on: the middle of the profile's filter pass band, nm.
+double emissivity_slope_centre_nm(const CameraProfile& p);
+
+// Throws InputError unless alpha is finite, |alpha| <= kMaxEmissivitySlope and the emissivity
+// stays positive over the profile's filter pass band (the light the camera sees; outside it
+// with_emissivity_slope clamps at 0). `what` names the setting in the message.
+void check_emissivity_slope(const CameraProfile& p, double alpha, const char* what = "e-slope");
+
+// The spectral emissivity folded into a system QE (bands x wavelengths on p's grid): every
+// column times max(0, 1 + alpha (lambda - centre) / 100 nm). Not checked.
+Eigen::MatrixXd with_emissivity_slope(const CameraProfile& p, const Eigen::MatrixXd& q,
+                                      double alpha);
+
+// Per band, the factor a slope multiplies a graybody's signal by, eps_eff_b(T) = integral(Q_b eps
+// L(T)) / integral(Q_b L(T)), on a temperature grid (precomputed from the camera's system QE),
+// divided by the largest band's at each temperature: the estimators fit or cancel the scale, and
+// a signal divided by its factor is never smaller (a band above the dim threshold stays above).
+class SpectralEmissivity {
+ public:
+  // Every step_c degC from min_c to max_c (and max_c). Throws InputError for a slope
+  // check_emissivity_slope refuses, or a grid that is not min_c < max_c, step_c > 0.
+  SpectralEmissivity(const CameraModel& camera, double alpha, double min_c, double max_c,
+                     double step_c = 2);
+  double alpha() const { return alpha_; }
+  int bands() const { return static_cast<int>(factors_.cols()); }
+  // The factors at t_c (linear between grid samples, the end samples outside), bands() values.
+  void factors(double t_c, double* out) const;
+  std::size_t memory_bytes() const {
+    return static_cast<std::size_t>(factors_.size()) * sizeof(double);
+  }
+
+ private:
+  double alpha_, min_c_, step_c_;
+  Eigen::MatrixXd factors_;  // grid samples x bands
+};
+
+// Reads a surface whose emissivity has the slope alpha with any estimator: reads the signals
+// divided by the factors at the middle of the model's range, then divided by the factors at that
+// reading, and so on (secant steps on the reading's change) until the reading of the signals
+// corrected at a temperature is that temperature within kEmissivitySlopeToleranceC (2 to 9
+// readings on the test models; at most kEmissivitySlopeMaxPasses, then kEmissivitySlopeAcceptC).
+// Bands below the dim threshold, saturated or without a reading pass as they are, so the no-reading
+// decisions are the inner estimator's (allow-partial included: set it on the inner estimator). With
+// alpha = 0 the readings are the inner estimator's, bit for bit.
+//
+// The systematic uncertainty (expanded_uncertainty_c) then has the emissivity term |dT/d alpha|
+// u(alpha) at the chosen slope: alpha_u (per 100 nm), or with alpha_u < 0 the model's
+// UncertaintyModel::emissivity_slope_u. At alpha = 0 that is the model's own table (scaled by
+// alpha_u / emissivity_slope_u); elsewhere dT/d alpha is a central difference (alpha +-
+// 0.005) of corrected readings of noise-free graybody signals of the model's camera at every
+// temperature of the model's table.
+class EmissivitySlopeEstimator final : public TemperatureEstimator {
+ public:
+  // Throws InputError for a slope check_emissivity_slope refuses, or alpha_u above 1 or NaN.
+  EmissivitySlopeEstimator(std::shared_ptr<const TemperatureEstimator> inner, double alpha,
+                           double alpha_u = -1);
+
+  double temperature_c(const double* signals) const override;
+  // alpha = 0: the inner estimator's batch, bit for bit.
+  void estimate(const float* const* planes, std::size_t n, float* out_c) const override;
+  // The same, and how many readings of the inner estimator it took (`passes`, may be null).
+  double corrected_temperature_c(const double* signals, int* passes) const;
+  // The signals a grey surface at t_c would give: each band that reads divided by its factor.
+  void corrected_signals(const double* signals, double t_c, double* out) const;
+  // Calibration and emissivity terms at t_c, standard uncertainty, degC.
+  double systematic_u_c(double t_c) const override;
+  // The emissivity term alone, |dT/d alpha| u(alpha), degC.
+  double emissivity_u_c(double t_c) const;
+
+  double alpha() const { return emissivity_.alpha(); }
+  double alpha_u() const { return alpha_u_; }
+  const TemperatureEstimator& inner() const { return *inner_; }
+  std::size_t memory_bytes() const override {
+    return inner_->memory_bytes() + emissivity_.memory_bytes();
+  }
+
+ private:
+  std::shared_ptr<const TemperatureEstimator> inner_;
+  SpectralEmissivity emissivity_;
+  double alpha_u_;
+  double reference_c_;           // the first pass's factors are those at this temperature
+  UncertaintyModel systematic_;  // the model's, with the emissivity term at this slope
+};
+
+}  // namespace pyrocam

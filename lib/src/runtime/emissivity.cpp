@@ -1,0 +1,214 @@
+#include "pyrocam/runtime/emissivity.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <utility>
+
+#include "pyrocam/core/error.h"
+#include "pyrocam/core/physics.h"
+#include "runtime/estimator_kinds.h"
+
+namespace pyrocam {
+namespace {
+
+// A slope per 100 nm as the user gives it, %/100 nm.
+std::string percent(double alpha) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", alpha * 100);
+  return buf;
+}
+
+// The central-difference step of dT/d alpha (per 100 nm).
+constexpr double kSensitivityStep = 0.005;
+
+}  // namespace
+
+double emissivity_slope_centre_nm(const CameraProfile& p) {
+  return 0.5 * (p.filter_pass_band_nm[0] + p.filter_pass_band_nm[1]);
+}
+
+void check_emissivity_slope(const CameraProfile& p, double alpha, const char* what) {
+  if (!std::isfinite(alpha))
+    throw InputError(std::string(what) + " must be a finite number of %/100 nm");
+  if (std::abs(alpha) > kMaxEmissivitySlope)
+    throw InputError(std::string(what) + " " + percent(alpha) + " %/100 nm is outside -" +
+                     percent(kMaxEmissivitySlope) + ".." + percent(kMaxEmissivitySlope));
+  const double centre = emissivity_slope_centre_nm(p);
+  for (double nm : p.filter_pass_band_nm)
+    if (!(1 + alpha * (nm - centre) / 100.0 > 0))
+      throw InputError(std::string(what) + " " + percent(alpha) +
+                       " %/100 nm makes the emissivity zero or negative within the " + p.name +
+                       " filter pass band (" + std::to_string(p.filter_pass_band_nm[0]) + ".." +
+                       std::to_string(p.filter_pass_band_nm[1]) + " nm)");
+}
+
+Eigen::MatrixXd with_emissivity_slope(const CameraProfile& p, const Eigen::MatrixXd& q,
+                                      double alpha) {
+  const double centre = emissivity_slope_centre_nm(p);
+  Eigen::MatrixXd out = q;
+  for (Eigen::Index i = 0; i < p.grid.size(); ++i)
+    out.col(i) *= std::max(0.0, 1 + alpha * (p.grid.nm()[i] - centre) / 100.0);
+  return out;
+}
+
+SpectralEmissivity::SpectralEmissivity(const CameraModel& camera, double alpha, double min_c,
+                                       double max_c, double step_c)
+    : alpha_(alpha), min_c_(min_c), step_c_(step_c) {
+  check_emissivity_slope(camera.profile, alpha);
+  if (!(min_c < max_c) || !(step_c > 0) || (max_c - min_c) / step_c > 1e6)
+    throw InputError("emissivity factors: the temperature grid must be min < max, step > 0");
+  const auto n = static_cast<Eigen::Index>(std::ceil((max_c - min_c) / step_c - 1e-9)) + 1;
+  const Eigen::MatrixXd& q = camera.system_qe;
+  const Eigen::MatrixXd tilted = with_emissivity_slope(camera.profile, q, alpha);
+  factors_.resize(n, q.rows());
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double t = std::min(max_c, min_c + static_cast<double>(i) * step_c);
+    const Eigen::VectorXd l = weighted_photon_radiance(camera.profile.grid, celsius_to_kelvin(t));
+    const Eigen::VectorXd grey = q * l, sloped = tilted * l;
+    double largest = 0;
+    for (Eigen::Index b = 0; b < q.rows(); ++b) {
+      factors_(i, b) = grey[b] > 0 ? sloped[b] / grey[b] : 1.0;
+      largest = std::max(largest, factors_(i, b));
+    }
+    if (largest > 0) factors_.row(i) /= largest;
+  }
+}
+
+void SpectralEmissivity::factors(double t_c, double* out) const {
+  const Eigen::Index last = factors_.rows() - 1;
+  const double x = std::isfinite(t_c) ? (t_c - min_c_) / step_c_ : 0.0;
+  if (!(x > 0) || last == 0) {
+    for (Eigen::Index b = 0; b < factors_.cols(); ++b) out[b] = factors_(0, b);
+    return;
+  }
+  if (x >= static_cast<double>(last)) {
+    for (Eigen::Index b = 0; b < factors_.cols(); ++b) out[b] = factors_(last, b);
+    return;
+  }
+  const auto i = static_cast<Eigen::Index>(x);
+  const double f = x - static_cast<double>(i);
+  for (Eigen::Index b = 0; b < factors_.cols(); ++b)
+    out[b] = factors_(i, b) + f * (factors_(i + 1, b) - factors_(i, b));
+}
+
+EmissivitySlopeEstimator::EmissivitySlopeEstimator(
+    std::shared_ptr<const TemperatureEstimator> inner, double alpha, double alpha_u)
+    : TemperatureEstimator(inner ? inner->shared_model() : nullptr),
+      inner_(std::move(inner)),
+      emissivity_(model_->camera, alpha, model_->min_temperature_c, model_->max_temperature_c),
+      alpha_u_(alpha_u),
+      reference_c_(0.5 * (model_->min_temperature_c + model_->max_temperature_c)),
+      systematic_(model_->uncertainty) {
+  const UncertaintyModel& u = model_->uncertainty;
+  if (std::isnan(alpha_u) || alpha_u > 1)
+    throw InputError("e-slope-uncertainty " + percent(alpha_u) +
+                     " %/100 nm is outside 0..100 (or negative for the model's)");
+  if (alpha_u_ < 0) alpha_u_ = u.emissivity_slope_u;
+  std::vector<double>& table = systematic_.u_emissivity_c;
+  if (alpha == 0 && u.emissivity_slope_u > 0 && table.size() == u.temperature_c.size()) {
+    for (double& v : table) v *= alpha_u_ / u.emissivity_slope_u;
+    return;
+  }
+  // dT/d alpha at this slope: corrected readings of surfaces with alpha +- h.
+  const CameraModel& cam = model_->camera;
+  const CameraModel up{cam.profile,
+                       with_emissivity_slope(cam.profile, cam.system_qe, alpha + kSensitivityStep),
+                       cam.band_scale},
+      down{cam.profile, with_emissivity_slope(cam.profile, cam.system_qe, alpha - kSensitivityStep),
+           cam.band_scale};
+  // Noise-free signals, the dimmest band well above the dim threshold.
+  const auto read = [&](const CameraModel& c, double t) {
+    Eigen::VectorXd s = c.rates(t);
+    const double dimmest = s.minCoeff();
+    if (!(dimmest > 0)) return static_cast<double>(NAN);
+    s *= 100 * std::max(dim_dn_, 1.0) / dimmest;
+    return temperature_c(s.data());
+  };
+  table.assign(u.temperature_c.size(), 0.0);
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    const double t = u.temperature_c[i];
+    const double hi = read(up, t), lo = read(down, t);
+    double slope = NAN;
+    if (std::isfinite(hi) && std::isfinite(lo)) slope = (hi - lo) / (2 * kSensitivityStep);
+    // At the range ends one side may read outside the range: the other side and the truth.
+    else if (std::isfinite(hi))
+      slope = (hi - t) / kSensitivityStep;
+    else if (std::isfinite(lo))
+      slope = (t - lo) / kSensitivityStep;
+    table[i] = std::isfinite(slope) ? std::abs(slope) * alpha_u_ : 0.0;
+  }
+}
+
+void EmissivitySlopeEstimator::corrected_signals(const double* s, double t_c, double* out) const {
+  double f[kMaxBands];
+  emissivity_.factors(t_c, f);
+  for (int b = 0; b < bands_; ++b)
+    out[b] = std::isfinite(s[b]) && s[b] >= dim_dn_ ? s[b] / f[b] : s[b];
+}
+
+double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* passes) const {
+  if (passes) *passes = 1;
+  if (alpha() == 0) return inner_->temperature_c(s);
+  double c[kMaxBands];
+  int n = 0;
+  // g(t): the reading of the signals corrected with the factors at t; the answer is g's fixed
+  // point. Where the factors change fast with temperature (a colour camera's blue with its
+  // near-infrared leak, cold) plain iteration oscillates: the secant method on g(t) - t.
+  const auto g = [&](double t) {
+    corrected_signals(s, t, c);
+    ++n;
+    if (passes) *passes = n;
+    return inner_->temperature_c(c);
+  };
+  double x0 = g(reference_c_);
+  if (!std::isfinite(x0)) return NAN;
+  double g0 = g(x0);
+  double x1 = g0;
+  double best = g0, best_h = std::abs(g0 - x0);  // the most self-consistent reading so far
+  while (std::isfinite(g0) && std::abs(g0 - x0) > kEmissivitySlopeToleranceC) {
+    if (std::abs(g0 - x0) < best_h) {
+      best = g0;
+      best_h = std::abs(g0 - x0);
+    }
+    // No settled reading (a network's kinks can leave g(t) - t short of 0): the best one when
+    // it is consistent to kEmissivitySlopeAcceptC, else none.
+    if (n >= kEmissivitySlopeMaxPasses) return best_h <= kEmissivitySlopeAcceptC ? best : NAN;
+    const double g1 = g(x1);
+    if (!std::isfinite(g1)) return NAN;
+    const double h0 = g0 - x0, h1 = g1 - x1;
+    const double x2 = h1 != h0 ? x1 - h1 * (x1 - x0) / (h1 - h0) : g1;
+    x0 = x1;
+    g0 = g1;
+    // A step off the model's range (where the factors stop changing) falls back to g.
+    const bool usable = std::isfinite(x2) && x2 >= model_->min_temperature_c - 100 &&
+                        x2 <= model_->max_temperature_c + 100;
+    x1 = usable ? x2 : g1;
+  }
+  return g0;
+}
+
+double EmissivitySlopeEstimator::temperature_c(const double* s) const {
+  return corrected_temperature_c(s, nullptr);
+}
+
+void EmissivitySlopeEstimator::estimate(const float* const* planes, std::size_t n,
+                                        float* out) const {
+  if (alpha() == 0)
+    inner_->estimate(planes, n, out);
+  else
+    TemperatureEstimator::estimate(planes, n, out);
+}
+
+double EmissivitySlopeEstimator::systematic_u_c(double t_c) const {
+  return systematic_.systematic_u_c(t_c);
+}
+
+double EmissivitySlopeEstimator::emissivity_u_c(double t_c) const {
+  UncertaintyModel only = systematic_;
+  only.u_calibration_c.assign(only.u_calibration_c.size(), 0.0);
+  return only.systematic_u_c(t_c);
+}
+
+}  // namespace pyrocam
