@@ -200,10 +200,33 @@ void uncertainty_section(const CalibrationOutcome& o, std::ostream& h) {
        "term at inference. Thermocouple ±"
     << num(u.thermocouple_tolerance_c, 1) << " °C (rectangular) by " << u.monte_carlo_refits
     << " Monte-Carlo refits; emissivity slope u(α) = " << u.emissivity_slope_u << " per 100 nm.</p>"
-    << svg_plot({"Systematic uncertainty", "temperature (°C)", "°C", false, 1000, 300},
-                {{"u calibration (k=1)", u.temperature_c, u.u_calibration_c, colour(0)},
-                 {"u emissivity (k=1)", u.temperature_c, u.u_emissivity_c, colour(1)},
-                 {"expanded (k=2)", u.temperature_c, total, colour(2)}});
+    << svg_plot({"Systematic uncertainty", "temperature (°C)", "°C", false, 1000, 300}, [&] {
+         std::vector<Series> series{
+             {"u calibration (k=1)", u.temperature_c, u.u_calibration_c, colour(0)},
+             {"u emissivity (k=1)", u.temperature_c, u.u_emissivity_c, colour(1)},
+             {"expanded (k=2)", u.temperature_c, total, colour(2)}};
+         if (!u.u_qe_model_c.empty())
+           series.push_back({"u QE model (k=1)", u.temperature_c, u.u_qe_model_c, colour(3)});
+         return series;
+       }());
+  if (!u.u_qe_model_c.empty())
+    h << "<p>u QE model: the spread of the readings of QE solutions that fit the furnace (and "
+         "reference) data about equally well (posterior samples of the fit). It grows where the "
+         "model extrapolates beyond the data.</p>";
+}
+
+// Reference rows: each source beyond the furnace read with the datasheet QE and the fitted QE.
+void references_section(const CalibrationOutcome& o, std::ostream& h) {
+  if (o.references.empty()) return;
+  h << "<h2>Reference sources</h2><p>Each reference row's reading (the temperature whose modelled "
+       "band ratios best match its rates, scale free) minus its stated temperature.</p><table>"
+       "<tr><th>reference</th><th>temperature (°C)</th><th>u (k=1, °C)</th>"
+       "<th>datasheet QE (°C)</th><th>fitted QE (°C)</th></tr>";
+  for (const ReferenceCheck& r : o.references)
+    h << "<tr><td>" << html_escape(r.name) << "</td><td>" << num(r.temperature_c, 2) << "</td><td>"
+      << num(r.uncertainty_c, 2) << "</td><td>" << num(r.error_datasheet_c, 2) << "</td><td>"
+      << num(r.error_fitted_c, 2) << "</td></tr>";
+  h << "</table>";
 }
 
 // What the calibration warned about.
@@ -224,6 +247,7 @@ void write_report_html(const CalibrationOutcome& o, const std::filesystem::path&
   qe_section(o, h);
   rates_section(o, h);
   network_section(o, h);
+  references_section(o, h);
   uncertainty_section(o, h);
   warnings_section(o, h);
   h << "</body></html>\n";

@@ -141,6 +141,16 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   report_stage(progress, "evaluating", 1, 1);
 
   m.uncertainty = uncertainty_model(m, t_c, rates, opt, progress, references);
+  m.uncertainty.u_qe_model_c =
+      qe_model_uncertainty(m.camera, qe.posterior, m.uncertainty.temperature_c);
+  for (std::size_t r = 0; r < references.size(); ++r) {
+    ReferenceCheck check{references[r].name, references[r].temperature_c,
+                         references[r].temperature_uncertainty_c};
+    if (r < qe.reference_error_after_c.size())
+      check.error_datasheet_c = qe.reference_error_before_c[r],
+      check.error_fitted_c = qe.reference_error_after_c[r];
+    out.references.push_back(check);
+  }
   m.provenance = model_provenance(dataset, profile, opt.seed);
   out.seconds = since(t_start);
   out.verdict = calibration_verdict(out);

@@ -11,6 +11,9 @@ using calibration_detail::Clock;
 using calibration_detail::report_stage;
 using calibration_detail::since;
 
+// Enough for a standard deviation good to about 10 % (chi distribution, 1 / sqrt(2 (n - 1))).
+constexpr int kPosteriorSamples = 48;
+
 Eigen::VectorXd band_scale(const CameraProfile& p, const Eigen::MatrixXd& q,
                            const std::vector<double>& t_c, const Eigen::MatrixXd& rates) {
   Eigen::VectorXd k(p.band_count());
@@ -67,6 +70,7 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
     }
     QeFitOptions qo;
     qo.solver = solvers[s] == "paper" ? QeSolver::kPaper : QeSolver::kRegularised;
+    qo.regularised.posterior_samples = kPosteriorSamples;
     const QeFitResult fit = fit_qe(profile, data, qo);
     const auto rms_of = [](const Eigen::VectorXd& v) {
       return std::sqrt(v.array().square().mean());
@@ -84,6 +88,9 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
       best.band_scale = fit.gains;
       best.solver = solvers[s];
       best.qe_spread = cv.qe_spread;
+      best.posterior = fit.posterior;
+      best.reference_error_before_c = fit.diagnostics.reference_error_before_c;
+      best.reference_error_after_c = fit.diagnostics.reference_error_after_c;
     }
   }
   report_stage(progress, "optimising QE", solvers.size(), solvers.size());

@@ -87,6 +87,14 @@ nlohmann::json outcome_summary(const CalibrationOutcome& o) {
                   {"rms_c", s.rms},
                   {"exposure_spread_c", s.exposure_spread}});
   j["table4"] = t4;
+  json refs = json::array();
+  for (const ReferenceCheck& r : o.references)
+    refs.push_back({{"name", r.name},
+                    {"temperature_c", r.temperature_c},
+                    {"uncertainty_c", r.uncertainty_c},
+                    {"error_datasheet_c", r.error_datasheet_c},
+                    {"error_fitted_c", r.error_fitted_c}});
+  j["references"] = refs;
   j["mlp"] = {{"final_train_rmse_c", o.mlp_report.final_train_rmse},
               {"final_test_rmse_c", o.mlp_report.final_test_rmse},
               {"locus_max_error_c", o.mlp_locus_max_error_c},

@@ -208,6 +208,7 @@ double EmissivitySlopeEstimator::systematic_u_c(double t_c) const {
 double EmissivitySlopeEstimator::emissivity_u_c(double t_c) const {
   UncertaintyModel only = systematic_;
   only.u_calibration_c.assign(only.u_calibration_c.size(), 0.0);
+  only.u_qe_model_c.clear();
   return only.systematic_u_c(t_c);
 }
 

@@ -90,7 +90,8 @@ double number_within(const json& j, const std::string& what, double lo, double h
 double UncertaintyModel::systematic_u_c(double t) const {
   const double a = interpolate(temperature_c, u_calibration_c, t);
   const double b = interpolate(temperature_c, u_emissivity_c, t);
-  return std::sqrt(a * a + b * b);
+  const double c = u_qe_model_c.empty() ? 0.0 : interpolate(temperature_c, u_qe_model_c, t);
+  return std::sqrt(a * a + b * b + c * c);
 }
 
 std::string fnv1a_hex(const std::string& text) {
@@ -118,6 +119,7 @@ void save_model(const ThermalModel& m, const std::filesystem::path& path) {
   payload["uncertainty"] = {{"temperature_c", u.temperature_c},
                             {"u_calibration_c", u.u_calibration_c},
                             {"u_emissivity_c", u.u_emissivity_c},
+                            {"u_qe_model_c", u.u_qe_model_c},
                             {"thermocouple_tolerance_c", u.thermocouple_tolerance_c},
                             {"emissivity_slope_u", u.emissivity_slope_u},
                             {"monte_carlo_refits", u.monte_carlo_refits},
@@ -209,6 +211,13 @@ ThermalModel load_model(const std::filesystem::path& path) {
         numbers_within(u.at("u_calibration_c"), uw + "u_calibration_c", 0, kModelMaxUncertaintyC);
     um.u_emissivity_c =
         numbers_within(u.at("u_emissivity_c"), uw + "u_emissivity_c", 0, kModelMaxUncertaintyC);
+    if (u.contains("u_qe_model_c")) {
+      um.u_qe_model_c =
+          numbers_within(u.at("u_qe_model_c"), uw + "u_qe_model_c", 0, kModelMaxUncertaintyC);
+      if (!um.u_qe_model_c.empty() && um.u_qe_model_c.size() != um.temperature_c.size())
+        throw InputError(uw + "u_qe_model_c has " + std::to_string(um.u_qe_model_c.size()) +
+                         " rows, temperature_c " + std::to_string(um.temperature_c.size()));
+    }
     if (um.temperature_c.empty())
       throw InputError(uw + "temperature_c is empty; the uncertainty table needs at least one row");
     if (um.u_calibration_c.size() != um.temperature_c.size() ||

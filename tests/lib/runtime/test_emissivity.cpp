@@ -165,7 +165,12 @@ TEST(EmissivitySlope, the_uncertainty_has_the_emissivity_term_of_the_chosen_slop
   const EmissivitySlopeEstimator tiny(lik, 1e-4);
   for (std::size_t i = 0; i < um.temperature_c.size(); ++i) {
     const double t = um.temperature_c[i];
-    EXPECT_NEAR(tiny.emissivity_u_c(t), um.u_emissivity_c[i], 0.15 * um.u_emissivity_c[i] + 1)
+    // The table holds the network's own error at t as well (largest at the range's ends).
+    const Eigen::VectorXd x =
+        normalised_ratios(model->profile().normalisation, model->camera.rates(t));
+    const double network_error = std::abs(model->mlp.predict(x.data()) - t);
+    EXPECT_NEAR(tiny.emissivity_u_c(t), um.u_emissivity_c[i],
+                0.15 * um.u_emissivity_c[i] + 1 + network_error)
         << t;  // measured: within 3 degC (8 %) from 1000 degC up
   }
   // Steeper slopes: the term follows dT/d alpha there, and reaches the expanded uncertainty.

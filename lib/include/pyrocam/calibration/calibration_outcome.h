@@ -42,6 +42,14 @@ struct QeSolverReport {
   double seconds = 0;
 };
 
+// A reference row (a source beyond the furnace) against the model: its reading by the scale-free
+// fit of its rates minus its temperature, with the datasheet QE and with the chosen QE.
+struct ReferenceCheck {
+  std::string name;
+  double temperature_c = NAN, uncertainty_c = NAN;
+  double error_datasheet_c = NAN, error_fitted_c = NAN;
+};
+
 struct CalibrationOutcome {
   ThermalModel model;
   RateTable rates;
@@ -52,6 +60,7 @@ struct CalibrationOutcome {
   double mlp_locus_max_error_c = NAN;  // over the whole noise-free locus
   double mlp_locus_rms_error_c = NAN;
   std::vector<EstimatorScore> table4;
+  std::vector<ReferenceCheck> references;
   std::vector<std::string> warnings;
   std::string verdict;
   double seconds = 0;

@@ -17,6 +17,9 @@ struct QeChoice {
   Eigen::VectorXd band_scale;           // k_b
   std::vector<QeSolverReport> reports;  // every solver tried, in the order tried
   Eigen::MatrixXd qe_spread;            // the chosen fit's cross-validation std (may be empty)
+  std::vector<QeSample> posterior;      // plausible QE solutions (regularised fit only)
+  // Per reference row: its reading minus its temperature, datasheet QE and chosen QE.
+  std::vector<double> reference_error_before_c, reference_error_after_c;
 };
 
 // qe_solver: "paper", "regularised", "datasheet" or "auto" (paper and regularised). rates:

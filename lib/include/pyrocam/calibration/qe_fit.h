@@ -58,7 +58,7 @@ struct RegularisedOptions {
   double curvature_sigma = 0.0;        // per (100 nm)^2; off: trades against the leak, worse highs
   double shift_sigma_nm = 3.0;         // only for bands narrower than narrow_band_fwhm_nm:
   double narrow_band_fwhm_nm = 60;     // for broad bands a shift is a tilt the data cannot tell
-  double common_tilt_sigma = 0.1;      // per 100 nm: ND glass, windows (+-30 % over 300 nm)
+  double common_tilt_sigma = 0.05;     // per 100 nm: ND glass, windows (up to +-30 % / 300 nm)
   double edge_shift_sigma_nm = 5.0;    // each pass-band edge of the optical filter
   double furnace_temperature_sigma_c = 1.5;  // true plate temperature against the nominal
   double leak_spacing_nm = 25;         // bump spacing (and half width)

@@ -33,12 +33,17 @@ struct UncertaintyModel {
   std::vector<double> temperature_c;      // table grid
   std::vector<double> u_calibration_c;    // standard uncertainty from the thermocouple (MC refits)
   std::vector<double> u_emissivity_c;     // |dT/d alpha| u(alpha)
+  // What the furnace (and reference rows) leave open in the QE: the spread of the readings of
+  // plausible QE solutions (posterior samples of the fit). Grows where the model extrapolates.
+  // Empty in models made before it existed, or with the datasheet QE or the paper's solver.
+  std::vector<double> u_qe_model_c;
   double thermocouple_tolerance_c = 4.4;  // IEC 60584-2 class 1, rectangular
   double emissivity_slope_u = 0.01;       // u(alpha): relative emissivity change per 100 nm
   int monte_carlo_refits = 0;
   double coverage_factor = 2;
 
-  // Interpolated combined systematic standard uncertainty at T (calibration and emissivity).
+  // Interpolated combined systematic standard uncertainty at T (calibration, QE model and
+  // emissivity).
   double systematic_u_c(double temperature_c) const;
 };
 
