@@ -1,0 +1,122 @@
+// Above the furnace: the hostile unit family, reference rows in the QE fit, and the posterior
+// spread that tells the model where it extrapolates. Rate level (no images), a few seconds.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+
+#include "pyrocam/calibration/calibration_uncertainty.h"
+#include "pyrocam/calibration/extrapolation_study.h"
+#include "pyrocam/simulation/simulator.h"
+
+namespace pyrocam {
+namespace {
+
+double rms_between(const std::vector<double>& t, const std::vector<double>& e, double lo,
+                   double hi) {
+  double ss = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < t.size(); ++i)
+    if (t[i] >= lo && t[i] <= hi) ss += e[i] * e[i], ++n;
+  return std::sqrt(ss / n);
+}
+
+std::vector<double> grid_c() {
+  std::vector<double> t;
+  for (double x = 700; x <= 2600; x += 100) t.push_back(x);
+  return t;
+}
+
+TEST(HostileUnits, differ_from_typical_and_are_seeded) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  const Eigen::MatrixXd typical = true_system_qe(p, UnitPerturbation::parse("typical", 4));
+  const Eigen::MatrixXd hostile = true_system_qe(p, UnitPerturbation::parse("hostile", 4));
+  EXPECT_EQ(hostile, true_system_qe(p, UnitPerturbation::parse("hostile", 4)));
+  EXPECT_NE(hostile, true_system_qe(p, UnitPerturbation::parse("hostile", 5)));
+  EXPECT_GE(hostile.minCoeff(), 0.0);
+  EXPECT_LE(hostile.maxCoeff(), 1.0);
+  // Edges, leaks, a slope and shapes: several percent of the band's QE, not a rounding.
+  const double change =
+      ((hostile - typical).rowwise().norm().array() / typical.rowwise().norm().array()).maxCoeff();
+  std::cout << "largest relative change of a band against the typical unit: " << change << "\n";
+  EXPECT_GT(change, 0.03);
+  EXPECT_THROW(UnitPerturbation::parse("friendly", 1), InputError);
+}
+
+// What the hostile family does to the fit without and with three reference rows.
+struct Study {
+  std::vector<double> without, with;
+  QeFitResult fit_with;
+};
+
+Study study(const std::string& profile_name, std::uint64_t unit) {
+  const CameraProfile p = load_profile_by_name(profile_name);
+  const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse("hostile", unit));
+  RateCampaign campaign;
+  campaign.seed = 100 + unit;
+  Study s;
+  const QeFitResult plain = fit_qe(p, simulate_calibration_rates(p, truth, campaign));
+  s.without =
+      extrapolation_errors(p, truth, CameraModel{p, plain.system_qe, plain.gains}, grid_c());
+  campaign.reference_temperatures_c = {1324, 1738, 2474};
+  s.fit_with = fit_qe(p, simulate_calibration_rates(p, truth, campaign));
+  s.with = extrapolation_errors(p, truth, CameraModel{p, s.fit_with.system_qe, s.fit_with.gains},
+                                grid_c());
+  return s;
+}
+
+TEST(ReferenceRows, pin_the_high_range_of_hostile_units) {
+  for (const char* profile : {"rgb-reference", "nir5x5-reference"})
+    for (std::uint64_t unit : {2, 3}) {
+      SCOPED_TRACE(std::string(profile) + " unit " + std::to_string(unit));
+      const Study s = study(profile, unit);
+      const double without = rms_between(grid_c(), s.without, 700, 2600);
+      const double with = rms_between(grid_c(), s.with, 700, 2600);
+      std::cout << profile << " hostile unit " << unit << ": rms error 700-2600 degC without "
+                << without << ", with three reference rows " << with << " degC\n";
+      // The target is 5 degC rms with three reference rows (over many units; 2.5 degC rms for
+      // colour, 1.4 for 5x5 over six hostile units in bench_extrapolation); one unit may miss it.
+      EXPECT_LT(with, 8.0);
+      EXPECT_LT(with, std::max(without, 3.0));  // never much worse than without
+      // The report's residuals: each reference read by the fitted model within a few degC.
+      ASSERT_EQ(s.fit_with.diagnostics.reference_error_after_c.size(), 3u);
+      for (double e : s.fit_with.diagnostics.reference_error_after_c) EXPECT_LT(std::abs(e), 10.0);
+    }
+}
+
+TEST(ReferenceRows, bad_rows_are_named) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  RateCampaign campaign;
+  campaign.reference_temperatures_c = {1738};
+  CalibrationRates data = simulate_calibration_rates(p, p.system_qe(), campaign);
+  data.references[0].name = "Pt-C cell";
+  data.references[0].temperature_uncertainty_c = NAN;
+  try {
+    fit_qe(p, data);
+    ADD_FAILURE() << "a NaN uncertainty was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("Pt-C cell"), std::string::npos) << e.what();
+  }
+  data.references[0].temperature_uncertainty_c = 0.5;
+  data.references[0].rates[1] = data.references[0].rates[2] = NAN;
+  EXPECT_THROW(fit_qe(p, data), InputError);  // one usable band: no ratio
+}
+
+TEST(QePosterior, spreads_where_the_furnace_does_not_reach) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse("typical", 3));
+  QeFitOptions options;
+  options.regularised.posterior_samples = 48;
+  const QeFitResult fit = fit_qe(p, simulate_calibration_rates(p, truth, {}), options);
+  ASSERT_EQ(fit.posterior.size(), 48u);
+  const std::vector<double> t{900, 1500, 2500};
+  const std::vector<double> u =
+      qe_model_uncertainty(CameraModel{p, fit.system_qe, fit.gains}, fit.posterior, t);
+  std::cout << "u QE model at 900 / 1500 / 2500 degC: " << u[0] << " " << u[1] << " " << u[2]
+            << "\n";
+  EXPECT_LT(u[0], 3.0);       // the furnace range is pinned by the data
+  EXPECT_GT(u[2], 3 * u[0]);  // far above it the QE is open and the model says so
+}
+
+}  // namespace
+}  // namespace pyrocam
