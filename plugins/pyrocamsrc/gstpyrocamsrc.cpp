@@ -5,7 +5,9 @@
  * A simulated camera, the thermal counterpart of videotestsrc: renders raw mosaic frames of a
  * test scene (a hot plate, a filament, or a melt pool crossing the frame) through a camera
  * profile with EMVA 1288 noise (pyrocam::Simulator). The "typical" unit deviates from the
- * profile's datasheet the way a real camera does (filter leak, per-band scale and tilt).
+ * profile's datasheet the way a real camera does (filter leak, per-band scale and tilt); the
+ * "hostile" one also has moved filter edges, narrow leaks, a sloping ND glass and band shape
+ * changes.
  *
  * Output follows the profile: 8-bit Bayer profiles give video/x-bayer (format = the pattern),
  * 5x5 profiles give video/x-raw GRAY8, profiles deeper than 8 bit GRAY16_LE; gray video carries
@@ -138,12 +140,29 @@ GType gst_pyrocam_src_scene_get_type(void) {
   return type;
 }
 
+namespace {
+const char* unit_name(GstPyrocamSrcUnit unit) {
+  switch (unit) {
+    case GST_PYROCAM_SRC_UNIT_TYPICAL:
+      return "typical";
+    case GST_PYROCAM_SRC_UNIT_HOSTILE:
+      return "hostile";
+    default:
+      return "datasheet";
+  }
+}
+}  // namespace
+
 GType gst_pyrocam_src_unit_get_type(void) {
   static GType type = 0;
   static const GEnumValue values[] = {
       {GST_PYROCAM_SRC_UNIT_DATASHEET, "Exactly the profile's datasheet QE", "datasheet"},
       {GST_PYROCAM_SRC_UNIT_TYPICAL, "A real unit's deviation from the datasheet (seeded)",
        "typical"},
+      {GST_PYROCAM_SRC_UNIT_HOSTILE,
+       "Typical plus moved filter edges, narrow leaks, a sloping ND glass and band shape "
+       "changes (seeded)",
+       "hostile"},
       {0, nullptr, nullptr},
   };
   if (g_once_init_enter(&type)) {
@@ -254,13 +273,12 @@ static gboolean gst_pyrocam_src_start(GstBaseSrc* src) {
       self, pg::profile_error_kind(settings.profile),
       "Could not set up the simulated camera " + settings.profile, [&] {
         const pyrocam::CameraProfile profile = pyrocam::load_profile_by_name(settings.profile);
-        const auto unit = pyrocam::UnitPerturbation::parse(
-            settings.unit == GST_PYROCAM_SRC_UNIT_TYPICAL ? "typical" : "datasheet", settings.seed);
+        const auto unit = pyrocam::UnitPerturbation::parse(unit_name(settings.unit), settings.seed);
         camera = std::make_unique<pyrocam::Simulator>(profile, unit, settings.seed + 6);
       });
   if (!ok) return FALSE;
   GST_INFO_OBJECT(self, "camera profile %s, %s unit", camera->profile().name.c_str(),
-                  settings.unit == GST_PYROCAM_SRC_UNIT_TYPICAL ? "typical" : "datasheet");
+                  unit_name(settings.unit));
   pg::ObjectLock lock(self);
   *self->state = State();
   self->state->camera = std::move(camera);
@@ -465,8 +483,8 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
   g_object_class_install_property(
       gobject_class, PROP_UNIT,
       g_param_spec_enum("unit", "Camera unit",
-                        "Which unit of the camera model: the datasheet itself, or a typical "
-                        "unit deviating from it (drawn from seed)",
+                        "Which unit of the camera model: the datasheet itself, a typical unit "
+                        "deviating from it, or a hostile one (drawn from seed)",
                         GST_TYPE_PYROCAM_SRC_UNIT, DEFAULT_UNIT, ready));
   g_object_class_install_property(
       gobject_class, PROP_EXPOSURE,

@@ -1,0 +1,82 @@
+// Targets above the furnace (rate level, no images): for six seeded hostile units of each camera,
+// the QE fit's reading error from 700 to 2600 degC without and with three reference rows
+// (1324 / 1738 / 2474 degC), and how often the k=2 interval of the QE-model uncertainty covers
+// it at 1500-2600 degC. Prints every figure; asserts the targets that hold with loose bounds and,
+// for those not yet met, that they do not get worse than measured when this test was written.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "pyrocam/calibration/calibration_uncertainty.h"
+#include "pyrocam/calibration/extrapolation_study.h"
+#include "pyrocam/simulation/simulator.h"
+
+namespace pyrocam {
+namespace {
+
+struct Figures {
+  double in_range = 0, range_800_2600 = 0, range_1800_2600 = 0, range_700_2600 = 0;
+  int covered = 0, counted = 0;
+};
+
+Figures evaluate(const std::string& profile_name, bool references) {
+  const CameraProfile p = load_profile_by_name(profile_name);
+  std::vector<double> temps;
+  for (double t = 700; t <= 2600; t += 100) temps.push_back(t);
+  double ss[4] = {0, 0, 0, 0};
+  int n[4] = {0, 0, 0, 0};
+  Figures f;
+  std::printf("%s, hostile units%s\n", profile_name.c_str(),
+              references ? ", three reference rows" : "");
+  for (std::uint64_t unit = 1; unit <= 6; ++unit) {
+    const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse("hostile", unit));
+    RateCampaign campaign;
+    campaign.seed = 100 + unit;
+    if (references) campaign.reference_temperatures_c = {1324, 1738, 2474};
+    QeFitOptions options;
+    options.regularised.posterior_samples = 48;
+    const QeFitResult fit = fit_qe(p, simulate_calibration_rates(p, truth, campaign), options);
+    const CameraModel model{p, fit.system_qe, fit.gains};
+    const std::vector<double> e = extrapolation_errors(p, truth, model, temps);
+    const std::vector<double> u = qe_model_uncertainty(model, fit.posterior, temps);
+    std::printf("  unit %d:", static_cast<int>(unit));
+    for (std::size_t i = 0; i < temps.size(); ++i) {
+      std::printf(" %.0f", e[i]);
+      const double t = temps[i];
+      const bool in[4] = {t >= 700 && t <= 1100, t >= 800, t >= 1800, true};
+      for (int k = 0; k < 4; ++k)
+        if (in[k]) ss[k] += e[i] * e[i], ++n[k];
+      if (t >= 1500) f.covered += std::abs(e[i]) <= 2 * u[i], ++f.counted;
+    }
+    std::printf("\n");
+  }
+  f.in_range = std::sqrt(ss[0] / n[0]);
+  f.range_800_2600 = std::sqrt(ss[1] / n[1]);
+  f.range_1800_2600 = std::sqrt(ss[2] / n[2]);
+  f.range_700_2600 = std::sqrt(ss[3] / n[3]);
+  std::printf(
+      "  rms in range %.2f, 800-2600 %.2f, 1800-2600 %.2f, 700-2600 %.2f degC; k=2 "
+      "coverage at 1500-2600: %d of %d\n",
+      f.in_range, f.range_800_2600, f.range_1800_2600, f.range_700_2600, f.covered, f.counted);
+  return f;
+}
+
+TEST(ExtrapolationTargets, colour) {
+  const Figures plain = evaluate("rgb-reference", false);
+  const Figures refs = evaluate("rgb-reference", true);
+  EXPECT_LT(plain.in_range, 0.8);        // target: no worse than before (0.8)
+  EXPECT_LT(refs.range_700_2600, 5.0);   // target 5 degC rms with three reference rows
+  EXPECT_LT(plain.range_1800_2600, 75);  // target 15, NOT MET: 52 measured; a regression bound
+}
+
+TEST(ExtrapolationTargets, multispectral) {
+  const Figures plain = evaluate("nir5x5-reference", false);
+  const Figures refs = evaluate("nir5x5-reference", true);
+  EXPECT_LT(plain.in_range, 1.2);       // target: no worse than before (1.2)
+  EXPECT_LT(refs.range_700_2600, 5.0);  // target 5 degC rms with three reference rows
+  EXPECT_LT(plain.range_800_2600, 20);  // target 10, NOT MET: 12.3 measured; a regression bound
+}
+
+}  // namespace
+}  // namespace pyrocam
