@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <sstream>
 #include <utility>
@@ -244,6 +245,20 @@ TEST_F(CliReferenceDataset, calibrate_writes_a_model_from_a_dataset_with_referen
   const ToolRun r = calibrate_with("");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(model));
+  // The report reads each reference with the datasheet and the fitted QE.
+  std::filesystem::path report = model;
+  report.replace_extension();
+  const auto summary =
+      nlohmann::json::parse(read_text(report.string() + "-report.json")).at("references");
+  ASSERT_EQ(summary.size(), 2u);
+  for (const auto& ref : summary) {
+    EXPECT_TRUE(ref.at("error_datasheet_c").is_number()) << ref;
+    // The fit saw these rows: its residual stays near their 0.5 degC (with the furnace's pull).
+    EXPECT_LT(std::abs(ref.at("error_fitted_c").get<double>()), 10.0) << ref;
+  }
+  std::filesystem::path html = model;
+  html.replace_extension();
+  EXPECT_NE(read_text(html.string() + "-report.html").find("Reference sources"), std::string::npos);
 }
 
 TEST_F(CliReferenceDataset, calibrate_rejects_a_reference_outside_the_models_range_n) {
