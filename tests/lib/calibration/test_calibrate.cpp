@@ -176,6 +176,17 @@ TEST(ModelFile, round_trips) {
   EXPECT_NEAR(back.uncertainty.systematic_u_c(2000), std::sqrt(3.0 * 3 + 2 * 2), 1e-12);
 }
 
+TEST(ModelFile, keeps_the_qe_model_term_and_adds_it) {
+  ScratchDir dir("model-qe-term");
+  ThermalModel m = small_model(load_profile_by_name("rgb-reference"));
+  const double without = m.uncertainty.systematic_u_c(2000);
+  m.uncertainty.u_qe_model_c.assign(m.uncertainty.temperature_c.size(), 4.0);
+  save_model(m, dir / "m.json");
+  const ThermalModel back = load_model(dir / "m.json");
+  EXPECT_EQ(back.uncertainty.u_qe_model_c, m.uncertainty.u_qe_model_c);
+  EXPECT_NEAR(back.uncertainty.systematic_u_c(2000), std::sqrt(without * without + 16), 1e-12);
+}
+
 class ModelFileDamage : public ::testing::Test {
  protected:
   void SetUp() override {
