@@ -23,8 +23,9 @@ void add_camera_options(CLI::App* cmd, CameraOptions& o) {
          "--profile", o.profile,
          "Camera profile: a shipped name (rgb-reference, nir5x5-reference) or a .json path")
       ->capture_default_str();
-  cmd->add_option("--unit", o.unit,
-                  "How the simulated unit differs from its datasheet: datasheet, typical or hostile")
+  cmd->add_option(
+         "--unit", o.unit,
+         "How the simulated unit differs from its datasheet: datasheet, typical or hostile")
       ->check(CLI::IsMember({"datasheet", "typical", "hostile"}))
       ->capture_default_str();
   cmd->add_option("--unit-seed", o.unit_seed, "Seed of the unit's deviation")

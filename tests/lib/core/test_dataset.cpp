@@ -349,8 +349,7 @@ TEST_F(ReferenceDatasetFiles, an_empty_uncertainty_means_half_a_degree) {
       if (r.kind == FrameKind::kReference) r.temperature_uncertainty_c = 1.5;
   });
   const Dataset d = Dataset::open(dir.path());
-  for (const auto& g : d.references())
-    EXPECT_DOUBLE_EQ(g.temperature_uncertainty_c, 1.5);
+  for (const auto& g : d.references()) EXPECT_DOUBLE_EQ(g.temperature_uncertainty_c, 1.5);
 }
 
 TEST_F(ReferenceDatasetFiles, rejects_a_reference_exposure_without_its_dark_n) {

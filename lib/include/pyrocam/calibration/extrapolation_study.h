@@ -20,8 +20,8 @@ struct RateCampaign {
   // rms relative error of one extracted rate: a slope over many exposures of an ROI mean of
   // thousands of pixels (the end-to-end campaigns of the targets suite reach about this)
   double relative_noise = 3e-4;
-  double furnace_error_sigma_c = 1.0;            // true plate temperature off the nominal
-  double first_exposure_us = 0;                  // 0: 100 us colour, 10000 us multispectral
+  double furnace_error_sigma_c = 1.0;  // true plate temperature off the nominal
+  double first_exposure_us = 0;        // 0: 100 us colour, 10000 us multispectral
   double exposure_factor = 1.26;
   int exposure_count = 30;
   std::uint64_t seed = 11;

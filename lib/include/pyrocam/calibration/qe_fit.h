@@ -24,8 +24,8 @@ struct ReferenceRates {
 };
 
 struct CalibrationRates {
-  std::vector<double> temperatures_c;  // calibration temperatures, degC (any order)
-  Eigen::MatrixXd rates;               // bands x temperatures; NaN (or <= 0) = no usable points
+  std::vector<double> temperatures_c;      // calibration temperatures, degC (any order)
+  Eigen::MatrixXd rates;                   // bands x temperatures; NaN (or <= 0) = no usable points
   std::vector<ReferenceRates> references;  // optional; scale-free constraints on the ratios
 };
 
@@ -51,19 +51,19 @@ struct PaperSearchOptions {
 // Each sigma is a prior standard deviation (a Gaussian penalty); 0 fixes the parameter at the
 // datasheet's.
 struct RegularisedOptions {
-  double relative_noise = 0.005;       // expected relative rms error of a measured rate (the start)
-  int noise_passes = 3;                // refits weighting the data by the misfit reached, at most
-  double min_relative_noise = 2e-4;    // floor of that estimate
-  double tilt_sigma = 0.02;            // per 100 nm
-  double curvature_sigma = 0.0;        // per (100 nm)^2; off: trades against the leak, worse highs
-  double shift_sigma_nm = 3.0;         // only for bands narrower than narrow_band_fwhm_nm:
-  double narrow_band_fwhm_nm = 60;     // for broad bands a shift is a tilt the data cannot tell
-  double common_tilt_sigma = 0.05;     // per 100 nm: ND glass, windows (up to +-30 % / 300 nm)
-  double edge_shift_sigma_nm = 5.0;    // each pass-band edge of the optical filter
+  double relative_noise = 0.005;     // expected relative rms error of a measured rate (the start)
+  int noise_passes = 3;              // refits weighting the data by the misfit reached, at most
+  double min_relative_noise = 2e-4;  // floor of that estimate
+  double tilt_sigma = 0.02;          // per 100 nm
+  double curvature_sigma = 0.0;      // per (100 nm)^2; off: trades against the leak, worse highs
+  double shift_sigma_nm = 3.0;       // only for bands narrower than narrow_band_fwhm_nm:
+  double narrow_band_fwhm_nm = 60;   // for broad bands a shift is a tilt the data cannot tell
+  double common_tilt_sigma = 0.05;   // per 100 nm: ND glass, windows (up to +-30 % / 300 nm)
+  double edge_shift_sigma_nm = 5.0;  // each pass-band edge of the optical filter
   double furnace_temperature_sigma_c = 1.5;  // true plate temperature against the nominal
-  double leak_spacing_nm = 25;         // bump spacing (and half width)
-  double leak_sigma = 0.05;            // absolute filter transmission added by a leak
-  double leak_curvature_sigma = 0.01;  // second difference between neighbouring bumps
+  double leak_spacing_nm = 25;               // bump spacing (and half width)
+  double leak_sigma = 0.05;                  // absolute filter transmission added by a leak
+  double leak_curvature_sigma = 0.01;        // second difference between neighbouring bumps
   // Extrapolation control. A leak bump whose share of a band's signal grows by a factor L from
   // the hottest calibration temperature to the hottest of use_temperatures_c has its prior
   // sigma divided by L: the furnace barely sees it, the high range would depend on it.
@@ -93,7 +93,7 @@ struct QeFitDiagnostics {
   // rates (reference_reading_c) minus its temperature, with the datasheet QE (least-squares
   // gains on the furnace) and with the fitted QE.
   std::vector<double> reference_error_before_c, reference_error_after_c;
-  int iterations = 0;               // sweeps (paper) or Gauss-Newton iterations (regularised)
+  int iterations = 0;  // sweeps (paper) or Gauss-Newton iterations (regularised)
   double wall_time_s = 0;
 };
 

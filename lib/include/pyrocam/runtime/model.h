@@ -30,9 +30,9 @@ inline constexpr std::uintmax_t kModelMaxFileBytes = 64u << 20;
 // propagated per pixel from the profile's noise model; these are the temperature-dependent
 // terms that do not depend on the pixel's noise.
 struct UncertaintyModel {
-  std::vector<double> temperature_c;      // table grid
-  std::vector<double> u_calibration_c;    // standard uncertainty from the thermocouple (MC refits)
-  std::vector<double> u_emissivity_c;     // |dT/d alpha| u(alpha)
+  std::vector<double> temperature_c;    // table grid
+  std::vector<double> u_calibration_c;  // standard uncertainty from the thermocouple (MC refits)
+  std::vector<double> u_emissivity_c;   // |dT/d alpha| u(alpha)
   // What the furnace (and reference rows) leave open in the QE: the spread of the readings of
   // plausible QE solutions (posterior samples of the fit). Grows where the model extrapolates.
   // Empty in models made before it existed, or with the datasheet QE or the paper's solver.
