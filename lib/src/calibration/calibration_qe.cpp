@@ -78,7 +78,9 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
     rep.calibration_residual = rms_of(fit.diagnostics.residual_after);
     rep.qe_change_rms = rms_of(fit.diagnostics.qe_change_rms);
     report_stage(progress, "cross-validating QE (" + solvers[s] + ")", s, solvers.size());
-    CrossValidation cv = cross_validate(profile, data, qo, 5);
+    QeFitOptions folds = qo;
+    folds.regularised.posterior_samples = 0;  // the folds' spread is all that is used
+    CrossValidation cv = cross_validate(profile, data, folds, 5);
     rep.held_out_residual = rms_of(cv.heldout_residual);
     rep.seconds = since(t0);
     best.reports.push_back(rep);
