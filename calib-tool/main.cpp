@@ -1,5 +1,6 @@
 // pyrocam-calib: makes calibration data and model files for the pyrocam GStreamer elements.
 #include <iostream>
+#include <string>
 
 #include "commands.h"
 #include "pyrocam/core/error.h"
@@ -10,6 +11,7 @@ int main(int argc, char** argv) {
   app.footer(
       "Exit codes: 0 ok, 1 failed, 2 bad usage.\n"
       "Example:\n  pyrocam-calib simulate campaign --profile rgb-reference --out furnace");
+  app.set_version_flag("--version", std::string("pyrocam-calib ") + PYROCAM_VERSION);
   app.require_subcommand(1);
   GlobalOptions global;
   app.add_flag("-q,--quiet", global.quiet, "Print nothing but errors");

@@ -482,5 +482,16 @@ TEST_F(CliMeasure, measure_rejects_an_e_slope_out_of_range_n) {
   }
 }
 
+TEST(CliVersion, prints_the_tool_and_version_and_exits_0) {
+  ScratchDir dir("version");
+  const auto out = dir / "out.txt";
+  const std::string command = "timeout 60 '" + std::string(PYROCAM_CALIB_TOOL) +
+                              "' --version < /dev/null > '" + out.string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(read_text(out).rfind("pyrocam-calib ", 0), 0u) << read_text(out);
+}
+
 }  // namespace
 }  // namespace pyrocam
