@@ -258,50 +258,68 @@ std::vector<double> nice_ticks(double min_c, double max_c, int target) {
   return ticks;
 }
 
+ScaleBarLayout scale_bar_layout(cv::Size image, double min_c, double max_c) {
+  ScaleBarLayout l;
+  if (image.height < 48 || image.width < 64 ||
+      !(std::isfinite(min_c) && std::isfinite(max_c) && max_c - min_c >= kMinColormapSpanC))
+    return l;
+  l.font_scale = std::clamp(image.height / 700.0, 0.3, 0.8);
+  int baseline = 0;
+  const cv::Size unit = cv::getTextSize("degC", l.font, l.font_scale, l.thickness, &baseline);
+  const int bar_w = std::max(6, image.width / 40);
+  const int margin = std::max(4, image.height / 30);
+  // The bar spans rows [top, bottom); the unit is written above it, right-aligned.
+  const int top = margin + unit.height + 6, bottom = image.height - margin;
+  const int right = image.width - margin, left = right - bar_w;
+  l.bar = cv::Rect(left, top, bar_w, bottom - top);
+  l.unit = cv::Rect(right - unit.width, top - 5 - unit.height, unit.width, unit.height);
+  const int span = bottom - top;
+  const auto ticks = nice_ticks(min_c, max_c, std::clamp(span / 40, 2, 8));
+  const double step = ticks.size() > 1 ? ticks[1] - ticks[0] : 1.0;
+  for (double t : ticks) {
+    ScaleBarLayout::Tick tick;
+    tick.text = format_tick(t, step);
+    tick.y = bottom - 1 - static_cast<int>(std::lround((t - min_c) / (max_c - min_c) * (span - 1)));
+    const cv::Size size = cv::getTextSize(tick.text, l.font, l.font_scale, l.thickness, &baseline);
+    // Centred on its tick, but never up into the unit's row (a range ending on a tick) nor
+    // below the image.
+    const int base = std::clamp(tick.y + size.height / 2,
+                                l.unit.y + l.unit.height + 3 + size.height, image.height - 1);
+    tick.label = cv::Rect(left - 8 - size.width, base - size.height, size.width, size.height);
+    l.ticks.push_back(tick);
+  }
+  return l;
+}
+
 void draw_scale_bar(cv::Mat& image, Palette palette, double min_c, double max_c,
                     ChannelOrder order) {
   if (image.type() != CV_8UC4) throw InputError("scale bar: image must be CV_8UC4");
-  if (image.rows < 48 || image.cols < 64 ||
-      !(std::isfinite(min_c) && std::isfinite(max_c) && max_c - min_c >= kMinColormapSpanC))
-    return;
+  const ScaleBarLayout l = scale_bar_layout(image.size(), min_c, max_c);
+  if (l.bar.empty()) return;
   const auto& colors = palette_colors(palette);
   auto scalar = [order](std::uint8_t r, std::uint8_t g, std::uint8_t b) {
     return order == ChannelOrder::kRGBA ? cv::Scalar(r, g, b, 255) : cv::Scalar(b, g, r, 255);
   };
-  const double font_scale = std::clamp(image.rows / 700.0, 0.3, 0.8);
-  const int thickness = 1;
-  const int font = cv::FONT_HERSHEY_SIMPLEX;
-  int baseline = 0;
-  const cv::Size unit = cv::getTextSize("degC", font, font_scale, thickness, &baseline);
-  const int bar_w = std::max(6, image.cols / 40);
-  const int margin = std::max(4, image.rows / 30);
-  // The bar spans rows [top, bottom); the unit is written above it.
-  const int top = margin + unit.height + 6, bottom = image.rows - margin;
-  const int right = image.cols - margin, left = right - bar_w;
-  const int span = bottom - top;
+  const int top = l.bar.y, bottom = l.bar.y + l.bar.height;
+  const int left = l.bar.x, right = l.bar.x + l.bar.width;
   for (int y = top; y < bottom; ++y) {
-    const auto index = std::lround(255.0 * (bottom - 1 - y) / std::max(1, span - 1));
+    const auto index = std::lround(255.0 * (bottom - 1 - y) / std::max(1, l.bar.height - 1));
     const Rgb& c = colors[static_cast<std::size_t>(index)];
     cv::line(image, {left, y}, {right - 1, y}, scalar(c.r, c.g, c.b));
   }
   cv::rectangle(image, {left - 1, top - 1}, {right, bottom}, scalar(255, 255, 255));
-  auto label_at = [&](const std::string& text, cv::Point at) {
+  auto label_at = [&](const std::string& text, const cv::Rect& box) {
     // A dark outline keeps the label legible on any background.
-    cv::putText(image, text, at, font, font_scale, scalar(0, 0, 0), thickness + 2, cv::LINE_AA);
-    cv::putText(image, text, at, font, font_scale, scalar(255, 255, 255), thickness, cv::LINE_AA);
+    const cv::Point at{box.x, box.y + box.height};
+    cv::putText(image, text, at, l.font, l.font_scale, scalar(0, 0, 0), l.thickness + 2,
+                cv::LINE_AA);
+    cv::putText(image, text, at, l.font, l.font_scale, scalar(255, 255, 255), l.thickness,
+                cv::LINE_AA);
   };
-  label_at("degC", {right - unit.width, top - 5});
-
-  const auto ticks = nice_ticks(min_c, max_c, std::clamp(span / 40, 2, 8));
-  const double step = ticks.size() > 1 ? ticks[1] - ticks[0] : 1.0;
-  for (double t : ticks) {
-    const int y =
-        bottom - 1 - static_cast<int>(std::lround((t - min_c) / (max_c - min_c) * (span - 1)));
-    cv::line(image, {left - 5, y}, {left - 1, y}, scalar(255, 255, 255));
-    const std::string label = format_tick(t, step);
-    const cv::Size size = cv::getTextSize(label, font, font_scale, thickness, &baseline);
-    label_at(label,
-             {left - 8 - size.width, std::clamp(y + size.height / 2, size.height, image.rows - 1)});
+  label_at("degC", l.unit);
+  for (const ScaleBarLayout::Tick& t : l.ticks) {
+    cv::line(image, {left - 5, t.y}, {left - 1, t.y}, scalar(255, 255, 255));
+    label_at(t.text, t.label);
   }
 }
 

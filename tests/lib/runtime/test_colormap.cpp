@@ -142,6 +142,28 @@ TEST(Colormap, scale_bar_is_drawn_opaque_at_the_right_edge) {
   EXPECT_EQ(cv::countNonZero(tiny.reshape(1)), 0);
 }
 
+TEST(Colormap, scale_bar_labels_keep_clear_of_the_unit_and_each_other) {
+  // Ranges ending on a tick put the top label at the bar's top, right under "degC".
+  for (const cv::Size size : {cv::Size(320, 240), cv::Size(640, 480), cv::Size(1920, 1080)})
+    for (const auto& [lo, hi] :
+         {std::pair{500.0, 2500.0}, std::pair{1000.0, 2000.0}, std::pair{1013.0, 1087.0}}) {
+      SCOPED_TRACE(std::to_string(size.width) + "x" + std::to_string(size.height) + " " +
+                   std::to_string(lo) + "-" + std::to_string(hi));
+      const ScaleBarLayout l = scale_bar_layout(size, lo, hi);
+      ASSERT_FALSE(l.bar.empty());
+      ASSERT_GE(l.ticks.size(), 2u);
+      for (std::size_t i = 0; i < l.ticks.size(); ++i) {
+        EXPECT_TRUE((l.ticks[i].label & l.unit).empty()) << l.ticks[i].text;
+        EXPECT_GE(l.ticks[i].label.y, 0);
+        EXPECT_LE(l.ticks[i].label.y + l.ticks[i].label.height, size.height);
+        for (std::size_t j = i + 1; j < l.ticks.size(); ++j)
+          EXPECT_TRUE((l.ticks[i].label & l.ticks[j].label).empty())
+              << l.ticks[i].text << " " << l.ticks[j].text;
+      }
+    }
+  EXPECT_TRUE(scale_bar_layout(cv::Size(20, 20), 500, 2500).bar.empty());
+}
+
 // Codes of a plate at 730..740 degC over a w x h frame, the top rows without a reading.
 cv::Mat plate_codes(int w, int h) {
   cv::Mat codes(h, w, CV_16U, cv::Scalar(0));

@@ -103,6 +103,23 @@ class AutoRange {
 // never more than 2 * target + 2 (a range too narrow for its magnitude gives fewer or none).
 std::vector<double> nice_ticks(double min_c, double max_c, int target = 5);
 
+// Where a scale bar's parts go on an image of `image` size (empty bar: none drawn). Boxes are
+// the text's extent above its baseline, as cv::getTextSize gives it.
+struct ScaleBarLayout {
+  struct Tick {
+    std::string text;
+    int y = 0;       // row of the tick mark
+    cv::Rect label;  // its label, left of the bar
+  };
+  cv::Rect bar;   // the gradient
+  cv::Rect unit;  // "degC", above the bar
+  std::vector<Tick> ticks;
+  int font = 0;  // cv::FONT_HERSHEY_SIMPLEX
+  double font_scale = 0.5;
+  int thickness = 1;
+};
+ScaleBarLayout scale_bar_layout(cv::Size image, double min_c, double max_c);
+
 // Draws a vertical scale bar (palette gradient, hot at the top) with tick labels in degC at the
 // right edge of a CV_8UC4 image; opaque, so it shows when overlaid. Too small an image (under
 // 48 px high or 64 px wide) or a range narrower than kMinColormapSpanC (or not finite) gets none.
