@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "calibration/qe_problem.h"
+#include "detail/curve_warp.h"
 #include "detail/portable_math.h"
 #include "detail/random.h"
 
@@ -13,25 +14,6 @@ namespace pyrocam {
 namespace {
 
 using namespace qe_detail;
-
-// curve(w) by linear interpolation at source wavelengths w (one per grid sample), clamped.
-Eigen::VectorXd resampled(const Eigen::VectorXd& curve, const WavelengthGrid& grid,
-                          const Eigen::ArrayXd& source_nm) {
-  Eigen::VectorXd out(curve.size());
-  const double last = static_cast<double>(curve.size() - 1);
-  for (Eigen::Index i = 0; i < curve.size(); ++i) {
-    const double pos = std::clamp((source_nm[i] - grid.start_nm()) / grid.step_nm(), 0.0, last);
-    const auto i0 = static_cast<Eigen::Index>(std::floor(pos));
-    const auto i1 = std::min<Eigen::Index>(i0 + 1, curve.size() - 1);
-    const double f = pos - static_cast<double>(i0);
-    out[i] = curve[i0] * (1 - f) + curve[i1] * f;
-  }
-  return out;
-}
-
-Eigen::VectorXd shifted(const Eigen::VectorXd& curve, const WavelengthGrid& grid, double shift) {
-  return resampled(curve, grid, grid.nm().array() - shift);
-}
 
 // Leak bumps: raised cosines of half width `spacing` stepping away from the pass band edges,
 // zero inside the pass band (a leak is what the filter lets through where it should block).
@@ -109,8 +91,9 @@ class RegularisedModel {
   Eigen::VectorXd optics(const Eigen::VectorXd& th, Eigen::MatrixXd* d = nullptr) const {
     const double d_lo = th[common_offset() + 1], d_hi = th[common_offset() + 2];
     const auto warp = [&](double a, double b) {
-      return resampled(profile_.optics_transmission, profile_.grid,
-                       profile_.grid.nm().array() - (a * (1 - edge_weight_) + b * edge_weight_));
+      return detail::warp_curve(
+          profile_.optics_transmission, profile_.grid,
+          profile_.grid.nm().array() - (a * (1 - edge_weight_) + b * edge_weight_));
     };
     if (d) {
       const double eps = 0.5 * profile_.grid.step_nm();
@@ -129,7 +112,7 @@ class RegularisedModel {
     const double tau = th[common_offset()];
     const Eigen::VectorXd sensor = profile_.sensor_qe.row(b).transpose();
     const Eigen::ArrayXd s_shifted =
-        (pb[2] != 0 ? shifted(sensor, profile_.grid, pb[2]) : sensor).array();
+        (pb[2] != 0 ? detail::shift_curve(sensor, profile_.grid, pb[2]) : sensor).array();
     const Eigen::ArrayXd band = 1.0 + pb[0] * x_ + pb[1] * x_.square();
     const Eigen::ArrayXd common = 1.0 + tau * x_;
     const Eigen::ArrayXd s = s_shifted * opt.array();
@@ -142,8 +125,8 @@ class RegularisedModel {
       dq->col(0) = (s * x_ * common * positive).matrix();
       dq->col(1) = (s * x_.square() * common * positive).matrix();
       const double eps = 0.5 * profile_.grid.step_nm();
-      dq->col(2) = ((shifted(sensor, profile_.grid, pb[2] + eps) -
-                     shifted(sensor, profile_.grid, pb[2] - eps))
+      dq->col(2) = ((detail::shift_curve(sensor, profile_.grid, pb[2] + eps) -
+                     detail::shift_curve(sensor, profile_.grid, pb[2] - eps))
                         .array() /
                     (2 * eps) * opt.array() * band * common * positive)
                        .matrix();

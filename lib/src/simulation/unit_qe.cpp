@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "detail/curve_warp.h"
 #include "detail/portable_math.h"
 #include "detail/random.h"
 #include "pyrocam/simulation/simulator.h"
@@ -9,25 +10,8 @@
 namespace pyrocam {
 namespace {
 
-// curve(w(lambda)) by linear interpolation, w given per grid sample, clamped to the grid.
-Eigen::VectorXd resample(const Eigen::VectorXd& curve, const WavelengthGrid& grid,
-                         const Eigen::VectorXd& source_nm) {
-  Eigen::VectorXd out(curve.size());
-  const double last = static_cast<double>(curve.size() - 1);
-  for (Eigen::Index i = 0; i < curve.size(); ++i) {
-    const double pos = std::clamp((source_nm[i] - grid.start_nm()) / grid.step_nm(), 0.0, last);
-    const auto i0 = static_cast<Eigen::Index>(std::floor(pos));
-    const auto i1 = std::min<Eigen::Index>(i0 + 1, curve.size() - 1);
-    const double f = pos - static_cast<double>(i0);
-    out[i] = curve[i0] * (1 - f) + curve[i1] * f;
-  }
-  return out;
-}
-
-Eigen::VectorXd shift_curve(const Eigen::VectorXd& curve, const WavelengthGrid& grid,
-                            double shift_nm) {
-  return resample(curve, grid, (grid.nm().array() - shift_nm).matrix());
-}
+using detail::shift_curve;
+using detail::warp_curve;
 
 // The hostile family's changes to the optics, common to all bands: the filter's pass-band
 // edges moved independently by 3-10 nm, one or two narrow leaks within 50 nm outside an edge
@@ -45,7 +29,7 @@ Eigen::VectorXd hostile_optics(const CameraProfile& profile, Random& rng) {
     const double f = std::clamp((x - lo) / (hi - lo), 0.0, 1.0);
     source[i] = x - (d_lo * (1 - f) + d_hi * f);
   }
-  Eigen::VectorXd optics = resample(profile.optics_transmission, grid, source);
+  Eigen::VectorXd optics = warp_curve(profile.optics_transmission, grid, source.array());
   const double slope = rng.uniform(-0.3, 0.3);  // relative change over 700-1000 nm
   const int leaks = 1 + static_cast<int>(rng.below(2));
   for (int k = 0; k < leaks; ++k) {
