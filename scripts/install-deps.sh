@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages pyrocam needs, only those missing (quick when all are there).
+# With --tests also those only the tests need (scripts/test-all.sh passes it).
 set -euo pipefail
 
 packages=(
@@ -11,6 +12,16 @@ packages=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libeigen3-dev libgtest-dev nlohmann-json3-dev libcli11-dev libpugixml-dev
 )
+
+# Only for the tests.
+test_packages=(
+)
+if [[ ${1:-} == --tests ]]; then
+  packages+=("${test_packages[@]}")
+elif (($# > 0)); then
+  echo "install-deps: unknown argument '$1' (the only one is --tests)" >&2
+  exit 2
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -2,7 +2,7 @@
 # README command 2: install what is missing, build with warnings as errors, run every test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/install-deps.sh
+scripts/install-deps.sh --tests
 scripts/build.sh -Dwerror=true
 set +e
 meson test -C build --print-errorlogs --num-processes 2 2>&1 | tee build/test-output.txt
