@@ -9,14 +9,19 @@
  * and 0 for "no reading", so temperatures can be recorded losslessly (e.g. avenc_ffv1 !
  * matroskamux) and read back by any tool.
  *
- * A pixel has no reading (0) when any band is saturated (+INF), without a reading (NaN) or
- * below the model's dim threshold (profile `inference_dim_dn`, 20 DN for the shipped profiles),
- * or when the estimate falls outside the model's temperature range. With
- * #GstRatioTemp:allow-partial the likelihood method instead drops such bands and fits the rest
- * when at least two remain (e.g. a colour pixel with a saturated red reads from green and blue);
- * it gives no reading when they fit two temperatures about equally well. Two bands whose ratio
- * is not monotonic over the model's range (the colour camera's red/green) pin such fits near
- * the ratio's turning point, so partial readings are off by default.
+ * A pixel has no reading (0) when the estimate falls outside the model's temperature range, or
+ * when a band is saturated (+INF), without a reading (NaN) or below the model's dim threshold
+ * (profile `inference_dim_dn`, 20 DN for the shipped profiles) and #GstRatioTemp:partial-bands
+ * does not read it from the rest. With partial-bands=safe (the default) the likelihood fit reads
+ * such a pixel from the bands left when two of them have a ratio monotonic over the model's
+ * whole range (decided from the model's locus when the element starts): two bands whose ratio
+ * turns over pin such fits near the turning point, a reading that looks right and is not. The
+ * shipped 5x5 camera has 198 such pairs of 300, so a pixel with a few dim bands reads; the
+ * shipped colour camera has none (each of its ratios turns over somewhere in 500..3500 degC),
+ * so its pixels still need all three bands. partial-bands=any (or the older
+ * #GstRatioTemp:allow-partial) reads from any two; the fit gives no reading when they fit two
+ * temperatures about equally well. With the lut or mlp method the pixels they cannot read go to
+ * the likelihood fit under the same rule.
  *
  * With #GstRatioTemp:misfit-probability above 0 (e.g. 1e-6; default 0, off) every reading goes
  * through a band-consistency check: the band signals must be those of a graybody within 1 % of
@@ -507,7 +512,12 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
           st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
         pyrocam::PlaneEstimator& chosen = st.estimators->estimator(st.method);
         chosen.set_misfit_probability(settings.misfit_probability);
-        chosen.set_allow_partial(settings.allow_partial);
+        chosen.set_partial_bands(settings.allow_partial ||
+                                         settings.partial_bands == GST_RATIO_TEMP_PARTIAL_ANY
+                                     ? pyrocam::TemperatureEstimator::PartialBands::kAny
+                                 : settings.partial_bands == GST_RATIO_TEMP_PARTIAL_SAFE
+                                     ? pyrocam::TemperatureEstimator::PartialBands::kSafe
+                                     : pyrocam::TemperatureEstimator::PartialBands::kOff);
         const pyrocam::PlaneEstimator& estimator = chosen;
         MappedFrame out(outbuf, &st.out_info);
         if (!uncertainty && !stats_due) {
@@ -578,6 +588,7 @@ static void gst_ratio_temp_class_init(GstRatioTempClass* klass) {
 
   gst_type_mark_as_plugin_api(GST_TYPE_RATIO_TEMP_METHOD, static_cast<GstPluginAPIFlags>(0));
   gst_type_mark_as_plugin_api(GST_TYPE_RATIO_TEMP_OUTPUT, static_cast<GstPluginAPIFlags>(0));
+  gst_type_mark_as_plugin_api(GST_TYPE_RATIO_TEMP_PARTIAL, static_cast<GstPluginAPIFlags>(0));
 }
 
 static void gst_ratio_temp_init(GstRatioTemp* self) {

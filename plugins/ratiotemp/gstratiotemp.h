@@ -25,6 +25,14 @@ typedef enum {
   GST_RATIO_TEMP_OUTPUT_UNCERTAINTY,
 } GstRatioTempOutput;
 #define GST_TYPE_RATIO_TEMP_OUTPUT (gst_ratio_temp_output_get_type())
+
+typedef enum {
+  GST_RATIO_TEMP_PARTIAL_OFF,
+  GST_RATIO_TEMP_PARTIAL_SAFE,
+  GST_RATIO_TEMP_PARTIAL_ANY,
+} GstRatioTempPartial;
+#define GST_TYPE_RATIO_TEMP_PARTIAL (gst_ratio_temp_partial_get_type())
+GType gst_ratio_temp_partial_get_type(void);
 GType gst_ratio_temp_output_get_type(void);
 
 GST_ELEMENT_REGISTER_DECLARE(ratiotemp);

@@ -20,6 +20,7 @@ constexpr GstRatioTempMethod DEFAULT_METHOD = GST_RATIO_TEMP_METHOD_AUTO;
 constexpr GstRatioTempOutput DEFAULT_OUTPUT = GST_RATIO_TEMP_OUTPUT_TEMPERATURE;
 constexpr guint64 DEFAULT_STATS_INTERVAL = GST_SECOND;
 constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
+constexpr GstRatioTempPartial DEFAULT_PARTIAL_BANDS = GST_RATIO_TEMP_PARTIAL_SAFE;
 constexpr double DEFAULT_MISFIT_PROBABILITY = 0.0;
 constexpr double MAX_MISFIT_PROBABILITY = 0.5;
 constexpr guint DEFAULT_PEAK_WINDOW = 5;              // pyrocam::kDefaultPeakWindow
@@ -34,7 +35,8 @@ struct Settings {
   GstRatioTempMethod method = DEFAULT_METHOD;
   GstRatioTempOutput output = DEFAULT_OUTPUT;
   guint64 stats_interval = DEFAULT_STATS_INTERVAL;
-  gboolean allow_partial = DEFAULT_ALLOW_PARTIAL;
+  gboolean allow_partial = DEFAULT_ALLOW_PARTIAL;  // true: as partial_bands any
+  GstRatioTempPartial partial_bands = DEFAULT_PARTIAL_BANDS;
   double misfit_probability = DEFAULT_MISFIT_PROBABILITY;
   std::string region_text;   // as set; empty: no region
   bool region_valid = true;  // region_text is empty or parsed into region

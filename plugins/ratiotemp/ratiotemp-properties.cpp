@@ -21,6 +21,7 @@ enum {
   PROP_PEAK_WINDOW,
   PROP_E_SLOPE,
   PROP_E_SLOPE_UNCERTAINTY,
+  PROP_PARTIAL_BANDS,
 };
 
 }  // namespace
@@ -67,10 +68,19 @@ void install_properties(GObjectClass* gobject_class) {
   g_object_class_install_property(
       gobject_class, PROP_ALLOW_PARTIAL,
       g_param_spec_boolean("allow-partial", "Allow partial readings",
-                           "likelihood only: fit pixels where some bands are saturated, "
-                           "missing or below the dim threshold from the remaining bands (at "
-                           "least two); off: such pixels have no reading with every method",
+                           "Read pixels where some bands are saturated, missing or below the "
+                           "dim threshold from any two or more of the rest (partial-bands=any, "
+                           "which it overrides; kept for older pipelines)",
                            DEFAULT_ALLOW_PARTIAL, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_PARTIAL_BANDS,
+      g_param_spec_enum("partial-bands", "Partial readings",
+                        "Pixels where some bands are saturated, missing or below the dim "
+                        "threshold: off: no reading; safe: read by the likelihood fit from the "
+                        "rest when they include two bands whose ratio is monotonic over the "
+                        "model's range (decided from its locus; none for the shipped colour "
+                        "camera, most pairs for the 5x5 one); any: from any two",
+                        GST_TYPE_RATIO_TEMP_PARTIAL, DEFAULT_PARTIAL_BANDS, playing));
   g_object_class_install_property(
       gobject_class, PROP_MISFIT_PROBABILITY,
       g_param_spec_double("misfit-probability", "Band-consistency false-rejection probability",
@@ -133,6 +143,9 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
     case PROP_ALLOW_PARTIAL:
       s.allow_partial = g_value_get_boolean(value);
       break;
+    case PROP_PARTIAL_BANDS:
+      s.partial_bands = static_cast<GstRatioTempPartial>(g_value_get_enum(value));
+      break;
     case PROP_MISFIT_PROBABILITY:
       s.misfit_probability = g_value_get_double(value);
       break;
@@ -192,6 +205,9 @@ void get_property(GObject* object, guint prop_id, GValue* value, GParamSpec* psp
     case PROP_ALLOW_PARTIAL:
       g_value_set_boolean(value, s.allow_partial);
       break;
+    case PROP_PARTIAL_BANDS:
+      g_value_set_enum(value, s.partial_bands);
+      break;
     case PROP_MISFIT_PROBABILITY:
       g_value_set_double(value, s.misfit_probability);
       break;
@@ -228,6 +244,22 @@ GType gst_ratio_temp_method_get_type(void) {
   };
   if (g_once_init_enter(&type)) {
     GType t = g_enum_register_static("GstRatioTempMethod", values);
+    g_once_init_leave(&type, t);
+  }
+  return type;
+}
+
+GType gst_ratio_temp_partial_get_type(void) {
+  static GType type = 0;
+  static const GEnumValue values[] = {
+      {GST_RATIO_TEMP_PARTIAL_OFF, "No reading unless every band reads", "off"},
+      {GST_RATIO_TEMP_PARTIAL_SAFE, "From the bands left when a monotonic pair is among them",
+       "safe"},
+      {GST_RATIO_TEMP_PARTIAL_ANY, "From any two bands left", "any"},
+      {0, nullptr, nullptr},
+  };
+  if (g_once_init_enter(&type)) {
+    GType t = g_enum_register_static("GstRatioTempPartial", values);
     g_once_init_leave(&type, t);
   }
   return type;

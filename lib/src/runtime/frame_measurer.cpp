@@ -13,7 +13,10 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
     : model_(std::move(model)),
       options_(options),
       planes_estimator_(model_, options.method, options.misfit_probability) {
-  planes_estimator_.set_allow_partial(options.allow_partial);
+  planes_estimator_.set_partial_bands(
+      options.allow_partial  ? TemperatureEstimator::PartialBands::kAny
+      : options.safe_partial ? TemperatureEstimator::PartialBands::kSafe
+                             : TemperatureEstimator::PartialBands::kOff);
   planes_estimator_.set_emissivity_slope(options.emissivity_slope, options.emissivity_slope_u);
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model_->profile().thresholds.inference_saturation_dn;

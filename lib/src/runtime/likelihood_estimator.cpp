@@ -162,6 +162,25 @@ class LikelihoodFit : public TemperatureEstimator {
       shot_gain_[b] = n.shot_gain;
       noise_floor_[b] = n.floor_dn2;
     }
+    // A ratio that turns over (rises, then falls) fits two temperatures: only pairs whose ratio
+    // keeps one direction over the whole range read a pixel alone.
+    monotonic_.assign(static_cast<std::size_t>(bands_ * bands_), 0);
+    for (int i = 0; i < bands_; ++i)
+      for (int j = i + 1; j < bands_; ++j) {
+        int rising = 0, falling = 0;
+        bool positive = true;
+        double previous = NAN;
+        for (Eigen::Index k = 0; k < locus_.size() && positive; ++k) {
+          const double a = locus_.rates(k, i), b = locus_.rates(k, j);
+          positive = a > 0 && b > 0;
+          const double r = a / b;
+          if (k > 0) rising += r > previous, falling += r < previous;
+          previous = r;
+        }
+        const bool one_way = positive && (rising == 0 || falling == 0);
+        monotonic_[static_cast<std::size_t>(i * bands_ + j)] = one_way;
+        monotonic_[static_cast<std::size_t>(j * bands_ + i)] = one_way;
+      }
   }
 
  protected:
@@ -180,6 +199,26 @@ class LikelihoodFit : public TemperatureEstimator {
   };
 
   // Returns how many bands count.
+  bool can_read_partial() const override {
+    if (partial_ == PartialBands::kOff || bands_ < 3) return false;
+    return partial_ == PartialBands::kAny ||
+           std::any_of(monotonic_.begin(), monotonic_.end(), [](std::uint8_t m) { return m != 0; });
+  }
+
+  // Whether the bands that read are enough: all of them, or (set_partial_bands) at least two,
+  // with kSafe among them a pair whose ratio is monotonic over the model's range.
+  bool enough_bands(int reading, const Weighted& px) const {
+    if (reading == bands_) return true;
+    if (reading < min_bands_) return false;
+    if (partial_ != PartialBands::kSafe) return true;
+    for (int i = 0; i < bands_; ++i) {
+      if (px.w[i] == 0.0) continue;
+      for (int j = i + 1; j < bands_; ++j)
+        if (px.w[j] != 0.0 && monotonic_[static_cast<std::size_t>(i * bands_ + j)]) return true;
+    }
+    return false;
+  }
+
   int weigh(const double* s, Weighted& px) const {
     return weigh_bands(s, bands_, dim_dn_, shot_gain_, noise_floor_, px.w, px.ws, &px.sss);
   }
@@ -217,6 +256,7 @@ class LikelihoodFit : public TemperatureEstimator {
   Locus locus_;
   std::vector<double> rates_, squares_;  // m and m^2: samples x bands, row after row
   double shot_gain_[kMaxBands] = {}, noise_floor_[kMaxBands] = {};
+  std::vector<std::uint8_t> monotonic_;  // bands x bands: ratio monotonic over the locus
 };
 
 // The definition: every coarse sample and every 1 degC sample of each refinement window.
@@ -226,7 +266,7 @@ class ExhaustiveLikelihoodEstimator : public LikelihoodFit {
 
   double temperature_c(const double* s) const override {
     Weighted px;
-    if (weigh(s, px) < min_bands_) return NAN;
+    if (!enough_bands(weigh(s, px), px)) return NAN;
     const Eigen::Index n = locus_.size();
     std::vector<double> c;
     for (Eigen::Index i = 0; i < n; i += kCoarse) c.push_back(chi2(i, px));
@@ -300,7 +340,7 @@ class LikelihoodEstimator : public LikelihoodFit {
 
   double temperature_c(const double* s) const override {
     Weighted px;
-    if (weigh(s, px) < min_bands_) return NAN;
+    if (!enough_bands(weigh(s, px), px)) return NAN;
     // Projections of w*s and w on the factors.
     alignas(32) double p[kMaxRank] = {}, q[kMaxRank] = {};
     alignas(32) float pf[kMaxRank], qf[kMaxRank];

@@ -14,8 +14,24 @@ namespace pyrocam {
 
 PlaneEstimator::PlaneEstimator(std::shared_ptr<const ThermalModel> model, Method method,
                                double misfit_probability)
-    : model_(std::move(model)), estimator_(make_estimator(model_, method)), misfit_(nullptr) {
+    : model_(std::move(model)),
+      estimator_(make_estimator(model_, method)),
+      misfit_(nullptr),
+      method_(method) {
   set_misfit_probability(misfit_probability);
+}
+
+void PlaneEstimator::set_partial_bands(TemperatureEstimator::PartialBands partial) {
+  if (partial_set_ && partial == partial_) return;  // called per frame: build once
+  partial_set_ = true;
+  partial_ = partial;
+  estimator_->set_partial_bands(partial);
+  partial_fit_.reset();
+  if (method_ == Method::kLikelihood || partial == TemperatureEstimator::PartialBands::kOff) return;
+  auto fit = make_estimator(model_, Method::kLikelihood);
+  fit->set_partial_bands(partial);
+  // A fit that can read none of them would only cost a call per pixel without a reading.
+  if (fit->can_read_partial()) partial_fit_ = std::move(fit);
 }
 
 void PlaneEstimator::set_misfit_probability(double probability) {
@@ -40,6 +56,21 @@ void PlaneEstimator::set_emissivity_slope(double alpha, double alpha_u) {
 void PlaneEstimator::estimate_row(const float* const* rows, std::size_t n, float* out) const {
   if (!sloped_) {
     estimator_->estimate(rows, n, out);
+    if (partial_fit_) {
+      // Only pixels with a band the network cannot use: a reading outside its range stays none.
+      const auto bands = static_cast<std::size_t>(model_->profile().band_count());
+      const double dim = model_->profile().thresholds.inference_dim_dn;
+      double s[kMaxBands];
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!std::isnan(out[i])) continue;
+        bool some_unusable = false;
+        for (std::size_t b = 0; b < bands; ++b) {
+          s[b] = rows[b][i];
+          some_unusable |= !(s[b] >= dim && std::isfinite(s[b]));
+        }
+        if (some_unusable) out[i] = static_cast<float>(partial_fit_->temperature_c(s));
+      }
+    }
     if (misfit_) misfit_->apply(rows, n, out);
     return;
   }

@@ -75,5 +75,51 @@ TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {
   EXPECT_TRUE(std::isnan(fast->temperature_c(s.data())));
 }
 
+// Safe partial readings: a pixel with unusable bands reads from the rest only when two of them
+// have a ratio monotonic over the model's range. The shipped colour camera has no such pair
+// (each of its ratios turns over), the 5x5 one has many: its dim-band pixels read, and as
+// the fit with any bands reads them (the rule only decides whether).
+TEST(LikelihoodEstimator, safe_partial_readings_need_a_monotonic_pair) {
+  for (const char* name : {"test-model-rgb.json", "test-model-nir5x5.json"}) {
+    SCOPED_TRACE(name);
+    const auto model = test_model(name);
+    const ThermalModel& m = *model;
+    const NoisyPixels px = noisy_pixels(m, kSweepC, 100, 30, 200, saturation_signal_dn(m), 0.3, 17);
+    const auto safe = make_estimator(model, Method::kLikelihood);
+    const auto any = make_estimator(model, Method::kLikelihood);
+    safe->set_partial_bands(TemperatureEstimator::PartialBands::kSafe);
+    any->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
+    const bool colour = m.profile().band_count() == 3;
+    EXPECT_EQ(safe->can_read_partial(), !colour);
+    std::size_t partial = 0, safe_read = 0;
+    for (std::size_t i = 0; i < px.size(); ++i) {
+      const double* s = px.pixel(i);
+      const bool all_read = std::all_of(s, s + px.bands, [&](double v) {
+        return std::isfinite(v) && v >= m.profile().thresholds.inference_dim_dn;
+      });
+      const double a = any->temperature_c(s), b = safe->temperature_c(s);
+      if (all_read || std::isnan(b)) {
+        if (all_read) {
+          EXPECT_EQ(std::isnan(a), std::isnan(b)) << i;
+        }
+        continue;
+      }
+      ++safe_read;
+      EXPECT_EQ(a, b) << i;  // the same fit: the rule only decides whether it reads
+    }
+    for (std::size_t i = 0; i < px.size(); ++i) {
+      const double* s = px.pixel(i);
+      partial += !std::all_of(s, s + px.bands, [&](double v) {
+        return std::isfinite(v) && v >= m.profile().thresholds.inference_dim_dn;
+      });
+    }
+    ASSERT_GT(partial, 50u);
+    if (colour)
+      EXPECT_EQ(safe_read, 0u);
+    else
+      EXPECT_GT(safe_read, partial / 2);
+  }
+}
+
 }  // namespace
 }  // namespace pyrocam::test

@@ -40,11 +40,23 @@ class TemperatureEstimator {
   virtual double systematic_u_c(double t_c) const;
 
   // Whether the likelihood fit may read a pixel from the bands left when some are saturated,
-  // missing or dim (at least two of them). Off (the default) such a pixel has no reading with
-  // every method: a colour pixel's two remaining bands can pin the fit near the turning point of
-  // their ratio, a reading that looks right and is not. The network and its table always need
-  // every band.
-  void set_allow_partial(bool allow) { min_bands_ = allow ? 2 : bands_; }
+  // missing or dim (at least two of them): kOff (the default) never, such a pixel has no
+  // reading with every method; kSafe when a pair of the bands left has a ratio monotonic over
+  // the model's whole range (decided from the model's locus: for the colour camera green/blue
+  // but not red/green, whose ratio turns over and can pin the fit near its turning point, a
+  // reading that looks right and is not); kAny with any two. The network and its table always
+  // need every band (PlaneEstimator::set_partial_bands reads such pixels by the fit).
+  enum class PartialBands { kOff, kSafe, kAny };
+  void set_partial_bands(PartialBands p) {
+    partial_ = p;
+    min_bands_ = p == PartialBands::kOff ? bands_ : 2;
+  }
+  void set_allow_partial(bool allow) {
+    set_partial_bands(allow ? PartialBands::kAny : PartialBands::kOff);
+  }
+  // Whether a pixel with unusable bands can ever read under the current rule (the likelihood
+  // fit: kAny with more than two bands, kSafe with a monotonic pair in the model).
+  virtual bool can_read_partial() const { return false; }
   // Bytes of the tables the estimator holds (the lookup table grows as pixels need its blocks,
   // up to 8192 of 4 KB; past that, pixels in blocks not yet filled are read by the network itself,
   // which differs from the table by at most about 0.5 degC: which pixels those are then depends
@@ -59,7 +71,8 @@ class TemperatureEstimator {
   std::shared_ptr<const ThermalModel> model_;  // never null
   int bands_;
   double dim_dn_;
-  int min_bands_;  // bands the likelihood fit needs (set_allow_partial)
+  int min_bands_;  // bands the likelihood fit needs (set_partial_bands)
+  PartialBands partial_ = PartialBands::kOff;
 };
 
 // Throws InputError without a model or when the method does not fit the model (the lookup table

@@ -19,7 +19,8 @@ struct MeasureOptions {
   double saturation_level_dn = -1;  // raw DN; -1: the profile's inference saturation threshold
   bool uncertainty = false;
   double misfit_probability = 0;  // band-consistency check (misfit.h); 0: none
-  bool allow_partial = false;     // TemperatureEstimator::set_allow_partial
+  bool allow_partial = false;     // TemperatureEstimator::set_allow_partial (any two bands)
+  bool safe_partial = false;      // else PartialBands::kSafe: a monotonic pair among them
   // PlaneEstimator::set_emissivity_slope: per 100 nm (0 = grey), and its standard uncertainty
   // (negative: the model's).
   double emissivity_slope = 0;

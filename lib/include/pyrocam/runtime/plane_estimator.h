@@ -33,8 +33,15 @@ class PlaneEstimator {
   const TemperatureEstimator& estimator() const {
     return sloped_ ? static_cast<const TemperatureEstimator&>(*sloped_) : *estimator_;
   }
-  // See TemperatureEstimator::set_allow_partial (off by default).
-  void set_allow_partial(bool allow) { estimator_->set_allow_partial(allow); }
+  // See TemperatureEstimator::set_partial_bands (off by default). With the network or its
+  // table, pixels they cannot read because a band is saturated, invalid or dim are read by the
+  // likelihood fit with those rules (a grey surface only: with an emissivity slope they stay
+  // without a reading). Not while an estimate runs; the fit is built when first needed.
+  void set_partial_bands(TemperatureEstimator::PartialBands partial);
+  void set_allow_partial(bool allow) {
+    set_partial_bands(allow ? TemperatureEstimator::PartialBands::kAny
+                            : TemperatureEstimator::PartialBands::kOff);
+  }
   // Not while an estimate runs. Throws InputError outside 0 or (0, 1).
   void set_misfit_probability(double probability);
   // The surface's emissivity slope, per 100 nm (0.01 = 1 %/100 nm, positive rising with
@@ -59,6 +66,11 @@ class PlaneEstimator {
   double alpha_u_ = -1;                               // as set
   // Made when the check is first turned on (its tables cost a locus).
   std::unique_ptr<MisfitCheck> misfit_;
+  Method method_;
+  // The likelihood fit for the pixels the network or its table cannot read (set_partial_bands).
+  std::unique_ptr<TemperatureEstimator> partial_fit_;
+  TemperatureEstimator::PartialBands partial_ = TemperatureEstimator::PartialBands::kOff;
+  bool partial_set_ = false;
 };
 
 }  // namespace pyrocam
