@@ -81,11 +81,14 @@ thermal_chain=(camera. ! queue ! darksub $DARK ! "${demosaic[@]}" ! ratiotemp "m
 # (not at 0, which adds frames before it and can negotiate a 1x1 picture); it waits LATENCY_MS
 # for the slower temperature branch, so that no frame goes out without its overlay (on a loaded
 # machine the branch can take longer: raise it).
+# A frame whose overlay comes later than that is shown without it, never with the last overlay
+# that came (sink_1::max-last-buffer-repeat=0; compositor's default repeats it, which puts the
+# temperatures of an earlier frame over a moving scene).
 # The queue after it keeps its thread free: in a live pipeline the first sink to get a frame
 # waits for the others, while compositor answers the tee's allocation queries from that thread,
 # so without the queue the start can deadlock (GStreamer 1.22).
 overlay_mix=(camera. ! queue ! "${camera_view[@]}" ! video/x-raw,format=RGBA ! mix.sink_0
   compositor name=mix start-time-selection=first latency="$((LATENCY_MS * 1000000))"
-  sink_0::zorder=0 sink_1::zorder=1 ! video/x-raw,format=RGBA ! queue)
+  sink_0::zorder=0 sink_1::zorder=1 sink_1::max-last-buffer-repeat=0 ! video/x-raw,format=RGBA ! queue)
 colormap_to_mix=("${colormap_scale[@]}" thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1)
 set +f

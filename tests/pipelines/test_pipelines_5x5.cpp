@@ -348,5 +348,62 @@ TEST_F(Pipelines5x5, no_display_is_a_clear_error_not_a_crash_n) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+
+// A live view whose temperatures come too late (LATENCY_MS=0: the compositor waits for nothing)
+// shows each camera frame bare or under its own overlay, never under an earlier frame's: the
+// melt pool moves, and an earlier overlay sits beside it with temperatures that look right.
+TEST(LiveOverlay, never_shows_an_earlier_frames_overlay) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp", "thermalcolormap"})
+    REQUIRE_ELEMENT(e);
+  ScratchDir dir("live-overlay");
+  const std::string model = test_model("test-model-rgb.json");
+  const std::string scene = "pyrocamsrc scene=melt-pool seed=7";
+  const std::string caps = "video/x-bayer,width=160,height=120,framerate=30/1";
+  constexpr int kFrames = 30, kW = 160, kH = 120;
+  const ScriptRun run = run_script("live-view.sh", {},
+                                   {{"MODEL", model},
+                                    {"SOURCE", scene + " is-live=true"},
+                                    {"CAPS", caps},
+                                    {"LATENCY_MS", "0"},
+                                    {"WATCHDOG_MS", "30000"},
+                                    {"NUM_BUFFERS", std::to_string(kFrames)},
+                                    {"SINK", raw_sink(dir, "view-")}},
+                                   (dir / "live-view.log").string(), kRunLimit);
+  ASSERT_EQ(run.status, 0) << run.log;
+  const auto frames = frames_in_files(dir.path().string(), "view-");
+  ASSERT_GE(frames.size(), static_cast<std::size_t>(kFrames));
+  // The same seeded frames as the live camera's (pyrocamsrc draws them by frame index).
+  const std::string chain = scene + " num-buffers=" + std::to_string(kFrames) + " ! " + caps;
+  const Video camera =
+      pull_frames(chain + " ! bayer2rgb ! video/x-raw,format=RGBA ! appsink name=out");
+  const Video overlay = pull_frames(chain + " ! darksub dark-level=50 ! demosaic25 ! ratiotemp " +
+                                    "model=\"" + model +
+                                    "\" ! thermalcolormap scale-bar=true ! "
+                                    "video/x-raw,format=RGBA ! appsink name=out");
+  ASSERT_EQ(camera.frames.size(), static_cast<std::size_t>(kFrames)) << camera.error;
+  ASSERT_EQ(overlay.frames.size(), static_cast<std::size_t>(kFrames)) << overlay.error;
+  int bare = 0, with_overlay = 0;
+  // The first kFrames frames shown: the camera's (after its end, the compositor may go on
+  // drawing overlays that came late over its background).
+  for (int k = 0; k < kFrames; ++k) {
+    ASSERT_EQ(frames[k].size(), static_cast<std::size_t>(kW * kH * 4));
+    bool ok = false;
+    for (int i = 0; i < kFrames && !ok; ++i) {
+      if (frames[k] == camera.frames[i]) {
+        ok = true;
+        ++bare;
+      } else if (check_composite(frames[k], camera.frames[i], overlay.frames[i]).wrong == 0) {
+        ok = true;
+        ++with_overlay;
+      }
+    }
+    EXPECT_TRUE(ok) << "frame " << k
+                    << " is no camera frame, bare or under its own overlay (an earlier one?)";
+  }
+  std::cout << "[ info     ] " << with_overlay << " frames with their overlay, " << bare
+            << " bare\n";
+}
+
 }  // namespace
 }  // namespace pyrocam::test
