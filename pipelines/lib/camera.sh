@@ -34,14 +34,6 @@ NUM_BUFFERS=${NUM_BUFFERS:--1}
 WATCHDOG_MS=${WATCHDOG_MS:-5000}
 LATENCY_MS=${LATENCY_MS:-100}
 
-if [[ ! -f $MODEL ]]; then
-  if [[ -n $model_given ]]; then
-    echo "$name: no model file $MODEL (set MODEL to a model from pyrocam-calib calibrate)" >&2
-    exit 1
-  fi
-  "$here/lib/ensure-model.sh" "$PROFILE" "$MODEL" >&2 ||
-    { echo "$name: could not calibrate the default model $MODEL of $PROFILE" >&2; exit 1; }
-fi
 [[ $LATENCY_MS =~ ^[0-9]+$ ]] || { echo "$name: LATENCY_MS must be a whole number of milliseconds, not '$LATENCY_MS'" >&2; exit 2; }
 
 set -f # SOURCE, CAPS and DARK split on spaces into the launcher's words
@@ -92,3 +84,13 @@ overlay_mix=(camera. ! queue ! "${camera_view[@]}" ! video/x-raw,format=RGBA ! m
   sink_0::zorder=0 sink_1::zorder=1 sink_1::max-last-buffer-repeat=0 ! video/x-raw,format=RGBA ! queue)
 colormap_to_mix=("${colormap_scale[@]}" thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1)
 set +f
+
+# Last, after every setting was checked: a first calibration takes a minute or two.
+if [[ ! -f $MODEL ]]; then
+  if [[ -n $model_given ]]; then
+    echo "$name: no model file $MODEL (set MODEL to a model from pyrocam-calib calibrate)" >&2
+    exit 1
+  fi
+  "$here/lib/ensure-model.sh" "$PROFILE" "$MODEL" >&2 ||
+    { echo "$name: could not calibrate the default model $MODEL of $PROFILE" >&2; exit 1; }
+fi
