@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "pyrocam/core/locus.h"
 #include "pyrocam/core/spectrum.h"
 #include "svg_plot.h"
 
@@ -166,6 +167,79 @@ void rates_section(const CalibrationOutcome& o, std::ostream& h) {
       {"Slope fits of ROI signal vs exposure: R²", "temperature (°C)", "R²", false, 1000, 280}, r2);
 }
 
+// The Planckian locus in the model's ratio space, the furnace measurements on it. Colour: the two
+// normalised ratios; more bands: the shortest- and longest-wavelength numerators' ratios.
+void locus_section(const CalibrationOutcome& o, std::ostream& h) {
+  const ThermalModel& m = o.model;
+  const CameraProfile& p = m.profile();
+  const std::vector<int>& numerators = p.normalisation.numerators;
+  if (numerators.empty()) return;
+  const Eigen::Index ix = 0, iy = static_cast<Eigen::Index>(numerators.size()) - 1;
+  const Locus locus = make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 5);
+  Series line{"locus (model)", to_vec(locus.ratios.col(ix)), to_vec(locus.ratios.col(iy)),
+              colour(2)};
+  Series ticks{"every 500 °C", {}, {}, colour(2), true};
+  for (Eigen::Index i = 0; i < locus.size(); ++i) {
+    const double t = locus.temperature_c(i);
+    if (std::fmod(t, 500.0) != 0) continue;
+    ticks.x.push_back(locus.ratios(i, ix));
+    ticks.y.push_back(locus.ratios(i, iy));
+    ticks.labels.push_back(num(t, 0) + " °C");
+  }
+  // The furnace's measured rates, normalised the same way; labelled every 100 °C.
+  const Eigen::MatrixXd measured = o.rates.rates();
+  Series furnace{"furnace (measured)", {}, {}, colour(0), true};
+  for (Eigen::Index t = 0; t < measured.rows(); ++t) {
+    const Eigen::VectorXd r = normalised_ratios(p.normalisation, measured.row(t).transpose());
+    const double t_c = o.rates.temperatures_c[static_cast<std::size_t>(t)];
+    furnace.x.push_back(r(ix));
+    furnace.y.push_back(r(iy));
+    furnace.labels.push_back(std::fmod(t_c, 100.0) == 0 ? num(t_c, 0) : "");
+  }
+  const auto ratio_name = [&](Eigen::Index i) {
+    std::string ref;
+    for (int b : p.normalisation.reference) ref += (ref.empty() ? "" : ",") + p.band_names[b];
+    return p.band_names[numerators[static_cast<std::size_t>(i)]] + " / " +
+           (p.normalisation.reference.size() > 1 ? "mean(" + ref + ")" : ref);
+  };
+  h << "<h2>Planckian locus</h2><p>The model's locus from " << num(m.min_temperature_c, 0) << " to "
+    << num(m.max_temperature_c, 0)
+    << " °C in its normalised band ratios (what the estimators read), and the furnace "
+       "measurements' ratios: on a good calibration they lie on the locus at their temperatures.";
+  if (numerators.size() > 2)
+    h << " Shown: two of the " << numerators.size() << " ratios, the first and the last numerator.";
+  h << "</p>"
+    << svg_plot({"Planckian locus and furnace measurements", ratio_name(ix), ratio_name(iy), false,
+                 1000, 520, "locus-plot"},
+                {line, ticks, furnace});
+}
+
+// The temperature error of every furnace setting (temperature and exposure) per estimator.
+void setting_errors_section(const CalibrationOutcome& o, std::ostream& h) {
+  // The estimators the elements read with; the baselines' errors (the table above) are far
+  // larger and would flatten these to a line. All of them if those names are not found.
+  const auto runtime = [](const std::string& name) {
+    return name == "MLP" || name == "likelihood fit";
+  };
+  bool any = false;
+  for (const EstimatorScore& s : o.table4) any = any || runtime(s.name);
+  std::vector<Series> series;
+  for (std::size_t i = 0; i < o.table4.size(); ++i) {
+    const EstimatorScore& s = o.table4[i];
+    if (any && !runtime(s.name)) continue;
+    Series e{s.name, s.true_c, {}, colour(i), true};
+    for (std::size_t k = 0; k < s.true_c.size(); ++k) e.y.push_back(s.estimate_c[k] - s.true_c[k]);
+    series.push_back(std::move(e));
+  }
+  h << "<h2>Error per furnace setting</h2><p>Each point is one furnace setting (a temperature and "
+       "an exposure time): the estimator's reading of the ROI's mean signals minus the furnace "
+       "temperature. Points of one temperature spread over its exposures. Shown: the network "
+       "and the likelihood fit (the baselines' errors are in the table above).</p>"
+    << svg_plot({"Temperature error per setting", "furnace temperature (°C)",
+                 "reading − furnace (°C)", false, 1000, 420, "setting-error-plot"},
+                series);
+}
+
 // The temperature network: locus error and training curve.
 void network_section(const CalibrationOutcome& o, std::ostream& h) {
   // One pass per Adam epoch, then per L-BFGS iteration of the polish.
@@ -246,6 +320,8 @@ void write_report_html(const CalibrationOutcome& o, const std::filesystem::path&
   table4_section(o, h);
   qe_section(o, h);
   rates_section(o, h);
+  locus_section(o, h);
+  setting_errors_section(o, h);
   network_section(o, h);
   references_section(o, h);
   uncertainty_section(o, h);

@@ -73,8 +73,9 @@ std::string svg_plot(const PlotSpec& spec, const std::vector<Series>& series) {
   auto py = [&](double y) { return h - b - (y - y0) / (y1 - y0) * (h - t - b); };
 
   std::ostringstream o;
-  o << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h
-    << "' font-family='sans-serif' font-size='11'>";
+  o << "<svg xmlns='http://www.w3.org/2000/svg'";
+  if (!spec.id.empty()) o << " id='" << html_escape(spec.id) << "'";
+  o << " width='" << w << "' height='" << h << "' font-family='sans-serif' font-size='11'>";
   o << "<rect width='100%' height='100%' fill='white'/>";
   o << "<text x='" << w / 2 << "' y='16' text-anchor='middle' font-size='13'>"
     << html_escape(spec.title) << "</text>";
@@ -111,6 +112,9 @@ std::string svg_plot(const PlotSpec& spec, const std::vector<Series>& series) {
         path << (pen ? " L" : " M") << px(s.x[i]) << "," << py(ty(s.y[i]));
         pen = true;
       }
+      if (i < s.labels.size() && !s.labels[i].empty())
+        o << "<text x='" << px(s.x[i]) + 5 << "' y='" << py(ty(s.y[i])) - 5 << "' fill='"
+          << s.colour << "'>" << html_escape(s.labels[i]) << "</text>";
     }
     if (!s.points)
       o << "<path d='" << path.str() << "' fill='none' stroke='" << s.colour

@@ -12,12 +12,14 @@ struct Series {
   std::string colour = "#1f77b4";
   bool points = false;  // markers instead of a line
   bool dashed = false;
+  std::vector<std::string> labels = {};  // text beside each point ("" for none)
 };
 
 struct PlotSpec {
   std::string title, x_label, y_label;
   bool log_y = false;
   int width = 640, height = 360;
+  std::string id = "";  // the <svg> element's id ("" for none)
 };
 
 // An <svg> element with axes, ticks, a legend and the series; NaN points are skipped.

@@ -10,7 +10,9 @@
 #   MODEL        calibrated model of THIS camera (required)
 #   DARK         darksub settings for this camera (required): location=dark.pgm or dark-level=N
 #   CAMERA       camera name (arv-tool-0.8 lists them) or IP address  [the first camera found]
-#   CAPS         caps after the camera: Bayer format, size, frame rate [video/x-bayer,format=rggb]
+#   PROFILE      rgb-reference (colour Bayer) or nir5x5-reference (5x5 mosaic) [rgb-reference]
+#   CAPS         caps after the camera: format, size, frame rate      [video/x-bayer,format=rggb;
+#                5x5: video/x-raw,format=GRAY8,pattern=5x5, and the size is required (multiples of 5)]
 #   EXPOSURE_US  exposure time in microseconds                        [the camera's setting]
 #   GAIN_DB      gain in dB                                           [the camera's setting]
 #   WATCHDOG_MS  longest wait for a frame, in ms                      [2000]
@@ -21,6 +23,8 @@
 # Example:
 #   MODEL=cam42.json DARK=location=cam42-dark.pgm CAMERA=192.168.1.42 \
 #     CAPS=video/x-bayer,format=rggb,width=1024,height=768 pipelines/genicam-live.sh
+#   PROFILE=nir5x5-reference MODEL=nir.json DARK=location=nir-dark.pgm \
+#     CAPS=video/x-raw,format=GRAY8,pattern=5x5,width=2045,height=1085 pipelines/genicam-live.sh
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 # The build tree's plugin and `launch` (pyrocam-launch, which never hangs after an error).
@@ -29,12 +33,17 @@ source "$here/lib/setup.sh"
 MODEL=${MODEL:-}
 DARK=${DARK:-}
 CAMERA=${CAMERA:-}
-CAPS=${CAPS:-video/x-bayer,format=rggb}
+if [[ ${PROFILE:-} == nir5x5-reference ]]; then
+  CAPS=${CAPS:-video/x-raw,format=GRAY8,pattern=5x5}
+else
+  CAPS=${CAPS:-video/x-bayer,format=rggb}
+fi
 EXPOSURE_US=${EXPOSURE_US:-}
 GAIN_DB=${GAIN_DB:-}
 WATCHDOG_MS=${WATCHDOG_MS:-2000}
 NUM_BUFFERS=${NUM_BUFFERS:--1}
 SINK=${SINK:-autovideosink}
+require_display "$SINK"
 
 # A model or dark level that belongs to another camera gives temperatures that look right and are
 # wrong: no defaults for these two.

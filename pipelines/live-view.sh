@@ -1,26 +1,34 @@
 #!/usr/bin/env bash
-# Live view: the camera's own colour image with the calibrated temperature overlay and scale bar.
+# Live view: the camera's own image (colour, or a 5x5 camera's centre band) with the calibrated temperature overlay and scale bar.
 #
 # Settings (environment variables, defaults in brackets):
-#   MODEL        calibrated model from pyrocam-calib calibrate        [out/model-rgb.json]
-#   SOURCE       camera element with its properties                   [pyrocamsrc is-live=true]
-#   CAPS         caps after the camera: format, size, frame rate      [video/x-bayer,width=320,height=240,framerate=30/1]
+#   PROFILE      camera: rgb-reference (colour) or nir5x5-reference (5x5 mosaic) [rgb-reference]
+#   MODEL        calibrated model; the default is calibrated on first use [out/model-rgb.json,
+#                5x5: out/model-nir5x5.json]
+#   SOURCE       camera element with its properties                   [pyrocamsrc is-live=true profile=PROFILE;
+#                    5x5: scene=plate too]
+#   CAPS         caps after the camera: format, size, frame rate      [video/x-bayer,width=320,height=240,framerate=30/1;
+#                5x5: video/x-raw,width=320,height=240,framerate=30/1]
 #   DARK         darksub settings: dark-level=N or location=dark.pgm  [dark-level=50]
 #   NUM_BUFFERS  frames before the view ends; -1 runs until Ctrl-C    [-1]
 #   WATCHDOG_MS  end with an error when the camera sends nothing this long; 0: never [5000]
 #   LATENCY_MS   how long the picture waits for its temperature overlay, ms [100]
 #   SINK         where the view goes                                  [autovideosink]
 #
-# Example (the simulated melt pool, after scripts/main-job.sh made the model):
+# Several monitors, window placement and full screen: docs/live-view.md.
+#
+# Example (the simulated melt pool; the first run calibrates the simulated camera, once):
 #   pipelines/live-view.sh
+#   PROFILE=nir5x5-reference pipelines/live-view.sh
 #   SOURCE="pyrocamsrc is-live=true scene=filament temperature=1800" pipelines/live-view.sh
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 # The build tree's plugin and `launch` (pyrocam-launch, which never hangs after an error).
 source "$here/lib/setup.sh"
 
-source "$here/lib/camera.sh"
 SINK=${SINK:-autovideosink}
+require_display "$SINK"
+source "$here/lib/camera.sh"
 
 set -f # SINK splits on spaces into the launcher's words
 exec "$launch" -e "${camera_chain[@]}" \

@@ -6,11 +6,17 @@
 #                [out/recording]
 # Settings (environment variables, defaults in brackets):
 #   COLORMAP     thermalcolormap settings                             [scale-bar=true]
+#   PROFILE      the camera that recorded it; nir5x5-reference (one temperature per 5x5 macro-pixel)
+#                scales the view up to VIEW_HEIGHT rows                [rgb-reference]
+#   VIEW_HEIGHT  rows to scale the view to, by nearest neighbour (every code kept, none blended),
+#                aspect kept; 0: as recorded                          [0; 5x5: 240]
 #   SINK         where the colour frames go                           [autovideosink]
 #
 # Example: the melt pool between 1200 and 2600 degC in the rainbow palette
 #   COLORMAP="scale-bar=true range-mode=fixed min-temperature=1200 max-temperature=2600 palette=rainbow" \
 #     pipelines/playback.sh out/pool
+# A recording of the 5x5 camera:
+#   PROFILE=nir5x5-reference pipelines/playback.sh out/pool-5x5
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 # The build tree's plugin and `launch` (pyrocam-launch, which never hangs after an error).
@@ -18,7 +24,15 @@ source "$here/lib/setup.sh"
 
 RECORDING=${1:-out/recording}
 COLORMAP=${COLORMAP:-scale-bar=true}
+PROFILE=${PROFILE:-rgb-reference}
+case $PROFILE in
+  rgb-reference) VIEW_HEIGHT=${VIEW_HEIGHT:-0} ;;
+  nir5x5-reference) VIEW_HEIGHT=${VIEW_HEIGHT:-240} ;;
+  *) echo "playback: PROFILE must be rgb-reference or nir5x5-reference, not '$PROFILE'" >&2; exit 2 ;;
+esac
+[[ $VIEW_HEIGHT =~ ^[0-9]+$ ]] || { echo "playback: VIEW_HEIGHT must be a whole number of rows, not '$VIEW_HEIGHT'" >&2; exit 2; }
 SINK=${SINK:-autovideosink}
+require_display "$SINK"
 
 if [[ -d $RECORDING ]]; then
   compgen -G "$RECORDING/temperature-*.mkv" >/dev/null ||
@@ -31,8 +45,14 @@ else
   exit 1
 fi
 
+# A 5x5 recording has one temperature per macro-pixel (64x48 from a 320x240 sensor): too small
+# for a scale bar, so it is scaled up before the colour map, keeping every code.
+scale=()
+((VIEW_HEIGHT > 0)) &&
+  scale=(videoscale method=nearest-neighbour ! "video/x-raw,height=$VIEW_HEIGHT,pixel-aspect-ratio=1/1" !)
+
 # splitmuxsrc plays the segments (a glob, in name order) as one stream with continuous times.
 set -f
 exec "$launch" \
-  splitmuxsrc "location=$files" ! avdec_ffv1 ! video/x-raw,format=GRAY16_LE ! \
+  splitmuxsrc "location=$files" ! avdec_ffv1 ! video/x-raw,format=GRAY16_LE ! "${scale[@]}" \
   thermalcolormap $COLORMAP ! videoconvert ! $SINK

@@ -12,10 +12,14 @@
 # WATCHDOG_MS ends the recording with an error: the segments already closed stay intact.
 #
 # Settings (environment variables, defaults in brackets):
-#   MODEL            calibrated model from pyrocam-calib calibrate        [out/model-rgb.json]
+#   PROFILE          camera: rgb-reference (colour) or nir5x5-reference (5x5 mosaic) [rgb-reference]
+#   MODEL            calibrated model; the default is calibrated on first use [out/model-rgb.json,
+#                    5x5: out/model-nir5x5.json]
 #   OUT              folder for the segments and the snapshot            [out/recording]
-#   SOURCE           camera element with its properties                  [pyrocamsrc is-live=true]
-#   CAPS             caps after the camera: format, size, frame rate     [video/x-bayer,width=320,height=240,framerate=30/1]
+#   SOURCE           camera element with its properties                  [pyrocamsrc is-live=true profile=PROFILE;
+#                    5x5: scene=plate too]
+#   CAPS             caps after the camera: format, size, frame rate     [video/x-bayer,width=320,height=240,framerate=30/1;
+#                    5x5: video/x-raw,width=320,height=240,framerate=30/1]
 #   DARK             darksub settings: dark-level=N or location=dark.pgm [dark-level=50]
 #   NUM_BUFFERS      frames to record; -1 records until Ctrl-C           [-1]
 #   WATCHDOG_MS      end with an error when the camera sends nothing this long; 0: never [5000]

@@ -6,9 +6,13 @@
 #   PORT         UDP port                                             [5004]
 #   BITRATE      H.264 bit rate in kbit/s                             [2000]
 #   KEY_SECONDS  seconds between key frames: how long a screen that joins waits for a picture [1]
-#   MODEL        calibrated model from pyrocam-calib calibrate        [out/model-rgb.json]
-#   SOURCE       camera element with its properties                   [pyrocamsrc is-live=true]
-#   CAPS         caps after the camera: format, size, frame rate      [video/x-bayer,width=320,height=240,framerate=30/1]
+#   PROFILE      camera: rgb-reference (colour) or nir5x5-reference (5x5 mosaic) [rgb-reference]
+#   MODEL        calibrated model; the default is calibrated on first use [out/model-rgb.json,
+#                5x5: out/model-nir5x5.json]
+#   SOURCE       camera element with its properties                   [pyrocamsrc is-live=true profile=PROFILE;
+#                    5x5: scene=plate too]
+#   CAPS         caps after the camera: format, size, frame rate      [video/x-bayer,width=320,height=240,framerate=30/1;
+#                5x5: video/x-raw,width=320,height=240,framerate=30/1]
 #   DARK         darksub settings: dark-level=N or location=dark.pgm  [dark-level=50]
 #   LATENCY_MS   how long the picture waits for its temperature overlay, ms [100]
 #   NUM_BUFFERS  frames to send; -1 streams until Ctrl-C              [-1]

@@ -23,6 +23,7 @@ PORT=${PORT:-5004}
 LATENCY_MS=${LATENCY_MS:-100}
 WATCHDOG_MS=${WATCHDOG_MS:-10000}
 SINK=${SINK:-autovideosink}
+require_display "$SINK"
 
 set -f # the fragments above split on spaces into the launcher's words
 exec "$launch" \

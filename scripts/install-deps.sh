@@ -8,6 +8,7 @@ packages=(
   libgstreamer1.0-dev libgstreamer-plugins-base1.0-dev libgstrtspserver-1.0-dev
   gstreamer1.0-tools gstreamer1.0-plugins-base gstreamer1.0-plugins-good
   gstreamer1.0-plugins-bad gstreamer1.0-plugins-ugly gstreamer1.0-libav
+  gstreamer1.0-x
   libaravis-dev aravis-tools aravis-tools-cli libusb-1.0-0-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libeigen3-dev libgtest-dev nlohmann-json3-dev libcli11-dev libpugixml-dev
@@ -15,6 +16,7 @@ packages=(
 
 # Only for the tests.
 test_packages=(
+  xvfb
 )
 if [[ ${1:-} == --tests ]]; then
   packages+=("${test_packages[@]}")

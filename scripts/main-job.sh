@@ -22,12 +22,8 @@ mkdir -p "$out"
 if [[ -f $model ]]; then
   echo "main-job: using the model $model (delete it to calibrate again)"
 else
-  echo "main-job: no model yet: simulated furnace campaign of the colour camera (rgb-reference,"
-  echo "          a typical unit), then calibration; about a minute"
-  rm -rf "$out/furnace-rgb"
-  "$tool" simulate campaign --profile rgb-reference --unit typical --frames 3 \
-    --out "$out/furnace-rgb"
-  "$tool" calibrate --dataset "$out/furnace-rgb" --profile rgb-reference --out "$model"
+  # The campaign and calibration the pipelines also run for their default model on first use.
+  PYROCAM_CALIB=$tool pipelines/lib/ensure-model.sh rgb-reference "$model"
 fi
 
 recording=$out/melt-pool-$(date +%Y%m%d-%H%M%S)

@@ -1,18 +1,39 @@
 # Sourced by the scripts in pipelines/ that read a camera through the thermal chain and show the
-# overlay (live-view.sh, record.sh, stream.sh), after setup.sh: the camera settings' defaults
-# (documented in each script's header) and the pipeline fragments they share, as arrays of the
-# launcher's words. `name` is the script's name for messages.
+# overlay (live-view.sh, record.sh, stream.sh, genicam-live.sh), after setup.sh: the camera
+# settings' defaults (documented in each script's header) and the pipeline fragments they share,
+# as arrays of the launcher's words. `name` is the script's name for messages.
+#
+# PROFILE picks the camera: rgb-reference (colour Bayer, the default) or nir5x5-reference (5x5
+# snapshot mosaic, 25 NIR bands). It sets the defaults of MODEL, SOURCE and CAPS and the camera
+# view under the overlay. The default MODEL of a shipped profile is calibrated from a simulated
+# furnace campaign on first use (lib/ensure-model.sh); a MODEL set by the user must exist.
 name=$(basename "$0" .sh)
 
-MODEL=${MODEL:-out/model-rgb.json}
-SOURCE=${SOURCE:-pyrocamsrc is-live=true}
-CAPS=${CAPS:-video/x-bayer,width=320,height=240,framerate=30/1}
+PROFILE=${PROFILE:-rgb-reference}
+case $PROFILE in
+  rgb-reference)
+    default_model=out/model-rgb.json
+    default_caps=video/x-bayer,width=320,height=240,framerate=30/1 ;;
+  nir5x5-reference)
+    default_model=out/model-nir5x5.json
+    default_caps=video/x-raw,width=320,height=240,framerate=30/1 ;;
+  *)
+    echo "$name: PROFILE must be rgb-reference (colour camera) or nir5x5-reference (5x5 mosaic), not '$PROFILE'" >&2
+    exit 2 ;;
+esac
+
+model_given=${MODEL:+yes}
+MODEL=${MODEL:-$default_model}
+# The simulated 5x5 camera looks at a plate: its melt pool is a few macro-pixels across, most of
+# them straddling the pool's edge (no reading).
+[[ $PROFILE == nir5x5-reference ]] && default_scene=" scene=plate" || default_scene=""
+SOURCE=${SOURCE:-pyrocamsrc is-live=true profile=$PROFILE$default_scene}
+CAPS=${CAPS:-$default_caps}
 DARK=${DARK:-dark-level=50}
 NUM_BUFFERS=${NUM_BUFFERS:--1}
 WATCHDOG_MS=${WATCHDOG_MS:-5000}
 LATENCY_MS=${LATENCY_MS:-100}
 
-[[ -f $MODEL ]] || { echo "$name: no model file $MODEL (set MODEL, or run scripts/main-job.sh)" >&2; exit 1; }
 [[ $LATENCY_MS =~ ^[0-9]+$ ]] || { echo "$name: LATENCY_MS must be a whole number of milliseconds, not '$LATENCY_MS'" >&2; exit 2; }
 
 set -f # SOURCE, CAPS and DARK split on spaces into the launcher's words
@@ -20,19 +41,56 @@ set -f # SOURCE, CAPS and DARK split on spaces into the launcher's words
 # camera sends nothing for WATCHDOG_MS.
 camera_chain=($SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS !
   watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera)
+if [[ $PROFILE == nir5x5-reference ]]; then
+  # A 5x5 camera reads one temperature per 5x5 macro-pixel (width/5 x height/5). The view and
+  # the overlay are both drawn at the sensor's size, each macro-pixel a 5x5 block, so that they
+  # line up pixel for pixel: the temperatures scaled up by nearest neighbour (each code kept,
+  # none interpolated), the camera view one band, the centre cell of each macro-pixel (the
+  # nearest-neighbour scale-down by 5 takes pixel 5i+2), scaled back up the same way.
+  width=$(sed -n 's/.*width=\(([a-z]*)\)\{0,1\} *\([0-9]*\).*/\2/p' <<<"$CAPS")
+  height=$(sed -n 's/.*height=\(([a-z]*)\)\{0,1\} *\([0-9]*\).*/\2/p' <<<"$CAPS")
+  if [[ -z $width || -z $height ]] || ((width % 5 || height % 5)); then
+    echo "$name: the 5x5 view needs CAPS with a width and height that are multiples of 5, not '$CAPS'" >&2
+    exit 2
+  fi
+  to_sensor_size=(videoscale method=nearest-neighbour ! "video/x-raw,width=$width,height=$height")
+  camera_view=(videoscale method=nearest-neighbour !
+    "video/x-raw,width=$((width / 5)),height=$((height / 5))" ! "${to_sensor_size[@]}" !
+    videoconvert)
+  colormap_scale=("${to_sensor_size[@]}" !)
+  # A camera that does not say its band map in its caps (aravissrc) gets the profile's.
+  demosaic=(demosaic25 "profile=$PROFILE")
+else
+  camera_view=(bayer2rgb)
+  colormap_scale=()
+  demosaic=(demosaic25)
+fi
 # Camera frames to temperatures (0.1 K codes): `"${thermal_chain[@]}" ! ...`.
-thermal_chain=(camera. ! queue ! darksub $DARK ! demosaic25 ! ratiotemp "model=$MODEL")
-# The temperature overlay (transparent where there is no reading) over the camera's colour image:
+thermal_chain=(camera. ! queue ! darksub $DARK ! "${demosaic[@]}" ! ratiotemp "model=$MODEL")
+# The temperature overlay (transparent where there is no reading) over the camera's image:
 # link a colour-mapped branch to mix.sink_1, then `"${overlay_mix[@]}" ! ...` gives RGBA frames.
 # compositor, live: start-time-selection=first starts its output at the camera's first frame
 # (not at 0, which adds frames before it and can negotiate a 1x1 picture); it waits LATENCY_MS
 # for the slower temperature branch, so that no frame goes out without its overlay (on a loaded
 # machine the branch can take longer: raise it).
+# A frame whose overlay comes later than that is shown without it, never with the last overlay
+# that came (sink_1::max-last-buffer-repeat=0; compositor's default repeats it, which puts the
+# temperatures of an earlier frame over a moving scene).
 # The queue after it keeps its thread free: in a live pipeline the first sink to get a frame
 # waits for the others, while compositor answers the tee's allocation queries from that thread,
 # so without the queue the start can deadlock (GStreamer 1.22).
-overlay_mix=(camera. ! queue ! bayer2rgb ! video/x-raw,format=RGBA ! mix.sink_0
+overlay_mix=(camera. ! queue ! "${camera_view[@]}" ! video/x-raw,format=RGBA ! mix.sink_0
   compositor name=mix start-time-selection=first latency="$((LATENCY_MS * 1000000))"
-  sink_0::zorder=0 sink_1::zorder=1 ! video/x-raw,format=RGBA ! queue)
-colormap_to_mix=(thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1)
+  sink_0::zorder=0 sink_1::zorder=1 sink_1::max-last-buffer-repeat=0 ! video/x-raw,format=RGBA ! queue)
+colormap_to_mix=("${colormap_scale[@]}" thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1)
 set +f
+
+# Last, after every setting was checked: a first calibration takes a minute or two.
+if [[ ! -f $MODEL ]]; then
+  if [[ -n $model_given ]]; then
+    echo "$name: no model file $MODEL (set MODEL to a model from pyrocam-calib calibrate)" >&2
+    exit 1
+  fi
+  "$here/lib/ensure-model.sh" "$PROFILE" "$MODEL" >&2 ||
+    { echo "$name: could not calibrate the default model $MODEL of $PROFILE" >&2; exit 1; }
+fi

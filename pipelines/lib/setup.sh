@@ -17,3 +17,14 @@ if [[ -z $launch ]]; then
     exit 1
   fi
 fi
+
+# Ends the script with a clear message when the view would go to autovideosink without a display:
+# on a machine without one, autovideosink of GStreamer 1.22 falls back to sinks that fail or
+# crash (dfbvideosink: segmentation fault). Usage: require_display "$SINK".
+require_display() {
+  [[ ${1%% *} == autovideosink ]] || return 0
+  [[ -n ${DISPLAY:-} || -n ${WAYLAND_DISPLAY:-} ]] && return 0
+  echo "$(basename "$0" .sh): no display to show the view on (DISPLAY and WAYLAND_DISPLAY are unset):" \
+    "run it on a desktop or under Xvfb, or set SINK (e.g. SINK=fakesink; docs/live-view.md)" >&2
+  exit 1
+}

@@ -111,6 +111,54 @@ TEST_F(CliDataset, calibrate_writes_a_model_from_the_intact_dataset) {
   EXPECT_TRUE(std::filesystem::exists(model));
 }
 
+// The <svg> element with this id in a report page ("" if none).
+std::string svg_with_id(const std::string& html, const std::string& id) {
+  const auto at = html.find("<svg xmlns='http://www.w3.org/2000/svg' id='" + id + "'");
+  if (at == std::string::npos) return "";
+  const auto end = html.find("</svg>", at);
+  return end == std::string::npos ? "" : html.substr(at, end - at);
+}
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
+  return n;
+}
+
+// The locus plot: a line with many points, the furnace measurements (one marker per
+// temperature), temperature labels; the error plot: one marker per estimator and setting.
+void expect_report_plots(const std::string& html, int furnace_temperatures) {
+  const std::string locus = svg_with_id(html, "locus-plot");
+  ASSERT_FALSE(locus.empty()) << "no locus plot";
+  EXPECT_NE(locus.find("Planckian locus"), std::string::npos);
+  EXPECT_GT(count_of(locus, " L"), 100u) << "the locus line has too few points";
+  // Markers: the locus every 500 degC (at least 2) and the furnace temperatures.
+  EXPECT_GE(count_of(locus, "<circle"), static_cast<std::size_t>(furnace_temperatures + 2));
+  EXPECT_NE(locus.find("1000 °C"), std::string::npos) << "no temperature labels on the locus";
+  const std::string errors = svg_with_id(html, "setting-error-plot");
+  ASSERT_FALSE(errors.empty()) << "no per-setting error plot";
+  EXPECT_NE(errors.find("reading − furnace"), std::string::npos);
+  EXPECT_GE(count_of(errors, "<circle"), static_cast<std::size_t>(furnace_temperatures))
+      << "no per-setting points";
+  EXPECT_NE(errors.find("MLP"), std::string::npos);
+}
+
+TEST_F(CliDataset, calibrate_report_plots_the_locus_and_the_error_per_setting) {
+  const ToolRun r = calibrate();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::filesystem::path report = model;
+  report.replace_extension();
+  expect_report_plots(read_text(report.string() + "-report.html"), 5);
+}
+
+TEST(CliReport, the_5x5_test_models_report_plots_the_locus_and_the_error_per_setting) {
+  // tests/data/make-test-model.sh keeps each test model's report beside it.
+  const std::filesystem::path report =
+      test_model("test-model-nir5x5.json").string() + ".d/report.html";
+  ASSERT_TRUE(std::filesystem::exists(report)) << report;
+  // The test models' campaigns are 800..1100 degC every 10 degC.
+  expect_report_plots(read_text(report), 31);
+}
+
 TEST_F(CliDataset, calibrate_rejects_a_manifest_path_leaving_the_dataset_n) {
   const int line = line_of(first_frame);
   replace_in_manifest(first_frame, "../../../../etc/passwd");
