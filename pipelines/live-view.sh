@@ -10,6 +10,9 @@
 #   WATCHDOG_MS  end with an error when the camera sends nothing this long; 0: never [5000]
 #   LATENCY_MS   how long the picture waits for its temperature overlay, ms [100]
 #   SINK         where the view goes                                  [autovideosink]
+#   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]
+#   STATS_INTERVAL_MS  ms between statistics rows                   [1000]
+#   ALARM_CSV    write alarm messages (thermalalarm) here as CSV    [none]
 #
 # Example (the simulated melt pool, after scripts/main-job.sh made the model):
 #   pipelines/live-view.sh
@@ -23,6 +26,6 @@ source "$here/lib/camera.sh"
 SINK=${SINK:-autovideosink}
 
 set -f # SINK splits on spaces into the launcher's words
-exec "$launch" -e "${camera_chain[@]}" \
+exec "$launch" -e "${launch_options[@]}" "${camera_chain[@]}" \
   "${thermal_chain[@]}" ! "${colormap_to_mix[@]}" \
   "${overlay_mix[@]}" ! videoconvert ! $SINK

@@ -22,6 +22,9 @@
 #   LATENCY_MS       how long the picture waits for its temperature overlay, ms [100]
 #   SEGMENT_SECONDS  length of one segment in seconds (decimals allowed) [10]
 #   SNAPSHOT_RATE    snapshots per second (at most the frame rate)       [1]
+#   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]
+#   STATS_INTERVAL_MS  ms between statistics rows                   [1000]
+#   ALARM_CSV    write alarm messages (thermalalarm) here as CSV    [none]
 #
 # Example: 300 frames of the simulated melt pool (10 s at 30 fps) into out/pool
 #   OUT=out/pool NUM_BUFFERS=300 SOURCE="pyrocamsrc scene=melt-pool" pipelines/record.sh
@@ -56,7 +59,7 @@ fi
 # recording's time at the last 0.5 s cluster) and, in a first segment, 2.0 s estimated 1.0 s.
 # splitmuxsink sets muxer properties only with async-finalize=true. The snapshot branch keeps
 # SNAPSHOT_RATE frames a second, so PNG encoding costs little.
-exec "$launch" -e "${camera_chain[@]}" \
+exec "$launch" -e "${launch_options[@]}" "${camera_chain[@]}" \
   "${thermal_chain[@]}" ! tee name=temperature \
   temperature. ! queue ! avenc_ffv1 gop-size=1 ! \
     splitmuxsink async-finalize=true muxer-factory=matroskamux \
