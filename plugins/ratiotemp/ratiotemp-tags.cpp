@@ -19,6 +19,9 @@ std::string clean(std::string value) {
   return value;
 }
 
+// GST_TAG_CAPTURING_SHUTTER_SPEED (libgsttag, which the plugin does not link): a fraction, s.
+constexpr const char* CAPTURING_SHUTTER_SPEED = "capturing-shutter-speed";
+
 std::string number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.6g", v);
@@ -48,8 +51,7 @@ std::string recording_comment(const RecordingInfo& info) {
 
 double exposure_us_of(const GstTagList* tags) {
   gint n = 0, d = 0;
-  const GValue* v =
-      tags ? gst_tag_list_get_value_index(tags, GST_TAG_CAPTURING_SHUTTER_SPEED, 0) : nullptr;
+  const GValue* v = tags ? gst_tag_list_get_value_index(tags, CAPTURING_SHUTTER_SPEED, 0) : nullptr;
   if (!v || !GST_VALUE_HOLDS_FRACTION(v)) return -1;
   n = gst_value_get_fraction_numerator(v);
   d = gst_value_get_fraction_denominator(v);

@@ -29,15 +29,15 @@ std::string read_all(const fs::path& path) {
 }
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
-struct Run {
+struct ToolResult {
   int exit_code = -1;
   std::string err;
 };
-Run run(const std::string& command, const fs::path& err) {
+ToolResult run(const std::string& command, const fs::path& err) {
   const int status = std::system((command + " < /dev/null > /dev/null 2> " + q(err)).c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_all(err)};
 }
-Run run_export(const std::string& args, const ScratchDir& dir) {
+ToolResult run_export(const std::string& args, const ScratchDir& dir) {
   return run("timeout 120 " + q(PYROCAM_CALIB_TOOL) + " export " + args, dir / "stderr.txt");
 }
 
@@ -58,22 +58,29 @@ class CliExport : public ::testing::Test {
  protected:
   void SetUp() override {
     fs::create_directories(rec);
+    // rawvideoparse reads rows at GStreamer's stride: 2 * 7 bytes padded to 16.
+    constexpr int kStride = (2 * kW + 3) / 4 * 4;
     std::ofstream raw(dir / "frames.raw", std::ios::binary);
     for (int f = 0; f < kFrames; ++f) {
       const cv::Mat m = frame_codes(f);
-      raw.write(reinterpret_cast<const char*>(m.data), static_cast<std::streamsize>(m.total() * 2));
+      for (int y = 0; y < kH; ++y) {
+        std::string row(reinterpret_cast<const char*>(m.ptr(y)), 2 * kW);
+        row.resize(kStride, '\0');
+        raw << row;
+      }
     }
     raw.close();
     // 10 fps, segments of 0.3 s: 3 frames in each.
-    const Run r = run("timeout 60 gst-launch-1.0 -q filesrc location=" + q(dir / "frames.raw") +
-                          " blocksize=" + std::to_string(kW * kH * 2) +
-                          " ! rawvideoparse format=gray16-le width=" + std::to_string(kW) +
-                          " height=" + std::to_string(kH) +
-                          " framerate=10/1 ! avenc_ffv1 gop-size=1 ! splitmuxsink "
-                          "async-finalize=true muxer-factory=matroskamux "
-                          "max-size-time=300000000 location=" +
-                          q(rec / "temperature-%05d.mkv"),
-                      dir / "gst.txt");
+    const ToolResult r =
+        run("timeout 60 gst-launch-1.0 -q filesrc location=" + q(dir / "frames.raw") +
+                " blocksize=" + std::to_string(kStride * kH) +
+                " ! rawvideoparse format=gray16-le width=" + std::to_string(kW) +
+                " height=" + std::to_string(kH) +
+                " framerate=10/1 ! avenc_ffv1 gop-size=1 ! splitmuxsink "
+                "async-finalize=true muxer-factory=matroskamux "
+                "max-size-time=300000000 location=" +
+                q(rec / "temperature-%05d.mkv"),
+            dir / "gst.txt");
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
   ScratchDir dir{"cli-export"};
@@ -82,9 +89,9 @@ class CliExport : public ::testing::Test {
 
 TEST_F(CliExport, writes_the_codes_and_their_statistics) {
   const fs::path npy = dir / "t.npy", tif = dir / "t.tif", csv = dir / "t.csv";
-  const Run r = run_export("--recording " + q(rec) + " --npy " + q(npy) + " --tiff " + q(tif) +
-                               " --csv " + q(csv) + " --peak-window 3",
-                           dir);
+  const ToolResult r = run_export("--recording " + q(rec) + " --npy " + q(npy) + " --tiff " +
+                                      q(tif) + " --csv " + q(csv) + " --peak-window 3",
+                                  dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // Recorded without ratiotemp: no tags, said so.
   EXPECT_NE(r.err.find("no pyrocam tags"), std::string::npos) << r.err;
@@ -142,7 +149,8 @@ TEST_F(CliExport, writes_the_codes_and_their_statistics) {
 }
 
 TEST_F(CliExport, rejects_a_missing_folder_n) {
-  const Run r = run_export("--recording " + q(dir / "nowhere") + " --npy " + q(dir / "t.npy"), dir);
+  const ToolResult r =
+      run_export("--recording " + q(dir / "nowhere") + " --npy " + q(dir / "t.npy"), dir);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("nowhere: no such recording"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "t.npy"));
@@ -150,7 +158,8 @@ TEST_F(CliExport, rejects_a_missing_folder_n) {
 
 TEST_F(CliExport, rejects_a_folder_without_segments_n) {
   fs::create_directories(dir / "empty");
-  const Run r = run_export("--recording " + q(dir / "empty") + " --csv " + q(dir / "t.csv"), dir);
+  const ToolResult r =
+      run_export("--recording " + q(dir / "empty") + " --csv " + q(dir / "t.csv"), dir);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("not a recording (no temperature-NNNNN.mkv segments)"), std::string::npos)
       << r.err;
@@ -159,7 +168,7 @@ TEST_F(CliExport, rejects_a_folder_without_segments_n) {
 
 TEST_F(CliExport, rejects_a_segment_that_is_not_matroska_n) {
   test::write_text(rec / "temperature-00002.mkv", "not a video\n");
-  const Run r = run_export(
+  const ToolResult r = run_export(
       "--recording " + q(rec) + " --npy " + q(dir / "t.npy") + " --csv " + q(dir / "t.csv"), dir);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("temperature-00002.mkv: not a readable temperature recording segment"),
@@ -176,14 +185,14 @@ TEST_F(CliExport, rejects_a_segment_truncated_before_its_first_frame_n) {
   const std::string bytes = read_all(seg);
   ASSERT_GT(bytes.size(), 200u);
   std::ofstream(seg, std::ios::binary | std::ios::trunc) << bytes.substr(0, 120);
-  const Run r = run_export("--recording " + q(rec) + " --npy " + q(dir / "t.npy"), dir);
+  const ToolResult r = run_export("--recording " + q(rec) + " --npy " + q(dir / "t.npy"), dir);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("temperature-00001.mkv"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "t.npy"));
 }
 
 TEST_F(CliExport, needs_an_output_and_a_tiff_name_n) {
-  Run r = run_export("--recording " + q(rec), dir);
+  ToolResult r = run_export("--recording " + q(rec), dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("at least one of --tiff, --npy, --csv"), std::string::npos) << r.err;
   r = run_export("--recording " + q(rec) + " --tiff " + q(dir / "t.png"), dir);

@@ -62,7 +62,12 @@ TEST_F(RatioTempTags, describe_the_recording_and_follow_changes) {
   ASSERT_EQ(model.fingerprint.size(), 16u);
   start("ratiotemp method=likelihood model=" + rgb_model_path(), kCaps);
   // Upstream's stream tags (a camera's exposure, 1/500 s, and a name) come before the frame.
-  GstTagList* upstream = gst_tag_list_new(GST_TAG_CAPTURING_SHUTTER_SPEED, 1, 500, GST_TAG_ARTIST,
+  // The exposure tag is libgsttag's (GST_TAG_CAPTURING_SHUTTER_SPEED), registered here as it is.
+  if (!gst_tag_exists("capturing-shutter-speed"))
+    gst_tag_register("capturing-shutter-speed", GST_TAG_FLAG_META, GST_TYPE_FRACTION,
+                     "capturing shutter speed", "Shutter speed used when capturing an image, in s",
+                     nullptr);
+  GstTagList* upstream = gst_tag_list_new("capturing-shutter-speed", 1, 500, GST_TAG_ARTIST,
                                           "camera 7", GST_TAG_COMMENT, "upstream's", nullptr);
   gst_tag_list_set_scope(upstream, GST_TAG_SCOPE_STREAM);
   ASSERT_TRUE(gst_harness_push_event(h, gst_event_new_tag(upstream)));

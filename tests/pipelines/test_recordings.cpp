@@ -197,6 +197,8 @@ TEST_F(Recordings, export_gives_the_recorded_codes_and_their_statistics) {
   ASSERT_EQ(rows.size(), static_cast<std::size_t>(kFrames + 1));
   EXPECT_EQ(rows[0], (std::vector<std::string>{"index", "timestamp_s", "valid_fraction", "min_c",
                                                "median_c", "mean_c", "max_c", "peak_c"}));
+  std::size_t total_valid = 0;
+  int peaks = 0;
   for (int i = 0; i < kFrames; ++i) {
     const auto& r = rows[static_cast<std::size_t>(i + 1)];
     ASSERT_EQ(r.size(), 8u);
@@ -214,14 +216,21 @@ TEST_F(Recordings, export_gives_the_recorded_codes_and_their_statistics) {
       lo = std::min(lo, code / 10.0 - 273.15);
       hi = std::max(hi, code / 10.0 - 273.15);
     }
-    ASSERT_GT(valid, 10u) << "frame " << i << " of the melt pool has no readings";
+    ASSERT_GT(valid, 0u) << "frame " << i << " of the melt pool has no readings";
+    total_valid += valid;
     EXPECT_NEAR(std::stod(r[2]), static_cast<double>(valid) / (kWidth * kHeight), 1e-6);
     EXPECT_NEAR(std::stod(r[3]), lo, 0.006);
     EXPECT_NEAR(std::stod(r[6]), hi, 0.006);
     EXPECT_LE(std::stod(r[3]), std::stod(r[4]));
     EXPECT_LE(std::stod(r[4]), std::stod(r[6]));
-    EXPECT_LE(std::stod(r[7]), std::stod(r[6]) + 0.006);  // a window median is no maximum
+    // A window median is no maximum; no window at least half read: no peak (an empty cell).
+    if (!r[7].empty()) {
+      EXPECT_LE(std::stod(r[7]), std::stod(r[6]) + 0.006);
+      ++peaks;
+    }
   }
+  EXPECT_GT(total_valid, static_cast<std::size_t>(kFrames) * 10);
+  EXPECT_GT(peaks, 0);
 }
 
 TEST_F(Recordings, stats_csv_has_a_row_per_statistics_message_matching_the_export) {
@@ -244,7 +253,7 @@ TEST_F(Recordings, stats_csv_has_a_row_per_statistics_message_matching_the_expor
   // recorded frame's median at that time (the export's, from the codes, printed to 0.01: 0.005
   // more).
   const fs::path csv = *dir / "for-stats.csv";
-  ASSERT_EQ(run_command("'" + std::string(PYROCAM_CALIB_TOOL) + "' export -q --recording '" +
+  ASSERT_EQ(run_command("'" + std::string(PYROCAM_CALIB_TOOL) + "' -q export --recording '" +
                             rec.string() + "' --csv '" + csv.string() + "' ",
                         *dir / "export2.log"),
             0);
