@@ -7,6 +7,9 @@
 # once, leaving it unfinalised). A killed recording (SIGKILL, power cut) keeps every closed
 # segment intact; the segment being written decodes up to its last whole frame, but has no
 # index (no seeking) and no duration: players estimate one from its last frame.
+# Each segment's title and comment tags (from ratiotemp) say the units, the model and its
+# fingerprint, the profile, the method and the e-slope; see docs/recordings.md, which also
+# covers `pyrocam-calib export` (TIFF, .npy, CSV) and STATS_CSV.
 # The colour-mapped view (overlay over the camera's colour image) is written
 # to OUT/view.png, refreshed SNAPSHOT_RATE times a second. A camera that sends nothing for
 # WATCHDOG_MS ends the recording with an error: the segments already closed stay intact.

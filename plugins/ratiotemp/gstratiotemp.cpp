@@ -572,7 +572,9 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         }
       });
   if (!ok) return GST_FLOW_ERROR;
-  push_recording_tags(self, settings);
+  if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not describe the stream in tags",
+                       [&] { push_recording_tags(self, settings); }))
+    return GST_FLOW_ERROR;
   if (stats_due) {
     if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not compute temperature statistics",
                          [&] { post_stats(self, settings, inbuf); }))
