@@ -5,6 +5,7 @@
 #include "demosaic25/gstdemosaic25.h"
 #include "pyrocamsrc/gstpyrocamsrc.h"
 #include "ratiotemp/gstratiotemp.h"
+#include "thermalalarm/gstthermalalarm.h"
 #include "thermalcolormap/gstthermalcolormap.h"
 
 static gboolean plugin_init(GstPlugin* plugin) {
@@ -14,6 +15,7 @@ static gboolean plugin_init(GstPlugin* plugin) {
   ok |= GST_ELEMENT_REGISTER(demosaic25, plugin);
   ok |= GST_ELEMENT_REGISTER(ratiotemp, plugin);
   ok |= GST_ELEMENT_REGISTER(thermalcolormap, plugin);
+  ok |= GST_ELEMENT_REGISTER(thermalalarm, plugin);
   return ok;
 }
 
