@@ -349,5 +349,58 @@ TEST(RecordingsLauncher, stats_csv_keeps_its_columns_without_readings_and_refuse
   EXPECT_NE(bad.log().find("no-such-folder"), std::string::npos) << bad.log();
 }
 
+// --alarm-csv: thermalalarm's change of state as a row with the alarm's columns.
+TEST(RecordingsLauncher, alarm_csv_has_a_row_per_change_of_state) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp", "thermalalarm"})
+    REQUIRE_ELEMENT(e);
+  const char* env = std::getenv("PYROCAM_LAUNCH");
+  const std::string launch = env && *env ? env : "pyrocam-launch";
+  ScratchDir dir("launcher-alarm");
+  const fs::path csv = dir / "alarms.csv";
+  // A plate at 1200 degC watched with a threshold of 1000 degC: raised on the second frame.
+  Process p({launch,
+             "--alarm-csv=" + csv.string(),
+             "pyrocamsrc",
+             "scene=plate",
+             "temperature=1200",
+             "num-buffers=6",
+             "!",
+             "video/x-bayer,width=32,height=24,framerate=30/1",
+             "!",
+             "darksub",
+             "dark-level=50",
+             "!",
+             "demosaic25",
+             "!",
+             "ratiotemp",
+             "model=" + rgb_model(),
+             "!",
+             "thermalalarm",
+             "threshold-c=1000",
+             "frames=2",
+             "!",
+             "fakesink"},
+            {}, (dir / "run.log").string());
+  ASSERT_EQ(p.wait_for(milliseconds(30000)), 0) << p.log();
+  const auto rows = read_csv(csv);
+  ASSERT_EQ(rows.size(), 2u) << read_text(csv);
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"element", "state", "active", "statistic", "value-c",
+                                               "threshold-c", "clear-c", "frames", "timestamp",
+                                               "running-time", "region-x", "region-y",
+                                               "region-width", "region-height"}));
+  const auto& r = rows[1];
+  ASSERT_EQ(r.size(), rows[0].size());
+  EXPECT_EQ(r[0], "thermalalarm0");
+  EXPECT_EQ(r[1], "raised");
+  EXPECT_EQ(r[2], "true");
+  EXPECT_EQ(r[3], "median");
+  EXPECT_NEAR(std::stod(r[4]), 1200, 60);  // the plate read through the test model
+  EXPECT_EQ(r[5], "1000");
+  EXPECT_EQ(r[6], "990");
+  EXPECT_EQ(r[7], "2");
+  EXPECT_EQ(r[8], std::to_string(GST_SECOND / 30));  // the second frame
+  EXPECT_EQ(r[12], "32");
+}
+
 }  // namespace
 }  // namespace pyrocam::test
