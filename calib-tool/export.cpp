@@ -1,5 +1,7 @@
 // `pyrocam-calib export`: a temperature recording (pipelines/record.sh) to a 16-bit multi-page
 // TIFF, a NumPy .npy array and a CSV of per-frame statistics, for tools outside GStreamer.
+#include "export.h"
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -49,10 +51,12 @@ std::string csv_number(double v, int decimals) {
   return buf;
 }
 
+}  // namespace
+
 // An output written beside its final name and renamed when complete: a failed export leaves
 // no partial file under the name asked for.
-struct Output {
-  explicit Output(const std::string& p) : path(p), partial(p + ".partial") {}
+struct ExportWriter::Output {
+  Output(const std::string& p, const std::string& suffix) : path(p), partial(p + suffix) {}
   ~Output() {
     std::error_code ec;
     if (!done) fs::remove(partial, ec);
@@ -65,54 +69,90 @@ struct Output {
   bool done = false;
 };
 
+ExportWriter::ExportWriter(const ExportPaths& paths) : paths_(paths) {
+  if (!paths.npy.empty()) {
+    npy_out_ = std::make_unique<Output>(paths.npy, ".partial");
+    npy_.open(npy_out_->partial, std::ios::binary);
+    if (!npy_) throw InputError(paths.npy + ": cannot write");
+    npy_ << npy_header(0, 0, 0);
+  }
+  if (!paths.csv.empty()) {
+    csv_out_ = std::make_unique<Output>(paths.csv, ".partial");
+    csv_.open(csv_out_->partial);
+    if (!csv_) throw InputError(paths.csv + ": cannot write");
+    csv_ << "index,timestamp_s,valid_fraction,min_c,median_c,mean_c,max_c,peak_c\n";
+  }
+  // The extension tells OpenCV the format: the partial name keeps it.
+  if (!paths.tiff.empty()) tiff_out_ = std::make_unique<Output>(paths.tiff, ".partial.tif");
+}
+
+ExportWriter::~ExportWriter() {
+  npy_.close();  // before the partial files go
+  csv_.close();
+}
+
+void ExportWriter::add(std::size_t index, double timestamp_s, const cv::Mat& codes) {
+  width_ = codes.cols;
+  height_ = codes.rows;
+  ++frames_;
+  if (npy_out_) {
+    const cv::Mat c = codes.isContinuous() ? codes : codes.clone();
+    npy_.write(reinterpret_cast<const char*>(c.data),
+               static_cast<std::streamsize>(c.total() * 2));  // x86-64: little-endian
+    if (!npy_) throw InputError(paths_.npy + ": write failed");
+  }
+  if (tiff_out_) {
+    constexpr std::size_t kMaxTiffBytes = std::size_t{2} << 30;  // held in memory until written
+    tiff_bytes_ += codes.total() * 2;
+    if (tiff_bytes_ > kMaxTiffBytes)
+      throw InputError(paths_.tiff +
+                       ": more than 2 GiB of frames for one TIFF; write .npy, or a part");
+    pages_.push_back(codes.clone());
+  }
+  if (csv_out_) {
+    const cv::Mat t = decode_decikelvin(codes);
+    const RegionStats s = region_stats(t);
+    const RegionPeak p = region_peak(t, paths_.peak_window);
+    csv_ << index << ',' << csv_number(timestamp_s, 6) << ',' << csv_number(s.valid_fraction, 6)
+         << ',' << csv_number(s.min_c, 2) << ',' << csv_number(s.median_c, 2) << ','
+         << csv_number(s.mean_c, 3) << ',' << csv_number(s.max_c, 2) << ',' << csv_number(p.c, 2)
+         << '\n';
+    if (!csv_) throw InputError(paths_.csv + ": write failed");
+  }
+}
+
+void ExportWriter::finish() {
+  if (npy_out_) {
+    npy_.seekp(0);
+    npy_ << npy_header(frames_, height_, width_);
+    npy_.close();
+    if (!npy_) throw InputError(paths_.npy + ": write failed");
+    npy_out_->commit();
+  }
+  if (csv_out_) {
+    csv_.close();
+    if (!csv_) throw InputError(paths_.csv + ": write failed");
+    csv_out_->commit();
+  }
+  if (tiff_out_) {
+    if (!cv::imwritemulti(tiff_out_->partial.string(), pages_))
+      throw InputError(paths_.tiff + ": cannot write the TIFF");
+    pages_.clear();
+    tiff_out_->commit();
+  }
+}
+
+namespace {
+
 int run_export(const ExportArgs& a, const GlobalOptions& global) {
   const auto segments = recording_segments(a.recording);
-  std::optional<Output> npy_out, csv_out, tiff_out;
-  std::ofstream npy, csv;
-  if (!a.npy.empty()) {
-    npy_out.emplace(a.npy);
-    npy.open(npy_out->partial, std::ios::binary);
-    if (!npy) throw InputError(a.npy + ": cannot write");
-    npy << npy_header(0, 0, 0);
-  }
-  if (!a.csv.empty()) {
-    csv_out.emplace(a.csv);
-    csv.open(csv_out->partial);
-    if (!csv) throw InputError(a.csv + ": cannot write");
-    csv << "index,timestamp_s,valid_fraction,min_c,median_c,mean_c,max_c,peak_c\n";
-  }
-  if (!a.tiff.empty()) tiff_out.emplace(a.tiff);
-  std::vector<cv::Mat> pages;
-  constexpr std::size_t kMaxTiffBytes = std::size_t{2} << 30;  // held in memory until written
-  std::size_t tiff_bytes = 0, frames = 0;
-  int width = 0, height = 0;
+  ExportWriter writer({a.tiff, a.npy, a.csv, a.peak_window});
   const RecordingDescription d = read_recording(segments, [&](const RecordingFrame& f) {
-    width = f.codes.cols;
-    height = f.codes.rows;
-    ++frames;
-    if (npy.is_open()) {
-      npy.write(reinterpret_cast<const char*>(f.codes.data),
-                static_cast<std::streamsize>(f.codes.total() * 2));  // x86-64: little-endian
-      if (!npy) throw InputError(a.npy + ": write failed");
-    }
-    if (tiff_out) {
-      tiff_bytes += f.codes.total() * 2;
-      if (tiff_bytes > kMaxTiffBytes)
-        throw InputError(a.recording +
-                         ": more than 2 GiB of frames for one TIFF; export it to "
-                         ".npy, or a part of it");
-      pages.push_back(f.codes);
-    }
-    if (csv.is_open()) {
-      const cv::Mat t = decode_decikelvin(f.codes);
-      const RegionStats s = region_stats(t);
-      const RegionPeak p = region_peak(t, a.peak_window);
-      csv << f.index << ',' << csv_number(f.timestamp_s, 6) << ','
-          << csv_number(s.valid_fraction, 6) << ',' << csv_number(s.min_c, 2) << ','
-          << csv_number(s.median_c, 2) << ',' << csv_number(s.mean_c, 3) << ','
-          << csv_number(s.max_c, 2) << ',' << csv_number(p.c, 2) << '\n';
-      if (!csv) throw InputError(a.csv + ": write failed");
-    }
+    if (f.codes.type() != CV_16U)
+      throw InputError(a.recording +
+                       ": 8-bit frames, not temperatures (a raw recording? "
+                       "re-measure it with pyrocam-calib measure --recording)");
+    writer.add(f.index, f.timestamp_s, f.codes);
   });
   const auto quantity = d.fields.find("quantity");
   if (quantity != d.fields.end() && quantity->second != "temperature")
@@ -122,28 +162,10 @@ int run_export(const ExportArgs& a, const GlobalOptions& global) {
     std::cerr << "warning: " << a.recording
               << " has no pyrocam tags (recorded before they existed, or not by ratiotemp): "
                  "read as temperatures in 0.1 K, 0 = no reading\n";
-  if (npy.is_open()) {
-    npy.seekp(0);
-    npy << npy_header(frames, height, width);
-    npy.close();
-    if (!npy) throw InputError(a.npy + ": write failed");
-    npy_out->commit();
-  }
-  if (csv.is_open()) {
-    csv.close();
-    if (!csv) throw InputError(a.csv + ": write failed");
-    csv_out->commit();
-  }
-  if (tiff_out) {
-    // The extension tells OpenCV the format; the partial name has to keep it.
-    tiff_out->partial = tiff_out->path.string() + ".partial.tif";
-    if (!cv::imwritemulti(tiff_out->partial.string(), pages))
-      throw InputError(a.tiff + ": cannot write the TIFF");
-    tiff_out->commit();
-  }
+  writer.finish();
   if (!global.quiet)
-    std::cerr << "exported " << frames << " frames of " << width << "x" << height << " from "
-              << segments.size() << " segment(s)"
+    std::cerr << "exported " << writer.frames() << " frames of " << d.width << "x" << d.height
+              << " from " << segments.size() << " segment(s)"
               << (d.fields.count("model") ? " (model " + d.fields.at("model") + ")" : "") << "\n";
   return kExitOk;
 }

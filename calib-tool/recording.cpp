@@ -54,7 +54,10 @@ GstPadProbeReturn keep_tags(GstPad*, GstPadProbeInfo* info, gpointer data) {
     gst_event_parse_tag(event, &tags);
     auto* d = static_cast<RecordingDescription*>(data);
     gchar* v = nullptr;
-    if (gst_tag_list_get_string(tags, GST_TAG_COMMENT, &v)) d->comment = v;
+    if (gst_tag_list_get_string(tags, GST_TAG_COMMENT, &v)) {
+      d->comment = v;
+      d->fields = parse_recording_comment(d->comment);
+    }
     g_free(v);
     v = nullptr;
     if (gst_tag_list_get_string(tags, GST_TAG_TITLE, &v)) d->title = v;
@@ -68,18 +71,21 @@ cv::Mat codes_of(GstSample* sample, const fs::path& file) {
   GstVideoInfo info;
   GstCaps* caps = gst_sample_get_caps(sample);
   if (!caps || !gst_video_info_from_caps(&info, caps) ||
-      GST_VIDEO_INFO_FORMAT(&info) != GST_VIDEO_FORMAT_GRAY16_LE)
-    throw InputError(file.string() + ": not a temperature recording (frames are not 16-bit gray)");
+      (GST_VIDEO_INFO_FORMAT(&info) != GST_VIDEO_FORMAT_GRAY16_LE &&
+       GST_VIDEO_INFO_FORMAT(&info) != GST_VIDEO_FORMAT_GRAY8))
+    throw InputError(file.string() +
+                     ": not a pyrocam recording (frames are not 16- or 8-bit gray)");
+  const bool wide = GST_VIDEO_INFO_FORMAT(&info) == GST_VIDEO_FORMAT_GRAY16_LE;
   GstVideoFrame frame;
   if (!gst_video_frame_map(&frame, &info, gst_sample_get_buffer(sample), GST_MAP_READ))
     throw InputError(file.string() + ": a decoded frame is smaller than its caps say");
   const int w = GST_VIDEO_FRAME_WIDTH(&frame), h = GST_VIDEO_FRAME_HEIGHT(&frame);
-  cv::Mat out(h, w, CV_16U);
+  cv::Mat out(h, w, wide ? CV_16U : CV_8U);
   for (int y = 0; y < h; ++y)
     std::memcpy(out.ptr(y),
                 static_cast<const guint8*>(GST_VIDEO_FRAME_PLANE_DATA(&frame, 0)) +
                     static_cast<std::ptrdiff_t>(y) * GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0),
-                static_cast<std::size_t>(w) * 2);
+                static_cast<std::size_t>(w) * (wide ? 2 : 1));
   gst_video_frame_unmap(&frame);
   return out;
 }
@@ -105,7 +111,8 @@ std::vector<fs::path> recording_segments(const fs::path& where, const std::strin
 
 std::map<std::string, std::string> parse_recording_comment(const std::string& comment) {
   std::map<std::string, std::string> fields;
-  if (comment.rfind("pyrocam-recording", 0) != 0) return fields;
+  if (comment.rfind("pyrocam-recording", 0) != 0 && comment.rfind("pyrocam-raw", 0) != 0)
+    return fields;
   std::size_t start = 0;
   while (start < comment.size()) {
     std::size_t end = comment.find("; ", start);
@@ -192,6 +199,7 @@ RecordingDescription read_recording(const std::vector<fs::path>& segments,
         }
         // Segments written with offset-to-zero (record.sh) restart at 0: they follow the last.
         if (frames_here == 0 && index > 0 && pts_s < end_s - 1e-6) offset_s = end_s - pts_s;
+        f.tags = &description;
         f.index = index++;
         f.timestamp_s = offset_s + pts_s;
         end_s = std::max(end_s, f.timestamp_s + duration_s);
@@ -212,7 +220,8 @@ RecordingDescription read_recording(const std::vector<fs::path>& segments,
     if (frames_here == 0)
       throw InputError(file.string() + ": no frames (an empty or truncated segment)");
   }
-  description.fields = parse_recording_comment(description.comment);
+  description.width = width;
+  description.height = height;
   return description;
 }
 

@@ -28,6 +28,7 @@
 #   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]
 #   STATS_INTERVAL_MS  ms between statistics rows                   [1000]
 #   ALARM_CSV    write alarm messages (thermalalarm) here as CSV    [none]
+#   RAW              1: also the camera's raw mosaic, lossless, in OUT/raw-NNNNN.mkv [0]
 #
 # Example: 300 frames of the simulated melt pool (10 s at 30 fps) into out/pool
 #   OUT=out/pool NUM_BUFFERS=300 SOURCE="pyrocamsrc scene=melt-pool" pipelines/record.sh
@@ -44,6 +45,7 @@ source "$here/lib/camera.sh"
 OUT=${OUT:-out/recording}
 SEGMENT_SECONDS=${SEGMENT_SECONDS:-10}
 SNAPSHOT_RATE=${SNAPSHOT_RATE:-1}
+RAW=${RAW:-0}
 
 segment_ns=$(awk -v s="$SEGMENT_SECONDS" 'BEGIN { if (s + 0 <= 0) exit 1; printf "%.0f", s * 1e9 }') ||
   { echo "record: SEGMENT_SECONDS must be a positive number of seconds, not '$SEGMENT_SECONDS'" >&2; exit 2; }
@@ -62,12 +64,28 @@ fi
 # recording's time at the last 0.5 s cluster) and, in a first segment, 2.0 s estimated 1.0 s.
 # splitmuxsink sets muxer properties only with async-finalize=true. The snapshot branch keeps
 # SNAPSHOT_RATE frames a second, so PNG encoding costs little.
+segments=(avenc_ffv1 gop-size=1 ! splitmuxsink async-finalize=true muxer-factory=matroskamux
+  "muxer-properties=properties,min-cluster-duration=(guint64)0,offset-to-zero=true"
+  max-size-time="$segment_ns")
+# RAW=1: the camera's frames as they came (8-bit Bayer as GRAY8, FFV1 has no Bayer format) in
+# segments beside the temperatures, frame for frame, for `pyrocam-calib measure --recording`;
+# their comment tag gives the Bayer layout when CAPS names it and DARK. identity keeps the
+# encoder's buffer pool from the camera (pyrocamsrc refuses its buffers).
+raw_branch=()
+if [[ $RAW == 1 ]]; then
+  raw_tags="pyrocam-raw; dark=$DARK"
+  if [[ $CAPS =~ format=(rggb|bggr|grbg|gbrg) ]]; then raw_tags+="; pattern=${BASH_REMATCH[1]}"; fi
+  raw_branch=(camera. ! queue ! identity drop-allocation=true !)
+  [[ $CAPS != video/x-bayer* ]] || raw_branch+=(capssetter join=false caps=video/x-raw,format=GRAY8 !)
+  raw_branch+=(taginject "tags=\"comment=\\\"$raw_tags\\\"\"" ! "${segments[@]}" "location=$OUT/raw-%05d.mkv")
+elif [[ $RAW != 0 ]]; then
+  echo "record: RAW must be 0 or 1, not '$RAW'" >&2
+  exit 2
+fi
 exec "$launch" -e "${launch_options[@]}" "${camera_chain[@]}" \
   "${thermal_chain[@]}" ! tee name=temperature \
-  temperature. ! queue ! avenc_ffv1 gop-size=1 ! \
-    splitmuxsink async-finalize=true muxer-factory=matroskamux \
-      "muxer-properties=properties,min-cluster-duration=(guint64)0,offset-to-zero=true" \
-      max-size-time="$segment_ns" "location=$OUT/temperature-%05d.mkv" \
+  temperature. ! queue ! "${segments[@]}" "location=$OUT/temperature-%05d.mkv" \
+  "${raw_branch[@]}" \
   temperature. ! queue ! "${colormap_to_mix[@]}" \
   "${overlay_mix[@]}" ! \
     videorate drop-only=true max-rate="$SNAPSHOT_RATE" ! videoconvert ! video/x-raw,format=RGB ! \

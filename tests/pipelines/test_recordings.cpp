@@ -402,5 +402,85 @@ TEST(RecordingsLauncher, alarm_csv_has_a_row_per_change_of_state) {
   EXPECT_EQ(r[12], "32");
 }
 
+// RAW=1: the camera's mosaic recorded beside the temperatures, frame for frame; measured again
+// with the same model it gives the recorded codes bit for bit, with another model others.
+TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_another_model_not) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
+  ScratchDir dir("recordings-raw");
+  const fs::path rec = dir / "rec";
+  const Env env = {{"MODEL", rgb_model()},
+                   {"OUT", rec.string()},
+                   {"SOURCE", kScene},
+                   {"CAPS", "video/x-bayer,format=rggb,width=160,height=120,framerate=30/1"},
+                   {"NUM_BUFFERS", std::to_string(kFrames)},
+                   {"SEGMENT_SECONDS", "0.5"},
+                   {"RAW", "1"}};
+  const ScriptRun run =
+      run_script("record.sh", {}, env, (dir / "record.log").string(), milliseconds(60000));
+  ASSERT_EQ(run.status, 0) << run.log;
+  const auto raw = files_in(rec.string(), "raw-", ".mkv");
+  ASSERT_EQ(raw.size(), 2u);
+  for (const auto& file : raw) {
+    const std::string comment = discovered_tags(file).second;
+    EXPECT_EQ(comment, "pyrocam-raw; dark=dark-level=50; pattern=rggb") << file;
+  }
+  const std::string tool = "'" + std::string(PYROCAM_CALIB_TOOL) + "' -q ";
+  const fs::path recorded = dir / "recorded.npy";
+  ASSERT_EQ(run_command(tool + "export --recording '" + rec.string() + "' --npy '" +
+                            recorded.string() + "'",
+                        dir / "export.log"),
+            0)
+      << read_text(dir / "export.log");
+  const Npy codes = read_npy(recorded);
+  ASSERT_EQ(codes.shape, (std::vector<long>{kFrames, kHeight, kWidth}));
+
+  // The same model and method (auto, as ratiotemp's default): the recorded codes exactly.
+  const auto measure = [&](const std::string& model, const std::string& out) {
+    return run_command(tool + "measure --recording '" + rec.string() + "' --model '" + model +
+                           "' --method auto --out '" + (dir / out).string() + "'",
+                       dir / (out + ".log"));
+  };
+  ASSERT_EQ(measure(rgb_model(), "same"), 0) << read_text(dir / "same.log");
+  const Npy same = read_npy(dir / "same" / "temperature.npy");
+  EXPECT_EQ(same.shape, codes.shape);
+  EXPECT_TRUE(same.data == codes.data) << "re-measured codes differ from the recorded ones";
+  EXPECT_EQ(read_csv(dir / "same" / "temperature.csv").size(), kFrames + 1u);
+
+  // Another model: a hostile unit of the same camera type, calibrated as the test model is.
+  const fs::path other = dir / "other.json", campaign = dir / "campaign";
+  ASSERT_EQ(run_command(tool + "simulate campaign --profile rgb-reference --unit hostile " +
+                            "--frames 2 --size 64x64 --roi-area 1500 --out '" + campaign.string() +
+                            "' && " + tool + "calibrate --dataset '" + campaign.string() +
+                            "' --profile rgb-reference --solver regularised " +
+                            "--epochs 30 --polish-iterations 50 --mc-refits 0 --locus-step 2 " +
+                            "--out '" + other.string() + "'",
+                        dir / "other.log"),
+            0)
+      << read_text(dir / "other.log");
+  ASSERT_EQ(measure(other.string(), "other"), 0) << read_text(dir / "other.log");
+  const Npy changed = read_npy(dir / "other" / "temperature.npy");
+  ASSERT_EQ(changed.data.size(), codes.data.size());
+  std::size_t both = 0, differ = 0;
+  for (std::size_t i = 0; i + 1 < codes.data.size(); i += 2) {
+    const int a = static_cast<unsigned char>(codes.data[i]) |
+                  static_cast<unsigned char>(codes.data[i + 1]) << 8;
+    const int b = static_cast<unsigned char>(changed.data[i]) |
+                  static_cast<unsigned char>(changed.data[i + 1]) << 8;
+    if (a && b) {
+      ++both;
+      differ += a != b;
+    }
+  }
+  EXPECT_GT(both, static_cast<std::size_t>(kFrames) * 10);
+  EXPECT_GT(differ * 2, both) << "another model left most readings unchanged";
+
+  // A model of another mosaic is refused, naming both.
+  ASSERT_EQ(measure(test_model("test-model-nir5x5.json"), "nir"), 1);
+  EXPECT_NE(read_text(dir / "nir.log").find("5x5 mosaic"), std::string::npos)
+      << read_text(dir / "nir.log");
+  EXPECT_NE(read_text(dir / "nir.log").find("frames are rggb"), std::string::npos)
+      << read_text(dir / "nir.log");
+}
+
 }  // namespace
 }  // namespace pyrocam::test
