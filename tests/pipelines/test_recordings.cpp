@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 #include "element_support.h"
@@ -471,6 +472,8 @@ TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_anoth
       differ += a != b;
     }
   }
+  std::cout << "[ info     ] another model: " << differ << " of " << both
+            << " readings in both differ\n";
   EXPECT_GT(both, static_cast<std::size_t>(kFrames) * 10);
   EXPECT_GT(differ * 2, both) << "another model left most readings unchanged";
 
