@@ -346,9 +346,16 @@ int main(int argc, char** argv) {
     const std::string chain = "darksub dark-level=50" + q + " ! demosaic25" + q +
                               " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
                               " misfit-probability=" + o.misfit_probability;
-    if (wanted("lut"))
+    if (wanted("lut")) {
       print_run("darksub ! demosaic25 ! ratiotemp method=lut",
                 run_chain(chain + " method=lut", caps, raw, o.frames, o.warmup));
+      // The same with demosaic25's mixed-pixel check (off by default): what the check costs.
+      const std::string checked = "darksub dark-level=50" + q + " ! demosaic25 mixed-pixels=0.2" +
+                                  q + " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
+                                  " misfit-probability=" + o.misfit_probability;
+      print_run("the same, demosaic25 mixed-pixels=0.2",
+                run_chain(checked + " method=lut", caps, raw, o.frames, o.warmup));
+    }
     if (wanted("likelihood"))
       print_run("darksub ! demosaic25 ! ratiotemp method=likelihood",
                 run_chain(chain + " method=likelihood", caps, raw, std::max(o.frames / 50, 8), 2));

@@ -1,6 +1,7 @@
 /* The pyrocam plugin: registers the elements, nothing more. */
 #include <gst/gst.h>
 
+#include "autoexposure/gstautoexposure.h"
 #include "darksub/gstdarksub.h"
 #include "demosaic25/gstdemosaic25.h"
 #include "pyrocamsrc/gstpyrocamsrc.h"
@@ -16,6 +17,7 @@ static gboolean plugin_init(GstPlugin* plugin) {
   ok |= GST_ELEMENT_REGISTER(ratiotemp, plugin);
   ok |= GST_ELEMENT_REGISTER(thermalcolormap, plugin);
   ok |= GST_ELEMENT_REGISTER(thermalalarm, plugin);
+  ok |= GST_ELEMENT_REGISTER(autoexposure, plugin);
   return ok;
 }
 

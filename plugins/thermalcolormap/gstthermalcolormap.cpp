@@ -12,6 +12,9 @@
  * so the output overlays cleanly on the camera image with compositor. Pixels at or above
  * #GstThermalColormap:isotherm-threshold get #GstThermalColormap:isotherm-color (an alarm).
  * #GstThermalColormap:scale-bar draws the palette with labelled ticks in degC at the right edge.
+ * #GstThermalColormap:peak-marker rings the frame's peak (the largest median of
+ * #GstThermalColormap:peak-window square windows, as ratiotemp's peak-c) and writes its
+ * temperature at the top left.
  *
  * In fixed mode a range narrower than one temperature code (max-temperature - min-temperature
  * below 0.1 degC, including min-temperature >= max-temperature) is refused with a warning on
@@ -32,7 +35,9 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
+#include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/colormap.h"
+#include "pyrocam/runtime/region_stats.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_thermal_colormap_debug);
 #define GST_CAT_DEFAULT gst_thermal_colormap_debug
@@ -53,6 +58,8 @@ enum {
   PROP_INVALID_COLOR,
   PROP_ISOTHERM_THRESHOLD,
   PROP_ISOTHERM_COLOR,
+  PROP_PEAK_MARKER,
+  PROP_PEAK_WINDOW,
 };
 
 constexpr GstThermalColormapPalette DEFAULT_PALETTE = GST_THERMAL_COLORMAP_PALETTE_IRON;
@@ -68,6 +75,8 @@ constexpr guint DEFAULT_INVALID_COLOR = 0x00000000u;
 constexpr double ISOTHERM_OFF = -273.15;
 constexpr double DEFAULT_ISOTHERM_THRESHOLD = ISOTHERM_OFF;
 constexpr guint DEFAULT_ISOTHERM_COLOR = 0xFF00FF00u;
+constexpr gboolean DEFAULT_PEAK_MARKER = FALSE;
+constexpr guint DEFAULT_PEAK_WINDOW = pyrocam::kDefaultPeakWindow;
 
 struct Settings {
   GstThermalColormapPalette palette = DEFAULT_PALETTE;
@@ -79,6 +88,8 @@ struct Settings {
   guint invalid_color = DEFAULT_INVALID_COLOR;
   double isotherm_c = DEFAULT_ISOTHERM_THRESHOLD;
   guint isotherm_color = DEFAULT_ISOTHERM_COLOR;
+  gboolean peak_marker = DEFAULT_PEAK_MARKER;
+  guint peak_window = DEFAULT_PEAK_WINDOW;  // odd
 };
 
 struct State {
@@ -86,6 +97,7 @@ struct State {
   pyrocam::AutoRange auto_range;
   pyrocam::ChannelOrder order = pyrocam::ChannelOrder::kRGBA;
   bool warned_range = false;
+  bool warned_peak_window = false;
 };
 
 pyrocam::Palette to_library(GstThermalColormapPalette p) {
@@ -280,6 +292,20 @@ static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter
     st.colormap.configure(cs);
     st.colormap.apply(in, out);
     if (settings.scale_bar) pyrocam::draw_scale_bar(out, cs.palette, cs.min_c, cs.max_c, cs.order);
+    if (settings.peak_marker) {
+      const int window = static_cast<int>(settings.peak_window);
+      if (window <= width && window <= height) {
+        const pyrocam::RegionPeak peak =
+            pyrocam::region_peak(pyrocam::decode_decikelvin(in), window);
+        pyrocam::draw_peak_marker(out, peak.x, peak.y, peak.c, cs.order);
+      } else if (!st.warned_peak_window) {
+        GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                            ("peak-window %d is larger than the %dx%d frame: no peak marker",
+                             window, width, height),
+                            ("peak window does not fit"));
+        st.warned_peak_window = true;
+      }
+    }
   });
   return ok ? GST_FLOW_OK : GST_FLOW_ERROR;
 }
@@ -320,6 +346,17 @@ static void gst_thermal_colormap_set_property(GObject* object, guint prop_id, co
     case PROP_ISOTHERM_COLOR:
       s.isotherm_color = g_value_get_uint(value);
       break;
+    case PROP_PEAK_MARKER:
+      s.peak_marker = g_value_get_boolean(value);
+      break;
+    case PROP_PEAK_WINDOW: {
+      const guint w = g_value_get_uint(value);
+      if (w % 2 == 1)
+        s.peak_window = w;
+      else
+        GST_WARNING_OBJECT(self, "peak-window %u is not odd; keeping %u", w, s.peak_window);
+      break;
+    }
     default:
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
@@ -361,6 +398,12 @@ static void gst_thermal_colormap_get_property(GObject* object, guint prop_id, GV
       break;
     case PROP_ISOTHERM_COLOR:
       g_value_set_uint(value, s.isotherm_color);
+      break;
+    case PROP_PEAK_MARKER:
+      g_value_set_boolean(value, s.peak_marker);
+      break;
+    case PROP_PEAK_WINDOW:
+      g_value_set_uint(value, s.peak_window);
       break;
     default:
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
@@ -451,6 +494,20 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
       g_param_spec_uint("isotherm-color", "Isotherm colour",
                         "Colour of pixels at or above isotherm-threshold, 0xAARRGGBB", 0, G_MAXUINT,
                         DEFAULT_ISOTHERM_COLOR, display));
+  g_object_class_install_property(
+      gobject_class, PROP_PEAK_MARKER,
+      g_param_spec_boolean("peak-marker", "Peak marker",
+                           "Ring the frame's peak (the largest median of peak-window square "
+                           "windows, robust to wild edge pixels) and write \"peak N degC\" at "
+                           "the top left",
+                           DEFAULT_PEAK_MARKER, display));
+  g_object_class_install_property(
+      gobject_class, PROP_PEAK_WINDOW,
+      g_param_spec_uint("peak-window", "Peak window",
+                        "Side in pixels of the square windows of the peak marker (odd, "
+                        "1..255; an even value is refused with a warning in the log; larger "
+                        "than the frame: a warning on the bus and no marker)",
+                        1, pyrocam::kMaxPeakWindow, DEFAULT_PEAK_WINDOW, display));
 
   gst_element_class_set_static_metadata(
       element_class, "Thermal false colour", "Filter/Effect/Video",

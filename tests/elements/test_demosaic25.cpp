@@ -72,6 +72,28 @@ TEST_F(Demosaic25, bilinear_keeps_full_resolution) {
     EXPECT_NE(caps.find(part), std::string::npos) << part << " in " << caps;
 }
 
+TEST_F(Demosaic25, mixed_pixels_at_a_sharp_edge_get_no_reading_and_the_rest_stays) {
+  // An 8x6 RGGB mosaic: columns 0-3 a hot object (100..110 DN, a gentle gradient), columns 4-7
+  // the cold background (2 DN).
+  std::vector<float> mosaic(8 * 6);
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 8; ++x) mosaic[y * 8 + x] = x < 4 ? 100.f + 3.f * x : 2.f;
+  start("demosaic25 mixed-pixels=0.2", mosaic_caps("rggb", 8, 6));
+  const auto checked = run(mosaic);
+  const auto plain = library(mosaic, 8, 6, MosaicLayout::bayer("RGGB"), DemosaicMethod::kBilinear);
+  ASSERT_EQ(checked.size(), plain.size());
+  for (int b = 0; b < 3; ++b)
+    for (int y = 0; y < 6; ++y)
+      for (int x = 0; x < 8; ++x) {
+        const std::size_t i = static_cast<std::size_t>(b * 48 + y * 8 + x);
+        // Columns 3 and 4 have footprints across the edge; the others are one level each.
+        if (x == 3 || x == 4)
+          EXPECT_TRUE(std::isnan(checked[i])) << b << " " << x << "," << y;
+        else
+          EXPECT_EQ(checked[i], plain[i]) << b << " " << x << "," << y;
+      }
+}
+
 TEST_F(Demosaic25, bin2x2_halves_resolution) {
   expect_library_planes("demosaic25 method=bin2x2", "rggb", DemosaicMethod::kBinCells);
   const std::string caps = sink_caps(h);

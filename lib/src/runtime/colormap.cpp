@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <iomanip>
 #include <opencv2/imgproc.hpp>
@@ -321,6 +322,26 @@ void draw_scale_bar(cv::Mat& image, Palette palette, double min_c, double max_c,
     cv::line(image, {left - 5, t.y}, {left - 1, t.y}, scalar(255, 255, 255));
     label_at(t.text, t.label);
   }
+}
+
+void draw_peak_marker(cv::Mat& image, int x, int y, double peak_c, ChannelOrder order) {
+  if (image.type() != CV_8UC4) throw InputError("peak marker: image must be CV_8UC4");
+  if (x < 0 || y < 0 || std::isnan(peak_c)) return;
+  auto scalar = [order](std::uint8_t r, std::uint8_t g, std::uint8_t b) {
+    return order == ChannelOrder::kRGBA ? cv::Scalar(r, g, b, 255) : cv::Scalar(b, g, r, 255);
+  };
+  const int radius = std::max(4, std::min(image.cols, image.rows) / 30);
+  cv::circle(image, {x, y}, radius, scalar(0, 0, 0), 3, cv::LINE_AA);
+  cv::circle(image, {x, y}, radius, scalar(0, 255, 255), 1, cv::LINE_AA);
+  char text[48];
+  std::snprintf(text, sizeof text, "peak %.0f degC", peak_c);
+  const int font = cv::FONT_HERSHEY_SIMPLEX;
+  const double scale = 0.5;
+  int baseline = 0;
+  const cv::Size size = cv::getTextSize(text, font, scale, 1, &baseline);
+  const cv::Point at{4, 4 + size.height};
+  cv::putText(image, text, at, font, scale, scalar(0, 0, 0), 3, cv::LINE_AA);
+  cv::putText(image, text, at, font, scale, scalar(255, 255, 255), 1, cv::LINE_AA);
 }
 
 }  // namespace pyrocam

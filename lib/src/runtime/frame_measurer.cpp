@@ -42,6 +42,13 @@ void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& te
   const cv::Mat dark_f = dark.type() == CV_32F ? dark : dark_from_image(dark);
   subtract_dark(raw, dark_f, options_.saturation_level_dn, signal_);
   demosaic(signal_, model_->profile().mosaic, options_.demosaic, planes_);
+  if (options_.footprint_spread > 0) {
+    FootprintCheck check;
+    check.relative_spread = options_.footprint_spread;
+    for (int b = 0; b < model_->profile().band_count(); ++b)
+      check.noise.push_back(signal_noise(model_->profile(), b));
+    mark_mixed_pixels(signal_, model_->profile().mosaic, options_.demosaic, check, planes_);
+  }
   planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);
 }
 

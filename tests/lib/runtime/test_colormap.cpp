@@ -219,3 +219,26 @@ TEST(Colormap, trimmed_range_keeps_a_melt_pool_of_one_percent_at_the_top) {
 
 }  // namespace
 }  // namespace pyrocam
+
+namespace pyrocam {
+namespace {
+
+TEST(PeakMarker, RingsThePeakAndLabelsItOrDrawsNothingWithoutOne) {
+  cv::Mat image(120, 160, CV_8UC4, cv::Scalar(0, 0, 0, 0));
+  draw_peak_marker(image, -1, -1, NAN, ChannelOrder::kRGBA);
+  EXPECT_EQ(cv::countNonZero(image.reshape(1)), 0);
+  draw_peak_marker(image, 100, 80, 2213.4, ChannelOrder::kRGBA);
+  // The ring: opaque pixels around (100, 80) but not at its centre; the label at the top left.
+  std::vector<cv::Mat> channels;
+  cv::split(image, channels);
+  const cv::Mat& alpha = channels[3];
+  EXPECT_GT(cv::countNonZero(alpha(cv::Rect(90, 70, 21, 21))), 10);
+  EXPECT_EQ(alpha.at<std::uint8_t>(80, 100), 0);
+  EXPECT_GT(cv::countNonZero(alpha(cv::Rect(0, 0, 130, 20))), 50);
+  EXPECT_EQ(cv::countNonZero(alpha(cv::Rect(0, 30, 80, 40))), 0);  // nothing elsewhere
+  cv::Mat grey(8, 8, CV_8U, cv::Scalar(0));
+  EXPECT_THROW(draw_peak_marker(grey, 1, 1, 1000, ChannelOrder::kRGBA), InputError);
+}
+
+}  // namespace
+}  // namespace pyrocam

@@ -126,4 +126,10 @@ ScaleBarLayout scale_bar_layout(cv::Size image, double min_c, double max_c);
 void draw_scale_bar(cv::Mat& image, Palette palette, double min_c, double max_c,
                     ChannelOrder order);
 
+// Marks the peak of a temperature image on its CV_8UC4 colouring: a ring around (x, y) and the
+// label "peak 2213 degC" at the top left (outlined, legible on any background), so that a live
+// view or a snapshot shows the object's peak and where it is. Nothing for a peak at x or y < 0
+// or a NaN temperature. Throws InputError for another image type.
+void draw_peak_marker(cv::Mat& image, int x, int y, double peak_c, ChannelOrder order);
+
 }  // namespace pyrocam

@@ -8,6 +8,7 @@
 
 #include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/estimators.h"
+#include "pyrocam/runtime/mixed_pixels.h"
 #include "pyrocam/runtime/plane_estimator.h"
 
 namespace pyrocam {
@@ -23,6 +24,8 @@ struct MeasureOptions {
   // (negative: the model's).
   double emissivity_slope = 0;
   double emissivity_slope_u = -1;
+  // mark_mixed_pixels (mixed_pixels.h) with this relative spread and the profile's noise; 0: off.
+  double footprint_spread = 0;
 };
 
 // One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.

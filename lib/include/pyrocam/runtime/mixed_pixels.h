@@ -1,0 +1,45 @@
+// Mixed pixels: at a sharp edge the mosaic pixels that demosaicking combines into one output
+// pixel see different temperatures, and their bands make a ratio that belongs to no single
+// temperature, often one that looks plausible (a 735 degC plate's edge read 500..2300 degC). A
+// pixel whose footprint is not uniform, band by band, within the noise model and a smooth
+// gradient's allowance, gets no reading.
+#pragma once
+
+#include <cstddef>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "pyrocam/core/mosaic.h"
+#include "pyrocam/core/noise_model.h"
+#include "pyrocam/runtime/demosaic.h"
+
+namespace pyrocam {
+
+// Allowed spread (max - min) of one band's samples in a footprint, relative to their largest:
+// an edge between a hot object and its cold background changes a band's signal by factors of
+// 10 to 1000, a smooth gradient across 2-3 pixels by far less. Interpolating a band whose two
+// samples differ by a factor g errs by about (ln g)^2 / 8 of its value where the other band
+// is not interpolated in the same direction: 0.2 (g = 1.25) is 0.6 %, about 6 degC at 1500
+// and 13 degC at 2300 degC for the colour camera's ratios.
+inline constexpr double kDefaultFootprintSpread = 0.2;
+
+struct FootprintCheck {
+  double relative_spread = kDefaultFootprintSpread;
+  double k_sigma = 5;              // plus this many noise standard deviations of the difference
+  std::vector<SignalNoise> noise;  // per band (signal_noise of the profile)
+};
+inline constexpr double kMaxRelativeSpread = 10;
+
+// The footprint: for bilinear Bayer the 3x3 mosaic pixels around each output pixel (mirrored at
+// the borders, as demosaic does), for binned Bayer the 2x2 cell. Snapshot mosaics (one sample
+// of each band per cell) have nothing to compare and are left alone: the band-consistency check
+// (misfit.h) catches their mixed pixels. Samples that are not finite (saturated or no reading)
+// are left out of the comparison (the planes already carry their marks where they are used).
+// Sets every plane to NaN at each mixed pixel and returns how many there were. Throws
+// InputError when the mosaic is not CV_32F, the planes do not match demosaic's output or the
+// noise model has fewer entries than bands.
+std::size_t mark_mixed_pixels(const cv::Mat& mosaic, const MosaicLayout& layout,
+                              DemosaicMethod method, const FootprintCheck& check,
+                              std::vector<cv::Mat>& planes);
+
+}  // namespace pyrocam
