@@ -45,5 +45,6 @@ using Command = std::function<int()>;
 void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& selected);
 void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& selected);
 void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& selected);
+void add_export_command(CLI::App& app, const GlobalOptions& global, Command& selected);
 
 }  // namespace pyrocam::cli

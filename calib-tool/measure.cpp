@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "commands.h"
+#include "measure_recording.h"
 #include "pyrocam/core/dataset.h"
 #include "pyrocam/core/image_io.h"
 #include "pyrocam/core/temperature_codes.h"
@@ -21,7 +22,8 @@ namespace pyrocam::cli {
 namespace {
 
 struct MeasureArgs {
-  std::string model, dataset, frame, dark, roi, out, pattern;
+  std::string model, dataset, frame, dark, roi, out, pattern, recording;
+  double dark_level = -1;  // --recording: DN
   std::string method = "mlp", demosaic = "bilinear", format = "png";
   double saturation = -1;
   double misfit_probability = 0;
@@ -95,8 +97,10 @@ struct MeasureInputs {
 
 // What CLI11 cannot check by itself: which inputs go together.
 void check_measure_args(const MeasureArgs& a) {
-  if (a.dataset.empty() && a.frame.empty())
-    throw CLI::ValidationError("measure", "give --dataset or --frame");
+  if (a.dataset.empty() && a.frame.empty() && a.recording.empty())
+    throw CLI::ValidationError("measure", "give --dataset, --frame or --recording");
+  if (!a.dark.empty() && a.frame.empty() && a.recording.empty())
+    throw CLI::ValidationError("--dark", "--dark goes with --frame or --recording");
   if (!a.frame.empty() && a.dark.empty())
     throw CLI::ValidationError("--dark", "--frame needs --dark");
   if (!a.frame.empty() && a.pattern.empty())
@@ -231,6 +235,19 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
   const auto shared_model = std::make_shared<const ThermalModel>(load_model(a.model));
   const ThermalModel& model = *shared_model;
   const MeasureOptions options = measure_options(a, shared_model, global);
+  if (!a.recording.empty()) {
+    RecordingMeasure m;
+    m.recording = a.recording;
+    m.out = a.out;
+    m.model = shared_model;
+    m.model_path = a.model;
+    m.options = options;
+    m.dark = a.dark;
+    m.dark_level = a.dark_level;
+    m.pattern = a.pattern;
+    m.quiet = global.quiet;
+    return measure_recording(m);
+  }
   FrameMeasurer measurer(shared_model, options);
   const MeasureInputs in = measure_inputs(a, model);
   std::ofstream csv = open_stats_csv(a.out);
@@ -251,8 +268,18 @@ void add_input_options(CLI::App* c, MeasureArgs& a) {
   c->add_option("--model", a.model, "Model file from `pyrocam-calib calibrate`")->required();
   auto* ds = c->add_option("--dataset", a.dataset, "Dataset folder: every frame row is measured");
   auto* fr = c->add_option("--frame", a.frame, "One raw frame (PGM/PNG/TIFF)");
-  c->add_option("--dark", a.dark, "Dark frame for --frame")->needs(fr);
+  auto* rec = c->add_option("--recording", a.recording,
+                            "Raw recording (record.sh RAW=1: raw-NNNNN.mkv segments) to measure "
+                            "again into OUT/temperature.npy and OUT/temperature.csv (the export "
+                            "formats); its dark and layout come from its tags");
+  c->add_option("--dark", a.dark, "Dark frame for --frame (or for --recording)");
+  c->add_option("--dark-level", a.dark_level,
+                "--recording: dark level in DN instead of the recording's (darksub dark-level)")
+      ->check(CLI::Range(0.0, 65535.0))
+      ->needs(rec);
   ds->excludes(fr);
+  rec->excludes(ds);
+  rec->excludes(fr);
   c->add_option("--pattern", a.pattern,
                 "Mosaic layout of the raw frames: rggb, bggr, grbg, gbrg (Bayer, by the top-left "
                 "cell) or the snapshot period, e.g. 5x5; must be the model's. Needed with --frame "
@@ -326,7 +353,11 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       "Examples:\n"
       "  pyrocam-calib measure --model rgb-model.json --dataset pool --out pool-t\n"
       "  pyrocam-calib measure --model rgb-model.json --frame raw.pgm --dark dark.pgm "
-      "--pattern rggb --out t --uncertainty");
+      "--pattern rggb --out t --uncertainty\n"
+      "  pyrocam-calib measure --model other.json --recording out/run1 --method lut --out t2\n"
+      "With --recording (a raw recording, record.sh RAW=1) the output is OUT/temperature.npy\n"
+      "and OUT/temperature.csv as `pyrocam-calib export` writes them; give --method as the\n"
+      "recording's (its temperature tags say it, e.g. lut) to reproduce the recorded codes.");
   add_input_options(c, a);
   add_output_options(c, a);
   c->callback([&global, &selected, c] {

@@ -1,6 +1,7 @@
 /* pyrocam-launch: runs a gst-launch-1.0 pipeline description and always ends.
  *
- *   pyrocam-launch [-e] [-m] [--stop-timeout=SECONDS] ELEMENT [! ELEMENT ...]
+ *   pyrocam-launch [-e] [-m] [--stop-timeout=SECONDS] [--stats-csv=FILE] [--alarm-csv=FILE]
+ *                  ELEMENT [! ELEMENT ...]
  *
  * The words are parsed as gst-launch-1.0 parses them (gst_parse_launchv). Exit status: 0 at
  * end of stream, 1 after an error (the error, its element and its debug text on stderr), 2 for
@@ -16,7 +17,16 @@
  * the status the pipeline had earned (1 if neither an error nor the end of stream came: the
  * files may not be finalised). -m prints element messages (e.g. ratiotemp's statistics)
  * on stdout, as gst-launch-1.0 -m does. Scripts in pipelines/ run their pipelines with it.
+ *
+ * --stats-csv=FILE writes every "pyrocam-temperature-stats" message (ratiotemp's statistics) as
+ * a CSV row, --alarm-csv=FILE every "pyrocam-alarm" message (thermalalarm's changes of state):
+ * a header line, then one row per message, flushed at once so that Ctrl-C or a crash loses no
+ * row. The columns are fixed (see stats_columns and alarm_columns below: "element", the
+ * element's name, then the message's documented fields in order); a field a message lacks
+ * (e.g. min-c in a frame without readings, the region fields without a region) is an empty
+ * cell, as is an unknown time (GST_CLOCK_TIME_NONE). A file that cannot be created is exit 2.
  */
+#include <errno.h>
 #include <glib-unix.h>
 #include <glib.h>
 #include <gst/gst.h>
@@ -26,6 +36,27 @@
 #include <string.h>
 #include <unistd.h>
 
+/* A CSV file of one kind of element message. */
+typedef struct {
+  const char* message;        /* structure name of the messages it takes */
+  const char* const* columns; /* NULL-terminated; "element" is the posting element's name */
+  FILE* file;
+} CsvLog;
+
+static const char* const stats_columns[] = {
+    "element",       "timestamp",      "stream-time",   "running-time",
+    "method",        "width",          "height",        "pixels",
+    "valid",         "valid-fraction", "min-c",         "max-c",
+    "mean-c",        "median-c",       "peak-c",        "peak-x",
+    "peak-y",        "region-x",       "region-y",      "region-width",
+    "region-height", "region-pixels",  "region-valid",  "region-valid-fraction",
+    "region-min-c",  "region-max-c",   "region-mean-c", "region-median-c",
+    "region-peak-c", "region-peak-x",  "region-peak-y", NULL};
+static const char* const alarm_columns[] = {
+    "element",     "state",    "active",       "statistic",     "value-c",
+    "threshold-c", "clear-c",  "frames",       "timestamp",     "running-time",
+    "region-x",    "region-y", "region-width", "region-height", NULL};
+
 typedef struct {
   GMainLoop* loop;
   GstElement* pipeline;
@@ -34,6 +65,8 @@ typedef struct {
   guint stop_timeout_s;   /* bound on stopping the pipeline */
   gboolean messages;      /* -m */
   gboolean eos_on_signal; /* -e */
+  CsvLog stats_csv;       /* --stats-csv */
+  CsvLog alarm_csv;       /* --alarm-csv */
 } Launch;
 
 static Launch launch_state;
@@ -88,6 +121,75 @@ static void print_warning(GstMessage* msg) {
   g_clear_error(&err);
 }
 
+/* A cell: text with a comma, quote or line break is quoted, quotes doubled. */
+static void write_cell(FILE* f, const gchar* text) {
+  if (!strpbrk(text, ",\"\r\n")) {
+    fputs(text, f);
+    return;
+  }
+  fputc('"', f);
+  for (const gchar* c = text; *c; ++c) {
+    if (*c == '"') fputc('"', f);
+    fputc(*c, f);
+  }
+  fputc('"', f);
+}
+
+/* A field's value as a cell: numbers in the C locale (doubles to their shortest exact form),
+ * times of GST_CLOCK_TIME_NONE empty. */
+static gchar* cell_text(const GValue* v) {
+  if (G_VALUE_HOLDS_DOUBLE(v)) {
+    gchar buf[G_ASCII_DTOSTR_BUF_SIZE];
+    return g_strdup(g_ascii_dtostr(buf, sizeof buf, g_value_get_double(v)));
+  }
+  if (G_VALUE_HOLDS_UINT64(v)) {
+    const guint64 u = g_value_get_uint64(v);
+    return u == GST_CLOCK_TIME_NONE ? g_strdup("") : g_strdup_printf("%" G_GUINT64_FORMAT, u);
+  }
+  if (G_VALUE_HOLDS_BOOLEAN(v)) return g_strdup(g_value_get_boolean(v) ? "true" : "false");
+  if (G_VALUE_HOLDS_STRING(v)) return g_value_dup_string(v);
+  return gst_value_serialize(v);
+}
+
+static void write_header(const CsvLog* log) {
+  for (const char* const* c = log->columns; *c; ++c) {
+    if (c != log->columns) fputc(',', log->file);
+    fputs(*c, log->file);
+  }
+  fputc('\n', log->file);
+  fflush(log->file);
+}
+
+static void write_row(const CsvLog* log, GstMessage* msg, const GstStructure* s) {
+  for (const char* const* c = log->columns; *c; ++c) {
+    if (c != log->columns) fputc(',', log->file);
+    if (g_str_equal(*c, "element")) {
+      write_cell(log->file, GST_OBJECT_NAME(GST_MESSAGE_SRC(msg)));
+      continue;
+    }
+    const GValue* v = gst_structure_get_value(s, *c);
+    if (!v) continue;
+    gchar* text = cell_text(v);
+    if (text) write_cell(log->file, text);
+    g_free(text);
+  }
+  fputc('\n', log->file);
+  fflush(log->file); /* Ctrl-C, a kill or a crash loses no row */
+}
+
+/* Opens a CSV log for --stats-csv / --alarm-csv and writes its header; FALSE with a message. */
+static gboolean open_csv(CsvLog* log, const char* option, const char* path) {
+  if (log->file) fclose(log->file);
+  log->file = *path ? fopen(path, "w") : NULL;
+  if (!log->file) {
+    fprintf(stderr, "pyrocam-launch: %s: cannot create '%s': %s\n", option, path,
+            *path ? g_strerror(errno) : "empty file name");
+    return FALSE;
+  }
+  write_header(log);
+  return TRUE;
+}
+
 static gboolean on_bus(GstBus* bus, GstMessage* msg, gpointer data) {
   (void)bus;
   Launch* launch = data;
@@ -108,6 +210,10 @@ static gboolean on_bus(GstBus* bus, GstMessage* msg, gpointer data) {
     case GST_MESSAGE_ELEMENT: {
       /* Element messages (e.g. ratiotemp's statistics) on stdout, as gst-launch-1.0 -m. */
       const GstStructure* s = gst_message_get_structure(msg);
+      if (s && launch->stats_csv.file && gst_structure_has_name(s, launch->stats_csv.message))
+        write_row(&launch->stats_csv, msg, s);
+      if (s && launch->alarm_csv.file && gst_structure_has_name(s, launch->alarm_csv.message))
+        write_row(&launch->alarm_csv, msg, s);
       if (s && launch->messages) {
         gchar* text = gst_structure_to_string(s);
         printf("%s\n", text);
@@ -145,6 +251,8 @@ static gboolean on_signal(gpointer data) {
 int main(int argc, char** argv) {
   Launch* launch = &launch_state;
   launch->stop_timeout_s = 10;
+  launch->stats_csv = (CsvLog){"pyrocam-temperature-stats", stats_columns, NULL};
+  launch->alarm_csv = (CsvLog){"pyrocam-alarm", alarm_columns, NULL};
   int first = 1;
   for (; first < argc; ++first) {
     if (g_str_equal(argv[first], "-m")) {
@@ -160,6 +268,12 @@ int main(int argc, char** argv) {
         return 2;
       }
       launch->stop_timeout_s = (guint)v;
+    } else if (g_str_has_prefix(argv[first], "--stats-csv=")) {
+      if (!open_csv(&launch->stats_csv, "--stats-csv", argv[first] + strlen("--stats-csv=")))
+        return 2;
+    } else if (g_str_has_prefix(argv[first], "--alarm-csv=")) {
+      if (!open_csv(&launch->alarm_csv, "--alarm-csv", argv[first] + strlen("--alarm-csv=")))
+        return 2;
     } else {
       break;
     }
@@ -167,7 +281,8 @@ int main(int argc, char** argv) {
   gst_init(NULL, NULL);
   if (argc <= first) {
     fprintf(stderr,
-            "usage: pyrocam-launch [-e] [-m] [--stop-timeout=SECONDS] ELEMENT [! ELEMENT ...]\n"
+            "usage: pyrocam-launch [-e] [-m] [--stop-timeout=SECONDS] [--stats-csv=FILE]\n"
+            "                      [--alarm-csv=FILE] ELEMENT [! ELEMENT ...]\n"
             "Runs a gst-launch-1.0 pipeline: exit 0 at end of stream, 1 after an error.\n");
     return 2;
   }
@@ -218,5 +333,7 @@ int main(int argc, char** argv) {
   gst_object_unref(bus);
   gst_object_unref(pipeline);
   g_main_loop_unref(launch->loop);
+  if (launch->stats_csv.file) fclose(launch->stats_csv.file);
+  if (launch->alarm_csv.file) fclose(launch->alarm_csv.file);
   return g_atomic_int_get(&launch->status);
 }

@@ -19,6 +19,9 @@
 #   NUM_BUFFERS  frames before the view ends; -1 runs until Ctrl-C    [-1]
 #   LATENCY_MS   how long the picture waits for its temperature overlay, ms [100]
 #   SINK         where the view goes                                  [autovideosink]
+#   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]
+#   STATS_INTERVAL_MS  ms between statistics rows                   [1000]
+#   ALARM_CSV    write alarm messages (thermalalarm) here as CSV    [none]
 #
 # Example:
 #   MODEL=cam42.json DARK=location=cam42-dark.pgm CAMERA=192.168.1.42 \
@@ -63,7 +66,7 @@ set +e
 # The launcher's messages pass through a filter that adds a plain diagnosis to the watchdog's
 # error at once (Aravis may then take seconds to let go of the vanished camera). The filter
 # ignores Ctrl-C so that the launcher can still print while it stops.
-"$launch" \
+"$launch" "${launch_options[@]}" \
   "${camera[@]}" ! $CAPS ! watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
   "${thermal_chain[@]}" ! "${colormap_to_mix[@]}" \
   "${overlay_mix[@]}" ! videoconvert ! $SINK \

@@ -14,6 +14,9 @@
 #   WATCHDOG_MS  end with an error when the camera sends nothing this long; 0: never [5000]
 #   LATENCY_MS   how long the picture waits for its temperature overlay, ms [100]
 #   SINK         where the view goes                                  [autovideosink]
+#   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]
+#   STATS_INTERVAL_MS  ms between statistics rows                   [1000]
+#   ALARM_CSV    write alarm messages (thermalalarm) here as CSV    [none]
 #
 # Several monitors, window placement and full screen: docs/live-view.md.
 #
@@ -31,6 +34,6 @@ require_display "$SINK"
 source "$here/lib/camera.sh"
 
 set -f # SINK splits on spaces into the launcher's words
-exec "$launch" -e "${camera_chain[@]}" \
+exec "$launch" -e "${launch_options[@]}" "${camera_chain[@]}" \
   "${thermal_chain[@]}" ! "${colormap_to_mix[@]}" \
   "${overlay_mix[@]}" ! videoconvert ! $SINK

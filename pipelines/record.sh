@@ -7,6 +7,9 @@
 # once, leaving it unfinalised). A killed recording (SIGKILL, power cut) keeps every closed
 # segment intact; the segment being written decodes up to its last whole frame, but has no
 # index (no seeking) and no duration: players estimate one from its last frame.
+# Each segment's title and comment tags (from ratiotemp) say the units, the model and its
+# fingerprint, the profile, the method and the e-slope; see docs/recordings.md, which also
+# covers `pyrocam-calib export` (TIFF, .npy, CSV) and STATS_CSV.
 # The colour-mapped view (overlay over the camera's colour image) is written
 # to OUT/view.png, refreshed SNAPSHOT_RATE times a second. A camera that sends nothing for
 # WATCHDOG_MS ends the recording with an error: the segments already closed stay intact.
@@ -26,6 +29,10 @@
 #   LATENCY_MS       how long the picture waits for its temperature overlay, ms [100]
 #   SEGMENT_SECONDS  length of one segment in seconds (decimals allowed) [10]
 #   SNAPSHOT_RATE    snapshots per second (at most the frame rate)       [1]
+#   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]
+#   STATS_INTERVAL_MS  ms between statistics rows                   [1000]
+#   ALARM_CSV    write alarm messages (thermalalarm) here as CSV    [none]
+#   RAW              1: also the camera's raw mosaic, lossless, in OUT/raw-NNNNN.mkv [0]
 #
 # Example: 300 frames of the simulated melt pool (10 s at 30 fps) into out/pool
 #   OUT=out/pool NUM_BUFFERS=300 SOURCE="pyrocamsrc scene=melt-pool" pipelines/record.sh
@@ -42,6 +49,7 @@ source "$here/lib/camera.sh"
 OUT=${OUT:-out/recording}
 SEGMENT_SECONDS=${SEGMENT_SECONDS:-10}
 SNAPSHOT_RATE=${SNAPSHOT_RATE:-1}
+RAW=${RAW:-0}
 
 segment_ns=$(awk -v s="$SEGMENT_SECONDS" 'BEGIN { if (s + 0 <= 0) exit 1; printf "%.0f", s * 1e9 }') ||
   { echo "record: SEGMENT_SECONDS must be a positive number of seconds, not '$SEGMENT_SECONDS'" >&2; exit 2; }
@@ -60,12 +68,28 @@ fi
 # recording's time at the last 0.5 s cluster) and, in a first segment, 2.0 s estimated 1.0 s.
 # splitmuxsink sets muxer properties only with async-finalize=true. The snapshot branch keeps
 # SNAPSHOT_RATE frames a second, so PNG encoding costs little.
-exec "$launch" -e "${camera_chain[@]}" \
+segments=(avenc_ffv1 gop-size=1 ! splitmuxsink async-finalize=true muxer-factory=matroskamux
+  "muxer-properties=properties,min-cluster-duration=(guint64)0,offset-to-zero=true"
+  max-size-time="$segment_ns")
+# RAW=1: the camera's frames as they came (8-bit Bayer as GRAY8, FFV1 has no Bayer format) in
+# segments beside the temperatures, frame for frame, for `pyrocam-calib measure --recording`;
+# their comment tag gives the Bayer layout when CAPS names it and DARK. identity keeps the
+# encoder's buffer pool from the camera (pyrocamsrc refuses its buffers).
+raw_branch=()
+if [[ $RAW == 1 ]]; then
+  raw_tags="pyrocam-raw; dark=$DARK"
+  if [[ $CAPS =~ format=(rggb|bggr|grbg|gbrg) ]]; then raw_tags+="; pattern=${BASH_REMATCH[1]}"; fi
+  raw_branch=(camera. ! queue ! identity drop-allocation=true !)
+  [[ $CAPS != video/x-bayer* ]] || raw_branch+=(capssetter join=false caps=video/x-raw,format=GRAY8 !)
+  raw_branch+=(taginject "tags=\"comment=\\\"$raw_tags\\\"\"" ! "${segments[@]}" "location=$OUT/raw-%05d.mkv")
+elif [[ $RAW != 0 ]]; then
+  echo "record: RAW must be 0 or 1, not '$RAW'" >&2
+  exit 2
+fi
+exec "$launch" -e "${launch_options[@]}" "${camera_chain[@]}" \
   "${thermal_chain[@]}" ! tee name=temperature \
-  temperature. ! queue ! avenc_ffv1 gop-size=1 ! \
-    splitmuxsink async-finalize=true muxer-factory=matroskamux \
-      "muxer-properties=properties,min-cluster-duration=(guint64)0,offset-to-zero=true" \
-      max-size-time="$segment_ns" "location=$OUT/temperature-%05d.mkv" \
+  temperature. ! queue ! "${segments[@]}" "location=$OUT/temperature-%05d.mkv" \
+  "${raw_branch[@]}" \
   temperature. ! queue ! "${colormap_to_mix[@]}" \
   "${overlay_mix[@]}" ! \
     videorate drop-only=true max-rate="$SNAPSHOT_RATE" ! videoconvert ! video/x-raw,format=RGB ! \

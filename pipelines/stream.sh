@@ -17,6 +17,9 @@
 #   LATENCY_MS   how long the picture waits for its temperature overlay, ms [100]
 #   NUM_BUFFERS  frames to send; -1 streams until Ctrl-C              [-1]
 #   WATCHDOG_MS  end with an error when the camera sends nothing this long; 0: never [5000]
+#   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]
+#   STATS_INTERVAL_MS  ms between statistics rows                   [1000]
+#   ALARM_CSV    write alarm messages (thermalalarm) here as CSV    [none]
 #
 # Example: to every screen listening on the multicast group 239.255.42.42, port 5004
 #   HOST=239.255.42.42 pipelines/stream.sh
@@ -37,7 +40,7 @@ key_int=$(awk -v f="${fps:-30 1}" -v s="$KEY_SECONDS" 'BEGIN { split(f, r, " ");
 # zerolatency: no B-frames or look-ahead, each frame leaves as soon as it is encoded. SPS/PPS go
 # with every key frame (config-interval=-1) so that a screen can join at any time.
 set -f
-exec "$launch" -e "${camera_chain[@]}" \
+exec "$launch" -e "${launch_options[@]}" "${camera_chain[@]}" \
   "${thermal_chain[@]}" ! "${colormap_to_mix[@]}" \
   "${overlay_mix[@]}" ! videoconvert ! video/x-raw,format=I420 ! \
   x264enc tune=zerolatency speed-preset=ultrafast bitrate="$BITRATE" key-int-max="$key_int" ! \

@@ -17,6 +17,8 @@ packages=(
 # Only for the tests.
 test_packages=(
   xvfb
+  # examples/read_recording.py (run by the pipelines tests)
+  python3-gi gir1.2-gstreamer-1.0 gir1.2-gst-plugins-base-1.0 python3-numpy
 )
 if [[ ${1:-} == --tests ]]; then
   packages+=("${test_packages[@]}")

@@ -85,6 +85,20 @@ overlay_mix=(camera. ! queue ! "${camera_view[@]}" ! video/x-raw,format=RGBA ! m
 colormap_to_mix=("${colormap_scale[@]}" thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1)
 set +f
 
+# STATS_CSV: ratiotemp's statistics (a message every STATS_INTERVAL_MS) written by the launcher as
+# CSV rows, flushed row by row; ALARM_CSV: alarm messages (thermalalarm) likewise. Scripts pass
+# `"${launch_options[@]}"` to the launcher.
+STATS_CSV=${STATS_CSV:-}
+ALARM_CSV=${ALARM_CSV:-}
+STATS_INTERVAL_MS=${STATS_INTERVAL_MS:-1000}
+launch_options=()
+if [[ -n $STATS_CSV ]]; then
+  [[ $STATS_INTERVAL_MS =~ ^[0-9]+$ && $STATS_INTERVAL_MS -gt 0 ]] ||
+    { echo "$name: STATS_INTERVAL_MS must be a whole number of milliseconds above 0, not '$STATS_INTERVAL_MS'" >&2; exit 2; }
+  thermal_chain+=(stats-interval="$((STATS_INTERVAL_MS * 1000000))")  # words for ratiotemp
+  launch_options+=("--stats-csv=$STATS_CSV")
+fi
+[[ -z $ALARM_CSV ]] || launch_options+=("--alarm-csv=$ALARM_CSV")
 # Last, after every setting was checked: a first calibration takes a minute or two.
 if [[ ! -f $MODEL ]]; then
   if [[ -n $model_given ]]; then

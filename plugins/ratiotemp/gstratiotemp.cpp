@@ -94,6 +94,14 @@
  * frame). Frames without a timestamp count by the framerate; without either, every frame
  * posts.
  *
+ * Recordings describe themselves: before the first frame, and again when the method, the
+ * e-slope or upstream's tags change, the element pushes stream tags downstream: title (the
+ * encoding in words) and comment "pyrocam-recording; quantity=temperature; unit=0.1 K;
+ * no-reading=0; model=FILE; model-fingerprint=HEX; profile=NAME; method=lut; e-slope=0 %/100 nm"
+ * (quantity=expanded-uncertainty with output=uncertainty; "; exposure=N us" added when upstream
+ * tags carry capturing-shutter-speed). The fingerprint is the model file's checksum_fnv1a64.
+ * Matroska keeps the title and comment (it drops most other tags), in every splitmuxsink segment.
+ *
  * Errors: no model set: RESOURCE SETTINGS; a missing model file: RESOURCE NOT_FOUND; a
  * truncated, edited, unparsable or other-version model: RESOURCE READ (the message names the
  * file); input whose band count or layout (bayer, 5x5) differs from the model's: CORE
@@ -210,6 +218,11 @@ struct pyrocam::gst::ratiotemp::State {
   guint64 frames = 0;  // since start or the last flush
   guint region_serial_seen = 0;
   std::string peak_warned;  // the last peak-window/frame misfit warned about
+  struct TagListUnref {
+    void operator()(GstTagList* t) const { gst_tag_list_unref(t); }
+  };
+  std::unique_ptr<GstTagList, TagListUnref> upstream_tags;  // the last stream tags from upstream
+  std::string pushed_comment;  // the recording comment last pushed downstream; empty: none yet
 };
 
 using rt::State;
@@ -403,6 +416,18 @@ static gboolean gst_ratio_temp_stop(GstBaseTransform* trans) {
 
 static gboolean gst_ratio_temp_sink_event(GstBaseTransform* trans, GstEvent* event) {
   GstRatioTemp* self = GST_RATIO_TEMP(trans);
+  if (GST_EVENT_TYPE(event) == GST_EVENT_TAG) {
+    /* Upstream's stream tags go out merged into ours before the next frame: a second stream tag
+     * event would replace ours downstream. */
+    GstTagList* tags = nullptr;
+    gst_event_parse_tag(event, &tags);
+    if (gst_tag_list_get_scope(tags) == GST_TAG_SCOPE_STREAM) {
+      self->state->upstream_tags.reset(gst_tag_list_copy(tags));
+      self->state->pushed_comment.clear();
+      gst_event_unref(event);
+      return TRUE;
+    }
+  }
   if (GST_EVENT_TYPE(event) == GST_EVENT_FLUSH_STOP || GST_EVENT_TYPE(event) == GST_EVENT_SEGMENT) {
     self->state->last_stats = GST_CLOCK_TIME_NONE;  // the next frame posts statistics
     if (GST_EVENT_TYPE(event) == GST_EVENT_FLUSH_STOP) self->state->frames = 0;
@@ -471,6 +496,26 @@ static void post_stats(GstRatioTemp* self, const Settings& settings, GstBuffer* 
   gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), s));
 }
 
+/* Pushes the stream's tags downstream when what they say has changed (the first frame, a new
+ * method or e-slope, new upstream tags), before the frame they describe. */
+static void push_recording_tags(GstRatioTemp* self, const Settings& settings) {
+  State& st = *self->state;
+  rt::RecordingInfo info;
+  info.model_file = st.model_path;
+  info.fingerprint = st.model->fingerprint;
+  info.profile = st.model->profile().name;
+  info.method = pyrocam::method_name(st.method);
+  info.uncertainty = settings.output == GST_RATIO_TEMP_OUTPUT_UNCERTAINTY;
+  info.e_slope = settings.e_slope;
+  info.exposure_us = rt::exposure_us_of(st.upstream_tags.get());
+  std::string comment = rt::recording_comment(info);
+  if (comment == st.pushed_comment) return;
+  GST_INFO_OBJECT(self, "tags: %s", comment.c_str());
+  st.pushed_comment = std::move(comment);
+  gst_pad_push_event(GST_BASE_TRANSFORM_SRC_PAD(self),
+                     gst_event_new_tag(rt::recording_tags(info, st.upstream_tags.get())));
+}
+
 static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer* inbuf,
                                               GstBuffer* outbuf) {
   GstRatioTemp* self = GST_RATIO_TEMP(trans);
@@ -537,6 +582,9 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         }
       });
   if (!ok) return GST_FLOW_ERROR;
+  if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not describe the stream in tags",
+                       [&] { push_recording_tags(self, settings); }))
+    return GST_FLOW_ERROR;
   if (stats_due) {
     if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not compute temperature statistics",
                          [&] { post_stats(self, settings, inbuf); }))

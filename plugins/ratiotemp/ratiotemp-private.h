@@ -63,6 +63,23 @@ struct State;  // streaming state, gstratiotemp.cpp
 GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& settings,
                               const GstSegment* segment, GstClockTime pts, Method method);
 
+/* What a recording of the output says about itself (ratiotemp-tags.cpp): pushed downstream as
+ * the stream's title and comment before the first frame and again when it changes. */
+struct RecordingInfo {
+  std::string model_file, fingerprint, profile, method;
+  bool uncertainty = false;  // output=uncertainty
+  double e_slope = 0;        // %/100 nm
+  double exposure_us = -1;   // from an upstream capturing-shutter-speed tag; negative: unknown
+};
+/* The comment starts with this word; its fields follow as "; key=value". */
+constexpr const char* RECORDING_COMMENT_MARK = "pyrocam-recording";
+std::string recording_title(bool uncertainty);
+std::string recording_comment(const RecordingInfo& info);
+/* Upstream's stream tags (may be null) with our title and comment in place of theirs. */
+GstTagList* recording_tags(const RecordingInfo& info, const GstTagList* upstream);
+/* The exposure in a capturing-shutter-speed tag, in microseconds; negative when absent. */
+double exposure_us_of(const GstTagList* tags);
+
 /* GObject properties: installed by class_init, read and written under the object lock. */
 void install_properties(GObjectClass* klass);
 void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpec* pspec);

@@ -173,6 +173,7 @@ ThermalModel load_model(const std::filesystem::path& path) {
       throw InputError(where + ": checksum mismatch: the model file was edited or corrupted");
 
     ThermalModel m;
+    m.fingerprint = file.value("checksum_fnv1a64", std::string());
     m.camera.profile = profile_from_json(payload.at("profile"), path);
     const CameraProfile& p = m.camera.profile;
     const Eigen::Index bands = p.band_count(), wl = p.grid.size();

@@ -56,6 +56,9 @@ struct ThermalModel {
   UncertaintyModel uncertainty;
   nlohmann::json provenance;  // tool version, date, dataset hash, profile source
   nlohmann::json summary;     // calibration figures, for people
+  // The file's checksum_fnv1a64 (16 hex digits), set by load_model: names the model's content
+  // in recordings, whatever the file is called.
+  std::string fingerprint;
 
   const CameraProfile& profile() const { return camera.profile; }
 };

@@ -1,0 +1,88 @@
+// `pyrocam-calib measure --recording`: a raw recording (record.sh with RAW=1: the camera's
+// mosaic as FFV1/Matroska segments raw-NNNNN.mkv) measured again, frame by frame, with a model
+// (the one it was recorded with, or another), into the export formats.
+#include "measure_recording.h"
+
+#include <cctype>
+#include <iostream>
+
+#include "commands.h"
+#include "export.h"
+#include "pyrocam/core/error.h"
+#include "pyrocam/core/image_io.h"
+#include "pyrocam/core/temperature_codes.h"
+#include "recording.h"
+
+namespace pyrocam::cli {
+namespace {
+
+std::string lower(std::string s) {
+  for (char& ch : s) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return s;
+}
+
+// The dark record.sh recorded with: its DARK setting, "dark-level=N" or "location=FILE".
+void dark_from_tags(const std::map<std::string, std::string>& fields, const std::string& where,
+                    double* level, std::string* file) {
+  const auto it = fields.find("dark");
+  if (it == fields.end())
+    throw InputError(where + ": the recording does not say its dark; give --dark or --dark-level");
+  const std::string& v = it->second;
+  try {
+    if (v.rfind("dark-level=", 0) == 0) {
+      *level = std::stod(v.substr(11));
+      if (*level >= 0) return;
+    } else if (v.rfind("location=", 0) == 0 && v.size() > 9) {
+      *file = v.substr(9);
+      return;
+    }
+  } catch (const std::exception&) {
+  }
+  throw InputError(where + ": the recording's dark '" + v +
+                   "' is neither dark-level=N nor location=FILE; give --dark or --dark-level");
+}
+
+}  // namespace
+
+int measure_recording(const RecordingMeasure& m) {
+  const auto segments = recording_segments(m.recording, "raw-");
+  const std::string model_pattern = lower(m.model->profile().mosaic.pattern);
+  const std::filesystem::path out(m.out);
+  std::filesystem::create_directories(out);
+  FrameMeasurer measurer(m.model, m.options);
+  ExportWriter writer(
+      {"", (out / "temperature.npy").string(), (out / "temperature.csv").string(), m.peak_window});
+  cv::Mat dark;  // CV_32F or a raw image of the frames' size, from the first frame on
+  read_recording(segments, [&](const RecordingFrame& f) {
+    if (dark.empty()) {
+      // The tags have come with the first frame: the layout and the dark.
+      const auto& fields = f.tags->fields;
+      if (fields.empty() || f.tags->comment.rfind("pyrocam-raw", 0) != 0)
+        std::cerr << "warning: " << m.recording
+                  << " has no pyrocam-raw tags (not recorded by record.sh RAW=1?)\n";
+      std::string pattern = lower(m.pattern);
+      const auto tagged = fields.find("pattern");
+      if (pattern.empty() && tagged != fields.end()) pattern = lower(tagged->second);
+      if (!pattern.empty() && pattern != model_pattern)
+        throw InputError(m.model_path + ": the model was calibrated for a " + model_pattern +
+                         " mosaic (profile " + m.model->profile().name +
+                         "), the recording's frames are " + pattern);
+      double level = m.dark_level;
+      std::string file = m.dark;
+      if (file.empty() && level < 0) dark_from_tags(fields, m.recording, &level, &file);
+      dark = file.empty() ? cv::Mat(f.codes.size(), CV_32F, cv::Scalar(level))
+                          : read_raw_image(file, f.codes.size(), "the recording's frames");
+    }
+    cv::Mat t;
+    measurer.measure(f.codes, dark, t);
+    writer.add(f.index, f.timestamp_s, encode_decikelvin(t));
+  });
+  writer.finish();
+  if (!m.quiet)
+    std::cerr << "measured " << writer.frames() << " raw frames of " << m.recording << " into "
+              << (out / "temperature.npy").string() << " and " << (out / "temperature.csv").string()
+              << "\n";
+  return kExitOk;
+}
+
+}  // namespace pyrocam::cli

@@ -1,0 +1,27 @@
+// `pyrocam-calib measure --recording`: a raw recording measured again with a model.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "pyrocam/runtime/frame_measurer.h"
+#include "pyrocam/runtime/model.h"
+
+namespace pyrocam::cli {
+
+struct RecordingMeasure {
+  std::string recording;  // folder of raw-NNNNN.mkv segments (or one)
+  std::string out;        // folder for temperature.npy and temperature.csv
+  std::shared_ptr<const ThermalModel> model;
+  std::string model_path;
+  MeasureOptions options;
+  std::string dark;        // dark frame file; empty: --dark-level or the recording's tags
+  double dark_level = -1;  // DN; negative: the dark frame or the recording's tags
+  std::string pattern;     // --pattern; empty: the recording's tags, else the model's
+  int peak_window = 5;
+  bool quiet = false;
+};
+
+int measure_recording(const RecordingMeasure& m);
+
+}  // namespace pyrocam::cli

@@ -1,0 +1,70 @@
+/* ratiotemp's tags: what a recording of its output says about itself. Matroska keeps a stream's
+ * title and comment (matroskamux drops extended-comment, description and custom tags), so the
+ * facts go into the comment as "key=value" fields. */
+#include <gst/gst.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "ratiotemp-private.h"
+
+namespace pyrocam::gst::ratiotemp {
+namespace {
+
+// A field's value without the separator.
+std::string clean(std::string value) {
+  for (char& c : value)
+    if (c == ';' || c == '\n' || c == '\r') c = ',';
+  return value;
+}
+
+// GST_TAG_CAPTURING_SHUTTER_SPEED (libgsttag, which the plugin does not link): a fraction, s.
+constexpr const char* CAPTURING_SHUTTER_SPEED = "capturing-shutter-speed";
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+}  // namespace
+
+std::string recording_title(bool uncertainty) {
+  return uncertainty ? "pyrocam expanded uncertainty (k = 2): 0.1 K per code, 0 = no reading"
+                     : "pyrocam temperature: 0.1 K per code (degC = code / 10 - 273.15), "
+                       "0 = no reading";
+}
+
+std::string recording_comment(const RecordingInfo& info) {
+  std::string c = std::string(RECORDING_COMMENT_MARK) +
+                  "; quantity=" + (info.uncertainty ? "expanded-uncertainty" : "temperature") +
+                  "; unit=0.1 K; no-reading=0";
+  c += "; model=" + clean(std::filesystem::path(info.model_file).filename().string());
+  c += "; model-fingerprint=" + clean(info.fingerprint);
+  c += "; profile=" + clean(info.profile);
+  c += "; method=" + clean(info.method);
+  c += "; e-slope=" + number(info.e_slope) + " %/100 nm";
+  if (info.exposure_us > 0) c += "; exposure=" + number(info.exposure_us) + " us";
+  return c;
+}
+
+double exposure_us_of(const GstTagList* tags) {
+  gint n = 0, d = 0;
+  const GValue* v = tags ? gst_tag_list_get_value_index(tags, CAPTURING_SHUTTER_SPEED, 0) : nullptr;
+  if (!v || !GST_VALUE_HOLDS_FRACTION(v)) return -1;
+  n = gst_value_get_fraction_numerator(v);
+  d = gst_value_get_fraction_denominator(v);
+  return n > 0 && d > 0 ? 1e6 * n / d : -1;
+}
+
+GstTagList* recording_tags(const RecordingInfo& info, const GstTagList* upstream) {
+  GstTagList* tags = upstream ? gst_tag_list_copy(upstream) : gst_tag_list_new_empty();
+  gst_tag_list_set_scope(tags, GST_TAG_SCOPE_STREAM);
+  gst_tag_list_add(tags, GST_TAG_MERGE_REPLACE, GST_TAG_TITLE,
+                   recording_title(info.uncertainty).c_str(), GST_TAG_COMMENT,
+                   recording_comment(info).c_str(), nullptr);
+  return tags;
+}
+
+}  // namespace pyrocam::gst::ratiotemp

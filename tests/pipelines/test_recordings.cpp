@@ -1,0 +1,489 @@
+// Recordings as data: record.sh's segments describe themselves in tags (read back with
+// GstDiscoverer, in every segment), STATS_CSV logs ratiotemp's statistics, `pyrocam-calib
+// export` gives the recorded codes bit-exactly as .npy and TIFF and per-frame statistics as CSV,
+// and examples/read_recording.py reads the same numbers into NumPy.
+#include <gst/pbutils/pbutils.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "element_support.h"
+#include "pipeline_support.h"
+#include "test_support.h"
+
+namespace pyrocam::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kWidth = 160, kHeight = 120, kFps = 30, kFrames = 30;  // two 0.5 s segments
+const std::string kCaps = "video/x-bayer,width=160,height=120,framerate=30/1";
+const std::string kScene = "pyrocamsrc scene=melt-pool seed=7";
+constexpr int kStatsIntervalMs = 100;
+
+std::string rgb_model() { return test_model("test-model-rgb.json"); }
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+std::vector<std::vector<std::string>> read_csv(const fs::path& path) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(read_text(path));
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> cells;
+    std::size_t start = 0;
+    for (std::size_t comma; (comma = line.find(',', start)) != std::string::npos; start = comma + 1)
+      cells.push_back(line.substr(start, comma - start));
+    cells.push_back(line.substr(start));
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+// A shell command's exit status, its output in `log`.
+int run_command(const std::string& command, const fs::path& log) {
+  const int status = std::system((command + " > '" + log.string() + "' 2>&1").c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// A .npy file: its dtype, shape and data bytes.
+struct Npy {
+  std::string descr;
+  std::vector<long> shape;
+  std::string data;
+};
+Npy read_npy(const fs::path& path) {
+  const std::string bytes = read_text(path);
+  Npy n;
+  if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0) return n;
+  const std::size_t len = static_cast<unsigned char>(bytes[8]) |
+                          static_cast<std::size_t>(static_cast<unsigned char>(bytes[9])) << 8;
+  const std::string header = bytes.substr(10, len);
+  const std::size_t d = header.find("'descr': '");
+  if (d != std::string::npos) n.descr = header.substr(d + 10, header.find('\'', d + 10) - d - 10);
+  const std::size_t s = header.find("'shape': (");
+  if (s != std::string::npos) {
+    std::istringstream shape(header.substr(s + 10, header.find(')', s) - s - 10));
+    for (std::string part; std::getline(shape, part, ',');)
+      if (part.find_first_not_of(' ') != std::string::npos) n.shape.push_back(std::stol(part));
+  }
+  n.data = bytes.substr(10 + len);
+  return n;
+}
+
+// The stream tags GstDiscoverer finds in a file, as title and comment.
+std::pair<std::string, std::string> discovered_tags(const std::string& path) {
+  GError* error = nullptr;
+  GstDiscoverer* discoverer = gst_discoverer_new(10 * GST_SECOND, &error);
+  g_clear_error(&error);
+  if (!discoverer) return {};
+  gchar* uri = gst_filename_to_uri(path.c_str(), nullptr);
+  GstDiscovererInfo* info = gst_discoverer_discover_uri(discoverer, uri, &error);
+  g_free(uri);
+  g_clear_error(&error);
+  std::pair<std::string, std::string> out;
+  if (info) {
+    GList* streams = gst_discoverer_info_get_video_streams(info);
+    const GstTagList* tags =
+        streams ? gst_discoverer_stream_info_get_tags(GST_DISCOVERER_STREAM_INFO(streams->data))
+                : nullptr;
+    gchar* v = nullptr;
+    if (tags && gst_tag_list_get_string(tags, GST_TAG_TITLE, &v)) out.first = v;
+    g_free(v);
+    v = nullptr;
+    if (tags && gst_tag_list_get_string(tags, GST_TAG_COMMENT, &v)) out.second = v;
+    g_free(v);
+    gst_discoverer_stream_info_list_free(streams);
+    g_object_unref(info);
+  }
+  g_object_unref(discoverer);
+  return out;
+}
+
+// One recording made by record.sh for every test here, with STATS_CSV, and the same frames
+// computed directly.
+class Recordings : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir = new ScratchDir("recordings");
+    rec = *dir / "rec";
+    const Env env = {{"MODEL", rgb_model()},
+                     {"OUT", rec.string()},
+                     {"SOURCE", kScene},
+                     {"CAPS", kCaps},
+                     {"NUM_BUFFERS", std::to_string(kFrames)},
+                     {"SEGMENT_SECONDS", "0.5"},
+                     {"STATS_CSV", (*dir / "stats.csv").string()},
+                     {"STATS_INTERVAL_MS", std::to_string(kStatsIntervalMs)}};
+    run = new ScriptRun(
+        run_script("record.sh", {}, env, (*dir / "record.log").string(), milliseconds(60000)));
+    reference =
+        new Video(pull_frames(kScene + " num-buffers=" + std::to_string(kFrames) + " ! " + kCaps +
+                              " ! darksub dark-level=50 ! demosaic25 ! " + "ratiotemp model=\"" +
+                              rgb_model() + "\" ! appsink name=out"));
+  }
+  static void TearDownTestSuite() {
+    delete reference;
+    delete run;
+    delete dir;
+  }
+  void SetUp() override {
+    for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
+    ASSERT_EQ(run->status, 0) << run->log;
+    ASSERT_EQ(reference->frames.size(), static_cast<std::size_t>(kFrames)) << reference->error;
+  }
+  static std::vector<std::string> segments() {
+    return files_in(rec.string(), "temperature-", ".mkv");
+  }
+  // The reference frames' codes, rows without padding (160 pixels: none).
+  static std::string reference_bytes() {
+    std::string all;
+    for (const Bytes& f : reference->frames) all.append(f.begin(), f.end());
+    return all;
+  }
+  static inline ScratchDir* dir = nullptr;
+  static inline fs::path rec;
+  static inline ScriptRun* run = nullptr;
+  static inline Video* reference = nullptr;
+};
+
+TEST_F(Recordings, every_segment_says_its_units_model_profile_and_method) {
+  // The model's fingerprint is its file's checksum.
+  const std::string model = read_text(rgb_model());
+  const std::size_t at = model.find("\"checksum_fnv1a64\": \"");
+  ASSERT_NE(at, std::string::npos);
+  const std::string fingerprint = model.substr(at + 21, 16);
+  const auto files = segments();
+  ASSERT_EQ(files.size(), 2u);
+  for (const auto& file : files) {
+    const auto [title, comment] = discovered_tags(file);
+    EXPECT_NE(title.find("0.1 K per code"), std::string::npos) << file << ": " << title;
+    EXPECT_EQ(comment.rfind("pyrocam-recording; quantity=temperature; unit=0.1 K; no-reading=0; "
+                            "model=test-model-rgb.json; model-fingerprint=" +
+                                fingerprint + "; profile=rgb-reference; method=",
+                            0),
+              0u)
+        << file << ": " << comment;
+    EXPECT_NE(comment.find("; e-slope=0 %/100 nm"), std::string::npos) << comment;
+  }
+}
+
+TEST_F(Recordings, export_gives_the_recorded_codes_and_their_statistics) {
+  const fs::path npy = *dir / "t.npy", csv = *dir / "t.csv", tiff = *dir / "t.tif";
+  ASSERT_EQ(run_command("'" + std::string(PYROCAM_CALIB_TOOL) + "' export --recording '" +
+                            rec.string() + "' --npy '" + npy.string() + "' --csv '" + csv.string() +
+                            "' --tiff '" + tiff.string() + "'",
+                        *dir / "export.log"),
+            0)
+      << read_text(*dir / "export.log");
+  const Npy n = read_npy(npy);
+  EXPECT_EQ(n.descr, "<u2");
+  EXPECT_EQ(n.shape, (std::vector<long>{kFrames, kHeight, kWidth}));
+  EXPECT_TRUE(n.data == reference_bytes()) << "the .npy codes differ from the recorded frames";
+  // The TIFF: one 16-bit page per frame (checked by its size: 2 bytes a pixel, uncompressed or
+  // not, it cannot hold the frames in fewer than a few kB; the pages are read back by the CLI
+  // tests).
+  EXPECT_GT(fs::file_size(tiff), 1000u);
+  EXPECT_FALSE(fs::exists(tiff.string() + ".partial.tif"));
+
+  const auto rows = read_csv(csv);
+  ASSERT_EQ(rows.size(), static_cast<std::size_t>(kFrames + 1));
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"index", "timestamp_s", "valid_fraction", "min_c",
+                                               "median_c", "mean_c", "max_c", "peak_c"}));
+  std::size_t total_valid = 0;
+  int peaks = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    const auto& r = rows[static_cast<std::size_t>(i + 1)];
+    ASSERT_EQ(r.size(), 8u);
+    EXPECT_EQ(std::stoi(r[0]), i);
+    // Matroska keeps milliseconds; the second segment follows the first.
+    EXPECT_NEAR(std::stod(r[1]), static_cast<double>(i) / kFps, 0.0015) << i;
+    // Against the codes of the reference frame, computed here.
+    const Bytes& f = reference->frames[static_cast<std::size_t>(i)];
+    std::size_t valid = 0;
+    double lo = INFINITY, hi = -INFINITY;
+    for (std::size_t p = 0; p + 1 < f.size(); p += 2) {
+      const int code = f[p] | f[p + 1] << 8;
+      if (!code) continue;
+      ++valid;
+      lo = std::min(lo, code / 10.0 - 273.15);
+      hi = std::max(hi, code / 10.0 - 273.15);
+    }
+    ASSERT_GT(valid, 0u) << "frame " << i << " of the melt pool has no readings";
+    total_valid += valid;
+    EXPECT_NEAR(std::stod(r[2]), static_cast<double>(valid) / (kWidth * kHeight), 1e-6);
+    EXPECT_NEAR(std::stod(r[3]), lo, 0.006);
+    EXPECT_NEAR(std::stod(r[6]), hi, 0.006);
+    EXPECT_LE(std::stod(r[3]), std::stod(r[4]));
+    EXPECT_LE(std::stod(r[4]), std::stod(r[6]));
+    // A window median is no maximum; no window at least half read: no peak (an empty cell).
+    if (!r[7].empty()) {
+      EXPECT_LE(std::stod(r[7]), std::stod(r[6]) + 0.006);
+      ++peaks;
+    }
+  }
+  EXPECT_GT(total_valid, static_cast<std::size_t>(kFrames) * 10);
+  EXPECT_GT(peaks, 0);
+}
+
+TEST_F(Recordings, stats_csv_has_a_row_per_statistics_message_matching_the_export) {
+  const auto rows = read_csv(*dir / "stats.csv");
+  ASSERT_GE(rows.size(), 2u) << read_text(*dir / "stats.csv");
+  const auto& header = rows[0];
+  ASSERT_GE(header.size(), 14u);
+  EXPECT_EQ(header[0], "element");
+  EXPECT_EQ(header[1], "timestamp");
+  const auto column = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  const std::size_t ts = column("timestamp"), median = column("median-c");
+  ASSERT_LT(median, header.size());
+  // A row for the first frame and then one at least every 100 ms of 1 s of frames: 8 to 11.
+  const std::size_t messages = rows.size() - 1;
+  EXPECT_GE(messages, 8u);
+  EXPECT_LE(messages, 11u);
+  // Each row's median of the unquantised temperatures is within half a code (0.05 K) of the
+  // recorded frame's median at that time (the export's, from the codes, printed to 0.01: 0.005
+  // more).
+  const fs::path csv = *dir / "for-stats.csv";
+  ASSERT_EQ(run_command("'" + std::string(PYROCAM_CALIB_TOOL) + "' -q export --recording '" +
+                            rec.string() + "' --csv '" + csv.string() + "' ",
+                        *dir / "export2.log"),
+            0);
+  const auto exported = read_csv(csv);
+  ASSERT_EQ(exported.size(), static_cast<std::size_t>(kFrames + 1));
+  guint64 last = 0;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    ASSERT_EQ(rows[i].size(), header.size()) << "row " << i;
+    EXPECT_EQ(rows[i][0], "ratiotemp0");
+    const guint64 t = std::stoull(rows[i][ts]);
+    if (i > 1) {
+      EXPECT_GE(t, last + kStatsIntervalMs * GST_MSECOND - GST_MSECOND) << "row " << i;
+    }
+    last = t;
+    const auto frame = static_cast<std::size_t>(std::llround(t * 1e-9 * kFps));
+    ASSERT_LT(frame, static_cast<std::size_t>(kFrames));
+    EXPECT_NEAR(std::stod(rows[i][median]), std::stod(exported[frame + 1][4]), 0.0551)
+        << "frame " << frame;
+  }
+}
+
+TEST_F(Recordings, python_example_reads_the_recording_in_celsius) {
+  const fs::path npy = *dir / "celsius.npy", log = *dir / "python.log";
+  if (run_command("/usr/bin/python3 -c 'import gi, numpy'", log) != 0)
+    FAIL() << "python3-gi or python3-numpy missing (scripts/install-deps.sh --tests): "
+           << read_text(log);
+  ASSERT_EQ(
+      run_command("/usr/bin/python3 '" + std::string(PYROCAM_EXAMPLES_DIR) +
+                      "/read_recording.py' '" + rec.string() + "' --save '" + npy.string() + "'",
+                  log),
+      0)
+      << read_text(log);
+  EXPECT_NE(read_text(log).find("# 30 frames of 160x120; pyrocam-recording"), std::string::npos)
+      << read_text(log);
+  const Npy n = read_npy(npy);
+  EXPECT_EQ(n.descr, "<f4");
+  ASSERT_EQ(n.shape, (std::vector<long>{kFrames, kHeight, kWidth}));
+  ASSERT_EQ(n.data.size(), static_cast<std::size_t>(kFrames * kHeight * kWidth * 4));
+  const std::string codes = reference_bytes();
+  std::size_t wrong = 0, readings = 0;
+  for (std::size_t i = 0; i < codes.size() / 2; ++i) {
+    const int code = static_cast<unsigned char>(codes[2 * i]) |
+                     static_cast<unsigned char>(codes[2 * i + 1]) << 8;
+    float c = 0;
+    std::memcpy(&c, n.data.data() + 4 * i, 4);
+    if (code == 0) {
+      wrong += !std::isnan(c);
+    } else {
+      ++readings;
+      wrong += !(std::fabs(c - (code / 10.0 - 273.15)) < 1e-3);  // float32 of a 0.1 K step
+    }
+  }
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_GT(readings, static_cast<std::size_t>(kFrames) * 10);
+}
+
+// pyrocam-launch --stats-csv on its own: frames without a reading keep every column (empty
+// temperature cells), and a file that cannot be created is a usage error before anything runs.
+TEST(RecordingsLauncher, stats_csv_keeps_its_columns_without_readings_and_refuses_a_bad_path_n) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
+  const char* env = std::getenv("PYROCAM_LAUNCH");
+  const std::string launch = env && *env ? env : "pyrocam-launch";
+  ScratchDir dir("launcher-csv");
+  const fs::path csv = dir / "stats.csv";
+  // A dark level above every pixel: no readings at all.
+  Process p(
+      {launch, "--stats-csv=" + csv.string(), "pyrocamsrc", "num-buffers=3", "!",
+       "video/x-bayer,width=16,height=12,framerate=30/1", "!", "darksub", "dark-level=255", "!",
+       "demosaic25", "!", "ratiotemp", "model=" + rgb_model(), "stats-interval=1", "!", "fakesink"},
+      {}, (dir / "run.log").string());
+  ASSERT_EQ(p.wait_for(milliseconds(30000)), 0) << p.log();
+  const auto rows = read_csv(csv);
+  ASSERT_EQ(rows.size(), 4u) << read_text(csv);
+  const auto& header = rows[0];
+  const auto col = [&](const char* name) {
+    return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  ASSERT_LT(col("region-peak-y"), header.size());
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    ASSERT_EQ(rows[i].size(), header.size()) << "row " << i;
+    EXPECT_EQ(rows[i][col("valid")], "0");
+    EXPECT_EQ(rows[i][col("pixels")], "192");
+    EXPECT_EQ(rows[i][col("min-c")], "");
+    EXPECT_EQ(rows[i][col("region-x")], "");  // no region set
+    EXPECT_EQ(rows[i][col("width")], "16");
+  }
+
+  Process bad({launch, "--stats-csv=" + (dir / "no-such-folder" / "s.csv").string(), "videotestsrc",
+               "num-buffers=1", "!", "fakesink"},
+              {}, (dir / "bad.log").string());
+  ASSERT_EQ(bad.wait_for(milliseconds(20000)), 2) << bad.log();
+  EXPECT_NE(bad.log().find("--stats-csv: cannot create"), std::string::npos) << bad.log();
+  EXPECT_NE(bad.log().find("no-such-folder"), std::string::npos) << bad.log();
+}
+
+// --alarm-csv: thermalalarm's change of state as a row with the alarm's columns.
+TEST(RecordingsLauncher, alarm_csv_has_a_row_per_change_of_state) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp", "thermalalarm"})
+    REQUIRE_ELEMENT(e);
+  const char* env = std::getenv("PYROCAM_LAUNCH");
+  const std::string launch = env && *env ? env : "pyrocam-launch";
+  ScratchDir dir("launcher-alarm");
+  const fs::path csv = dir / "alarms.csv";
+  // A plate at 1200 degC watched with a threshold of 1000 degC: raised on the second frame.
+  Process p({launch,
+             "--alarm-csv=" + csv.string(),
+             "pyrocamsrc",
+             "scene=plate",
+             "temperature=1200",
+             "num-buffers=6",
+             "!",
+             "video/x-bayer,width=32,height=24,framerate=30/1",
+             "!",
+             "darksub",
+             "dark-level=50",
+             "!",
+             "demosaic25",
+             "!",
+             "ratiotemp",
+             "model=" + rgb_model(),
+             "!",
+             "thermalalarm",
+             "threshold-c=1000",
+             "frames=2",
+             "!",
+             "fakesink"},
+            {}, (dir / "run.log").string());
+  ASSERT_EQ(p.wait_for(milliseconds(30000)), 0) << p.log();
+  const auto rows = read_csv(csv);
+  ASSERT_EQ(rows.size(), 2u) << read_text(csv);
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"element", "state", "active", "statistic", "value-c",
+                                               "threshold-c", "clear-c", "frames", "timestamp",
+                                               "running-time", "region-x", "region-y",
+                                               "region-width", "region-height"}));
+  const auto& r = rows[1];
+  ASSERT_EQ(r.size(), rows[0].size());
+  EXPECT_EQ(r[0], "thermalalarm0");
+  EXPECT_EQ(r[1], "raised");
+  EXPECT_EQ(r[2], "true");
+  EXPECT_EQ(r[3], "median");
+  EXPECT_NEAR(std::stod(r[4]), 1200, 60);  // the plate read through the test model
+  EXPECT_EQ(r[5], "1000");
+  EXPECT_EQ(r[6], "990");
+  EXPECT_EQ(r[7], "2");
+  EXPECT_EQ(r[8], std::to_string(GST_SECOND / 30));  // the second frame
+  EXPECT_EQ(r[12], "32");
+}
+
+// RAW=1: the camera's mosaic recorded beside the temperatures, frame for frame; measured again
+// with the same model it gives the recorded codes bit for bit, with another model others.
+TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_another_model_not) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
+  ScratchDir dir("recordings-raw");
+  const fs::path rec = dir / "rec";
+  const Env env = {{"MODEL", rgb_model()},
+                   {"OUT", rec.string()},
+                   {"SOURCE", kScene},
+                   {"CAPS", "video/x-bayer,format=rggb,width=160,height=120,framerate=30/1"},
+                   {"NUM_BUFFERS", std::to_string(kFrames)},
+                   {"SEGMENT_SECONDS", "0.5"},
+                   {"RAW", "1"}};
+  const ScriptRun run =
+      run_script("record.sh", {}, env, (dir / "record.log").string(), milliseconds(60000));
+  ASSERT_EQ(run.status, 0) << run.log;
+  const auto raw = files_in(rec.string(), "raw-", ".mkv");
+  ASSERT_EQ(raw.size(), 2u);
+  for (const auto& file : raw) {
+    const std::string comment = discovered_tags(file).second;
+    EXPECT_EQ(comment, "pyrocam-raw; dark=dark-level=50; pattern=rggb") << file;
+  }
+  const std::string tool = "'" + std::string(PYROCAM_CALIB_TOOL) + "' -q ";
+  const fs::path recorded = dir / "recorded.npy";
+  ASSERT_EQ(run_command(tool + "export --recording '" + rec.string() + "' --npy '" +
+                            recorded.string() + "'",
+                        dir / "export.log"),
+            0)
+      << read_text(dir / "export.log");
+  const Npy codes = read_npy(recorded);
+  ASSERT_EQ(codes.shape, (std::vector<long>{kFrames, kHeight, kWidth}));
+
+  // The same model and method (auto, as ratiotemp's default): the recorded codes exactly.
+  const auto measure = [&](const std::string& model, const std::string& out) {
+    return run_command(tool + "measure --recording '" + rec.string() + "' --model '" + model +
+                           "' --method auto --out '" + (dir / out).string() + "'",
+                       dir / (out + ".log"));
+  };
+  ASSERT_EQ(measure(rgb_model(), "same"), 0) << read_text(dir / "same.log");
+  const Npy same = read_npy(dir / "same" / "temperature.npy");
+  EXPECT_EQ(same.shape, codes.shape);
+  EXPECT_TRUE(same.data == codes.data) << "re-measured codes differ from the recorded ones";
+  EXPECT_EQ(read_csv(dir / "same" / "temperature.csv").size(), kFrames + 1u);
+
+  // Another model: a hostile unit of the same camera type, calibrated as the test model is.
+  const fs::path other = dir / "other.json", campaign = dir / "campaign";
+  ASSERT_EQ(run_command(tool + "simulate campaign --profile rgb-reference --unit hostile " +
+                            "--frames 2 --size 64x64 --roi-area 1500 --out '" + campaign.string() +
+                            "' && " + tool + "calibrate --dataset '" + campaign.string() +
+                            "' --profile rgb-reference --solver regularised " +
+                            "--epochs 30 --polish-iterations 50 --mc-refits 0 --locus-step 2 " +
+                            "--out '" + other.string() + "'",
+                        dir / "other.log"),
+            0)
+      << read_text(dir / "other.log");
+  ASSERT_EQ(measure(other.string(), "other"), 0) << read_text(dir / "other.log");
+  const Npy changed = read_npy(dir / "other" / "temperature.npy");
+  ASSERT_EQ(changed.data.size(), codes.data.size());
+  std::size_t both = 0, differ = 0;
+  for (std::size_t i = 0; i + 1 < codes.data.size(); i += 2) {
+    const int a = static_cast<unsigned char>(codes.data[i]) |
+                  static_cast<unsigned char>(codes.data[i + 1]) << 8;
+    const int b = static_cast<unsigned char>(changed.data[i]) |
+                  static_cast<unsigned char>(changed.data[i + 1]) << 8;
+    if (a && b) {
+      ++both;
+      differ += a != b;
+    }
+  }
+  std::cout << "[ info     ] another model: " << differ << " of " << both
+            << " readings in both differ\n";
+  EXPECT_GT(both, static_cast<std::size_t>(kFrames) * 10);
+  EXPECT_GT(differ * 2, both) << "another model left most readings unchanged";
+
+  // A model of another mosaic is refused, naming both.
+  ASSERT_EQ(measure(test_model("test-model-nir5x5.json"), "nir"), 1);
+  EXPECT_NE(read_text(dir / "nir.log").find("5x5 mosaic"), std::string::npos)
+      << read_text(dir / "nir.log");
+  EXPECT_NE(read_text(dir / "nir.log").find("frames are rggb"), std::string::npos)
+      << read_text(dir / "nir.log");
+}
+
+}  // namespace
+}  // namespace pyrocam::test
