@@ -11,10 +11,12 @@ packages=(
   libaravis-dev aravis-tools aravis-tools-cli libusb-1.0-0-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libeigen3-dev libgtest-dev nlohmann-json3-dev libcli11-dev libpugixml-dev
+  libsoup-3.0-dev libjs-chart.js
 )
 
 # Only for the tests.
 test_packages=(
+  chromium
 )
 if [[ ${1:-} == --tests ]]; then
   packages+=("${test_packages[@]}")
