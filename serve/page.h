@@ -96,7 +96,6 @@ function makePanel(index, server) {
     $("time").textContent = s.timestamp != null ? fmt(s.timestamp / 1e9, 2) + " s" : "–";
     $("method").textContent = s.method || "–";
     $("updates").textContent = String(++updates);
-    $("frame").dataset.width = String($("frame").naturalWidth);
     if (chart) {
       const d = chart.data;
       d.labels.push(new Date().toLocaleTimeString());
@@ -120,6 +119,8 @@ function makePanel(index, server) {
     $("camera").textContent = c.state === "running" ? "camera running" : "camera lost";
     if (c.state !== "running") log("camera lost: " + (c.why || ""));
   }
+  // The image's size once a frame came (tests read it from the DOM).
+  setInterval(() => { $("frame").dataset.width = String($("frame").naturalWidth); }, 250);
   const events = new EventSource(base + "/events");
   events.addEventListener("hello", (e) => {
     const s = JSON.parse(e.data);
