@@ -1,10 +1,12 @@
 /* The pyrocam plugin: registers the elements, nothing more. */
 #include <gst/gst.h>
 
+#include "autoexposure/gstautoexposure.h"
 #include "darksub/gstdarksub.h"
 #include "demosaic25/gstdemosaic25.h"
 #include "pyrocamsrc/gstpyrocamsrc.h"
 #include "ratiotemp/gstratiotemp.h"
+#include "thermalalarm/gstthermalalarm.h"
 #include "thermalcolormap/gstthermalcolormap.h"
 
 static gboolean plugin_init(GstPlugin* plugin) {
@@ -14,6 +16,8 @@ static gboolean plugin_init(GstPlugin* plugin) {
   ok |= GST_ELEMENT_REGISTER(demosaic25, plugin);
   ok |= GST_ELEMENT_REGISTER(ratiotemp, plugin);
   ok |= GST_ELEMENT_REGISTER(thermalcolormap, plugin);
+  ok |= GST_ELEMENT_REGISTER(thermalalarm, plugin);
+  ok |= GST_ELEMENT_REGISTER(autoexposure, plugin);
   return ok;
 }
 

@@ -248,4 +248,18 @@ void post_error(GstElement* element, ErrorKind kind, const std::string& user,
                            g_strdup(debug.c_str()), __FILE__, function, line);
 }
 
+bool parse_region(const std::string& text, Region* out) {
+  gchar** parts = g_strsplit(text.c_str(), ",", -1);
+  bool ok = g_strv_length(parts) == 4;
+  gint64 v[4] = {0, 0, 0, 0};
+  for (int i = 0; ok && i < 4; ++i)
+    ok = g_ascii_string_to_signed(g_strstrip(parts[i]), 10, 0, G_MAXINT, &v[i], nullptr) &&
+         (i < 2 || v[i] >= 1);
+  g_strfreev(parts);
+  if (ok)
+    *out = {static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]),
+            static_cast<int>(v[3])};
+  return ok;
+}
+
 }  // namespace pyrocam::gst

@@ -108,6 +108,13 @@ gboolean decide_allocation(GstBaseTransform* trans, GstQuery* query);
  * current values. */
 void sync_controlled_properties(GstBaseTransform* trans, GstBuffer* buffer);
 
+/* A rectangle of frame pixels, as the elements' region properties give it. */
+struct Region {
+  int x = 0, y = 0, width = 0, height = 0;
+};
+/* "x,y,width,height" (non-negative integers, width and height at least 1); false otherwise. */
+bool parse_region(const std::string& text, Region* out);
+
 /* Integer field of a structure when fixed, else `fallback`. */
 int structure_int(const GstStructure* s, const char* field, int fallback);
 

@@ -40,6 +40,7 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
+#include "pyrocam-meta.h"
 #include "pyrocam/core/profile.h"
 #include "pyrocam/simulation/scenes.h"
 #include "pyrocam/simulation/simulator.h"
@@ -342,6 +343,7 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
                                 ? settings.exposure_us
                                 : st.camera->exposure_for(nominal_c, kScene.target_dn, emissivity);
     const cv::Mat raw = st.camera->render(*map, exposure, emissivity);
+    pyrocam_buffer_add_exposure_meta(buffer, exposure, 0.0);
     GstMapInfo info;
     if (!gst_buffer_map(buffer, &info, GST_MAP_WRITE))
       throw pyrocam::InputError("cannot map the output buffer");

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "gstratiotemp.h"
+#include "pyrocam-common.h"
 #include "pyrocam/runtime/estimators.h"
 
 GST_DEBUG_CATEGORY_EXTERN(gst_ratio_temp_debug);
@@ -26,14 +27,6 @@ constexpr guint MAX_PEAK_WINDOW = 255;                // pyrocam::kMaxPeakWindow
 constexpr double DEFAULT_E_SLOPE = 0.0;               // %/100 nm: grey
 constexpr double MAX_E_SLOPE = 50.0;                  // pyrocam::kMaxEmissivitySlope, in %/100 nm
 constexpr double DEFAULT_E_SLOPE_UNCERTAINTY = -1.0;  // the model's
-
-/* A rectangle of output pixels. */
-struct Region {
-  int x = 0, y = 0, width = 0, height = 0;
-};
-
-/* "x,y,width,height" (non-negative integers, width and height at least 1); false otherwise. */
-bool parse_region(const std::string& text, Region* out);
 
 /* Property values; read and written under GST_OBJECT_LOCK, copied once per buffer. */
 struct Settings {

@@ -1,4 +1,4 @@
-/* ratiotemp's GObject properties and the region they parse. */
+/* ratiotemp's GObject properties. */
 #include <cmath>
 
 #include "pyrocam-common.h"
@@ -24,21 +24,6 @@ enum {
 };
 
 }  // namespace
-
-/* "x,y,width,height" (non-negative integers, width and height at least 1); false otherwise. */
-bool parse_region(const std::string& text, Region* out) {
-  gchar** parts = g_strsplit(text.c_str(), ",", -1);
-  bool ok = g_strv_length(parts) == 4;
-  gint64 v[4] = {0, 0, 0, 0};
-  for (int i = 0; ok && i < 4; ++i)
-    ok = g_ascii_string_to_signed(g_strstrip(parts[i]), 10, 0, G_MAXINT, &v[i], nullptr) &&
-         (i < 2 || v[i] >= 1);
-  g_strfreev(parts);
-  if (ok)
-    *out = {static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]),
-            static_cast<int>(v[3])};
-  return ok;
-}
 
 void install_properties(GObjectClass* gobject_class) {
   const auto ready = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |

@@ -1,0 +1,59 @@
+// Automatic exposure for thermal reading: keeps the hottest region's brightest band near a
+// target share of the usable signal range (dark to saturation), so that the object of interest
+// reads (a saturated band gives no reading, a dim one a noisy or no reading). Frame-by-frame
+// logic only; the autoexposure element feeds it.
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <optional>
+
+namespace pyrocam {
+
+// The level of the hottest region of a raw frame: the `hot_pixels`-th brightest raw value (so
+// that a few hot or defective pixels do not set it), in raw DN.
+struct HotLevel {
+  double level_dn = 0;   // the hot_pixels-th brightest value
+  bool clipped = false;  // level_dn at or above the saturation level: the true level is higher
+};
+// raw: CV_8U or CV_16U (any layout: the brightest band dominates the top values). Throws
+// InputError for another type, an empty image or hot_pixels < 1.
+HotLevel hot_level(const cv::Mat& raw, int hot_pixels, double saturation_dn);
+
+struct ExposureControlSettings {
+  double target = 0.7;         // wanted hot level: dark + target (saturation - dark), 0.05..0.95
+  double dark_dn = 0;          // raw dark level
+  double saturation_dn = 255;  // raw level from which a pixel is saturated
+  double min_exposure_us = 10, max_exposure_us = 1e6;  // the camera's range
+  double max_step = 8;     // largest change of the exposure per adjustment (factor), >= 1.5
+  double tolerance = 0.1;  // no change while the level is within this share of the target
+  int latency_frames = 3;  // frames before a change shows, when frames do not carry their exposure
+};
+
+struct ExposureCommand {
+  double exposure_us = 0;
+  bool clamped = false;  // the wanted exposure was outside min..max_exposure_us
+};
+
+class ExposureController {
+ public:
+  // Throws InputError for settings out of their ranges (see the struct).
+  explicit ExposureController(const ExposureControlSettings& settings);
+  // One frame: its hot level and the exposure it was taken with, when the frame says
+  // (`frame_exposure_us`), else the one last commanded (or `current_us` at the start) after
+  // latency_frames. Returns a new exposure to set, or nothing to keep the current one.
+  // Normalising by the frame's own exposure makes the step dead-beat: the frames still taken
+  // with the old exposure ask for the same new one, so latency makes no oscillation.
+  std::optional<ExposureCommand> update(const HotLevel& level,
+                                        std::optional<double> frame_exposure_us, double current_us);
+  const ExposureControlSettings& settings() const { return settings_; }
+  // Whether the last frame wanted an exposure outside the camera's range (clamped to it).
+  bool at_limit() const { return at_limit_; }
+
+ private:
+  bool at_limit_ = false;
+  ExposureControlSettings settings_;
+  std::optional<double> commanded_us_;
+  int frames_since_command_ = 0;
+};
+
+}  // namespace pyrocam

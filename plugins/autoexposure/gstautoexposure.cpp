@@ -1,0 +1,444 @@
+/**
+ * SECTION:element-autoexposure
+ * @title: autoexposure
+ *
+ * Automatic exposure for thermal reading. Placed right after the camera (raw mosaic: Bayer,
+ * GRAY8 or GRAY16_LE, passed through unchanged), it measures the hottest region of each frame
+ * (the #GstAutoExposure:hot-pixels-th brightest raw value: the brightest band of the hottest
+ * place, a few hot pixels aside) and sets the camera's `exposure` property (microseconds;
+ * pyrocamsrc and aravissrc have one) so that this level sits at #GstAutoExposure:target of the
+ * way from #GstAutoExposure:dark-level to the saturation level (the caps' saturation-level,
+ * else darksub's default, 220/255 of the full scale). A camera's automatic exposure aims at a
+ * pleasing picture; this one keeps the object of interest readable: not saturated (no reading) and
+ * well above the dim threshold (a noisy or no reading).
+ *
+ * Each frame's own exposure comes from its PyrocamExposureMeta (pyrocamsrc attaches it): the
+ * new exposure is the frame's times the ratio of target to level, so the frames still taken
+ * with the old exposure ask for the same new one and the loop settles in one step whatever the
+ * latency, without oscillating. Frames without the meta (aravissrc) are taken with the
+ * exposure last set after #GstAutoExposure:latency frames; no change is made meanwhile. A
+ * saturated level steps down by #GstAutoExposure:max-step at once. Within
+ * #GstAutoExposure:tolerance of the target nothing changes. Every change posts an element
+ * message "pyrocam-exposure" (exposure-us, previous-us, level-dn, clamped).
+ *
+ * The camera is the element named #GstAutoExposure:camera, else the first element upstream
+ * that has no sink pad. One without a double `exposure` property gets a warning and no control
+ * (frames still pass). Exposures outside #GstAutoExposure:min-exposure..
+ * #GstAutoExposure:max-exposure (and the property's own range) are clamped, with a warning
+ * once each time the limit is reached. Gain is left as it is.
+ *
+ * ## Example launch line
+ * |[
+ * gst-launch-1.0 aravissrc exposure=2000 ! video/x-bayer,format=rggb ! \
+ *     autoexposure dark-level=12 max-exposure=20000 ! darksub dark-level=12 ! demosaic25 ! \
+ *     ratiotemp model=model.json ! fakesink
+ * ]|
+ */
+#include "gstautoexposure.h"
+
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "pyrocam-caps.h"
+#include "pyrocam-common.h"
+#include "pyrocam-meta.h"
+#include "pyrocam/runtime/exposure_control.h"
+
+GST_DEBUG_CATEGORY_STATIC(gst_auto_exposure_debug);
+#define GST_CAT_DEFAULT gst_auto_exposure_debug
+
+namespace pg = pyrocam::gst;
+
+namespace {
+
+enum {
+  PROP_0,
+  PROP_TARGET,
+  PROP_HOT_PIXELS,
+  PROP_DARK_LEVEL,
+  PROP_MIN_EXPOSURE,
+  PROP_MAX_EXPOSURE,
+  PROP_MAX_STEP,
+  PROP_TOLERANCE,
+  PROP_LATENCY,
+  PROP_CAMERA,
+};
+
+constexpr const char* EXPOSURE_MESSAGE = "pyrocam-exposure";
+constexpr double DEFAULT_TARGET = 0.7;
+constexpr guint DEFAULT_HOT_PIXELS = 50;
+constexpr double DEFAULT_DARK_LEVEL = 0;
+constexpr double DEFAULT_MIN_EXPOSURE =
+    1e-3;  // the simulated cameras need well below 1 us when hot
+constexpr double DEFAULT_MAX_EXPOSURE = 1e6;
+constexpr double DEFAULT_MAX_STEP = 8;
+constexpr double DEFAULT_TOLERANCE = 0.1;
+constexpr guint DEFAULT_LATENCY = 3;
+
+struct Settings {
+  double target = DEFAULT_TARGET;
+  guint hot_pixels = DEFAULT_HOT_PIXELS;
+  double dark_level = DEFAULT_DARK_LEVEL;
+  double min_exposure_us = DEFAULT_MIN_EXPOSURE, max_exposure_us = DEFAULT_MAX_EXPOSURE;
+  double max_step = DEFAULT_MAX_STEP;
+  double tolerance = DEFAULT_TOLERANCE;
+  guint latency = DEFAULT_LATENCY;
+  std::string camera;  // element name; empty: the first source upstream
+  guint serial = 0;    // bumped by every change
+};
+
+struct State {
+  pg::RawFormat format;
+  double saturation_dn = 255;
+  GstElement* camera = nullptr;  // owned reference; null: not looked for yet or none
+  bool camera_looked_up = false;
+  double property_min_us = 0, property_max_us = G_MAXDOUBLE;
+  std::unique_ptr<pyrocam::ExposureController> controller;
+  guint serial = G_MAXUINT;
+  bool warned_limit = false;
+  ~State() {
+    if (camera) gst_object_unref(camera);
+  }
+};
+
+}  // namespace
+
+struct _GstAutoExposure {
+  GstBaseTransform parent;
+  Settings* settings;
+  State* state;
+};
+
+G_DEFINE_TYPE(GstAutoExposure, gst_auto_exposure, GST_TYPE_BASE_TRANSFORM);
+GST_ELEMENT_REGISTER_DEFINE(autoexposure, "autoexposure", GST_RANK_NONE, GST_TYPE_AUTO_EXPOSURE);
+
+static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
+    "sink", GST_PAD_SINK, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_RAW_CAPS));
+static GstStaticPadTemplate src_template =
+    GST_STATIC_PAD_TEMPLATE("src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_RAW_CAPS));
+
+static gboolean gst_auto_exposure_set_caps(GstBaseTransform* trans, GstCaps* incaps,
+                                           GstCaps* /*outcaps*/) {
+  GstAutoExposure* self = GST_AUTO_EXPOSURE(trans);
+  State& st = *self->state;
+  if (!pg::parse_raw_caps(incaps, &st.format)) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation, "Caps are not a raw mosaic",
+                       "parse_raw_caps failed");
+    return FALSE;
+  }
+  const GstStructure* s = gst_caps_get_structure(incaps, 0);
+  const int depth = pg::structure_int(s, "bit-depth", 8 * st.format.bytes_per_sample);
+  // Without the caps field, darksub's default: 220/255 of the full scale.
+  const int full_scale = (1 << depth) - 1;
+  st.saturation_dn = pg::structure_int(s, "saturation-level",
+                                       static_cast<int>(std::lround(full_scale * 220.0 / 255.0)));
+  st.serial = G_MAXUINT;  // the controller is made again with the new saturation level
+  return TRUE;
+}
+
+/* The camera whose exposure is set: the named element, or the first element upstream without a
+ * sink pad (through queues, capsfilters and tees). */
+static GstElement* find_camera(GstAutoExposure* self, const std::string& name) {
+  if (!name.empty()) {
+    GstObject* top = GST_OBJECT(self);
+    while (GST_OBJECT_PARENT(top)) top = GST_OBJECT_PARENT(top);
+    return GST_IS_BIN(top) ? gst_bin_get_by_name_recurse_up(GST_BIN(top), name.c_str()) : nullptr;
+  }
+  GstElement* element = GST_ELEMENT(gst_object_ref(self));
+  for (int hops = 0; hops < 64; ++hops) {
+    GstPad* sink = gst_element_get_static_pad(element, "sink");
+    if (!sink && element != GST_ELEMENT(self)) return element;
+    GstPad* peer = sink ? gst_pad_get_peer(sink) : nullptr;
+    if (sink) gst_object_unref(sink);
+    gst_object_unref(element);
+    if (!peer) return nullptr;
+    element = gst_pad_get_parent_element(peer);
+    gst_object_unref(peer);
+    if (!element) return nullptr;
+  }
+  gst_object_unref(element);
+  return nullptr;
+}
+
+static void look_up_camera(GstAutoExposure* self, const Settings& settings) {
+  State& st = *self->state;
+  st.camera_looked_up = true;
+  GstElement* camera = find_camera(self, settings.camera);
+  if (!camera) {
+    GST_ELEMENT_WARNING(
+        self, RESOURCE, SETTINGS,
+        ("No camera found %s: exposure control is off",
+         settings.camera.empty() ? "upstream" : ("named " + settings.camera).c_str()),
+        ("find_camera returned nothing"));
+    return;
+  }
+  GParamSpec* spec = g_object_class_find_property(G_OBJECT_GET_CLASS(camera), "exposure");
+  if (!spec || G_PARAM_SPEC_VALUE_TYPE(spec) != G_TYPE_DOUBLE ||
+      !(spec->flags & G_PARAM_WRITABLE)) {
+    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                        ("Camera %s has no exposure property (a writable number of "
+                         "microseconds): exposure control is off",
+                         GST_OBJECT_NAME(camera)),
+                        ("element type %s", G_OBJECT_TYPE_NAME(camera)));
+    gst_object_unref(camera);
+    return;
+  }
+  st.property_min_us = G_PARAM_SPEC_DOUBLE(spec)->minimum;
+  st.property_max_us = G_PARAM_SPEC_DOUBLE(spec)->maximum;
+  st.camera = camera;
+  GST_INFO_OBJECT(self, "controlling the exposure of %s", GST_OBJECT_NAME(camera));
+}
+
+static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, GstBuffer* buffer) {
+  GstAutoExposure* self = GST_AUTO_EXPOSURE(trans);
+  const Settings settings = pg::locked_copy(self, *self->settings);
+  State& st = *self->state;
+  if (!st.camera_looked_up) look_up_camera(self, settings);
+  if (!st.camera) return GST_FLOW_OK;
+  if (settings.serial != st.serial) {
+    pyrocam::ExposureControlSettings c;
+    c.target = settings.target;
+    c.dark_dn = settings.dark_level;
+    c.saturation_dn = st.saturation_dn;
+    // The camera property's range too: a value outside it would not be set at all.
+    c.min_exposure_us = std::max({settings.min_exposure_us, st.property_min_us, 1e-3});
+    c.max_exposure_us = std::min(settings.max_exposure_us, st.property_max_us);
+    c.max_step = settings.max_step;
+    c.tolerance = settings.tolerance;
+    c.latency_frames = static_cast<int>(settings.latency);
+    if (!PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "Bad exposure control settings",
+                         [&] { st.controller = std::make_unique<pyrocam::ExposureController>(c); }))
+      return GST_FLOW_ERROR;
+    st.serial = settings.serial;
+  }
+  std::optional<double> frame_exposure;
+  if (const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(buffer))
+    frame_exposure = meta->exposure_us;
+  double current_us = 0;
+  g_object_get(st.camera, "exposure", &current_us, nullptr);
+  pyrocam::HotLevel level;
+  std::optional<pyrocam::ExposureCommand> command;
+  if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not measure the frame", [&] {
+        pg::MappedImage image;
+        image.map_raw(buffer, st.format);
+        level = pyrocam::hot_level(image.image(), static_cast<int>(settings.hot_pixels),
+                                   st.saturation_dn);
+        command = st.controller->update(level, frame_exposure, current_us);
+      }))
+    return GST_FLOW_ERROR;
+  if (st.controller->at_limit() && !st.warned_limit) {
+    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                        ("The exposure wanted is outside the camera's range %g..%g us: clamped "
+                         "(the hottest region reads %g DN)",
+                         st.controller->settings().min_exposure_us,
+                         st.controller->settings().max_exposure_us, level.level_dn),
+                        ("exposure clamped"));
+  }
+  st.warned_limit = st.controller->at_limit();
+  if (!command) return GST_FLOW_OK;
+  const double previous = frame_exposure.value_or(current_us);
+  GST_DEBUG_OBJECT(self, "level %g DN%s: exposure %g -> %g us", level.level_dn,
+                   level.clipped ? " (saturated)" : "", previous, command->exposure_us);
+  g_object_set(st.camera, "exposure", command->exposure_us, nullptr);
+  gst_element_post_message(
+      GST_ELEMENT(self),
+      gst_message_new_element(
+          GST_OBJECT(self),
+          gst_structure_new(EXPOSURE_MESSAGE, "exposure-us", G_TYPE_DOUBLE, command->exposure_us,
+                            "previous-us", G_TYPE_DOUBLE, previous, "level-dn", G_TYPE_DOUBLE,
+                            level.level_dn, "saturated", G_TYPE_BOOLEAN, level.clipped, "clamped",
+                            G_TYPE_BOOLEAN, command->clamped, "timestamp", G_TYPE_UINT64,
+                            static_cast<guint64>(GST_BUFFER_PTS(buffer)), nullptr)));
+  return GST_FLOW_OK;
+}
+
+static gboolean gst_auto_exposure_start(GstBaseTransform* trans) {
+  GstAutoExposure* self = GST_AUTO_EXPOSURE(trans);
+  delete self->state;
+  self->state = new State();
+  return TRUE;
+}
+
+static gboolean gst_auto_exposure_stop(GstBaseTransform* trans) {
+  return gst_auto_exposure_start(trans);  // drops the camera reference
+}
+
+static void gst_auto_exposure_set_property(GObject* object, guint prop_id, const GValue* value,
+                                           GParamSpec* pspec) {
+  GstAutoExposure* self = GST_AUTO_EXPOSURE(object);
+  pg::ObjectLock lock(self);
+  Settings& s = *self->settings;
+  switch (prop_id) {
+    case PROP_TARGET:
+      s.target = g_value_get_double(value);
+      break;
+    case PROP_HOT_PIXELS:
+      s.hot_pixels = g_value_get_uint(value);
+      break;
+    case PROP_DARK_LEVEL:
+      s.dark_level = g_value_get_double(value);
+      break;
+    case PROP_MIN_EXPOSURE:
+      s.min_exposure_us = g_value_get_double(value);
+      break;
+    case PROP_MAX_EXPOSURE:
+      s.max_exposure_us = g_value_get_double(value);
+      break;
+    case PROP_MAX_STEP:
+      s.max_step = g_value_get_double(value);
+      break;
+    case PROP_TOLERANCE:
+      s.tolerance = g_value_get_double(value);
+      break;
+    case PROP_LATENCY:
+      s.latency = g_value_get_uint(value);
+      break;
+    case PROP_CAMERA: {
+      const char* v = g_value_get_string(value);
+      s.camera = v ? v : "";
+      break;
+    }
+    default:
+      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+      return;
+  }
+  ++s.serial;
+}
+
+static void gst_auto_exposure_get_property(GObject* object, guint prop_id, GValue* value,
+                                           GParamSpec* pspec) {
+  GstAutoExposure* self = GST_AUTO_EXPOSURE(object);
+  pg::ObjectLock lock(self);
+  const Settings& s = *self->settings;
+  switch (prop_id) {
+    case PROP_TARGET:
+      g_value_set_double(value, s.target);
+      break;
+    case PROP_HOT_PIXELS:
+      g_value_set_uint(value, s.hot_pixels);
+      break;
+    case PROP_DARK_LEVEL:
+      g_value_set_double(value, s.dark_level);
+      break;
+    case PROP_MIN_EXPOSURE:
+      g_value_set_double(value, s.min_exposure_us);
+      break;
+    case PROP_MAX_EXPOSURE:
+      g_value_set_double(value, s.max_exposure_us);
+      break;
+    case PROP_MAX_STEP:
+      g_value_set_double(value, s.max_step);
+      break;
+    case PROP_TOLERANCE:
+      g_value_set_double(value, s.tolerance);
+      break;
+    case PROP_LATENCY:
+      g_value_set_uint(value, s.latency);
+      break;
+    case PROP_CAMERA:
+      g_value_set_string(value, s.camera.empty() ? nullptr : s.camera.c_str());
+      break;
+    default:
+      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+      break;
+  }
+}
+
+static void gst_auto_exposure_finalize(GObject* object) {
+  GstAutoExposure* self = GST_AUTO_EXPOSURE(object);
+  delete self->settings;
+  delete self->state;
+  G_OBJECT_CLASS(gst_auto_exposure_parent_class)->finalize(object);
+}
+
+static void gst_auto_exposure_class_init(GstAutoExposureClass* klass) {
+  GObjectClass* gobject_class = G_OBJECT_CLASS(klass);
+  GstElementClass* element_class = GST_ELEMENT_CLASS(klass);
+  GstBaseTransformClass* trans_class = GST_BASE_TRANSFORM_CLASS(klass);
+
+  GST_DEBUG_CATEGORY_INIT(gst_auto_exposure_debug, "autoexposure", 0, "pyrocam exposure control");
+
+  gobject_class->set_property = gst_auto_exposure_set_property;
+  gobject_class->get_property = gst_auto_exposure_get_property;
+  gobject_class->finalize = gst_auto_exposure_finalize;
+
+  const auto playing = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                                GST_PARAM_MUTABLE_PLAYING);
+  g_object_class_install_property(
+      gobject_class, PROP_TARGET,
+      g_param_spec_double("target", "Target",
+                          "Where the hottest region's level is kept, as a share of the way from "
+                          "dark-level to the saturation level (0.05..0.95)",
+                          0.05, 0.95, DEFAULT_TARGET, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_HOT_PIXELS,
+      g_param_spec_uint("hot-pixels", "Hot pixels",
+                        "The level measured is the hot-pixels-th brightest raw value of the "
+                        "frame: about the size in sensor pixels of the smallest hot region to "
+                        "expose for (1..1000000)",
+                        1, 1000000, DEFAULT_HOT_PIXELS, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_DARK_LEVEL,
+      g_param_spec_double("dark-level", "Dark level",
+                          "The camera's raw dark level in DN (0..65535), as given to darksub", 0.0,
+                          65535.0, DEFAULT_DARK_LEVEL, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_MIN_EXPOSURE,
+      g_param_spec_double(
+          "min-exposure", "Minimum exposure",
+          "Shortest exposure to set, microseconds (0.001..1e9): set the camera's own minimum", 1e-3,
+          1e9, DEFAULT_MIN_EXPOSURE, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_MAX_EXPOSURE,
+      g_param_spec_double("max-exposure", "Maximum exposure",
+                          "Longest exposure to set, microseconds (0.001..1e9; keep it below the "
+                          "frame period for the full frame rate)",
+                          1e-3, 1e9, DEFAULT_MAX_EXPOSURE, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_MAX_STEP,
+      g_param_spec_double("max-step", "Largest step",
+                          "Largest factor by which one adjustment changes the exposure; a "
+                          "saturated frame steps down by this much (1.5..100)",
+                          1.5, 100.0, DEFAULT_MAX_STEP, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_TOLERANCE,
+      g_param_spec_double("tolerance", "Tolerance",
+                          "No change while the level's signal is within this share of the "
+                          "target's (0.01..0.49)",
+                          0.01, 0.49, DEFAULT_TOLERANCE, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_LATENCY,
+      g_param_spec_uint("latency", "Latency",
+                        "Frames between setting an exposure and the first frame taken with it, "
+                        "for frames that do not carry their exposure (0..100)",
+                        0, 100, DEFAULT_LATENCY, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_CAMERA,
+      g_param_spec_string("camera", "Camera",
+                          "Name of the element whose exposure property is set (empty: the first "
+                          "element upstream without a sink pad)",
+                          nullptr,
+                          static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                                   GST_PARAM_MUTABLE_READY)));
+
+  gst_element_class_set_static_metadata(
+      element_class, "Exposure control for thermal reading", "Filter/Analyzer/Video",
+      "Sets the camera's exposure so that the hottest region neither saturates nor goes dim",
+      "pyrocam developers");
+  gst_element_class_add_static_pad_template(element_class, &sink_template);
+  gst_element_class_add_static_pad_template(element_class, &src_template);
+
+  trans_class->passthrough_on_same_caps = TRUE;
+  trans_class->transform_ip_on_passthrough = TRUE;
+  trans_class->start = GST_DEBUG_FUNCPTR(gst_auto_exposure_start);
+  trans_class->stop = GST_DEBUG_FUNCPTR(gst_auto_exposure_stop);
+  trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_auto_exposure_set_caps);
+  trans_class->transform_ip = GST_DEBUG_FUNCPTR(gst_auto_exposure_transform_ip);
+}
+
+static void gst_auto_exposure_init(GstAutoExposure* self) {
+  self->settings = new Settings();
+  self->state = new State();
+}

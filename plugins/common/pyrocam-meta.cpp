@@ -1,0 +1,46 @@
+#include "pyrocam-meta.h"
+
+GType pyrocam_exposure_meta_api_get_type(void) {
+  static GType type = 0;
+  static const gchar* tags[] = {nullptr};  // none: valid whatever a transform does to the frame
+  if (g_once_init_enter(&type)) {
+    GType t = gst_meta_api_type_register("PyrocamExposureMetaAPI", tags);
+    g_once_init_leave(&type, t);
+  }
+  return type;
+}
+
+static gboolean exposure_meta_init(GstMeta* meta, gpointer /*params*/, GstBuffer* /*buffer*/) {
+  auto* m = reinterpret_cast<PyrocamExposureMeta*>(meta);
+  m->exposure_us = 0;
+  m->gain_db = 0;
+  return TRUE;
+}
+
+static gboolean exposure_meta_transform(GstBuffer* dest, GstMeta* meta, GstBuffer* /*buffer*/,
+                                        GQuark /*type*/, gpointer /*data*/) {
+  auto* m = reinterpret_cast<PyrocamExposureMeta*>(meta);
+  return pyrocam_buffer_add_exposure_meta(dest, m->exposure_us, m->gain_db) != nullptr;
+}
+
+const GstMetaInfo* pyrocam_exposure_meta_get_info(void) {
+  static const GstMetaInfo* info = nullptr;
+  if (g_once_init_enter(&info)) {
+    const GstMetaInfo* i = gst_meta_register(PYROCAM_EXPOSURE_META_API_TYPE, "PyrocamExposureMeta",
+                                             sizeof(PyrocamExposureMeta), exposure_meta_init,
+                                             nullptr, exposure_meta_transform);
+    g_once_init_leave(&info, i);
+  }
+  return info;
+}
+
+PyrocamExposureMeta* pyrocam_buffer_add_exposure_meta(GstBuffer* buffer, gdouble exposure_us,
+                                                      gdouble gain_db) {
+  auto* m = reinterpret_cast<PyrocamExposureMeta*>(
+      gst_buffer_add_meta(buffer, pyrocam_exposure_meta_get_info(), nullptr));
+  if (m) {
+    m->exposure_us = exposure_us;
+    m->gain_db = gain_db;
+  }
+  return m;
+}

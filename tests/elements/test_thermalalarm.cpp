@@ -1,0 +1,208 @@
+// thermalalarm: frames pass unchanged; the pyrocam-alarm message on raise and clear with its
+// fields; median against peak (a wild edge pixel raises nothing); region; bad settings.
+#include <cmath>
+
+#include "element_support.h"
+
+namespace pyrocam::test {
+namespace {
+
+std::uint16_t code_of(double t_c) {
+  return static_cast<std::uint16_t>(std::lround((t_c + 273.15) * 10));
+}
+
+constexpr int kW = 16, kH = 12;
+
+// A kW x kH frame at `background_c` (0 = no reading) with a 6x6 square at `hot_c` whose
+// corner is (4, 3).
+std::vector<std::uint16_t> frame(double background_c, double hot_c) {
+  std::vector<std::uint16_t> v(kW * kH, background_c > 0 ? code_of(background_c) : 0);
+  for (int y = 3; y < 9; ++y)
+    for (int x = 4; x < 10; ++x) v[y * kW + x] = hot_c > 0 ? code_of(hot_c) : 0;
+  return v;
+}
+
+class ThermalAlarm : public HarnessTest {
+ protected:
+  ThermalAlarm() : HarnessTest("thermalalarm") {}
+  void start(const std::string& launch) {
+    HarnessTest::start(launch, "video/x-raw,format=GRAY16_LE,width=" + std::to_string(kW) +
+                                   ",height=" + std::to_string(kH) + ",framerate=30/1");
+    attach_bus();
+  }
+  // Pushes one frame with pts n/30 s, checks it comes out unchanged, and returns the alarm
+  // messages it caused.
+  std::vector<GstStructure*> push(const std::vector<std::uint16_t>& codes) {
+    const GstClockTime pts = gst_util_uint64_scale(n_++, GST_SECOND, 30);
+    EXPECT_EQ(push_pull<std::uint16_t>(h, with_pts(buffer_from(codes), pts)), codes);
+    std::vector<GstStructure*> out;
+    while (GstMessage* m = gst_bus_pop(bus)) {
+      const GstStructure* s = gst_message_get_structure(m);
+      if (GST_MESSAGE_TYPE(m) == GST_MESSAGE_ELEMENT && gst_structure_has_name(s, "pyrocam-alarm"))
+        out.push_back(gst_structure_copy(s));
+      else if (GST_MESSAGE_TYPE(m) == GST_MESSAGE_WARNING)
+        warnings_.push_back(text_of(m));
+      gst_message_unref(m);
+    }
+    return out;
+  }
+  // The states ("raised"/"cleared", "" for none) of pushing each frame.
+  std::string states(const std::vector<std::vector<std::uint16_t>>& frames) {
+    std::string out;
+    for (const auto& f : frames) {
+      auto messages = push(f);
+      EXPECT_LE(messages.size(), 1u);
+      out += messages.empty() ? '.' : gst_structure_get_string(messages[0], "state")[0];
+      for (GstStructure* s : messages) gst_structure_free(s);
+    }
+    return out;
+  }
+  static std::string text_of(GstMessage* m) {
+    GError* err = nullptr;
+    if (GST_MESSAGE_TYPE(m) == GST_MESSAGE_ERROR)
+      gst_message_parse_error(m, &err, nullptr);
+    else
+      gst_message_parse_warning(m, &err, nullptr);
+    std::string text = err->message;
+    g_error_free(err);
+    return text;
+  }
+  // The first warning (seen by push or still on the bus) or error not yet taken ("" if none).
+  std::string first_warning_or_error(GstMessageType type) {
+    if (type == GST_MESSAGE_WARNING && !warnings_.empty()) {
+      std::string text = warnings_.front();
+      warnings_.erase(warnings_.begin());
+      return text;
+    }
+    GstMessage* m = gst_bus_pop_filtered(bus, type);
+    if (!m) return "";
+    std::string text = text_of(m);
+    gst_message_unref(m);
+    return text;
+  }
+  std::vector<std::string> warnings_;
+  // Sets a property of the element while it plays.
+  template <typename T>
+  void set(const char* property, T value) {
+    GstElement* e = find_element(h, "thermalalarm");
+    g_object_set(e, property, value, nullptr);
+    gst_object_unref(e);
+  }
+  guint64 n_ = 0;
+};
+
+TEST_F(ThermalAlarm, RaisesAfterFramesAboveAndClearsBelowTheHysteresis) {
+  start("thermalalarm threshold-c=1500 frames=3 hysteresis-c=20 region=4,3,6,6");
+  const auto cool = frame(900, 1400), hot = frame(900, 1600), band = frame(900, 1490),
+             below = frame(900, 1470);
+  EXPECT_EQ(states({cool, hot, hot, hot, hot, band, band, band, below, below, below}),
+            "...r......c");
+  // The fields of a raise.
+  push(cool);
+  push(hot);
+  push(hot);
+  auto m = push(hot);
+  ASSERT_EQ(m.size(), 1u);
+  const GstStructure* s = m[0];
+  EXPECT_STREQ(gst_structure_get_string(s, "state"), "raised");
+  gboolean active = FALSE;
+  EXPECT_TRUE(gst_structure_get_boolean(s, "active", &active) && active);
+  EXPECT_STREQ(gst_structure_get_string(s, "statistic"), "median");
+  double v = 0, threshold = 0, clear = 0;
+  EXPECT_TRUE(gst_structure_get_double(s, "value-c", &v));
+  EXPECT_NEAR(v, 1600, 0.06);  // one code
+  EXPECT_TRUE(gst_structure_get_double(s, "threshold-c", &threshold));
+  EXPECT_EQ(threshold, 1500);
+  EXPECT_TRUE(gst_structure_get_double(s, "clear-c", &clear));
+  EXPECT_EQ(clear, 1480);
+  guint frames = 0;
+  EXPECT_TRUE(gst_structure_get_uint(s, "frames", &frames));
+  EXPECT_EQ(frames, 3u);
+  guint64 ts = 0;
+  EXPECT_TRUE(gst_structure_get_uint64(s, "timestamp", &ts));
+  EXPECT_EQ(ts, gst_util_uint64_scale(n_ - 1, GST_SECOND, 30));
+  int x = -1, y = -1, w = -1, hh = -1;
+  EXPECT_TRUE(gst_structure_get_int(s, "region-x", &x) &&
+              gst_structure_get_int(s, "region-y", &y) &&
+              gst_structure_get_int(s, "region-width", &w) &&
+              gst_structure_get_int(s, "region-height", &hh));
+  EXPECT_EQ(x, 4);
+  EXPECT_EQ(y, 3);
+  EXPECT_EQ(w, 6);
+  EXPECT_EQ(hh, 6);
+  for (GstStructure* st : m) gst_structure_free(st);
+}
+
+TEST_F(ThermalAlarm, TheWholeFrameMedianIsTheBackgroundSoOnlyARegionOrThePeakSeesTheSpot) {
+  start("thermalalarm threshold-c=1500 frames=1");
+  const auto hot = frame(900, 1600);  // 36 of 192 pixels hot: the median is the background
+  EXPECT_EQ(states({hot, hot, hot}), "...");
+  set("statistic", 1 /* peak */);
+  EXPECT_EQ(states({hot}), "r");
+}
+
+TEST_F(ThermalAlarm, OneWildPixelDoesNotRaiseThePeakAlarm) {
+  start("thermalalarm threshold-c=1500 frames=1 statistic=peak peak-window=5");
+  auto wild = frame(900, 1000);
+  wild[3 * kW + 4] = code_of(2900);  // a mixed pixel at the square's corner
+  EXPECT_EQ(states({wild, wild}), "..");
+}
+
+TEST_F(ThermalAlarm, FramesWithoutAReadingDoNotClearARaisedAlarm) {
+  start("thermalalarm threshold-c=1500 frames=2 region=4,3,6,6");
+  const auto hot = frame(900, 1600), saturated = frame(900, 0), cool = frame(900, 1000);
+  EXPECT_EQ(states({hot, hot, saturated, saturated, saturated, cool, cool}), ".r....c");
+}
+
+TEST_F(ThermalAlarm, TurningTheThresholdOffClearsARaisedAlarm) {
+  start("thermalalarm threshold-c=1500 frames=1 region=4,3,6,6");
+  const auto hot = frame(900, 1600);
+  EXPECT_EQ(states({hot}), "r");
+  set("threshold-c", -273.15);
+  auto m = push(hot);
+  ASSERT_EQ(m.size(), 1u);
+  EXPECT_STREQ(gst_structure_get_string(m[0], "state"), "cleared");
+  EXPECT_FALSE(gst_structure_has_field(m[0], "value-c"));
+  for (GstStructure* st : m) gst_structure_free(st);
+  EXPECT_EQ(states({hot}), ".");
+}
+
+TEST_F(ThermalAlarm, ARegionOutsideTheFrameIsAnErrorAndAPartialOneAWarning) {
+  start("thermalalarm threshold-c=1500 frames=1 region=12,8,10,10");
+  EXPECT_EQ(states({frame(1600, 1600)}), "r");
+  EXPECT_NE(first_warning_or_error(GST_MESSAGE_WARNING).find("watching 12,8,4,4"),
+            std::string::npos);
+  set("region", "40,40,2,2");
+  EXPECT_EQ(gst_harness_push(h, buffer_from(frame(900, 1600))), GST_FLOW_ERROR);
+  EXPECT_NE(first_warning_or_error(GST_MESSAGE_ERROR).find("lies outside the 16x12 frame"),
+            std::string::npos);
+}
+
+TEST_F(ThermalAlarm, APeakWindowLargerThanTheRegionIsAnError) {
+  start("thermalalarm threshold-c=1500 statistic=peak peak-window=7 region=0,0,6,6");
+  EXPECT_EQ(gst_harness_push(h, buffer_from(frame(900, 1600))), GST_FLOW_ERROR);
+  const std::string e = first_warning_or_error(GST_MESSAGE_ERROR);
+  EXPECT_NE(e.find("peak-window 7"), std::string::npos) << e;
+  EXPECT_NE(e.find("6x6"), std::string::npos) << e;
+}
+
+TEST_F(ThermalAlarm, MalformedSettingsAreRefusedWithAWarningAndTheOldOnesStay) {
+  start("thermalalarm threshold-c=1500 region=4,3,6,6");
+  set("region", "4,3,6");
+  set("peak-window", 4u);
+  GstElement* e = find_element(h, "thermalalarm");
+  gchar* region = nullptr;
+  guint window = 0;
+  g_object_get(e, "region", &region, "peak-window", &window, nullptr);
+  EXPECT_STREQ(region, "4,3,6,6");
+  EXPECT_EQ(window, 5u);
+  g_free(region);
+  EXPECT_NE(first_warning_or_error(GST_MESSAGE_WARNING).find("'4,3,6' is not x,y,width,height"),
+            std::string::npos);
+  EXPECT_NE(first_warning_or_error(GST_MESSAGE_WARNING).find("peak-window 4 is not odd"),
+            std::string::npos);
+  gst_object_unref(e);
+}
+
+}  // namespace
+}  // namespace pyrocam::test
