@@ -112,6 +112,14 @@ bool RtspOut::start(std::string& error) {
   }
   g_object_unref(mounts);
 
+  // A client over TCP that reads slower than the stream comes gets its packets held, not
+  // dropped: a dropped packet of the lossless stream would decode to wrong temperatures until
+  // the next key frame. The encoders' input queues drop whole frames instead.
+  g_signal_connect(server_, "client-connected",
+                   G_CALLBACK(+[](GstRTSPServer*, GstRTSPClient* client, gpointer) {
+                     g_object_set(client, "drop-backlog", FALSE, nullptr);
+                   }),
+                   nullptr);
   GError* err = nullptr;
   GSource* source = gst_rtsp_server_create_source(server_, nullptr, &err);
   if (source == nullptr) {
