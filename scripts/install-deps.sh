@@ -12,6 +12,7 @@ packages=(
   libaravis-dev aravis-tools aravis-tools-cli libusb-1.0-0-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libeigen3-dev libgtest-dev nlohmann-json3-dev libcli11-dev libpugixml-dev
+  libsoup-3.0-dev libjs-chart.js
 )
 
 # Only for the tests.
@@ -19,6 +20,7 @@ test_packages=(
   xvfb
   # examples/read_recording.py (run by the pipelines tests)
   python3-gi gir1.2-gstreamer-1.0 gir1.2-gst-plugins-base-1.0 python3-numpy
+  chromium
 )
 if [[ ${1:-} == --tests ]]; then
   packages+=("${test_packages[@]}")

@@ -1,0 +1,148 @@
+// The monitoring page pyrocam-serve serves at /: one panel per server (this one, those given with
+// --server, or ?servers=host:port,host:port), each with the live image, the statistics, a
+// temperature-over-time plot (Chart.js) and the alarm state, fed by the server's /events.
+#pragma once
+
+namespace pyrocam::serve {
+
+inline constexpr const char* kPage = R"PAGE(<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<title>pyrocam monitor</title>
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<style>
+  body { font-family: sans-serif; background: #1b1d21; color: #e8e8e8; margin: 0; }
+  header { padding: 8px 16px; background: #2a2d33; font-size: 18px; }
+  main { display: flex; flex-wrap: wrap; gap: 16px; padding: 16px; }
+  .panel { background: #25282d; border-radius: 6px; padding: 12px; width: 640px; }
+  .panel h2 { font-size: 16px; margin: 0 0 8px 0; display: flex; justify-content: space-between; }
+  .panel img { width: 100%; image-rendering: pixelated; background: #000; min-height: 120px; }
+  table { width: 100%; border-collapse: collapse; margin: 8px 0; }
+  td { padding: 2px 6px; border-bottom: 1px solid #333; }
+  td.v { text-align: right; font-variant-numeric: tabular-nums; font-weight: bold; }
+  .badge { padding: 2px 8px; border-radius: 4px; font-size: 13px; }
+  .ok { background: #2e6b3a; } .lost { background: #7a5a12; } .raised { background: #b3261e; }
+  .off { background: #444; }
+  .log { font-size: 12px; max-height: 90px; overflow-y: auto; color: #bbb; }
+  canvas { background: #202226; }
+</style>
+</head>
+<body>
+<header>pyrocam monitor <span id="summary" style="font-size:13px;color:#aaa"></span></header>
+<main id="panels"></main>
+<script src="/chart.js"></script>
+<script>
+"use strict";
+const fmt = (v, d = 1) => (typeof v === "number" ? v.toFixed(d) : "–");
+const query = new URLSearchParams(location.search);
+const maxPoints = 300;
+
+function makePanel(index, server) {
+  const base = server ? "http://" + server : "";
+  const el = document.createElement("section");
+  el.className = "panel";
+  el.innerHTML = `
+    <h2><span>${server || location.host}</span>
+      <span><span class="badge lost" id="camera-${index}">connecting</span>
+      <span class="badge off" id="alarm-${index}">no alarm set</span></span></h2>
+    <img id="frame-${index}" alt="live image" src="${base}/stream.mjpg">
+    <table>
+      <tr><td id="median-label-${index}">median</td><td class="v" id="median-${index}">–</td>
+          <td>peak</td><td class="v" id="peak-${index}">–</td></tr>
+      <tr><td>min / max</td><td class="v" id="minmax-${index}">–</td>
+          <td>peak at (x, y)</td><td class="v" id="peak-at-${index}">–</td></tr>
+      <tr><td>valid pixels</td><td class="v" id="valid-${index}">–</td>
+          <td>frame time</td><td class="v" id="time-${index}">–</td></tr>
+      <tr><td>updates</td><td class="v" id="updates-${index}">0</td>
+          <td>estimator</td><td class="v" id="method-${index}">–</td></tr>
+    </table>
+    <div style="position: relative; height: 200px"><canvas id="chart-${index}"></canvas></div>
+    <div class="log" id="log-${index}"></div>`;
+  document.getElementById("panels").appendChild(el);
+  const $ = (id) => document.getElementById(id + "-" + index);
+  let chart = null;
+  if (window.Chart) {
+    chart = new Chart($("chart").getContext("2d"), {
+      type: "line",
+      data: { labels: [], datasets: [
+        { label: "median °C", data: [], borderColor: "#4fc3f7", pointRadius: 0, borderWidth: 2 },
+        { label: "peak °C", data: [], borderColor: "#ff7043", pointRadius: 0, borderWidth: 2 },
+        { label: "alarm threshold °C", data: [], borderColor: "#e53935", borderDash: [6, 4],
+          pointRadius: 0, borderWidth: 1 } ] },
+      options: { animation: false, responsive: true, maintainAspectRatio: false,
+        scales: { x: { ticks: { color: "#aaa", maxTicksLimit: 8 } },
+                  y: { ticks: { color: "#aaa" }, title: { display: true, text: "°C", color: "#aaa" } } },
+        plugins: { legend: { labels: { color: "#ddd" } } } } });
+  } else {
+    $("chart").replaceWith(Object.assign(document.createElement("p"),
+      { textContent: "No plot: Chart.js did not load (install libjs-chart.js on the server)." }));
+  }
+  let updates = 0, threshold = null;
+
+  function log(text) {
+    const line = document.createElement("div");
+    line.textContent = new Date().toLocaleTimeString() + "  " + text;
+    $("log").prepend(line);
+  }
+  function showStats(s) {
+    const r = s["region-median-c"] !== undefined || s["region-x"] !== undefined ? "region-" : "";
+    $("median-label").textContent = r ? "region median" : "median";
+    $("median").textContent = fmt(s[r + "median-c"]) + " °C";
+    $("peak").textContent = fmt(s[r + "peak-c"]) + " °C";
+    $("peak-at").textContent = s[r + "peak-x"] !== undefined ? `${s[r + "peak-x"]}, ${s[r + "peak-y"]}` : "–";
+    $("minmax").textContent = fmt(s[r + "min-c"], 0) + " / " + fmt(s[r + "max-c"], 0);
+    $("valid").textContent = fmt(100 * (s[r + "valid-fraction"] ?? NaN), 1) + " %";
+    $("time").textContent = s.timestamp != null ? fmt(s.timestamp / 1e9, 2) + " s" : "–";
+    $("method").textContent = s.method || "–";
+    $("updates").textContent = String(++updates);
+    if (chart) {
+      const d = chart.data;
+      d.labels.push(new Date().toLocaleTimeString());
+      d.datasets[0].data.push(s[r + "median-c"] ?? null);
+      d.datasets[1].data.push(s[r + "peak-c"] ?? null);
+      d.datasets[2].data.push(threshold);
+      if (d.labels.length > maxPoints) { d.labels.shift(); d.datasets.forEach((x) => x.data.shift()); }
+      chart.update("none");
+    }
+  }
+  function showAlarm(a, quiet) {
+    threshold = a["threshold-c"] ?? null;
+    const raised = a.state === "raised";
+    $("alarm").className = "badge " + (raised ? "raised" : "ok");
+    $("alarm").textContent = raised ? `ALARM ${a.statistic} ${fmt(a["value-c"])} °C > ${fmt(a["threshold-c"])}`
+                                    : `alarm clear (< ${fmt(a["threshold-c"])} °C)`;
+    if (!quiet) log(`alarm ${a.state}: ${a.statistic} ${fmt(a["value-c"])} °C`);
+  }
+  function showCamera(c) {
+    $("camera").className = "badge " + (c.state === "running" ? "ok" : "lost");
+    $("camera").textContent = c.state === "running" ? "camera running" : "camera lost";
+    if (c.state !== "running") log("camera lost: " + (c.why || ""));
+  }
+  // The image's size once a frame came (tests read it from the DOM).
+  setInterval(() => { $("frame").dataset.width = String($("frame").naturalWidth); }, 250);
+  const events = new EventSource(base + "/events");
+  events.addEventListener("hello", (e) => {
+    const s = JSON.parse(e.data);
+    if (s.stats) showStats(s.stats);
+    if (s.camera) showCamera(s.camera);
+    (s["alarm-log"] || []).forEach((a) => log(`alarm ${a.state}: ${a.statistic} ${fmt(a["value-c"])} °C`));
+    if (s.alarm) showAlarm(s.alarm, true);
+    if (index === 0 && !query.has("servers"))
+      (s.servers || []).forEach((other, i) => makePanel(i + 1, other));
+  });
+  events.addEventListener("stats", (e) => showStats(JSON.parse(e.data)));
+  events.addEventListener("alarm", (e) => showAlarm(JSON.parse(e.data), false));
+  events.addEventListener("camera", (e) => showCamera(JSON.parse(e.data)));
+  events.onerror = () => { $("camera").className = "badge lost"; $("camera").textContent = "server unreachable"; };
+}
+
+const servers = query.has("servers") ? query.get("servers").split(",").filter((s) => s) : [""];
+servers.forEach((s, i) => makePanel(i, s));
+document.getElementById("summary").textContent = servers.length > 1 ? servers.length + " servers" : "";
+</script>
+</body>
+</html>
+)PAGE";
+
+}  // namespace pyrocam::serve
