@@ -31,7 +31,7 @@ echo "main-job: recording $frames frames of the simulated melt pool into $record
 # Not live: the frames are computed as fast as the machine can, with the same timestamps.
 MODEL=$model OUT=$recording NUM_BUFFERS=$frames SEGMENT_SECONDS=2 SNAPSHOT_RATE=1 \
   CAPS=video/x-bayer,width=320,height=240,framerate=30/1 \
-  SOURCE="pyrocamsrc scene=melt-pool" pipelines/record.sh >"$out/record.log" 2>&1 || {
+  EXPOSURE_CONTROL=1 PEAK_MARKER=1 SOURCE="pyrocamsrc scene=melt-pool" pipelines/record.sh >"$out/record.log" 2>&1 || {
   cat "$out/record.log" >&2
   echo "main-job: the recording failed (log: $out/record.log)" >&2
   exit 1

@@ -33,13 +33,25 @@ DARK=${DARK:-dark-level=50}
 NUM_BUFFERS=${NUM_BUFFERS:--1}
 WATCHDOG_MS=${WATCHDOG_MS:-5000}
 LATENCY_MS=${LATENCY_MS:-100}
+EXPOSURE_CONTROL=${EXPOSURE_CONTROL:-0}
+PEAK_MARKER=${PEAK_MARKER:-0}
+ALARM_C=${ALARM_C:-}
 
+[[ $EXPOSURE_CONTROL =~ ^[01]$ ]] || { echo "$name: EXPOSURE_CONTROL must be 0 or 1, not '$EXPOSURE_CONTROL'" >&2; exit 2; }
+[[ $PEAK_MARKER =~ ^[01]$ ]] || { echo "$name: PEAK_MARKER must be 0 or 1, not '$PEAK_MARKER'" >&2; exit 2; }
+[[ -z $ALARM_C || $ALARM_C =~ ^[0-9]+([.][0-9]+)?$ ]] || { echo "$name: ALARM_C must be a temperature in degC, not '$ALARM_C'" >&2; exit 2; }
 [[ $LATENCY_MS =~ ^[0-9]+$ ]] || { echo "$name: LATENCY_MS must be a whole number of milliseconds, not '$LATENCY_MS'" >&2; exit 2; }
 
 set -f # SOURCE, CAPS and DARK split on spaces into the launcher's words
 # The camera, ending in the tee `camera`; the watchdog ends the pipeline with an error when the
 # camera sends nothing for WATCHDOG_MS.
-camera_chain=($SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS !
+# EXPOSURE_CONTROL=1 puts autoexposure after it (its dark level darksub's, when DARK gives one).
+exposure_control=()
+if [[ $EXPOSURE_CONTROL == 1 ]]; then
+  dark_level=$(sed -n 's/^dark-level=\([0-9.]*\)$/\1/p' <<<"$DARK")
+  exposure_control=(autoexposure ${dark_level:+dark-level=$dark_level} !)
+fi
+camera_chain=($SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! "${exposure_control[@]}"
   watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera)
 if [[ $PROFILE == nir5x5-reference ]]; then
   # A 5x5 camera reads one temperature per 5x5 macro-pixel (width/5 x height/5). The view and
@@ -82,7 +94,10 @@ thermal_chain=(camera. ! queue ! darksub $DARK ! "${demosaic[@]}" ! ratiotemp "m
 overlay_mix=(camera. ! queue ! "${camera_view[@]}" ! video/x-raw,format=RGBA ! mix.sink_0
   compositor name=mix start-time-selection=first latency="$((LATENCY_MS * 1000000))"
   sink_0::zorder=0 sink_1::zorder=1 sink_1::max-last-buffer-repeat=0 ! video/x-raw,format=RGBA ! queue)
-colormap_to_mix=("${colormap_scale[@]}" thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! mix.sink_1)
+peak_marker=()
+[[ $PEAK_MARKER == 1 ]] && peak_marker=(peak-marker=true)
+colormap_to_mix=("${colormap_scale[@]}" thermalcolormap scale-bar=true "${peak_marker[@]}" !
+  video/x-raw,format=RGBA ! mix.sink_1)
 set +f
 
 # STATS_CSV: ratiotemp's statistics (a message every STATS_INTERVAL_MS) written by the launcher as
@@ -99,6 +114,9 @@ if [[ -n $STATS_CSV ]]; then
   launch_options+=("--stats-csv=$STATS_CSV")
 fi
 [[ -z $ALARM_CSV ]] || launch_options+=("--alarm-csv=$ALARM_CSV")
+# ALARM_C: thermalalarm after ratiotemp, on the frame's peak for 5 frames (after the statistics'
+# words above, which are ratiotemp's).
+[[ -z $ALARM_C ]] || thermal_chain+=(! thermalalarm "threshold-c=$ALARM_C" statistic=peak)
 # Last, after every setting was checked: a first calibration takes a minute or two.
 if [[ ! -f $MODEL ]]; then
   if [[ -n $model_given ]]; then
