@@ -85,9 +85,10 @@ thermal_chain=(camera. ! queue ! darksub $DARK ! "${demosaic[@]}" ! ratiotemp "m
 # (not at 0, which adds frames before it and can negotiate a 1x1 picture); it waits LATENCY_MS
 # for the slower temperature branch, so that no frame goes out without its overlay (on a loaded
 # machine the branch can take longer: raise it).
-# A frame whose overlay comes later than that is shown without it, never with the last overlay
-# that came (sink_1::max-last-buffer-repeat=0; compositor's default repeats it, which puts the
-# temperatures of an earlier frame over a moving scene).
+# A frame whose overlay comes later than that is shown without it rather than with the last
+# overlay that came (sink_1::max-last-buffer-repeat=0; compositor's default repeats it, which puts
+# the temperatures of an earlier frame over a moving scene); not yet guaranteed at the start of a
+# view (docs/live-view.md).
 # The queue after it keeps its thread free: in a live pipeline the first sink to get a frame
 # waits for the others, while compositor answers the tee's allocation queries from that thread,
 # so without the queue the start can deadlock (GStreamer 1.22).
