@@ -21,6 +21,8 @@ test_packages=(
   # examples/read_recording.py (run by the pipelines tests)
   python3-gi gir1.2-gstreamer-1.0 gir1.2-gst-plugins-base-1.0 python3-numpy
   chromium
+  # the serve-lossless test reads /temperature with ffmpeg's RTSP client too
+  ffmpeg
 )
 if [[ ${1:-} == --tests ]]; then
   packages+=("${test_packages[@]}")

@@ -68,8 +68,11 @@ std::string mount_launch(const RtspConfig& c, bool temperature) {
       "leaky-type=downstream ! queue max-size-buffers=3 leaky=downstream ! ";
   const std::string key = " key-int-max=" + std::to_string(c.key_frames);
   if (temperature)
-    // Quantiser 0 with 4:4:4 input is x264's lossless mode (High 4:4:4 Predictive).
-    launch += "x264enc tune=zerolatency speed-preset=ultrafast pass=quant quantizer=0" + key;
+    // Quantiser 0 with 4:4:4 input is x264's lossless mode (High 4:4:4 Predictive). One
+    // thread, so one slice per frame: with zerolatency's sliced threads (a slice per thread)
+    // ffmpeg, and avdec_h264 reading a stored copy, decoded codes the camera never sent.
+    launch +=
+        "x264enc tune=zerolatency speed-preset=ultrafast pass=quant quantizer=0 threads=1" + key;
   else
     launch +=
         "videoconvert ! video/x-raw,format=I420 ! x264enc tune=zerolatency "
