@@ -62,7 +62,7 @@ camera=(aravissrc num-buffers="$NUM_BUFFERS")
 [[ -n $EXPOSURE_US ]] && camera+=("exposure=$EXPOSURE_US")
 [[ -n $GAIN_DB ]] && camera+=("gain=$GAIN_DB")
 
-# The chain and the overlay compositor as in live-view.sh (pipelines/lib/camera.sh).
+# The chain and the overlay (thermaloverlay) as in live-view.sh (pipelines/lib/camera.sh).
 source "$here/lib/camera.sh"
 set -f # the fragments above split on spaces into the launcher's words
 set +e

@@ -8,6 +8,7 @@
 #include "ratiotemp/gstratiotemp.h"
 #include "thermalalarm/gstthermalalarm.h"
 #include "thermalcolormap/gstthermalcolormap.h"
+#include "thermaloverlay/gstthermaloverlay.h"
 
 static gboolean plugin_init(GstPlugin* plugin) {
   gboolean ok = FALSE;
@@ -17,6 +18,7 @@ static gboolean plugin_init(GstPlugin* plugin) {
   ok |= GST_ELEMENT_REGISTER(ratiotemp, plugin);
   ok |= GST_ELEMENT_REGISTER(thermalcolormap, plugin);
   ok |= GST_ELEMENT_REGISTER(thermalalarm, plugin);
+  ok |= GST_ELEMENT_REGISTER(thermaloverlay, plugin);
   ok |= GST_ELEMENT_REGISTER(autoexposure, plugin);
   return ok;
 }

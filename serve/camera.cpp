@@ -59,13 +59,13 @@ std::string camera_description(const CameraConfig& c) {
          "temperature. ! " +
          leaky + " ! appsink name=temperature-sink" + sink +
          " temperature. ! queue ! thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! "
-         "mix.sink_1 "
+         "mix.overlay_sink "
          "camera. ! queue ! " +
          (bayer ? "bayer2rgb" : "videoconvert") +
-         " ! video/x-raw,format=RGBA ! mix.sink_0 "
-         "compositor name=mix start-time-selection=first latency=" +
+         " ! video/x-raw,format=RGBA ! mix.video_sink "
+         "thermaloverlay name=mix latency=" +
          std::to_string(c.latency_ms * 1000000LL) +
-         " sink_0::zorder=0 sink_1::zorder=1 ! video/x-raw,format=RGBA ! queue ! tee name=overlay "
+         " ! video/x-raw,format=RGBA ! queue ! tee name=overlay "
          "overlay. ! " +
          leaky + " ! appsink name=overlay-sink" + sink + " overlay. ! " + leaky +
          " ! videorate drop-only=true max-rate=" + std::to_string(std::max(1, c.jpeg_fps)) +

@@ -170,7 +170,7 @@ int main(int argc, char** argv) {
                  "pyrocam-calib calibrate, or give another with --model\n";
     return 1;
   }
-  for (const char* element : {"ratiotemp", "x264enc", "rtph264pay", "jpegenc", "compositor"}) {
+  for (const char* element : {"ratiotemp", "thermaloverlay", "x264enc", "rtph264pay", "jpegenc"}) {
     GstElementFactory* f = gst_element_factory_find(element);
     if (f == nullptr) {
       std::cerr << kName << ": GStreamer element " << element

@@ -80,25 +80,19 @@ fi
 # Camera frames to temperatures (0.1 K codes): `"${thermal_chain[@]}" ! ...`.
 thermal_chain=(camera. ! queue ! darksub $DARK ! "${demosaic[@]}" ! ratiotemp "model=$MODEL")
 # The temperature overlay (transparent where there is no reading) over the camera's image:
-# link a colour-mapped branch to mix.sink_1, then `"${overlay_mix[@]}" ! ...` gives RGBA frames.
-# compositor, live: start-time-selection=first starts its output at the camera's first frame
-# (not at 0, which adds frames before it and can negotiate a 1x1 picture); it waits LATENCY_MS
-# for the slower temperature branch, so that no frame goes out without its overlay (on a loaded
-# machine the branch can take longer: raise it).
-# A frame whose overlay comes later than that is shown without it rather than with the last
-# overlay that came (sink_1::max-last-buffer-repeat=0; compositor's default repeats it, which puts
-# the temperatures of an earlier frame over a moving scene); not yet guaranteed at the start of a
-# view (docs/live-view.md).
+# link a colour-mapped branch to mix.overlay_sink, then `"${overlay_mix[@]}" ! ...` gives RGBA
+# frames. thermaloverlay pairs each camera frame with the overlay of the same frame and waits for
+# it, so no frame goes out under another frame's temperatures or without its own (unless the
+# temperature branch drops it); LATENCY_MS is how long that wait is allowed before a live sink
+# counts the frame late (it tells the sink; on a loaded machine raise it).
 # The queue after it keeps its thread free: in a live pipeline the first sink to get a frame
-# waits for the others, while compositor answers the tee's allocation queries from that thread,
-# so without the queue the start can deadlock (GStreamer 1.22).
-overlay_mix=(camera. ! queue ! "${camera_view[@]}" ! video/x-raw,format=RGBA ! mix.sink_0
-  compositor name=mix start-time-selection=first latency="$((LATENCY_MS * 1000000))"
-  sink_0::zorder=0 sink_1::zorder=1 sink_1::max-last-buffer-repeat=0 ! video/x-raw,format=RGBA ! queue)
+# waits for the others.
+overlay_mix=(camera. ! queue ! "${camera_view[@]}" ! video/x-raw,format=RGBA ! mix.video_sink
+  thermaloverlay name=mix latency="$((LATENCY_MS * 1000000))" ! video/x-raw,format=RGBA ! queue)
 peak_marker=()
 [[ $PEAK_MARKER == 1 ]] && peak_marker=(peak-marker=true)
 colormap_to_mix=("${colormap_scale[@]}" thermalcolormap scale-bar=true "${peak_marker[@]}" !
-  video/x-raw,format=RGBA ! mix.sink_1)
+  video/x-raw,format=RGBA ! mix.overlay_sink)
 set +f
 
 # STATS_CSV: ratiotemp's statistics (a message every STATS_INTERVAL_MS) written by the launcher as

@@ -64,11 +64,13 @@
  *
  * Temperatures: video/x-raw, format=(string)GRAY16_LE, one value per pixel in units of 0.1 K
  *   (e.g. 14732 = 1473.2 K = 1200.05 degC); 0 means "no reading" (saturated, too dim, invalid).
- *   The code and its conversions are defined once, in the library: pyrocam/core/temperature_codes.h.
+ *   The code and its conversions are defined once, in the library:
+ * pyrocam/core/temperature_codes.h.
  */
 #pragma once
 
 #include <gst/gst.h>
+#include <gst/video/video.h>
 
 #define PYROCAM_MOSAIC_MEDIA_TYPE "video/x-pyrocam-mosaic"
 #define PYROCAM_BANDS_MEDIA_TYPE "video/x-pyrocam-bands"
@@ -106,6 +108,11 @@
   ", format = (string) F32LE, bands = (int) [ 1, max ], " PYROCAM_SIZE_RANGE \
   ", " PYROCAM_FRAMERATE_RANGE ", layout = (string) " PYROCAM_LAYOUTS
 
+/* Colour-mapped temperatures (thermalcolormap's output, thermaloverlay's overlay input) and the
+ * camera images thermaloverlay lays them on: 4 bytes a pixel, alpha (or padding) last. */
+#define PYROCAM_RGBA_FORMATS "{ RGBA, BGRA, RGBx, BGRx }"
+#define PYROCAM_RGBA_CAPS GST_VIDEO_CAPS_MAKE(PYROCAM_RGBA_FORMATS)
+#define PYROCAM_OVERLAY_CAPS GST_VIDEO_CAPS_MAKE("{ RGBA, BGRA }")
+
 #define PYROCAM_TEMPERATURE_CAPS \
   "video/x-raw, format = (string) GRAY16_LE, " PYROCAM_SIZE_RANGE ", " PYROCAM_FRAMERATE_RANGE
-

@@ -155,12 +155,10 @@ GType gst_thermal_colormap_range_mode_get_type(void) {
   return type;
 }
 
-#define OUTPUT_CAPS GST_VIDEO_CAPS_MAKE("{ RGBA, BGRA, RGBx, BGRx }")
-
 static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
     "sink", GST_PAD_SINK, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_TEMPERATURE_CAPS));
 static GstStaticPadTemplate src_template =
-    GST_STATIC_PAD_TEMPLATE("src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(OUTPUT_CAPS));
+    GST_STATIC_PAD_TEMPLATE("src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_RGBA_CAPS));
 
 static GstCaps* gst_thermal_colormap_transform_caps(GstBaseTransform* trans,
                                                     GstPadDirection direction, GstCaps* caps,

@@ -351,5 +351,53 @@ TEST_F(Pipelines5x5, no_display_is_a_clear_error_not_a_crash_n) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+
+// A live view shows every camera frame under its own overlay, from the first frame, however late
+// the temperatures come (LATENCY_MS=0: a sink that counted frames late would drop them, this one
+// does not sync): thermaloverlay waits for each frame's own overlay. Neither an earlier frame's
+// overlay (the melt pool moves: temperatures beside it that look right) nor none at all.
+TEST(LiveOverlay, every_frame_under_its_own_overlay_from_the_first) {
+  for (const char* e :
+       {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp", "thermalcolormap", "thermaloverlay"})
+    REQUIRE_ELEMENT(e);
+  ScratchDir dir("live-overlay");
+  const std::string model = test_model("test-model-rgb.json");
+  const std::string scene = "pyrocamsrc scene=melt-pool seed=7";
+  const std::string caps = "video/x-bayer,width=160,height=120,framerate=30/1";
+  constexpr int kFrames = 30, kW = 160, kH = 120;
+  const ScriptRun run = run_script("live-view.sh", {},
+                                   {{"MODEL", model},
+                                    {"SOURCE", scene + " is-live=true"},
+                                    {"CAPS", caps},
+                                    {"LATENCY_MS", "0"},
+                                    {"WATCHDOG_MS", "30000"},
+                                    {"NUM_BUFFERS", std::to_string(kFrames)},
+                                    {"SINK", raw_sink(dir, "view-")}},
+                                   (dir / "live-view.log").string(), kRunLimit);
+  ASSERT_EQ(run.status, 0) << run.log;
+  const auto frames = frames_in_files(dir.path().string(), "view-");
+  ASSERT_EQ(frames.size(), static_cast<std::size_t>(kFrames));
+  // The same seeded frames as the live camera's (pyrocamsrc draws them by frame index).
+  const std::string chain = scene + " num-buffers=" + std::to_string(kFrames) + " ! " + caps;
+  const Video camera =
+      pull_frames(chain + " ! bayer2rgb ! video/x-raw,format=RGBA ! appsink name=out");
+  const Video overlay = pull_frames(chain + " ! darksub dark-level=50 ! demosaic25 ! ratiotemp " +
+                                    "model=\"" + model +
+                                    "\" ! thermalcolormap scale-bar=true ! "
+                                    "video/x-raw,format=RGBA ! appsink name=out");
+  ASSERT_EQ(camera.frames.size(), static_cast<std::size_t>(kFrames)) << camera.error;
+  ASSERT_EQ(overlay.frames.size(), static_cast<std::size_t>(kFrames)) << overlay.error;
+  for (int k = 0; k < kFrames; ++k) {
+    ASSERT_EQ(frames[k].size(), static_cast<std::size_t>(kW * kH * 4));
+    const CompositeCheck c = check_composite(frames[k], camera.frames[k], overlay.frames[k]);
+    EXPECT_EQ(c.wrong, 0) << "frame " << k << " is not camera frame " << k
+                          << " under its own overlay";
+    // Every frame has readings to show (the pool and the scale bar), so a bare frame would fail.
+    EXPECT_GT(c.opaque, 0) << "frame " << k;
+    EXPECT_NE(frames[k], camera.frames[k]) << "frame " << k << " is shown bare";
+  }
+}
+
 }  // namespace
 }  // namespace pyrocam::test

@@ -344,4 +344,27 @@ void draw_peak_marker(cv::Mat& image, int x, int y, double peak_c, ChannelOrder 
   cv::putText(image, text, at, font, scale, scalar(255, 255, 255), 1, cv::LINE_AA);
 }
 
+void blend_overlay(const cv::Mat& overlay, ChannelOrder overlay_order, cv::Mat& image,
+                   ChannelOrder image_order) {
+  if (overlay.type() != CV_8UC4 || image.type() != CV_8UC4 || overlay.size() != image.size())
+    throw InputError(
+        "blend_overlay: the overlay and the image must be 4-channel 8-bit images "
+        "of one size");
+  // Byte of the image that receives overlay byte c (0..2); the alpha is byte 3 in both orders.
+  const bool swap = overlay_order != image_order;
+  const int to[3] = {swap ? 2 : 0, 1, swap ? 0 : 2};
+  for (int y = 0; y < image.rows; ++y) {
+    const std::uint8_t* o = overlay.ptr<std::uint8_t>(y);
+    std::uint8_t* p = image.ptr<std::uint8_t>(y);
+    for (int x = 0; x < image.cols; ++x, o += 4, p += 4) {
+      const unsigned a = o[3];
+      if (a == 0) continue;
+      for (int c = 0; c < 3; ++c) {
+        const unsigned v = o[c] * a + p[to[c]] * (255u - a);
+        p[to[c]] = static_cast<std::uint8_t>((v + 127u) / 255u);
+      }
+    }
+  }
+}
+
 }  // namespace pyrocam

@@ -240,5 +240,28 @@ TEST(PeakMarker, RingsThePeakAndLabelsItOrDrawsNothingWithoutOne) {
   EXPECT_THROW(draw_peak_marker(grey, 1, 1, 1000, ChannelOrder::kRGBA), InputError);
 }
 
+// Opaque overlay pixels replace the image's colour, transparent ones leave it, partial ones mix
+// in proportion to alpha (rounded to nearest); a BGRx image gets the overlay's channels swapped,
+// and its fourth byte is kept.
+TEST(BlendOverlay, MixesByAlphaInEitherChannelOrder) {
+  cv::Mat overlay(1, 3, CV_8UC4), image(1, 3, CV_8UC4, cv::Scalar(10, 20, 30, 77));
+  overlay.at<cv::Vec4b>(0, 0) = {200, 100, 50, 255};
+  overlay.at<cv::Vec4b>(0, 1) = {200, 100, 50, 0};
+  overlay.at<cv::Vec4b>(0, 2) = {200, 100, 50, 128};
+  cv::Mat rgba = image.clone(), bgra = image.clone();
+  blend_overlay(overlay, ChannelOrder::kRGBA, rgba, ChannelOrder::kRGBA);
+  EXPECT_EQ(rgba.at<cv::Vec4b>(0, 0), cv::Vec4b(200, 100, 50, 77));
+  EXPECT_EQ(rgba.at<cv::Vec4b>(0, 1), cv::Vec4b(10, 20, 30, 77));
+  // (200 * 128 + 10 * 127) / 255 = 105.38; (100 * 128 + 20 * 127) / 255 = 60.16;
+  // (50 * 128 + 30 * 127) / 255 = 40.04
+  EXPECT_EQ(rgba.at<cv::Vec4b>(0, 2), cv::Vec4b(105, 60, 40, 77));
+  blend_overlay(overlay, ChannelOrder::kRGBA, bgra, ChannelOrder::kBGRA);
+  EXPECT_EQ(bgra.at<cv::Vec4b>(0, 0), cv::Vec4b(50, 100, 200, 77));
+  // (50 * 128 + 10 * 127) / 255 = 30.08; (200 * 128 + 30 * 127) / 255 = 115.34
+  EXPECT_EQ(bgra.at<cv::Vec4b>(0, 2), cv::Vec4b(30, 60, 115, 77));
+  cv::Mat small(1, 2, CV_8UC4);
+  EXPECT_THROW(blend_overlay(overlay, ChannelOrder::kRGBA, small, ChannelOrder::kRGBA), InputError);
+}
+
 }  // namespace
 }  // namespace pyrocam

@@ -132,4 +132,11 @@ void draw_scale_bar(cv::Mat& image, Palette palette, double min_c, double max_c,
 // or a NaN temperature. Throws InputError for another image type.
 void draw_peak_marker(cv::Mat& image, int x, int y, double peak_c, ChannelOrder order);
 
+// Lays a colour map's CV_8UC4 output (straight alpha, bytes in `overlay_order`) over a CV_8UC4
+// image of the same size in place (bytes in `image_order`): each colour byte becomes
+// (overlay * alpha + image * (255 - alpha)) / 255, rounded to nearest; the image's fourth byte
+// is kept. Throws InputError for other types or sizes.
+void blend_overlay(const cv::Mat& overlay, ChannelOrder overlay_order, cv::Mat& image,
+                   ChannelOrder image_order);
+
 }  // namespace pyrocam
