@@ -388,6 +388,9 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
   if (!ok) return FALSE;
   st.model_path = settings.model;
   st.estimators = std::make_unique<pyrocam::EstimatorSelector>(st.model);
+  st.estimators->set_table_cache(pyrocam::table_cache_file(
+      *st.model,
+      settings.table_cache_set ? settings.table_cache : pyrocam::default_table_cache_dir()));
   const pyrocam::EstimatorSelector::Choice choice =
       st.estimators->select(to_library(settings.method));
   st.method = choice.method;
@@ -398,6 +401,9 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
                        "estimator construction or its check failed in start");
     return FALSE;
   }
+  if (!st.estimators->cache_problem().empty())
+    GST_WARNING_OBJECT(self, "table cache not used: %s", st.estimators->cache_problem().c_str());
+  GST_INFO_OBJECT(self, "%zu table blocks from the cache", st.estimators->cache_blocks_read());
   if (!choice.fallback.empty())
     GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
                         ("method auto uses likelihood, not lut, for model %s: %s",
@@ -413,7 +419,17 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
 }
 
 static gboolean gst_ratio_temp_stop(GstBaseTransform* trans) {
-  reset_state(GST_RATIO_TEMP(trans));
+  GstRatioTemp* self = GST_RATIO_TEMP(trans);
+  if (self->state->estimators) {
+    /* The next run of this model starts with the blocks this one filled. */
+    try {
+      const std::size_t saved = self->state->estimators->save_table_cache();
+      if (saved > 0) GST_INFO_OBJECT(self, "%zu table blocks kept in the cache", saved);
+    } catch (const std::exception& e) {
+      GST_WARNING_OBJECT(self, "table cache not written: %s", e.what());
+    }
+  }
+  reset_state(self);
   return TRUE;
 }
 

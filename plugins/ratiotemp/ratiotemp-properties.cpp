@@ -22,6 +22,7 @@ enum {
   PROP_E_SLOPE,
   PROP_E_SLOPE_UNCERTAINTY,
   PROP_PARTIAL_BANDS,
+  PROP_TABLE_CACHE,
 };
 
 }  // namespace
@@ -37,6 +38,15 @@ void install_properties(GObjectClass* gobject_class) {
                           "Thermal model (JSON) written by pyrocam-calib calibrate for this "
                           "camera; required",
                           nullptr, ready));
+  g_object_class_install_property(
+      gobject_class, PROP_TABLE_CACHE,
+      g_param_spec_string(
+          "table-cache", "Lookup-table cache folder",
+          "Folder where the lookup table's filled blocks are kept between runs, a file per model "
+          "(lut-FINGERPRINT.bin, written at stop, read and checked against the network at "
+          "start), so that a model's next run does not fill them again while frames wait; "
+          "empty: no cache. Unset (default): $XDG_CACHE_HOME/pyrocam, else ~/.cache/pyrocam",
+          nullptr, ready));
   g_object_class_install_property(
       gobject_class, PROP_METHOD,
       g_param_spec_enum("method", "Estimator",
@@ -128,6 +138,15 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
         s.model = v ? v : "";
       }
       break;
+    case PROP_TABLE_CACHE:
+      if (running) {
+        GST_WARNING_OBJECT(self, "table-cache can only change in NULL or READY");
+      } else {
+        const char* v = g_value_get_string(value);
+        s.table_cache_set = v != nullptr;
+        s.table_cache = v ? v : "";
+      }
+      break;
     case PROP_METHOD:
       s.method = static_cast<GstRatioTempMethod>(g_value_get_enum(value));
       break;
@@ -192,6 +211,9 @@ void get_property(GObject* object, guint prop_id, GValue* value, GParamSpec* psp
   switch (prop_id) {
     case PROP_MODEL:
       g_value_set_string(value, s.model.empty() ? nullptr : s.model.c_str());
+      break;
+    case PROP_TABLE_CACHE:
+      g_value_set_string(value, s.table_cache_set ? s.table_cache.c_str() : nullptr);
       break;
     case PROP_METHOD:
       g_value_set_enum(value, s.method);

@@ -1,6 +1,8 @@
 #include "pyrocam/runtime/estimator_selection.h"
 
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <stdexcept>
 
 #include "pyrocam/core/error.h"
@@ -53,6 +55,13 @@ std::string EstimatorSelector::prepare(Method m) {
   try {
     if (!slot) slot = std::make_unique<PlaneEstimator>(model_, m);
     if (m != Method::kLut || lut_checked_) return "";
+    if (!cache_file_.empty() && std::filesystem::exists(cache_file_)) {
+      try {
+        cache_read_ = slot->estimator().load_tables(cache_file_);
+      } catch (const InputError& e) {
+        cache_problem_ = e.what();
+      }
+    }
     const auto mlp = make_estimator(model_, Method::kMlp);
     lut_problem_ = lut_disagreement(compare_on_locus(*model_, slot->estimator(), *mlp));
     lut_checked_ = true;
@@ -97,6 +106,30 @@ PlaneEstimator& EstimatorSelector::estimator(Method m) {
   const auto& slot = estimators_[static_cast<std::size_t>(m)];
   if (!slot) throw std::logic_error("estimator " + method_name(m) + " was not selected");
   return *slot;
+}
+
+std::size_t EstimatorSelector::save_table_cache() const {
+  const auto& lut = estimators_[static_cast<std::size_t>(Method::kLut)];
+  if (!lut || cache_file_.empty()) return 0;
+  std::error_code ec;
+  std::filesystem::create_directories(std::filesystem::path(cache_file_).parent_path(), ec);
+  if (ec)
+    throw InputError("cannot make the folder of the table cache " + cache_file_ + ": " +
+                     ec.message());
+  return lut->estimator().save_tables(cache_file_);
+}
+
+std::string default_table_cache_dir() {
+  const char* xdg = std::getenv("XDG_CACHE_HOME");
+  if (xdg != nullptr && *xdg == '/') return std::string(xdg) + "/pyrocam";
+  const char* home = std::getenv("HOME");
+  if (home != nullptr && *home != '\0') return std::string(home) + "/.cache/pyrocam";
+  return "";
+}
+
+std::string table_cache_file(const ThermalModel& model, const std::string& dir) {
+  if (dir.empty() || model.fingerprint.empty()) return "";
+  return dir + "/lut-" + model.fingerprint + ".bin";
 }
 
 Method choose_method(std::shared_ptr<const ThermalModel> model, MethodRequest request,

@@ -76,4 +76,7 @@ std::unique_ptr<TemperatureEstimator> make_estimator(std::shared_ptr<const Therm
   throw InputError("unknown estimator method");
 }
 
+std::size_t TemperatureEstimator::save_tables(const std::string&) const { return 0; }
+std::size_t TemperatureEstimator::load_tables(const std::string&) const { return 0; }
+
 }  // namespace pyrocam

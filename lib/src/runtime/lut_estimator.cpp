@@ -1,13 +1,19 @@
 // The lookup-table estimator (Method::kLut): the network tabulated over a colour camera's two
 // ratios, with its per-pixel passes (compiled for AVX2 too).
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -17,6 +23,7 @@
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/locus.h"
 #include "pyrocam/core/spectrum.h"
+#include "pyrocam/runtime/model.h"
 #include "runtime/estimator_kinds.h"
 
 namespace pyrocam {
@@ -137,6 +144,13 @@ class LutEstimator : public TemperatureEstimator {
   static constexpr double kGuardC = 2.0;
   static constexpr std::size_t kMaxCells = std::size_t{1} << 26;  // in the box
   static constexpr std::size_t kMaxBlocks = 8192;                 // filled: 32 MB
+  // The cache keeps the first half of the budget that a run filled: the blocks its scenes need
+  // first, leaving the other half for a run's own scene (past the budget pixels are read by the
+  // network, which then depends on what came before).
+  static constexpr std::size_t kMaxCachedBlocks = kMaxBlocks / 2;
+  static constexpr std::size_t kBlockBytes = 4 * kBlockCells * kBlockCells * sizeof(float);
+  // Bump when a block's values would change (grid rule, network arithmetic, output space).
+  static constexpr const char* kCacheMagic = "pyrocam lookup-table cache 1\n";
 
   explicit LutEstimator(std::shared_ptr<const ThermalModel> model)
       : TemperatureEstimator(std::move(model)), mlp_(model_) {
@@ -276,6 +290,105 @@ class LutEstimator : public TemperatureEstimator {
     }
   }
 
+  // The cache file: kCacheMagic, then a header line naming the model's fingerprint, the
+  // output space, the grid and the block count, then per block its index (uint32) and its
+  // 4 * kBlockCells^2 floats (host byte order: the cache belongs to one machine), then the
+  // FNV-1a checksum of everything before it as a text line.
+  std::string cache_header(std::size_t blocks) const {
+    char line[256];
+    std::snprintf(line, sizeof line, "%s %d %d %d %.17g %.17g %.17g %zu\n",
+                  model_->fingerprint.c_str(), static_cast<int>(space_), blocks_x_, blocks_y_, h_,
+                  x0_, y0_, blocks);
+    return std::string(kCacheMagic) + line;
+  }
+
+  std::size_t save_tables(const std::string& path) const override {
+    if (model_->fingerprint.empty()) return 0;
+    const std::size_t built = built_.load(std::memory_order_acquire);
+    if (built <= loaded_) return 0;
+    std::string data;
+    std::size_t count = 0;
+    std::vector<std::uint32_t> order;
+    {
+      std::lock_guard<std::mutex> lock(order_mutex_);
+      order = built_order_;
+    }
+    if (loaded_ >= kMaxCachedBlocks) return 0;
+    std::string body;
+    for (std::uint32_t index : order) {
+      if (count == kMaxCachedBlocks) break;
+      body.append(reinterpret_cast<const char*>(&index), sizeof index);
+      body.append(reinterpret_cast<const char*>(blocks_[index].load(std::memory_order_acquire)),
+                  kBlockBytes);
+      ++count;
+    }
+    data = cache_header(count) + body;
+    data += fnv1a_hex(data) + "\n";
+    const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
+    {
+      std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+      out.write(data.data(), static_cast<std::streamsize>(data.size()));
+      out.close();
+      if (!out) {
+        std::remove(temporary.c_str());
+        throw InputError("could not write the table cache " + temporary);
+      }
+    }
+    if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+      std::remove(temporary.c_str());
+      throw InputError("could not rename the table cache to " + path);
+    }
+    return count;
+  }
+
+  std::size_t load_tables(const std::string& path) const override {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError("cannot read the table cache " + path);
+    const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::size_t magic = std::strlen(kCacheMagic);
+    const std::size_t header_end = data.find('\n', magic);
+    if (data.compare(0, magic, kCacheMagic) != 0 || header_end == std::string::npos)
+      throw InputError("the table cache " + path + " is not a table cache of this version");
+    std::size_t count = 0;
+    const std::string header = data.substr(0, header_end + 1);
+    if (std::sscanf(header.c_str() + magic, "%*s %*d %*d %*d %*g %*g %*g %zu", &count) != 1 ||
+        header != cache_header(count))
+      throw InputError("the table cache " + path +
+                       " is for another model, grid or version (header " +
+                       header.substr(magic, header.size() - magic - 1) + ")");
+    const std::size_t record = sizeof(std::uint32_t) + kBlockBytes;
+    const std::size_t body_end = header.size() + count * record;
+    if (count > kMaxCachedBlocks || data.size() != body_end + 17 ||
+        data.compare(body_end, 17, fnv1a_hex(data.substr(0, body_end)) + "\n") != 0)
+      throw InputError("the table cache " + path + " is truncated or altered (checksum)");
+    const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
+    for (std::size_t k = 0; k < count; ++k) {
+      std::uint32_t index = 0;
+      std::memcpy(&index, data.data() + header.size() + k * record, sizeof index);
+      if (index >= slots)
+        throw InputError("the table cache " + path + " names a block outside the table");
+    }
+    std::size_t added = 0;
+    for (std::size_t k = 0; k < count; ++k) {
+      const char* at = data.data() + header.size() + k * record;
+      std::uint32_t index = 0;
+      std::memcpy(&index, at, sizeof index);
+      std::unique_ptr<float[]> values(new float[4 * kBlockCells * kBlockCells]);
+      std::memcpy(values.get(), at + sizeof index, kBlockBytes);
+      float* expected = nullptr;
+      if (blocks_[index].compare_exchange_strong(expected, values.get(),
+                                                 std::memory_order_acq_rel)) {
+        values.release();
+        built_.fetch_add(1, std::memory_order_relaxed);
+        std::lock_guard<std::mutex> lock(order_mutex_);
+        built_order_.push_back(index);
+        ++added;
+      }
+    }
+    loaded_ = built_.load(std::memory_order_acquire);
+    return added;
+  }
+
   std::size_t memory_bytes() const override {
     return built_.load(std::memory_order_relaxed) * kBlockCells * kBlockCells * 4 * sizeof(float) +
            static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_) *
@@ -324,6 +437,8 @@ class LutEstimator : public TemperatureEstimator {
     float* expected = nullptr;
     if (slot.compare_exchange_strong(expected, values.get(), std::memory_order_acq_rel)) {
       built_.fetch_add(1, std::memory_order_relaxed);
+      std::lock_guard<std::mutex> lock(order_mutex_);
+      built_order_.push_back(static_cast<std::uint32_t>(by * blocks_x_ + bx));
       return values.release();
     }
     return expected;  // another thread was first
@@ -356,6 +471,9 @@ class LutEstimator : public TemperatureEstimator {
   float inv_ref_count_ = 1, lowest_ = 0, highest_ = 0;
   std::unique_ptr<std::atomic<float*>[]> blocks_;
   mutable std::atomic<std::size_t> built_{0};
+  mutable std::size_t loaded_ = 0;  // blocks held after the last load_tables
+  mutable std::mutex order_mutex_;
+  mutable std::vector<std::uint32_t> built_order_;  // filled blocks, first filled first
 };
 
 }  // namespace

@@ -3,12 +3,17 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "pyrocam/core/error.h"
+#include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/plane_estimator.h"
 #include "runtime/estimator_test_support.h"
+#include "test_support.h"
 
 namespace pyrocam::test {
 namespace {
@@ -77,6 +82,73 @@ TEST(LutEstimator, rejects_saturated_dim_and_invalid_bands_n) {
   EXPECT_TRUE(std::isnan(lut->temperature_c(dim)));
   EXPECT_TRUE(std::isnan(lut->temperature_c(nan)));
   EXPECT_TRUE(std::isnan(lut->temperature_c(negative)));
+}
+
+// The table cache: a second estimator of the model starts with the blocks the first filled, and
+// reads every pixel as the first did; a cache of another model, cut short or altered adds
+// nothing.
+TEST(LutEstimator, table_cache_round_trip_gives_the_same_readings) {
+  const auto model = test_model("test-model-rgb.json");
+  ASSERT_FALSE(model->fingerprint.empty());
+  const NoisyPixels px =
+      noisy_pixels(*model, kSweepC, 100, 15, 200, saturation_signal_dn(*model), 0.02, 11);
+  const std::vector<cv::Mat> planes = as_planes(px);
+  ScratchDir dir("lut-cache");
+  const std::string file = table_cache_file(*model, dir.path().string());
+  EXPECT_EQ(file, (dir / ("lut-" + model->fingerprint + ".bin")).string());
+
+  const PlaneEstimator first(model, Method::kLut);
+  cv::Mat first_c;
+  first.estimate(planes, first_c);
+  const std::size_t filled = first.estimator().memory_bytes();
+  const std::size_t saved = first.estimator().save_tables(file);
+  EXPECT_GT(saved, 10u);
+  EXPECT_EQ(first.estimator().save_tables(file), saved) << "it holds blocks the file did not give";
+
+  const PlaneEstimator second(model, Method::kLut);
+  EXPECT_EQ(second.estimator().load_tables(file), saved);
+  EXPECT_EQ(second.estimator().memory_bytes(), filled);
+  EXPECT_EQ(second.estimator().save_tables(file), 0u) << "nothing new to keep";
+  cv::Mat second_c;
+  second.estimate(planes, second_c);
+  EXPECT_EQ(second.estimator().memory_bytes(), filled) << "no block filled again";
+  int differ = 0;
+  for (int i = 0; i < first_c.cols; ++i) {
+    const float x = first_c.at<float>(0, i), y = second_c.at<float>(0, i);
+    differ += !(x == y || (std::isnan(x) && std::isnan(y)));
+  }
+  EXPECT_EQ(differ, 0);
+
+  // Altered, cut short, another model's, not a cache: InputError, nothing added.
+  std::string bytes;
+  {
+    std::ifstream in(file, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto write = [&](const std::string& path, const std::string& content) {
+    std::ofstream(path, std::ios::binary) << content;
+    return path;
+  };
+  std::string altered = bytes;
+  altered[altered.size() / 2] ^= 0x10;
+  ThermalModel other_model = *model;
+  other_model.fingerprint = "0123456789abcdef";
+  const auto other = std::make_shared<const ThermalModel>(other_model);
+  const std::vector<std::pair<std::shared_ptr<const ThermalModel>, std::string>> bad = {
+      {model, write((dir / "altered.bin").string(), altered)},
+      {model, write((dir / "short.bin").string(), bytes.substr(0, bytes.size() - 100))},
+      {model, write((dir / "text.bin").string(), "not a cache\n")},
+      {model, (dir / "missing.bin").string()},
+      {other, file}};
+  for (const auto& [m, path] : bad) {
+    const auto fresh = make_estimator(m, Method::kLut);
+    EXPECT_THROW(fresh->load_tables(path), InputError) << path;
+    EXPECT_EQ(fresh->memory_bytes(), make_estimator(m, Method::kLut)->memory_bytes()) << path;
+  }
+  // A model not loaded from a file has no fingerprint to name its cache by.
+  ThermalModel unnamed = *model;
+  unnamed.fingerprint.clear();
+  EXPECT_EQ(table_cache_file(unnamed, dir.path().string()), "");
 }
 
 }  // namespace

@@ -46,12 +46,23 @@ class EstimatorSelector {
   Choice select(MethodRequest request);
   // The estimator of a method that select() returned without a problem.
   PlaneEstimator& estimator(Method method);
+  // Keeps the lookup table's blocks in `file` between runs (table_cache_file): read when the
+  // table is built, before its check (which then checks them too); "" (the default): none.
+  void set_table_cache(std::string file) { cache_file_ = std::move(file); }
+  // Blocks the cache gave, and why it gave none when it was there but unusable ("" otherwise).
+  std::size_t cache_blocks_read() const { return cache_read_; }
+  const std::string& cache_problem() const { return cache_problem_; }
+  // Writes the table's blocks to the cache file when it holds blocks the file did not give it
+  // (creating the folder); returns how many it wrote. Throws InputError when it cannot.
+  std::size_t save_table_cache() const;
 
  private:
   std::string prepare(Method method);
 
   std::shared_ptr<const ThermalModel> model_;
   std::array<std::unique_ptr<PlaneEstimator>, 3> estimators_;  // by Method
+  std::string cache_file_, cache_problem_;
+  std::size_t cache_read_ = 0;
   bool lut_checked_ = false;
   std::string lut_problem_;  // why the lookup table is not used, once checked
 };
@@ -61,5 +72,13 @@ class EstimatorSelector {
 // the method cannot be used with the model.
 Method choose_method(std::shared_ptr<const ThermalModel> model, MethodRequest request,
                      std::string* fallback = nullptr);
+
+// Where the lookup table's filled blocks are kept between runs by default (ratiotemp
+// table-cache, pyrocam-calib calibrate): $XDG_CACHE_HOME/pyrocam, else $HOME/.cache/pyrocam; ""
+// when neither variable is set.
+std::string default_table_cache_dir();
+// A model's cache file in `dir` (TemperatureEstimator::save_tables): dir/lut-FINGERPRINT.bin;
+// "" for an empty dir or a model without a fingerprint (not loaded from a file).
+std::string table_cache_file(const ThermalModel& model, const std::string& dir);
 
 }  // namespace pyrocam

@@ -62,6 +62,16 @@ class TemperatureEstimator {
   // which differs from the table by at most about 0.5 degC: which pixels those are then depends
   // on the frames seen before).
   virtual std::size_t memory_bytes() const { return 0; }
+  // The lookup table's filled blocks kept between runs (ratiotemp's table cache), so that a
+  // second run of a model starts with the blocks the first one needed. save_tables writes them
+  // to `path` atomically (a temporary file, then a rename) when it holds blocks that `path` did
+  // not give it, and returns how many it wrote (0: nothing new, or a model without a
+  // fingerprint). load_tables adds a file's blocks and returns how many; it throws InputError,
+  // adding none, for a file that is not such a cache, is truncated or altered (checksum), or was
+  // made for another model (fingerprint), grid or version. A block read back holds the values
+  // this machine computed for it, so readings do not change. Other methods keep no tables.
+  virtual std::size_t save_tables(const std::string& path) const;
+  virtual std::size_t load_tables(const std::string& path) const;
 
  protected:
   // All bands finite and at least the dim threshold.
