@@ -42,3 +42,17 @@ trap 'rm -f "$partial"' EXIT
   --report "${model%.json}-report"
 mv -f "$partial" "$model"
 echo "ensure-model: wrote $model (report: ${model%.json}-report.html)"
+
+# The colour model's first view starts with the lookup-table blocks that the simulated melt pool
+# and a plate need (kept in ratiotemp's table cache), rather than filling them while its first
+# frames wait; a few seconds, once.
+if [[ $profile == rgb-reference ]]; then
+  here=$(cd "$(dirname "$0")/.." && pwd)
+  source "$here/lib/setup.sh"
+  for scene in melt-pool "plate temperature=1300"; do
+    # shellcheck disable=SC2086 # the scene's words are pyrocamsrc's properties
+    "$launch" pyrocamsrc scene=$scene num-buffers=30 ! video/x-bayer,width=320,height=240 ! \
+      darksub dark-level=50 ! demosaic25 ! ratiotemp "model=$model" ! fakesink >/dev/null ||
+      echo "ensure-model: could not fill the lookup-table cache (the first frames will be slower)" >&2
+  done
+fi

@@ -69,6 +69,8 @@ struct State {
   std::vector<cv::Mat> planes;                      // headers onto the output buffer, reused
   std::vector<pyrocam::SignalNoise> profile_noise;  // per band, from the profile; empty: none
   std::vector<pyrocam::SignalNoise> noise;          // per band, for the stream's bit depth
+  double profile_dim_dn = -1;                       // the profile's dim threshold; <0: none
+  float skip_below_dn = 0;  // the mixed-pixel check leaves footprints dimmer than this alone
 };
 
 pyrocam::DemosaicMethod to_library(GstDemosaic25Method m) {
@@ -264,13 +266,15 @@ static gboolean gst_demosaic25_set_caps(GstBaseTransform* trans, GstCaps* incaps
   // camera's sensor (0.03 DN per electron and 6 electrons read noise at 8 bits) scaled to the
   // stream's bit depth.
   st.noise = st.profile_noise;
-  if (static_cast<int>(st.noise.size()) < st.bands) {
-    int depth = 8;
-    gst_structure_get_int(gst_caps_get_structure(incaps, 0), "bit-depth", &depth);
-    const double scale = std::ldexp(1.0, depth - 8);
+  int depth = 8;
+  gst_structure_get_int(gst_caps_get_structure(incaps, 0), "bit-depth", &depth);
+  const double scale = std::ldexp(1.0, depth - 8);
+  if (static_cast<int>(st.noise.size()) < st.bands)
     st.noise.assign(static_cast<std::size_t>(st.bands),
                     pyrocam::SignalNoise{0.03 * scale, 0.23 * scale * scale});
-  }
+  // Footprints all below the dim threshold give pixels without a reading whatever the check
+  // says: the profile's threshold, else the shipped profiles' 20 DN at 8 bits.
+  st.skip_below_dn = static_cast<float>(st.profile_dim_dn >= 0 ? st.profile_dim_dn : 20 * scale);
   st.configured = true;
   GST_INFO_OBJECT(self, "%dx%d %s -> %d bands of %dx%d", st.in_width, st.in_height, pattern,
                   st.bands, st.out_width, st.out_height);
@@ -313,6 +317,7 @@ static gboolean gst_demosaic25_start(GstBaseTransform* trans) {
   }
   for (int b = 0; b < profile.band_count(); ++b)
     st.profile_noise.push_back(pyrocam::signal_noise(profile, b));
+  st.profile_dim_dn = profile.thresholds.inference_dim_dn;
   st.profile_name = settings.profile;
   GST_INFO_OBJECT(self, "camera profile %s (%s)", profile.name.c_str(),
                   profile.mosaic.pattern.c_str());
@@ -347,6 +352,7 @@ static GstFlowReturn gst_demosaic25_transform(GstBaseTransform* trans, GstBuffer
       pyrocam::FootprintCheck check;
       check.relative_spread = spread;
       check.noise = st.noise;
+      check.skip_below_dn = st.skip_below_dn;
       pyrocam::mark_mixed_pixels(in.image(), st.layout, st.method, check, st.planes);
     }
   });

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <opencv2/core/utility.hpp>
 
+#include "detail/vector_clones.h"
 #include "pyrocam/core/error.h"
 
 namespace pyrocam {
@@ -29,6 +32,93 @@ inline bool uniform(float lo, float hi, const SignalNoise& n, const FootprintChe
 
 void set_nan(std::vector<cv::Mat>& planes, int x, int y) {
   for (cv::Mat& p : planes) p.at<float>(y, x) = std::numeric_limits<float>::quiet_NaN();
+}
+
+// The bilinear check of one row (see mark_mixed_pixels) in one branch-free pass that the
+// compiler vectorises: mixed[x] = 1 where a footprint is not uniform. Non-finite samples
+// (saturated, no reading) are left out: +INF never lowers a min, and it is replaced by -INF for
+// the max. `r` is the row, `a` and `b` the rows above and below (mirrored at the ends); columns
+// x - 1 and x + 1 must exist for x in [x0, x1): the two end columns go through `left`/`right`.
+struct RowNoise {
+  const float* gain[3];    // per column, the band of test t's lattice (0: row neighbours,
+  const float* floor2[3];  // 1: column neighbours, 2: corners)
+};
+
+inline float high(float v) { return v < std::numeric_limits<float>::infinity() ? v : -v; }
+// std::min and std::max on values (theirs select a reference, which does not vectorise).
+inline float min_of(float a, float b) { return b < a ? b : a; }
+inline float max_of(float a, float b) { return a < b ? b : a; }
+
+// 1 where a band's samples spread beyond the allowance, else 0 (floats: one vector type).
+inline float spread_exceeds(float lo, float hi, float gain, float floor2, float rel, float k2) {
+  const float h = max_of(hi, 0.f);
+  const float beyond = (hi - lo) - rel * h;
+  const float var = gain * (max_of(lo, 0.f) + h) + floor2;
+  // Footprints without two finite samples have hi < lo: beyond < 0.
+  const float over = beyond * beyond > k2 * var ? 1.f : 0.f;
+  return beyond > 0.f ? over : 0.f;
+}
+
+// One pixel from its footprint's samples: the row's at columns x - 1 and x + 1 (rl, rr), and
+// the rows above and below at x - 1, x and x + 1.
+inline float footprint_mixed(float rl, float rr, float al, float ac, float ar, float bl, float bc,
+                             float br, float g0, float f0, float g1, float f1, float g2, float f2,
+                             float rel, float k2) {
+  const float row_lo = min_of(rl, rr);
+  const float row_hi = max_of(high(rl), high(rr));
+  const float col_lo = ac < bc ? ac : bc;
+  const float ach = high(ac), bch = high(bc);
+  const float col_hi = ach > bch ? ach : bch;
+  const float lo_l = al < bl ? al : bl, lo_r = ar < br ? ar : br;
+  const float alh = high(al), blh = high(bl), arh = high(ar), brh = high(br);
+  const float hi_l = alh > blh ? alh : blh, hi_r = arh > brh ? arh : brh;
+  const float corner_lo = min_of(lo_l, lo_r), corner_hi = max_of(hi_l, hi_r);
+  return max_of(max_of(spread_exceeds(row_lo, row_hi, g0, f0, rel, k2),
+                       spread_exceeds(col_lo, col_hi, g1, f1, rel, k2)),
+                spread_exceeds(corner_lo, corner_hi, g2, f2, rel, k2));
+}
+
+// Pixel x with its neighbour columns xl and xr (mirrored at the row's ends).
+inline float pixel_mixed(const float* r, const float* a, const float* b, std::size_t x,
+                         std::size_t xl, std::size_t xr, const RowNoise& n, float rel, float k2) {
+  return footprint_mixed(r[xl], r[xr], a[xl], a[x], a[xr], b[xl], b[x], b[xr], n.gain[0][x],
+                         n.floor2[0][x], n.gain[1][x], n.floor2[1][x], n.gain[2][x], n.floor2[2][x],
+                         rel, k2);
+}
+
+// Columns 1 to w - 2 (both neighbours inside the row).
+PYROCAM_VECTOR_CLONES
+void row_mixed(const float* __restrict r, const float* __restrict a, const float* __restrict b,
+               std::size_t w, const float* __restrict g0, const float* __restrict f0,
+               const float* __restrict g1, const float* __restrict f1, const float* __restrict g2,
+               const float* __restrict f2, float rel, float k2, float* __restrict mixed) {
+  for (std::size_t x = 1; x + 1 < w; ++x)
+    mixed[x] = footprint_mixed(r[x - 1], r[x + 1], a[x - 1], a[x], a[x + 1], b[x - 1], b[x],
+                               b[x + 1], g0[x], f0[x], g1[x], f1[x], g2[x], f2[x], rel, k2);
+}
+
+// How many samples of three rows' columns [x0, x1) are at least `dim` (+INF, saturated, is).
+PYROCAM_VECTOR_CLONES
+std::int32_t count_bright(const float* __restrict r, const float* __restrict a,
+                          const float* __restrict b, std::size_t x0, std::size_t x1, float dim) {
+  std::int32_t n = 0;
+  for (std::size_t x = x0; x < x1; ++x)
+    n += (r[x] >= dim ? 1 : 0) + (a[x] >= dim ? 1 : 0) + (b[x] >= dim ? 1 : 0);
+  return n;
+}
+
+// How many of a row's flags are set.
+PYROCAM_VECTOR_CLONES
+std::int32_t count_mixed(const float* __restrict mixed, std::size_t w) {
+  std::int32_t n = 0;
+  for (std::size_t x = 0; x < w; ++x) n += static_cast<std::int32_t>(mixed[x]);
+  return n;
+}
+
+PYROCAM_VECTOR_CLONES
+void blank_mixed(const float* __restrict mixed, std::size_t w, float* __restrict plane) {
+  for (std::size_t x = 0; x < w; ++x)
+    plane[x] = mixed[x] != 0.f ? std::numeric_limits<float>::quiet_NaN() : plane[x];
 }
 
 }  // namespace
@@ -74,76 +164,76 @@ std::size_t mark_mixed_pixels(const cv::Mat& mosaic, const MosaicLayout& layout,
   };
 
   if (method == DemosaicMethod::kBilinear) {
-    // Each band's samples lie on period-2 lattices (R and B one each, G two: the even and the
-    // odd rows' G); the samples of a lattice in a pixel's 3x3 window are those in the rows and
-    // the columns of the window on the lattice: {y} or {y-1, y+1}, times {x} or {x-1, x+1}.
-    // Row by row: min and max down the lattice rows for every column, then across the lattice
-    // columns: a few contiguous passes the compiler vectorises, not 9 loads per pixel.
-    struct Lattice {
-      int band, row_parity, column_parity;
+    // Each band's samples lie on a period-2 lattice (R and B one each, G two: the even and the
+    // odd rows' G). In the 3x3 window of pixel (x, y) the lattice through the pixel itself has
+    // one sample (always uniform); the lattice on its row has the samples at x - 1 and x + 1;
+    // the lattice on its column those at y - 1 and y + 1; the fourth the four corners. So per
+    // row: the min and max of rows y - 1 and y + 1 down each column, then three tests per pixel
+    // from contiguous arrays shifted by one column, which the compiler vectorises; rows in
+    // parallel. The arithmetic is that of `uniform`, in the same order.
+    struct BandNoise {
+      std::vector<float> gain, floor2;  // per column: the band of the lattice tested there
     };
-    std::vector<Lattice> lattices;
+    // For a row parity and a test (0: row neighbours, 1: column neighbours, 2: corners), the
+    // noise of the band tested at each column.
+    std::array<std::array<BandNoise, 3>, 2> noise_of;
     for (int py = 0; py < 2; ++py)
-      for (int px = 0; px < 2; ++px) lattices.push_back({layout.band_at(px, py), py, px});
+      for (int t = 0; t < 3; ++t) {
+        BandNoise& bn = noise_of[static_cast<std::size_t>(py)][static_cast<std::size_t>(t)];
+        bn.gain.resize(static_cast<std::size_t>(width));
+        bn.floor2.resize(static_cast<std::size_t>(width));
+        for (int x = 0; x < width; ++x) {
+          const int lattice_x = t == 1 ? x : x + 1, lattice_y = t == 0 ? py : py + 1;
+          const SignalNoise& n =
+              check.noise[static_cast<std::size_t>(layout.band_at(lattice_x % 2, lattice_y % 2))];
+          bn.gain[static_cast<std::size_t>(x)] = static_cast<float>(n.shot_gain);
+          bn.floor2[static_cast<std::size_t>(x)] = static_cast<float>(2 * n.floor_dn2);
+        }
+      }
+    const float rel = static_cast<float>(check.relative_spread);
+    const float k2 = static_cast<float>(check.k_sigma * check.k_sigma);
+    const float skip = check.skip_below_dn;
     auto row = [&](int y) {
       return mosaic.ptr<float>(y < 0 ? -y : y >= height ? 2 * height - 2 - y : y);
     };
-    std::vector<float> vlo(static_cast<std::size_t>(width) + 2),
-        vhi(static_cast<std::size_t>(width) + 2);
-    std::vector<float> hlo(static_cast<std::size_t>(width)), hhi(static_cast<std::size_t>(width));
-    std::vector<std::uint8_t> mixed(static_cast<std::size_t>(width));
-    for (int y = 0; y < height; ++y) {
-      std::fill(mixed.begin(), mixed.end(), 0);
-      for (const Lattice& l : lattices) {
-        const SignalNoise& n = check.noise[static_cast<std::size_t>(l.band)];
-        // Down the rows: vlo/vhi[x + 1] for column x, mirrored columns at both ends.
-        const float* a = row((y & 1) == l.row_parity ? y : y - 1);
-        const float* b = row((y & 1) == l.row_parity ? y : y + 1);
-        float* lo_col = vlo.data() + 1;
-        float* hi_col = vhi.data() + 1;
-        for (int x = 0; x < width; ++x) {
-          // Non-finite samples (saturated, no reading) are left out: +INF never lowers a min,
-          // and it is replaced by -INF for the max.
-          const float u = a[x], v = b[x];
-          const float u_hi = u < std::numeric_limits<float>::infinity() ? u : -u;
-          const float v_hi = v < std::numeric_limits<float>::infinity() ? v : -v;
-          lo_col[x] = u < v ? u : v;
-          hi_col[x] = u_hi > v_hi ? u_hi : v_hi;
+    std::atomic<std::size_t> total{0};
+    cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+      const auto w = static_cast<std::size_t>(width);
+      std::vector<float> mixed(w);
+      std::size_t marked_here = 0;
+      for (int y = rows.start; y < rows.end; ++y) {
+        const auto& noise = noise_of[static_cast<std::size_t>(y & 1)];
+        RowNoise n{};
+        for (std::size_t t = 0; t < 3; ++t) {
+          n.gain[t] = noise[t].gain.data();
+          n.floor2[t] = noise[t].floor2.data();
         }
-        if (width > 1) {
-          vlo[0] = vlo[2], vhi[0] = vhi[2];
-          vlo[static_cast<std::size_t>(width) + 1] = vlo[static_cast<std::size_t>(width) - 1];
-          vhi[static_cast<std::size_t>(width) + 1] = vhi[static_cast<std::size_t>(width) - 1];
+        const float *r = row(y), *a = row(y - 1), *b = row(y + 1);
+        // In chunks; a chunk whose footprints hold no sample at the skip level is left out.
+        constexpr std::size_t kChunk = 64;
+        for (std::size_t x0 = 1; x0 + 1 < w; x0 += kChunk) {
+          const std::size_t x1 = std::min(x0 + kChunk, w - 1);
+          if (count_bright(r, a, b, x0 - 1, x1 + 1, skip) == 0) {
+            std::fill(mixed.begin() + static_cast<std::ptrdiff_t>(x0),
+                      mixed.begin() + static_cast<std::ptrdiff_t>(x1), 0.f);
+            continue;
+          }
+          row_mixed(r + x0 - 1, a + x0 - 1, b + x0 - 1, x1 - x0 + 2, n.gain[0] + x0 - 1,
+                    n.floor2[0] + x0 - 1, n.gain[1] + x0 - 1, n.floor2[1] + x0 - 1,
+                    n.gain[2] + x0 - 1, n.floor2[2] + x0 - 1, rel, k2, mixed.data() + x0 - 1);
         }
-        // Across the columns, then the test: branch-free passes.
-        for (int x = l.column_parity; x < width; x += 2)
-          hlo[static_cast<std::size_t>(x)] = lo_col[x],
-          hhi[static_cast<std::size_t>(x)] = hi_col[x];
-        for (int x = 1 - l.column_parity; x < width; x += 2) {
-          hlo[static_cast<std::size_t>(x)] = std::min(lo_col[x - 1], lo_col[x + 1]);
-          hhi[static_cast<std::size_t>(x)] = std::max(hi_col[x - 1], hi_col[x + 1]);
-        }
-        const float rel = static_cast<float>(check.relative_spread);
-        const float k2 = static_cast<float>(check.k_sigma * check.k_sigma);
-        const float gain = static_cast<float>(n.shot_gain);
-        const float floor2 = static_cast<float>(2 * n.floor_dn2);
-        const float* lo = hlo.data();
-        const float* hi = hhi.data();
-        std::uint8_t* m = mixed.data();
-        for (int x = 0; x < width; ++x) {
-          const float h = std::max(hi[x], 0.f);
-          const float beyond = (hi[x] - lo[x]) - rel * h;
-          const float var = gain * (std::max(lo[x], 0.f) + h) + floor2;
-          // Footprints without two finite samples have hi < lo: beyond < 0.
-          m[x] |= static_cast<std::uint8_t>(beyond > 0.f && beyond * beyond > k2 * var);
-        }
+        // The end columns, their missing neighbour mirrored in (column -1 is 1, w is w - 2).
+        const std::size_t inner = w > 1 ? 1 : 0;
+        mixed[0] = pixel_mixed(r, a, b, 0, inner, inner, n, rel, k2);
+        if (w > 1) mixed[w - 1] = pixel_mixed(r, a, b, w - 1, w - 2, w - 2, n, rel, k2);
+        const auto here = static_cast<std::size_t>(count_mixed(mixed.data(), w));
+        if (here == 0) continue;
+        marked_here += here;
+        for (cv::Mat& p : planes) blank_mixed(mixed.data(), w, p.ptr<float>(y));
       }
-      for (int x = 0; x < width; ++x)
-        if (mixed[static_cast<std::size_t>(x)]) {
-          set_nan(planes, x, y);
-          ++marked;
-        }
-    }
+      total.fetch_add(marked_here, std::memory_order_relaxed);
+    });
+    marked = total.load();
   } else {
     Offsets cell;
     for (int dy = 0; dy < layout.period_height; ++dy)

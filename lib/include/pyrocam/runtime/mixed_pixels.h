@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -27,6 +28,10 @@ struct FootprintCheck {
   double relative_spread = kDefaultFootprintSpread;
   double k_sigma = 5;              // plus this many noise standard deviations of the difference
   std::vector<SignalNoise> noise;  // per band (signal_noise of the profile)
+  // Footprints whose samples are all below this are not tested: every band interpolated from
+  // them is below it too, so with the readings' dim threshold here the pixel has no reading
+  // anyway (a cold background, most of a melt-pool frame, costs almost nothing).
+  float skip_below_dn = -std::numeric_limits<float>::infinity();
 };
 inline constexpr double kMaxRelativeSpread = 10;
 
