@@ -38,7 +38,7 @@ void set_nan(std::vector<cv::Mat>& planes, int x, int y) {
 // compiler vectorises: mixed[x] = 1 where a footprint is not uniform. Non-finite samples
 // (saturated, no reading) are left out: +INF never lowers a min, and it is replaced by -INF for
 // the max. `r` is the row, `a` and `b` the rows above and below (mirrored at the ends); columns
-// x - 1 and x + 1 must exist for x in [x0, x1): the two end columns go through `left`/`right`.
+// x - 1 and x + 1 must exist: the two end columns go through pixel_mixed with mirrored ones.
 struct RowNoise {
   const float* gain[3];    // per column, the band of test t's lattice (0: row neighbours,
   const float* floor2[3];  // 1: column neighbours, 2: corners)
