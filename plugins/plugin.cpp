@@ -8,6 +8,7 @@
 #include "ratiotemp/gstratiotemp.h"
 #include "thermalalarm/gstthermalalarm.h"
 #include "thermalcolormap/gstthermalcolormap.h"
+#include "thermalfuse/gstthermalfuse.h"
 #include "thermaloverlay/gstthermaloverlay.h"
 
 static gboolean plugin_init(GstPlugin* plugin) {
@@ -19,6 +20,7 @@ static gboolean plugin_init(GstPlugin* plugin) {
   ok |= GST_ELEMENT_REGISTER(thermalcolormap, plugin);
   ok |= GST_ELEMENT_REGISTER(thermalalarm, plugin);
   ok |= GST_ELEMENT_REGISTER(thermaloverlay, plugin);
+  ok |= GST_ELEMENT_REGISTER(thermalfuse, plugin);
   ok |= GST_ELEMENT_REGISTER(autoexposure, plugin);
   return ok;
 }

@@ -23,6 +23,9 @@
  * #GstPyrocamSrc:exposure 0 the exposure puts the brightest band 140 DN above the dark level at
  * the scene's nominal temperature (plate, filament) or at 2000 degC (melt pool, as the
  * calibration tool's scene sequences: the hottest frames saturate, the coolest are dim).
+ * #GstPyrocamSrc:bracket cycles frame by frame through exposure factors (e.g. "1,0.1": the
+ * exposure, then a tenth of it) for thermalfuse, which reads each pixel from the most exposed
+ * frame where it reads. Every frame carries the exposure it was taken with (PyrocamExposureMeta).
  *
  * ## Example launch line
  * |[
@@ -42,6 +45,7 @@
 #include "pyrocam-common.h"
 #include "pyrocam-meta.h"
 #include "pyrocam/core/profile.h"
+#include "pyrocam/runtime/bracket_fusion.h"
 #include "pyrocam/simulation/scenes.h"
 #include "pyrocam/simulation/simulator.h"
 
@@ -61,6 +65,7 @@ enum {
   PROP_TEMPERATURE,
   PROP_SEED,
   PROP_IS_LIVE,
+  PROP_BRACKET,
 };
 
 constexpr GstPyrocamSrcScene DEFAULT_SCENE = GST_PYROCAM_SRC_SCENE_MELT_POOL;
@@ -89,6 +94,9 @@ struct Settings {
   double exposure_us = DEFAULT_EXPOSURE;
   double temperature_c = DEFAULT_TEMPERATURE;
   guint64 seed = DEFAULT_SEED;
+  std::string bracket_text;     // as set
+  std::vector<double> bracket;  // parsed factors; empty: none
+  bool bracket_valid = true;    // else start() refuses to run
 };
 
 struct State {
@@ -269,6 +277,16 @@ static gboolean gst_pyrocam_src_set_caps(GstBaseSrc* src, GstCaps* caps) {
 static gboolean gst_pyrocam_src_start(GstBaseSrc* src) {
   GstPyrocamSrc* self = GST_PYROCAM_SRC(src);
   const Settings settings = copy_settings(self);
+  if (!settings.bracket_valid) {
+    std::string why;
+    try {
+      pyrocam::parse_bracket(settings.bracket_text);
+    } catch (const std::exception& e) {
+      why = e.what();
+    }
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings, why, "the bracket property did not parse");
+    return FALSE;
+  }
   std::unique_ptr<pyrocam::Simulator> camera;
   const bool ok = PYROCAM_GUARDED(
       self, pg::profile_error_kind(settings.profile),
@@ -339,9 +357,12 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
       }
       map = &st.scene_map;
     }
-    const double exposure = settings.exposure_us > 0
-                                ? settings.exposure_us
-                                : st.camera->exposure_for(nominal_c, kScene.target_dn, emissivity);
+    const double factor =
+        settings.bracket.empty() ? 1.0 : settings.bracket[st.frame % settings.bracket.size()];
+    const double exposure =
+        factor * (settings.exposure_us > 0
+                      ? settings.exposure_us
+                      : st.camera->exposure_for(nominal_c, kScene.target_dn, emissivity));
     const cv::Mat raw = st.camera->render(*map, exposure, emissivity);
     pyrocam_buffer_add_exposure_meta(buffer, exposure, 0.0);
     GstMapInfo info;
@@ -409,6 +430,19 @@ static void gst_pyrocam_src_set_property(GObject* object, guint prop_id, const G
       else
         s.seed = g_value_get_uint64(value);
       break;
+    case PROP_BRACKET: {
+      const char* v = g_value_get_string(value);
+      s.bracket_text = v ? v : "";
+      try {
+        s.bracket = pyrocam::parse_bracket(s.bracket_text);
+        s.bracket_valid = true;
+      } catch (const std::exception& e) {
+        // Playing: the last good bracket stays; else start() refuses to run.
+        GST_WARNING_OBJECT(self, "%s", e.what());
+        s.bracket_valid = running;
+      }
+      break;
+    }
     default:
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
@@ -439,6 +473,9 @@ static void gst_pyrocam_src_get_property(GObject* object, guint prop_id, GValue*
       break;
     case PROP_TEMPERATURE:
       g_value_set_double(value, s.temperature_c);
+      break;
+    case PROP_BRACKET:
+      g_value_set_string(value, s.bracket_text.c_str());
       break;
     case PROP_SEED:
       g_value_set_uint64(value, s.seed);
@@ -495,6 +532,14 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
                           "brightest band 140 DN above dark at the scene's nominal temperature "
                           "(melt pool: 2000 degC)",
                           0.0, 1e7, DEFAULT_EXPOSURE, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_BRACKET,
+      g_param_spec_string(
+          "bracket", "Exposure bracket",
+          "Exposure factors the frames cycle through, comma-separated, each 0.001..1000 times "
+          "the exposure (or the automatic one), at most 16: e.g. 1,0.1 alternates the exposure "
+          "and a tenth of it, for thermalfuse; empty: every frame at the exposure",
+          "", playing));
   g_object_class_install_property(
       gobject_class, PROP_TEMPERATURE,
       g_param_spec_double("temperature", "Temperature",

@@ -1,0 +1,52 @@
+// High dynamic range by exposure bracketing: the camera cycles through two or more exposures and
+// the temperature frames of one cycle are fused, so that a 2500 degC core (saturated at the long
+// exposure) and a 1300 degC rim (too dim at the short one) both read in one frame.
+#pragma once
+
+#include <cstddef>
+#include <deque>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+namespace pyrocam {
+
+inline constexpr int kMaxBracketFrames = 16;
+inline constexpr double kMinBracketFactor = 0.001, kMaxBracketFactor = 1000;
+
+// The exposure factors a camera cycles through, e.g. "1,0.1": 1 to kMaxBracketFrames numbers
+// from kMinBracketFactor to kMaxBracketFactor, comma-separated; "" is none. Throws InputError
+// naming what is wrong.
+std::vector<double> parse_bracket(const std::string& text);
+
+// Fuses each new temperature frame with the ones before it: each pixel takes its reading from
+// the frame, among the last `frames`, taken with the most light (exposure times the linear gain)
+// where it has one; ties go to the latest. More light is a higher signal in every band, so
+// where both read, the more exposed frame's reading has the smaller noise (shot and read noise);
+// where it saturates or is dim it has no reading and a less exposed frame's is used. A pixel
+// read in no frame has none. The fused frame carries the latest frame's time: a pixel taken from
+// an earlier frame is as old as that frame (over a moving pool, where the pool was then).
+class BracketFusion {
+ public:
+  // frames: 1..kMaxBracketFrames (1: no fusion); throws InputError otherwise.
+  explicit BracketFusion(int frames);
+
+  // decikelvin: CV_16U, 0 = no reading; light > 0 (e.g. exposure in microseconds times the
+  // linear gain). Writes the fused frame to `out` (CV_16U, the same size; may be `decikelvin`
+  // itself). A frame of another size than the ones held starts anew. Throws InputError for
+  // another type or a light that is not > 0.
+  void add(const cv::Mat& decikelvin, double light, cv::Mat& out);
+  void reset() { held_.clear(); }
+  int frames() const { return frames_; }
+  std::size_t held() const { return held_.size(); }
+
+ private:
+  struct Held {
+    cv::Mat decikelvin;
+    double light;
+  };
+  int frames_;
+  std::deque<Held> held_;  // oldest first, at most frames_ - 1 before the new one
+};
+
+}  // namespace pyrocam

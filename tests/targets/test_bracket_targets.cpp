@@ -1,0 +1,120 @@
+// High dynamic range by exposure bracketing (targets): melt pools with a peak of 1500-2500 degC
+// filmed at four exposures, the longest for the rim (its hotter part saturates), the shortest
+// for the core (its rim is dim), read one by one and fused (BracketFusion: each pixel from the
+// most exposed frame where it reads). The target, readings on >= 90 % of the pixels
+// hotter than 1300 degC, is not met with the colour camera: 76 % measured (84 % with six
+// exposures, 42 % with two a factor 20 apart); pixels on the pools' steep sides, whose
+// demosaicking footprint holds a saturated sample at one exposure and dim ones at the next, read
+// at none. Asserted: the fused frame reads well beyond every single exposure and its readings
+// are no wilder (more than max(150 degC, 10 %) off the truth) than theirs. The model is the
+// camera's true QE with the likelihood fit, so that the dynamic range is measured, not the
+// calibration. The scene holds still over the bracket.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+#include "pyrocam/core/temperature_codes.h"
+#include "pyrocam/runtime/bracket_fusion.h"
+#include "pyrocam/runtime/frame_measurer.h"
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
+
+namespace pyrocam {
+namespace {
+
+constexpr int kW = 320, kH = 240;
+
+// As in the mixed-pixel targets: parabolic from the peak to 1300 degC at the rim, then a sharp
+// edge to a cold background; a shape the simulator's scenes do not have.
+cv::Mat parabolic_pool(double peak_c) {
+  cv::Mat t(kH, kW, CV_32F);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const double r2 = std::pow((x - 150.3) / 40.5, 2) + std::pow((y - 121.7) / 17.2, 2);
+      t.at<float>(y, x) = static_cast<float>(r2 <= 1 ? peak_c - (peak_c - 1300) * r2 : 300);
+    }
+  return t;
+}
+
+struct Coverage {
+  long hot = 0;                 // pixels hotter than 1300 degC
+  long read = 0;                // of those, with a reading
+  long readings = 0, wild = 0;  // all readings, and those far off
+  void add(const cv::Mat& truth, const cv::Mat& codes) {
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) {
+        const double t = truth.at<float>(y, x);
+        const std::uint16_t c = codes.at<std::uint16_t>(y, x);
+        if (t > 1300) {
+          ++hot;
+          read += c != kNoReadingCode;
+        }
+        if (c == kNoReadingCode) continue;
+        ++readings;
+        if (!(std::abs(code_to_celsius(c) - t) <= std::max(150.0, 0.1 * t))) ++wild;
+      }
+  }
+  double read_percent() const { return 100.0 * read / std::max(hot, 1L); }
+  double wild_percent() const { return 100.0 * wild / std::max(readings, 1L); }
+};
+
+TEST(BracketTargets, TheCoreAndTheRimReadInOneFusedFrame) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  const UnitPerturbation unit = UnitPerturbation::parse("typical", 3);
+  auto model = std::make_shared<ThermalModel>();
+  model->camera = CameraModel{p, true_system_qe(p, unit), Eigen::VectorXd::Ones(p.band_count())};
+  MeasureOptions options;
+  options.method = Method::kLikelihood;
+  FrameMeasurer measurer(model, options);
+  Simulator camera(p, unit, 17);
+  // The longest exposure puts a 1400 degC surface's brightest band at 70 % of the usable range;
+  // each next one is a third of the one before (4 exposures: 1, 1/3, 1/9, 1/27). A colour
+  // pixel reads only while all three bands lie between the dim and the saturation thresholds
+  // (20 and 170 DN above dark), and its bands differ by up to 2.3 times: one exposure covers a
+  // brightness range of less than 4 times, so steps of 3.
+  const double target_dn = 0.7 * (p.thresholds.inference_saturation_dn - 50);
+  const double long_us = camera.exposure_for(1400, target_dn);
+  constexpr double ratio = 3;
+  constexpr int n = 4;
+  Coverage long_only, short_only, fused;
+  auto frame = [&](const cv::Mat& truth_with_nan) {
+    cv::Mat truth = truth_with_nan.clone();
+    cv::patchNaNs(truth, 0);  // NaN: the scene's cold background
+    BracketFusion fusion(n);
+    cv::Mat codes[16], out;
+    double exposures[16];
+    for (int k = 0; k < n; ++k) exposures[k] = long_us / std::pow(ratio, k);
+    for (int k = 0; k < n; ++k) {
+      cv::Mat t;
+      measurer.measure(camera.render(truth_with_nan, exposures[k]),
+                       camera.render_dark(kW, kH, exposures[k]), t);
+      codes[k] = encode_decikelvin(t);
+      fusion.add(codes[k], exposures[k], out);
+    }
+    long_only.add(truth, codes[0]);
+    short_only.add(truth, codes[n - 1]);
+    fused.add(truth, out);
+  };
+  for (int i = 0; i < 60; i += 4) frame(melt_pool_scene(kW, kH, i, 60));
+  for (double peak : {1500.0, 2000.0, 2500.0}) frame(parabolic_pool(peak));
+  for (const auto& [name, c] : {std::pair{"long exposure", long_only},
+                                {"short exposure (1/27)", short_only},
+                                {"fused", fused}})
+    std::printf(
+        "%-22s %5.1f %% of %ld pixels hotter than 1300 degC read; %.2f %% of %ld "
+        "readings wild\n",
+        name, c.read_percent(), c.hot, c.wild_percent(), c.readings);
+  // Measured 76.2 % fused, 23.9 % and 18.1 % for the longest and shortest alone (seeded
+  // simulation: the margins cover another libm's noise draws).
+  EXPECT_GE(fused.read_percent(), 70);
+  EXPECT_GE(fused.read_percent(),
+            2.5 * std::max(long_only.read_percent(), short_only.read_percent()));
+  EXPECT_LE(fused.wild_percent(), std::max(long_only.wild_percent(), short_only.wild_percent()));
+}
+
+}  // namespace
+}  // namespace pyrocam
