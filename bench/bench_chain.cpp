@@ -10,41 +10,48 @@
 // of the warm-up and the end of the run are printed too. Wall-clock figures: run on a quiet
 // machine. Not a test.
 //
-// Soak mode (--soak N): the resident memory of the colour chain with the lookup table over N
-// frames of the simulated camera, whose frames all differ (a moving melt pool, new noise):
-//   pyrocamsrc scene=melt-pool (8-bit RGGB, 320x240 or --soak-size) ! darksub ! demosaic25 !
-//   ratiotemp method=lut ! fakesink
-// printing the resident memory at frames 1k, 2k, 5k, 10k, 20k, 50k, 100k, ... and at the last.
+// One scene (--scene): every stage and method of both chains. Several (--scenes a,b,...): per
+// scene bayer2rgb and each camera's own method (colour: lut, 5x5: likelihood), with the chain's
+// rate as a multiple of bayer2rgb's on the same frames, then a table of all scenes.
+//
+// Soak mode (--soak N): the resident memory of each chain over N frames of the simulated camera,
+// whose frames all differ (a moving melt pool, new noise):
+//   colour: pyrocamsrc scene=melt-pool (8-bit RGGB, 320x240 or --soak-size) ! darksub !
+//           demosaic25 ! ratiotemp method=lut ! fakesink
+//   5x5:    pyrocamsrc profile=nir5x5-reference scene=melt-pool (GRAY8, the same size) ! darksub
+//           pattern=5x5 ! demosaic25 ! ratiotemp method=likelihood ! fakesink (with --nir-model)
+// printing the resident memory at frames 1k, 2k, 5k, 10k, 20k, 50k, 100k, ... and at the last,
+// and its growth from frame 1000 (a tenth of a shorter soak) to the last.
 //
 // Usage: bench_chain --rgb-model M.json --nir-model N.json [--frames N] [--mlp-frames N]
-//                    [--scene plate:T|filament:T|melt-pool] [--queues] [--only colour|5x5]
-//                    [--methods lut,likelihood,mlp]
-//        bench_chain --rgb-model M.json --soak N [--soak-size WxH]
+//                    [--scene plate:T[:P]|filament:T|melt-pool | --scenes S1,S2,...] [--queues]
+//                    [--only colour|5x5] [--methods lut,likelihood,mlp]
+//        bench_chain --rgb-model M.json [--nir-model N.json] --soak N [--soak-size WxH]
+//                    [--only colour|5x5]
 // (scripts/bench.sh builds the models and runs this.)
-#include <gst/app/gstappsrc.h>
 #include <gst/gst.h>
-#include <sys/resource.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
-#include <fstream>
+#include <exception>
 #include <opencv2/core.hpp>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "bench_support.h"
+#include "chain_runs.h"
 #include "pyrocam/runtime/model.h"
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using pyrocam::bench::Run;
+using pyrocam::bench::run_chain;
+using pyrocam::bench::status_kb;
 
 struct Options {
   std::string rgb_model, nir_model, scene = "plate:1500";
+  std::vector<std::string> scenes;  // --scenes: the per-scene table
   int frames = 600, mlp_frames = 3, warmup = 20;
   bool queues = false;
   std::string only;                            // "colour" or "5x5": one chain
@@ -52,218 +59,188 @@ struct Options {
   std::string misfit_probability = "0";        // ratiotemp's band-consistency check (0: off)
   int soak = 0;                                // frames of the soak run (0: no soak)
   int soak_width = 320, soak_height = 240;
+
+  bool wanted(const std::string& method) const { return methods.find(method) != std::string::npos; }
+  bool colour() const { return only.empty() || only == "colour"; }
+  bool nir() const { return only.empty() || only == "5x5"; }
 };
 
-// kB from /proc/self/status ("VmRSS", "VmHWM").
-long status_kb(const char* key) {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  const std::size_t n = std::strlen(key);
-  while (std::getline(in, line))
-    if (line.compare(0, n, key) == 0 && line.size() > n && line[n] == ':')
-      return std::atol(line.c_str() + n + 1);
-  return -1;
-}
-
-struct Run {
-  bool ok = false;
-  std::string error;
-  int frames = 0;            // frames timed (after the warm-up)
-  double fps = 0;            // over the timed frames
-  double first_frame_s = 0;  // from PLAYING to the first frame at the sink
-  double cpu_ms = 0;         // process CPU time per timed frame (all threads)
-  long rss_warm_kb = 0, rss_end_kb = 0;
-};
-
-// Process CPU time (user + system), s.
-double cpu_seconds() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
-
-struct Handoffs {
-  std::vector<Clock::time_point> at;
-  std::vector<double> cpu;
-  std::size_t warmup = 0;
-  long rss_warm_kb = 0;  // when the last warm-up frame reached the sink
-};
-
-void on_handoff(GstElement*, GstBuffer*, GstPad*, gpointer data) {
-  auto* h = static_cast<Handoffs*>(data);
-  h->at.push_back(Clock::now());
-  h->cpu.push_back(cpu_seconds());
-  if (h->at.size() == h->warmup + 1) h->rss_warm_kb = status_kb("VmRSS");
-}
-
-// Pushes `frames` timestamped references to `raw` through `chain` (a launch fragment between
-// appsrc and fakesink) and times the frames after `warmup`.
-Run run_chain(const std::string& chain, const std::string& caps, const cv::Mat& raw, int frames,
-              int warmup) {
-  Run r;
-  const std::string launch = "appsrc name=src format=time is-live=false block=true ! " + chain +
-                             " ! fakesink name=sink sync=false signal-handoffs=true";
-  GError* error = nullptr;
-  GstElement* pipeline = gst_parse_launch(launch.c_str(), &error);
-  if (!pipeline || error) {
-    r.error = error ? error->message : "could not build the pipeline";
-    if (error) g_error_free(error);
-    if (pipeline) gst_object_unref(pipeline);
-    return r;
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> parts;
+  for (std::size_t from = 0; from <= s.size();) {
+    const std::size_t comma = std::min(s.find(',', from), s.size());
+    if (comma > from) parts.push_back(s.substr(from, comma - from));
+    from = comma + 1;
   }
-  GstElement* src = gst_bin_get_by_name(GST_BIN(pipeline), "src");
-  GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
-  GstCaps* src_caps = gst_caps_from_string(caps.c_str());
-  const guint64 frame_bytes = static_cast<guint64>(raw.total() * raw.elemSize());
-  g_object_set(src, "caps", src_caps, "max-bytes", 2 * frame_bytes, nullptr);
-  gst_caps_unref(src_caps);
-  Handoffs handoffs;
-  handoffs.at.reserve(static_cast<std::size_t>(frames) + 1);
-  handoffs.cpu.reserve(static_cast<std::size_t>(frames) + 1);
-  handoffs.warmup = static_cast<std::size_t>(warmup);
-  g_signal_connect(sink, "handoff", G_CALLBACK(on_handoff), &handoffs);
-
-  // One buffer wrapping the frame; each push is a metadata copy sharing its memory.
-  GstBuffer* frame = gst_buffer_new_wrapped_full(GST_MEMORY_FLAG_READONLY, raw.data, frame_bytes, 0,
-                                                 frame_bytes, nullptr, nullptr);
-  const GstClockTime duration = GST_SECOND / 30;
-  const auto started = Clock::now();
-  gst_element_set_state(pipeline, GST_STATE_PLAYING);
-  // Pushing blocks while appsrc holds two frames: from a thread of its own, so that an error
-  // (which stops the stream) cannot leave this one waiting.
-  std::thread pusher([&] {
-    for (int i = 0; i < frames; ++i) {
-      GstBuffer* b = gst_buffer_copy(frame);
-      GST_BUFFER_PTS(b) = static_cast<GstClockTime>(i) * duration;
-      GST_BUFFER_DURATION(b) = duration;
-      if (gst_app_src_push_buffer(GST_APP_SRC(src), b) != GST_FLOW_OK) return;
-    }
-    gst_app_src_end_of_stream(GST_APP_SRC(src));
-  });
-  GstBus* bus = gst_element_get_bus(pipeline);
-  GstMessage* m = gst_bus_timed_pop_filtered(
-      bus, GST_CLOCK_TIME_NONE, static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
-  if (m && GST_MESSAGE_TYPE(m) == GST_MESSAGE_ERROR) {
-    GError* e = nullptr;
-    gst_message_parse_error(m, &e, nullptr);
-    r.error = e ? e->message : "error";
-    if (e) g_error_free(e);
-    gst_element_set_state(pipeline, GST_STATE_NULL);  // unblocks the pusher
-  }
-  if (m) gst_message_unref(m);
-  pusher.join();
-  r.rss_end_kb = status_kb("VmRSS");
-  gst_element_set_state(pipeline, GST_STATE_NULL);
-  gst_object_unref(bus);
-  gst_buffer_unref(frame);
-  gst_object_unref(src);
-  gst_object_unref(sink);
-  gst_object_unref(pipeline);
-  if (!r.error.empty()) return r;
-  const int got = static_cast<int>(handoffs.at.size());
-  if (got < 2) {
-    r.error = "fewer than two frames reached the sink";
-    return r;
-  }
-  r.first_frame_s = std::chrono::duration<double>(handoffs.at.front() - started).count();
-  const int first = std::min(warmup, got - 2);
-  r.frames = got - 1 - first;
-  const auto f = static_cast<std::size_t>(first);
-  r.fps = r.frames / std::chrono::duration<double>(handoffs.at.back() - handoffs.at[f]).count();
-  r.cpu_ms = 1e3 * (handoffs.cpu.back() - handoffs.cpu[f]) / r.frames;
-  r.rss_warm_kb = handoffs.rss_warm_kb ? handoffs.rss_warm_kb : r.rss_end_kb;
-  r.ok = true;
-  return r;
+  return parts;
 }
 
-// The soak: resident memory at checkpoints (1, 2, 5 x 10^k frames from 1000 on, and the last).
-struct Soak {
-  int frames = 0;
-  int count = 0;
-  Clock::time_point started;
-  double cpu_started = 0;
-};
-
-bool soak_checkpoint(int frame, int last) {
-  if (frame == last) return true;
-  for (int decade = 1000; decade > 0 && decade <= frame; decade *= 10)
-    if (frame == decade || frame == 2 * decade || frame == 5 * decade) return true;
-  return false;
-}
-
-void on_soak_handoff(GstElement*, GstBuffer*, GstPad*, gpointer data) {
-  auto* s = static_cast<Soak*>(data);
-  if (!soak_checkpoint(++s->count, s->frames)) return;
-  const double wall = std::chrono::duration<double>(Clock::now() - s->started).count();
-  std::printf(
-      "  frame %7d: resident %6.1f MB (peak %6.1f MB), %6.0f s, %6.1f frames/s, %.2f CPU "
-      "ms/frame\n",
-      s->count, status_kb("VmRSS") / 1024.0, status_kb("VmHWM") / 1024.0, wall, s->count / wall,
-      1e3 * (cpu_seconds() - s->cpu_started) / s->count);
-  std::fflush(stdout);
-}
-
-int run_soak(const Options& o) {
-  const std::string size =
-      "width=" + std::to_string(o.soak_width) + ",height=" + std::to_string(o.soak_height);
-  const std::string launch =
-      "pyrocamsrc scene=melt-pool num-buffers=" + std::to_string(o.soak) +
-      " ! video/x-bayer,format=rggb," + size +
-      ",framerate=30/1 ! darksub dark-level=50 ! demosaic25 ! ratiotemp stats-interval=0 "
-      "method=lut model=" +
-      o.rgb_model + " ! fakesink name=sink sync=false signal-handoffs=true";
-  std::printf("soak: %s\n", launch.c_str());
-  std::printf("  start:         resident %6.1f MB\n", status_kb("VmRSS") / 1024.0);
-  GError* error = nullptr;
-  GstElement* pipeline = gst_parse_launch(launch.c_str(), &error);
-  if (!pipeline || error) {
-    std::fprintf(stderr, "soak: %s\n", error ? error->message : "could not build the pipeline");
-    if (error) g_error_free(error);
-    if (pipeline) gst_object_unref(pipeline);
-    return 1;
-  }
-  Soak soak;
-  soak.frames = o.soak;
-  GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
-  g_signal_connect(sink, "handoff", G_CALLBACK(on_soak_handoff), &soak);
-  soak.started = Clock::now();
-  soak.cpu_started = cpu_seconds();
-  gst_element_set_state(pipeline, GST_STATE_PLAYING);
-  GstBus* bus = gst_element_get_bus(pipeline);
-  GstMessage* m = gst_bus_timed_pop_filtered(
-      bus, GST_CLOCK_TIME_NONE, static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
-  int rc = 0;
-  if (m && GST_MESSAGE_TYPE(m) == GST_MESSAGE_ERROR) {
-    GError* e = nullptr;
-    gst_message_parse_error(m, &e, nullptr);
-    std::fprintf(stderr, "soak: %s\n", e ? e->message : "error");
-    if (e) g_error_free(e);
-    rc = 1;
-  }
-  if (m) gst_message_unref(m);
-  gst_element_set_state(pipeline, GST_STATE_NULL);
-  gst_object_unref(bus);
-  gst_object_unref(sink);
-  gst_object_unref(pipeline);
-  if (rc == 0 && soak.count != o.soak) {
-    std::fprintf(stderr, "soak: %d frames of %d reached the sink\n", soak.count, o.soak);
-    rc = 1;
-  }
-  return rc;
-}
-
-void print_run(const std::string& what, const Run& r) {
+// `bayer`: bayer2rgb on the same frames in the same run, for the ratio of the rates.
+void print_run(const std::string& what, const Run& r, const Run* bayer = nullptr) {
   if (!r.ok) {
     std::printf("%-52s FAILED: %s\n", what.c_str(), r.error.c_str());
     return;
   }
+  char ratio[32] = "";
+  if (bayer && bayer->ok)
+    std::snprintf(ratio, sizeof ratio, "%6.2fx bayer2rgb", r.fps / bayer->fps);
   std::printf(
-      "%-52s %7.1f frames/s %7.1f CPU ms/frame  (%4d frames timed, first after %.2f s, RSS %ld "
-      "-> %ld MB)\n",
-      what.c_str(), r.fps, r.cpu_ms, r.frames, r.first_frame_s, r.rss_warm_kb / 1024,
+      "%-52s %7.1f frames/s %7.1f CPU ms/frame %16s  (%4d frames timed, first after %.2f s, RSS "
+      "%ld -> %ld MB)\n",
+      what.c_str(), r.fps, r.cpu_ms, ratio, r.frames, r.first_frame_s, r.rss_warm_kb / 1024,
       r.rss_end_kb / 1024);
   std::fflush(stdout);
+}
+
+// One scene's figures for the table.
+struct SceneRow {
+  std::string scene;
+  double hot = 0;
+  Run colour_bayer, colour_lut, nir_bayer, nir_likelihood;
+};
+
+// The colour chain on one scene; `detailed`: every stage and method, else bayer2rgb and lut.
+void bench_colour(const Options& o, const pyrocam::ThermalModel& m, const std::string& spec,
+                  bool detailed, SceneRow& row) {
+  const std::string q = o.queues ? " ! queue" : "";
+  const auto scene = pyrocam::bench::make_scene(spec, 2048, 2048);
+  row.hot = pyrocam::bench::hot_fraction(scene);
+  const cv::Mat raw = pyrocam::bench::render(m, scene);
+  const std::string caps = "video/x-bayer,format=rggb,width=2048,height=2048,framerate=30/1";
+  std::printf(
+      "\n%s: colour camera, 2048x2048 8-bit RGGB, %.0f %% of the pixels on the hot object, "
+      "model %s\n",
+      spec.c_str(), 100 * row.hot, o.rgb_model.c_str());
+  row.colour_bayer = run_chain("bayer2rgb", caps, raw, o.frames, o.warmup);
+  print_run("bayer2rgb alone", row.colour_bayer);
+  const Run* bayer = &row.colour_bayer;
+  if (detailed)
+    print_run(
+        "darksub ! demosaic25 (no ratiotemp)",
+        run_chain("darksub dark-level=50" + q + " ! demosaic25", caps, raw, o.frames, o.warmup),
+        bayer);
+  const std::string chain = "darksub dark-level=50" + q + " ! demosaic25" + q +
+                            " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
+                            " misfit-probability=" + o.misfit_probability;
+  if (o.wanted("lut")) {
+    row.colour_lut = run_chain(chain + " method=lut", caps, raw, o.frames, o.warmup);
+    print_run("darksub ! demosaic25 ! ratiotemp method=lut", row.colour_lut, bayer);
+    if (detailed) {
+      // The same with demosaic25's mixed-pixel check (off by default): what the check costs.
+      const std::string checked = "darksub dark-level=50" + q + " ! demosaic25 mixed-pixels=0.2" +
+                                  q + " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
+                                  " misfit-probability=" + o.misfit_probability;
+      print_run("the same, demosaic25 mixed-pixels=0.2",
+                run_chain(checked + " method=lut", caps, raw, o.frames, o.warmup), bayer);
+    }
+  }
+  if (!detailed) return;
+  if (o.wanted("likelihood"))
+    print_run("darksub ! demosaic25 ! ratiotemp method=likelihood",
+              run_chain(chain + " method=likelihood", caps, raw, std::max(o.frames / 50, 8), 2),
+              bayer);
+  if (o.wanted("mlp"))
+    print_run("darksub ! demosaic25 ! ratiotemp method=mlp",
+              run_chain(chain + " method=mlp", caps, raw, o.mlp_frames, 1), bayer);
+}
+
+// The 5x5 chain on one scene; `detailed`: every stage and method, else bayer2rgb and likelihood.
+void bench_5x5(const Options& o, const pyrocam::ThermalModel& m, const std::string& spec,
+               bool detailed, SceneRow& row) {
+  const std::string q = o.queues ? " ! queue" : "";
+  // The sensor's frame; the chain reads its whole 5x5 periods, 2045x1085 (gray video rows are
+  // padded to a multiple of 4 bytes: the same 2048 bytes per row). bayer2rgb (which crashes on
+  // odd sizes) reads the whole frame.
+  const auto scene = pyrocam::bench::make_scene(spec, 2048, 1088);
+  const double hot = pyrocam::bench::hot_fraction(scene);
+  if (!o.colour()) row.hot = hot;
+  const cv::Mat sensor = pyrocam::bench::render(m, scene);
+  const cv::Mat raw = sensor(cv::Rect(0, 0, 2048, 1085)).clone();
+  const std::string caps = "video/x-raw,format=GRAY8,width=2045,height=1085,framerate=30/1";
+  std::printf(
+      "\n%s: 5x5 camera, 2045x1085 GRAY8 5x5 mosaic (409x217 macro-pixels), %.0f %% of the "
+      "pixels on the hot object, model %s\n",
+      spec.c_str(), 100 * hot, o.nir_model.c_str());
+  row.nir_bayer =
+      run_chain("bayer2rgb", "video/x-bayer,format=rggb,width=2048,height=1088,framerate=30/1",
+                sensor, o.frames, o.warmup);
+  print_run("bayer2rgb alone (2048x1088, bytes as RGGB)", row.nir_bayer);
+  const Run* bayer = &row.nir_bayer;
+  if (detailed)
+    print_run("darksub ! demosaic25 (no ratiotemp)",
+              run_chain("darksub dark-level=50 pattern=5x5" + q + " ! demosaic25", caps, raw,
+                        o.frames, o.warmup),
+              bayer);
+  const std::string chain = "darksub dark-level=50 pattern=5x5" + q + " ! demosaic25" + q +
+                            " ! ratiotemp stats-interval=0 model=" + o.nir_model +
+                            " misfit-probability=" + o.misfit_probability;
+  if (o.wanted("likelihood")) {
+    // Half the frames (the slower chain), but never fewer than 10 timed past the warm-up.
+    row.nir_likelihood = run_chain(chain + " method=likelihood", caps, raw,
+                                   std::max(o.frames / 2, o.warmup + 11), o.warmup);
+    print_run("darksub ! demosaic25 ! ratiotemp method=likelihood", row.nir_likelihood, bayer);
+  }
+  if (detailed && o.wanted("mlp"))
+    print_run("darksub ! demosaic25 ! ratiotemp method=mlp",
+              run_chain(chain + " method=mlp", caps, raw, o.mlp_frames, 1), bayer);
+}
+
+std::string cell(const Run& r) {
+  char s[48];
+  if (r.ok)
+    std::snprintf(s, sizeof s, "%8.1f %7.1f", r.fps, r.cpu_ms);
+  else
+    std::snprintf(s, sizeof s, "%16s", r.error.empty() ? "-" : "FAILED");
+  return s;
+}
+
+std::string ratio(const Run& chain, const Run& bayer) {
+  char s[16] = "      -";
+  if (chain.ok && bayer.ok) std::snprintf(s, sizeof s, "%6.2fx", chain.fps / bayer.fps);
+  return s;
+}
+
+void print_table(const std::vector<SceneRow>& rows) {
+  std::printf(
+      "\nper scene: frames/s and CPU ms/frame (all threads); ratio: the chain's frames/s over "
+      "bayer2rgb's on the same frames in this run\n"
+      "%24s | %-41s | %s\n%24s | %-16s %-24s | %-16s %s\n"
+      "%-18s %5s | %8s %7s %8s %7s %7s | %8s %7s %8s %7s %7s\n",
+      "", "colour 2048x2048 8-bit RGGB", "5x5 2045x1085 GRAY8", "", "bayer2rgb",
+      "ratiotemp method=lut", "bayer2rgb", "ratiotemp method=likelihood", "scene", "hot",
+      "frames/s", "CPU ms", "frames/s", "CPU ms", "ratio", "frames/s", "CPU ms", "frames/s",
+      "CPU ms", "ratio");
+  for (const SceneRow& r : rows)
+    std::printf("%-18s %3.0f %% | %s %s %s | %s %s %s\n", r.scene.c_str(), 100 * r.hot,
+                cell(r.colour_bayer).c_str(), cell(r.colour_lut).c_str(),
+                ratio(r.colour_lut, r.colour_bayer).c_str(), cell(r.nir_bayer).c_str(),
+                cell(r.nir_likelihood).c_str(), ratio(r.nir_likelihood, r.nir_bayer).c_str());
+  std::fflush(stdout);
+}
+
+int run_soaks(const Options& o) {
+  const std::string n = std::to_string(o.soak);
+  const std::string size = ",width=" + std::to_string(o.soak_width) +
+                           ",height=" + std::to_string(o.soak_height) + ",framerate=30/1";
+  const std::string sink = " ! fakesink name=sink sync=false signal-handoffs=true";
+  int rc = 0;
+  if (o.colour())
+    rc |= pyrocam::bench::run_soak(
+        "colour chain, lookup table",
+        "pyrocamsrc scene=melt-pool num-buffers=" + n + " ! video/x-bayer,format=rggb" + size +
+            " ! darksub dark-level=50 ! demosaic25 ! ratiotemp stats-interval=0 method=lut model=" +
+            o.rgb_model + sink,
+        o.soak);
+  if (o.nir() && !o.nir_model.empty())
+    rc |= pyrocam::bench::run_soak(
+        "5x5 chain, likelihood fit",
+        "pyrocamsrc profile=nir5x5-reference scene=melt-pool num-buffers=" + n +
+            " ! video/x-raw,format=GRAY8" + size +
+            " ! darksub dark-level=50 pattern=5x5 ! demosaic25 ! ratiotemp stats-interval=0 "
+            "method=likelihood model=" +
+            o.nir_model + sink,
+        o.soak);
+  return rc;
 }
 
 }  // namespace
@@ -284,6 +261,8 @@ int main(int argc, char** argv) {
       o.mlp_frames = std::atoi(value().c_str());
     else if (a == "--scene")
       o.scene = value();
+    else if (a == "--scenes")
+      o.scenes = split(value());
     else if (a == "--queues")
       o.queues = true;
     else if (a == "--only")
@@ -305,13 +284,16 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (o.rgb_model.empty() || (o.nir_model.empty() && o.soak == 0) || o.soak < 0) {
+  const bool only_ok = o.only.empty() || o.only == "colour" || o.only == "5x5";
+  if (o.rgb_model.empty() || (o.nir_model.empty() && o.soak == 0 && o.nir()) || o.soak < 0 ||
+      !only_ok) {
     std::fprintf(
         stderr,
-        "usage: %s --rgb-model M.json --nir-model N.json [--frames N] "
-        "[--mlp-frames N] [--scene plate:T|filament:T|melt-pool] [--queues] [--only colour|5x5] "
-        "[--methods lut,likelihood,mlp] [--misfit-probability P]\n"
-        "       %s --rgb-model M.json --soak FRAMES [--soak-size WxH]\n",
+        "usage: %s --rgb-model M.json --nir-model N.json [--frames N] [--mlp-frames N]\n"
+        "         [--scene plate:T[:P]|filament:T|melt-pool | --scenes S1,S2,...] [--queues]\n"
+        "         [--only colour|5x5] [--methods lut,likelihood,mlp] [--misfit-probability P]\n"
+        "       %s --rgb-model M.json [--nir-model N.json] --soak FRAMES [--soak-size WxH]\n"
+        "         [--only colour|5x5]\n",
         argv[0], argv[0]);
     return 2;
   }
@@ -321,79 +303,34 @@ int main(int argc, char** argv) {
     return 1;
   }
   gst_object_unref(f);
-  if (o.soak > 0) return run_soak(o);
-  const std::string q = o.queues ? " ! queue" : "";
-  std::printf("pyrocam chain benchmark: %u CPU cores, scene %s%s\n", g_get_num_processors(),
-              o.scene.c_str(), o.queues ? ", queues between elements" : "");
-
-  auto wanted = [&](const std::string& method) {
-    return o.methods.find(method) != std::string::npos;
-  };
-  if (o.only.empty() || o.only == "colour") {
-    const pyrocam::ThermalModel m = pyrocam::load_model(o.rgb_model);
-    const auto scene = pyrocam::bench::make_scene(o.scene, 2048, 2048);
-    const double hot = pyrocam::bench::hot_fraction(scene);
-    const cv::Mat raw = pyrocam::bench::render(m, scene);
-    const std::string caps = "video/x-bayer,format=rggb,width=2048,height=2048,framerate=30/1";
-    std::printf(
-        "\ncolour camera, 2048x2048 8-bit RGGB, %.0f %% of the pixels on the hot object, "
-        "model %s\n",
-        100 * hot, o.rgb_model.c_str());
-    print_run("bayer2rgb alone", run_chain("bayer2rgb", caps, raw, o.frames, o.warmup));
-    print_run(
-        "darksub ! demosaic25 (no ratiotemp)",
-        run_chain("darksub dark-level=50" + q + " ! demosaic25", caps, raw, o.frames, o.warmup));
-    const std::string chain = "darksub dark-level=50" + q + " ! demosaic25" + q +
-                              " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
-                              " misfit-probability=" + o.misfit_probability;
-    if (wanted("lut")) {
-      print_run("darksub ! demosaic25 ! ratiotemp method=lut",
-                run_chain(chain + " method=lut", caps, raw, o.frames, o.warmup));
-      // The same with demosaic25's mixed-pixel check (off by default): what the check costs.
-      const std::string checked = "darksub dark-level=50" + q + " ! demosaic25 mixed-pixels=0.2" +
-                                  q + " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
-                                  " misfit-probability=" + o.misfit_probability;
-      print_run("the same, demosaic25 mixed-pixels=0.2",
-                run_chain(checked + " method=lut", caps, raw, o.frames, o.warmup));
+  if (o.soak > 0) return run_soaks(o);
+  const bool table = !o.scenes.empty();
+  if (!table) o.scenes = {o.scene};
+  for (const std::string& spec : o.scenes) {
+    try {
+      pyrocam::bench::make_scene(spec, 64, 64);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+      return 2;
     }
-    if (wanted("likelihood"))
-      print_run("darksub ! demosaic25 ! ratiotemp method=likelihood",
-                run_chain(chain + " method=likelihood", caps, raw, std::max(o.frames / 50, 8), 2));
-    if (wanted("mlp"))
-      print_run("darksub ! demosaic25 ! ratiotemp method=mlp",
-                run_chain(chain + " method=mlp", caps, raw, o.mlp_frames, 1));
   }
-  if (o.only.empty() || o.only == "5x5") {
-    const pyrocam::ThermalModel m = pyrocam::load_model(o.nir_model);
-    // The sensor's frame; the chain reads its whole 5x5 periods, 2045x1085 (gray video rows are
-    // padded to a multiple of 4 bytes: the same 2048 bytes per row). bayer2rgb (which crashes on
-    // odd sizes) reads the whole frame.
-    const auto scene = pyrocam::bench::make_scene(o.scene, 2048, 1088);
-    const double hot = pyrocam::bench::hot_fraction(scene);
-    const cv::Mat sensor = pyrocam::bench::render(m, scene);
-    const cv::Mat raw = sensor(cv::Rect(0, 0, 2048, 1085)).clone();
-    const std::string caps = "video/x-raw,format=GRAY8,width=2045,height=1085,framerate=30/1";
-    std::printf(
-        "\n5x5 camera, 2045x1085 GRAY8 5x5 mosaic (409x217 macro-pixels), %.0f %% of the pixels "
-        "on the hot object, model %s\n",
-        100 * hot, o.nir_model.c_str());
-    print_run(
-        "bayer2rgb alone (2048x1088, bytes as RGGB)",
-        run_chain("bayer2rgb", "video/x-bayer,format=rggb,width=2048,height=1088,framerate=30/1",
-                  sensor, o.frames, o.warmup));
-    print_run("darksub ! demosaic25 (no ratiotemp)",
-              run_chain("darksub dark-level=50 pattern=5x5" + q + " ! demosaic25", caps, raw,
-                        o.frames, o.warmup));
-    const std::string chain = "darksub dark-level=50 pattern=5x5" + q + " ! demosaic25" + q +
-                              " ! ratiotemp stats-interval=0 model=" + o.nir_model +
-                              " misfit-probability=" + o.misfit_probability;
-    if (wanted("likelihood"))
-      print_run("darksub ! demosaic25 ! ratiotemp method=likelihood",
-                run_chain(chain + " method=likelihood", caps, raw, o.frames / 2, o.warmup));
-    if (wanted("mlp"))
-      print_run("darksub ! demosaic25 ! ratiotemp method=mlp",
-                run_chain(chain + " method=mlp", caps, raw, o.mlp_frames, 1));
+  std::string names;
+  for (const std::string& spec : o.scenes) names += (names.empty() ? "" : ", ") + spec;
+  std::printf("pyrocam chain benchmark: %u CPU cores, scene%s %s%s\n", g_get_num_processors(),
+              o.scenes.size() > 1 ? "s" : "", names.c_str(),
+              o.queues ? ", queues between elements" : "");
+  pyrocam::ThermalModel rgb, nir;
+  if (o.colour()) rgb = pyrocam::load_model(o.rgb_model);
+  if (o.nir()) nir = pyrocam::load_model(o.nir_model);
+  std::vector<SceneRow> rows;
+  for (const std::string& spec : o.scenes) {
+    SceneRow row;
+    row.scene = spec;
+    if (o.colour()) bench_colour(o, rgb, spec, !table, row);
+    if (o.nir()) bench_5x5(o, nir, spec, !table, row);
+    rows.push_back(row);
   }
+  if (table) print_table(rows);
   std::printf("\npeak resident memory of the run: %ld MB\n", status_kb("VmHWM") / 1024);
   return 0;
 }

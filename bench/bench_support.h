@@ -13,7 +13,8 @@
 
 namespace pyrocam::bench {
 
-// A scene by name: "plate:T", "filament:T" (T in degC) or "melt-pool".
+// A scene by name: "plate:T[:P]", "filament:T" (T in degC) or "melt-pool"; P: the plate's share
+// of the frame's area in % (default 36: the central 60 % of each side).
 struct Scene {
   std::string name = "plate:1500";
   cv::Mat temperature_c;  // NaN: cold background
@@ -27,7 +28,15 @@ inline Scene make_scene(const std::string& spec, int width, int height) {
   const std::string kind = spec.substr(0, colon);
   const double t = colon == std::string::npos ? 1500 : std::atof(spec.c_str() + colon + 1);
   if (kind == "plate") {
-    s.temperature_c = plate_scene(width, height, t);
+    const auto share = colon == std::string::npos ? colon : spec.find(':', colon + 1);
+    if (share == std::string::npos) {
+      s.temperature_c = plate_scene(width, height, t);
+    } else {
+      const double percent = std::atof(spec.c_str() + share + 1);
+      if (!(percent > 0 && percent <= 100))
+        throw std::invalid_argument("scene '" + spec + "': the plate's share lies in (0, 100] %");
+      s.temperature_c = plate_scene(width, height, t, percent / 100);
+    }
     s.emissivity = 0.7;
   } else if (kind == "filament") {
     s.temperature_c = filament_scene(width, height, t);
@@ -36,7 +45,8 @@ inline Scene make_scene(const std::string& spec, int width, int height) {
     s.temperature_c = melt_pool_scene(width, height, 3, 10);
     s.emissivity = 0.35;
   } else {
-    throw std::invalid_argument("unknown scene '" + spec + "' (plate:T, filament:T or melt-pool)");
+    throw std::invalid_argument("unknown scene '" + spec +
+                                "' (plate:T[:P], filament:T or melt-pool)");
   }
   return s;
 }

@@ -41,6 +41,20 @@ cv::Mat plate_scene(int width, int height, double t_c) {
   return m;
 }
 
+cv::Mat plate_scene(int width, int height, double t_c, double area_fraction) {
+  if (!(area_fraction > 0 && area_fraction <= 1))
+    throw InputError("plate scene: the area fraction must lie in (0, 1]");
+  // Rounded down like the 60 % plate's width / 5 margins (the epsilon absorbs the rounding of
+  // sqrt), so that 0.36 gives that plate exactly.
+  const double margin = (1 - std::sqrt(area_fraction)) / 2;
+  const int mx = static_cast<int>(std::floor(width * margin + 1e-9));
+  const int my = static_cast<int>(std::floor(height * margin + 1e-9));
+  cv::Mat m(height, width, CV_32F, cv::Scalar(kCold));
+  if (width > 2 * mx && height > 2 * my)
+    m(cv::Rect(mx, my, width - 2 * mx, height - 2 * my)).setTo(static_cast<float>(t_c));
+  return m;
+}
+
 cv::Mat filament_scene(int width, int height, double t_c) {
   cv::Mat m(height, width, CV_32F, cv::Scalar(kCold));
   const int half = std::max(3, width / 24);

@@ -276,5 +276,23 @@ TEST(Scenes, filament_scene_has_a_hot_core_and_cooler_edges) {
   EXPECT_TRUE(std::isnan(m.at<float>(y, 0)));
 }
 
+TEST(Scenes, plate_scene_covers_the_asked_share_of_the_frame) {
+  auto hot_share = [](const cv::Mat& m) {
+    return static_cast<double>(cv::countNonZero(m == m)) / static_cast<double>(m.total());
+  };
+  // 0.36 is the three-argument plate, pixel for pixel, at sizes dividing by 5 and not.
+  for (const cv::Size size : {cv::Size(2048, 2048), cv::Size(2048, 1088), cv::Size(2045, 1085),
+                              cv::Size(320, 240), cv::Size(97, 61)}) {
+    const cv::Mat old_plate = plate_scene(size.width, size.height, 1500);
+    const cv::Mat plate = plate_scene(size.width, size.height, 1500, 0.36);
+    EXPECT_EQ(cv::countNonZero((old_plate == old_plate) != (plate == plate)), 0) << size;
+  }
+  for (const double share : {0.05, 0.36, 0.9, 1.0})
+    // Margins round down: at most a pixel more per side.
+    EXPECT_NEAR(hot_share(plate_scene(2048, 1088, 1500, share)), share, 0.005) << share;
+  EXPECT_THROW(plate_scene(64, 64, 1500, 0), InputError);
+  EXPECT_THROW(plate_scene(64, 64, 1500, 1.5), InputError);
+}
+
 }  // namespace
 }  // namespace pyrocam

@@ -16,6 +16,9 @@ std::string scene_kind_name(SceneKind kind);
 
 // A plate at t_c filling the central 60 % of the frame.
 cv::Mat plate_scene(int width, int height, double t_c);
+// A centred plate at t_c covering `area_fraction` (0..1] of the frame, with the frame's aspect
+// ratio; 0.36 gives the same plate as the form above.
+cv::Mat plate_scene(int width, int height, double t_c, double area_fraction);
 // A vertical filament at t_c, about width/12 wide, cooler over its last two pixels per side.
 cv::Mat filament_scene(int width, int height, double t_c);
 // Frame `index` of a melt pool crossing the frame: a hot spot whose peak swings between
