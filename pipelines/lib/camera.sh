@@ -36,11 +36,22 @@ LATENCY_MS=${LATENCY_MS:-100}
 EXPOSURE_CONTROL=${EXPOSURE_CONTROL:-0}
 PEAK_MARKER=${PEAK_MARKER:-0}
 ALARM_C=${ALARM_C:-}
+BRACKET=${BRACKET:-}
 
 [[ $EXPOSURE_CONTROL =~ ^[01]$ ]] || { echo "$name: EXPOSURE_CONTROL must be 0 or 1, not '$EXPOSURE_CONTROL'" >&2; exit 2; }
 [[ $PEAK_MARKER =~ ^[01]$ ]] || { echo "$name: PEAK_MARKER must be 0 or 1, not '$PEAK_MARKER'" >&2; exit 2; }
 [[ -z $ALARM_C || $ALARM_C =~ ^[0-9]+([.][0-9]+)?$ ]] || { echo "$name: ALARM_C must be a temperature in degC, not '$ALARM_C'" >&2; exit 2; }
 [[ $LATENCY_MS =~ ^[0-9]+$ ]] || { echo "$name: LATENCY_MS must be a whole number of milliseconds, not '$LATENCY_MS'" >&2; exit 2; }
+# BRACKET: the camera cycles through these exposure factors and thermalfuse fuses each cycle
+# (high dynamic range); the simulated camera only: aravissrc frames carry no exposure.
+bracket_frames=0
+if [[ -n $BRACKET ]]; then
+  [[ $BRACKET =~ ^[0-9.]+(,[0-9.]+)*$ ]] || { echo "$name: BRACKET must be exposure factors separated by commas (e.g. 1,0.333,0.111,0.037), not '$BRACKET'" >&2; exit 2; }
+  [[ $SOURCE == pyrocamsrc* ]] || { echo "$name: BRACKET needs the simulated camera (SOURCE=pyrocamsrc ...): other cameras' frames carry no exposure to fuse by" >&2; exit 2; }
+  [[ $EXPOSURE_CONTROL == 0 ]] || { echo "$name: BRACKET and EXPOSURE_CONTROL=1 do not go together: the exposure control would chase the bracket's levels" >&2; exit 2; }
+  SOURCE="$SOURCE bracket=$BRACKET"
+  bracket_frames=$(($(tr -cd , <<<"$BRACKET" | wc -c) + 1))
+fi
 
 set -f # SOURCE, CAPS and DARK split on spaces into the launcher's words
 # The camera, ending in the tee `camera`; the watchdog ends the pipeline with an error when the
@@ -109,6 +120,9 @@ if [[ -n $STATS_CSV ]]; then
   launch_options+=("--stats-csv=$STATS_CSV")
 fi
 [[ -z $ALARM_CSV ]] || launch_options+=("--alarm-csv=$ALARM_CSV")
+# BRACKET: thermalfuse after ratiotemp (after the statistics' words, which are ratiotemp's), so
+# that the alarm watches fused frames.
+((bracket_frames == 0)) || thermal_chain+=(! thermalfuse "frames=$bracket_frames")
 # ALARM_C: thermalalarm after ratiotemp, on the frame's peak for 5 frames (after the statistics'
 # words above, which are ratiotemp's).
 [[ -z $ALARM_C ]] || thermal_chain+=(! thermalalarm "threshold-c=$ALARM_C" statistic=peak)

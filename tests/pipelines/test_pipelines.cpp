@@ -339,6 +339,42 @@ TEST_F(Record, temperatures_decode_bit_exact_in_segments_with_a_snapshot) {
   EXPECT_GT(c.opaque, 100);
 }
 
+// BRACKET: the simulated camera cycles through the exposures and the recording holds the fused
+// frames, bit for bit those of the same chain with thermalfuse; bad settings are refused.
+TEST_F(Record, bracket_records_the_fused_frames) {
+  constexpr int kFrames = 12;
+  const std::string bracket = "1,0.333,0.111";
+  Env env = settings(kScene, kFrames);
+  env["BRACKET"] = bracket;
+  env["SEGMENT_SECONDS"] = "10";
+  const ScriptRun run = run_script("record.sh", {}, env, log("record-bracket"), kRunLimit);
+  ASSERT_EQ(run.status, 0) << run.log;
+  const auto files = segments();
+  ASSERT_EQ(files.size(), 1u);
+  const Video recorded = decode_segment(files[0]);
+  ASSERT_EQ(recorded.frames.size(), static_cast<std::size_t>(kFrames)) << recorded.error;
+  const std::string camera = kScene + " bracket=" + bracket +
+                             " num-buffers=" + std::to_string(kFrames) + " ! " + kCaps + " ! " +
+                             temperature_elements();
+  const Video fused = pull_frames(camera + " ! thermalfuse frames=3 ! appsink name=out");
+  const Video single = pull_frames(camera + " ! appsink name=out");
+  ASSERT_EQ(fused.frames.size(), static_cast<std::size_t>(kFrames)) << fused.error;
+  ASSERT_EQ(single.frames.size(), static_cast<std::size_t>(kFrames)) << single.error;
+  EXPECT_TRUE(recorded.frames == fused.frames);
+  EXPECT_FALSE(fused.frames == single.frames) << "the fusion changed nothing: a weak test";
+
+  for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+           {"BRACKET", "1,zero"}, {"SOURCE", "videotestsrc"}, {"EXPOSURE_CONTROL", "1"}}) {
+    Env bad = settings(kScene, 2);
+    bad["BRACKET"] = "1,0.1";
+    bad[key] = value;
+    const ScriptRun r = run_script("record.sh", {}, bad, log("record-bracket-bad"), kRunLimit);
+    ASSERT_TRUE(r.status.has_value()) << "hung";
+    EXPECT_EQ(*r.status, 2) << key << "=" << value << ": " << r.log;
+    EXPECT_NE(r.log.find("BRACKET"), std::string::npos) << r.log;
+  }
+}
+
 TEST_F(Record, ctrl_c_finalises_the_last_segment) {
   Process rec({pipeline_script("record.sh")}, settings(kLiveScene, -1), log("record"));
   // Two segments on disk: the first is closed, the second is being written.
