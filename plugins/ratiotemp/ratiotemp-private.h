@@ -46,8 +46,9 @@ struct Settings {
   bool peak_window_set = false;             // set by the user: warn when it does not fit
   double e_slope = DEFAULT_E_SLOPE;         // %/100 nm, never NaN
   double e_slope_uncertainty = DEFAULT_E_SLOPE_UNCERTAINTY;  // %/100 nm; negative: the model's
-  std::string table_cache;                                   // folder; "" = none
-  bool table_cache_set = false;                              // else the user's cache folder
+  bool region_tracks_peak = false;  // the region centred on the frame's peak
+  std::string table_cache;          // folder; "" = none
+  bool table_cache_set = false;     // else the user's cache folder
 };
 
 /* Whether the statistics of a frame (or region) of this size carry a peak. */

@@ -23,6 +23,7 @@ enum {
   PROP_E_SLOPE_UNCERTAINTY,
   PROP_PARTIAL_BANDS,
   PROP_TABLE_CACHE,
+  PROP_REGION_TRACKS_PEAK,
 };
 
 }  // namespace
@@ -38,6 +39,15 @@ void install_properties(GObjectClass* gobject_class) {
                           "Thermal model (JSON) written by pyrocam-calib calibrate for this "
                           "camera; required",
                           nullptr, ready));
+  g_object_class_install_property(
+      gobject_class, PROP_REGION_TRACKS_PEAK,
+      g_param_spec_boolean(
+          "region-tracks-peak", "Region tracks the peak",
+          "Centre the statistics region (its size from region) on the frame's peak (peak-c's "
+          "window) each time statistics are posted, moved to stay inside the frame, so that the "
+          "region's statistics follow a moving hot spot; a frame without a peak keeps region's "
+          "own place. Needs region and a peak-window",
+          FALSE, playing));
   g_object_class_install_property(
       gobject_class, PROP_TABLE_CACHE,
       g_param_spec_string(
@@ -138,6 +148,9 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
         s.model = v ? v : "";
       }
       break;
+    case PROP_REGION_TRACKS_PEAK:
+      s.region_tracks_peak = g_value_get_boolean(value);
+      break;
     case PROP_TABLE_CACHE:
       if (running) {
         GST_WARNING_OBJECT(self, "table-cache can only change in NULL or READY");
@@ -211,6 +224,9 @@ void get_property(GObject* object, guint prop_id, GValue* value, GParamSpec* psp
   switch (prop_id) {
     case PROP_MODEL:
       g_value_set_string(value, s.model.empty() ? nullptr : s.model.c_str());
+      break;
+    case PROP_REGION_TRACKS_PEAK:
+      g_value_set_boolean(value, s.region_tracks_peak);
       break;
     case PROP_TABLE_CACHE:
       g_value_set_string(value, s.table_cache_set ? s.table_cache.c_str() : nullptr);

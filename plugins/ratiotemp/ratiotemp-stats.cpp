@@ -1,4 +1,6 @@
 /* ratiotemp's statistics message: frame and region statistics of the temperatures. */
+#include <algorithm>
+
 #include "pyrocam/runtime/region_stats.h"
 #include "ratiotemp-private.h"
 
@@ -50,8 +52,15 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& sett
   RegionStats region;
   RegionPeak part_peak;
   if (with_region) {
-    const cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,
-                          settings.region.height);
+    cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,
+                    settings.region.height);
+    if (settings.region_tracks_peak && whole_peak.found()) {
+      // Centred on the peak and moved, not cut, to stay in the frame where it fits.
+      wanted.x = std::clamp(whole_peak.x - wanted.width / 2, 0,
+                            std::max(temperature_c.cols - wanted.width, 0));
+      wanted.y = std::clamp(whole_peak.y - wanted.height / 2, 0,
+                            std::max(temperature_c.rows - wanted.height, 0));
+    }
     r = wanted & cv::Rect(0, 0, temperature_c.cols, temperature_c.rows);
     if (!r.empty()) {
       region = region_stats(temperature_c(r));
@@ -67,7 +76,9 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& sett
   set_peak_fields(s, "", whole_peak, cv::Point());
   if (with_region) {
     gst_structure_set(s, "region-x", G_TYPE_INT, r.x, "region-y", G_TYPE_INT, r.y, "region-width",
-                      G_TYPE_INT, r.width, "region-height", G_TYPE_INT, r.height, nullptr);
+                      G_TYPE_INT, r.width, "region-height", G_TYPE_INT, r.height,
+                      "region-tracks-peak", G_TYPE_BOOLEAN,
+                      settings.region_tracks_peak && whole_peak.found(), nullptr);
     set_stats_fields(s, "region-", region);
     set_peak_fields(s, "region-", part_peak, r.tl());
   }

@@ -969,6 +969,47 @@ TEST_F(RatioTemp, stats_peak_is_the_hot_spot_not_a_wild_pixel) {
   EXPECT_TRUE(warnings.empty());
 }
 
+// region-tracks-peak: the region (its size from region) is centred on the frame's peak, moved
+// to stay in the frame, so its statistics are the hot spot's; off, it stays where region says.
+TEST_F(RatioTemp, region_tracks_the_peak) {
+  const int w = 24, h = 16;
+  start(
+      "ratiotemp stats-interval=1 region=0,0,5,5 region-tracks-peak=true model=" + rgb_model_path(),
+      bands_caps(3, "bayer", w, h));
+  const auto planes = plate_with_spot_and_outlier(w, h);  // the 7x7 spot centred at (12, 7)
+  run(planes, w, h, 0);
+  auto s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  int px = -1, py = -1, rx = -1, ry = -1, rw = 0, rh = 0;
+  gboolean tracking = FALSE;
+  ASSERT_TRUE(gst_structure_get_int(s[0], "peak-x", &px));
+  ASSERT_TRUE(gst_structure_get_int(s[0], "peak-y", &py));
+  ASSERT_TRUE(gst_structure_get_int(s[0], "region-x", &rx));
+  ASSERT_TRUE(gst_structure_get_int(s[0], "region-y", &ry));
+  ASSERT_TRUE(gst_structure_get_int(s[0], "region-width", &rw));
+  ASSERT_TRUE(gst_structure_get_int(s[0], "region-height", &rh));
+  ASSERT_TRUE(gst_structure_get_boolean(s[0], "region-tracks-peak", &tracking));
+  EXPECT_TRUE(tracking);
+  EXPECT_EQ(rw, 5);
+  EXPECT_EQ(rh, 5);
+  EXPECT_EQ(rx, px - 2);
+  EXPECT_EQ(ry, py - 2);
+  // The region lies in the spot: its median is the spot's, 1400 degC, not the plate's.
+  EXPECT_NEAR(field_double(s[0], "region-median-c"), 1400, 30);
+  free_all(s);
+  g_object_set(element, "region-tracks-peak", FALSE, nullptr);
+  run(planes, w, h, GST_SECOND);
+  s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  ASSERT_TRUE(gst_structure_get_int(s[0], "region-x", &rx));
+  ASSERT_TRUE(gst_structure_get_boolean(s[0], "region-tracks-peak", &tracking));
+  EXPECT_EQ(rx, 0);
+  EXPECT_FALSE(tracking);
+  EXPECT_NEAR(field_double(s[0], "region-median-c"), 1000, 30);
+  free_all(s);
+  EXPECT_TRUE(warnings.empty());
+}
+
 TEST_F(RatioTemp, peak_window_larger_than_the_frame_warns_once_and_gives_no_peak) {
   const int w = 24, h = 16;
   start("ratiotemp name=rt0 stats-interval=1 peak-window=17 model=" + rgb_model_path(),
