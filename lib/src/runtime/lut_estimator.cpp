@@ -116,6 +116,22 @@ bool interpolate(const float* __restrict corners, const float* __restrict wx,
 
 }  // namespace lut
 
+// FNV-1a over 8-byte words (then the tail's bytes), as 16 hex digits: a table cache's checksum,
+// eight times faster than bytewise FNV-1a over its megabytes.
+std::string cache_checksum(const char* data, std::size_t n) {
+  std::uint64_t h = 1469598103934665603ull;
+  std::size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    std::uint64_t word;
+    std::memcpy(&word, data + i, 8);
+    h = (h ^ word) * 1099511628211ull;
+  }
+  for (; i < n; ++i) h = (h ^ static_cast<unsigned char>(data[i])) * 1099511628211ull;
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
+  return text;
+}
+
 // The network tabulated over the colour camera's two ratios x = (s_n0 / ref, s_n1 / ref)
 // themselves, on a uniform grid. A ReLU network is piecewise affine in its inputs (log ratios,
 // when it takes their logarithms, which are close to affine over a cell) and a grid cell is a
@@ -150,7 +166,7 @@ class LutEstimator : public TemperatureEstimator {
   static constexpr std::size_t kMaxCachedBlocks = kMaxBlocks / 2;
   static constexpr std::size_t kBlockBytes = 4 * kBlockCells * kBlockCells * sizeof(float);
   // Bump when a block's values would change (grid rule, network arithmetic, output space).
-  static constexpr const char* kCacheMagic = "pyrocam lookup-table cache 1\n";
+  static constexpr const char* kCacheMagic = "pyrocam lookup-table cache 2\n";
 
   explicit LutEstimator(std::shared_ptr<const ThermalModel> model)
       : TemperatureEstimator(std::move(model)), mlp_(model_) {
@@ -293,7 +309,7 @@ class LutEstimator : public TemperatureEstimator {
   // The cache file: kCacheMagic, then a header line naming the model's fingerprint, the
   // output space, the grid and the block count, then per block its index (uint32) and its
   // 4 * kBlockCells^2 floats (host byte order: the cache belongs to one machine), then the
-  // FNV-1a checksum of everything before it as a text line.
+  // checksum of everything before it (cache_checksum) as a text line.
   std::string cache_header(std::size_t blocks) const {
     char line[256];
     std::snprintf(line, sizeof line, "%s %d %d %d %.17g %.17g %.17g %zu\n",
@@ -323,7 +339,7 @@ class LutEstimator : public TemperatureEstimator {
       ++count;
     }
     data = cache_header(count) + body;
-    data += fnv1a_hex(data) + "\n";
+    data += cache_checksum(data.data(), data.size()) + "\n";
     const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
     {
       std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
@@ -342,9 +358,12 @@ class LutEstimator : public TemperatureEstimator {
   }
 
   std::size_t load_tables(const std::string& path) const override {
-    std::ifstream in(path, std::ios::binary);
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw InputError("cannot read the table cache " + path);
-    const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::string data(static_cast<std::size_t>(std::max<std::streamoff>(in.tellg(), 0)), '\0');
+    in.seekg(0);
+    in.read(data.data(), static_cast<std::streamsize>(data.size()));
+    if (!in) throw InputError("cannot read the table cache " + path);
     const std::size_t magic = std::strlen(kCacheMagic);
     const std::size_t header_end = data.find('\n', magic);
     if (data.compare(0, magic, kCacheMagic) != 0 || header_end == std::string::npos)
@@ -359,7 +378,7 @@ class LutEstimator : public TemperatureEstimator {
     const std::size_t record = sizeof(std::uint32_t) + kBlockBytes;
     const std::size_t body_end = header.size() + count * record;
     if (count > kMaxCachedBlocks || data.size() != body_end + 17 ||
-        data.compare(body_end, 17, fnv1a_hex(data.substr(0, body_end)) + "\n") != 0)
+        data.compare(body_end, 17, cache_checksum(data.data(), body_end) + "\n") != 0)
       throw InputError("the table cache " + path + " is truncated or altered (checksum)");
     const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
     for (std::size_t k = 0; k < count; ++k) {
