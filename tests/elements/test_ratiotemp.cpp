@@ -1037,39 +1037,5 @@ TEST_F(RatioTemp, peak_window_larger_than_the_frame_warns_once_and_gives_no_peak
   free_all(s);
 }
 
-// table-cache: the first run keeps the lookup table's blocks in the folder (a file named by the
-// model's fingerprint), the next starts with them and writes the same temperatures; an altered
-// cache is not used and changes nothing; nor does running without a cache.
-TEST(RatioTempTableCache, a_second_run_reads_the_cache_and_gives_the_same_codes) {
-  REQUIRE_ELEMENT("ratiotemp");
-  if (rgb_auto_method() != Method::kLut) GTEST_SKIP() << "the test model's table fails its check";
-  ScratchDir dir("ratiotemp-cache");
-  const std::string cache = (dir / "cache").string();
-  const std::string file = cache + "/lut-" + rgb_model()->fingerprint + ".bin";
-  const auto run = [&](const std::string& table_cache, const std::string& out) {
-    const BusResult r = run_pipeline(
-        "pyrocamsrc scene=plate seed=3 num-buffers=3 ! video/x-bayer,width=64,height=48 ! "
-        "darksub dark-level=50 ! demosaic25 ! ratiotemp model=\"" +
-        rgb_model_path() + "\" table-cache=\"" + table_cache +
-        "\" ! filesink name=sink location=\"" + out + "\"");
-    EXPECT_TRUE(r.eos && !r.error) << r.message << " " << r.debug;
-    std::ifstream in(out, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
-  const std::string first = run(cache, (dir / "first.raw").string());
-  ASSERT_EQ(first.size(), 3u * 64 * 48 * 2);
-  ASSERT_TRUE(std::filesystem::exists(file));
-  const auto written = std::filesystem::last_write_time(file);
-  EXPECT_EQ(run(cache, (dir / "second.raw").string()), first);
-  EXPECT_EQ(std::filesystem::last_write_time(file), written) << "nothing new to keep";
-  {
-    std::fstream f(file, std::ios::binary | std::ios::in | std::ios::out);
-    f.seekp(200);
-    f.put('\x7f');
-  }
-  EXPECT_EQ(run(cache, (dir / "third.raw").string()), first);
-  EXPECT_EQ(run("", (dir / "fourth.raw").string()), first);
-}
-
 }  // namespace
 }  // namespace pyrocam::test
