@@ -80,6 +80,12 @@ segments=(avenc_ffv1 gop-size=1 ! splitmuxsink async-finalize=true muxer-factory
 # their comment tag gives the Bayer layout when CAPS names it and DARK. identity keeps the
 # encoder's buffer pool from the camera (pyrocamsrc refuses its buffers).
 raw_branch=()
+if [[ $RAW == 1 && -n $BRACKET ]]; then
+  # measure --recording reads frame by frame: it would not fuse the bracket, and its readings
+  # would not be the recorded ones.
+  echo "record: RAW=1 and BRACKET do not go together yet (pyrocam-calib measure --recording does not fuse a bracket)" >&2
+  exit 2
+fi
 if [[ $RAW == 1 ]]; then
   raw_tags="pyrocam-raw; dark=$DARK"
   if [[ $CAPS =~ format=(rggb|bggr|grbg|gbrg) ]]; then raw_tags+="; pattern=${BASH_REMATCH[1]}"; fi

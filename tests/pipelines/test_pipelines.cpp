@@ -363,8 +363,11 @@ TEST_F(Record, bracket_records_the_fused_frames) {
   EXPECT_TRUE(recorded.frames == fused.frames);
   EXPECT_FALSE(fused.frames == single.frames) << "the fusion changed nothing: a weak test";
 
-  for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
-           {"BRACKET", "1,zero"}, {"SOURCE", "videotestsrc"}, {"EXPOSURE_CONTROL", "1"}}) {
+  for (const auto& [key, value] :
+       std::vector<std::pair<std::string, std::string>>{{"BRACKET", "1,zero"},
+                                                        {"SOURCE", "videotestsrc"},
+                                                        {"EXPOSURE_CONTROL", "1"},
+                                                        {"RAW", "1"}}) {
     Env bad = settings(kScene, 2);
     bad["BRACKET"] = "1,0.1";
     bad[key] = value;
