@@ -370,6 +370,7 @@ TEST_F(Record, bracket_records_the_fused_frames) {
                                                         {"RAW", "1"}}) {
     Env bad = settings(kScene, 2);
     bad["BRACKET"] = "1,0.1";
+    bad["OUT"] = (dir / ("rec-bad-" + key)).string();
     bad[key] = value;
     const ScriptRun r = run_script("record.sh", {}, bad, log("record-bracket-bad"), kRunLimit);
     ASSERT_TRUE(r.status.has_value()) << "hung";
