@@ -40,6 +40,7 @@ std::string camera_description(const CameraConfig& c) {
                           " stats-interval=" + std::to_string(c.stats_interval_ms * 1000000LL) +
                           " peak-window=" + std::to_string(c.peak_window);
   if (!c.region.empty()) ratiotemp += " region=" + quoted(c.region);
+  if (c.region_tracks_peak) ratiotemp += " region-tracks-peak=true";
   if (!c.profile.empty()) ratiotemp += " profile=" + quoted(c.profile);
   std::string alarm;
   if (!c.alarm.empty()) {

@@ -21,6 +21,7 @@ struct CameraConfig {
   std::string model;
   std::string profile;
   std::string region;
+  bool region_tracks_peak = false;  // ratiotemp region-tracks-peak
   int peak_window = 5;
   int stats_interval_ms = 500;
   int watchdog_ms = 5000;

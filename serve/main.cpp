@@ -94,6 +94,9 @@ int main(int argc, char** argv) {
   app.add_option("--region", o.camera.region,
                  "Region whose statistics the page shows and the alarm watches: x,y,width,height "
                  "in output pixels (empty: the whole frame)");
+  app.add_flag("--region-tracks-peak", o.camera.region_tracks_peak,
+               "Centre the page's statistics region (its size from --region) on the frame's peak, "
+               "so that it follows a moving melt pool (the alarm's region stays put)");
   app.add_option("--peak-window", o.camera.peak_window,
                  "Peak statistic's window, odd pixels (ratiotemp peak-window)")
       ->capture_default_str()
@@ -159,6 +162,10 @@ int main(int argc, char** argv) {
                       "statistic=" + o.alarm_statistic,
                       "peak-window=" + std::to_string(o.camera.peak_window)};
     if (!o.camera.region.empty()) o.camera.alarm.push_back("region=\"" + o.camera.region + "\"");
+  }
+  if (o.camera.region_tracks_peak && o.camera.region.empty()) {
+    std::cerr << kName << ": --region-tracks-peak needs --region (its width and height)\n";
+    return 2;
   }
   if (o.print_pipeline) {
     std::cout << camera_description(o.camera) << "\n";

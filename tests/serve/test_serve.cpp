@@ -470,6 +470,26 @@ TEST(Serve, BadInputPortInUse) {
   close(fd);
 }
 
+// Options that contradict each other: a clear message and exit 2 before anything starts; with
+// --region the tracking reaches ratiotemp.
+TEST(Serve, BadInputRegionTracking) {
+  ScratchDir dir("serve-tracking");
+  Process p({serve_binary(), "--rtsp-port", "0", "--http-port", "0", "--model", rgb_model(),
+             "--region-tracks-peak"},
+            Env{}, (dir / "no-region.log").string());
+  const auto status = p.wait_for(milliseconds(20000));
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(*status, 2);
+  EXPECT_NE(p.log().find("--region-tracks-peak needs --region"), std::string::npos) << p.log();
+  Process printed({serve_binary(), "--model", rgb_model(), "--region", "0,0,40,40",
+                   "--region-tracks-peak", "--print-pipeline"},
+                  Env{}, (dir / "print.log").string());
+  const auto printed_status = printed.wait_for(milliseconds(20000));
+  ASSERT_TRUE(printed_status.has_value());
+  EXPECT_EQ(*printed_status, 0) << printed.log();
+  EXPECT_NE(printed.log().find("region-tracks-peak=true"), std::string::npos) << printed.log();
+}
+
 TEST(Serve, BadInputModel) {
   ScratchDir dir("serve-model");
   {
