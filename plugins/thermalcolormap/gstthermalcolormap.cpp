@@ -477,10 +477,11 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
                            DEFAULT_SCALE_BAR, display));
   g_object_class_install_property(
       gobject_class, PROP_INVALID_COLOR,
-      g_param_spec_uint("invalid-color", "Invalid colour",
-                        "Colour of pixels without a reading, 0xAARRGGBB (default fully "
-                        "transparent, so the camera image shows through in compositor)",
-                        0, G_MAXUINT, DEFAULT_INVALID_COLOR, display));
+      g_param_spec_uint(
+          "invalid-color", "Invalid colour",
+          "Colour of pixels without a reading, 0xAARRGGBB (default fully "
+          "transparent, so the camera image shows through in thermaloverlay or compositor)",
+          0, G_MAXUINT, DEFAULT_INVALID_COLOR, display));
   g_object_class_install_property(
       gobject_class, PROP_ISOTHERM_THRESHOLD,
       g_param_spec_double("isotherm-threshold", "Isotherm threshold",
