@@ -16,7 +16,7 @@
 #   EXPOSURE_CONTROLautoexposure after the camera: the hottest region neither saturates nor goes dim (1) [0]
 #   PEAK_MARKER  ring the frame's peak and write its temperature on the overlay (1) [0]
 #   ALARM_C      thermalalarm: a pyrocam-alarm message when the peak stays above this, degC []
-#   BRACKET      exposure factors the simulated camera cycles through, fused by thermalfuse (high dynamic range), e.g. 1,0.333,0.111,0.037 []
+#   BRACKET      exposure factors the simulated camera cycles through, fused by thermalfuse (high dynamic range), e.g. 1,0.333,0.111,0.037,0.012,0.004 []
 #   SINK         where the view goes                                  [autovideosink]
 #   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]
 #   STATS_INTERVAL_MS  ms between statistics rows                   [1000]

@@ -30,7 +30,7 @@
 #   EXPOSURE_CONTROL autoexposure after the camera: the hottest region neither saturates nor goes dim (1) [0]
 #   PEAK_MARKER      ring the frame's peak and write its temperature on the overlay (1) [0]
 #   ALARM_C          thermalalarm: a pyrocam-alarm message when the peak stays above this, degC []
-#   BRACKET          exposure factors the simulated camera cycles through, fused by thermalfuse (high dynamic range), e.g. 1,0.333,0.111,0.037 []
+#   BRACKET          exposure factors the simulated camera cycles through, fused by thermalfuse (high dynamic range), e.g. 1,0.333,0.111,0.037,0.012,0.004 []
 #   SEGMENT_SECONDS  length of one segment in seconds (decimals allowed) [10]
 #   SNAPSHOT_RATE    snapshots per second (at most the frame rate)       [1]
 #   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]

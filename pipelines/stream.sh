@@ -18,7 +18,7 @@
 #   EXPOSURE_CONTROLautoexposure after the camera: the hottest region neither saturates nor goes dim (1) [0]
 #   PEAK_MARKER  ring the frame's peak and write its temperature on the overlay (1) [0]
 #   ALARM_C      thermalalarm: a pyrocam-alarm message when the peak stays above this, degC []
-#   BRACKET      exposure factors the simulated camera cycles through, fused by thermalfuse (high dynamic range), e.g. 1,0.333,0.111,0.037 []
+#   BRACKET      exposure factors the simulated camera cycles through, fused by thermalfuse (high dynamic range), e.g. 1,0.333,0.111,0.037,0.012,0.004 []
 #   NUM_BUFFERS  frames to send; -1 streams until Ctrl-C              [-1]
 #   WATCHDOG_MS  end with an error when the camera sends nothing this long; 0: never [5000]
 #   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]

@@ -46,7 +46,7 @@ BRACKET=${BRACKET:-}
 # (high dynamic range); the simulated camera only: aravissrc frames carry no exposure.
 bracket_frames=0
 if [[ -n $BRACKET ]]; then
-  [[ $BRACKET =~ ^[0-9.]+(,[0-9.]+)*$ ]] || { echo "$name: BRACKET must be exposure factors separated by commas (e.g. 1,0.333,0.111,0.037), not '$BRACKET'" >&2; exit 2; }
+  [[ $BRACKET =~ ^[0-9.]+(,[0-9.]+)*$ ]] || { echo "$name: BRACKET must be exposure factors separated by commas (e.g. 1,0.333,0.111,0.037,0.012,0.004), not '$BRACKET'" >&2; exit 2; }
   [[ $SOURCE == pyrocamsrc* ]] || { echo "$name: BRACKET needs the simulated camera (SOURCE=pyrocamsrc ...): other cameras' frames carry no exposure to fuse by" >&2; exit 2; }
   [[ $EXPOSURE_CONTROL == 0 ]] || { echo "$name: BRACKET and EXPOSURE_CONTROL=1 do not go together: the exposure control would chase the bracket's levels" >&2; exit 2; }
   SOURCE="$SOURCE bracket=$BRACKET"

@@ -1,14 +1,12 @@
 // High dynamic range by exposure bracketing (targets): melt pools with a peak of 1500-2500 degC
-// filmed at four exposures, the longest for the rim (its hotter part saturates), the shortest
+// filmed at six exposures, the longest for the rim (its hotter part saturates), the shortest
 // for the core (its rim is dim), read one by one and fused (BracketFusion: each pixel from the
-// most exposed frame where it reads). The target, readings on >= 90 % of the pixels
-// hotter than 1300 degC, is not met with the colour camera: 76 % measured (84 % with six
-// exposures, 42 % with two a factor 20 apart); pixels on the pools' steep sides, whose
-// demosaicking footprint holds a saturated sample at one exposure and dim ones at the next, read
-// at none. Asserted: the fused frame reads well beyond every single exposure and its readings
-// are no wilder (more than max(150 degC, 10 %) off the truth) than theirs. The model is the
-// camera's true QE with the likelihood fit, so that the dynamic range is measured, not the
-// calibration. The scene holds still over the bracket.
+// most exposed frame where it reads). Target: readings on >= 90 % of the pixels hotter than
+// 1300 degC; measured 90.6 % (76 % with four exposures 3 times apart, whose shortest leaves the
+// hottest cores saturated; 42 % with two a factor 20 apart), and fused readings no wilder (more
+// than max(150 degC, 10 %) off the truth) than the single exposures'. The model is the camera's
+// true QE with the likelihood fit, so that the dynamic range is measured, not the calibration.
+// The scene holds still over the bracket.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -72,14 +70,15 @@ TEST(BracketTargets, TheCoreAndTheRimReadInOneFusedFrame) {
   FrameMeasurer measurer(model, options);
   Simulator camera(p, unit, 17);
   // The longest exposure puts a 1400 degC surface's brightest band at 70 % of the usable range;
-  // each next one is a third of the one before (4 exposures: 1, 1/3, 1/9, 1/27). A colour
-  // pixel reads only while all three bands lie between the dim and the saturation thresholds
-  // (20 and 170 DN above dark), and its bands differ by up to 2.3 times: one exposure covers a
-  // brightness range of less than 4 times, so steps of 3.
+  // each next one is a third of the one before (6 exposures: 1 to 1/243). A colour pixel reads
+  // only while all three bands lie between the dim and the saturation thresholds (20 and 170 DN
+  // above dark), and its bands differ by up to 2.3 times: one exposure covers a brightness range
+  // of less than 4 times, so steps of 3; and a 2500 degC surface is about 300 times brighter
+  // than a 1400 degC one in the red band, so six of them.
   const double target_dn = 0.7 * (p.thresholds.inference_saturation_dn - 50);
   const double long_us = camera.exposure_for(1400, target_dn);
   constexpr double ratio = 3;
-  constexpr int n = 4;
+  constexpr int n = 6;
   Coverage long_only, short_only, fused;
   auto frame = [&](const cv::Mat& truth_with_nan) {
     cv::Mat truth = truth_with_nan.clone();
@@ -102,15 +101,15 @@ TEST(BracketTargets, TheCoreAndTheRimReadInOneFusedFrame) {
   for (int i = 0; i < 60; i += 4) frame(melt_pool_scene(kW, kH, i, 60));
   for (double peak : {1500.0, 2000.0, 2500.0}) frame(parabolic_pool(peak));
   for (const auto& [name, c] : {std::pair{"long exposure", long_only},
-                                {"short exposure (1/27)", short_only},
+                                {"short exposure (1/243)", short_only},
                                 {"fused", fused}})
     std::printf(
         "%-22s %5.1f %% of %ld pixels hotter than 1300 degC read; %.2f %% of %ld "
         "readings wild\n",
         name, c.read_percent(), c.hot, c.wild_percent(), c.readings);
-  // Measured 76.2 % fused, 23.9 % and 18.1 % for the longest and shortest alone (seeded
-  // simulation: the margins cover another libm's noise draws).
-  EXPECT_GE(fused.read_percent(), 70);
+  // Measured 90.6 % fused, 23.8 % for the longest alone (seeded simulation: the loose bound
+  // covers another libm's noise draws).
+  EXPECT_GE(fused.read_percent(), 88);
   EXPECT_GE(fused.read_percent(),
             2.5 * std::max(long_only.read_percent(), short_only.read_percent()));
   EXPECT_LE(fused.wild_percent(), std::max(long_only.wild_percent(), short_only.wild_percent()));
