@@ -10,7 +10,6 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -319,17 +318,16 @@ class LutEstimator : public TemperatureEstimator {
   }
 
   std::size_t save_tables(const std::string& path) const override {
-    if (model_->fingerprint.empty()) return 0;
-    const std::size_t built = built_.load(std::memory_order_acquire);
-    if (built <= loaded_) return 0;
-    std::string data;
-    std::size_t count = 0;
+    // Nothing new to keep, or the file already holds as many blocks as a cache may.
+    if (model_->fingerprint.empty() || built_.load(std::memory_order_acquire) <= loaded_ ||
+        loaded_ >= kMaxCachedBlocks)
+      return 0;
     std::vector<std::uint32_t> order;
     {
       std::lock_guard<std::mutex> lock(order_mutex_);
       order = built_order_;
     }
-    if (loaded_ >= kMaxCachedBlocks) return 0;
+    std::size_t count = 0;
     std::string body;
     for (std::uint32_t index : order) {
       if (count == kMaxCachedBlocks) break;
@@ -338,7 +336,7 @@ class LutEstimator : public TemperatureEstimator {
                   kBlockBytes);
       ++count;
     }
-    data = cache_header(count) + body;
+    std::string data = cache_header(count) + body;
     data += cache_checksum(data.data(), data.size()) + "\n";
     const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
     {
