@@ -294,7 +294,9 @@ TEST_F(Pipelines5x5, default_model_is_calibrated_on_first_use) {
 class VirtualDisplay {
  public:
   explicit VirtualDisplay(const std::string& log_path) : log_(log_path) {
-    process_.emplace(std::vector<std::string>{"Xvfb", "-displayfd", "1", "-screen", "0",
+    // -noreset: by default the server resets when its last client leaves, and a view that
+    // connects meanwhile fails ("Could not initialise X output", seen once in CI).
+    process_.emplace(std::vector<std::string>{"Xvfb", "-displayfd", "1", "-noreset", "-screen", "0",
                                               "640x480x24", "-nolisten", "tcp"},
                      Env{}, log_path);
     wait_until(
