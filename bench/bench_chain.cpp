@@ -132,6 +132,11 @@ void bench_colour(const Options& o, const pyrocam::ThermalModel& m, const std::s
                                   " misfit-probability=" + o.misfit_probability;
       print_run("the same, demosaic25 mixed-pixels=0.2",
                 run_chain(checked + " method=lut", caps, raw, o.frames, o.warmup), bayer);
+      const std::string matched = "darksub dark-level=50" + q + " ! demosaic25 method=matched" + q +
+                                  " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
+                                  " misfit-probability=" + o.misfit_probability;
+      print_run("the same, demosaic25 method=matched",
+                run_chain(matched + " method=lut", caps, raw, o.frames, o.warmup), bayer);
     }
   }
   if (!detailed) return;

@@ -43,13 +43,16 @@ TruthScore compare_truth(const cv::Mat& t, const cv::Mat& truth_dk, const Mosaic
                          DemosaicMethod method) {
   const bool binned =
       method == DemosaicMethod::kBinCells || layout.kind == MosaicLayout::Kind::kSnapshot;
-  const int cw = binned ? layout.period_width : 3, ch = binned ? layout.period_height : 3;
+  // Full resolution: the 3x3 pixels bilinear draws on, the 5x5 of matched.
+  const int reach = method == DemosaicMethod::kMatched ? 2 : 1;
+  const int cw = binned ? layout.period_width : 2 * reach + 1;
+  const int ch = binned ? layout.period_height : 2 * reach + 1;
   TruthScore s;
   std::vector<double> errors;
   double sum2 = 0;
   for (int y = 0; y < t.rows; ++y)
     for (int x = 0; x < t.cols; ++x) {
-      const int x0 = binned ? x * cw : x - 1, y0 = binned ? y * ch : y - 1;
+      const int x0 = binned ? x * cw : x - reach, y0 = binned ? y * ch : y - reach;
       if (x0 < 0 || y0 < 0 || x0 + cw > truth_dk.cols || y0 + ch > truth_dk.rows) continue;
       const std::uint16_t v = truth_dk.at<std::uint16_t>(y0, x0);
       bool uniform = v != 0;
@@ -306,8 +309,11 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
                 "likelihood)")
       ->check(CLI::IsMember({"mlp", "lut", "likelihood", "auto"}))
       ->capture_default_str();
-  c->add_option("--demosaic", a.demosaic, "Bayer demosaicking: bilinear or bin2x2")
-      ->check(CLI::IsMember({"bilinear", "bin2x2"}))
+  c->add_option("--demosaic", a.demosaic,
+                "Bayer demosaicking: bilinear, bin2x2 or matched (every band through a 5x5 "
+                "kernel of the same spread: no colour shift on hot spots, no wild ratios at "
+                "edges to a cold background)")
+      ->check(CLI::IsMember({"bilinear", "bin2x2", "matched"}))
       ->capture_default_str();
   c->add_option("--saturation", a.saturation, "Raw saturation level, DN (-1: the model's)")
       ->capture_default_str();

@@ -12,6 +12,7 @@ G_DECLARE_FINAL_TYPE(GstDemosaic25, gst_demosaic25, GST, DEMOSAIC25, GstBaseTran
 typedef enum {
   GST_DEMOSAIC25_METHOD_BILINEAR,
   GST_DEMOSAIC25_METHOD_BIN2X2,
+  GST_DEMOSAIC25_METHOD_MATCHED,
 } GstDemosaic25Method;
 #define GST_TYPE_DEMOSAIC25_METHOD (gst_demosaic25_method_get_type())
 GType gst_demosaic25_method_get_type(void);

@@ -94,6 +94,55 @@ TEST_F(Demosaic25, mixed_pixels_at_a_sharp_edge_get_no_reading_and_the_rest_stay
       }
 }
 
+TEST_F(Demosaic25, matched_gives_no_band_mixing_a_cold_background_into_a_lit_one) {
+  // The edge of the test above: a lit object (100..109 DN) beside a background without light
+  // (2 DN, under 5 noise-floor standard deviations at 8 bits). Each band value is either
+  // measured light or dim (0); none lies between, where a ratio of two temperatures would.
+  std::vector<float> mosaic(8 * 6);
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 8; ++x) mosaic[y * 8 + x] = x < 4 ? 100.f + 3.f * x : 2.f;
+  start("demosaic25 method=matched", mosaic_caps("rggb", 8, 6));
+  const auto planes = run(mosaic);
+  ASSERT_EQ(planes.size(), 3u * 48);
+  int dim = 0;
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    const int x = static_cast<int>(i % 8);
+    if (planes[i] == 0.f) {
+      ++dim;
+      EXPECT_GE(x, 2) << i;  // only kernels that reach the background
+    } else {
+      EXPECT_GE(planes[i], 100.f) << i;
+      EXPECT_LE(x, 3) << i;
+    }
+  }
+  // Dim: every band of columns 4-7; every kernel at column 3 reaches column 4 or 5; at column
+  // 2 those with samples 2 columns right (2 of the 3 bands in each row).
+  EXPECT_EQ(dim, 3 * 6 * 4 + 3 * 6 + 2 * 6);
+  // A lit mosaic reads as the library's matched planes.
+  std::vector<float> lit = ramp(8, 6);
+  for (float& v : lit) v += 50.f;
+  expect_same(run(lit), library(lit, 8, 6, MosaicLayout::bayer("RGGB"), DemosaicMethod::kMatched));
+}
+
+TEST_F(Demosaic25, matched_mixed_pixel_check_tests_each_kernel) {
+  // An edge between two lit levels (100 and 40 DN): every pixel with a kernel across it
+  // (columns 2-5, 5x5 kernels) gets no reading, the others keep the library's values.
+  std::vector<float> mosaic(8 * 6);
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 8; ++x) mosaic[y * 8 + x] = x < 4 ? 100.f : 40.f;
+  start("demosaic25 method=matched mixed-pixels=0.2", mosaic_caps("rggb", 8, 6));
+  const auto checked = run(mosaic);
+  const auto plain = library(mosaic, 8, 6, MosaicLayout::bayer("RGGB"), DemosaicMethod::kMatched);
+  ASSERT_EQ(checked.size(), plain.size());
+  for (std::size_t i = 0; i < checked.size(); ++i) {
+    const int x = static_cast<int>(i % 8);
+    if (x >= 2 && x <= 5)
+      EXPECT_TRUE(std::isnan(checked[i])) << i;
+    else
+      EXPECT_EQ(checked[i], plain[i]) << i;
+  }
+}
+
 TEST_F(Demosaic25, bin2x2_halves_resolution) {
   expect_library_planes("demosaic25 method=bin2x2", "rggb", DemosaicMethod::kBinCells);
   const std::string caps = sink_caps(h);

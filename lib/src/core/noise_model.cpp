@@ -1,6 +1,7 @@
 #include "pyrocam/core/noise_model.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace pyrocam {
 
@@ -13,6 +14,12 @@ SignalNoise signal_noise(const CameraProfile& p, int band) {
 double signal_variance_dn2(const CameraProfile& p, int band, double signal_dn, int frames) {
   const SignalNoise n = signal_noise(p, band);
   return (n.shot_gain * std::max(signal_dn, 0.0) + n.floor_dn2) / std::max(frames, 1);
+}
+
+double no_signal_level_dn(const std::vector<SignalNoise>& noise) {
+  double floor = 0;
+  for (const SignalNoise& n : noise) floor = std::max(floor, n.floor_dn2);
+  return 5 * std::sqrt(floor);
 }
 
 }  // namespace pyrocam

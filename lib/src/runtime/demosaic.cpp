@@ -185,17 +185,18 @@ class BayerBilinear {
 DemosaicMethod parse_demosaic_method(const std::string& name) {
   if (name == "bilinear") return DemosaicMethod::kBilinear;
   if (name == "bin2x2") return DemosaicMethod::kBinCells;
-  throw InputError("unknown demosaic method '" + name + "' (use bilinear or bin2x2)");
+  if (name == "matched") return DemosaicMethod::kMatched;
+  throw InputError("unknown demosaic method '" + name + "' (use bilinear, bin2x2 or matched)");
 }
 
 cv::Size demosaic_output_size(const MosaicLayout& layout, DemosaicMethod method, cv::Size input) {
-  if (method == DemosaicMethod::kBilinear && layout.kind == MosaicLayout::Kind::kBayer)
+  if (method != DemosaicMethod::kBinCells && layout.kind == MosaicLayout::Kind::kBayer)
     return input;
   return {input.width / layout.period_width, input.height / layout.period_height};
 }
 
 void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod method,
-              std::vector<cv::Mat>& planes) {
+              std::vector<cv::Mat>& planes, float no_signal_dn) {
   if (mosaic.type() != CV_32F) throw InputError("demosaic: the mosaic must be CV_32F");
   if (mosaic.cols < layout.period_width || mosaic.rows < layout.period_height)
     throw InputError("demosaic: a " + std::to_string(mosaic.cols) + "x" +
@@ -205,6 +206,10 @@ void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod 
   prepare_planes(planes, layout.band_count(), out_size);
   if (method == DemosaicMethod::kBinCells || layout.kind != MosaicLayout::Kind::kBayer) {
     bin_cells(mosaic, layout, planes);
+    return;
+  }
+  if (method == DemosaicMethod::kMatched) {
+    demosaic_matched_bayer(mosaic, layout, no_signal_dn, planes);
     return;
   }
   const BayerBilinear bilinear(layout);

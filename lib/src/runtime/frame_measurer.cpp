@@ -44,12 +44,14 @@ void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& te
                      std::to_string(profile.bit_depth) + "-bit single-channel frames");
   const cv::Mat dark_f = dark.type() == CV_32F ? dark : dark_from_image(dark);
   subtract_dark(raw, dark_f, options_.saturation_level_dn, signal_);
-  demosaic(signal_, model_->profile().mosaic, options_.demosaic, planes_);
+  std::vector<SignalNoise> noise;
+  for (int b = 0; b < profile.band_count(); ++b) noise.push_back(signal_noise(profile, b));
+  demosaic(signal_, profile.mosaic, options_.demosaic, planes_,
+           static_cast<float>(no_signal_level_dn(noise)));
   if (options_.footprint_spread > 0) {
     FootprintCheck check;
     check.relative_spread = options_.footprint_spread;
-    for (int b = 0; b < model_->profile().band_count(); ++b)
-      check.noise.push_back(signal_noise(model_->profile(), b));
+    check.noise = noise;
     mark_mixed_pixels(signal_, model_->profile().mosaic, options_.demosaic, check, planes_);
   }
   planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);

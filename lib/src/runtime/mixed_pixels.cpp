@@ -234,6 +234,28 @@ std::size_t mark_mixed_pixels(const cv::Mat& mosaic, const MosaicLayout& layout,
       total.fetch_add(marked_here, std::memory_order_relaxed);
     });
     marked = total.load();
+  } else if (method == DemosaicMethod::kMatched) {
+    // Each band's kernel samples at each pixel parity, one pixel at a time (slower than the
+    // bilinear pass). Pixels without a finite band at the skip level are left alone: they have
+    // no reading whatever their footprint.
+    std::array<std::array<Offsets, 2>, 2> footprint;  // row parity, column parity
+    for (int py = 0; py < 2; ++py)
+      for (int px = 0; px < 2; ++px)
+        for (int b = 0; b < bands; ++b)
+          footprint[py][px].of_band[static_cast<std::size_t>(b)] =
+              matched_footprint(layout, b, px, py);
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x) {
+        bool lit = false;
+        for (const cv::Mat& p : planes) {
+          const float v = p.at<float>(y, x);
+          lit = lit || (std::isfinite(v) && v >= check.skip_below_dn);
+        }
+        if (lit && !test(footprint[y & 1][x & 1], x, y, true)) {
+          set_nan(planes, x, y);
+          ++marked;
+        }
+      }
   } else {
     Offsets cell;
     for (int dy = 0; dy < layout.period_height; ++dy)

@@ -1,12 +1,13 @@
 // Demosaicking: bilinear Bayer, 2x2 binning, one reading per 5x5 macro-pixel, mark propagation.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
 
-#include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/core/error.h"
+#include "pyrocam/runtime/demosaic.h"
 
 namespace pyrocam {
 namespace {
@@ -132,6 +133,125 @@ TEST(Demosaic, large_frames_split_over_threads_give_the_same_result) {
                         0.25f * ((img.at<float>(y - 1, x) + img.at<float>(y + 1, x)) +
                                  (img.at<float>(y, x - 1) + img.at<float>(y, x + 1))));
     }
+  // Matched: rows split over threads give the rows of small frames cut from the same mosaic.
+  demosaic(img, m, DemosaicMethod::kMatched, planes, 20.f);
+  for (int y0 : {100, 258}) {
+    std::vector<cv::Mat> part;
+    demosaic(img.rowRange(y0 - 4, y0 + 6).clone(), m, DemosaicMethod::kMatched, part, 20.f);
+    for (int b = 0; b < 3; ++b)
+      for (int x = 0; x < img.cols; ++x)
+        EXPECT_EQ(planes[b].at<float>(y0, x), part[b].at<float>(4, x)) << b << " " << x;
+  }
+}
+
+}  // namespace
+}  // namespace pyrocam
+
+namespace pyrocam {
+namespace {
+
+// A mosaic whose band b reads 100 b + q(x, y), with q quadratic: each band's kernel mean is
+// q + its first moments . grad q + (Mxx qxx + Myy qyy) / 2 + Mxy qxy.
+cv::Mat bowl(const MosaicLayout& m, int w, int h) {
+  cv::Mat img(h, w, CV_32F);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      img.at<float>(y, x) = 100.f * m.band_at(x, y) + 0.5f * (x - 6.f) * (x - 6.f) +
+                            0.25f * (y - 5.f) * (y - 5.f) + 0.1f * (x - 6.f) * (y - 5.f) + x;
+  return img;
+}
+
+TEST(Demosaic, matched_gives_every_band_the_same_offset_on_a_curved_signal) {
+  for (const char* p : {"RGGB", "BGGR", "GRBG", "GBRG"}) {
+    const MosaicLayout m = MosaicLayout::bayer(p);
+    std::vector<cv::Mat> planes;
+    demosaic(bowl(m, 12, 10), m, DemosaicMethod::kMatched, planes);
+    ASSERT_EQ(planes.size(), 3u);
+    ASSERT_EQ(planes[0].size(), cv::Size(12, 10));
+    for (int b = 0; b < 3; ++b)
+      for (int y = 2; y < 8; ++y)
+        for (int x = 2; x < 10; ++x) {
+          // Moments 1 along x and y, none across or first-order: + (0.5 * 2 + 0.25 * 2) / 2.
+          const float q = 0.5f * (x - 6.f) * (x - 6.f) + 0.25f * (y - 5.f) * (y - 5.f) +
+                          0.1f * (x - 6.f) * (y - 5.f) + x;
+          EXPECT_NEAR(planes[b].at<float>(y, x), 100.f * b + q + 0.75f, 1e-3)
+              << p << " band " << b << " at " << x << "," << y;
+        }
+  }
+}
+
+}  // namespace
+}  // namespace pyrocam
+
+namespace pyrocam {
+namespace {
+
+TEST(Demosaic, matched_keeps_the_pattern_at_the_borders) {
+  // One level per band: every kernel reads its band's level, borders included (mirrored).
+  for (const char* p : {"RGGB", "GBRG"}) {
+    const MosaicLayout m = MosaicLayout::bayer(p);
+    cv::Mat img(7, 9, CV_32F);  // odd sizes: the last row and column have the other parity
+    for (int y = 0; y < img.rows; ++y)
+      for (int x = 0; x < img.cols; ++x) img.at<float>(y, x) = 10.f + 7.f * m.band_at(x, y);
+    std::vector<cv::Mat> planes;
+    demosaic(img, m, DemosaicMethod::kMatched, planes);
+    for (int b = 0; b < 3; ++b)
+      for (int y = 0; y < img.rows; ++y)
+        for (int x = 0; x < img.cols; ++x)
+          EXPECT_FLOAT_EQ(planes[b].at<float>(y, x), 10.f + 7.f * b) << p << " " << x << "," << y;
+  }
+}
+
+TEST(Demosaic, matched_marks_saturation_nan_and_samples_without_light) {
+  const MosaicLayout m = MosaicLayout::bayer("RGGB");
+  cv::Mat img(10, 10, CV_32F, cv::Scalar(50));
+  img.at<float>(4, 4) = kInf;           // an R pixel
+  img.at<float>(4, 7) = std::nanf("");  // a G pixel
+  img.at<float>(8, 1) = 0.5f;           // a G pixel without light
+  std::vector<cv::Mat> planes;
+  demosaic(img, m, DemosaicMethod::kMatched, planes, 2.f);
+  EXPECT_EQ(planes[0].at<float>(4, 4), kInf);  // R at itself
+  EXPECT_EQ(planes[0].at<float>(6, 4), kInf);  // R at the R pixel 2 below (its axial kernel)
+  EXPECT_EQ(planes[1].at<float>(4, 4), 50.f);  // G never draws on an R sample
+  EXPECT_TRUE(std::isnan(planes[1].at<float>(4, 7)));
+  EXPECT_TRUE(std::isnan(planes[1].at<float>(5, 8)));  // G at a diagonal of the NaN G
+  EXPECT_EQ(planes[1].at<float>(8, 1), 0.f);   // dim: a band drawn from a sample without light
+  EXPECT_EQ(planes[1].at<float>(8, 2), 0.f);   // G at the R pixel next to it
+  EXPECT_EQ(planes[0].at<float>(8, 1), 50.f);  // R and B do not draw on it
+  EXPECT_EQ(planes[2].at<float>(8, 1), 50.f);
+  // Without the level the same sample is averaged in.
+  demosaic(img, m, DemosaicMethod::kMatched, planes);
+  EXPECT_GT(planes[1].at<float>(8, 2), 30.f);
+  // A kernel with both a saturated sample and one without light: no reading.
+  img.at<float>(6, 6) = kInf;
+  img.at<float>(6, 8) = 0.f;
+  demosaic(img, m, DemosaicMethod::kMatched, planes, 2.f);
+  EXPECT_TRUE(std::isnan(planes[0].at<float>(6, 7)));  // R at G (6,7): both R neighbours
+}
+
+TEST(Demosaic, matched_footprint_is_the_kernel_samples_of_the_band) {
+  const MosaicLayout m = MosaicLayout::bayer("RGGB");
+  for (int py = 0; py < 2; ++py)
+    for (int px = 0; px < 2; ++px)
+      for (int b = 0; b < 3; ++b) {
+        // A mosaic with one sample changed changes band b at the pixel exactly when the sample
+        // is in the footprint (and of band b).
+        const auto footprint = matched_footprint(m, b, px, py);
+        for (int dy = -2; dy <= 2; ++dy)
+          for (int dx = -2; dx <= 2; ++dx) {
+            cv::Mat img(10, 10, CV_32F, cv::Scalar(40));
+            img.at<float>(4 + py + dy, 4 + px + dx) = 80.f;
+            std::vector<cv::Mat> planes;
+            demosaic(img, m, DemosaicMethod::kMatched, planes);
+            const bool in =
+                std::find(footprint.begin(), footprint.end(), cv::Point(dx, dy)) != footprint.end();
+            EXPECT_EQ(planes[b].at<float>(4 + py, 4 + px) != 40.f, in)
+                << b << " at parity " << px << "," << py << " sample " << dx << "," << dy;
+            if (in) {
+              EXPECT_EQ(m.band_at(4 + px + dx, 4 + py + dy), b);
+            }
+          }
+      }
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 // check, the GUM uncertainty and the noisy locus copies weigh or draw signals by.
 #pragma once
 
+#include <vector>
+
 #include "pyrocam/core/profile.h"
 
 namespace pyrocam {
@@ -18,5 +20,10 @@ struct SignalNoise {
   double floor_dn2;
 };
 SignalNoise signal_noise(const CameraProfile& profile, int band);
+
+// The level below which a dark-subtracted sample may hold no light at all: 5 standard
+// deviations of the noisiest band's floor (read noise and quantisation of the frame and its
+// dark). At an edge to a cold background, interpolation mixes such samples with lit ones.
+double no_signal_level_dn(const std::vector<SignalNoise>& noise);
 
 }  // namespace pyrocam

@@ -36,7 +36,9 @@ struct FootprintCheck {
 inline constexpr double kMaxRelativeSpread = 10;
 
 // The footprint: for bilinear Bayer the 3x3 mosaic pixels around each output pixel (mirrored at
-// the borders, as demosaic does), for binned Bayer the 2x2 cell. Snapshot mosaics (one sample
+// the borders, as demosaic does), for matched Bayer each band's kernel samples
+// (matched_footprint, one pixel at a time: several times the bilinear pass's cost), for binned
+// Bayer the 2x2 cell. Snapshot mosaics (one sample
 // of each band per cell) have nothing to compare and are left alone: the band-consistency check
 // (misfit.h) catches their mixed pixels. Samples that are not finite (saturated or no reading)
 // are left out of the comparison (the planes already carry their marks where they are used).

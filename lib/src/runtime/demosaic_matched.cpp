@@ -1,0 +1,202 @@
+// Moment-matched Bayer demosaicking (DemosaicMethod::kMatched).
+//
+// Why: a band interpolated from its neighbours is a local mean, so on a curved signal (a melt
+// pool's peak, a cooling tail) it is off by half its kernel's second moment times the band's
+// curvature, while a band taken at the pixel itself is not. Bilinear demosaicking gives the
+// three bands second moments of 0 (self), 0.5 (cross) and 1 (diagonal) pixel^2, so their
+// ratio is off by the curvature of one band's log signal, about ten times that of the log
+// ratio between the colour camera's bands: at a few-pixel hot spot the reading is 100 degC
+// and more too hot. Here every band of every pixel comes from a symmetric kernel with the same
+// second moment (1 pixel^2 along each axis, none across), so the curvature terms of the bands
+// cancel down to that of the log ratio itself: the reading is that of the temperature field
+// seen through one common blur, as an optical blur would give.
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "detail/vector_clones.h"
+#include "pyrocam/runtime/demosaic.h"
+
+namespace pyrocam {
+namespace {
+
+// The kernels by where the band's samples lie around the pixel. Each has weights summing to
+// 1, first moments 0 and second moments 1 pixel^2 along x and y, 0 across (the unit test
+// checks this on a quadratic). Row sums: r0 the pixel's row, v the rows 1 above and below
+// added, c those 2 above and below added.
+enum class Kernel {
+  kSelfAxial,     // R or B at its own pixel: itself 1/2, its samples 2 away along the axes 1/8
+  kSelfDiagonal,  // G at its own pixel: itself 2/9, diagonals 5/36, 2 away along the axes 1/18
+  kHorizontal,    // left and right 3/8, the same columns 2 rows away 1/16
+  kVertical,      // above and below 3/8, the same rows 2 columns away 1/16
+  kDiagonal,      // the four diagonals 1/4
+  kCross,         // G at R or B: the four next 3/16, the eight a knight's move away 1/32
+};
+
+template <Kernel kK>
+inline float apply(const float* r0, const float* v, const float* c, int x) {
+  switch (kK) {
+    case Kernel::kSelfAxial:
+      return 0.5f * r0[x] + 0.125f * ((r0[x - 2] + r0[x + 2]) + c[x]);
+    case Kernel::kSelfDiagonal:
+      return (2.f / 9) * r0[x] + (5.f / 36) * (v[x - 1] + v[x + 1]) +
+             (1.f / 18) * ((r0[x - 2] + r0[x + 2]) + c[x]);
+    case Kernel::kHorizontal:
+      return 0.375f * (r0[x - 1] + r0[x + 1]) + 0.0625f * (c[x - 1] + c[x + 1]);
+    case Kernel::kVertical:
+      return 0.375f * v[x] + 0.0625f * (v[x - 2] + v[x + 2]);
+    case Kernel::kDiagonal:
+      return 0.25f * (v[x - 1] + v[x + 1]);
+    case Kernel::kCross:
+      return 0.1875f * ((r0[x - 1] + r0[x + 1]) + v[x]) +
+             0.03125f * ((v[x - 2] + v[x + 2]) + (c[x - 1] + c[x + 1]));
+  }
+  return 0.f;
+}
+
+// One kernel over a whole row (inputs padded by 2 on each side, index 0 is column 0):
+// contiguous, so that it vectorises; a band's row takes the even columns of one kernel's row
+// and the odd ones of another's.
+template <Kernel kK>
+PYROCAM_VECTOR_CLONES void kernel_row(const float* __restrict r0, const float* __restrict v,
+                                      const float* __restrict c, float* __restrict o, int width) {
+  for (int x = 0; x < width; ++x) o[x] = apply<kK>(r0, v, c, x);
+}
+
+using RowFn = void (*)(const float*, const float*, const float*, float*, int);
+
+RowFn row_fn(Kernel k) {
+  switch (k) {
+    case Kernel::kSelfAxial:
+      return kernel_row<Kernel::kSelfAxial>;
+    case Kernel::kSelfDiagonal:
+      return kernel_row<Kernel::kSelfDiagonal>;
+    case Kernel::kHorizontal:
+      return kernel_row<Kernel::kHorizontal>;
+    case Kernel::kVertical:
+      return kernel_row<Kernel::kVertical>;
+    case Kernel::kDiagonal:
+      return kernel_row<Kernel::kDiagonal>;
+    case Kernel::kCross:
+      return kernel_row<Kernel::kCross>;
+  }
+  return nullptr;
+}
+
+// out = even columns of `even`, odd ones of `odd`; -INF (no signal) becomes 0 (dim) when
+// `no_signal`.
+PYROCAM_VECTOR_CLONES
+void interleave(const float* __restrict even, const float* __restrict odd, float* __restrict out,
+                int width, bool no_signal) {
+  constexpr float kMinusInf = -std::numeric_limits<float>::infinity();
+  int x = 0;
+  for (; x + 1 < width; x += 2) {  // pairs: a blend the compiler vectorises
+    out[x] = even[x];
+    out[x + 1] = odd[x + 1];
+  }
+  if (x < width) out[x] = even[x];
+  if (no_signal)
+    for (x = 0; x < width; ++x) out[x] = out[x] == kMinusInf ? 0.f : out[x];
+}
+
+Kernel kernel_for(const MosaicLayout& layout, int band, int px, int py) {
+  auto is = [&](int x, int y) { return layout.band_at(x & 1, y & 1) == band; };
+  if (is(px, py)) return is(px + 1, py + 1) ? Kernel::kSelfDiagonal : Kernel::kSelfAxial;
+  if (is(px + 1, py)) return is(px, py + 1) ? Kernel::kCross : Kernel::kHorizontal;
+  if (is(px, py + 1)) return Kernel::kVertical;
+  return Kernel::kDiagonal;
+}
+
+}  // namespace
+
+std::vector<cv::Point> matched_footprint(const MosaicLayout& layout, int band, int px, int py) {
+  std::vector<cv::Point> at;
+  auto pairs = [&](int dx, int dy) {  // (dx, dy) with every sign
+    for (int sx : {-1, 1})
+      for (int sy : {-1, 1})
+        if ((sx > 0 || dx != 0) && (sy > 0 || dy != 0)) at.push_back({sx * dx, sy * dy});
+  };
+  switch (kernel_for(layout, band, px, py)) {
+    case Kernel::kSelfAxial:
+      at.push_back({0, 0}), pairs(2, 0), pairs(0, 2);
+      break;
+    case Kernel::kSelfDiagonal:
+      at.push_back({0, 0}), pairs(1, 1), pairs(2, 0), pairs(0, 2);
+      break;
+    case Kernel::kHorizontal:
+      pairs(1, 0), pairs(1, 2);
+      break;
+    case Kernel::kVertical:
+      pairs(0, 1), pairs(2, 1);
+      break;
+    case Kernel::kDiagonal:
+      pairs(1, 1);
+      break;
+    case Kernel::kCross:
+      pairs(1, 0), pairs(0, 1), pairs(1, 2), pairs(2, 1);
+      break;
+  }
+  return at;
+}
+
+void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, float no_signal_dn,
+                            std::vector<cv::Mat>& planes) {
+  constexpr int kReach = 2;
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  const bool mark_no_signal = no_signal_dn > -kInf;
+  std::array<std::array<std::array<RowFn, 2>, 2>, 3> rows_of{};  // band, row, column parity
+  for (int b = 0; b < 3; ++b)
+    for (int py = 0; py < 2; ++py)
+      for (int px = 0; px < 2; ++px) rows_of[b][py][px] = row_fn(kernel_for(layout, b, px, py));
+  const int width = mosaic.cols, height = mosaic.rows, padded_width = width + 2 * kReach;
+  auto run = [&](const cv::Range& r) {
+    // The five input rows around the output row, padded: a ring, each row read once per chunk.
+    std::vector<float> buffer(static_cast<std::size_t>(9 * padded_width));
+    auto ring = [&](int yy) { return buffer.data() + ((yy + 2 * kReach) % 5) * padded_width; };
+    float* v = buffer.data() + 5 * padded_width;
+    float* c = v + padded_width;
+    float* even = c + padded_width;
+    float* odd = even + padded_width;
+    auto load = [&](int yy) {
+      // Mirrored without repeating the edge, which keeps the pattern (as the bilinear method).
+      const float* src =
+          mosaic.ptr<float>(cv::borderInterpolate(yy, height, cv::BORDER_REFLECT_101));
+      float* row = ring(yy);
+      std::copy(src, src + width, row + kReach);
+      for (int k = 1; k <= kReach; ++k) {
+        row[kReach - k] = src[cv::borderInterpolate(-k, width, cv::BORDER_REFLECT_101)];
+        row[kReach + width - 1 + k] =
+            src[cv::borderInterpolate(width - 1 + k, width, cv::BORDER_REFLECT_101)];
+      }
+      // A sample without signal becomes -INF, which every kernel sum carries to the band value
+      // (with a saturated +INF sample: NaN, no reading); the band value then reads as dim.
+      if (mark_no_signal)
+        for (int x = 0; x < padded_width; ++x) row[x] = row[x] < no_signal_dn ? -kInf : row[x];
+    };
+    for (int yy = r.start - kReach; yy < r.start + kReach; ++yy) load(yy);
+    for (int y = r.start; y < r.end; ++y) {
+      load(y + kReach);
+      const float *up2 = ring(y - 2), *up1 = ring(y - 1), *r0 = ring(y), *down1 = ring(y + 1),
+                  *down2 = ring(y + 2);
+      for (int x = 0; x < padded_width; ++x) {
+        v[x] = up1[x] + down1[x];
+        c[x] = up2[x] + down2[x];
+      }
+      for (int b = 0; b < 3; ++b) {
+        const auto& fn = rows_of[b][y & 1];
+        fn[0](r0 + kReach, v + kReach, c + kReach, even, width);
+        fn[1](r0 + kReach, v + kReach, c + kReach, odd, width);
+        interleave(even, odd, planes[static_cast<std::size_t>(b)].ptr<float>(y), width,
+                   mark_no_signal);
+      }
+    }
+  };
+  if (static_cast<double>(mosaic.total()) < 512.0 * 512.0)
+    run(cv::Range(0, height));
+  else
+    cv::parallel_for_(cv::Range(0, height), run, 2.0);
+}
+
+}  // namespace pyrocam
