@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "bench_support.h"
+#include "pyrocam/core/noise_model.h"
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/plane_estimator.h"
@@ -103,7 +104,11 @@ std::vector<cv::Mat> band_planes(const pyrocam::ThermalModel& m, const cv::Mat& 
   pyrocam::subtract_dark_level(raw, m.profile().dark_offset_dn,
                                m.profile().thresholds.inference_saturation_dn, signal);
   std::vector<cv::Mat> planes;
-  pyrocam::demosaic(signal, m.profile().mosaic, pyrocam::DemosaicMethod::kBilinear, planes);
+  std::vector<pyrocam::SignalNoise> noise;  // as demosaic25 with the profile
+  for (int b = 0; b < m.profile().band_count(); ++b)
+    noise.push_back(pyrocam::signal_noise(m.profile(), b));
+  pyrocam::demosaic(signal, m.profile().mosaic, pyrocam::DemosaicMethod::kAuto, planes,
+                    static_cast<float>(pyrocam::no_signal_level_dn(noise)));
   return planes;
 }
 

@@ -24,7 +24,7 @@ namespace {
 struct MeasureArgs {
   std::string model, dataset, frame, dark, roi, out, pattern, recording;
   double dark_level = -1;  // --recording: DN
-  std::string method = "mlp", demosaic = "bilinear", format = "png";
+  std::string method = "mlp", demosaic = "auto", format = "png";
   double saturation = -1;
   double misfit_probability = 0;
   double e_slope = 0, e_slope_uncertainty = -1;  // %/100 nm
@@ -41,18 +41,21 @@ struct TruthScore {
 
 TruthScore compare_truth(const cv::Mat& t, const cv::Mat& truth_dk, const MosaicLayout& layout,
                          DemosaicMethod method) {
+  method = resolve_demosaic_method(method, layout);
   const bool binned =
       method == DemosaicMethod::kBinCells || layout.kind == MosaicLayout::Kind::kSnapshot;
-  // Full resolution: the 3x3 pixels bilinear draws on, the 5x5 of matched.
-  const int reach = method == DemosaicMethod::kMatched ? 2 : 1;
-  const int cw = binned ? layout.period_width : 2 * reach + 1;
-  const int ch = binned ? layout.period_height : 2 * reach + 1;
+  // The footprint of an output pixel, in output pixels (cells when binned) around it: bilinear
+  // draws on 3x3 pixels, matched on 5x5 pixels or 3x3 cells, binning on one cell.
+  const bool matched = method == DemosaicMethod::kMatched;
+  const int reach = binned ? (matched ? 1 : 0) : (matched ? 2 : 1);
+  const int unit_w = binned ? layout.period_width : 1, unit_h = binned ? layout.period_height : 1;
+  const int cw = (2 * reach + 1) * unit_w, ch = (2 * reach + 1) * unit_h;
   TruthScore s;
   std::vector<double> errors;
   double sum2 = 0;
   for (int y = 0; y < t.rows; ++y)
     for (int x = 0; x < t.cols; ++x) {
-      const int x0 = binned ? x * cw : x - reach, y0 = binned ? y * ch : y - reach;
+      const int x0 = (x - reach) * unit_w, y0 = (y - reach) * unit_h;
       if (x0 < 0 || y0 < 0 || x0 + cw > truth_dk.cols || y0 + ch > truth_dk.rows) continue;
       const std::uint16_t v = truth_dk.at<std::uint16_t>(y0, x0);
       bool uniform = v != 0;
@@ -310,10 +313,12 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
       ->check(CLI::IsMember({"mlp", "lut", "likelihood", "auto"}))
       ->capture_default_str();
   c->add_option("--demosaic", a.demosaic,
-                "Bayer demosaicking: bilinear, bin2x2 or matched (every band through a 5x5 "
-                "kernel of the same spread: no colour shift on hot spots, no wild ratios at "
-                "edges to a cold background)")
-      ->check(CLI::IsMember({"bilinear", "bin2x2", "matched"}))
+                "Demosaicking: bilinear, bin2x2, matched (every band through a kernel of the "
+                "same spread: no colour shift on hot spots, no wild ratios at edges to a cold "
+                "background; 5x5 mosaics: each band read at the cell's centre) or auto "
+                "(matched for 5x5 mosaics, bilinear for Bayer); 5x5 mosaics are binned by "
+                "bilinear and bin2x2")
+      ->check(CLI::IsMember({"bilinear", "bin2x2", "matched", "auto"}))
       ->capture_default_str();
   c->add_option("--saturation", a.saturation, "Raw saturation level, DN (-1: the model's)")
       ->capture_default_str();

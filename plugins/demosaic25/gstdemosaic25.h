@@ -13,6 +13,7 @@ typedef enum {
   GST_DEMOSAIC25_METHOD_BILINEAR,
   GST_DEMOSAIC25_METHOD_BIN2X2,
   GST_DEMOSAIC25_METHOD_MATCHED,
+  GST_DEMOSAIC25_METHOD_AUTO,
 } GstDemosaic25Method;
 #define GST_TYPE_DEMOSAIC25_METHOD (gst_demosaic25_method_get_type())
 GType gst_demosaic25_method_get_type(void);

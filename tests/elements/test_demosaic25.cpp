@@ -2,9 +2,12 @@
 // demosaic25, 5x5 macro-pixels, profile band map, flush/EOS, bus errors.
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "element_support.h"
+#include "pyrocam/core/noise_model.h"
+#include "pyrocam/core/profile.h"
 #include "pyrocam/runtime/demosaic.h"
 
 namespace pyrocam::test {
@@ -28,10 +31,11 @@ std::vector<float> ramp(int w, int h) {
 
 // The library's planes for a mosaic, concatenated.
 std::vector<float> library(const std::vector<float>& mosaic, int w, int h,
-                           const MosaicLayout& layout, DemosaicMethod method) {
+                           const MosaicLayout& layout, DemosaicMethod method,
+                           float no_signal_dn = -std::numeric_limits<float>::infinity()) {
   cv::Mat in(h, w, CV_32F, const_cast<float*>(mosaic.data()));
   std::vector<cv::Mat> planes;
-  demosaic(in, layout, method, planes);
+  demosaic(in, layout, method, planes, no_signal_dn);
   std::vector<float> out;
   for (const cv::Mat& p : planes) out.insert(out.end(), p.begin<float>(), p.end<float>());
   return out;
@@ -151,7 +155,7 @@ TEST_F(Demosaic25, bin2x2_halves_resolution) {
 }
 
 TEST_F(Demosaic25, snapshot_gives_25_bands_per_macro_pixel) {
-  start("demosaic25 profile=nir5x5-reference", mosaic_caps("5x5", 10, 15));
+  start("demosaic25 profile=nir5x5-reference method=bin2x2", mosaic_caps("5x5", 10, 15));
   auto mosaic = ramp(10, 15);
   mosaic[3] = kInf;                    // band 3 of macro-pixel (0,0)
   mosaic[10 * 5 + 7] = std::nanf("");  // band 2 of macro-pixel (1,1)
@@ -166,6 +170,25 @@ TEST_F(Demosaic25, snapshot_gives_25_bands_per_macro_pixel) {
   const std::string caps = sink_caps(h);
   for (const char* part : {"bands=(int)25", "width=(int)2", "height=(int)3", "layout=(string)5x5"})
     EXPECT_NE(caps.find(part), std::string::npos) << part << " in " << caps;
+}
+
+TEST_F(Demosaic25, snapshot_bands_are_read_at_the_cell_centre_by_default) {
+  // The default (auto) is matched for 5x5 mosaics: the library's, with the profile's level of
+  // samples without light; a ramp's bands then differ from their binned values.
+  start("demosaic25 profile=nir5x5-reference", mosaic_caps("5x5", 15, 15));
+  const auto mosaic = ramp(15, 15);
+  const auto out = run(mosaic);
+  const CameraProfile profile = load_profile_by_name("nir5x5-reference");
+  std::vector<SignalNoise> noise;
+  for (int b = 0; b < profile.band_count(); ++b) noise.push_back(signal_noise(profile, b));
+  const float no_signal = static_cast<float>(no_signal_level_dn(noise));
+  EXPECT_GT(no_signal, 0.f);
+  expect_same(out, library(mosaic, 15, 15, profile.mosaic, DemosaicMethod::kMatched, no_signal));
+  const auto binned = library(mosaic, 15, 15, profile.mosaic, DemosaicMethod::kBinCells);
+  ASSERT_EQ(out.size(), binned.size());
+  int differ = 0;
+  for (std::size_t i = 0; i < out.size(); ++i) differ += out[i] != binned[i];
+  EXPECT_GT(differ, static_cast<int>(out.size()) / 2);
 }
 
 TEST_F(Demosaic25, saturated_pixel_stays_marked_through_darksub_and_demosaic25) {

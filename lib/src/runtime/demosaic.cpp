@@ -186,10 +186,19 @@ DemosaicMethod parse_demosaic_method(const std::string& name) {
   if (name == "bilinear") return DemosaicMethod::kBilinear;
   if (name == "bin2x2") return DemosaicMethod::kBinCells;
   if (name == "matched") return DemosaicMethod::kMatched;
-  throw InputError("unknown demosaic method '" + name + "' (use bilinear, bin2x2 or matched)");
+  if (name == "auto") return DemosaicMethod::kAuto;
+  throw InputError("unknown demosaic method '" + name +
+                   "' (use bilinear, bin2x2, matched or auto)");
+}
+
+DemosaicMethod resolve_demosaic_method(DemosaicMethod method, const MosaicLayout& layout) {
+  if (method != DemosaicMethod::kAuto) return method;
+  return layout.kind == MosaicLayout::Kind::kBayer ? DemosaicMethod::kBilinear
+                                                   : DemosaicMethod::kMatched;
 }
 
 cv::Size demosaic_output_size(const MosaicLayout& layout, DemosaicMethod method, cv::Size input) {
+  method = resolve_demosaic_method(method, layout);
   if (method != DemosaicMethod::kBinCells && layout.kind == MosaicLayout::Kind::kBayer)
     return input;
   return {input.width / layout.period_width, input.height / layout.period_height};
@@ -202,8 +211,14 @@ void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod 
     throw InputError("demosaic: a " + std::to_string(mosaic.cols) + "x" +
                      std::to_string(mosaic.rows) + " mosaic is smaller than one " + layout.pattern +
                      " period");
+  method = resolve_demosaic_method(method, layout);
   const cv::Size out_size = demosaic_output_size(layout, method, mosaic.size());
   prepare_planes(planes, layout.band_count(), out_size);
+  if (method == DemosaicMethod::kMatched && layout.kind != MosaicLayout::Kind::kBayer) {
+    bin_cells(mosaic, layout, planes);
+    register_snapshot_bands(layout, no_signal_dn, planes);
+    return;
+  }
   if (method == DemosaicMethod::kBinCells || layout.kind != MosaicLayout::Kind::kBayer) {
     bin_cells(mosaic, layout, planes);
     return;

@@ -14,6 +14,7 @@
 #include <array>
 #include <limits>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "detail/vector_clones.h"
@@ -197,6 +198,46 @@ void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, f
     run(cv::Range(0, height));
   else
     cv::parallel_for_(cv::Range(0, height), run, 2.0);
+}
+
+namespace {
+
+// Weights at cell offsets -1, 0, +1 for a band whose samples lie `f` cells from the cell's
+// centre (|f| <= 0.5): zero mean about the centre, variance kCellVariance (the least that keeps
+// every weight non-negative at |f| = 0.5).
+constexpr double kCellVariance = 0.25;
+std::array<float, 3> registration_weights(double f) {
+  return {static_cast<float>((kCellVariance + f * f + f) / 2),
+          static_cast<float>(1 - kCellVariance - f * f),
+          static_cast<float>((kCellVariance + f * f - f) / 2)};
+}
+
+}  // namespace
+
+void register_snapshot_bands(const MosaicLayout& layout, float no_signal_dn,
+                             std::vector<cv::Mat>& planes) {
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  const int pw = layout.period_width, ph = layout.period_height;
+  for (int b = 0; b < static_cast<int>(planes.size()); ++b) {
+    // Where the band's samples sit in the cell, in cells from its centre.
+    double sx = 0, sy = 0;
+    int members = 0;
+    for (int y = 0; y < ph; ++y)
+      for (int x = 0; x < pw; ++x)
+        if (layout.band_at(x, y) == b) sx += x, sy += y, ++members;
+    if (members == 0) continue;
+    const auto wx = registration_weights((sx / members - (pw - 1) / 2.0) / pw);
+    const auto wy = registration_weights((sy / members - (ph - 1) / 2.0) / ph);
+    cv::Mat& plane = planes[static_cast<std::size_t>(b)];
+    if (no_signal_dn > -kInf)
+      plane.setTo(-kInf, plane < no_signal_dn);  // NaN compares false: it stays
+    cv::Mat registered;
+    cv::sepFilter2D(plane, registered, CV_32F, cv::Mat(1, 3, CV_32F, const_cast<float*>(wx.data())),
+                    cv::Mat(3, 1, CV_32F, const_cast<float*>(wy.data())), cv::Point(-1, -1), 0,
+                    cv::BORDER_REFLECT_101);
+    if (no_signal_dn > -kInf) registered.setTo(0, registered == -kInf);
+    registered.copyTo(plane);  // into the caller's buffer
+  }
 }
 
 }  // namespace pyrocam

@@ -127,6 +127,7 @@ std::size_t mark_mixed_pixels(const cv::Mat& mosaic, const MosaicLayout& layout,
                               DemosaicMethod method, const FootprintCheck& check,
                               std::vector<cv::Mat>& planes) {
   if (layout.kind != MosaicLayout::Kind::kBayer) return 0;
+  method = resolve_demosaic_method(method, layout);
   if (mosaic.type() != CV_32F) throw InputError("mixed pixels: the mosaic must be CV_32F");
   const int bands = layout.band_count();
   if (bands > kMaxBands || static_cast<int>(check.noise.size()) < bands)

@@ -254,5 +254,42 @@ TEST(Demosaic, matched_footprint_is_the_kernel_samples_of_the_band) {
       }
 }
 
+TEST(Demosaic, matched_reads_every_snapshot_band_at_the_cell_centre) {
+  // The same linear ramp under every band: binned, each band reads it where it sits in the
+  // cell; matched, every band reads it at the cell's centre (zero first moment), marks spread
+  // over the 3x3 cells around.
+  std::vector<int> identity(25);
+  std::iota(identity.begin(), identity.end(), 0);
+  const MosaicLayout m = MosaicLayout::snapshot(5, 5, identity);
+  cv::Mat img(30, 35, CV_32F);
+  for (int y = 0; y < img.rows; ++y)
+    for (int x = 0; x < img.cols; ++x) img.at<float>(y, x) = 30.f + 0.5f * x + 0.25f * y;
+  std::vector<cv::Mat> binned, matched;
+  demosaic(img, m, DemosaicMethod::kBinCells, binned);
+  demosaic(img, m, DemosaicMethod::kMatched, matched);
+  ASSERT_EQ(matched.size(), 25u);
+  ASSERT_EQ(matched[0].size(), cv::Size(7, 6));
+  for (int b = 0; b < 25; ++b)
+    for (int cy = 1; cy < 5; ++cy)
+      for (int cx = 1; cx < 6; ++cx) {
+        EXPECT_FLOAT_EQ(binned[b].at<float>(cy, cx),
+                        30.f + 0.5f * (5 * cx + b % 5) + 0.25f * (5 * cy + b / 5));
+        EXPECT_NEAR(matched[b].at<float>(cy, cx), 30.f + 0.5f * (5 * cx + 2) + 0.25f * (5 * cy + 2),
+                    1e-4)
+            << "band " << b << " cell " << cx << "," << cy;
+      }
+  img.at<float>(12, 13) = kInf;  // band 2 * 5 + 3 of cell (2, 2)
+  img.at<float>(22, 5) = 1.f;    // band 2 * 5 + 0 of cell (1, 4), without light
+  demosaic(img, m, DemosaicMethod::kMatched, matched, 5.f);
+  for (int cy = 0; cy < 6; ++cy)
+    for (int cx = 0; cx < 7; ++cx) {
+      const bool near_inf = std::abs(cx - 2) <= 1 && std::abs(cy - 2) <= 1;
+      EXPECT_EQ(matched[13].at<float>(cy, cx) == kInf, near_inf) << cx << "," << cy;
+      const bool near_dark = std::abs(cx - 1) <= 1 && std::abs(cy - 4) <= 1;
+      EXPECT_EQ(matched[10].at<float>(cy, cx) == 0.f, near_dark) << cx << "," << cy;
+      EXPECT_TRUE(std::isfinite(matched[12].at<float>(cy, cx)));  // other bands untouched
+    }
+}
+
 }  // namespace
 }  // namespace pyrocam

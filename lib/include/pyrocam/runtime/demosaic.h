@@ -15,22 +15,33 @@
 namespace pyrocam {
 
 enum class DemosaicMethod {
-  // Bayer only: full resolution; the missing bands at each pixel are the mean of the nearest
-  // pixels of that band (2 horizontal or vertical, or 4 diagonal for R/B; 4 cross neighbours
-  // for G). Borders are mirrored without repeating the edge pixel, which keeps the pattern.
+  // Bayer: full resolution; the missing bands at each pixel are the mean of the nearest pixels
+  // of that band (2 horizontal or vertical, or 4 diagonal for R/B; 4 cross neighbours for G).
+  // Borders are mirrored without repeating the edge pixel, which keeps the pattern. Snapshot
+  // mosaics: as kBinCells.
   kBilinear,
   // One reading per mosaic period (macro-pixel): each band is the mean of the pixels of that
-  // band in the cell. Bayer: half resolution, R, mean of both G, B per 2x2 cell. 5x5 snapshot
-  // mosaics always use it (one reading per 5x5 macro-pixel, as the paper).
+  // band in the cell. Bayer: half resolution, R, mean of both G, B per 2x2 cell. Snapshot
+  // mosaics: one reading per macro-pixel, each band where it sits in the cell (as the paper).
   kBinCells,
-  // Bayer only: full resolution; every band of every pixel from a symmetric kernel of the same
-  // second moment (1 pixel^2 along each axis; 5x5 footprint), so that on a curved signal (a hot
-  // spot) the bands' interpolation errors cancel in their ratio instead of adding a colour
-  // shift (see demosaic_matched.cpp). Marks spread over the larger footprint.
+  // Every band of every output pixel through a symmetric kernel of the same spread, so that on
+  // a curved signal (a hot spot) the bands' interpolation errors cancel in their ratio instead
+  // of shifting it, and in a gradient a snapshot cell's bands are read at one place (see
+  // demosaic_matched.cpp). Bayer: full resolution, 5x5 footprint, second moment 1 pixel^2 along
+  // each axis. Snapshot: one reading per macro-pixel, each band binned and then interpolated to
+  // the cell's centre over 3x3 cells, variance 0.25 cell^2 along each axis. Marks spread over
+  // the larger footprint.
   kMatched,
+  // kMatched for snapshot mosaics (it costs little there and reads their melt pools), kBilinear
+  // for Bayer (kMatched costs about twice as much at full resolution).
+  kAuto,
 };
 
-DemosaicMethod parse_demosaic_method(const std::string& name);  // "bilinear", "bin2x2", "matched"
+// The method `method` stands for on `layout` (kAuto resolved; the others as they are).
+DemosaicMethod resolve_demosaic_method(DemosaicMethod method, const MosaicLayout& layout);
+
+// "bilinear", "bin2x2", "matched", "auto".
+DemosaicMethod parse_demosaic_method(const std::string& name);
 
 // Output plane size: the input size for bilinear, else floor(input / period) (pixels of an
 // incomplete trailing cell are dropped).
@@ -50,6 +61,12 @@ void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod 
 // The mosaic samples (offsets from the pixel) that kMatched draws band `band` from at a pixel
 // of column parity px and row parity py: its footprint, for the mixed-pixel check.
 std::vector<cv::Point> matched_footprint(const MosaicLayout& layout, int band, int px, int py);
+
+// kMatched for a snapshot layout, after binning: each band plane (cells) is interpolated to the
+// cells' centres with separable 3x3-cell weights of zero mean and the same variance (0.25
+// cell^2 along each axis) whatever the band's place in the cell (no checks: see demosaic).
+void register_snapshot_bands(const MosaicLayout& layout, float no_signal_dn,
+                             std::vector<cv::Mat>& planes);
 
 // kMatched for a Bayer layout, into planes of the mosaic's size (no checks: see demosaic).
 void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, float dim_dn,

@@ -15,7 +15,7 @@ namespace pyrocam {
 
 struct MeasureOptions {
   Method method = Method::kMlp;
-  DemosaicMethod demosaic = DemosaicMethod::kBilinear;
+  DemosaicMethod demosaic = DemosaicMethod::kAuto;
   double saturation_level_dn = -1;  // raw DN; -1: the profile's inference saturation threshold
   bool uncertainty = false;
   double misfit_probability = 0;  // band-consistency check (misfit.h); 0: none
