@@ -211,6 +211,12 @@ std::array<float, 3> registration_weights(double f) {
           static_cast<float>(1 - kCellVariance - f * f),
           static_cast<float>((kCellVariance + f * f - f) / 2)};
 }
+cv::Mat filter(const cv::Mat& plane, std::array<float, 3> wx, std::array<float, 3> wy) {
+  cv::Mat out;
+  cv::sepFilter2D(plane, out, CV_32F, cv::Mat(1, 3, CV_32F, wx.data()),
+                  cv::Mat(3, 1, CV_32F, wy.data()), cv::Point(-1, -1), 0, cv::BORDER_REFLECT_101);
+  return out;
+}
 
 }  // namespace
 
@@ -226,15 +232,12 @@ void register_snapshot_bands(const MosaicLayout& layout, float no_signal_dn,
       for (int x = 0; x < pw; ++x)
         if (layout.band_at(x, y) == b) sx += x, sy += y, ++members;
     if (members == 0) continue;
-    const auto wx = registration_weights((sx / members - (pw - 1) / 2.0) / pw);
-    const auto wy = registration_weights((sy / members - (ph - 1) / 2.0) / ph);
+    const double fx = (sx / members - (pw - 1) / 2.0) / pw;
+    const double fy = (sy / members - (ph - 1) / 2.0) / ph;
     cv::Mat& plane = planes[static_cast<std::size_t>(b)];
-    if (no_signal_dn > -kInf)
-      plane.setTo(-kInf, plane < no_signal_dn);  // NaN compares false: it stays
-    cv::Mat registered;
-    cv::sepFilter2D(plane, registered, CV_32F, cv::Mat(1, 3, CV_32F, const_cast<float*>(wx.data())),
-                    cv::Mat(3, 1, CV_32F, const_cast<float*>(wy.data())), cv::Point(-1, -1), 0,
-                    cv::BORDER_REFLECT_101);
+    if (no_signal_dn > -kInf) plane.setTo(-kInf, plane < no_signal_dn);  // NaN compares false
+    cv::Mat registered = filter(plane, registration_weights(fx), registration_weights(fy));
+    // A band drawn from a sample without light (an edge to a dark background) reads as dim.
     if (no_signal_dn > -kInf) registered.setTo(0, registered == -kInf);
     registered.copyTo(plane);  // into the caller's buffer
   }
