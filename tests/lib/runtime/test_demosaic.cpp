@@ -1,4 +1,5 @@
-// Demosaicking: bilinear Bayer, 2x2 binning, one reading per 5x5 macro-pixel, mark propagation.
+// Demosaicking: bilinear and moment-matched Bayer, 2x2 binning, 5x5 macro-pixels binned and
+// registered to the cell centre, mark propagation.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -144,12 +145,6 @@ TEST(Demosaic, large_frames_split_over_threads_give_the_same_result) {
   }
 }
 
-}  // namespace
-}  // namespace pyrocam
-
-namespace pyrocam {
-namespace {
-
 // A mosaic whose band b reads 100 b + q(x, y), with q quadratic: each band's kernel mean is
 // q + its first moments . grad q + (Mxx qxx + Myy qyy) / 2 + Mxy qxy.
 cv::Mat bowl(const MosaicLayout& m, int w, int h) {
@@ -179,12 +174,6 @@ TEST(Demosaic, matched_gives_every_band_the_same_offset_on_a_curved_signal) {
         }
   }
 }
-
-}  // namespace
-}  // namespace pyrocam
-
-namespace pyrocam {
-namespace {
 
 TEST(Demosaic, matched_keeps_the_pattern_at_the_borders) {
   // One level per band: every kernel reads its band's level, borders included (mirrored).
