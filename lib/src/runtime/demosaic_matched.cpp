@@ -14,7 +14,6 @@
 #include <array>
 #include <limits>
 #include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "detail/vector_clones.h"
@@ -211,36 +210,65 @@ std::array<float, 3> registration_weights(double f) {
           static_cast<float>(1 - kCellVariance - f * f),
           static_cast<float>((kCellVariance + f * f - f) / 2)};
 }
-cv::Mat filter(const cv::Mat& plane, std::array<float, 3> wx, std::array<float, 3> wy) {
-  cv::Mat out;
-  cv::sepFilter2D(plane, out, CV_32F, cv::Mat(1, 3, CV_32F, wx.data()),
-                  cv::Mat(3, 1, CV_32F, wy.data()), cv::Point(-1, -1), 0, cv::BORDER_REFLECT_101);
-  return out;
+// One row through 3 taps, the ends mirrored without repeating the edge; samples below
+// `no_signal` count as -INF (NaN compares false and stays).
+PYROCAM_VECTOR_CLONES
+void taps_row(const float* __restrict in, float* __restrict out, int n, float w0, float w1,
+              float w2, float no_signal) {
+  constexpr float kMinusInf = -std::numeric_limits<float>::infinity();
+  auto at = [&](int x) { return in[x] < no_signal ? kMinusInf : in[x]; };
+  if (n == 1) {
+    out[0] = at(0);
+    return;
+  }
+  out[0] = w0 * at(1) + w1 * at(0) + w2 * at(1);
+  for (int x = 1; x + 1 < n; ++x) out[x] = w0 * at(x - 1) + w1 * at(x) + w2 * at(x + 1);
+  out[n - 1] = w0 * at(n - 2) + w1 * at(n - 1) + w2 * at(n - 2);
+}
+
+// out = w0 up + w1 mid + w2 down, -INF (a sample without light) as 0 (dim).
+PYROCAM_VECTOR_CLONES
+void taps_column(const float* __restrict up, const float* __restrict mid,
+                 const float* __restrict down, float* __restrict out, int n, float w0, float w1,
+                 float w2) {
+  constexpr float kMinusInf = -std::numeric_limits<float>::infinity();
+  for (int x = 0; x < n; ++x) {
+    const float v = w0 * up[x] + w1 * mid[x] + w2 * down[x];
+    out[x] = v == kMinusInf ? 0.f : v;
+  }
 }
 
 }  // namespace
 
 void register_snapshot_bands(const MosaicLayout& layout, float no_signal_dn,
                              std::vector<cv::Mat>& planes) {
-  constexpr float kInf = std::numeric_limits<float>::infinity();
   const int pw = layout.period_width, ph = layout.period_height;
-  for (int b = 0; b < static_cast<int>(planes.size()); ++b) {
-    // Where the band's samples sit in the cell, in cells from its centre.
-    double sx = 0, sy = 0;
-    int members = 0;
-    for (int y = 0; y < ph; ++y)
-      for (int x = 0; x < pw; ++x)
-        if (layout.band_at(x, y) == b) sx += x, sy += y, ++members;
-    if (members == 0) continue;
-    const double fx = (sx / members - (pw - 1) / 2.0) / pw;
-    const double fy = (sy / members - (ph - 1) / 2.0) / ph;
-    cv::Mat& plane = planes[static_cast<std::size_t>(b)];
-    if (no_signal_dn > -kInf) plane.setTo(-kInf, plane < no_signal_dn);  // NaN compares false
-    cv::Mat registered = filter(plane, registration_weights(fx), registration_weights(fy));
-    // A band drawn from a sample without light (an edge to a dark background) reads as dim.
-    if (no_signal_dn > -kInf) registered.setTo(0, registered == -kInf);
-    registered.copyTo(plane);  // into the caller's buffer
-  }
+  const int bands = static_cast<int>(planes.size());
+  cv::parallel_for_(cv::Range(0, bands), [&](const cv::Range& range) {
+    cv::Mat across;  // the rows through the horizontal taps
+    for (int b = range.start; b < range.end; ++b) {
+      // Where the band's samples sit in the cell, in cells from its centre.
+      double sx = 0, sy = 0;
+      int members = 0;
+      for (int y = 0; y < ph; ++y)
+        for (int x = 0; x < pw; ++x)
+          if (layout.band_at(x, y) == b) sx += x, sy += y, ++members;
+      if (members == 0) continue;
+      const auto wx = registration_weights((sx / members - (pw - 1) / 2.0) / pw);
+      const auto wy = registration_weights((sy / members - (ph - 1) / 2.0) / ph);
+      cv::Mat& plane = planes[static_cast<std::size_t>(b)];
+      const int w = plane.cols, h = plane.rows;
+      across.create(h, w, CV_32F);
+      for (int y = 0; y < h; ++y)
+        taps_row(plane.ptr<float>(y), across.ptr<float>(y), w, wx[0], wx[1], wx[2], no_signal_dn);
+      // A band drawn from a sample without light (an edge to a dark background) reads as dim.
+      for (int y = 0; y < h; ++y)
+        taps_column(across.ptr<float>(cv::borderInterpolate(y - 1, h, cv::BORDER_REFLECT_101)),
+                    across.ptr<float>(y),
+                    across.ptr<float>(cv::borderInterpolate(y + 1, h, cv::BORDER_REFLECT_101)),
+                    plane.ptr<float>(y), w, wy[0], wy[1], wy[2]);
+    }
+  });
 }
 
 }  // namespace pyrocam
