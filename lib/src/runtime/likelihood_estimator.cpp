@@ -17,120 +17,11 @@
 #include "pyrocam/core/locus.h"
 #include "pyrocam/core/noise_model.h"
 #include "runtime/estimator_kinds.h"
+#include "runtime/likelihood_bounds.h"
+#include "runtime/likelihood_kernels.h"
 
 namespace pyrocam {
 namespace {
-
-// Samples per step of approximate_chi2: long coarse scans in single precision, short windows
-// in double precision.
-constexpr std::ptrdiff_t kCoarseBlock = 32, kWindowBlock = 8;
-
-// Approximate chi2 of the likelihood fit from low-rank factors stored rank after rank, `stride`
-// samples each (see LikelihoodEstimator): at `count` samples from `from`, into out[0 .. count
-// rounded up to kBlock) (values past count are meaningless). Blocks of samples keep their sums
-// in registers.
-// (Inlined into each compiled version, which would otherwise call one baseline copy.)
-template <std::ptrdiff_t kBlock, class Real>
-[[gnu::always_inline]] inline void approximate_chi2_impl(const Real* along, int rank,
-                                                         const Real* along2, int rank2,
-                                                         std::ptrdiff_t stride, std::ptrdiff_t from,
-                                                         std::ptrdiff_t count, const Real* p,
-                                                         const Real* q, Real sss, Real* out) {
-  for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kBlock) {
-    Real ssm[kBlock] = {}, smm[kBlock] = {};
-    for (int r = 0; r < rank; ++r) {
-      const Real* a = along + r * stride + from + i0;
-      for (std::ptrdiff_t j = 0; j < kBlock; ++j) ssm[j] += p[r] * a[j];
-    }
-    for (int r = 0; r < rank2; ++r) {
-      const Real* a = along2 + r * stride + from + i0;
-      for (std::ptrdiff_t j = 0; j < kBlock; ++j) smm[j] += q[r] * a[j];
-    }
-    for (std::ptrdiff_t j = 0; j < kBlock; ++j) out[i0 + j] = sss - ssm[j] * ssm[j] / smm[j];
-  }
-}
-
-PYROCAM_VECTOR_CLONES
-void approximate_chi2(const float* along, int rank, const float* along2, int rank2,
-                      std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
-                      const float* p, const float* q, float sss, float* out) {
-  approximate_chi2_impl<kCoarseBlock>(along, rank, along2, rank2, stride, from, count, p, q, sss,
-                                      out);
-}
-
-PYROCAM_VECTOR_CLONES
-void approximate_chi2(const double* along, int rank, const double* along2, int rank2,
-                      std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
-                      const double* p, const double* q, double sss, double* out) {
-  approximate_chi2_impl<kWindowBlock>(along, rank, along2, rank2, stride, from, count, p, q, sss,
-                                      out);
-}
-
-// chi2 = sss - ssm^2 / smm of the likelihood fit at one locus sample: ssm = sum (w s) m and
-// smm = sum w m^2 over the bands, each in four partial sums added in a fixed order (the same
-// bits in every compiled version).
-PYROCAM_VECTOR_CLONES
-double profiled_chi2(const double* m, const double* m2, const double* ws, const double* w,
-                     int bands, double sss) {
-  double ssm[4] = {0, 0, 0, 0}, smm[4] = {0, 0, 0, 0};
-  int b = 0;
-  for (; b + 4 <= bands; b += 4)
-    for (int k = 0; k < 4; ++k) {
-      ssm[k] += ws[b + k] * m[b + k];
-      smm[k] += w[b + k] * m2[b + k];
-    }
-  for (; b < bands; ++b) {
-    ssm[0] += ws[b] * m[b];
-    smm[0] += w[b] * m2[b];
-  }
-  const double sm = (ssm[0] + ssm[1]) + (ssm[2] + ssm[3]);
-  const double mm = (smm[0] + smm[1]) + (smm[2] + smm[3]);
-  return sss - sm * sm / mm;
-}
-
-// The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
-// and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
-// Returns how many bands read. Selects, so that the divisions vectorise.
-PYROCAM_VECTOR_CLONES
-int weigh_bands(const double* __restrict s, int bands, double dim, const double* __restrict gain,
-                const double* __restrict floor, double* __restrict w, double* __restrict ws,
-                double* sss) {
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  for (int b = 0; b < bands; ++b) {
-    const double v = s[b];
-    const bool reads = v >= dim && v < kInf;  // NaN fails both
-    const double weight = 1.0 / (gain[b] * std::max(v, 0.0) + floor[b]);
-    w[b] = reads ? weight : 0.0;
-    ws[b] = reads ? weight * v : 0.0;
-  }
-  int valid = 0;
-  double sum = 0;
-  for (int b = 0; b < bands; ++b) {
-    valid += w[b] != 0.0;
-    sum += w[b] != 0.0 ? ws[b] * s[b] : 0.0;
-  }
-  *sss = sum;
-  return valid;
-}
-
-constexpr int kMaxRank = 16;  // low-rank factors of the likelihood fit's locus
-
-// Projections p = V^T (w s), q = V2^T w on the factors (bands x kMaxRank each, zero padded), in
-// double and single precision.
-PYROCAM_VECTOR_CLONES
-void project(const double* __restrict ws, const double* __restrict w, int bands,
-             const double* __restrict v, const double* __restrict v2, double* __restrict p,
-             double* __restrict q, float* __restrict pf, float* __restrict qf) {
-  for (int b = 0; b < bands; ++b)
-    for (int r = 0; r < kMaxRank; ++r) {
-      p[r] += ws[b] * v[b * kMaxRank + r];
-      q[r] += w[b] * v2[b * kMaxRank + r];
-    }
-  for (int r = 0; r < kMaxRank; ++r) {
-    pf[r] = static_cast<float>(p[r]);
-    qf[r] = static_cast<float>(q[r]);
-  }
-}
 
 // Weighted least squares of the band signals against the modelled locus with a free scale
 // (unknown emissivity, exposure and geometry): chi2(T) = sum w (S - a m(T))^2, a profiled out.
@@ -291,22 +182,21 @@ class ExhaustiveLikelihoodEstimator : public LikelihoodFit {
 // so the locus rows are normalised, and the normalised rates (and their squares) over the
 // samples form matrices of very low rank (smooth spectra: 9 to 11 of 25 columns leave rows off by
 // 1e-8 to 1e-10). With such factors, ssm and smm at a sample cost one multiply-add per rank
-// instead of one per band. An approximate chi2 from them steers the scan; the exact chi2 (double
-// precision, as the exhaustive scan computes it) settles everything the approximation's error
-// bound leaves open:
-//  - coarse scan in single precision: two coarse samples closer than twice the bound are
-//    compared exactly;
-//  - refinement window in double precision from finer factors: every sample within the bound of
-//    the exact chi2 of the approximate best is evaluated exactly, and the best of those wins.
-// So the answer and the no-reading decisions are those of the exhaustive scan (the unit tests
-// compare both on noisy pixels, with saturated, dim and NaN bands).
+// instead of one per band. The factors' row errors (measured when they are made) and the
+// rounding of the sums bound ssm and smm, hence chi2, at every sample (FitBounds): the scan
+// decides by these bounds where they tell, and by the exact chi2 (double precision, as the
+// exhaustive scan computes it) where they overlap:
+//  - coarse scan in single precision: a sample whose lower bound is above a neighbour's upper
+//    bound is no local minimum; the few others are tested with double precision bounds from
+//    all factors, then exactly;
+//  - refinement window in double precision from all factors: only samples whose lower bound is
+//    not above the least upper bound can be the best, and only they are evaluated exactly.
+// So the answer and the no-reading decisions are those of the exhaustive scan by construction
+// (the unit tests compare both on noisy pixels, with saturated, dim and NaN bands).
 class LikelihoodEstimator : public LikelihoodFit {
  public:
   // Row error left by the factors (rows have unit length): coarse, window.
   static constexpr double kCoarseRankTolerance = 1e-8, kWindowRankTolerance = 1e-10;
-  // Error bounds of the approximate chi2, relative to sum w s^2 (ten times the largest seen on
-  // noisy pixels of both reference cameras).
-  static constexpr double kCoarseError = 1e-5, kWindowError = 1e-8;
   static constexpr Eigen::Index kMaxCoarse = 504;  // coarse samples: a 10 000 degC range
 
   explicit LikelihoodEstimator(std::shared_ptr<const ThermalModel> model)
@@ -334,8 +224,19 @@ class LikelihoodEstimator : public LikelihoodFit {
       throw InputError("method likelihood: the model's temperature range is too wide");
     stride_ = padded(n);
     coarse_stride_ = padded(coarse_count_);
-    factor(unit, across_, rank_, coarse_rank_, along_, coarse_along_);
-    factor(squares, across2_, rank2_, coarse_rank2_, along2_, coarse_along2_);
+    factor(unit, across_, rank_, coarse_rank_, along_, coarse_along_, residual_);
+    factor(squares, across2_, rank2_, coarse_rank2_, along2_, coarse_along2_, residual2_);
+    // All factors of each coarse sample side by side (read sample by sample).
+    pad_ = (rank_ + 3) / 4 * 4;
+    point_width_ = pad_ + (rank2_ + 3) / 4 * 4;
+    points_.assign(static_cast<std::size_t>(coarse_count_ * point_width_), 0.0);
+    for (Eigen::Index k = 0; k < coarse_count_; ++k) {
+      double* at = &points_[static_cast<std::size_t>(k * point_width_)];
+      for (int r = 0; r < rank_; ++r)
+        at[r] = along_[static_cast<std::size_t>(r * stride_ + k * kCoarse)];
+      for (int r = 0; r < rank2_; ++r)
+        at[pad_ + r] = along2_[static_cast<std::size_t>(r * stride_ + k * kCoarse)];
+    }
   }
 
   double temperature_c(const double* s) const override {
@@ -345,26 +246,39 @@ class LikelihoodEstimator : public LikelihoodFit {
     alignas(32) double p[kMaxRank] = {}, q[kMaxRank] = {};
     alignas(32) float pf[kMaxRank], qf[kMaxRank];
     project(px.ws, px.w, bands_, across_.data(), across2_.data(), p, q, pf, qf);
+    double ws2 = 0, w2 = 0;
+    for (int b = 0; b < bands_; ++b) ws2 += px.ws[b] * px.ws[b], w2 += px.w[b] * px.w[b];
+    const double ws_norm = std::sqrt(ws2), w_norm = std::sqrt(w2);
 
-    // Coarse scan.
-    alignas(32) float c[kMaxCoarse + kCoarseBlock];  // written in whole blocks
+    // Coarse scan: bounds of chi2 at every coarse sample, in single precision. Single precision
+    // sums of up to kMaxRank terms are off by at most 1.1e-6 of sum |p_r a_r| <= |w s| (the
+    // factors' rows are at most unit length), and the bounds' own rounding by about 1e-6 of sss.
+    alignas(32) float lower[kMaxCoarse + kCoarseBlock], upper[kMaxCoarse + kCoarseBlock];
     const Eigen::Index nc = coarse_count_;
-    approximate_chi2(coarse_along_.data(), coarse_rank_, coarse_along2_.data(), coarse_rank2_,
-                     coarse_stride_, 0, nc, pf, qf, static_cast<float>(px.sss), c);
-    const double tie = kCoarseError * px.sss + 1e-9;
+    bounded_chi2(coarse_along_.data(), coarse_rank_, coarse_along2_.data(), coarse_rank2_,
+                 coarse_stride_, nc, pf, qf, static_cast<float>(px.sss),
+                 static_cast<float>(ws_norm * (residual_[0] + 2e-6)),
+                 static_cast<float>(w_norm * (residual2_[0] + 2e-6)),
+                 static_cast<float>(1e-5 * px.sss + 1e-9), lower, upper);
+    const FitBounds fine = fit_bounds(px.sss, ws_norm, w_norm, residual_[1], residual2_[1]);
+    // The exhaustive scan's test c[k] <= c[other]: by bounds from all factors in double
+    // precision, exactly only where they overlap.
     auto not_above = [&](Eigen::Index k, Eigen::Index other) {
-      if (std::abs(c[k] - c[other]) > 2 * tie) return c[k] <= c[other];
-      return chi2(k * kCoarse, px) <= chi2(other * kCoarse, px);  // too close to tell: exactly
+      double lk, hk, lo, ho;
+      coarse_bounds(k, p, q, fine, lk, hk);
+      coarse_bounds(other, p, q, fine, lo, ho);
+      if (hk < lo) return true;
+      if (lk > ho) return false;
+      return chi2(k * kCoarse, px) <= chi2(other * kCoarse, px);
     };
-    // Local minima. A sample clearly above a neighbour is none (flags as bytes, scanned eight
-    // at a time: most samples are not minima); the few others are checked.
-    const auto margin = static_cast<float>(2 * tie);
+    // Local minima. A sample surely above a neighbour is none (flags as bytes, scanned eight
+    // at a time: most samples are not minima); the few others are tested.
     alignas(16) std::uint8_t candidate[kMaxCoarse + 8];
     std::memset(candidate + nc, 0, 8);
-    candidate[0] = c[0] <= c[1] + margin;
+    candidate[0] = lower[0] <= upper[1];
     for (Eigen::Index k = 1; k + 1 < nc; ++k)
-      candidate[k] = (c[k] <= c[k - 1] + margin) & (c[k] <= c[k + 1] + margin);
-    candidate[nc - 1] = c[nc - 1] <= c[nc - 2] + margin;
+      candidate[k] = (lower[k] <= upper[k - 1]) & (lower[k] <= upper[k + 1]);
+    candidate[nc - 1] = lower[nc - 1] <= upper[nc - 2];
     Minimum refined[kMaxCoarse];
     std::size_t count = 0;
     for (Eigen::Index k0 = 0; k0 < nc; k0 += 8) {
@@ -374,14 +288,41 @@ class LikelihoodEstimator : public LikelihoodFit {
       for (Eigen::Index k = k0; k < std::min(k0 + 8, nc); ++k) {
         if (!candidate[k]) continue;
         if (!((k == 0 || not_above(k, k - 1)) && (k + 1 == nc || not_above(k, k + 1)))) continue;
-        refined[count++] = refine(k * kCoarse, px, p, q);
+        refined[count++] = refine(k * kCoarse, px, p, q, fine);
       }
     }
     return decide(refined, count, px);
   }
 
  private:
-  // Room for n samples and the reads of a last, partial block of approximate_chi2.
+  // A pixel's error bounds with factors whose rows are off by at most `residual` (unit rows)
+  // and `residual2` (their squares), |w s| and |w| being ws_norm and w_norm. The rounding
+  // allowances are far above what double precision loses on these sums (about 1e-14 relative).
+  static FitBounds fit_bounds(double sss, double ws_norm, double w_norm, double residual,
+                              double residual2) {
+    FitBounds f;
+    f.sss = sss;
+    f.ssm_error = ws_norm * (residual + 1e-12);
+    f.smm_error = w_norm * (residual2 + 1e-12);
+    f.slack = 1e-11 * sss + 1e-12;
+    return f;
+  }
+
+  // Bounds of chi2 at coarse sample k from all its factors (points_), summed in four lanes.
+  void coarse_bounds(Eigen::Index k, const double* p, const double* q, const FitBounds& f,
+                     double& lower, double& upper) const {
+    const double* at = &points_[static_cast<std::size_t>(k * point_width_)];
+    double a[4] = {}, b[4] = {};
+    for (Eigen::Index r = 0; r < pad_; r += 4)
+      for (int j = 0; j < 4; ++j) a[j] += p[r + j] * at[r + j];
+    for (Eigen::Index r = pad_; r < point_width_; r += 4)
+      for (int j = 0; j < 4; ++j) b[j] += q[r - pad_ + j] * at[r + j];
+    const double ssm = (a[0] + a[1]) + (a[2] + a[3]), smm = (b[0] + b[1]) + (b[2] + b[3]);
+    lower = chi2_lower(ssm, 0, smm, 0, f);
+    upper = chi2_upper(ssm, smm, f);
+  }
+
+  // Room for n samples and the reads of a last, partial block of bounded_chi2.
   static constexpr Eigen::Index padded(Eigen::Index n) {
     return (n + kCoarseBlock - 1) / kCoarseBlock * kCoarseBlock + kCoarseBlock;
   }
@@ -391,8 +332,10 @@ class LikelihoodEstimator : public LikelihoodFit {
   // windows and coarse_along (coarse rank x coarse_stride_, every kCoarse-th sample, single
   // precision) for the coarse scan. V is grown greedily from the row A leaves least explained
   // (pivoted Gram-Schmidt), so its first columns are the coarse factors.
+  // residual: the largest row error left by the coarse factors and by all of them.
   void factor(const Eigen::MatrixXd& a, std::vector<double>& across, int& rank, int& coarse_rank,
-              std::vector<double>& along, std::vector<float>& coarse_along) const {
+              std::vector<double>& along, std::vector<float>& coarse_along,
+              double* residual) const {
     Eigen::MatrixXd left = a;
     Eigen::MatrixXd v(a.cols(), 0);
     coarse_rank = 0;
@@ -411,6 +354,12 @@ class LikelihoodEstimator : public LikelihoodFit {
     rank = static_cast<int>(v.cols());
     if (coarse_rank == 0) coarse_rank = rank;
     const Eigen::MatrixXd av = a * v;
+    // From the stored factors, so that the bounds hold for what the fit computes.
+    for (int part = 0; part < 2; ++part) {
+      const int r = part == 0 ? coarse_rank : rank;
+      const Eigen::MatrixXd off = a - av.leftCols(r) * v.leftCols(r).transpose();
+      residual[part] = 2 * off.rowwise().norm().maxCoeff() + 1e-15;
+    }
     across.assign(static_cast<std::size_t>(bands_ * kMaxRank), 0.0);
     along.assign(static_cast<std::size_t>(rank * stride_), 0.0);
     coarse_along.assign(static_cast<std::size_t>(coarse_rank * coarse_stride_), 0.f);
@@ -425,31 +374,38 @@ class LikelihoodEstimator : public LikelihoodFit {
     }
   }
 
-  // The exact best 1 degC sample within kCoarse of `around`, as the exhaustive scan finds it:
-  // the true best is no worse than the approximate best `at`, so its approximate chi2 is at most
-  // the exact chi2 of `at` plus the error bound; only such samples are evaluated exactly.
-  Minimum refine(Eigen::Index around, const Weighted& px, const double* p, const double* q) const {
+  // The exhaustive scan's refinement around `around` with the window factors' provable bounds:
+  // only samples whose lower bound is not above an upper bound of the window's least chi2 can be
+  // the best one, and only they are evaluated exactly; ties go as in the exhaustive scan (`around`
+  // first, then the first sample).
+  Minimum refine(Eigen::Index around, const Weighted& px, const double* p, const double* q,
+                 const FitBounds& f) const {
     const Eigen::Index n = locus_.size();
     const Eigen::Index lo = std::max<Eigen::Index>(0, around - kCoarse);
     const Eigen::Index hi = std::min<Eigen::Index>(n - 1, around + kCoarse);
-    alignas(32) double f[(2 * kCoarse + 1 + kWindowBlock - 1) / kWindowBlock * kWindowBlock];
-    approximate_chi2(along_.data(), rank_, along2_.data(), rank2_, stride_, lo, hi - lo + 1, p, q,
-                     px.sss, f);
-    Eigen::Index at = lo;
-    for (Eigen::Index i = lo; i <= hi; ++i)
-      if (f[i - lo] < f[at - lo]) at = i;
+    constexpr Eigen::Index kRoom =
+        (2 * kCoarse + 1 + kWindowBlock - 1) / kWindowBlock * kWindowBlock;
+    alignas(32) double ssm[kRoom], smm[kRoom];
+    approximate_sums(along_.data(), rank_, along2_.data(), rank2_, stride_, lo, hi - lo + 1, p, q,
+                     ssm, smm);
+    // The sample the factors find best (largest ssm^2 / smm) bounds the window's least chi2.
+    const Eigen::Index count = hi - lo + 1;
+    Eigen::Index at = 0;
+    for (Eigen::Index i = 1; i < count; ++i)
+      if (ssm[i] * ssm[i] * smm[at] > ssm[at] * ssm[at] * smm[i]) at = i;
+    const double least_upper = chi2_upper(ssm[at], smm[at], f);
+    alignas(16) std::uint8_t open[kRoom];
+    window_candidates(ssm, smm, count, f.sss - 2 * f.slack - least_upper, f.ssm_error, f.smm_error,
+                      open);
     double exact[2 * kCoarse + 1];
-    for (Eigen::Index i = lo; i <= hi; ++i) exact[i - lo] = NAN;
-    exact[at - lo] = chi2(at, px);
-    Minimum best{at, exact[at - lo], NAN, NAN};
-    const double bound = best.chi2 + kWindowError * px.sss + 1e-12;
+    for (Eigen::Index i = 0; i < count; ++i) exact[i] = NAN;
+    Minimum best{around, std::numeric_limits<double>::infinity(), NAN, NAN};
+    if (open[around - lo]) best.chi2 = exact[around - lo] = chi2(around, px);
     for (Eigen::Index i = lo; i <= hi; ++i) {
-      if (i == at || f[i - lo] > bound) continue;
+      if (i == around || !open[i - lo]) continue;
       exact[i - lo] = chi2(i, px);
-      if (exact[i - lo] < best.chi2 || (exact[i - lo] == best.chi2 && i < best.index))
-        best = {i, exact[i - lo], NAN, NAN};
+      if (exact[i - lo] < best.chi2) best = {i, exact[i - lo], NAN, NAN};
     }
-    // Neighbours already evaluated are kept for the parabola.
     if (best.index - 1 >= lo) best.below = exact[best.index - 1 - lo];
     if (best.index + 1 <= hi) best.above = exact[best.index + 1 - lo];
     return best;
@@ -459,6 +415,9 @@ class LikelihoodEstimator : public LikelihoodFit {
   Eigen::Index stride_ = 0, coarse_count_ = 0, coarse_stride_ = 0;
   std::vector<double> across_, across2_, along_, along2_;
   std::vector<float> coarse_along_, coarse_along2_;
+  double residual_[2] = {}, residual2_[2] = {};  // row errors: coarse factors, all factors
+  std::vector<double> points_;  // per coarse sample: its factors, then its squares' (padded)
+  Eigen::Index pad_ = 0, point_width_ = 0;
 };
 
 }  // namespace

@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "pyrocam/core/locus.h"
 #include "pyrocam/runtime/estimators.h"
 #include "runtime/estimator_test_support.h"
 
@@ -63,6 +65,73 @@ TEST(LikelihoodEstimator, fast_fit_gives_the_exhaustive_fits_answer_colour) {
 
 TEST(LikelihoodEstimator, fast_fit_gives_the_exhaustive_fits_answer_5x5) {
   expect_fast_fit_is_exhaustive_fit(test_model("test-model-nir5x5.json"), 6);
+}
+
+// Pixels that put the fast fit's bounds on the spot, each read by both fits, bit for bit:
+//  - noise-free pixels on the locus halfway between coarse samples (two coarse samples fit
+//    almost equally well: their bounds overlap, the exact chi2 decides) and at every offset
+//    from a coarse sample (the refinement's best sample anywhere in its window);
+//  - near and at the locus ends (no reading at an end sample);
+//  - with all but two bands dropped (partial readings: the locus may pass the same ratios
+//    twice, two minima, an ambiguous reading) and very dim (flat chi2, many candidates).
+void expect_same_on_edge_pixels(const std::shared_ptr<const ThermalModel>& model) {
+  const ThermalModel& m = *model;
+  const int bands = m.profile().band_count();
+  const auto fast = make_estimator(model, Method::kLikelihood);
+  const auto exhaustive = make_exhaustive_likelihood_estimator(model);
+  fast->set_allow_partial(true);
+  exhaustive->set_allow_partial(true);
+  const double lo = m.min_temperature_c, hi = m.max_temperature_c;
+  std::vector<double> temperatures;
+  for (double t = lo; t <= lo + 45; t += 0.5) temperatures.push_back(t);
+  for (double t = hi - 45; t <= hi; t += 0.5) temperatures.push_back(t);
+  for (double t = lo + 200; t < hi - 200; t += 137.25) temperatures.push_back(t);
+  for (int k = 1; k < 20; ++k) temperatures.push_back(lo + 1000 + k);  // each window offset
+  const double saturation = saturation_signal_dn(m);
+  std::size_t read = 0, no_reading = 0, disagree = 0;
+  std::uint64_t state = 12345;
+  auto uniform = [&] {  // a fixed, portable sequence
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  for (double t : temperatures) {
+    const Eigen::VectorXd rates = m.camera.rates(t);
+    for (int variant = 0; variant < 6; ++variant) {
+      // Brightest band at 0.6 of saturation, 0.01 of it (dim), or in between.
+      const double peak = variant == 1 ? 0.01 * saturation : (0.05 + 0.55 * uniform()) * saturation;
+      std::vector<double> s(static_cast<std::size_t>(bands));
+      for (int b = 0; b < bands; ++b)
+        s[static_cast<std::size_t>(b)] = peak * rates[b] / rates.maxCoeff();
+      if (variant >= 3) {  // two bands left
+        const int keep1 = static_cast<int>(uniform() * bands);
+        const int keep2 = (keep1 + 1 + static_cast<int>(uniform() * (bands - 1))) % bands;
+        for (int b = 0; b < bands; ++b)
+          if (b != keep1 && b != keep2)
+            s[static_cast<std::size_t>(b)] = variant == 3 ? NAN : INFINITY;
+      }
+      const double a = fast->temperature_c(s.data()), e = exhaustive->temperature_c(s.data());
+      if (std::isnan(e))
+        ++no_reading;
+      else
+        ++read;
+      if (!(a == e || (std::isnan(a) && std::isnan(e)))) {
+        ++disagree;
+        ADD_FAILURE() << t << " degC, variant " << variant << ": fast " << a << ", exhaustive "
+                      << e;
+      }
+    }
+  }
+  EXPECT_EQ(disagree, 0u);
+  EXPECT_GT(read, temperatures.size());  // both decisions exercised
+  EXPECT_GT(no_reading, temperatures.size() / 10);
+}
+
+TEST(LikelihoodEstimator, fast_fit_is_the_exhaustive_fit_on_edge_pixels_colour) {
+  expect_same_on_edge_pixels(test_model("test-model-rgb.json"));
+}
+
+TEST(LikelihoodEstimator, fast_fit_is_the_exhaustive_fit_on_edge_pixels_5x5) {
+  expect_same_on_edge_pixels(test_model("test-model-nir5x5.json"));
 }
 
 TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {

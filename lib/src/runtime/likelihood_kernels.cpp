@@ -1,0 +1,130 @@
+// The likelihood fit's per-pixel kernels (see likelihood_kernels.h).
+#include "runtime/likelihood_kernels.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "detail/vector_clones.h"
+
+namespace pyrocam {
+
+// chi2 = sss - ssm^2 / smm of the likelihood fit at one locus sample: ssm = sum (w s) m and
+// smm = sum w m^2 over the bands, each in four partial sums added in a fixed order (the same
+// bits in every compiled version).
+PYROCAM_VECTOR_CLONES
+double profiled_chi2(const double* m, const double* m2, const double* ws, const double* w,
+                     int bands, double sss) {
+  double ssm[4] = {0, 0, 0, 0}, smm[4] = {0, 0, 0, 0};
+  int b = 0;
+  for (; b + 4 <= bands; b += 4)
+    for (int k = 0; k < 4; ++k) {
+      ssm[k] += ws[b + k] * m[b + k];
+      smm[k] += w[b + k] * m2[b + k];
+    }
+  for (; b < bands; ++b) {
+    ssm[0] += ws[b] * m[b];
+    smm[0] += w[b] * m2[b];
+  }
+  const double sm = (ssm[0] + ssm[1]) + (ssm[2] + ssm[3]);
+  const double mm = (smm[0] + smm[1]) + (smm[2] + smm[3]);
+  return sss - sm * sm / mm;
+}
+
+// The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
+// and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
+// Returns how many bands read. Selects, so that the divisions vectorise.
+PYROCAM_VECTOR_CLONES
+int weigh_bands(const double* __restrict s, int bands, double dim, const double* __restrict gain,
+                const double* __restrict floor, double* __restrict w, double* __restrict ws,
+                double* sss) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  for (int b = 0; b < bands; ++b) {
+    const double v = s[b];
+    const bool reads = v >= dim && v < kInf;  // NaN fails both
+    const double weight = 1.0 / (gain[b] * std::max(v, 0.0) + floor[b]);
+    w[b] = reads ? weight : 0.0;
+    ws[b] = reads ? weight * v : 0.0;
+  }
+  int valid = 0;
+  double sum = 0;
+  for (int b = 0; b < bands; ++b) {
+    valid += w[b] != 0.0;
+    sum += w[b] != 0.0 ? ws[b] * s[b] : 0.0;
+  }
+  *sss = sum;
+  return valid;
+}
+
+// Projections p = V^T (w s), q = V2^T w on the factors (bands x kMaxRank each, zero padded), in
+// double and single precision.
+PYROCAM_VECTOR_CLONES
+void project(const double* __restrict ws, const double* __restrict w, int bands,
+             const double* __restrict v, const double* __restrict v2, double* __restrict p,
+             double* __restrict q, float* __restrict pf, float* __restrict qf) {
+  for (int b = 0; b < bands; ++b)
+    for (int r = 0; r < kMaxRank; ++r) {
+      p[r] += ws[b] * v[b * kMaxRank + r];
+      q[r] += w[b] * v2[b * kMaxRank + r];
+    }
+  for (int r = 0; r < kMaxRank; ++r) {
+    pf[r] = static_cast<float>(p[r]);
+    qf[r] = static_cast<float>(q[r]);
+  }
+}
+
+// Blocks of samples keep their sums in registers; selects, so that the bounds vectorise.
+PYROCAM_VECTOR_CLONES
+void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
+                  std::ptrdiff_t stride, std::ptrdiff_t count, const float* p, const float* q,
+                  float sss, float ssm_error, float smm_error, float slack, float* lower,
+                  float* upper) {
+  for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kCoarseBlock) {
+    float ssm[kCoarseBlock] = {}, smm[kCoarseBlock] = {};
+    for (int r = 0; r < rank; ++r) {
+      const float* a = along + r * stride + i0;
+      for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) ssm[j] += p[r] * a[j];
+    }
+    for (int r = 0; r < rank2; ++r) {
+      const float* a = along2 + r * stride + i0;
+      for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) smm[j] += q[r] * a[j];
+    }
+    for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) {
+      const float x = std::abs(ssm[j]), top = x + ssm_error, bottom = smm[j] - smm_error;
+      const float low = sss - top * top / std::max(bottom, 1e-30f) - slack;
+      lower[i0 + j] = bottom > 0 ? low : -std::numeric_limits<float>::max();
+      const float least = std::max(x - ssm_error, 0.0f);
+      upper[i0 + j] = sss - least * least / (smm[j] + smm_error) + slack;
+    }
+  }
+}
+
+PYROCAM_VECTOR_CLONES
+void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double bar,
+                       double ssm_error, double smm_error, std::uint8_t* open) {
+  for (std::ptrdiff_t i = 0; i < count; ++i) {
+    const double top = std::abs(ssm[i]) + ssm_error, bottom = smm[i] - smm_error;
+    open[i] = !(bottom > 0) || top * top >= bar * bottom;
+  }
+}
+
+// Blocks of samples keep their sums in registers.
+PYROCAM_VECTOR_CLONES
+void approximate_sums(const double* along, int rank, const double* along2, int rank2,
+                      std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
+                      const double* p, const double* q, double* ssm, double* smm) {
+  for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kWindowBlock) {
+    double a[kWindowBlock] = {}, b[kWindowBlock] = {};
+    for (int r = 0; r < rank; ++r) {
+      const double* f = along + r * stride + from + i0;
+      for (std::ptrdiff_t j = 0; j < kWindowBlock; ++j) a[j] += p[r] * f[j];
+    }
+    for (int r = 0; r < rank2; ++r) {
+      const double* f = along2 + r * stride + from + i0;
+      for (std::ptrdiff_t j = 0; j < kWindowBlock; ++j) b[j] += q[r] * f[j];
+    }
+    for (std::ptrdiff_t j = 0; j < kWindowBlock; ++j) ssm[i0 + j] = a[j], smm[i0 + j] = b[j];
+  }
+}
+
+}  // namespace pyrocam

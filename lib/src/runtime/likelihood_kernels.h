@@ -1,0 +1,54 @@
+// The likelihood fit's per-pixel kernels (likelihood_estimator.cpp), compiled for AVX2 too
+// (PYROCAM_VECTOR_CLONES): the same bits in every version.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace pyrocam {
+
+// Samples per step of bounded_chi2 (long coarse scans, single precision) and approximate_sums
+// (short windows, double precision).
+inline constexpr std::ptrdiff_t kCoarseBlock = 32, kWindowBlock = 8;
+inline constexpr int kMaxRank = 16;  // low-rank factors of the likelihood fit's locus
+
+// Bounds of chi2 from factors in single precision at the first `count` samples, into lower
+// and upper [0 .. count rounded up to kCoarseBlock): ssm and smm summed from the factors are
+// taken to be off by at most ssm_error and smm_error, and the bounds widened by slack (their
+// own rounding). A lower bound is -FLT_MAX where smm may be 0.
+void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
+                  std::ptrdiff_t stride, std::ptrdiff_t count, const float* p, const float* q,
+                  float sss, float ssm_error, float smm_error, float slack, float* lower,
+                  float* upper);
+
+// The approximate sums ssm = p . along, smm = q . along2 at `count` samples from `from`, into
+// ssm and smm [0 .. count rounded up to kWindowBlock).
+void approximate_sums(const double* along, int rank, const double* along2, int rank2,
+                      std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
+                      const double* p, const double* q, double* ssm, double* smm);
+
+// Flags, into open[0 .. count), the samples whose chi2 (sss - ssm^2 / smm, ssm and smm within
+// ssm_error and smm_error of the values given) may be at most sss - bar: where
+// (|ssm| + ssm_error)^2 >= bar (smm - smm_error), or smm may be 0. Divides nothing (vectorises).
+void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double bar,
+                       double ssm_error, double smm_error, std::uint8_t* open);
+
+// chi2 = sss - ssm^2 / smm of the likelihood fit at one locus sample: ssm = sum (w s) m and
+// smm = sum w m^2 over the bands.
+double profiled_chi2(const double* m, const double* m2, const double* ws, const double* w,
+                     int bands, double sss);
+
+// The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
+// and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
+// Returns how many bands read.
+int weigh_bands(const double* __restrict s, int bands, double dim, const double* __restrict gain,
+                const double* __restrict floor, double* __restrict w, double* __restrict ws,
+                double* sss);
+
+// Projections p = V^T (w s), q = V2^T w on the factors (bands x kMaxRank each, zero padded), in
+// double and single precision (p and q accumulate: zero them first).
+void project(const double* __restrict ws, const double* __restrict w, int bands,
+             const double* __restrict v, const double* __restrict v2, double* __restrict p,
+             double* __restrict q, float* __restrict pf, float* __restrict qf);
+
+}  // namespace pyrocam
