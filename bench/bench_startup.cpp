@@ -170,9 +170,8 @@ int main(int argc, char** argv) {
     return 0;
   }
   std::printf("%s\n", description.c_str());
-  std::printf(own_dir ? "  cold (no cache): first reading"
-                      : "  first run: first reading %.1f ms after PLAYING\n",
-              first_reading_ms(description));
+  std::printf("  %s: first reading %.1f ms after PLAYING\n",
+              own_dir ? "cold (no cache)" : "first run", first_reading_ms(description));
   for (int r = 0; r < runs; ++r)
     std::printf("  warm run %d: first reading %.1f ms after PLAYING\n", r + 1,
                 first_reading_ms(description));
