@@ -53,9 +53,10 @@ void install_properties(GObjectClass* gobject_class) {
       g_param_spec_string(
           "table-cache", "Lookup-table cache folder",
           "Folder where the lookup table's filled blocks are kept between runs, a file per model "
-          "(lut-FINGERPRINT.bin, written at stop, read and checked against the network at "
-          "start), so that a model's next run does not fill them again while frames wait; "
-          "empty: no cache. Unset (default): $XDG_CACHE_HOME/pyrocam, else ~/.cache/pyrocam",
+          "(lut-FINGERPRINT.bin, written at stop with the verdict of the table's check against "
+          "the network, read at start, where that verdict spares the check), so that a model's "
+          "next run does not fill them again while frames wait; empty: no cache. Unset "
+          "(default): $XDG_CACHE_HOME/pyrocam, else ~/.cache/pyrocam",
           nullptr, ready));
   g_object_class_install_property(
       gobject_class, PROP_METHOD,

@@ -30,4 +30,31 @@ inline nlohmann::json parse_bounded_json(std::istream& in, const std::string& wh
   return json::parse(in, bound, /*allow_exceptions=*/true, ignore_comments);
 }
 
+// The same for a document already in memory (no comments), several times faster: the nesting is
+// bounded by a scan of the brackets outside strings first, so the parser needs no callback per
+// value, and it reads the string's bytes directly rather than through a stream.
+inline nlohmann::json parse_bounded_json(const std::string& text, const std::string& where) {
+  int depth = 0;
+  bool in_string = false, escaped = false;
+  for (const char c : text) {
+    if (in_string) {
+      if (escaped)
+        escaped = false;
+      else if (c == '\\')
+        escaped = true;
+      else if (c == '"')
+        in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonNesting)
+        throw InputError(where + ": JSON nested deeper than " + std::to_string(kMaxJsonNesting) +
+                         " levels");
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return nlohmann::json::parse(text);
+}
+
 }  // namespace pyrocam

@@ -44,6 +44,14 @@ std::string lut_disagreement(const LocusAgreement& a) {
   return what;
 }
 
+std::string lut_check_verdict() {
+  // Names the limits, so that a cache checked against other limits is checked again.
+  char word[64];
+  std::snprintf(word, sizeof word, "lut-check-passed:%gC:%zu%%", kLutToleranceC,
+                kLutValidityPercent);
+  return word;
+}
+
 EstimatorSelector::EstimatorSelector(std::shared_ptr<const ThermalModel> model)
     : model_(std::move(model)) {
   require_model(model_, "estimator selection");
@@ -62,11 +70,22 @@ std::string EstimatorSelector::prepare(Method m) {
         cache_problem_ = e.what();
       }
     }
+    // A cache of this model's table (its fingerprint, grid and version, checksummed) that
+    // records that the table passed this very check: the check's answer would be the same.
+    const std::string passed = lut_check_verdict();
+    if (cache_read_ > 0 && slot->estimator().tables_verdict() == passed) {
+      lut_checked_ = lut_check_skipped_ = true;
+      return "";
+    }
     const auto mlp = make_estimator(model_, Method::kMlp);
     lut_problem_ = lut_disagreement(compare_on_locus(*model_, slot->estimator(), *mlp));
     lut_checked_ = true;
-    if (!lut_problem_.empty()) slot.reset();
-    return lut_problem_;
+    if (!lut_problem_.empty()) {
+      slot.reset();
+      return lut_problem_;
+    }
+    slot->estimator().set_tables_verdict(passed);
+    return "";
   } catch (const std::exception& e) {
     // A method that does not fit the model (the table needs two ratios) is a choice's problem,
     // not an error of the caller.

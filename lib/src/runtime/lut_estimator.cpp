@@ -165,7 +165,8 @@ class LutEstimator : public TemperatureEstimator {
   static constexpr std::size_t kMaxCachedBlocks = kMaxBlocks / 2;
   static constexpr std::size_t kBlockBytes = 4 * kBlockCells * kBlockCells * sizeof(float);
   // Bump when a block's values would change (grid rule, network arithmetic, output space).
-  static constexpr const char* kCacheMagic = "pyrocam lookup-table cache 2\n";
+  // (3: the header ends with the tables' verdict.)
+  static constexpr const char* kCacheMagic = "pyrocam lookup-table cache 3\n";
 
   explicit LutEstimator(std::shared_ptr<const ThermalModel> model)
       : TemperatureEstimator(std::move(model)), mlp_(model_) {
@@ -306,27 +307,39 @@ class LutEstimator : public TemperatureEstimator {
   }
 
   // The cache file: kCacheMagic, then a header line naming the model's fingerprint, the
-  // output space, the grid and the block count, then per block its index (uint32) and its
-  // 4 * kBlockCells^2 floats (host byte order: the cache belongs to one machine), then the
-  // checksum of everything before it (cache_checksum) as a text line.
-  std::string cache_header(std::size_t blocks) const {
+  // output space, the grid, the block count and the verdict ("-" for none), then per block its
+  // index (uint32) and its 4 * kBlockCells^2 floats (host byte order: the cache belongs to one
+  // machine), then the checksum of everything before it (cache_checksum) as a text line.
+  std::string cache_header(std::size_t blocks, const std::string& verdict) const {
     char line[256];
-    std::snprintf(line, sizeof line, "%s %d %d %d %.17g %.17g %.17g %zu\n",
+    std::snprintf(line, sizeof line, "%s %d %d %d %.17g %.17g %.17g %zu ",
                   model_->fingerprint.c_str(), static_cast<int>(space_), blocks_x_, blocks_y_, h_,
                   x0_, y0_, blocks);
-    return std::string(kCacheMagic) + line;
+    return std::string(kCacheMagic) + line + (verdict.empty() ? "-" : verdict) + "\n";
+  }
+
+  void set_tables_verdict(const std::string& verdict) const override {
+    std::lock_guard<std::mutex> lock(order_mutex_);
+    verdict_ = verdict;
+  }
+  std::string tables_verdict() const override {
+    std::lock_guard<std::mutex> lock(order_mutex_);
+    return verdict_;
   }
 
   std::size_t save_tables(const std::string& path) const override {
     // Nothing new to keep, or the file already holds as many blocks as a cache may.
-    if (model_->fingerprint.empty() || built_.load(std::memory_order_acquire) <= loaded_ ||
-        loaded_ >= kMaxCachedBlocks)
-      return 0;
     std::vector<std::uint32_t> order;
+    std::string verdict;
     {
       std::lock_guard<std::mutex> lock(order_mutex_);
       order = built_order_;
+      verdict = verdict_;
     }
+    // ... unless the verdict is new.
+    const bool new_blocks = order.size() > loaded_ && loaded_ < kMaxCachedBlocks;
+    if (model_->fingerprint.empty() || order.empty() || (!new_blocks && verdict == loaded_verdict_))
+      return 0;
     std::size_t count = 0;
     std::string body;
     for (std::uint32_t index : order) {
@@ -336,7 +349,7 @@ class LutEstimator : public TemperatureEstimator {
                   kBlockBytes);
       ++count;
     }
-    std::string data = cache_header(count) + body;
+    std::string data = cache_header(count, verdict) + body;
     data += cache_checksum(data.data(), data.size()) + "\n";
     const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
     {
@@ -368,8 +381,10 @@ class LutEstimator : public TemperatureEstimator {
       throw InputError("the table cache " + path + " is not a table cache of this version");
     std::size_t count = 0;
     const std::string header = data.substr(0, header_end + 1);
-    if (std::sscanf(header.c_str() + magic, "%*s %*d %*d %*d %*g %*g %*g %zu", &count) != 1 ||
-        header != cache_header(count))
+    char verdict[64] = "";
+    if (std::sscanf(header.c_str() + magic, "%*s %*d %*d %*d %*g %*g %*g %zu %63s", &count,
+                    verdict) != 2 ||
+        header != cache_header(count, verdict == std::string("-") ? "" : verdict))
       throw InputError("the table cache " + path +
                        " is for another model, grid or version (header " +
                        header.substr(magic, header.size() - magic - 1) + ")");
@@ -403,6 +418,8 @@ class LutEstimator : public TemperatureEstimator {
       }
     }
     loaded_ = built_.load(std::memory_order_acquire);
+    loaded_verdict_ = verdict == std::string("-") ? "" : verdict;
+    set_tables_verdict(loaded_verdict_);
     return added;
   }
 
@@ -488,7 +505,9 @@ class LutEstimator : public TemperatureEstimator {
   float inv_ref_count_ = 1, lowest_ = 0, highest_ = 0;
   std::unique_ptr<std::atomic<float*>[]> blocks_;
   mutable std::atomic<std::size_t> built_{0};
-  mutable std::size_t loaded_ = 0;  // blocks held after the last load_tables
+  mutable std::size_t loaded_ = 0;      // blocks held after the last load_tables
+  mutable std::string loaded_verdict_;  // the verdict the last load_tables read
+  mutable std::string verdict_;         // under order_mutex_
   mutable std::mutex order_mutex_;
   mutable std::vector<std::uint32_t> built_order_;  // filled blocks, first filled first
 };

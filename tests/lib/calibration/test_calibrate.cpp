@@ -220,6 +220,31 @@ TEST_F(ModelFileDamage, rejects_an_edited_file_n) {
   expect_rejected(edited, "checksum mismatch");
 }
 
+TEST_F(ModelFileDamage, rejects_a_second_payload_after_the_signed_one_n) {
+  // The checksum is taken from the file's text when it can be; the parser keeps the last payload.
+  nlohmann::json payload = nlohmann::json::parse(text)["payload"];
+  payload["qe_solver"] = "datasheef";
+  std::string doubled = text;
+  doubled.insert(doubled.rfind('}'), ", \"payload\": " + payload.dump());
+  expect_rejected(doubled, "checksum mismatch");
+}
+
+TEST_F(ModelFileDamage, reads_the_same_model_written_in_another_layout) {
+  // Other white space (checked from the text), another spelling of a string (checked by the
+  // dump of what was parsed): the same payload, the same fingerprint.
+  const ThermalModel original = load_model(dir / "m.json");
+  std::string spelled = text;
+  const auto pos = spelled.find("\"qe_solver\": \"datasheet\"");
+  ASSERT_NE(pos, std::string::npos);
+  spelled.replace(pos, 24, "\"qe_solver\": \"\\u0064atasheet\"");
+  for (const std::string& layout : {nlohmann::json::parse(text).dump(4), spelled}) {
+    test::write_text(dir / "other.json", layout);
+    const ThermalModel m = load_model(dir / "other.json");
+    EXPECT_EQ(m.fingerprint, original.fingerprint);
+    EXPECT_EQ(m.qe_solver, "datasheet");
+  }
+}
+
 TEST_F(ModelFileDamage, rejects_another_version_n) {
   std::string edited = text;
   const auto pos = edited.rfind("\"version\": 1");  // the file's, written last

@@ -4,12 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <utility>
 
 #include "pyrocam/core/error.h"
 #include "pyrocam/runtime/estimator_selection.h"
+#include "test_support.h"
 
 namespace pyrocam {
 namespace {
@@ -104,6 +107,82 @@ TEST(EstimatorSelection, the_check_refuses_a_table_off_by_more_than_1_degc_or_1_
   a.max_difference_c = 0.5;
   a.validity_differs = 31;
   EXPECT_NE(lut_disagreement(a), "");
+}
+
+// The table cache records that the table passed its check, which the next run with that cache
+// then trusts; an altered cache, another model's, one without the verdict and no cache do not
+// spare the check.
+class CachedVerdict : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!rgb_lut_passes()) GTEST_SKIP() << "the test model's table does not pass its check";
+  }
+  std::unique_ptr<EstimatorSelector> select(std::shared_ptr<const ThermalModel> m,
+                                            const std::string& cache) {
+    auto s = std::make_unique<EstimatorSelector>(std::move(m));
+    s->set_table_cache(cache);
+    const auto c = s->select(MethodRequest::kLut);
+    EXPECT_TRUE(c.problem.empty()) << c.problem;
+    return s;
+  }
+  test::ScratchDir dir{"selection-cache"};
+  const std::string file = table_cache_file(*rgb(), dir.path().string());
+};
+
+TEST_F(CachedVerdict, a_second_run_trusts_the_verdict_and_reads_the_same) {
+  const auto first = select(rgb(), file);
+  EXPECT_FALSE(first->lut_check_skipped()) << "no cache yet";
+  ASSERT_GT(first->save_table_cache(), 0u);
+  const auto second = select(rgb(), file);
+  EXPECT_GT(second->cache_blocks_read(), 0u);
+  EXPECT_TRUE(second->lut_check_skipped());
+  EXPECT_EQ(second->save_table_cache(), 0u) << "nothing new to keep";
+  const LocusAgreement a = compare_on_locus(*rgb(), second->estimator(Method::kLut).estimator(),
+                                            first->estimator(Method::kLut).estimator());
+  EXPECT_EQ(a.max_difference_c, 0.0);
+  EXPECT_EQ(a.validity_differs, 0u);
+  EXPECT_FALSE(select(rgb(), "")->lut_check_skipped()) << "without a cache";
+}
+
+TEST_F(CachedVerdict, an_altered_cache_is_not_trusted_n) {
+  ASSERT_GT(select(rgb(), file)->save_table_cache(), 0u);
+  {
+    std::fstream f(file, std::ios::binary | std::ios::in | std::ios::out);
+    f.seekp(static_cast<std::streamoff>(std::filesystem::file_size(file) / 2));
+    f.put('\x7f');
+  }
+  const auto s = select(rgb(), file);
+  EXPECT_NE(s->cache_problem().find("truncated or altered"), std::string::npos)
+      << s->cache_problem();
+  EXPECT_FALSE(s->lut_check_skipped());
+}
+
+TEST_F(CachedVerdict, another_models_cache_is_ignored_n) {
+  ASSERT_GT(select(rgb(), file)->save_table_cache(), 0u);
+  ThermalModel other = *rgb();
+  other.fingerprint = "0123456789abcdef";
+  const auto other_model = std::make_shared<const ThermalModel>(other);
+  const std::string other_file = table_cache_file(other, dir.path().string());
+  std::filesystem::copy_file(file, other_file);
+  const auto s = select(other_model, other_file);
+  EXPECT_NE(s->cache_problem().find("another model"), std::string::npos) << s->cache_problem();
+  EXPECT_EQ(s->cache_blocks_read(), 0u);
+  EXPECT_FALSE(s->lut_check_skipped());
+}
+
+TEST_F(CachedVerdict, a_cache_without_the_verdict_is_checked_then_given_it_n) {
+  {
+    // Blocks kept by the estimator alone, never checked.
+    const PlaneEstimator lut(rgb(), Method::kLut);
+    const auto mlp = make_estimator(rgb(), Method::kMlp);
+    compare_on_locus(*rgb(), lut.estimator(), *mlp);
+    ASSERT_GT(lut.estimator().save_tables(file), 0u);
+  }
+  const auto checked = select(rgb(), file);
+  EXPECT_GT(checked->cache_blocks_read(), 0u);
+  EXPECT_FALSE(checked->lut_check_skipped());
+  EXPECT_GT(checked->save_table_cache(), 0u) << "the verdict is new";
+  EXPECT_TRUE(select(rgb(), file)->lut_check_skipped());
 }
 
 }  // namespace

@@ -30,6 +30,11 @@ constexpr std::size_t kLutValidityPercent = 1;
 // within the limits above, else why not: by how much and where it differs.
 std::string lut_disagreement(const LocusAgreement& agreement);
 
+// The verdict the table cache keeps for a table that passed the check above
+// (TemperatureEstimator::set_tables_verdict): a cache of the model that holds it spares the next
+// run the check.
+std::string lut_check_verdict();
+
 // Builds a model's estimators as they are asked for and keeps them, so that switching back is
 // free and the lookup table is checked once. They share the model; not thread-safe.
 class EstimatorSelector {
@@ -47,11 +52,15 @@ class EstimatorSelector {
   // The estimator of a method that select() returned without a problem.
   PlaneEstimator& estimator(Method method);
   // Keeps the lookup table's blocks in `file` between runs (table_cache_file): read when the
-  // table is built, before its check (which then checks them too); "" (the default): none.
+  // table is built, before its check (which then checks them too, unless the file records that
+  // this model's table passed it); "" (the default): none.
   void set_table_cache(std::string file) { cache_file_ = std::move(file); }
   // Blocks the cache gave, and why it gave none when it was there but unusable ("" otherwise).
   std::size_t cache_blocks_read() const { return cache_read_; }
   const std::string& cache_problem() const { return cache_problem_; }
+  // Whether the lookup table's check was not run again because the cache recorded that this
+  // model's table passed it.
+  bool lut_check_skipped() const { return lut_check_skipped_; }
   // Writes the table's blocks to the cache file when it holds blocks the file did not give it
   // (creating the folder); returns how many it wrote. Throws InputError when it cannot.
   std::size_t save_table_cache() const;
@@ -64,6 +73,7 @@ class EstimatorSelector {
   std::string cache_file_, cache_problem_;
   std::size_t cache_read_ = 0;
   bool lut_checked_ = false;
+  bool lut_check_skipped_ = false;
   std::string lut_problem_;  // why the lookup table is not used, once checked
 };
 

@@ -72,6 +72,11 @@ class TemperatureEstimator {
   // this machine computed for it, so readings do not change. Other methods keep no tables.
   virtual std::size_t save_tables(const std::string& path) const;
   virtual std::size_t load_tables(const std::string& path) const;
+  // A word (no white space; "" for none) kept with the tables in their file: the check the
+  // tables passed (EstimatorSelector). load_tables sets it from the file; a file whose verdict
+  // differs from the one it gave is written again even without new blocks.
+  virtual void set_tables_verdict(const std::string& verdict) const;
+  virtual std::string tables_verdict() const { return ""; }
 
  protected:
   // All bands finite and at least the dim threshold.
