@@ -1,5 +1,6 @@
 // The lookup-table estimator (Method::kLut): the network tabulated over a colour camera's two
 // ratios, with its per-pixel passes (compiled for AVX2 too).
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -79,18 +80,17 @@ void cells(const float* __restrict fx, const float* __restrict fy, std::size_t m
   }
 }
 
-// Bilinear interpolation from each pixel's four cell corners (NaN where the status is not
-// kInTable), then `special` = 1 for the pixels the network answers: off the table, or near or
-// beyond a range end. Returns whether there are any.
+// Bilinear interpolation from each pixel's four cell corners (c0..c3, one array each; 0 where the
+// status is not kInTable), then `special` = 1 for the pixels the network answers: off the table,
+// or near or beyond a range end. Returns whether there are any.
 PYROCAM_VECTOR_CLONES
-bool interpolate(const float* __restrict corners, const float* __restrict wx,
-                 const float* __restrict wy, const float* __restrict status, std::size_t m,
-                 MlpOutputTransform space, float lowest, float highest, float* __restrict out,
-                 float* __restrict special) {
+bool interpolate(const float* __restrict c0, const float* __restrict c1, const float* __restrict c2,
+                 const float* __restrict c3, const float* __restrict wx, const float* __restrict wy,
+                 const float* __restrict status, std::size_t m, MlpOutputTransform space,
+                 float lowest, float highest, float* __restrict out, float* __restrict special) {
   for (std::size_t k = 0; k < m; ++k) {
-    const float* c = corners + 4 * k;
-    const float below = c[0] + wx[k] * (c[1] - c[0]);
-    const float above = c[2] + wx[k] * (c[3] - c[2]);
+    const float below = c0[k] + wx[k] * (c1[k] - c0[k]);
+    const float above = c2[k] + wx[k] * (c3[k] - c2[k]);
     const float v = below + wy[k] * (above - below);
     out[k] = status[k] == kInTable ? v : NAN;
   }
@@ -163,7 +163,14 @@ class LutEstimator : public TemperatureEstimator {
   // first, leaving the other half for a run's own scene (past the budget pixels are read by the
   // network, which then depends on what came before).
   static constexpr std::size_t kMaxCachedBlocks = kMaxBlocks / 2;
-  static constexpr std::size_t kBlockBytes = 4 * kBlockCells * kBlockCells * sizeof(float);
+  static constexpr std::size_t kBlockFloats = 4 * kBlockCells * kBlockCells;
+  static constexpr std::size_t kBlockBytes = kBlockFloats * sizeof(float);
+  // The blocks live in one arena: address space for the budget and some slack, committed by the
+  // kernel page by page as blocks are filled, on 2 MB pages where it gives them (a frame's table
+  // reads then need a few TLB entries instead of one per 4 KB block: most of their cost).
+  static constexpr std::size_t kArenaBlocks = kMaxBlocks + 512;
+  static constexpr std::size_t kHugePage = std::size_t{2} << 20;
+  static constexpr std::size_t kArenaMappingBytes = kArenaBlocks * kBlockBytes + kHugePage;
   // Bump when a block's values would change (grid rule, network arithmetic, output space).
   // (3: the header ends with the tables' verdict.)
   static constexpr const char* kCacheMagic = "pyrocam lookup-table cache 3\n";
@@ -217,11 +224,11 @@ class LutEstimator : public TemperatureEstimator {
     const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
     blocks_.reset(new std::atomic<float*>[slots]);
     for (std::size_t i = 0; i < slots; ++i) blocks_[i].store(nullptr, std::memory_order_relaxed);
+    reserve_arena();
   }
 
   ~LutEstimator() override {
-    const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
-    for (std::size_t i = 0; i < slots; ++i) delete[] blocks_[i].load(std::memory_order_relaxed);
+    if (arena_mapping_ != MAP_FAILED) ::munmap(arena_mapping_, kArenaMappingBytes);
   }
   LutEstimator(const LutEstimator&) = delete;
   LutEstimator& operator=(const LutEstimator&) = delete;
@@ -246,7 +253,7 @@ class LutEstimator : public TemperatureEstimator {
     constexpr std::size_t kChunk = 256;
     alignas(64) float status[kChunk], fx[kChunk], fy[kChunk], wx[kChunk], wy[kChunk];
     alignas(64) float special[kChunk], others_read[kChunk];
-    alignas(64) float corners[4 * kChunk];  // per pixel: its cell's four corners
+    alignas(64) float c0[kChunk], c1[kChunk], c2[kChunk], c3[kChunk];  // the cells' corners
     alignas(64) std::int32_t block[kChunk], cell[kChunk];
     const lut::Grid grid{dim_f(), inv_h_, offset_x_, offset_y_, cells_x_, cells_y_};
     const bool three_bands = bands_ == 3 && ref_.size() == 1;
@@ -275,23 +282,9 @@ class LutEstimator : public TemperatureEstimator {
         continue;
       }
       lut::cells(fx, fy, m, kBlockShift, blocks_x_, block, cell, wx, wy);
-      for (std::size_t k = 0; k < m; ++k) {
-        float* c = corners + 4 * k;
-        if (status[k] != lut::kInTable) {
-          c[0] = c[1] = c[2] = c[3] = 0;
-          continue;
-        }
-        const float* blk =
-            blocks_[static_cast<std::size_t>(block[k])].load(std::memory_order_acquire);
-        if (!blk) blk = build_block(block[k] % blocks_x_, block[k] / blocks_x_);
-        if (!blk) {  // over the memory budget
-          status[k] = lut::kOffTable;
-          c[0] = c[1] = c[2] = c[3] = 0;
-          continue;
-        }
-        std::memcpy(c, blk + 4 * cell[k], 4 * sizeof(float));
-      }
-      if (!lut::interpolate(corners, wx, wy, status, m, space_, lowest_, highest_, o, special))
+      gather(status, block, cell, m, c0, c1, c2, c3);
+      if (!lut::interpolate(c0, c1, c2, c3, wx, wy, status, m, space_, lowest_, highest_, o,
+                            special))
         continue;
       for (std::size_t k = 0; k < m; ++k) {
         if (special[k] == 0.f) continue;
@@ -405,12 +398,12 @@ class LutEstimator : public TemperatureEstimator {
       const char* at = data.data() + header.size() + k * record;
       std::uint32_t index = 0;
       std::memcpy(&index, at, sizeof index);
-      std::unique_ptr<float[]> values(new float[4 * kBlockCells * kBlockCells]);
-      std::memcpy(values.get(), at + sizeof index, kBlockBytes);
+      if (blocks_[index].load(std::memory_order_acquire)) continue;
+      float* values = allocate_block();
+      if (!values) break;  // the arena is used up: the rest is filled as pixels need it
+      std::memcpy(values, at + sizeof index, kBlockBytes);
       float* expected = nullptr;
-      if (blocks_[index].compare_exchange_strong(expected, values.get(),
-                                                 std::memory_order_acq_rel)) {
-        values.release();
+      if (blocks_[index].compare_exchange_strong(expected, values, std::memory_order_acq_rel)) {
         built_.fetch_add(1, std::memory_order_relaxed);
         std::lock_guard<std::mutex> lock(order_mutex_);
         built_order_.push_back(index);
@@ -431,6 +424,57 @@ class LutEstimator : public TemperatureEstimator {
 
  private:
   float dim_f() const { return static_cast<float>(dim_dn_); }
+
+  // Each pixel's four cell corners, one array each (0 where the status is not kInTable), from
+  // its block. First the blocks not filled yet are filled (a pixel whose block is over the memory
+  // budget goes to the network: status kOffTable); then every pixel's reads without a branch
+  // (noise scatters neighbouring pixels over blocks and cells: branches on them would mispredict
+  // and keep the reads from overlapping).
+  void gather(float* __restrict status, const std::int32_t* __restrict block,
+              const std::int32_t* __restrict cell, std::size_t m, float* __restrict c0,
+              float* __restrict c1, float* __restrict c2, float* __restrict c3) const {
+    for (std::size_t k = 0; k < m; ++k) {
+      if (status[k] != lut::kInTable) continue;
+      const float* blk =
+          blocks_[static_cast<std::size_t>(block[k])].load(std::memory_order_acquire);
+      if (!blk) blk = build_block(block[k] % blocks_x_, block[k] / blocks_x_);
+      if (blk)
+        __builtin_prefetch(blk + 4 * cell[k]);  // the reads below then overlap
+      else
+        status[k] = lut::kOffTable;
+    }
+    static const float kNoCorners[4] = {0, 0, 0, 0};
+    for (std::size_t k = 0; k < m; ++k) {
+      // Filled wherever the status is kInTable (and published: seen by the acquire above).
+      const float* blk =
+          blocks_[static_cast<std::size_t>(block[k])].load(std::memory_order_relaxed);
+      const float* c = status[k] == lut::kInTable ? blk + 4 * cell[k] : kNoCorners;
+      c0[k] = c[0];
+      c1[k] = c[1];
+      c2[k] = c[2];
+      c3[k] = c[3];
+    }
+  }
+
+  // A block's storage from the arena: null once it is used up (the budget, plus room for blocks
+  // two threads computed at once, of which one is kept) or where it could not be reserved.
+  float* allocate_block() const {
+    if (!arena_) return nullptr;
+    const std::size_t k = arena_used_.fetch_add(1, std::memory_order_relaxed);
+    return k < kArenaBlocks ? arena_ + k * kBlockFloats : nullptr;
+  }
+
+  void reserve_arena() {
+    arena_mapping_ = ::mmap(nullptr, kArenaMappingBytes, PROT_READ | PROT_WRITE,
+                            MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+    if (arena_mapping_ == MAP_FAILED) return;  // no table: the network reads every pixel
+    const auto at = reinterpret_cast<std::uintptr_t>(arena_mapping_);
+    const std::uintptr_t aligned = (at + kHugePage - 1) & ~(kHugePage - 1);
+    arena_ = reinterpret_cast<float*>(aligned);
+#ifdef MADV_HUGEPAGE
+    ::madvise(arena_, kArenaBlocks * kBlockBytes, MADV_HUGEPAGE);  // advice: may be refused
+#endif
+  }
 
   float reference(const float* s) const {
     if (ref_.size() == 1) return s[ref_[0]];
@@ -458,7 +502,8 @@ class LutEstimator : public TemperatureEstimator {
       }
     const Eigen::VectorXd t = to_output_space(model_->mlp.predict(x));
     // Cell after cell, each with its four corners (one 16-byte read per pixel).
-    std::unique_ptr<float[]> values(new float[4 * kBlockCells * kBlockCells]);
+    float* values = allocate_block();
+    if (!values) return nullptr;
     for (int j = 0; j < kBlockCells; ++j)
       for (int i = 0; i < kBlockCells; ++i) {
         float* c = &values[static_cast<std::size_t>(4 * (j * kBlockCells + i))];
@@ -469,13 +514,13 @@ class LutEstimator : public TemperatureEstimator {
       }
     std::atomic<float*>& slot = blocks_[static_cast<std::size_t>(by * blocks_x_ + bx)];
     float* expected = nullptr;
-    if (slot.compare_exchange_strong(expected, values.get(), std::memory_order_acq_rel)) {
+    if (slot.compare_exchange_strong(expected, values, std::memory_order_acq_rel)) {
       built_.fetch_add(1, std::memory_order_relaxed);
       std::lock_guard<std::mutex> lock(order_mutex_);
       built_order_.push_back(static_cast<std::uint32_t>(by * blocks_x_ + bx));
-      return values.release();
+      return values;
     }
-    return expected;  // another thread was first
+    return expected;  // another thread was first (its arena place stays unused)
   }
 
   // The table holds the network's answer in the space of its output unit (1/T for an
@@ -504,6 +549,9 @@ class LutEstimator : public TemperatureEstimator {
   float cells_x_ = 0, cells_y_ = 0, inv_h_ = 1, offset_x_ = 0, offset_y_ = 0;
   float inv_ref_count_ = 1, lowest_ = 0, highest_ = 0;
   std::unique_ptr<std::atomic<float*>[]> blocks_;
+  void* arena_mapping_ = MAP_FAILED;
+  float* arena_ = nullptr;  // arena_mapping_ aligned to a huge page; null: none reserved
+  mutable std::atomic<std::size_t> arena_used_{0};
   mutable std::atomic<std::size_t> built_{0};
   mutable std::size_t loaded_ = 0;      // blocks held after the last load_tables
   mutable std::string loaded_verdict_;  // the verdict the last load_tables read

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <opencv2/core.hpp>
@@ -55,6 +56,46 @@ TEST(LutEstimator, gives_the_networks_answer_on_noisy_pixels) {
       EXPECT_NEAR(single, image, 1e-3) << i;
     }
   }
+}
+
+// The per-pixel passes work on chunks of pixels (each pixel's block and corners gathered for the
+// chunk, then interpolated together): a whole row gives every pixel the very bits it gets alone,
+// with saturated, dim, NaN and off-table pixels scattered between readable ones, and two rows
+// that share the table's blocks in a different order give the same bits again.
+TEST(LutEstimator, a_row_gives_each_pixel_the_bits_it_gets_alone) {
+  const auto model = test_model("test-model-rgb.json");
+  const NoisyPixels px =
+      noisy_pixels(*model, kSweepC, 120, 15, 200, saturation_signal_dn(*model), 0.02, 17);
+  std::vector<cv::Mat> planes = as_planes(px);
+  const int n = planes[0].cols;
+  for (int i = 0; i < n; i += 13) {  // every kind of pixel without a reading, or an odd one
+    const float odd[][3] = {{NAN, 100, 60}, {INFINITY, 120, 60}, {100, 2, 60},
+                            {150, 20, 150}, {20, 150, 20},       {100, 120, -5}};
+    const auto& o = odd[(i / 13) % 6];
+    for (int b = 0; b < 3; ++b) planes[static_cast<std::size_t>(b)].at<float>(0, i) = o[b];
+  }
+  const PlaneEstimator lut(model, Method::kLut);
+  cv::Mat row;
+  lut.estimate(planes, row);
+  std::vector<cv::Mat> reversed(3);
+  for (int b = 0; b < 3; ++b) cv::flip(planes[static_cast<std::size_t>(b)], reversed[b], 1);
+  cv::Mat backwards;
+  PlaneEstimator(model, Method::kLut).estimate(reversed, backwards);
+  int differ = 0, read = 0;
+  for (int i = 0; i < n; ++i) {
+    double s[3];
+    for (int b = 0; b < 3; ++b) s[b] = planes[static_cast<std::size_t>(b)].at<float>(0, i);
+    const auto alone = static_cast<float>(lut.estimator().temperature_c(s));
+    const float x = row.at<float>(0, i), y = backwards.at<float>(0, n - 1 - i);
+    const auto same = [](float a, float b) {
+      return std::memcmp(&a, &b, sizeof a) == 0 || (std::isnan(a) && std::isnan(b));
+    };
+    differ += !same(x, alone) || !same(x, y);
+    read += !std::isnan(x);
+  }
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(read, n / 2);
+  EXPECT_LT(read, n - n / 20);
 }
 
 TEST(LutEstimator, answers_with_the_network_far_from_the_locus) {
