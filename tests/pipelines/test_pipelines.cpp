@@ -654,7 +654,10 @@ TEST_F(GenICam, recording_from_a_camera_that_stops_keeps_its_closed_segments_n) 
                      {"SOURCE", "aravissrc camera-name=127.0.0.1 exposure=10000 gain=0"},
                      {"CAPS", "video/x-bayer,format=rggb,width=128,height=128"},
                      {"SEGMENT_SECONDS", "0.4"},
-                     {"WATCHDOG_MS", "1000"}},
+                     // Not 1 s: starting the chain (model, lookup table) held the camera's
+                     // branches for over a second when the suite ran two tests at once on 2
+                     // cores, and the watchdog fired before any segment closed.
+                     {"WATCHDOG_MS", "3000"}},
                     log("record"));
   const auto segments = [&] { return files_in(rec, "temperature-", ".mkv"); };
   ASSERT_TRUE(wait_until([&] { return segments().size() >= 3 || !recording.running(); },
@@ -663,13 +666,19 @@ TEST_F(GenICam, recording_from_a_camera_that_stops_keeps_its_closed_segments_n) 
   ASSERT_TRUE(recording.running()) << recording.log();
 
   // The camera stops sending (frozen, not gone); once the error is out it resumes, so that
-  // Aravis stops it without waiting for control-channel timeouts.
+  // Aravis stops it without waiting for control-channel timeouts. The error is the watchdog's
+  // or aravissrc's own (it gives up on a camera silent for about 2 s, before a 3 s watchdog):
+  // either ends the recording; the watchdog's diagnosis has its own test above.
   camera.freeze();
-  const bool diagnosed = wait_until(
-      [&] { return recording.log().find("GstWatchdog:camera-sent-no-frame") != std::string::npos; },
-      milliseconds(5000));
+  const bool stopped = wait_until(
+      [&] {
+        const std::string l = recording.log();
+        return l.find("GstWatchdog:camera-sent-no-frame") != std::string::npos ||
+               l.find("GstAravis") != std::string::npos;
+      },
+      milliseconds(8000));
   camera.thaw();
-  ASSERT_TRUE(diagnosed) << "no watchdog error within 5 s: " << recording.log();
+  ASSERT_TRUE(stopped) << "no error within 8 s of the camera stopping: " << recording.log();
   const auto status = recording.wait_for(milliseconds(30000));
   ASSERT_TRUE(status.has_value()) << recording.log();
   EXPECT_NE(*status, 0) << recording.log();
