@@ -68,6 +68,14 @@ int main(int argc, char** argv) {
       ro.edge_shift_sigma_nm = value;
     else if (key == "furnace_temperature_sigma_c")
       ro.furnace_temperature_sigma_c = value;
+    else if (key == "discrepancy_sigma")
+      ro.discrepancy_sigma = value;
+    else if (key == "discrepancy_spacing_nm")
+      ro.discrepancy_spacing_nm = value;
+    else if (key == "discrepancy_leak")
+      ro.discrepancy_leak = value;
+    else if (key == "discrepancy_leak_spacing_nm")
+      ro.discrepancy_leak_spacing_nm = value;
     else if (key == "relative_noise")
       ro.relative_noise = value;
     else if (key == "leverage") {

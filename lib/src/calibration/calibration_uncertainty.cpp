@@ -7,10 +7,16 @@
 #include "detail/random.h"
 #include "pyrocam/calibration/baselines.h"
 #include "pyrocam/calibration/qe_fit.h"
+#include "pyrocam/runtime/estimators.h"
 
 namespace pyrocam {
 
 using calibration_detail::report_stage;
+
+namespace {
+// The brightest band of a well exposed pixel, DN (as extrapolation_errors exposes).
+constexpr double kWellExposedDn = 150;
+}  // namespace
 
 std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
                                          const std::vector<QeSample>& posterior,
@@ -19,13 +25,25 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
   if (posterior.size() < 2) return u;
   const double lo = *std::min_element(temperatures_c.begin(), temperatures_c.end());
   const double hi = *std::max_element(temperatures_c.begin(), temperatures_c.end());
-  const OhnoEstimator inverse(make_locus(fitted, lo - 300, hi + 300, 1));
+  // Read as the live chain reads: the likelihood fit of a well exposed pixel, so that a band too
+  // dim to be read at a temperature does not count there (nor does its uncertainty).
+  auto model = std::make_shared<ThermalModel>();
+  model->camera = fitted;
+  model->datasheet_qe = fitted.profile.system_qe();
+  model->min_temperature_c = lo - 300;
+  model->max_temperature_c = hi + 300;
+  const auto reader = make_estimator(model, Method::kLikelihood);
+  const auto read = [&](const CameraModel& camera, double t) {
+    Eigen::VectorXd s = camera.rates(t);
+    s *= kWellExposedDn / s.maxCoeff();
+    return reader->temperature_c(s.data());
+  };
   for (double t : temperatures_c) {
+    const double nominal = read(fitted, t);
     double sum = 0, sum2 = 0;
     int n = 0;
     for (const QeSample& s : posterior) {
-      const CameraModel plausible{fitted.profile, s.system_qe, s.gains};
-      const double d = inverse.temperature_c(plausible.rates(t)) - t;
+      const double d = read(CameraModel{fitted.profile, s.system_qe, s.gains}, t) - nominal;
       if (!std::isfinite(d)) continue;
       sum += d, sum2 += d * d, ++n;
     }

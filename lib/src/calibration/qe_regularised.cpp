@@ -198,6 +198,33 @@ class RegularisedModel {
 
   double gain(int b, const Eigen::VectorXd& th) const { return gain0_[b] * portable::exp(th[b]); }
 
+  // evaluate()'s data rows (furnace, then references, band by band, before the priors)
+  // differentiated by linear changes of the QE: dq[b] holds d Q_b / d delta, wavelengths x m.
+  Eigen::MatrixXd data_jacobian(const Eigen::VectorXd& th,
+                                const std::vector<Eigen::MatrixXd>& dq) const {
+    Eigen::MatrixXd rad, drad, rrad, drrad;
+    radiance(data_.temperatures_c, th.segment(furnace_offset(), nt_), rad, drad);
+    Eigen::VectorXd ref_offsets(nr_);
+    for (Eigen::Index r = 0; r < nr_; ++r) ref_offsets[r] = th[reference_offset() + 2 * r + 1];
+    radiance(ref_t_, ref_offsets, rrad, drrad);
+    std::vector<Eigen::RowVectorXd> rows;
+    for (int b = 0; b < nb_; ++b) {
+      const double kg = gain(b, th) * g(b);
+      for (Eigen::Index i : p_.valid[b])
+        rows.push_back(kg / (o_.relative_noise * data_.rates(b, i)) * rad.row(i) * dq[b]);
+      for (Eigen::Index r = 0; r < nr_; ++r) {
+        const double m = data_.references[r].rates[b];
+        if (!usable(m)) continue;
+        const double scale = portable::exp(th[reference_offset() + 2 * r]);
+        rows.push_back(kg * scale / (o_.relative_noise * m) * rrad.row(r) * dq[b]);
+      }
+    }
+    Eigen::MatrixXd j(static_cast<Eigen::Index>(rows.size()), dq.empty() ? 0 : dq[0].cols());
+    for (std::size_t r = 0; r < rows.size(); ++r) j.row(static_cast<Eigen::Index>(r)) = rows[r];
+    return j;
+  }
+
+
   // rms relative misfit of the furnace rates.
   double data_rms(const Eigen::VectorXd& th) const {
     Eigen::MatrixXd rad, drad;
@@ -379,8 +406,55 @@ int levenberg_marquardt(const RegularisedModel& model, Eigen::VectorXd& th, int 
   return it;
 }
 
-// Draws theta ~ N(theta*, (J^T J)^-1) over the free parameters (leak bumps clamped at zero).
+// Shape changes the model's parameters cannot make (a filter edge's exact form, a coating's
+// ripple, a leak's shape): each band's QE times raised-cosine bumps along the wavelengths, each
+// bump's relative amplitude an independent N(0, sigma^2). They are not fitted (the data cannot
+// tell them from the parameters in the furnace range) but they join the posterior: where the
+// furnace sees them they are held by the data, where it does not they keep their prior spread,
+// which is what a reading far above the furnace range does not know.
+struct Discrepancy {
+  std::vector<Eigen::MatrixXd> dq;  // per band: d Q_b / d delta, wavelengths x parameters
+  Eigen::VectorXd sigma;
+};
+
+Discrepancy discrepancy_basis(const CameraProfile& profile, const Eigen::MatrixXd& qe,
+                              const RegularisedOptions& o) {
+  Discrepancy d;
+  const auto bands = qe.rows();
+  const double spacing = o.discrepancy_spacing_nm;
+  if (o.discrepancy_sigma <= 0 || spacing <= 0) return d;
+  const Eigen::ArrayXd nm = profile.grid.nm().array();
+  std::vector<std::pair<Eigen::Index, Eigen::VectorXd>> columns;  // band, d Q_b
+  for (double c = profile.grid.start_nm(); c <= profile.grid.stop_nm() + 1e-9; c += spacing) {
+    const Eigen::ArrayXd x = ((nm - c) / spacing).abs();
+    const Eigen::ArrayXd bump = (x < 1).select(0.5 + 0.5 * (M_PI * x).cos(), 0.0);
+    for (Eigen::Index b = 0; b < bands; ++b) {
+      const Eigen::VectorXd change = (qe.row(b).transpose().array() * bump).matrix();
+      if (change.maxCoeff() > 1e-3 * qe.row(b).maxCoeff()) columns.emplace_back(b, change);
+    }
+  }
+  const auto m = static_cast<Eigen::Index>(columns.size());
+  // Leaks of any shape outside the pass band, common to all bands (additive transmission).
+  std::vector<int> side;
+  const Eigen::MatrixXd leak = o.discrepancy_leak > 0
+                                   ? leak_basis(profile, o.discrepancy_leak_spacing_nm, side)
+                                   : Eigen::MatrixXd(qe.cols(), 0);
+  d.dq.assign(static_cast<std::size_t>(bands), Eigen::MatrixXd::Zero(qe.cols(), m + leak.cols()));
+  for (Eigen::Index k = 0; k < m; ++k)
+    d.dq[static_cast<std::size_t>(columns[k].first)].col(k) = columns[k].second;
+  for (Eigen::Index b = 0; b < bands; ++b)
+    d.dq[static_cast<std::size_t>(b)].rightCols(leak.cols()) =
+        leak.array().colwise() * profile.sensor_qe.row(b).transpose().array();
+  d.sigma.resize(m + leak.cols());
+  d.sigma.head(m).setConstant(o.discrepancy_sigma);
+  d.sigma.tail(leak.cols()).setConstant(o.discrepancy_leak);
+  return d;
+}
+
+// Draws theta ~ N(theta*, (J^T J)^-1) over the free parameters (leak bumps clamped at zero),
+// jointly with the discrepancy's shape changes.
 std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eigen::VectorXd& th,
+                                        const CameraProfile& profile,
                                         const RegularisedOptions& o) {
   std::vector<QeSample> out;
   if (o.posterior_samples <= 0) return out;
@@ -392,18 +466,26 @@ std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eig
   // correlations that keep a sample on the data.
   for (Eigen::Index k = 0; k < model.size(); ++k)
     if (!model.fixed(k) && !(model.bounded(k) && th[k] <= 0)) free.push_back(k);
-  const auto nf = static_cast<Eigen::Index>(free.size());
-  Eigen::MatrixXd jf(jac.rows(), nf);
-  for (Eigen::Index c = 0; c < nf; ++c) jf.col(c) = jac.col(free[c]);
-  Eigen::MatrixXd h = jf.transpose() * jf;
+  const int bands = model.band_count();
+  Eigen::MatrixXd fitted(bands, model.wavelengths());
+  for (int b = 0; b < bands; ++b) fitted.row(b) = model.qe(b, th).transpose();
+  const Discrepancy shape = discrepancy_basis(profile, fitted, o);
+  const Eigen::MatrixXd jd = shape.dq.empty() ? Eigen::MatrixXd(jac.rows(), 0)
+                                              : model.data_jacobian(th, shape.dq);
+  const auto nf = static_cast<Eigen::Index>(free.size()), nd = jd.cols();
+  // Data rows come first in the residual vector; the parameters' priors follow.
+  Eigen::MatrixXd ja = Eigen::MatrixXd::Zero(jac.rows() + nd, nf + nd);
+  for (Eigen::Index c = 0; c < nf; ++c) ja.col(c).head(jac.rows()) = jac.col(free[c]);
+  ja.block(0, nf, jd.rows(), nd) = jd;
+  for (Eigen::Index k = 0; k < nd; ++k) ja(jac.rows() + k, nf + k) = 1 / shape.sigma[k];
+  Eigen::MatrixXd h = ja.transpose() * ja;
   h.diagonal().array() += 1e-9 * (h.diagonal().array() + 1e-12);
   const Eigen::LLT<Eigen::MatrixXd> llt(h);
   if (llt.info() != Eigen::Success) return out;
   Random rng(mix(o.posterior_seed));
-  const int bands = static_cast<int>(model.band_count());
   for (int s = 0; s < o.posterior_samples; ++s) {
-    Eigen::VectorXd z(nf);
-    for (Eigen::Index c = 0; c < nf; ++c) z[c] = rng.normal();
+    Eigen::VectorXd z(nf + nd);
+    for (Eigen::Index c = 0; c < nf + nd; ++c) z[c] = rng.normal();
     const Eigen::VectorXd delta = llt.matrixU().solve(z);  // covariance (U^T U)^-1
     Eigen::VectorXd sample = th;
     for (Eigen::Index c = 0; c < nf; ++c) sample[free[c]] += delta[c];
@@ -413,7 +495,11 @@ std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eig
     q.system_qe.resize(bands, model.wavelengths());
     q.gains.resize(bands);
     for (int b = 0; b < bands; ++b) {
-      q.system_qe.row(b) = model.qe(b, sample).cwiseMin(1.0).transpose();
+      // The shape changes are a linear model, not clamped: a negative leak where the QE is
+      // zero would otherwise become a one-sided change the data never saw.
+      Eigen::VectorXd qb = model.qe(b, sample).cwiseMin(1.0);
+      if (nd > 0) qb += shape.dq[static_cast<std::size_t>(b)] * delta.tail(nd);
+      q.system_qe.row(b) = qb.transpose();
       q.gains[b] = model.gain(b, sample);
     }
     out.push_back(std::move(q));
@@ -450,7 +536,7 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
     r.gains[b] = model.gain(b, th);
   }
   r.diagnostics.iterations = iterations;
-  r.posterior = posterior_samples(model, th, options);
+  r.posterior = posterior_samples(model, th, profile, options);
   finish(profile, p, data, start, r);
   return r;
 }
