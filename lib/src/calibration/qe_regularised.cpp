@@ -142,6 +142,16 @@ class RegularisedModel {
     return qe(b, th, optics(th), nullptr);
   }
 
+  // The first-order change of Q_b for a parameter change `step` (all parameters).
+  Eigen::VectorXd qe_change(int b, const Eigen::VectorXd& th, const Eigen::VectorXd& step) const {
+    Eigen::MatrixXd dopt, dq;
+    qe(b, th, optics(th, &dopt), &dopt, &dq);
+    Eigen::VectorXd p(dq.cols());
+    p << step.segment(nb_ + b * kPerBand, kPerBand), step.segment(common_offset(), kCommon),
+        step.segment(leak_offset(), nk_);
+    return dq * p;
+  }
+
   // Residual vector and Jacobian at theta (gain k_b = gain0_b * exp(theta_b)).
   void evaluate(const Eigen::VectorXd& th, Eigen::VectorXd& res, Eigen::MatrixXd* jac) const {
     std::vector<double> rv;
@@ -223,7 +233,6 @@ class RegularisedModel {
     for (std::size_t r = 0; r < rows.size(); ++r) j.row(static_cast<Eigen::Index>(r)) = rows[r];
     return j;
   }
-
 
   // rms relative misfit of the furnace rates.
   double data_rms(const Eigen::VectorXd& th) const {
@@ -451,11 +460,10 @@ Discrepancy discrepancy_basis(const CameraProfile& profile, const Eigen::MatrixX
   return d;
 }
 
-// Draws theta ~ N(theta*, (J^T J)^-1) over the free parameters (leak bumps clamped at zero),
-// jointly with the discrepancy's shape changes.
+// Draws theta ~ N(theta*, (J^T J)^-1) over the free parameters, jointly with the
+// discrepancy's shape changes.
 std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eigen::VectorXd& th,
-                                        const CameraProfile& profile,
-                                        const RegularisedOptions& o) {
+                                        const CameraProfile& profile, const RegularisedOptions& o) {
   std::vector<QeSample> out;
   if (o.posterior_samples <= 0) return out;
   Eigen::VectorXd res;
@@ -470,8 +478,8 @@ std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eig
   Eigen::MatrixXd fitted(bands, model.wavelengths());
   for (int b = 0; b < bands; ++b) fitted.row(b) = model.qe(b, th).transpose();
   const Discrepancy shape = discrepancy_basis(profile, fitted, o);
-  const Eigen::MatrixXd jd = shape.dq.empty() ? Eigen::MatrixXd(jac.rows(), 0)
-                                              : model.data_jacobian(th, shape.dq);
+  const Eigen::MatrixXd jd =
+      shape.dq.empty() ? Eigen::MatrixXd(jac.rows(), 0) : model.data_jacobian(th, shape.dq);
   const auto nf = static_cast<Eigen::Index>(free.size()), nd = jd.cols();
   // Data rows come first in the residual vector; the parameters' priors follow.
   Eigen::MatrixXd ja = Eigen::MatrixXd::Zero(jac.rows() + nd, nf + nd);
@@ -487,20 +495,19 @@ std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eig
     Eigen::VectorXd z(nf + nd);
     for (Eigen::Index c = 0; c < nf + nd; ++c) z[c] = rng.normal();
     const Eigen::VectorXd delta = llt.matrixU().solve(z);  // covariance (U^T U)^-1
-    Eigen::VectorXd sample = th;
-    for (Eigen::Index c = 0; c < nf; ++c) sample[free[c]] += delta[c];
-    for (Eigen::Index k = 0; k < model.size(); ++k)
-      if (model.bounded(k)) sample[k] = std::max(sample[k], 0.0);
+    Eigen::VectorXd step = Eigen::VectorXd::Zero(model.size());
+    for (Eigen::Index c = 0; c < nf; ++c) step[free[c]] = delta[c];
+    // The sample is taken to first order, as the approximation is: the parameters and the
+    // shape changes trade against each other along directions the data hold, and the model's
+    // own nonlinearity (clamps, warps) would break that balance and leave samples off the data.
     QeSample q;
     q.system_qe.resize(bands, model.wavelengths());
     q.gains.resize(bands);
     for (int b = 0; b < bands; ++b) {
-      // The shape changes are a linear model, not clamped: a negative leak where the QE is
-      // zero would otherwise become a one-sided change the data never saw.
-      Eigen::VectorXd qb = model.qe(b, sample).cwiseMin(1.0);
+      Eigen::VectorXd qb = fitted.row(b).transpose() + model.qe_change(b, th, step);
       if (nd > 0) qb += shape.dq[static_cast<std::size_t>(b)] * delta.tail(nd);
       q.system_qe.row(b) = qb.transpose();
-      q.gains[b] = model.gain(b, sample);
+      q.gains[b] = model.gain(b, th) * (1 + step[b]);
     }
     out.push_back(std::move(q));
   }
