@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 #include "calibration/stage_support.h"
 #include "detail/random.h"
@@ -46,14 +44,6 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
     int n = 0;
     for (const QeSample& s : posterior) {
       const double d = read(CameraModel{fitted.profile, s.system_qe, s.gains}, t) - nominal;
-      if (getenv("DBG") && t < 1000 && n < 6) {
-        Eigen::VectorXd a = CameraModel{fitted.profile, s.system_qe, s.gains}.rates(t),
-                        f = fitted.rates(t);
-        a *= 150 / a.maxCoeff();
-        f *= 150 / f.maxCoeff();
-        fprintf(stderr, "t %.0f d %.2f sample %.3f %.3f %.3f fitted %.3f %.3f %.3f\n", t, d, a[0],
-                a[1], a[2], f[0], f[1], f[2]);
-      }
       if (!std::isfinite(d)) continue;
       sum += d, sum2 += d * d, ++n;
     }
