@@ -22,9 +22,9 @@ UncertaintyModel uncertainty_model(const ThermalModel& model, const std::vector<
                                    const std::vector<ReferenceRates>& references = {});
 
 // Standard uncertainty at every temperature of what the QE leaves open: the spread (std) of the
-// readings that `fitted`'s locus gives for the rates of each plausible camera in `posterior`
-// (QeFitResult::posterior). Small inside the furnace range, growing where the data do not
-// constrain the QE. Empty without samples.
+// readings that `fitted`'s likelihood fit gives for a well exposed pixel of each plausible
+// camera in `posterior` (QeFitResult::posterior). Small inside the furnace range, growing where
+// the data do not constrain the QE. Empty without samples.
 std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
                                          const std::vector<QeSample>& posterior,
                                          const std::vector<double>& temperatures_c);

@@ -107,7 +107,8 @@ struct QeFitDiagnostics {
   double wall_time_s = 0;
 };
 
-// One plausible camera: a system QE and its band gains.
+// One plausible camera: a system QE and its band gains. A first-order sample around the fit:
+// the QE may dip slightly below 0 where the fit's is 0 (it is only read, never shown).
 struct QeSample {
   Eigen::MatrixXd system_qe;
   Eigen::VectorXd gains;
