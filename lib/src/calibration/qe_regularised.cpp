@@ -142,14 +142,17 @@ class RegularisedModel {
     return qe(b, th, optics(th), nullptr);
   }
 
-  // The first-order change of Q_b for a parameter change `step` (all parameters).
-  Eigen::VectorXd qe_change(int b, const Eigen::VectorXd& th, const Eigen::VectorXd& step) const {
+  // d Q_b / d theta at theta over the parameters that shape Q_b (qe_parameters picks them).
+  Eigen::MatrixXd qe_jacobian(int b, const Eigen::VectorXd& th) const {
     Eigen::MatrixXd dopt, dq;
     qe(b, th, optics(th, &dopt), &dopt, &dq);
-    Eigen::VectorXd p(dq.cols());
-    p << step.segment(nb_ + b * kPerBand, kPerBand), step.segment(common_offset(), kCommon),
-        step.segment(leak_offset(), nk_);
-    return dq * p;
+    return dq;
+  }
+  Eigen::VectorXd qe_parameters(int b, const Eigen::VectorXd& th) const {
+    Eigen::VectorXd p(kPerBand + kCommon + nk_);
+    p << th.segment(nb_ + b * kPerBand, kPerBand), th.segment(common_offset(), kCommon),
+        th.segment(leak_offset(), nk_);
+    return p;
   }
 
   // Residual vector and Jacobian at theta (gain k_b = gain0_b * exp(theta_b)).
@@ -419,8 +422,8 @@ int levenberg_marquardt(const RegularisedModel& model, Eigen::VectorXd& th, int 
 // ripple, a leak's shape): each band's QE times raised-cosine bumps along the wavelengths, each
 // bump's relative amplitude an independent N(0, sigma^2). They are not fitted (the data cannot
 // tell them from the parameters in the furnace range) but they join the posterior: where the
-// furnace sees them they are held by the data, where it does not they keep their prior spread,
-// which is what a reading far above the furnace range does not know.
+// furnace sees them they are held by the data, where it does not they keep their prior spread:
+// the uncertainty of a reading far above the furnace range.
 struct Discrepancy {
   std::vector<Eigen::MatrixXd> dq;  // per band: d Q_b / d delta, wavelengths x parameters
   Eigen::VectorXd sigma;
@@ -477,6 +480,8 @@ std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eig
   const int bands = model.band_count();
   Eigen::MatrixXd fitted(bands, model.wavelengths());
   for (int b = 0; b < bands; ++b) fitted.row(b) = model.qe(b, th).transpose();
+  std::vector<Eigen::MatrixXd> dq_dtheta;
+  for (int b = 0; b < bands; ++b) dq_dtheta.push_back(model.qe_jacobian(b, th));
   const Discrepancy shape = discrepancy_basis(profile, fitted, o);
   const Eigen::MatrixXd jd =
       shape.dq.empty() ? Eigen::MatrixXd(jac.rows(), 0) : model.data_jacobian(th, shape.dq);
@@ -504,7 +509,8 @@ std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eig
     q.system_qe.resize(bands, model.wavelengths());
     q.gains.resize(bands);
     for (int b = 0; b < bands; ++b) {
-      Eigen::VectorXd qb = fitted.row(b).transpose() + model.qe_change(b, th, step);
+      Eigen::VectorXd qb = fitted.row(b).transpose() +
+                           dq_dtheta[static_cast<std::size_t>(b)] * model.qe_parameters(b, step);
       if (nd > 0) qb += shape.dq[static_cast<std::size_t>(b)] * delta.tail(nd);
       q.system_qe.row(b) = qb.transpose();
       q.gains[b] = model.gain(b, th) * (1 + step[b]);
