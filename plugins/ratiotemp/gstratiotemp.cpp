@@ -66,7 +66,10 @@
  * temperature, in the same encoding: 0.1 K per code (a temperature difference, no offset),
  * 0 = no reading, at least 1 where there is a reading. To get both, split the bands with tee
  * into two ratiotemp elements (see below). The uncertainty costs 2 x bands extra estimates
- * per pixel.
+ * per pixel. Frames taken at an analogue gain (the gain_db of their PyrocamExposureMeta, which
+ * pyrocamsrc attaches; 0 dB without one) carry that much more shot noise per DN: the noise model
+ * behind the likelihood weights, the band-consistency check and the uncertainty follows each
+ * frame's gain. Readings by ratio do not depend on it.
  *
  * Every #GstRatioTemp:stats-interval nanoseconds of buffer timestamps (0 = off) the element
  * posts an element message "pyrocam-temperature-stats" with statistics of the frame's
@@ -145,6 +148,7 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
+#include "pyrocam-meta.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/model.h"
@@ -575,6 +579,9 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         for (int b = 0; b < st.bands; ++b)
           st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
         pyrocam::PlaneEstimator& chosen = st.estimators->estimator(st.method);
+        // The frame's gain scales its shot noise per DN; rebuilt only when it changes.
+        const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(inbuf);
+        chosen.set_analogue_gain(meta ? std::pow(10.0, meta->gain_db / 20) : 1.0);
         chosen.set_misfit_probability(settings.misfit_probability);
         chosen.set_partial_bands(settings.allow_partial ||
                                          settings.partial_bands == GST_RATIO_TEMP_PARTIAL_ANY
