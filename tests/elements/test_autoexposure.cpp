@@ -199,6 +199,55 @@ TEST(AutoExposure, ACameraWithoutExposureGetsAWarningAndTheStreamRunsOn) {
   EXPECT_NE(r.warnings[0].find("videotestsrc0"), std::string::npos) << r.warnings[0];
 }
 
+// A camera with an exposure property and no gain: videotestsrc with a double "exposure" (us)
+// added, registered as "exposureonlysrc".
+double g_test_exposure_us = 1000;
+
+void exposure_only_set(GObject*, guint, const GValue* value, GParamSpec*) {
+  g_test_exposure_us = g_value_get_double(value);
+}
+void exposure_only_get(GObject*, guint, GValue* value, GParamSpec*) {
+  g_value_set_double(value, g_test_exposure_us);
+}
+
+bool register_exposure_only_source() {
+  const GType parent = g_type_from_name("GstVideoTestSrc");
+  if (!parent) return false;
+  GTypeQuery query;
+  g_type_query(parent, &query);
+  // GObject sends a property to the class that installed it: the parent's stay the parent's.
+  const GType type = g_type_register_static_simple(
+      parent, "TestExposureOnlySrc", query.class_size,
+      [](gpointer klass, gpointer) {
+        GObjectClass* object_class = G_OBJECT_CLASS(klass);
+        object_class->set_property = exposure_only_set;
+        object_class->get_property = exposure_only_get;
+        g_object_class_install_property(
+            object_class, 1000,
+            g_param_spec_double("exposure", "Exposure", "us", 0, 1e7, 1000,
+                                static_cast<GParamFlags>(G_PARAM_READWRITE)));
+      },
+      query.instance_size, nullptr, static_cast<GTypeFlags>(0));
+  return gst_element_register(nullptr, "exposureonlysrc", GST_RANK_NONE, type);
+}
+
+TEST(AutoExposure, ACameraWithoutGainGetsOneWarningAndExposureControlOnly) {
+  REQUIRE_ELEMENT("autoexposure");
+  REQUIRE_ELEMENT("videotestsrc");
+  ASSERT_TRUE(register_exposure_only_source());
+  // White bars above the 8-bit saturation level: every frame steps the exposure down.
+  const RunResult r =
+      run("exposureonlysrc num-buffers=4 ! video/x-raw,format=GRAY8,width=64,height=48 ! "
+          "autoexposure max-gain=12 ! fakesink name=sink",
+          0, 0, 0);
+  EXPECT_TRUE(r.eos);
+  EXPECT_EQ(r.levels.size(), 4u);
+  ASSERT_EQ(r.warnings.size(), 1u);  // once, not every frame
+  EXPECT_NE(r.warnings[0].find("has no gain property"), std::string::npos) << r.warnings[0];
+  EXPECT_NE(r.warnings[0].find("exposureonlysrc0"), std::string::npos) << r.warnings[0];
+  EXPECT_LT(g_test_exposure_us, 1000 / 8.0 + 1e-9);  // the exposure is still controlled
+}
+
 TEST(AutoExposure, AnExposureOutsideTheRangeIsClampedWithAWarning) {
   REQUIRE_ELEMENT("autoexposure");
   // 2500 degC with at least 5 us: always saturated, so it wants shorter than it may.
