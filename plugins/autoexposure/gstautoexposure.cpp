@@ -18,24 +18,41 @@
  * latency, without oscillating. Frames without the meta (aravissrc) are taken with the
  * exposure last set after #GstAutoExposure:latency frames; no change is made meanwhile. A
  * saturated level steps down by #GstAutoExposure:max-step at once. Within
- * #GstAutoExposure:tolerance of the target nothing changes. Every change posts an element
- * message "pyrocam-exposure" (exposure-us, previous-us, level-dn, clamped).
+ * #GstAutoExposure:tolerance of the target nothing changes.
+ *
+ * With #GstAutoExposure:max-gain above 0 dB the camera's `gain` property (dB; pyrocamsrc and
+ * aravissrc have one) is set too: the exposure alone (gain 0 dB) up to
+ * #GstAutoExposure:max-exposure, and only when the exposure is at its longest and the level still
+ * below the target, the gain, up to #GstAutoExposure:max-gain. A too bright scene brings the gain
+ * back to 0 dB before the exposure shortens. The dead-beat step then works on the brightness,
+ * exposure times gain factor, with each frame's own exposure and gain from its meta. A camera
+ * without a double `gain` property gets one warning and exposure control only. With max-gain 0
+ * (the default) the gain is left as it is.
+ *
+ * Every change posts an element message "pyrocam-exposure" (exposure-us, previous-us, gain-db,
+ * previous-gain-db, level-dn, saturated, clamped, timestamp).
  *
  * The camera is the element named #GstAutoExposure:camera, else the first element upstream
  * that has no sink pad. One without a double `exposure` property gets a warning and no control
  * (frames still pass). Exposures outside #GstAutoExposure:min-exposure..
- * #GstAutoExposure:max-exposure (and the property's own range) are clamped, with a warning
- * once each time the limit is reached. Gain is left as it is.
+ * #GstAutoExposure:max-exposure and gains above #GstAutoExposure:max-gain (and the properties'
+ * own ranges) are clamped, with a warning once each time the limit is reached.
  *
  * ## Example launch line
  * |[
  * gst-launch-1.0 aravissrc exposure=2000 ! video/x-bayer,format=rggb ! \
  *     autoexposure dark-level=12 max-exposure=20000 ! darksub dark-level=12 ! demosaic25 ! \
  *     ratiotemp model=model.json ! fakesink
+ * ]| With gain once the exposure is at 20 ms, up to 12 dB:
+ * |[
+ * gst-launch-1.0 pyrocamsrc scene=plate temperature=900 exposure=1000 ! \
+ *     autoexposure dark-level=50 max-exposure=20000 max-gain=12 ! darksub dark-level=50 ! \
+ *     demosaic25 ! ratiotemp model=model.json ! fakesink
  * ]|
  */
 #include "gstautoexposure.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -64,6 +81,7 @@ enum {
   PROP_TOLERANCE,
   PROP_LATENCY,
   PROP_CAMERA,
+  PROP_MAX_GAIN,
 };
 
 constexpr const char* EXPOSURE_MESSAGE = "pyrocam-exposure";
@@ -76,6 +94,8 @@ constexpr double DEFAULT_MAX_EXPOSURE = 1e6;
 constexpr double DEFAULT_MAX_STEP = 8;
 constexpr double DEFAULT_TOLERANCE = 0.1;
 constexpr guint DEFAULT_LATENCY = 3;
+constexpr double DEFAULT_MAX_GAIN = 0;  // dB: the gain is left as it is
+constexpr double MAX_MAX_GAIN = 48;
 
 struct Settings {
   double target = DEFAULT_TARGET;
@@ -85,6 +105,7 @@ struct Settings {
   double max_step = DEFAULT_MAX_STEP;
   double tolerance = DEFAULT_TOLERANCE;
   guint latency = DEFAULT_LATENCY;
+  double max_gain_db = DEFAULT_MAX_GAIN;
   std::string camera;  // element name; empty: the first source upstream
   guint serial = 0;    // bumped by every change
 };
@@ -95,6 +116,9 @@ struct State {
   GstElement* camera = nullptr;  // owned reference; null: not looked for yet or none
   bool camera_looked_up = false;
   double property_min_us = 0, property_max_us = G_MAXDOUBLE;
+  bool has_gain = false;  // the camera has a writable double `gain` property
+  double gain_property_min_db = 0, gain_property_max_db = G_MAXDOUBLE;
+  bool warned_no_gain = false;
   std::unique_ptr<pyrocam::ExposureController> controller;
   guint serial = G_MAXUINT;
   bool warned_limit = false;
@@ -187,8 +211,44 @@ static void look_up_camera(GstAutoExposure* self, const Settings& settings) {
   }
   st.property_min_us = G_PARAM_SPEC_DOUBLE(spec)->minimum;
   st.property_max_us = G_PARAM_SPEC_DOUBLE(spec)->maximum;
+  GParamSpec* gain = g_object_class_find_property(G_OBJECT_GET_CLASS(camera), "gain");
+  st.has_gain = gain && G_PARAM_SPEC_VALUE_TYPE(gain) == G_TYPE_DOUBLE &&
+                (gain->flags & G_PARAM_WRITABLE) && (gain->flags & G_PARAM_READABLE);
+  if (st.has_gain) {
+    st.gain_property_min_db = G_PARAM_SPEC_DOUBLE(gain)->minimum;
+    st.gain_property_max_db = G_PARAM_SPEC_DOUBLE(gain)->maximum;
+  }
   st.camera = camera;
-  GST_INFO_OBJECT(self, "controlling the exposure of %s", GST_OBJECT_NAME(camera));
+  GST_INFO_OBJECT(self, "controlling the exposure of %s (%s gain property)",
+                  GST_OBJECT_NAME(camera), st.has_gain ? "with a" : "without");
+}
+
+/* The controller's settings from the properties and the camera's property ranges. */
+static pyrocam::ExposureControlSettings controller_settings(GstAutoExposure* self,
+                                                            const Settings& settings) {
+  State& st = *self->state;
+  pyrocam::ExposureControlSettings c;
+  c.target = settings.target;
+  c.dark_dn = settings.dark_level;
+  c.saturation_dn = st.saturation_dn;
+  // The camera property's range too: a value outside it would not be set at all.
+  c.min_exposure_us = std::max({settings.min_exposure_us, st.property_min_us, 1e-3});
+  c.max_exposure_us = std::min(settings.max_exposure_us, st.property_max_us);
+  c.max_step = settings.max_step;
+  c.tolerance = settings.tolerance;
+  c.latency_frames = static_cast<int>(settings.latency);
+  // Gain 0 dB must be settable for the exposure-first rule; else exposure control only.
+  const bool gain_usable = st.has_gain && st.gain_property_min_db <= 0;
+  if (settings.max_gain_db > 0 && !gain_usable && !st.warned_no_gain) {
+    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                        ("Camera %s has no gain property (a writable number of dB from 0): "
+                         "max-gain is ignored, only the exposure is controlled",
+                         GST_OBJECT_NAME(st.camera)),
+                        ("element type %s", G_OBJECT_TYPE_NAME(st.camera)));
+    st.warned_no_gain = true;
+  }
+  c.max_gain_db = gain_usable ? std::min(settings.max_gain_db, st.gain_property_max_db) : 0.0;
+  return c;
 }
 
 static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, GstBuffer* buffer) {
@@ -198,26 +258,19 @@ static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, Gst
   if (!st.camera_looked_up) look_up_camera(self, settings);
   if (!st.camera) return GST_FLOW_OK;
   if (settings.serial != st.serial) {
-    pyrocam::ExposureControlSettings c;
-    c.target = settings.target;
-    c.dark_dn = settings.dark_level;
-    c.saturation_dn = st.saturation_dn;
-    // The camera property's range too: a value outside it would not be set at all.
-    c.min_exposure_us = std::max({settings.min_exposure_us, st.property_min_us, 1e-3});
-    c.max_exposure_us = std::min(settings.max_exposure_us, st.property_max_us);
-    c.max_step = settings.max_step;
-    c.tolerance = settings.tolerance;
-    c.latency_frames = static_cast<int>(settings.latency);
+    const pyrocam::ExposureControlSettings c = controller_settings(self, settings);
     if (!PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "Bad exposure control settings",
                          [&] { st.controller = std::make_unique<pyrocam::ExposureController>(c); }))
       return GST_FLOW_ERROR;
     st.serial = settings.serial;
   }
-  std::optional<double> frame_exposure;
+  const bool controls_gain = st.controller->settings().max_gain_db > 0;
+  std::optional<pyrocam::ExposureSetting> frame;
   if (const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(buffer))
-    frame_exposure = meta->exposure_us;
-  double current_us = 0;
-  g_object_get(st.camera, "exposure", &current_us, nullptr);
+    frame = pyrocam::ExposureSetting{meta->exposure_us, meta->gain_db};
+  pyrocam::ExposureSetting current;
+  g_object_get(st.camera, "exposure", &current.exposure_us, nullptr);
+  if (st.has_gain) g_object_get(st.camera, "gain", &current.gain_db, nullptr);
   pyrocam::HotLevel level;
   std::optional<pyrocam::ExposureCommand> command;
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not measure the frame", [&] {
@@ -225,31 +278,41 @@ static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, Gst
         image.map_raw(buffer, st.format);
         level = pyrocam::hot_level(image.image(), static_cast<int>(settings.hot_pixels),
                                    st.saturation_dn);
-        command = st.controller->update(level, frame_exposure, current_us);
+        command = st.controller->update(level, frame, current);
       }))
     return GST_FLOW_ERROR;
   if (st.controller->at_limit() && !st.warned_limit) {
-    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
-                        ("The exposure wanted is outside the camera's range %g..%g us: clamped "
-                         "(the hottest region reads %g DN)",
-                         st.controller->settings().min_exposure_us,
-                         st.controller->settings().max_exposure_us, level.level_dn),
-                        ("exposure clamped"));
+    GST_ELEMENT_WARNING(
+        self, RESOURCE, SETTINGS,
+        ("The exposure wanted is outside the camera's range %g..%g us (gain up "
+         "to %g dB): clamped (the hottest region reads %g DN)",
+         st.controller->settings().min_exposure_us, st.controller->settings().max_exposure_us,
+         st.controller->settings().max_gain_db, level.level_dn),
+        ("exposure clamped"));
   }
   st.warned_limit = st.controller->at_limit();
   if (!command) return GST_FLOW_OK;
-  const double previous = frame_exposure.value_or(current_us);
-  GST_DEBUG_OBJECT(self, "level %g DN%s: exposure %g -> %g us", level.level_dn,
-                   level.clipped ? " (saturated)" : "", previous, command->exposure_us);
-  g_object_set(st.camera, "exposure", command->exposure_us, nullptr);
+  const pyrocam::ExposureSetting previous = frame.value_or(current);
+  GST_DEBUG_OBJECT(self, "level %g DN%s: exposure %g -> %g us, gain %g -> %g dB", level.level_dn,
+                   level.clipped ? " (saturated)" : "", previous.exposure_us, command->exposure_us,
+                   previous.gain_db, command->gain_db);
+  if (controls_gain) {
+    const double gain =
+        std::clamp(command->gain_db, st.gain_property_min_db, st.gain_property_max_db);
+    g_object_set(st.camera, "exposure", command->exposure_us, "gain", gain, nullptr);
+  } else {
+    g_object_set(st.camera, "exposure", command->exposure_us, nullptr);
+  }
   gst_element_post_message(
       GST_ELEMENT(self),
       gst_message_new_element(
           GST_OBJECT(self),
           gst_structure_new(EXPOSURE_MESSAGE, "exposure-us", G_TYPE_DOUBLE, command->exposure_us,
-                            "previous-us", G_TYPE_DOUBLE, previous, "level-dn", G_TYPE_DOUBLE,
-                            level.level_dn, "saturated", G_TYPE_BOOLEAN, level.clipped, "clamped",
-                            G_TYPE_BOOLEAN, command->clamped, "timestamp", G_TYPE_UINT64,
+                            "previous-us", G_TYPE_DOUBLE, previous.exposure_us, "gain-db",
+                            G_TYPE_DOUBLE, command->gain_db, "previous-gain-db", G_TYPE_DOUBLE,
+                            previous.gain_db, "level-dn", G_TYPE_DOUBLE, level.level_dn,
+                            "saturated", G_TYPE_BOOLEAN, level.clipped, "clamped", G_TYPE_BOOLEAN,
+                            command->clamped, "timestamp", G_TYPE_UINT64,
                             static_cast<guint64>(GST_BUFFER_PTS(buffer)), nullptr)));
   return GST_FLOW_OK;
 }
@@ -295,6 +358,9 @@ static void gst_auto_exposure_set_property(GObject* object, guint prop_id, const
     case PROP_LATENCY:
       s.latency = g_value_get_uint(value);
       break;
+    case PROP_MAX_GAIN:
+      s.max_gain_db = g_value_get_double(value);
+      break;
     case PROP_CAMERA: {
       const char* v = g_value_get_string(value);
       s.camera = v ? v : "";
@@ -336,6 +402,9 @@ static void gst_auto_exposure_get_property(GObject* object, guint prop_id, GValu
       break;
     case PROP_LATENCY:
       g_value_set_uint(value, s.latency);
+      break;
+    case PROP_MAX_GAIN:
+      g_value_set_double(value, s.max_gain_db);
       break;
     case PROP_CAMERA:
       g_value_set_string(value, s.camera.empty() ? nullptr : s.camera.c_str());
@@ -415,6 +484,13 @@ static void gst_auto_exposure_class_init(GstAutoExposureClass* klass) {
                         "for frames that do not carry their exposure (0..100)",
                         0, 100, DEFAULT_LATENCY, playing));
   g_object_class_install_property(
+      gobject_class, PROP_MAX_GAIN,
+      g_param_spec_double("max-gain", "Maximum gain",
+                          "Largest analogue gain to set on the camera's gain property, dB "
+                          "(0..48); the gain rises above 0 dB only with the exposure at "
+                          "max-exposure. 0: the gain is left as it is",
+                          0.0, MAX_MAX_GAIN, DEFAULT_MAX_GAIN, playing));
+  g_object_class_install_property(
       gobject_class, PROP_CAMERA,
       g_param_spec_string("camera", "Camera",
                           "Name of the element whose exposure property is set (empty: the first "
@@ -425,7 +501,8 @@ static void gst_auto_exposure_class_init(GstAutoExposureClass* klass) {
 
   gst_element_class_set_static_metadata(
       element_class, "Exposure control for thermal reading", "Filter/Analyzer/Video",
-      "Sets the camera's exposure so that the hottest region neither saturates nor goes dim",
+      "Sets the camera's exposure (and gain) so that the hottest region neither saturates nor "
+      "goes dim",
       "pyrocam developers");
   gst_element_class_add_static_pad_template(element_class, &sink_template);
   gst_element_class_add_static_pad_template(element_class, &src_template);

@@ -25,7 +25,10 @@
  * calibration tool's scene sequences: the hottest frames saturate, the coolest are dim).
  * #GstPyrocamSrc:bracket cycles frame by frame through exposure factors (e.g. "1,0.1": the
  * exposure, then a tenth of it) for thermalfuse, which reads each pixel from the most exposed
- * frame where it reads. Every frame carries the exposure it was taken with (PyrocamExposureMeta).
+ * frame where it reads. #GstPyrocamSrc:gain (dB) multiplies the signal of the collected charge,
+ * shot noise included, by 10^(gain/20); the read noise stays as it is in DN (simpler than a real
+ * sensor, whose read noise at the output grows partly with gain). Every frame carries the exposure
+ * and gain it was taken with (PyrocamExposureMeta).
  *
  * ## Example launch line
  * |[
@@ -66,12 +69,15 @@ enum {
   PROP_SEED,
   PROP_IS_LIVE,
   PROP_BRACKET,
+  PROP_GAIN,
 };
 
 constexpr GstPyrocamSrcScene DEFAULT_SCENE = GST_PYROCAM_SRC_SCENE_MELT_POOL;
 constexpr const char* DEFAULT_PROFILE = "rgb-reference";
 constexpr GstPyrocamSrcUnit DEFAULT_UNIT = GST_PYROCAM_SRC_UNIT_TYPICAL;
 constexpr double DEFAULT_EXPOSURE = 0.0;
+constexpr double DEFAULT_GAIN = 0.0;
+constexpr double MAX_GAIN = 24.0;
 constexpr double DEFAULT_TEMPERATURE = 1200.0;
 constexpr guint64 DEFAULT_SEED = 1;
 constexpr gboolean DEFAULT_IS_LIVE = FALSE;
@@ -92,6 +98,7 @@ struct Settings {
   std::string profile = DEFAULT_PROFILE;
   GstPyrocamSrcUnit unit = DEFAULT_UNIT;
   double exposure_us = DEFAULT_EXPOSURE;
+  double gain_db = DEFAULT_GAIN;
   double temperature_c = DEFAULT_TEMPERATURE;
   guint64 seed = DEFAULT_SEED;
   std::string bracket_text;     // as set
@@ -133,22 +140,6 @@ struct _GstPyrocamSrc {
 G_DEFINE_TYPE(GstPyrocamSrc, gst_pyrocam_src, GST_TYPE_PUSH_SRC);
 GST_ELEMENT_REGISTER_DEFINE(pyrocamsrc, "pyrocamsrc", GST_RANK_NONE, GST_TYPE_PYROCAM_SRC);
 
-GType gst_pyrocam_src_scene_get_type(void) {
-  static GType type = 0;
-  static const GEnumValue values[] = {
-      {GST_PYROCAM_SRC_SCENE_PLATE, "Plate at temperature filling the central 60 %", "plate"},
-      {GST_PYROCAM_SRC_SCENE_FILAMENT, "Vertical filament at temperature", "filament"},
-      {GST_PYROCAM_SRC_SCENE_MELT_POOL, "Melt pool (1500-2500 degC) crossing the frame",
-       "melt-pool"},
-      {0, nullptr, nullptr},
-  };
-  if (g_once_init_enter(&type)) {
-    GType t = g_enum_register_static("GstPyrocamSrcScene", values);
-    g_once_init_leave(&type, t);
-  }
-  return type;
-}
-
 namespace {
 const char* unit_name(GstPyrocamSrcUnit unit) {
   switch (unit) {
@@ -161,25 +152,6 @@ const char* unit_name(GstPyrocamSrcUnit unit) {
   }
 }
 }  // namespace
-
-GType gst_pyrocam_src_unit_get_type(void) {
-  static GType type = 0;
-  static const GEnumValue values[] = {
-      {GST_PYROCAM_SRC_UNIT_DATASHEET, "Exactly the profile's datasheet QE", "datasheet"},
-      {GST_PYROCAM_SRC_UNIT_TYPICAL, "A real unit's deviation from the datasheet (seeded)",
-       "typical"},
-      {GST_PYROCAM_SRC_UNIT_HOSTILE,
-       "Typical plus moved filter edges, narrow leaks, a sloping ND glass and band shape "
-       "changes (seeded)",
-       "hostile"},
-      {0, nullptr, nullptr},
-  };
-  if (g_once_init_enter(&type)) {
-    GType t = g_enum_register_static("GstPyrocamSrcUnit", values);
-    g_once_init_leave(&type, t);
-  }
-  return type;
-}
 
 static GstStaticPadTemplate src_template =
     GST_STATIC_PAD_TEMPLATE("src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_RAW_CAPS));
@@ -332,8 +304,8 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
   if (!st.camera || st.width == 0) return GST_FLOW_NOT_NEGOTIATED;
   const GstClockTime pts = gst_util_uint64_scale(
       st.frame, static_cast<guint64>(st.fps_d) * GST_SECOND, static_cast<guint64>(st.fps_n));
-  // Controlled properties (scene, exposure, temperature) take their values at the frame's time;
-  // the segment starts at 0, so that is its stream time.
+  // Controlled properties (scene, exposure, gain, temperature) take their values at the frame's
+  // time; the segment starts at 0, so that is its stream time.
   gst_object_sync_values(GST_OBJECT(self), pts);
   const Settings settings = copy_settings(self);
   const double emissivity = kScene.emissivity(scene_kind(settings.scene));
@@ -363,8 +335,8 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
         factor * (settings.exposure_us > 0
                       ? settings.exposure_us
                       : st.camera->exposure_for(nominal_c, kScene.target_dn, emissivity));
-    const cv::Mat raw = st.camera->render(*map, exposure, emissivity);
-    pyrocam_buffer_add_exposure_meta(buffer, exposure, 0.0);
+    const cv::Mat raw = st.camera->render(*map, exposure, emissivity, settings.gain_db);
+    pyrocam_buffer_add_exposure_meta(buffer, exposure, settings.gain_db);
     GstMapInfo info;
     if (!gst_buffer_map(buffer, &info, GST_MAP_WRITE))
       throw pyrocam::InputError("cannot map the output buffer");
@@ -421,6 +393,9 @@ static void gst_pyrocam_src_set_property(GObject* object, guint prop_id, const G
     case PROP_EXPOSURE:
       s.exposure_us = g_value_get_double(value);
       break;
+    case PROP_GAIN:
+      s.gain_db = g_value_get_double(value);
+      break;
     case PROP_TEMPERATURE:
       s.temperature_c = g_value_get_double(value);
       break;
@@ -470,6 +445,9 @@ static void gst_pyrocam_src_get_property(GObject* object, guint prop_id, GValue*
       break;
     case PROP_EXPOSURE:
       g_value_set_double(value, s.exposure_us);
+      break;
+    case PROP_GAIN:
+      g_value_set_double(value, s.gain_db);
       break;
     case PROP_TEMPERATURE:
       g_value_set_double(value, s.temperature_c);
@@ -532,6 +510,13 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
                           "brightest band 140 DN above dark at the scene's nominal temperature "
                           "(melt pool: 2000 degC)",
                           0.0, 1e7, DEFAULT_EXPOSURE, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_GAIN,
+      g_param_spec_double("gain", "Gain",
+                          "Analogue gain in dB (0..24): the collected charge's signal (shot noise "
+                          "included) times 10^(gain/20), the read noise in DN as at 0 dB (a real "
+                          "sensor's grows partly with gain); the automatic exposure is for 0 dB",
+                          0.0, MAX_GAIN, DEFAULT_GAIN, playing));
   g_object_class_install_property(
       gobject_class, PROP_BRACKET,
       g_param_spec_string(

@@ -66,7 +66,10 @@
  * temperature, in the same encoding: 0.1 K per code (a temperature difference, no offset),
  * 0 = no reading, at least 1 where there is a reading. To get both, split the bands with tee
  * into two ratiotemp elements (see below). The uncertainty costs 2 x bands extra estimates
- * per pixel.
+ * per pixel. Frames taken at an analogue gain (the gain_db of their PyrocamExposureMeta, which
+ * pyrocamsrc attaches; 0 dB without one) carry that much more shot noise per DN: the noise model
+ * behind the likelihood weights, the band-consistency check and the uncertainty follows each
+ * frame's gain. Readings by ratio do not depend on it.
  *
  * Every #GstRatioTemp:stats-interval nanoseconds of buffer timestamps (0 = off) the element
  * posts an element message "pyrocam-temperature-stats" with statistics of the frame's
@@ -134,7 +137,8 @@
  * ]|
  */
 /* The negotiation, the estimator switching and the streaming; the properties
- * (ratiotemp-properties.cpp) and the statistics message (ratiotemp-stats.cpp) are beside it. */
+ * (ratiotemp-properties.cpp), the caps' transforms and the output frame (ratiotemp-caps.cpp)
+ * and the statistics message (ratiotemp-stats.cpp) are beside it. */
 #include "gstratiotemp.h"
 
 #include <cmath>
@@ -145,6 +149,7 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
+#include "pyrocam-meta.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/model.h"
@@ -158,49 +163,6 @@ GST_DEBUG_CATEGORY(gst_ratio_temp_debug);
 namespace pg = pyrocam::gst;
 namespace rt = pyrocam::gst::ratiotemp;
 using rt::Settings;
-
-namespace {
-
-const char* layout_name(const pyrocam::ThermalModel& model) {
-  return model.profile().mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot
-             ? PYROCAM_SNAPSHOT_PATTERN_NAME
-             : "bayer";
-}
-
-pyrocam::MethodRequest to_library(GstRatioTempMethod m) {
-  switch (m) {
-    case GST_RATIO_TEMP_METHOD_MLP:
-      return pyrocam::MethodRequest::kMlp;
-    case GST_RATIO_TEMP_METHOD_LUT:
-      return pyrocam::MethodRequest::kLut;
-    case GST_RATIO_TEMP_METHOD_LIKELIHOOD:
-      return pyrocam::MethodRequest::kLikelihood;
-    default:
-      return pyrocam::MethodRequest::kAuto;
-  }
-}
-
-/* An output buffer mapped as a GRAY16_LE frame (rows at the video info's stride); unmaps when
- * it goes. */
-struct MappedFrame {
-  MappedFrame(GstBuffer* buffer, GstVideoInfo* info) {
-    if (!gst_video_frame_map(&frame, info, buffer, GST_MAP_WRITE))
-      throw pyrocam::InputError("cannot map a " + std::to_string(gst_buffer_get_size(buffer)) +
-                                "-byte buffer as a " + std::to_string(GST_VIDEO_INFO_WIDTH(info)) +
-                                "x" + std::to_string(GST_VIDEO_INFO_HEIGHT(info)) +
-                                " GRAY16_LE frame");
-    image = cv::Mat(GST_VIDEO_FRAME_HEIGHT(&frame), GST_VIDEO_FRAME_WIDTH(&frame), CV_16U,
-                    GST_VIDEO_FRAME_PLANE_DATA(&frame, 0),
-                    static_cast<std::size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0)));
-  }
-  ~MappedFrame() { gst_video_frame_unmap(&frame); }
-  MappedFrame(const MappedFrame&) = delete;
-  MappedFrame& operator=(const MappedFrame&) = delete;
-  GstVideoFrame frame;
-  cv::Mat image;
-};
-
-}  // namespace
 
 /* Streaming state: the model and its estimators are built in start(), the format in set_caps(),
  * all dropped in stop(). The estimators share the model. */
@@ -245,47 +207,6 @@ static void reset_state(GstRatioTemp* self) {
   self->state = new State();
 }
 
-static GstCaps* gst_ratio_temp_transform_caps(GstBaseTransform* trans, GstPadDirection direction,
-                                              GstCaps* caps, GstCaps* filter) {
-  /* The band count and layout are not restricted to the model's here: set_caps checks them and
-   * names both in its error, which a failed negotiation would not. */
-  GstCaps* templ = gst_caps_from_string(direction == GST_PAD_SINK ? PYROCAM_TEMPERATURE_CAPS
-                                                                  : PYROCAM_BANDS_CAPS);
-  GstCaps* result = gst_caps_new_empty();
-  for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
-    GstStructure* out = gst_structure_copy(gst_caps_get_structure(templ, 0));
-    pg::copy_dimensions(gst_caps_get_structure(caps, i), out);
-    result = gst_caps_merge_structure(result, out);
-  }
-  gst_caps_unref(templ);
-  if (filter) {
-    GstCaps* tmp = gst_caps_intersect_full(filter, result, GST_CAPS_INTERSECT_FIRST);
-    gst_caps_unref(result);
-    result = tmp;
-  }
-  GST_DEBUG_OBJECT(trans, "transformed %" GST_PTR_FORMAT " to %" GST_PTR_FORMAT, caps, result);
-  return result;
-}
-
-static gboolean gst_ratio_temp_transform_size(GstBaseTransform* trans, GstPadDirection direction,
-                                              GstCaps* /*caps*/, gsize /*size*/, GstCaps* othercaps,
-                                              gsize* othersize) {
-  if (direction == GST_PAD_SINK) {
-    GstVideoInfo info;
-    if (!gst_video_info_from_caps(&info, othercaps)) {
-      GST_WARNING_OBJECT(trans, "cannot size %" GST_PTR_FORMAT, othercaps);
-      return FALSE;
-    }
-    *othersize = GST_VIDEO_INFO_SIZE(&info);
-    return TRUE;
-  }
-  const GstStructure* s = gst_caps_get_structure(othercaps, 0);
-  *othersize = static_cast<gsize>(pg::structure_int(s, "width", 0)) *
-               static_cast<gsize>(pg::structure_int(s, "height", 0)) *
-               static_cast<gsize>(pg::structure_int(s, "bands", 0)) * sizeof(float);
-  return *othersize > 0;
-}
-
 static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps,
                                         GstCaps* outcaps) {
   GstRatioTemp* self = GST_RATIO_TEMP(trans);
@@ -311,7 +232,7 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
   }
   const pyrocam::ThermalModel& model = *st.model;
   const int model_bands = model.profile().band_count();
-  const std::string model_layout = layout_name(model);
+  const std::string model_layout = rt::layout_name(model);
   if (st.bands != model_bands || model_layout != layout) {
     PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation,
                        "Model " + st.model_path + " (" + model.profile().name + ") is for " +
@@ -392,7 +313,7 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
       *st.model,
       settings.table_cache_set ? settings.table_cache : pyrocam::default_table_cache_dir()));
   const pyrocam::EstimatorSelector::Choice choice =
-      st.estimators->select(to_library(settings.method));
+      st.estimators->select(rt::to_library(settings.method));
   st.method = choice.method;
   if (!choice.problem.empty()) {
     PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
@@ -463,7 +384,7 @@ static void apply_method(GstRatioTemp* self, GstRatioTempMethod request) {
     return;
   }
   if (st.refused && st.refused_request == request) return;
-  const pyrocam::EstimatorSelector::Choice choice = st.estimators->select(to_library(request));
+  const pyrocam::EstimatorSelector::Choice choice = st.estimators->select(rt::to_library(request));
   const pyrocam::Method chosen = choice.method;
   const std::string& problem = choice.problem;
   if (problem.empty()) {
@@ -575,6 +496,9 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         for (int b = 0; b < st.bands; ++b)
           st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
         pyrocam::PlaneEstimator& chosen = st.estimators->estimator(st.method);
+        // The frame's gain scales its shot noise per DN; rebuilt only when it changes.
+        const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(inbuf);
+        chosen.set_analogue_gain(meta ? std::pow(10.0, meta->gain_db / 20) : 1.0);
         chosen.set_misfit_probability(settings.misfit_probability);
         chosen.set_partial_bands(settings.allow_partial ||
                                          settings.partial_bands == GST_RATIO_TEMP_PARTIAL_ANY
@@ -583,7 +507,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
                                      ? pyrocam::TemperatureEstimator::PartialBands::kSafe
                                      : pyrocam::TemperatureEstimator::PartialBands::kOff);
         const pyrocam::PlaneEstimator& estimator = chosen;
-        MappedFrame out(outbuf, &st.out_info);
+        rt::MappedFrame out(outbuf, &st.out_info);
         if (!uncertainty && !stats_due) {
           // Straight into the output frame (the header wraps it; a copy only if it did not fit).
           cv::Mat codes = out.image;
@@ -643,8 +567,8 @@ static void gst_ratio_temp_class_init(GstRatioTempClass* klass) {
   gst_element_class_add_static_pad_template(element_class, &sink_template);
   gst_element_class_add_static_pad_template(element_class, &src_template);
 
-  trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_ratio_temp_transform_caps);
-  trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_ratio_temp_transform_size);
+  trans_class->transform_caps = GST_DEBUG_FUNCPTR(rt::transform_caps);
+  trans_class->transform_size = GST_DEBUG_FUNCPTR(rt::transform_size);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_ratio_temp_set_caps);
   trans_class->decide_allocation = GST_DEBUG_FUNCPTR(pg::decide_allocation);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_ratio_temp_start);

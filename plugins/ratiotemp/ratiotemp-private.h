@@ -1,6 +1,6 @@
 /* ratiotemp's parts shared by its source files: the property values (ratiotemp-properties.cpp),
- * the statistics message (ratiotemp-stats.cpp) and the element struct; gstratiotemp.cpp has the
- * negotiation, the estimator switching and the streaming. */
+ * the formats (ratiotemp-caps.cpp), the statistics message (ratiotemp-stats.cpp) and the element
+ * struct; gstratiotemp.cpp has the negotiation, the estimator switching and the streaming. */
 #pragma once
 
 #include <gst/gst.h>
@@ -10,6 +10,7 @@
 
 #include "gstratiotemp.h"
 #include "pyrocam-common.h"
+#include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/estimators.h"
 
 GST_DEBUG_CATEGORY_EXTERN(gst_ratio_temp_debug);
@@ -82,6 +83,27 @@ std::string recording_comment(const RecordingInfo& info);
 GstTagList* recording_tags(const RecordingInfo& info, const GstTagList* upstream);
 /* The exposure in a capturing-shutter-speed tag, in microseconds; negative when absent. */
 double exposure_us_of(const GstTagList* tags);
+
+/* The library's request for a method property value (ratiotemp-properties.cpp). */
+pyrocam::MethodRequest to_library(GstRatioTempMethod method);
+
+/* Formats (ratiotemp-caps.cpp): the layout caps field a model expects ("bayer" or 5x5), the
+ * caps' transforms (any band count and layout: set_caps checks them against the model and names
+ * both in its error), and an output buffer mapped as a GRAY16_LE frame (rows at the video
+ * info's stride; throws InputError when it cannot be mapped; unmaps when it goes). */
+const char* layout_name(const pyrocam::ThermalModel& model);
+GstCaps* transform_caps(GstBaseTransform* trans, GstPadDirection direction, GstCaps* caps,
+                        GstCaps* filter);
+gboolean transform_size(GstBaseTransform* trans, GstPadDirection direction, GstCaps* caps,
+                        gsize size, GstCaps* othercaps, gsize* othersize);
+struct MappedFrame {
+  MappedFrame(GstBuffer* buffer, GstVideoInfo* info);
+  ~MappedFrame();
+  MappedFrame(const MappedFrame&) = delete;
+  MappedFrame& operator=(const MappedFrame&) = delete;
+  GstVideoFrame frame;
+  cv::Mat image;
+};
 
 /* GObject properties: installed by class_init, read and written under the object lock. */
 void install_properties(GObjectClass* klass);

@@ -28,6 +28,19 @@ enum {
 
 }  // namespace
 
+pyrocam::MethodRequest to_library(GstRatioTempMethod m) {
+  switch (m) {
+    case GST_RATIO_TEMP_METHOD_MLP:
+      return pyrocam::MethodRequest::kMlp;
+    case GST_RATIO_TEMP_METHOD_LUT:
+      return pyrocam::MethodRequest::kLut;
+    case GST_RATIO_TEMP_METHOD_LIKELIHOOD:
+      return pyrocam::MethodRequest::kLikelihood;
+    default:
+      return pyrocam::MethodRequest::kAuto;
+  }
+}
+
 void install_properties(GObjectClass* gobject_class) {
   const auto ready = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
                                               GST_PARAM_MUTABLE_READY);

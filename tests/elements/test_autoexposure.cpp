@@ -1,8 +1,9 @@
-// autoexposure: settles on the simulated camera after a 10x step of brightness and then stays;
-// frames pass unchanged; a camera without an exposure property gets a warning and the stream
-// runs on; clamping to the range is a warning.
+// autoexposure: settles on the simulated camera after a 10x step of brightness and then stays,
+// also with gain beyond the longest exposure; frames pass unchanged; a camera without an
+// exposure property gets a warning and the stream runs on; clamping to the range is a warning.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <mutex>
 
 #include "element_support.h"
@@ -11,22 +12,35 @@
 namespace pyrocam::test {
 namespace {
 
-// The 50th brightest value of each frame that reached the fakesink named "sink".
+// The 50th brightest value of each frame that reached the fakesink named "sink", and the
+// exposure and gain its meta says it was taken with (-1 without one).
 struct Levels {
   std::mutex lock;
   std::vector<int> levels;
+  std::vector<double> exposures, gains;
 };
+
+const PyrocamExposureMeta* exposure_meta(GstBuffer* buffer) {
+  // By the API's registered name: the plugin registered it, the test does not link it.
+  const GType api = g_type_from_name("PyrocamExposureMetaAPI");
+  return api ? reinterpret_cast<const PyrocamExposureMeta*>(gst_buffer_get_meta(buffer, api))
+             : nullptr;
+}
 
 void on_handoff(GstElement*, GstBuffer* buffer, GstPad*, gpointer data) {
   auto* out = static_cast<Levels*>(data);
   std::vector<std::uint8_t> v = values_of<std::uint8_t>(buffer);
   std::nth_element(v.begin(), v.begin() + 49, v.end(), std::greater<>());
+  const PyrocamExposureMeta* meta = exposure_meta(buffer);
   std::lock_guard<std::mutex> guard(out->lock);
   out->levels.push_back(v[49]);
+  out->exposures.push_back(meta ? meta->exposure_us : -1);
+  out->gains.push_back(meta ? meta->gain_db : -1);
 }
 
 struct RunResult {
   std::vector<int> levels;
+  std::vector<double> exposures, gains;  // per frame, from its meta
   std::vector<std::string> warnings;
   int exposure_messages_after = 0;  // after frame `quiet_from`
   bool eos = false;
@@ -75,6 +89,8 @@ RunResult run(const std::string& description, double from_c, double to_c, GstClo
   gst_object_unref(sink);
   gst_object_unref(pipeline);
   r.levels = levels.levels;
+  r.exposures = levels.exposures;
+  r.gains = levels.gains;
   return r;
 }
 
@@ -106,6 +122,70 @@ TEST(AutoExposure, SettlesWithinTenFramesOfATenfoldStepAndStaysWithoutOscillatin
   EXPECT_TRUE(r.warnings.empty());
 }
 
+TEST(AutoExposure, WithGainSettlesBeyondTheLongestExposureAndDropsTheGainFirst) {
+  REQUIRE_ELEMENT("autoexposure");
+  // The 1400 degC plate needs about 9 us at 0 dB; at most 2 us it needs about 13 dB. It starts
+  // 10x too dim (0.9 us, 0 dB); at frame 30 the step to 1800 degC makes it about 11x brighter
+  // (0.8 us at 0 dB): the gain goes back to 0 dB and the exposure shortens.
+  const double longest = 2;
+  const RunResult r =
+      run("pyrocamsrc name=camera scene=plate exposure=0.9 num-buffers=60 ! "
+          "video/x-bayer,width=320,height=240,framerate=30/1 ! autoexposure dark-level=50 "
+          "max-exposure=2 max-gain=24 ! fakesink name=sink sync=false",
+          1400, 1800, gst_util_uint64_scale(41, GST_SECOND, 30));
+  ASSERT_TRUE(r.eos);
+  ASSERT_EQ(r.levels.size(), 60u);
+  ASSERT_EQ(r.gains.size(), 60u);
+  EXPECT_FALSE(near_target(r.levels[0]));   // really a step: dim at the start
+  EXPECT_FALSE(near_target(r.levels[30]));  // and after the scene's step
+  int settled = -1, settled_after_step = -1;
+  for (int i = 0; i < 30 && settled < 0; ++i)
+    if (near_target(r.levels[i])) settled = i;
+  for (int i = 30; i < 60 && settled_after_step < 0; ++i)
+    if (near_target(r.levels[i])) settled_after_step = i - 30;
+  std::printf(
+      "[ figures  ] settled with gain after %d frames (%.2f us, %.2f dB), after the "
+      "step after %d frames (%.3f us, %.2f dB)\n",
+      settled, r.exposures[29], r.gains[29], settled_after_step, r.exposures[59], r.gains[59]);
+  EXPECT_GE(settled, 0);
+  EXPECT_LE(settled, 10);
+  EXPECT_GE(settled_after_step, 0);
+  EXPECT_LE(settled_after_step, 10);
+  for (int i = 10; i < 30; ++i)
+    EXPECT_TRUE(near_target(r.levels[i])) << "frame " << i << ": " << r.levels[i];
+  for (int i = 40; i < 60; ++i)
+    EXPECT_TRUE(near_target(r.levels[i])) << "frame " << i << ": " << r.levels[i];
+  // Settled on the gain at the longest exposure: 9 us / 2 us is about 13 dB.
+  EXPECT_DOUBLE_EQ(r.exposures[29], longest);
+  EXPECT_GT(r.gains[29], 8);
+  EXPECT_LT(r.gains[29], 18);
+  // After the step: no gain, a shorter exposure.
+  EXPECT_EQ(r.gains[59], 0);
+  EXPECT_LT(r.exposures[59], longest);
+  // Never a gain with an exposure below the longest: exposure first, gain last.
+  for (int i = 0; i < 60; ++i) {
+    if (r.gains[i] > 0) {
+      EXPECT_DOUBLE_EQ(r.exposures[i], longest) << "frame " << i << " at " << r.gains[i] << " dB";
+    }
+  }
+  EXPECT_EQ(r.exposure_messages_after, 0);  // settled: no more changes
+  EXPECT_TRUE(r.warnings.empty());
+}
+
+TEST(AutoExposure, WithoutMaxGainTheGainIsLeftAsItIs) {
+  REQUIRE_ELEMENT("autoexposure");
+  // 6 dB set on the camera: the exposure settles for it and the gain stays.
+  const RunResult r =
+      run("pyrocamsrc name=camera scene=plate exposure=20 gain=6 num-buffers=20 ! "
+          "video/x-bayer,width=320,height=240,framerate=30/1 ! autoexposure dark-level=50 ! "
+          "fakesink name=sink sync=false",
+          1400, 1400, 0);
+  ASSERT_TRUE(r.eos);
+  ASSERT_EQ(r.gains.size(), 20u);
+  for (double g : r.gains) EXPECT_EQ(g, 6);
+  EXPECT_TRUE(near_target(r.levels.back())) << r.levels.back();
+}
+
 TEST(AutoExposure, ACameraWithoutExposureGetsAWarningAndTheStreamRunsOn) {
   REQUIRE_ELEMENT("autoexposure");
   const RunResult r =
@@ -117,6 +197,55 @@ TEST(AutoExposure, ACameraWithoutExposureGetsAWarningAndTheStreamRunsOn) {
   ASSERT_EQ(r.warnings.size(), 1u);
   EXPECT_NE(r.warnings[0].find("has no exposure property"), std::string::npos) << r.warnings[0];
   EXPECT_NE(r.warnings[0].find("videotestsrc0"), std::string::npos) << r.warnings[0];
+}
+
+// A camera with an exposure property and no gain: videotestsrc with a double "exposure" (us)
+// added, registered as "exposureonlysrc".
+double g_test_exposure_us = 1000;
+
+void exposure_only_set(GObject*, guint, const GValue* value, GParamSpec*) {
+  g_test_exposure_us = g_value_get_double(value);
+}
+void exposure_only_get(GObject*, guint, GValue* value, GParamSpec*) {
+  g_value_set_double(value, g_test_exposure_us);
+}
+
+bool register_exposure_only_source() {
+  const GType parent = g_type_from_name("GstVideoTestSrc");
+  if (!parent) return false;
+  GTypeQuery query;
+  g_type_query(parent, &query);
+  // GObject sends a property to the class that installed it: the parent's stay the parent's.
+  const GType type = g_type_register_static_simple(
+      parent, "TestExposureOnlySrc", query.class_size,
+      [](gpointer klass, gpointer) {
+        GObjectClass* object_class = G_OBJECT_CLASS(klass);
+        object_class->set_property = exposure_only_set;
+        object_class->get_property = exposure_only_get;
+        g_object_class_install_property(
+            object_class, 1000,
+            g_param_spec_double("exposure", "Exposure", "us", 0, 1e7, 1000,
+                                static_cast<GParamFlags>(G_PARAM_READWRITE)));
+      },
+      query.instance_size, nullptr, static_cast<GTypeFlags>(0));
+  return gst_element_register(nullptr, "exposureonlysrc", GST_RANK_NONE, type);
+}
+
+TEST(AutoExposure, ACameraWithoutGainGetsOneWarningAndExposureControlOnly) {
+  REQUIRE_ELEMENT("autoexposure");
+  REQUIRE_ELEMENT("videotestsrc");
+  ASSERT_TRUE(register_exposure_only_source());
+  // White bars above the 8-bit saturation level: every frame steps the exposure down.
+  const RunResult r =
+      run("exposureonlysrc num-buffers=4 ! video/x-raw,format=GRAY8,width=64,height=48 ! "
+          "autoexposure max-gain=12 ! fakesink name=sink",
+          0, 0, 0);
+  EXPECT_TRUE(r.eos);
+  EXPECT_EQ(r.levels.size(), 4u);
+  ASSERT_EQ(r.warnings.size(), 1u);  // once, not every frame
+  EXPECT_NE(r.warnings[0].find("has no gain property"), std::string::npos) << r.warnings[0];
+  EXPECT_NE(r.warnings[0].find("exposureonlysrc0"), std::string::npos) << r.warnings[0];
+  EXPECT_LT(g_test_exposure_us, 1000 / 8.0 + 1e-9);  // the exposure is still controlled
 }
 
 TEST(AutoExposure, AnExposureOutsideTheRangeIsClampedWithAWarning) {
@@ -137,11 +266,7 @@ TEST(AutoExposure, AnExposureOutsideTheRangeIsClampedWithAWarning) {
 // The exposure each frame was taken with reaches the temperatures: the meta passes darksub,
 // demosaic25 and ratiotemp.
 void on_temperature(GstElement*, GstBuffer* buffer, GstPad*, gpointer data) {
-  // By the API's registered name: the plugin registered it, the test does not link it.
-  const GType api = g_type_from_name("PyrocamExposureMetaAPI");
-  const auto* meta =
-      api ? reinterpret_cast<const PyrocamExposureMeta*>(gst_buffer_get_meta(buffer, api))
-          : nullptr;
+  const PyrocamExposureMeta* meta = exposure_meta(buffer);
   static_cast<std::vector<double>*>(data)->push_back(meta ? meta->exposure_us : -1);
 }
 

@@ -5,14 +5,15 @@
 
 namespace pyrocam {
 
-SignalNoise signal_noise(const CameraProfile& p, int band) {
+SignalNoise signal_noise(const CameraProfile& p, int band, double gain) {
   const double k = p.band_gain[band] * p.noise.system_gain_dn_per_e;
   const double read = k * p.noise.read_noise_e;
-  return {k, 2 * (read * read + 1.0 / 12)};
+  return {k * gain, 2 * (read * read + 1.0 / 12)};
 }
 
-double signal_variance_dn2(const CameraProfile& p, int band, double signal_dn, int frames) {
-  const SignalNoise n = signal_noise(p, band);
+double signal_variance_dn2(const CameraProfile& p, int band, double signal_dn, int frames,
+                           double gain) {
+  const SignalNoise n = signal_noise(p, band, gain);
   return (n.shot_gain * std::max(signal_dn, 0.0) + n.floor_dn2) / std::max(frames, 1);
 }
 

@@ -63,6 +63,12 @@ void TemperatureEstimator::estimate(const float* const* planes, std::size_t n, f
   }
 }
 
+void TemperatureEstimator::set_analogue_gain(double factor) {
+  if (!(factor > 0) || !std::isfinite(factor))
+    throw InputError("the analogue gain must be a positive factor, not " + std::to_string(factor));
+  analogue_gain_ = factor;
+}
+
 std::unique_ptr<TemperatureEstimator> make_estimator(std::shared_ptr<const ThermalModel> model,
                                                      Method method) {
   switch (method) {

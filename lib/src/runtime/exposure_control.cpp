@@ -8,6 +8,11 @@
 #include "pyrocam/core/error.h"
 
 namespace pyrocam {
+namespace {
+
+double gain_factor(double gain_db) { return std::pow(10.0, gain_db / 20); }
+
+}  // namespace
 
 HotLevel hot_level(const cv::Mat& raw, int hot_pixels, double saturation_dn) {
   if (raw.empty()) throw InputError("hot level of an empty frame");
@@ -53,20 +58,31 @@ ExposureController::ExposureController(const ExposureControlSettings& s) : setti
   require(s.max_step >= 1.5 && std::isfinite(s.max_step), "max_step must be at least 1.5");
   require(s.tolerance > 0 && s.tolerance < 0.5, "tolerance must be in (0, 0.5)");
   require(s.latency_frames >= 0, "latency_frames must be >= 0");
+  require(s.max_gain_db >= 0 && s.max_gain_db <= 100, "max_gain_db must be 0..100");
 }
 
 std::optional<ExposureCommand> ExposureController::update(const HotLevel& level,
                                                           std::optional<double> frame_exposure_us,
                                                           double current_us) {
-  double taken_us;
-  if (frame_exposure_us) {
-    taken_us = *frame_exposure_us;
+  std::optional<ExposureSetting> frame;
+  if (frame_exposure_us) frame = ExposureSetting{*frame_exposure_us, 0.0};
+  return update(level, frame, ExposureSetting{current_us, 0.0});
+}
+
+std::optional<ExposureCommand> ExposureController::update(const HotLevel& level,
+                                                          std::optional<ExposureSetting> frame,
+                                                          const ExposureSetting& current) {
+  ExposureSetting taken;
+  if (frame) {
+    taken = *frame;
   } else {
-    // Without the frame's own exposure, frames right after a change may still be the old one.
-    if (commanded_us_ && ++frames_since_command_ <= settings_.latency_frames) return std::nullopt;
-    taken_us = commanded_us_.value_or(current_us);
+    // Without the frame's own settings, frames right after a change may still be the old ones.
+    if (commanded_ && ++frames_since_command_ <= settings_.latency_frames) return std::nullopt;
+    taken = commanded_.value_or(current);
   }
-  if (!(taken_us > 0) || !std::isfinite(taken_us)) return std::nullopt;
+  if (!(taken.exposure_us > 0) || !std::isfinite(taken.exposure_us) ||
+      !std::isfinite(taken.gain_db))
+    return std::nullopt;
   const ExposureControlSettings& s = settings_;
   const double wanted_signal = s.target * (s.saturation_dn - s.dark_dn);
   const double signal = level.level_dn - s.dark_dn;
@@ -81,15 +97,31 @@ std::optional<ExposureCommand> ExposureController::update(const HotLevel& level,
     at_limit_ = false;
     return std::nullopt;
   }
-  const double wanted_us = taken_us * ratio;
   ExposureCommand command;
-  command.exposure_us = std::clamp(wanted_us, s.min_exposure_us, s.max_exposure_us);
-  command.clamped = command.exposure_us != wanted_us;
+  if (s.max_gain_db > 0) {
+    // Brightness in exposure microseconds at 0 dB: the exposure first, then the gain.
+    const double wanted = taken.exposure_us * gain_factor(taken.gain_db) * ratio;
+    const double highest = s.max_exposure_us * gain_factor(s.max_gain_db);
+    const double reached = std::clamp(wanted, s.min_exposure_us, highest);
+    command.clamped = reached != wanted;
+    command.exposure_us = std::min(reached, s.max_exposure_us);
+    command.gain_db = reached > s.max_exposure_us
+                          ? std::min(20 * std::log10(reached / s.max_exposure_us), s.max_gain_db)
+                          : 0.0;
+  } else {
+    // The gain is not ours: whatever it is, the exposure alone scales the level.
+    const double wanted_us = taken.exposure_us * ratio;
+    command.exposure_us = std::clamp(wanted_us, s.min_exposure_us, s.max_exposure_us);
+    command.gain_db = taken.gain_db;
+    command.clamped = command.exposure_us != wanted_us;
+  }
   at_limit_ = command.clamped;
-  const double last = commanded_us_.value_or(current_us);
+  const ExposureSetting last = commanded_.value_or(current);
   // Already asked for (frames taken before the change took effect ask again): nothing new.
-  if (std::abs(command.exposure_us - last) <= 1e-3 * last) return std::nullopt;
-  commanded_us_ = command.exposure_us;
+  const bool same_gain = s.max_gain_db <= 0 || std::abs(command.gain_db - last.gain_db) <= 1e-3;
+  if (std::abs(command.exposure_us - last.exposure_us) <= 1e-3 * last.exposure_us && same_gain)
+    return std::nullopt;
+  commanded_ = ExposureSetting{command.exposure_us, command.gain_db};
   frames_since_command_ = 0;
   return command;
 }

@@ -48,11 +48,7 @@ class LikelihoodFit : public TemperatureEstimator {
         rates_[static_cast<std::size_t>(i * bands_ + b)] = m;
         squares_[static_cast<std::size_t>(i * bands_ + b)] = m * m;
       }
-    for (int b = 0; b < bands_; ++b) {
-      const SignalNoise n = signal_noise(model_->profile(), b);
-      shot_gain_[b] = n.shot_gain;
-      noise_floor_[b] = n.floor_dn2;
-    }
+    set_noise(1.0);
     // A ratio that turns over (rises, then falls) fits two temperatures: only pairs whose ratio
     // keeps one direction over the whole range read a pixel alone.
     monotonic_.assign(static_cast<std::size_t>(bands_ * bands_), 0);
@@ -90,6 +86,20 @@ class LikelihoodFit : public TemperatureEstimator {
   };
 
   // Returns how many bands count.
+  void set_analogue_gain(double factor) override {
+    TemperatureEstimator::set_analogue_gain(factor);
+    set_noise(factor);
+  }
+
+  // The weights' noise model at an analogue gain factor (noise_model.h).
+  void set_noise(double gain) {
+    for (int b = 0; b < bands_; ++b) {
+      const SignalNoise n = signal_noise(model_->profile(), b, gain);
+      shot_gain_[b] = n.shot_gain;
+      noise_floor_[b] = n.floor_dn2;
+    }
+  }
+
   bool can_read_partial() const override {
     if (partial_ == PartialBands::kOff || bands_ < 3) return false;
     return partial_ == PartialBands::kAny ||

@@ -269,12 +269,21 @@ MisfitCheck::MisfitCheck(std::shared_ptr<const ThermalModel> shared_model, doubl
       table_[at] = static_cast<float>(table_d_[at]);
     }
   }
+  set_analogue_gain(1.0);
+  set_probability(probability);
+}
+
+void MisfitCheck::set_analogue_gain(double factor) {
+  if (!(factor > 0) || !std::isfinite(factor))
+    throw InputError("misfit check: the analogue gain must be a positive factor");
+  analogue_gain_ = factor;
+  gain_.clear();
+  floor_.clear();
   for (int b = 0; b < bands_; ++b) {
-    const SignalNoise n = signal_noise(model.profile(), b);
+    const SignalNoise n = signal_noise(model_->profile(), b, factor);
     gain_.push_back(static_cast<float>(n.shot_gain));
     floor_.push_back(static_cast<float>(n.floor_dn2));
   }
-  set_probability(probability);
 }
 
 void MisfitCheck::set_probability(double probability) {
@@ -314,7 +323,7 @@ double MisfitCheck::chi2(const double* s, double t_c, int* counted_out) const {
     w[b] = 0;
     if (!reads) continue;
     const double e = model_error_ * s[b];
-    w[b] = 1 / (signal_variance_dn2(model_->profile(), b, s[b]) + e * e);
+    w[b] = 1 / (signal_variance_dn2(model_->profile(), b, s[b], 1, analogue_gain_) + e * e);
     sm += w[b] * s[b] * m[b];
     mm += w[b] * m[b] * m[b];
     sd += w[b] * s[b] * d[b];

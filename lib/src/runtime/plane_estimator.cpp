@@ -30,6 +30,7 @@ void PlaneEstimator::set_partial_bands(TemperatureEstimator::PartialBands partia
   if (method_ == Method::kLikelihood || partial == TemperatureEstimator::PartialBands::kOff) return;
   auto fit = make_estimator(model_, Method::kLikelihood);
   fit->set_partial_bands(partial);
+  fit->set_analogue_gain(analogue_gain_);
   // A fit that can read none of them would only cost a call per pixel without a reading.
   if (fit->can_read_partial()) partial_fit_ = std::move(fit);
 }
@@ -37,8 +38,19 @@ void PlaneEstimator::set_partial_bands(TemperatureEstimator::PartialBands partia
 void PlaneEstimator::set_misfit_probability(double probability) {
   if (misfit_)
     misfit_->set_probability(probability);
-  else if (probability != 0)  // the check's constructor refuses what set_probability refuses
+  else if (probability != 0) {  // the check's constructor refuses what set_probability refuses
     misfit_ = std::make_unique<MisfitCheck>(model_, probability);
+    misfit_->set_analogue_gain(analogue_gain_);
+  }
+}
+
+void PlaneEstimator::set_analogue_gain(double factor) {
+  if (factor == analogue_gain_) return;   // called per frame
+  estimator_->set_analogue_gain(factor);  // refuses before anything changes
+  if (sloped_) sloped_->set_analogue_gain(factor);
+  if (partial_fit_) partial_fit_->set_analogue_gain(factor);
+  if (misfit_) misfit_->set_analogue_gain(factor);
+  analogue_gain_ = factor;
 }
 
 void PlaneEstimator::set_emissivity_slope(double alpha, double alpha_u) {
@@ -48,6 +60,7 @@ void PlaneEstimator::set_emissivity_slope(double alpha, double alpha_u) {
     sloped_.reset();
   } else {  // built before anything changes: a refused value keeps the previous ones
     auto sloped = std::make_unique<EmissivitySlopeEstimator>(estimator_, alpha, alpha_u);
+    sloped->set_analogue_gain(analogue_gain_);
     sloped_ = std::move(sloped);
   }
   alpha_u_ = alpha_u;

@@ -32,7 +32,7 @@ double expanded_uncertainty_c(const TemperatureEstimator& est, const double* sig
       dt_ds = t_c - tm;
     else
       continue;
-    var += dt_ds * dt_ds * signal_variance_dn2(m.profile(), b, keep, frames);
+    var += dt_ds * dt_ds * signal_variance_dn2(m.profile(), b, keep, frames, est.analogue_gain());
   }
   const double sys = est.systematic_u_c(t_c);
   return m.uncertainty.coverage_factor * std::sqrt(var + sys * sys);

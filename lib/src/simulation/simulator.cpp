@@ -70,8 +70,11 @@ void Simulator::ensure_pixel_maps(int width, int height) {
     }
 }
 
-cv::Mat Simulator::render(const cv::Mat& temperature_c, double exposure_us, double emissivity) {
+cv::Mat Simulator::render(const cv::Mat& temperature_c, double exposure_us, double emissivity,
+                          double gain_db) {
   if (temperature_c.type() != CV_32F) throw InputError("simulator: temperature map must be CV_32F");
+  if (!std::isfinite(gain_db)) throw InputError("simulator: the gain must be a number of dB");
+  const double gain = portable::pow(10.0, gain_db / 20);
   const int width = temperature_c.cols, height = temperature_c.rows;
   ensure_pixel_maps(width, height);
   const int type = profile_.bit_depth == 8 ? CV_8U : CV_16U;
@@ -111,7 +114,8 @@ cv::Mat Simulator::render(const cv::Mat& temperature_c, double exposure_us, doub
               e = mean_e + std::sqrt(mean_e) * normal(rng);
             }
           }
-          e = std::clamp(e, 0.0, nm.full_well_e);
+          // The gain amplifies the collected charge; the read noise comes after it.
+          e = gain * std::clamp(e, 0.0, nm.full_well_e);
           if (noise_) e += nm.read_noise_e * normal(rng);
           const double dn = std::clamp(
               std::round(k[band] * e + profile_.dark_offset_dn + fpn_row[x]), 0.0, max_dn);

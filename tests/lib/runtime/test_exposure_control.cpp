@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <deque>
 
 #include "pyrocam/core/error.h"
@@ -84,6 +85,139 @@ TEST(ExposureController, SettlesWithinTenFramesOfATenfoldStepEitherWay) {
   }
 }
 
+// A camera with exposure and gain seen through `latency` frames, the scene's brightness
+// stepping from rate_before to rate_after (DN per us at 0 dB) at frame `step_at`.
+struct GainRun {
+  int settled_at = -1;    // first frame within 10 % of the target after the step; -1: never
+  int changes_after = 0;  // commands once settled (oscillation)
+  bool left = false;      // left the target again after settling
+  double exposure_us = 0, gain_db = 0;  // as set at the end
+  bool gain_before_exposure = false;    // gain above 0 dB set with an exposure below the longest
+  double max_gain_seen_db = 0;          // after the step
+};
+
+GainRun run_with_gain(double rate_before, double rate_after, int step_at, ExposureSetting start,
+                      int latency, bool carry, double max_exposure_us, double max_gain_db) {
+  ExposureControlSettings s = settings();
+  s.max_exposure_us = max_exposure_us;
+  s.max_gain_db = max_gain_db;
+  ExposureController control(s);
+  const double target_level = 50 + 0.7 * 170;
+  ExposureSetting set = start;
+  std::deque<ExposureSetting> in_flight(static_cast<std::size_t>(latency), start);
+  GainRun run;
+  for (int frame = 0; frame < step_at + 60; ++frame) {
+    in_flight.push_back(set);
+    const ExposureSetting taken = in_flight.front();
+    in_flight.pop_front();
+    const double rate = frame < step_at ? rate_before : rate_after;
+    const double level =
+        std::min(255.0, 50 + rate * taken.exposure_us * std::pow(10.0, taken.gain_db / 20));
+    HotLevel h;
+    h.level_dn = std::floor(level);
+    h.clipped = h.level_dn >= 220;
+    if (frame >= step_at) {
+      const bool near = std::abs(level - target_level) <= 0.1 * (target_level - 50);
+      if (near && run.settled_at < 0) run.settled_at = frame - step_at;
+      if (!near && run.settled_at >= 0) run.left = true;
+    }
+    auto command =
+        control.update(h, carry ? std::optional<ExposureSetting>(taken) : std::nullopt, set);
+    if (command) {
+      set = ExposureSetting{command->exposure_us, command->gain_db};
+      if (set.gain_db > 0 && set.exposure_us < max_exposure_us * (1 - 1e-9))
+        run.gain_before_exposure = true;
+      if (frame >= step_at && run.settled_at >= 0) ++run.changes_after;
+    }
+    if (frame >= step_at) run.max_gain_seen_db = std::max(run.max_gain_seen_db, set.gain_db);
+  }
+  run.exposure_us = set.exposure_us;
+  run.gain_db = set.gain_db;
+  return run;
+}
+
+TEST(ExposureController, WithGainSettlesWithinTenFramesOfATenfoldStepEitherWay) {
+  // At most 200 us: the dim scene (1000 us at 0 dB for the target) needs 5x = 14 dB of gain.
+  const double rate = 0.119;
+  for (int latency : {0, 1, 3}) {
+    for (bool carry : {true, false}) {
+      SCOPED_TRACE("latency " + std::to_string(latency) + (carry ? ", frames carry" : ""));
+      // From 10x too dark at the longest exposure: the gain goes up.
+      const GainRun up = run_with_gain(rate, rate, 0, {100, 0}, latency, carry, 200, 24);
+      EXPECT_GE(up.settled_at, 0);
+      EXPECT_LE(up.settled_at, 10);
+      EXPECT_FALSE(up.left);
+      EXPECT_EQ(up.changes_after, 0);
+      EXPECT_FALSE(up.gain_before_exposure);
+      EXPECT_DOUBLE_EQ(up.exposure_us, 200);
+      EXPECT_NEAR(up.gain_db, 20 * std::log10(5.0), 1.0);
+      // Settled on the gain, then a 10x brighter scene (saturated): the gain goes back to 0 dB
+      // and the exposure shortens (no gain is ever set below the longest exposure).
+      const GainRun down =
+          run_with_gain(rate, 10 * rate, 30, {200, 20 * std::log10(5.0)}, latency, carry, 200, 24);
+      std::printf(
+          "[ figures  ] latency %d%s: up %d frames (%.0f us, %.2f dB), down %d frames "
+          "(%.1f us, %.2f dB)\n",
+          latency, carry ? ", frames carry" : "", up.settled_at, up.exposure_us, up.gain_db,
+          down.settled_at, down.exposure_us, down.gain_db);
+      EXPECT_GE(down.settled_at, 0);
+      EXPECT_LE(down.settled_at, 10);
+      EXPECT_FALSE(down.left);
+      EXPECT_EQ(down.changes_after, 0);
+      EXPECT_FALSE(down.gain_before_exposure);
+      EXPECT_EQ(down.gain_db, 0);
+      EXPECT_NEAR(down.exposure_us, 100, 10);
+    }
+  }
+}
+
+TEST(ExposureController, GainStaysAtZeroWhenTheExposureSuffices) {
+  const double rate = 0.119;  // 1000 us gives the target level, within 1e6 us
+  for (int latency : {0, 1, 3}) {
+    for (bool carry : {true, false}) {
+      SCOPED_TRACE("latency " + std::to_string(latency) + (carry ? ", frames carry" : ""));
+      const GainRun dark = run_with_gain(rate, rate, 0, {100, 0}, latency, carry, 1e6, 24);
+      EXPECT_GE(dark.settled_at, 0);
+      EXPECT_LE(dark.settled_at, 10);
+      EXPECT_EQ(dark.changes_after, 0);
+      EXPECT_EQ(dark.max_gain_seen_db, 0);
+      const GainRun bright = run_with_gain(rate, rate, 0, {10000, 0}, latency, carry, 1e6, 24);
+      EXPECT_GE(bright.settled_at, 0);
+      EXPECT_LE(bright.settled_at, 10);
+      EXPECT_EQ(bright.changes_after, 0);
+      EXPECT_EQ(bright.max_gain_seen_db, 0);
+    }
+  }
+}
+
+TEST(ExposureController, WithoutMaxGainLeavesTheFramesGainAlone) {
+  // max_gain_db 0: a frame at 6 dB gets an exposure for its gain, and the gain it came with.
+  ExposureController control(settings());
+  HotLevel dim;
+  dim.level_dn = 50 + 0.7 * 170 / 2;  // half the target
+  auto c = control.update(dim, ExposureSetting{100, 6}, ExposureSetting{100, 6});
+  ASSERT_TRUE(c);
+  EXPECT_NEAR(c->exposure_us, 200, 1e-9);
+  EXPECT_EQ(c->gain_db, 6);
+}
+
+TEST(ExposureController, ClampsTheGainToItsMaximumAndSaysSo) {
+  auto s = settings();
+  s.max_exposure_us = 100;
+  s.max_gain_db = 6;
+  ExposureController control(s);
+  HotLevel dim;
+  dim.level_dn = 50 + 0.7 * 170 / 4;  // a quarter of the target: wants 12 dB at 100 us
+  auto c = control.update(dim, ExposureSetting{100, 0}, ExposureSetting{100, 0});
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->exposure_us, 100);
+  EXPECT_DOUBLE_EQ(c->gain_db, 6);
+  EXPECT_TRUE(c->clamped);
+  EXPECT_TRUE(control.at_limit());
+  EXPECT_FALSE(control.update(dim, ExposureSetting{100, 6}, ExposureSetting{100, 6}));
+  EXPECT_TRUE(control.at_limit());
+}
+
 TEST(ExposureController, ClampsToTheCameraRangeAndSaysSo) {
   ExposureController control(settings());
   HotLevel dim;
@@ -110,6 +244,9 @@ TEST(ExposureController, RefusesSettingsOutOfRange) {
   EXPECT_THROW(ExposureController{bad}, InputError);
   bad = settings();
   bad.max_step = 1;
+  EXPECT_THROW(ExposureController{bad}, InputError);
+  bad = settings();
+  bad.max_gain_db = -1;
   EXPECT_THROW(ExposureController{bad}, InputError);
 }
 

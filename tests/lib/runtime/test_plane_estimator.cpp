@@ -1,7 +1,9 @@
-// The plane estimator: temperature codes straight from the planes, and the model it shares.
+// The plane estimator: temperature codes straight from the planes, the model it shares, and
+// the analogue gain's noise.
 // Models: the small calibrated models the build makes (tests/data).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 #include <opencv2/core.hpp>
 
@@ -31,6 +33,47 @@ TEST(PlaneEstimator, codes_straight_from_the_planes_are_the_encoded_temperatures
     ASSERT_EQ(codes.size(), expected.size());
     EXPECT_EQ(cv::countNonZero(codes != expected), 0) << method_name(method);
     EXPECT_GT(cv::countNonZero(codes), static_cast<int>(codes.total() / 4)) << method_name(method);
+  }
+}
+
+TEST(PlaneEstimator, an_analogue_gain_grows_the_uncertainty_not_the_reading) {
+  // The same DN taken at 12 dB hold a quarter of the electrons: the shot-noise variance per DN
+  // is 3.98 times as large. Readings by ratio stay; the likelihood fit's shot-noise weights scale
+  // by the same factor in every band (the read-noise floor does not), so its readings move
+  // little; the uncertainty's noise term grows, its calibration term stays.
+  const auto model = test_model("test-model-rgb.json");
+  const NoisyPixels px = noisy_pixels(*model, {1000, 1400}, 50, 100, 150, 1e9, 0, 5);
+  const std::vector<cv::Mat> planes = as_planes(px);
+  for (Method method : {Method::kMlp, Method::kLikelihood}) {
+    SCOPED_TRACE(method_name(method));
+    PlaneEstimator estimator(model, method, 1e-6);
+    cv::Mat t0, u0, t12, u12;
+    estimator.estimate(planes, t0, &u0);
+    estimator.set_analogue_gain(std::pow(10.0, 12.0 / 20));
+    EXPECT_DOUBLE_EQ(estimator.analogue_gain(), std::pow(10.0, 12.0 / 20));
+    estimator.estimate(planes, t12, &u12);
+    int compared = 0;
+    for (int i = 0; i < t0.cols; ++i) {
+      const float a = t0.at<float>(0, i), b = t12.at<float>(0, i);
+      if (!std::isfinite(a) || !std::isfinite(b)) continue;
+      ++compared;
+      if (method == Method::kMlp) {
+        EXPECT_EQ(a, b);
+      }
+      // The fit's weights change a little band against band (the floor stays): a move well
+      // inside the reading's noise.
+      EXPECT_NEAR(a, b, 0.1 * u0.at<float>(0, i));
+      EXPECT_GT(u12.at<float>(0, i), u0.at<float>(0, i));
+    }
+    EXPECT_GT(compared, 50);
+    // Back to 0 dB: the readings and uncertainties of the start again.
+    estimator.set_analogue_gain(1.0);
+    cv::Mat t1, u1;
+    estimator.estimate(planes, t1, &u1);
+    EXPECT_EQ(cv::countNonZero((t1 != t0) & (t0 == t0)), 0);
+    EXPECT_EQ(cv::countNonZero((u1 != u0) & (u0 == u0)), 0);
+    EXPECT_THROW(estimator.set_analogue_gain(0), InputError);
+    EXPECT_THROW(estimator.set_analogue_gain(NAN), InputError);
   }
 }
 

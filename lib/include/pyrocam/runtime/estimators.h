@@ -78,6 +78,14 @@ class TemperatureEstimator {
   virtual void set_tables_verdict(const std::string& verdict) const;
   virtual std::string tables_verdict() const { return ""; }
 
+  // The analogue gain the signals were taken with, as a factor over the profile's (10^(dB / 20);
+  // 1, the default, for frames at 0 dB): the shot noise in DN per electron scales by it
+  // (noise_model.h), so the likelihood fit's weights and the uncertainty do. Ratios, and so the
+  // readings of the network and its table, do not depend on it. Not while an estimate runs.
+  // Throws InputError unless it is a positive number.
+  virtual void set_analogue_gain(double factor);
+  double analogue_gain() const { return analogue_gain_; }
+
  protected:
   // All bands finite and at least the dim threshold.
   bool all_bands_valid(const double* signals) const;
@@ -88,6 +96,7 @@ class TemperatureEstimator {
   double dim_dn_;
   int min_bands_;  // bands the likelihood fit needs (set_partial_bands)
   PartialBands partial_ = PartialBands::kOff;
+  double analogue_gain_ = 1.0;
 };
 
 // Throws InputError without a model or when the method does not fit the model (the lookup table

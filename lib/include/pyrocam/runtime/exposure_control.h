@@ -1,7 +1,7 @@
 // Automatic exposure for thermal reading: keeps the hottest region's brightest band near a
 // target share of the usable signal range (dark to saturation), so that the object of interest
-// reads (a saturated band gives no reading, a dim one a noisy or no reading). Frame-by-frame
-// logic only; the autoexposure element feeds it.
+// reads (a saturated band gives no reading, a dim one a noisy or no reading), by the exposure and,
+// when allowed, the analogue gain. Frame-by-frame logic only; the autoexposure element feeds it.
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -27,11 +27,22 @@ struct ExposureControlSettings {
   double max_step = 8;     // largest change of the exposure per adjustment (factor), >= 1.5
   double tolerance = 0.1;  // no change while the level is within this share of the target
   int latency_frames = 3;  // frames before a change shows, when frames do not carry their exposure
+  // Largest analogue gain to set, dB, 0..100; 0: the gain is never changed (the exposure alone
+  // is controlled, whatever gain the frames were taken with).
+  double max_gain_db = 0;
+};
+
+// What a frame was taken with, or what the camera is set to.
+struct ExposureSetting {
+  double exposure_us = 0;
+  double gain_db = 0;  // analogue gain: the signal is 10^(gain_db / 20) times that at 0 dB
 };
 
 struct ExposureCommand {
   double exposure_us = 0;
-  bool clamped = false;  // the wanted exposure was outside min..max_exposure_us
+  // The gain to set; with max_gain_db 0 the frame's own (or the current) gain, not to be set.
+  double gain_db = 0;
+  bool clamped = false;  // the wanted brightness was outside what the ranges allow
 };
 
 class ExposureController {
@@ -43,8 +54,17 @@ class ExposureController {
   // latency_frames. Returns a new exposure to set, or nothing to keep the current one.
   // Normalising by the frame's own exposure makes the step dead-beat: the frames still taken
   // with the old exposure ask for the same new one, so latency makes no oscillation.
+  // A camera without gain: the same as update() with every gain 0.
   std::optional<ExposureCommand> update(const HotLevel& level,
                                         std::optional<double> frame_exposure_us, double current_us);
+  // With gain (max_gain_db > 0): the wanted brightness, exposure times gain factor, is the
+  // frame's own times the ratio of target to level; it is made by the exposure alone (gain 0 dB)
+  // up to max_exposure_us, and only beyond that by the gain at the longest exposure. So the gain
+  // rises only once the exposure is at its longest, and a too bright scene brings the gain back
+  // to 0 dB before the exposure shortens. `frame` is what the frame says it was taken with;
+  // without it, the setting last commanded (or `current` at the start) after latency_frames.
+  std::optional<ExposureCommand> update(const HotLevel& level, std::optional<ExposureSetting> frame,
+                                        const ExposureSetting& current);
   const ExposureControlSettings& settings() const { return settings_; }
   // Whether the last frame wanted an exposure outside the camera's range (clamped to it).
   bool at_limit() const { return at_limit_; }
@@ -52,7 +72,7 @@ class ExposureController {
  private:
   bool at_limit_ = false;
   ExposureControlSettings settings_;
-  std::optional<double> commanded_us_;
+  std::optional<ExposureSetting> commanded_;
   int frames_since_command_ = 0;
 };
 

@@ -54,6 +54,10 @@ class MisfitCheck {
   double probability() const { return probability_; }
   bool enabled() const { return probability_ > 0; }
   double model_error() const { return model_error_; }
+  // The signals' noise at an analogue gain factor (TemperatureEstimator::set_analogue_gain);
+  // 1 by default. Not while a check runs. Throws InputError unless positive.
+  void set_analogue_gain(double factor);
+  double analogue_gain() const { return analogue_gain_; }
 
   // chi2 of one pixel at the best temperature within the window around t_c (double precision,
   // the definition); *counted = bands that count.
@@ -70,6 +74,7 @@ class MisfitCheck {
   std::shared_ptr<const ThermalModel> model_;  // never null
   int bands_;
   double probability_ = 0, model_error_;
+  double analogue_gain_ = 1.0;
   float dim_dn_;
   double t0_c_, step_c_;
   int samples_;

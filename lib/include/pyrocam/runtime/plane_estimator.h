@@ -52,6 +52,13 @@ class PlaneEstimator {
   // the previous ones.
   void set_emissivity_slope(double alpha, double alpha_u = -1);
   double emissivity_slope() const { return sloped_ ? sloped_->alpha() : 0.0; }
+  // The analogue gain the planes were taken with, as a factor over the profile's (10^(dB / 20);
+  // 1 by default): see TemperatureEstimator::set_analogue_gain. Weights of the likelihood fit
+  // and of the band-consistency check, and the uncertainty, follow it; called per frame, it
+  // does nothing while the factor stays. Not while an estimate runs. Throws InputError unless
+  // positive.
+  void set_analogue_gain(double factor);
+  double analogue_gain() const { return analogue_gain_; }
 
  private:
   // The planes' common size; throws InputError unless they are the model's bands, CV_32F, of
@@ -71,6 +78,7 @@ class PlaneEstimator {
   std::unique_ptr<TemperatureEstimator> partial_fit_;
   TemperatureEstimator::PartialBands partial_ = TemperatureEstimator::PartialBands::kOff;
   bool partial_set_ = false;
+  double analogue_gain_ = 1.0;
 };
 
 }  // namespace pyrocam

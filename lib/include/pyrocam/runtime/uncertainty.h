@@ -8,6 +8,7 @@ namespace pyrocam {
 // Expanded uncertainty (k from the model, 2 by default) of an estimate, degC: GUM with band
 // sensitivities by central differences (dS = 1 DN) and the estimator's systematic terms
 // (TemperatureEstimator::systematic_u_c: the model's, or those at a chosen emissivity slope).
+// The signal noise is at the estimator's analogue gain (TemperatureEstimator::analogue_gain).
 double expanded_uncertainty_c(const TemperatureEstimator& estimator, const double* signals,
                               double t_c, int frames = 1);
 

@@ -45,7 +45,11 @@ class Simulator {
 
   // Raw mosaic (CV_8U for bit depth 8, else CV_16U) of a temperature map (CV_32F, degC; NaN or
   // below 100 degC emits nothing). Deterministic for a given noise seed and call sequence.
-  cv::Mat render(const cv::Mat& temperature_c, double exposure_us, double emissivity = 1.0);
+  // gain_db: analogue gain, multiplying the collected electrons' signal (shot noise and dark
+  // current included) by 10^(gain_db / 20) before the read noise, which stays as it is in DN (a
+  // simplification: a real sensor's read noise referred to the output partly grows with gain).
+  cv::Mat render(const cv::Mat& temperature_c, double exposure_us, double emissivity = 1.0,
+                 double gain_db = 0.0);
   cv::Mat render_dark(int width, int height, double exposure_us);
 
   // Mean signal above the dark level per band, DN, noise-free and unclipped.

@@ -1,0 +1,74 @@
+/* ratiotemp's formats: the caps' transforms between band planes and temperatures, the layout
+ * name a model expects, and the output buffer mapped as a GRAY16_LE frame. */
+#include <string>
+
+#include "pyrocam-caps.h"
+#include "pyrocam-common.h"
+#include "ratiotemp-private.h"
+
+#define GST_CAT_DEFAULT gst_ratio_temp_debug
+
+namespace pyrocam::gst::ratiotemp {
+
+namespace pg = pyrocam::gst;
+
+const char* layout_name(const pyrocam::ThermalModel& model) {
+  return model.profile().mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot
+             ? PYROCAM_SNAPSHOT_PATTERN_NAME
+             : "bayer";
+}
+
+MappedFrame::MappedFrame(GstBuffer* buffer, GstVideoInfo* info) {
+  if (!gst_video_frame_map(&frame, info, buffer, GST_MAP_WRITE))
+    throw pyrocam::InputError("cannot map a " + std::to_string(gst_buffer_get_size(buffer)) +
+                              "-byte buffer as a " + std::to_string(GST_VIDEO_INFO_WIDTH(info)) +
+                              "x" + std::to_string(GST_VIDEO_INFO_HEIGHT(info)) +
+                              " GRAY16_LE frame");
+  image = cv::Mat(GST_VIDEO_FRAME_HEIGHT(&frame), GST_VIDEO_FRAME_WIDTH(&frame), CV_16U,
+                  GST_VIDEO_FRAME_PLANE_DATA(&frame, 0),
+                  static_cast<std::size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0)));
+}
+
+MappedFrame::~MappedFrame() { gst_video_frame_unmap(&frame); }
+
+GstCaps* transform_caps(GstBaseTransform* trans, GstPadDirection direction, GstCaps* caps,
+                        GstCaps* filter) {
+  /* The band count and layout are not restricted to the model's here: set_caps checks them and
+   * names both in its error, which a failed negotiation would not. */
+  GstCaps* templ = gst_caps_from_string(direction == GST_PAD_SINK ? PYROCAM_TEMPERATURE_CAPS
+                                                                  : PYROCAM_BANDS_CAPS);
+  GstCaps* result = gst_caps_new_empty();
+  for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
+    GstStructure* out = gst_structure_copy(gst_caps_get_structure(templ, 0));
+    pg::copy_dimensions(gst_caps_get_structure(caps, i), out);
+    result = gst_caps_merge_structure(result, out);
+  }
+  gst_caps_unref(templ);
+  if (filter) {
+    GstCaps* tmp = gst_caps_intersect_full(filter, result, GST_CAPS_INTERSECT_FIRST);
+    gst_caps_unref(result);
+    result = tmp;
+  }
+  GST_DEBUG_OBJECT(trans, "transformed %" GST_PTR_FORMAT " to %" GST_PTR_FORMAT, caps, result);
+  return result;
+}
+
+gboolean transform_size(GstBaseTransform* trans, GstPadDirection direction, GstCaps* /*caps*/,
+                        gsize /*size*/, GstCaps* othercaps, gsize* othersize) {
+  if (direction == GST_PAD_SINK) {
+    GstVideoInfo info;
+    if (!gst_video_info_from_caps(&info, othercaps)) {
+      GST_WARNING_OBJECT(trans, "cannot size %" GST_PTR_FORMAT, othercaps);
+      return FALSE;
+    }
+    *othersize = GST_VIDEO_INFO_SIZE(&info);
+    return TRUE;
+  }
+  const GstStructure* s = gst_caps_get_structure(othercaps, 0);
+  *othersize = static_cast<gsize>(pg::structure_int(s, "width", 0)) *
+               static_cast<gsize>(pg::structure_int(s, "height", 0)) *
+               static_cast<gsize>(pg::structure_int(s, "bands", 0)) * sizeof(float);
+  return *othersize > 0;
+}
+
+}  // namespace pyrocam::gst::ratiotemp
