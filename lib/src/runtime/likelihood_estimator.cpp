@@ -85,7 +85,6 @@ class LikelihoodFit : public TemperatureEstimator {
     double sss;
   };
 
-  // Returns how many bands count.
   void set_analogue_gain(double factor) override {
     TemperatureEstimator::set_analogue_gain(factor);
     set_noise(factor);
