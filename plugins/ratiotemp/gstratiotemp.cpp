@@ -1,6 +1,3 @@
-/* Over 600 lines because of its documentation comment (about 110 lines, the element's
- * gtk-doc section); the code is already split: properties, statistics and tags live in
- * ratiotemp-properties.cpp, ratiotemp-stats.cpp and ratiotemp-tags.cpp. */
 /**
  * SECTION:element-ratiotemp
  * @title: ratiotemp
