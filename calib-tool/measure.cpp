@@ -2,6 +2,7 @@
 // same library code as the ratiotemp element.
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -28,6 +29,7 @@ struct MeasureArgs {
   double saturation = -1;
   double misfit_probability = 0;
   double e_slope = 0, e_slope_uncertainty = -1;  // %/100 nm
+  double gain_db = 0;
   bool allow_partial = false;
   bool uncertainty = false;
 };
@@ -132,6 +134,8 @@ MeasureOptions measure_options(const MeasureArgs& a,
   options.allow_partial = a.allow_partial;
   options.emissivity_slope = a.e_slope / 100;
   options.emissivity_slope_u = a.e_slope_uncertainty / 100;
+  if (!std::isfinite(a.gain_db)) throw InputError("--gain-db must be a finite number of dB");
+  options.gain_db = a.gain_db;
   return options;
 }
 
@@ -338,6 +342,12 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
                 "Standard uncertainty of --e-slope, %/100 nm (0 to 100), for the emissivity "
                 "term of --uncertainty; negative: the model's (1 %/100 nm from calibrate)")
       ->check(CLI::Range(-1.0, 100.0))
+      ->capture_default_str();
+  c->add_option("--gain-db", a.gain_db,
+                "Analogue gain the frames were taken with, dB (0 to 48; pyrocamsrc's gain): the "
+                "shot noise per DN grows with it, which the likelihood weights, the "
+                "band-consistency check and --uncertainty follow; readings by ratio do not")
+      ->check(CLI::Range(0.0, 48.0))
       ->capture_default_str();
   c->add_option("--format", a.format, "Image type: png or tiff")
       ->check(CLI::IsMember({"png", "tiff"}))

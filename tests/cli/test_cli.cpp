@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <fstream>
+#include <iostream>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <sstream>
@@ -527,6 +528,31 @@ TEST_F(CliMeasure, measure_rejects_an_e_slope_out_of_range_n) {
                  dir);
     EXPECT_NE(r.exit_code, 0) << bad;
     EXPECT_NE(r.err.find("e-slope"), std::string::npos) << bad << ": " << r.err;
+  }
+}
+
+TEST_F(CliMeasure, measure_gain_db_widens_the_uncertainty_not_the_reading) {
+  const std::string base = "-q measure --model " + quoted(test_model("test-model-rgb.json")) +
+                           " --dataset " + quoted(data) + " --method likelihood --uncertainty";
+  const std::filesystem::path plain = dir / "plain", gained = dir / "gained";
+  ASSERT_EQ(run_tool(base + " --out " + quoted(plain), dir).exit_code, 0);
+  const ToolRun r = run_tool(base + " --gain-db 12 --out " + quoted(gained), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The same frames read as taken at 12 dB: each DN holds a quarter of the electrons, so the
+  // shot noise per DN is four times the variance. The ratios are the same, and the likelihood
+  // weights change little on a plate whose bands are all well exposed.
+  const double t_plain = first_median_c(plain / "stats.csv"),
+               t_gained = first_median_c(gained / "stats.csv");
+  EXPECT_NEAR(t_gained, t_plain, 1.0);
+  const double u_plain = median_nonzero(plain / "0000_uncertainty.png"),
+               u_gained = median_nonzero(gained / "0000_uncertainty.png");
+  std::cout << "median expanded uncertainty, codes: 0 dB " << u_plain << ", 12 dB " << u_gained
+            << "\n";
+  EXPECT_GT(u_gained, u_plain);
+  for (const std::string bad : {"-3", "60", "nan"}) {
+    const ToolRun b = run_tool(base + " --gain-db " + bad + " --out " + quoted(out), dir);
+    EXPECT_NE(b.exit_code, 0) << bad;
+    EXPECT_NE(b.err.find("gain-db"), std::string::npos) << bad << ": " << b.err;
   }
 }
 

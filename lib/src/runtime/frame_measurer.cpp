@@ -1,5 +1,6 @@
 #include "pyrocam/runtime/frame_measurer.h"
 
+#include <cmath>
 #include <string>
 #include <utility>
 
@@ -18,6 +19,7 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
       : options.safe_partial ? TemperatureEstimator::PartialBands::kSafe
                              : TemperatureEstimator::PartialBands::kOff);
   planes_estimator_.set_emissivity_slope(options.emissivity_slope, options.emissivity_slope_u);
+  planes_estimator_.set_analogue_gain(std::pow(10.0, options.gain_db / 20));
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model_->profile().thresholds.inference_saturation_dn;
 }

@@ -27,6 +27,8 @@ struct MeasureOptions {
   double emissivity_slope_u = -1;
   // mark_mixed_pixels (mixed_pixels.h) with this relative spread and the profile's noise; 0: off.
   double footprint_spread = 0;
+  // The analogue gain the frames were taken with, dB (PlaneEstimator::set_analogue_gain).
+  double gain_db = 0;
 };
 
 // One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.
