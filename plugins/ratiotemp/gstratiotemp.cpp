@@ -147,6 +147,7 @@
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
 #include "pyrocam-meta.h"
+#include "pyrocam/core/noise_model.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/model.h"
@@ -495,7 +496,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         pyrocam::PlaneEstimator& chosen = st.estimators->estimator(st.method);
         // The frame's gain scales its shot noise per DN; rebuilt only when it changes.
         const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(inbuf);
-        chosen.set_analogue_gain(meta ? std::pow(10.0, meta->gain_db / 20) : 1.0);
+        chosen.set_analogue_gain(meta ? pyrocam::analogue_gain_factor(meta->gain_db) : 1.0);
         chosen.set_misfit_probability(settings.misfit_probability);
         chosen.set_partial_bands(settings.allow_partial ||
                                          settings.partial_bands == GST_RATIO_TEMP_PARTIAL_ANY

@@ -34,6 +34,7 @@
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
 #include "pyrocam-meta.h"
+#include "pyrocam/core/noise_model.h"
 #include "pyrocam/runtime/bracket_fusion.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_thermal_fuse_debug);
@@ -117,7 +118,7 @@ static GstFlowReturn gst_thermal_fuse_transform_frame_ip(GstVideoFilter* filter,
     }
     return GST_FLOW_OK;
   }
-  const double light = meta->exposure_us * std::pow(10.0, meta->gain_db / 20.0);
+  const double light = meta->exposure_us * pyrocam::analogue_gain_factor(meta->gain_db);
   cv::Mat codes(GST_VIDEO_FRAME_HEIGHT(frame), GST_VIDEO_FRAME_WIDTH(frame), CV_16U,
                 GST_VIDEO_FRAME_PLANE_DATA(frame, 0),
                 static_cast<std::size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(frame, 0)));

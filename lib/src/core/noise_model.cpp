@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "detail/portable_math.h"
+
 namespace pyrocam {
+
+double analogue_gain_factor(double gain_db) { return portable::pow(10.0, gain_db / 20); }
 
 SignalNoise signal_noise(const CameraProfile& p, int band, double gain) {
   const double k = p.band_gain[band] * p.noise.system_gain_dn_per_e;

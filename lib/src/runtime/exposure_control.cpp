@@ -6,13 +6,9 @@
 #include <vector>
 
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/noise_model.h"
 
 namespace pyrocam {
-namespace {
-
-double gain_factor(double gain_db) { return std::pow(10.0, gain_db / 20); }
-
-}  // namespace
 
 HotLevel hot_level(const cv::Mat& raw, int hot_pixels, double saturation_dn) {
   if (raw.empty()) throw InputError("hot level of an empty frame");
@@ -100,8 +96,8 @@ std::optional<ExposureCommand> ExposureController::update(const HotLevel& level,
   ExposureCommand command;
   if (s.max_gain_db > 0) {
     // Brightness in exposure microseconds at 0 dB: the exposure first, then the gain.
-    const double wanted = taken.exposure_us * gain_factor(taken.gain_db) * ratio;
-    const double highest = s.max_exposure_us * gain_factor(s.max_gain_db);
+    const double wanted = taken.exposure_us * analogue_gain_factor(taken.gain_db) * ratio;
+    const double highest = s.max_exposure_us * analogue_gain_factor(s.max_gain_db);
     const double reached = std::clamp(wanted, s.min_exposure_us, highest);
     command.clamped = reached != wanted;
     command.exposure_us = std::min(reached, s.max_exposure_us);

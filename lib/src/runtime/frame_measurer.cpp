@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/noise_model.h"
 #include "pyrocam/runtime/darksub.h"
 
 namespace pyrocam {
@@ -19,7 +20,7 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
       : options.safe_partial ? TemperatureEstimator::PartialBands::kSafe
                              : TemperatureEstimator::PartialBands::kOff);
   planes_estimator_.set_emissivity_slope(options.emissivity_slope, options.emissivity_slope_u);
-  planes_estimator_.set_analogue_gain(std::pow(10.0, options.gain_db / 20));
+  planes_estimator_.set_analogue_gain(analogue_gain_factor(options.gain_db));
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model_->profile().thresholds.inference_saturation_dn;
 }

@@ -10,6 +10,7 @@
 #include "detail/random.h"
 #include "pyrocam/core/dataset.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/core/noise_model.h"
 
 namespace pyrocam {
 namespace {
@@ -74,7 +75,7 @@ cv::Mat Simulator::render(const cv::Mat& temperature_c, double exposure_us, doub
                           double gain_db) {
   if (temperature_c.type() != CV_32F) throw InputError("simulator: temperature map must be CV_32F");
   if (!std::isfinite(gain_db)) throw InputError("simulator: the gain must be a number of dB");
-  const double gain = portable::pow(10.0, gain_db / 20);
+  const double gain = analogue_gain_factor(gain_db);
   const int width = temperature_c.cols, height = temperature_c.rows;
   ensure_pixel_maps(width, height);
   const int type = profile_.bit_depth == 8 ? CV_8U : CV_16U;

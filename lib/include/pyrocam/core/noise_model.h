@@ -8,6 +8,9 @@
 
 namespace pyrocam {
 
+// An analogue gain in dB as the factor it multiplies the signal by, 10^(dB / 20).
+double analogue_gain_factor(double gain_db);
+
 // Signal noise variance of one band reading (EMVA 1288), DN^2, averaged over `frames` frames;
 // the dark frame's noise is included. `gain`: the analogue gain the frame was taken with, as a
 // factor (10^(dB / 20)) over the profile's system gain: the shot noise in DN per electron
