@@ -16,7 +16,12 @@
  * new exposure is the frame's times the ratio of target to level, so the frames still taken
  * with the old exposure ask for the same new one and the loop settles in one step whatever the
  * latency, without oscillating. Frames without the meta (aravissrc) are taken with the
- * exposure last set after #GstAutoExposure:latency frames; no change is made meanwhile. A
+ * exposure last set after #GstAutoExposure:latency frames; no change is made meanwhile, and such
+ * a frame gets a PyrocamExposureMeta with the camera's exposure and gain (read from its
+ * properties as the frame passes) once these have stayed the same for #GstAutoExposure:latency
+ * frames (the first setting read counts from the start), so that ratiotemp's noise model
+ * follows the gain and thermalfuse can rank the frames; frames within #GstAutoExposure:latency
+ * of a change, whose exposure is not known, get none. A
  * saturated level steps down by #GstAutoExposure:max-step at once. Within
  * #GstAutoExposure:tolerance of the target nothing changes.
  *
@@ -120,6 +125,7 @@ struct State {
   double gain_property_min_db = 0, gain_property_max_db = G_MAXDOUBLE;
   bool warned_no_gain = false;
   std::unique_ptr<pyrocam::ExposureController> controller;
+  std::unique_ptr<pyrocam::SettingInEffect> in_effect;  // for frames without their own meta
   guint serial = G_MAXUINT;
   bool warned_limit = false;
   ~State() {
@@ -259,8 +265,10 @@ static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, Gst
   if (!st.camera) return GST_FLOW_OK;
   if (settings.serial != st.serial) {
     const pyrocam::ExposureControlSettings c = controller_settings(self, settings);
-    if (!PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "Bad exposure control settings",
-                         [&] { st.controller = std::make_unique<pyrocam::ExposureController>(c); }))
+    if (!PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "Bad exposure control settings", [&] {
+          st.controller = std::make_unique<pyrocam::ExposureController>(c);
+          st.in_effect = std::make_unique<pyrocam::SettingInEffect>(c.latency_frames);
+        }))
       return GST_FLOW_ERROR;
     st.serial = settings.serial;
   }
@@ -271,6 +279,11 @@ static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, Gst
   pyrocam::ExposureSetting current;
   g_object_get(st.camera, "exposure", &current.exposure_us, nullptr);
   if (st.has_gain) g_object_get(st.camera, "gain", &current.gain_db, nullptr);
+  // A frame that does not say what it was taken with gets the camera's setting once that is
+  // known to have reached it, for everything downstream (ratiotemp's noise model, thermalfuse).
+  const std::optional<pyrocam::ExposureSetting> in_effect = st.in_effect->frame_setting(current);
+  if (!frame && in_effect)
+    pyrocam_buffer_add_exposure_meta(buffer, in_effect->exposure_us, in_effect->gain_db);
   pyrocam::HotLevel level;
   std::optional<pyrocam::ExposureCommand> command;
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not measure the frame", [&] {
@@ -507,8 +520,8 @@ static void gst_auto_exposure_class_init(GstAutoExposureClass* klass) {
   gst_element_class_add_static_pad_template(element_class, &sink_template);
   gst_element_class_add_static_pad_template(element_class, &src_template);
 
-  trans_class->passthrough_on_same_caps = TRUE;
-  trans_class->transform_ip_on_passthrough = TRUE;
+  // In place, not passthrough: the buffer must be writable to take a meta (a shared one is
+  // copied without its pixels).
   trans_class->start = GST_DEBUG_FUNCPTR(gst_auto_exposure_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_auto_exposure_stop);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_auto_exposure_set_caps);
@@ -518,4 +531,5 @@ static void gst_auto_exposure_class_init(GstAutoExposureClass* klass) {
 static void gst_auto_exposure_init(GstAutoExposure* self) {
   self->settings = new Settings();
   self->state = new State();
+  gst_base_transform_set_in_place(GST_BASE_TRANSFORM(self), TRUE);
 }

@@ -110,11 +110,13 @@ static GstFlowReturn gst_thermal_fuse_transform_frame_ip(GstVideoFilter* filter,
     st.fusion->reset();
     if (!st.warned_no_exposure) {
       st.warned_no_exposure = true;
-      GST_ELEMENT_WARNING(self, STREAM, FORMAT,
-                          ("A frame without its exposure: passed on unfused (frames of unknown "
-                           "exposure cannot be ranked; the source must attach "
-                           "PyrocamExposureMeta, as pyrocamsrc does)"),
-                          ("no PyrocamExposureMeta on the buffer"));
+      GST_ELEMENT_WARNING(
+          self, STREAM, FORMAT,
+          ("A frame without its exposure: passed on unfused (frames of unknown "
+           "exposure cannot be ranked; the source must attach "
+           "PyrocamExposureMeta, as pyrocamsrc does, or autoexposure once a camera's "
+           "exposure has held for its latency)"),
+          ("no PyrocamExposureMeta on the buffer"));
     }
     return GST_FLOW_OK;
   }

@@ -211,6 +211,7 @@ void exposure_only_get(GObject*, guint, GValue* value, GParamSpec*) {
 }
 
 bool register_exposure_only_source() {
+  if (g_type_from_name("TestExposureOnlySrc")) return true;  // another test did
   const GType parent = g_type_from_name("GstVideoTestSrc");
   if (!parent) return false;
   GTypeQuery query;
@@ -246,6 +247,33 @@ TEST(AutoExposure, ACameraWithoutGainGetsOneWarningAndExposureControlOnly) {
   EXPECT_NE(r.warnings[0].find("has no gain property"), std::string::npos) << r.warnings[0];
   EXPECT_NE(r.warnings[0].find("exposureonlysrc0"), std::string::npos) << r.warnings[0];
   EXPECT_LT(g_test_exposure_us, 1000 / 8.0 + 1e-9);  // the exposure is still controlled
+}
+
+// A camera whose frames do not say their exposure (as aravissrc's): each frame gets the camera's
+// setting as a meta once that has held for `latency` frames, none while a change may not have
+// reached it. Saturated frames step the exposure down by 8x whenever the controller may.
+TEST(AutoExposure, FramesWithoutTheirExposureGetTheCamerasOnceItHasReachedThem) {
+  REQUIRE_ELEMENT("autoexposure");
+  REQUIRE_ELEMENT("videotestsrc");
+  ASSERT_TRUE(register_exposure_only_source());
+  g_test_exposure_us = 1000;
+  const RunResult r =
+      run("exposureonlysrc num-buffers=12 pattern=white ! "
+          "video/x-raw,format=GRAY8,width=64,height=48 ! autoexposure latency=2 ! "
+          "fakesink name=sink",
+          0, 0, 0);
+  EXPECT_TRUE(r.eos);
+  ASSERT_EQ(r.exposures.size(), 12u);
+  // Frame 0: the setting the camera streamed with; a change after frames 0, 3, 6, 9 reaches
+  // the frames latency (2) frames later, when the controller may change it again.
+  for (int i = 0; i < 12; ++i) {
+    const double expected = i % 3 == 0 ? 1000 / std::pow(8.0, i / 3) : -1;
+    EXPECT_NEAR(r.exposures[i], expected, 1e-9 * std::abs(expected)) << "frame " << i;
+    if (i % 3 == 0) {
+      EXPECT_EQ(r.gains[i], 0) << "frame " << i;  // no gain property: 0 dB
+    }
+  }
+  EXPECT_NEAR(g_test_exposure_us, 1000 / std::pow(8.0, 4), 1e-9);
 }
 
 TEST(AutoExposure, AnExposureOutsideTheRangeIsClampedWithAWarning) {

@@ -122,4 +122,27 @@ std::optional<ExposureCommand> ExposureController::update(const HotLevel& level,
   return command;
 }
 
+SettingInEffect::SettingInEffect(int latency_frames) : latency_(latency_frames) {
+  if (latency_frames < 0)
+    throw InputError("exposure latency: " + std::to_string(latency_frames) +
+                     " frames (must be 0 or more)");
+}
+
+std::optional<ExposureSetting> SettingInEffect::frame_setting(const ExposureSetting& current) {
+  // Exact comparison: the camera's properties read back the values they hold.
+  if (!last_) {
+    last_ = current;
+    unchanged_ = latency_;
+  } else if (current.exposure_us != last_->exposure_us || current.gain_db != last_->gain_db) {
+    last_ = current;
+    unchanged_ = 0;
+  } else if (unchanged_ < latency_) {
+    ++unchanged_;
+  }
+  if (unchanged_ < latency_ || !(current.exposure_us > 0) || !std::isfinite(current.exposure_us) ||
+      !std::isfinite(current.gain_db))
+    return std::nullopt;
+  return current;
+}
+
 }  // namespace pyrocam

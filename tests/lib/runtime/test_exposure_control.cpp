@@ -250,5 +250,33 @@ TEST(ExposureController, RefusesSettingsOutOfRange) {
   EXPECT_THROW(ExposureController{bad}, InputError);
 }
 
+// Frames without their own meta: the camera's setting once it has held for latency frames. A
+// change at frame 5 (read as frame 5 passes) reaches frame 5 + latency first.
+TEST(SettingInEffect, KnowsAFramesSettingOnlyOnceAChangeHasHadTimeToReachIt) {
+  for (int latency : {0, 1, 3}) {
+    SettingInEffect in_effect(latency);
+    for (int frame = 0; frame < 12; ++frame) {
+      const ExposureSetting current{frame < 5 ? 1000.0 : 250.0, frame < 5 ? 0.0 : 6.0};
+      const std::optional<ExposureSetting> taken = in_effect.frame_setting(current);
+      // Before the change: known from the first frame (the camera was set before it streamed).
+      const bool known = frame < 5 || frame >= 5 + latency;
+      ASSERT_EQ(taken.has_value(), known) << "latency " << latency << ", frame " << frame;
+      if (!known) continue;
+      EXPECT_EQ(taken->exposure_us, current.exposure_us);
+      EXPECT_EQ(taken->gain_db, current.gain_db);
+    }
+  }
+  // A gain change alone restarts the wait; an invalid setting is never a frame's.
+  SettingInEffect in_effect(2);
+  EXPECT_TRUE(in_effect.frame_setting({1000, 0}));
+  EXPECT_FALSE(in_effect.frame_setting({1000, 3}));
+  EXPECT_FALSE(in_effect.frame_setting({1000, 3}));
+  EXPECT_TRUE(in_effect.frame_setting({1000, 3}));
+  SettingInEffect no_exposure(0);
+  EXPECT_FALSE(no_exposure.frame_setting({0, 0}));
+  EXPECT_FALSE(no_exposure.frame_setting({NAN, 0}));
+  EXPECT_THROW(SettingInEffect{-1}, InputError);
+}
+
 }  // namespace
 }  // namespace pyrocam

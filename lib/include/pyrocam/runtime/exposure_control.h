@@ -76,4 +76,23 @@ class ExposureController {
   int frames_since_command_ = 0;
 };
 
+// What a frame that does not say it (no exposure meta: aravissrc's frames) was taken with: the
+// camera's setting read as each frame passes, once it has stayed the same for latency frames
+// (frames between setting an exposure and the first frame taken with it: a change, whoever
+// made it, takes that long to reach the frames). The first setting read is taken to be in
+// effect from the start (the camera was set before it streamed).
+class SettingInEffect {
+ public:
+  // Throws InputError for a negative latency.
+  explicit SettingInEffect(int latency_frames);
+  // `current`: the camera's setting read as this frame passes. Returns what the frame was taken
+  // with, or nothing while that is not known (the setting changed less than latency frames ago).
+  std::optional<ExposureSetting> frame_setting(const ExposureSetting& current);
+
+ private:
+  int latency_;
+  std::optional<ExposureSetting> last_;
+  int unchanged_ = 0;  // frames since last_ was first read (capped at latency_)
+};
+
 }  // namespace pyrocam
