@@ -35,37 +35,44 @@ enum class Kernel {
   kCross,         // G at R or B: the four next 3/16, the eight a knight's move away 1/32
 };
 
+// The kernels work on rows split by column parity, so that every output column is computed
+// once and the loops stay contiguous: for an output column x, `s` holds the samples of x's
+// parity (s[i] is x - 2, s[i + 1] x itself, s[i + 2] x + 2) and `t` those of the other parity
+// (t[i] is x - 1, t[i + 1] x + 1), each for the pixel's row (r0), the rows 1 above and below
+// added (v) and those 2 above and below added (c).
 template <Kernel kK>
-inline float apply(const float* r0, const float* v, const float* c, int x) {
+inline float apply(const float* s, const float* t, const float* vs, const float* vt,
+                   const float* cs, const float* ct, int i) {
   switch (kK) {
     case Kernel::kSelfAxial:
-      return 0.5f * r0[x] + 0.125f * ((r0[x - 2] + r0[x + 2]) + c[x]);
+      return 0.5f * s[i + 1] + 0.125f * ((s[i] + s[i + 2]) + cs[i + 1]);
     case Kernel::kSelfDiagonal:
-      return (2.f / 9) * r0[x] + (5.f / 36) * (v[x - 1] + v[x + 1]) +
-             (1.f / 18) * ((r0[x - 2] + r0[x + 2]) + c[x]);
+      return (2.f / 9) * s[i + 1] + (5.f / 36) * (vt[i] + vt[i + 1]) +
+             (1.f / 18) * ((s[i] + s[i + 2]) + cs[i + 1]);
     case Kernel::kHorizontal:
-      return 0.375f * (r0[x - 1] + r0[x + 1]) + 0.0625f * (c[x - 1] + c[x + 1]);
+      return 0.375f * (t[i] + t[i + 1]) + 0.0625f * (ct[i] + ct[i + 1]);
     case Kernel::kVertical:
-      return 0.375f * v[x] + 0.0625f * (v[x - 2] + v[x + 2]);
+      return 0.375f * vs[i + 1] + 0.0625f * (vs[i] + vs[i + 2]);
     case Kernel::kDiagonal:
-      return 0.25f * (v[x - 1] + v[x + 1]);
+      return 0.25f * (vt[i] + vt[i + 1]);
     case Kernel::kCross:
-      return 0.1875f * ((r0[x - 1] + r0[x + 1]) + v[x]) +
-             0.03125f * ((v[x - 2] + v[x + 2]) + (c[x - 1] + c[x + 1]));
+      return 0.1875f * ((t[i] + t[i + 1]) + vs[i + 1]) +
+             0.03125f * ((vs[i] + vs[i + 2]) + (ct[i] + ct[i + 1]));
   }
   return 0.f;
 }
 
-// One kernel over a whole row (inputs padded by 2 on each side, index 0 is column 0):
-// contiguous, so that it vectorises; a band's row takes the even columns of one kernel's row
-// and the odd ones of another's.
+// One kernel over the n output columns of one parity.
 template <Kernel kK>
-PYROCAM_VECTOR_CLONES void kernel_row(const float* __restrict r0, const float* __restrict v,
-                                      const float* __restrict c, float* __restrict o, int width) {
-  for (int x = 0; x < width; ++x) o[x] = apply<kK>(r0, v, c, x);
+PYROCAM_VECTOR_CLONES void kernel_row(const float* __restrict s, const float* __restrict t,
+                                      const float* __restrict vs, const float* __restrict vt,
+                                      const float* __restrict cs, const float* __restrict ct,
+                                      float* __restrict o, int n) {
+  for (int i = 0; i < n; ++i) o[i] = apply<kK>(s, t, vs, vt, cs, ct, i);
 }
 
-using RowFn = void (*)(const float*, const float*, const float*, float*, int);
+using RowFn = void (*)(const float*, const float*, const float*, const float*, const float*,
+                       const float*, float*, int);
 
 RowFn row_fn(Kernel k) {
   switch (k) {
@@ -85,20 +92,44 @@ RowFn row_fn(Kernel k) {
   return nullptr;
 }
 
-// out = even columns of `even`, odd ones of `odd`; -INF (no signal) becomes 0 (dim) when
-// `no_signal`.
+// out = even[0], odd[0], even[1], ...; -INF (no signal) becomes 0 (dim) when `no_signal`.
 PYROCAM_VECTOR_CLONES
 void interleave(const float* __restrict even, const float* __restrict odd, float* __restrict out,
                 int width, bool no_signal) {
   constexpr float kMinusInf = -std::numeric_limits<float>::infinity();
-  int x = 0;
-  for (; x + 1 < width; x += 2) {  // pairs: a blend the compiler vectorises
-    out[x] = even[x];
-    out[x + 1] = odd[x + 1];
+  const int pairs = width / 2;
+  if (no_signal) {
+    for (int i = 0; i < pairs; ++i) {
+      out[2 * i] = even[i] == kMinusInf ? 0.f : even[i];
+      out[2 * i + 1] = odd[i] == kMinusInf ? 0.f : odd[i];
+    }
+  } else {
+    for (int i = 0; i < pairs; ++i) {
+      out[2 * i] = even[i];
+      out[2 * i + 1] = odd[i];
+    }
   }
-  if (x < width) out[x] = even[x];
-  if (no_signal)
-    for (x = 0; x < width; ++x) out[x] = out[x] == kMinusInf ? 0.f : out[x];
+  if (width & 1) out[width - 1] = no_signal && even[pairs] == kMinusInf ? 0.f : even[pairs];
+}
+
+// even = row[0], row[2], ...; odd = row[1], row[3], ... (n samples); with `no_signal`, samples
+// below it become -INF.
+PYROCAM_VECTOR_CLONES
+void split_row(const float* __restrict row, int n, float no_signal, float* __restrict even,
+               float* __restrict odd) {
+  constexpr float kMinusInf = -std::numeric_limits<float>::infinity();
+  for (int j = 0; j < n / 2; ++j) {
+    const float a = row[2 * j], b = row[2 * j + 1];
+    even[j] = a < no_signal ? kMinusInf : a;
+    odd[j] = b < no_signal ? kMinusInf : b;
+  }
+  if (n & 1) even[n / 2] = row[n - 1] < no_signal ? kMinusInf : row[n - 1];
+}
+
+// a + b element by element (the row sums v and c).
+PYROCAM_VECTOR_CLONES
+void add_rows(const float* __restrict a, const float* __restrict b, float* __restrict out, int n) {
+  for (int i = 0; i < n; ++i) out[i] = a[i] + b[i];
 }
 
 Kernel kernel_for(const MosaicLayout& layout, int band, int px, int py) {
@@ -151,44 +182,48 @@ void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, f
     for (int py = 0; py < 2; ++py)
       for (int px = 0; px < 2; ++px) rows_of[b][py][px] = row_fn(kernel_for(layout, b, px, py));
   const int width = mosaic.cols, height = mosaic.rows, padded_width = width + 2 * kReach;
+  // Padded column p goes to half row p / 2 of its parity: even (p even) or odd.
+  const int half = padded_width / 2 + 1;
+  const int n_even = (width + 1) / 2, n_odd = width / 2;  // output columns of each parity
   auto run = [&](const cv::Range& r) {
-    // The five input rows around the output row, padded: a ring, each row read once per chunk.
-    std::vector<float> buffer(static_cast<std::size_t>(9 * padded_width));
-    auto ring = [&](int yy) { return buffer.data() + ((yy + 2 * kReach) % 5) * padded_width; };
-    float* v = buffer.data() + 5 * padded_width;
-    float* c = v + padded_width;
-    float* even = c + padded_width;
-    float* odd = even + padded_width;
+    // The five input rows around the output row, split by parity: a ring, each row read once
+    // per chunk; then the row sums v and c and the outputs, split too.
+    std::vector<float> buffer(static_cast<std::size_t>(2 * (5 + 2 + 2) * half + padded_width));
+    auto ring = [&](int yy) { return buffer.data() + ((yy + 2 * kReach) % 5) * 2 * half; };
+    float* v = buffer.data() + 10 * half;  // even half, then odd half
+    float* c = v + 2 * half;
+    float* out_even = c + 2 * half;
+    float* out_odd = out_even + half;
+    float* padded = out_odd + half;
     auto load = [&](int yy) {
       // Mirrored without repeating the edge, which keeps the pattern (as the bilinear method).
       const float* src =
           mosaic.ptr<float>(cv::borderInterpolate(yy, height, cv::BORDER_REFLECT_101));
-      float* row = ring(yy);
-      std::copy(src, src + width, row + kReach);
+      std::copy(src, src + width, padded + kReach);
       for (int k = 1; k <= kReach; ++k) {
-        row[kReach - k] = src[cv::borderInterpolate(-k, width, cv::BORDER_REFLECT_101)];
-        row[kReach + width - 1 + k] =
+        padded[kReach - k] = src[cv::borderInterpolate(-k, width, cv::BORDER_REFLECT_101)];
+        padded[kReach + width - 1 + k] =
             src[cv::borderInterpolate(width - 1 + k, width, cv::BORDER_REFLECT_101)];
       }
       // A sample without signal becomes -INF, which every kernel sum carries to the band value
       // (with a saturated +INF sample: NaN, no reading); the band value then reads as dim.
-      if (mark_no_signal)
-        for (int x = 0; x < padded_width; ++x) row[x] = row[x] < no_signal_dn ? -kInf : row[x];
+      float* even = ring(yy);
+      split_row(padded, padded_width, no_signal_dn, even, even + half);
     };
     for (int yy = r.start - kReach; yy < r.start + kReach; ++yy) load(yy);
     for (int y = r.start; y < r.end; ++y) {
       load(y + kReach);
-      const float *up2 = ring(y - 2), *up1 = ring(y - 1), *r0 = ring(y), *down1 = ring(y + 1),
-                  *down2 = ring(y + 2);
-      for (int x = 0; x < padded_width; ++x) {
-        v[x] = up1[x] + down1[x];
-        c[x] = up2[x] + down2[x];
-      }
+      add_rows(ring(y - 1), ring(y + 1), v, 2 * half);
+      add_rows(ring(y - 2), ring(y + 2), c, 2 * half);
+      const float *r0_even = ring(y), *r0_odd = r0_even + half;
+      const float *v_even = v, *v_odd = v + half, *c_even = c, *c_odd = c + half;
       for (int b = 0; b < 3; ++b) {
         const auto& fn = rows_of[b][y & 1];
-        fn[0](r0 + kReach, v + kReach, c + kReach, even, width);
-        fn[1](r0 + kReach, v + kReach, c + kReach, odd, width);
-        interleave(even, odd, planes[static_cast<std::size_t>(b)].ptr<float>(y), width,
+        // Output column 2i: padded 2i + 2, so x - 2 is even[i] and x - 1 odd[i]; column 2i + 1:
+        // padded 2i + 3, so x - 2 is odd[i] and x - 1 even[i + 1].
+        fn[0](r0_even, r0_odd, v_even, v_odd, c_even, c_odd, out_even, n_even);
+        fn[1](r0_odd, r0_even + 1, v_odd, v_even + 1, c_odd, c_even + 1, out_odd, n_odd);
+        interleave(out_even, out_odd, planes[static_cast<std::size_t>(b)].ptr<float>(y), width,
                    mark_no_signal);
       }
     }
