@@ -16,8 +16,9 @@
  *   (bilinear's differ and shift the colour: at a small peak 50-130 degC too hot) and a
  *   reading is that of the temperature field seen through one blur; a sample without light
  *   (below 5 noise-floor standard deviations) makes the bands drawn from it dim, so pixels at
- *   an edge to a cold background have no reading instead of a wild one. It costs about twice
- *   bilinear.
+ *   an edge to a cold background have no reading instead of a wild one. It costs about 1.6
+ *   times bilinear's demosaicking; a pool a few pixels across loses most of its readings with
+ *   it (its kernel reaches samples without light on the pool's steep sides).
  * - 5x5 snapshot mosaics give 25 bands, one reading per 5x5 macro-pixel (output width/5 x
  *   height/5, as the paper); band index = row * 5 + column in the cell, or the band map of the
  *   camera profile named by #GstDemosaic25:profile. Each band is sampled at its own place in
@@ -31,7 +32,7 @@
  *   are conservative with it.
  *
  * #GstDemosaic25:method auto (the default) is matched for 5x5 mosaics and bilinear for Bayer
- * (where matched costs about twice as much).
+ * (where matched leaves small pools with few readings).
  *
  * With a #GstDemosaic25:profile, a stream whose mosaic pattern (from the caps) is not the
  * profile's, or whose 5x5 band-map caps field (pyrocamsrc sets it from its profile) differs
@@ -467,16 +468,17 @@ static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
                                               GST_PARAM_MUTABLE_READY);
   g_object_class_install_property(
       gobject_class, PROP_METHOD,
-      g_param_spec_enum("method", "Demosaicking method",
-                        "How mosaics become band planes. Bayer: bilinear (full resolution, "
-                        "interpolated), bin2x2 (half resolution, R, mean G, B of each cell) or "
-                        "matched (full resolution, every band through a 5x5 kernel of the same "
-                        "spread: no colour shift on hot spots, no wild ratios at edges to a cold "
-                        "background; about twice bilinear's cost). 5x5 mosaics give one reading "
-                        "per macro-pixel: matched reads each band at the cell's centre "
-                        "(interpolated over 3x3 cells), bilinear and bin2x2 where it sits in the "
-                        "cell. auto: matched for 5x5, bilinear for Bayer",
-                        GST_TYPE_DEMOSAIC25_METHOD, DEFAULT_METHOD, ready));
+      g_param_spec_enum(
+          "method", "Demosaicking method",
+          "How mosaics become band planes. Bayer: bilinear (full resolution, "
+          "interpolated), bin2x2 (half resolution, R, mean G, B of each cell) or "
+          "matched (full resolution, every band through a 5x5 kernel of the same "
+          "spread: no colour shift on hot spots, no wild ratios at edges to a cold "
+          "background; about 1.6 times bilinear's cost). 5x5 mosaics give one reading "
+          "per macro-pixel: matched reads each band at the cell's centre "
+          "(interpolated over 3x3 cells), bilinear and bin2x2 where it sits in the "
+          "cell. auto: matched for 5x5, bilinear for Bayer",
+          GST_TYPE_DEMOSAIC25_METHOD, DEFAULT_METHOD, ready));
   g_object_class_install_property(
       gobject_class, PROP_PROFILE,
       g_param_spec_string("profile", "Camera profile",
