@@ -63,17 +63,23 @@ std::string EstimatorSelector::prepare(Method m) {
   try {
     if (!slot) slot = std::make_unique<PlaneEstimator>(model_, m);
     if (m != Method::kLut || lut_checked_) return "";
-    if (!cache_file_.empty() && std::filesystem::exists(cache_file_)) {
+    // The prebuilt table first, then the cache's blocks beyond it (a cache written after it was
+    // read holds its blocks first).
+    const auto load = [&](const std::string& file, std::size_t& read, std::string& problem) {
+      std::error_code ec;
+      if (file.empty() || !std::filesystem::exists(file, ec)) return;
       try {
-        cache_read_ = slot->estimator().load_tables(cache_file_);
+        read = slot->estimator().load_tables(file);
       } catch (const InputError& e) {
-        cache_problem_ = e.what();
+        problem = e.what();
       }
-    }
-    // A cache of this model's table (its fingerprint, grid and version, checksummed) that
+    };
+    load(prebuilt_file_, prebuilt_read_, prebuilt_problem_);
+    load(cache_file_, cache_read_, cache_problem_);
+    // A table file of this model's table (its fingerprint, grid and version, checksummed) that
     // records that the table passed this very check: the check's answer would be the same.
     const std::string passed = lut_check_verdict();
-    if (cache_read_ > 0 && slot->estimator().tables_verdict() == passed) {
+    if (cache_read_ + prebuilt_read_ > 0 && slot->estimator().tables_verdict() == passed) {
       lut_checked_ = lut_check_skipped_ = true;
       return "";
     }
