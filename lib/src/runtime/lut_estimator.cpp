@@ -158,7 +158,8 @@ class LutEstimator : public TemperatureEstimator {
   static constexpr std::size_t kHugePage = std::size_t{2} << 20;
   static constexpr std::size_t kArenaMappingBytes = kArenaBlocks * kBlockBytes + kHugePage;
 
-  explicit LutEstimator(std::shared_ptr<const ThermalModel> model)
+  // grid: that of a table file of this model (make_lut_estimator_on_grid), or null to derive it.
+  LutEstimator(std::shared_ptr<const ThermalModel> model, const TableGrid* grid)
       : TemperatureEstimator(std::move(model)), mlp_(model_) {
     const ThermalModel& m = *model_;
     const Normalisation& n = m.profile().normalisation;
@@ -170,6 +171,28 @@ class LutEstimator : public TemperatureEstimator {
     num0_ = n.numerators[0];
     num1_ = n.numerators[1];
     ref_ = n.reference;
+    if (grid)
+      take_grid(*grid);
+    else
+      derive_grid();
+    cells_x_ = static_cast<float>(blocks_x_ * kBlockCells);
+    cells_y_ = static_cast<float>(blocks_y_ * kBlockCells);
+    inv_h_ = static_cast<float>(1 / h_);
+    offset_x_ = static_cast<float>(x0_ / h_);
+    offset_y_ = static_cast<float>(y0_ / h_);
+    inv_ref_count_ = 1.0f / static_cast<float>(ref_.size());
+    lowest_ = static_cast<float>(m.min_temperature_c + kGuardC);
+    highest_ = static_cast<float>(m.max_temperature_c - kGuardC);
+    const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
+    blocks_.reset(new std::atomic<float*>[slots]);
+    for (std::size_t i = 0; i < slots; ++i) blocks_[i].store(nullptr, std::memory_order_relaxed);
+    reserve_arena();
+  }
+
+  // The grid from the model: its locus's box, widened, and the network's slope along it (a
+  // third of the table's start: the table files name it, make_lut_estimator_on_grid).
+  void derive_grid() {
+    const ThermalModel& m = *model_;
     const Locus locus = make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 1.0);
     // Steepest slope of the network along the locus, degC per unit ratio (L1 over both).
     double slope = 0;
@@ -196,18 +219,21 @@ class LutEstimator : public TemperatureEstimator {
     y0_ = y_lo;
     blocks_x_ = static_cast<int>(std::ceil((x_hi - x_lo) / h_ / kBlockCells));
     blocks_y_ = static_cast<int>(std::ceil((y_hi - y_lo) / h_ / kBlockCells));
-    cells_x_ = static_cast<float>(blocks_x_ * kBlockCells);
-    cells_y_ = static_cast<float>(blocks_y_ * kBlockCells);
-    inv_h_ = static_cast<float>(1 / h_);
-    offset_x_ = static_cast<float>(x0_ / h_);
-    offset_y_ = static_cast<float>(y0_ / h_);
-    inv_ref_count_ = 1.0f / static_cast<float>(ref_.size());
-    lowest_ = static_cast<float>(m.min_temperature_c + kGuardC);
-    highest_ = static_cast<float>(m.max_temperature_c - kGuardC);
-    const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
-    blocks_.reset(new std::atomic<float*>[slots]);
-    for (std::size_t i = 0; i < slots; ++i) blocks_[i].store(nullptr, std::memory_order_relaxed);
-    reserve_arena();
+  }
+
+  // A grid a table file names, checked only for being one derive_grid could give (the file's
+  // checksum and fingerprint tie it to the model; its blocks' values are checked when read).
+  void take_grid(const TableGrid& g) {
+    const double h = g.block_size / kBlockCells;
+    const double cells = static_cast<double>(g.across) * g.down * kBlockCells * kBlockCells;
+    if (!(g.x0 > 0) || !(g.y0 > 0) || !(h > 0) || !std::isfinite(g.x0) || !std::isfinite(g.y0) ||
+        !std::isfinite(h) || g.across <= 0 || g.down <= 0 || cells > 2.0 * kMaxCells)
+      throw InputError("method lut: a table file names an impossible grid");
+    h_ = h;
+    x0_ = g.x0;
+    y0_ = g.y0;
+    blocks_x_ = g.across;
+    blocks_y_ = g.down;
   }
 
   ~LutEstimator() override {
@@ -549,7 +575,12 @@ class LutEstimator : public TemperatureEstimator {
 
 std::unique_ptr<TemperatureEstimator> make_lut_estimator(
     std::shared_ptr<const ThermalModel> model) {
-  return std::make_unique<LutEstimator>(std::move(model));
+  return std::make_unique<LutEstimator>(std::move(model), nullptr);
+}
+
+std::unique_ptr<TemperatureEstimator> make_lut_estimator_on_grid(
+    std::shared_ptr<const ThermalModel> model, const TemperatureEstimator::TableGrid& grid) {
+  return std::make_unique<LutEstimator>(std::move(model), &grid);
 }
 
 }  // namespace pyrocam

@@ -70,6 +70,22 @@ void write_table_file(const std::string& path, const std::string& fields,
   }
 }
 
+bool read_table_fields(const std::string& path, TableFields& f) {
+  std::ifstream in(path, std::ios::binary);
+  char head[512] = {};
+  in.read(head, sizeof head - 1);
+  const std::string text(head, static_cast<std::size_t>(std::max<std::streamsize>(in.gcount(), 0)));
+  const std::size_t magic = std::strlen(kTableFileMagic);
+  const std::size_t end = text.find('\n', magic);
+  if (text.compare(0, magic, kTableFileMagic) != 0 || end == std::string::npos) return false;
+  char fingerprint[64] = "";
+  if (std::sscanf(text.substr(magic, end - magic).c_str(), "%63s %d %d %d %lg %lg %lg", fingerprint,
+                  &f.space, &f.across, &f.down, &f.h, &f.x0, &f.y0) != 7)
+    return false;
+  f.fingerprint = fingerprint;
+  return true;
+}
+
 TableFile read_table_file(const std::string& path, const std::string& fields,
                           std::size_t block_bytes, std::size_t max_blocks, std::size_t slots) {
   TableFile f;

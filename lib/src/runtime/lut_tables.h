@@ -33,6 +33,15 @@ struct TableFile {
   const char* values(std::size_t k) const;  // block_bytes of floats
 };
 
+// The fields of a table file's header, read from its first line alone (the checksum is not
+// checked: read_table_file does that); false when the file is not a table file of this version.
+struct TableFields {
+  std::string fingerprint;
+  int space = 0, across = 0, down = 0;
+  double h = 0, x0 = 0, y0 = 0;
+};
+bool read_table_fields(const std::string& path, TableFields& fields);
+
 // Writes `blocks` (their `indices`, block_bytes each) atomically: a temporary file, then a
 // rename. Throws InputError when it cannot.
 void write_table_file(const std::string& path, const std::string& fields,

@@ -146,8 +146,8 @@ TEST_F(PrebuiltTable, readings_are_those_of_a_table_filled_as_pixels_need_it) {
   EXPECT_LT(bright.prebuilt * all.lazy, all.prebuilt * bright.lazy);
 }
 
-// Through the selector as ratiotemp uses it: the prebuilt table spares the check and gives its
-// blocks; the cache written after it keeps its blocks and the run's own.
+// Through the selector as ratiotemp uses it: the prebuilt table spares the check, the grid's
+// derivation and gives its blocks; the cache written after it keeps its blocks and the run's own.
 TEST_F(PrebuiltTable, the_selector_reads_it_before_the_cache_and_skips_the_check) {
   ASSERT_EQ(result_.problem, "");
   ScratchDir cache("prebuilt-cache");
@@ -161,10 +161,21 @@ TEST_F(PrebuiltTable, the_selector_reads_it_before_the_cache_and_skips_the_check
   EXPECT_EQ(s.prebuilt_problem(), "");
   EXPECT_TRUE(s.lut_check_skipped());
   EXPECT_EQ(s.save_table_cache(), 0u) << "nothing beyond the prebuilt blocks";
+  // Its table is on the grid the file names (not derived again): the same as derived, the
+  // same readings as a table filled as pixels need it.
+  const TemperatureEstimator::TableGrid derived = make_estimator(model, Method::kLut)->table_grid();
+  const TemperatureEstimator::TableGrid named = s.estimator(Method::kLut).estimator().table_grid();
+  EXPECT_EQ(derived.x0, named.x0);
+  EXPECT_EQ(derived.y0, named.y0);
+  EXPECT_EQ(derived.block_size, named.block_size);
+  EXPECT_EQ(derived.across, named.across);
+  EXPECT_EQ(derived.down, named.down);
   const NoisyPixels px =
       noisy_pixels(*model, {700, 3300}, 200, 15, 40, saturation_signal_dn(*model), 0, 5);
-  cv::Mat out;
+  cv::Mat out, lazy;
   s.estimator(Method::kLut).estimate(as_planes(px), out);
+  PlaneEstimator(model, Method::kLut).estimate(as_planes(px), lazy);
+  EXPECT_EQ(differing(lazy, out), 0);
   EXPECT_GT(s.save_table_cache(), result_.blocks) << "the run's own blocks after the prebuilt";
 }
 

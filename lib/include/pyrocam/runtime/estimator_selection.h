@@ -57,7 +57,8 @@ class EstimatorSelector {
   void set_table_cache(std::string file) { cache_file_ = std::move(file); }
   // A table prebuilt for the model (prebuilt_tables.h: the model's path + ".lut"), read when the
   // lookup table is built, before the cache (whose blocks then add to it), and spared the check
-  // as the cache is; "" (the default): none. A file that is not there is no problem; one that
+  // as the cache is, and the grid it names spares deriving the table's (a third of its start);
+  // "" (the default): none. A file that is not there is no problem; one that
   // cannot be used (not such a file, altered, another model's, values this machine would not
   // compute) adds nothing, and prebuilt_problem() says why.
   void set_prebuilt_tables(std::string file) { prebuilt_file_ = std::move(file); }
@@ -75,6 +76,7 @@ class EstimatorSelector {
 
  private:
   std::string prepare(Method method);
+  std::unique_ptr<PlaneEstimator> lut_on_prebuilt_grid() const;
 
   std::shared_ptr<const ThermalModel> model_;
   std::array<std::unique_ptr<PlaneEstimator>, 3> estimators_;  // by Method
