@@ -318,8 +318,9 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
                        "estimator construction or its check failed in start");
     return FALSE;
   }
-  rt::report_table_files(self, *st.estimators, settings.model,
-                         st.method == pyrocam::Method::kLut || !choice.fallback.empty());
+  const bool lut = st.method == pyrocam::Method::kLut;
+  rt::report_table_files(self, *st.estimators, settings.model, lut || !choice.fallback.empty(),
+                         lut);
   if (!choice.fallback.empty())
     GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
                         ("method auto uses likelihood, not lut, for model %s: %s",

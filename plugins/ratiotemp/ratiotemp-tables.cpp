@@ -19,7 +19,7 @@ void set_table_files(pyrocam::EstimatorSelector& estimators, const pyrocam::Ther
 }
 
 void report_table_files(GstRatioTemp* self, const pyrocam::EstimatorSelector& estimators,
-                        const std::string& model_path, bool lut_built) {
+                        const std::string& model_path, bool lut_built, bool lut_used) {
   if (!lut_built) return;
   const std::string prebuilt = pyrocam::prebuilt_tables_file(model_path);
   if (!estimators.prebuilt_problem().empty()) {
@@ -38,7 +38,7 @@ void report_table_files(GstRatioTemp* self, const pyrocam::EstimatorSelector& es
     GST_WARNING_OBJECT(self, "table cache not used: %s", estimators.cache_problem().c_str());
   GST_INFO_OBJECT(self, "%zu table blocks from the cache", estimators.cache_blocks_read());
   std::error_code ec;
-  if (estimators.prebuilt_blocks_read() == 0 && estimators.cache_blocks_read() == 0 &&
+  if (lut_used && estimators.prebuilt_blocks_read() == 0 && estimators.cache_blocks_read() == 0 &&
       estimators.prebuilt_problem().empty() && !std::filesystem::exists(prebuilt, ec))
     GST_ELEMENT_WARNING(self, RESOURCE, NOT_FOUND,
                         ("No prebuilt lookup table beside model %s, and none in the table cache: "
