@@ -92,7 +92,11 @@ TableFile read_table_file(const std::string& path, const std::string& fields,
   f.block_bytes = block_bytes;
   std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) throw InputError("cannot read the lookup-table file " + path);
-  f.data.assign(static_cast<std::size_t>(std::max<std::streamoff>(in.tellg(), 0)), '\0');
+  // No larger than the most blocks it may hold with a generous header: refused before it is read.
+  const auto size = static_cast<std::size_t>(std::max<std::streamoff>(in.tellg(), 0));
+  if (size > 4096 + max_blocks * (sizeof(std::uint32_t) + block_bytes) + 17)
+    throw InputError("the lookup-table file " + path + " is larger than any table file");
+  f.data.assign(size, '\0');
   in.seekg(0);
   in.read(f.data.data(), static_cast<std::streamsize>(f.data.size()));
   if (!in) throw InputError("cannot read the lookup-table file " + path);

@@ -180,7 +180,8 @@ TEST_F(PrebuiltTable, the_selector_reads_it_before_the_cache_and_skips_the_check
 }
 
 // Altered, cut short, another model's, values this machine does not compute (a valid file
-// otherwise): refused with the reason, nothing added, the check run, the readings unchanged.
+// otherwise), larger than any table file (refused unread): refused with the reason, nothing added,
+// the check run, the readings unchanged.
 TEST_F(PrebuiltTable, a_corrupt_or_foreign_file_is_refused_and_the_readings_stay_n) {
   ASSERT_EQ(result_.problem, "");
   const auto model = test_model("test-model-rgb.json");
@@ -211,7 +212,9 @@ TEST_F(PrebuiltTable, a_corrupt_or_foreign_file_is_refused_and_the_readings_stay
       {"short", bytes.substr(0, bytes.size() / 3), "truncated or altered", model},
       {"text", "pyrocam thermal model\n", "not a lookup-table file", model},
       {"other-values", other_values, "other values than this machine computes", model},
-      {"other-model", bytes, "another model", other_model}};
+      {"other-model", bytes, "another model", other_model},
+      {"huge", bytes + std::string(std::size_t{2} << 20, '\0'), "larger than any table file",
+       model}};
   ScratchDir dir("prebuilt-bad");
   for (const Case& c : cases) {
     const std::string path = (dir / (c.name + ".lut")).string();
