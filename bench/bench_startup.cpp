@@ -1,7 +1,8 @@
 // Start-up time of ratiotemp: from PLAYING to its first output buffer, for a chain of the
 // simulated camera, cold (no table cache) and warm (the cache the previous run wrote), and the
 // library's share of it step by step (model load, estimator build, cache load, lookup table's
-// check). Prints figures; never a test.
+// check; the prebuilt table beside the model, <model>.lut, when there is one). Prints figures;
+// never a test.
 //
 // Usage: bench_startup --model M.json [--profile P] [--pattern 5x5] [--runs N] [--library-only]
 //        [--cache-dir DIR]
@@ -20,6 +21,7 @@
 #include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/model.h"
 #include "pyrocam/runtime/plane_estimator.h"
+#include "pyrocam/runtime/prebuilt_tables.h"
 
 namespace {
 
@@ -89,12 +91,17 @@ void breakdown(const std::string& model_path, const std::string& dir) {
   const double load = ms_since(t0);
   t0 = Clock::now();
   pyrocam::EstimatorSelector selector(model);
+  const std::string prebuilt = pyrocam::prebuilt_tables_file(model_path);
+  selector.set_prebuilt_tables(prebuilt);
   selector.set_table_cache(pyrocam::table_cache_file(*model, dir));
   const pyrocam::EstimatorSelector::Choice c = selector.select(pyrocam::MethodRequest::kAuto);
   const double select = ms_since(t0);
-  std::printf("  library: load_model %.1f ms, select(auto) -> %s %.1f ms (%zu cached blocks%s)\n",
-              load, pyrocam::method_name(c.method).c_str(), select, selector.cache_blocks_read(),
-              selector.lut_check_skipped() ? ", check verdict from the cache" : "");
+  std::printf(
+      "  library: load_model %.1f ms, select(auto) -> %s %.1f ms (%zu prebuilt blocks, %zu "
+      "cached blocks%s)\n",
+      load, pyrocam::method_name(c.method).c_str(), select, selector.prebuilt_blocks_read(),
+      selector.cache_blocks_read(),
+      selector.lut_check_skipped() ? ", check verdict from the files" : "");
   const pyrocam::Method kinds[] = {pyrocam::Method::kLut, pyrocam::Method::kLikelihood,
                                    pyrocam::Method::kMlp};
   for (pyrocam::Method m : kinds) {
@@ -102,9 +109,13 @@ void breakdown(const std::string& model_path, const std::string& dir) {
       t0 = Clock::now();
       pyrocam::PlaneEstimator e(model, m);
       const double build = ms_since(t0);
-      double cache = 0, check = 0;
-      std::size_t blocks = 0;
+      double cache = 0, check = 0, prebuilt_ms = 0;
+      std::size_t blocks = 0, prebuilt_blocks = 0;
       if (m == pyrocam::Method::kLut) {
+        t0 = Clock::now();
+        if (std::filesystem::exists(prebuilt))
+          prebuilt_blocks = e.estimator().load_tables(prebuilt);
+        prebuilt_ms = ms_since(t0);
         const std::string file = pyrocam::table_cache_file(*model, dir);
         t0 = Clock::now();
         if (std::filesystem::exists(file)) blocks = e.estimator().load_tables(file);
@@ -116,7 +127,9 @@ void breakdown(const std::string& model_path, const std::string& dir) {
       }
       std::printf("    %-10s build %.1f ms", pyrocam::method_name(m).c_str(), build);
       if (m == pyrocam::Method::kLut)
-        std::printf(", cache load %.1f ms (%zu blocks), check %.1f ms", cache, blocks, check);
+        std::printf(
+            ", prebuilt load %.1f ms (%zu blocks), cache load %.1f ms (%zu blocks), check %.1f ms",
+            prebuilt_ms, prebuilt_blocks, cache, blocks, check);
       std::printf("\n");
     } catch (const std::exception& e) {
       std::printf("    %-10s not for this model (%s)\n", pyrocam::method_name(m).c_str(), e.what());

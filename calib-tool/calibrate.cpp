@@ -3,8 +3,12 @@
 
 #include <filesystem>
 #include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "commands.h"
+#include "pyrocam/runtime/prebuilt_tables.h"
 #include "report.h"
 
 namespace pyrocam::cli {
@@ -13,7 +17,27 @@ namespace {
 struct CalibrateArgs {
   std::string dataset, profile = "rgb-reference", out = "model.json", report;
   CalibrationOptions options;
+  bool no_table = false;
 };
+
+// The prebuilt lookup table beside a colour model (none for a 5x5 model, which has no table):
+// a line for the summary, or a warning. A table that cannot be made leaves the model usable
+// (ratiotemp then fills its table as pixels need it).
+void prebuild_beside(const std::string& model_path, std::vector<std::string>& lines,
+                     std::vector<std::string>& warnings) {
+  const std::string file = prebuilt_tables_file(model_path);
+  try {
+    const auto model = std::make_shared<const ThermalModel>(load_model(model_path));
+    const bool colour = model->profile().normalisation.numerators.size() == 2;
+    const PrebuiltTables t = prebuild_tables(model, file);
+    if (t.problem.empty())
+      lines.push_back("table:  " + file + " (" + std::to_string(t.blocks) + " blocks)");
+    else if (colour)
+      warnings.push_back("no prebuilt lookup table: " + t.problem);
+  } catch (const std::exception& e) {
+    warnings.push_back("prebuilt lookup table not written: " + std::string(e.what()));
+  }
+}
 
 }  // namespace
 
@@ -27,7 +51,9 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
       "  pyrocam-calib calibrate --dataset furnace-nir --profile nir5x5-reference --solver "
       "regularised --out nir-model.json\n"
       "The report is written beside the model (<out>-report.html and .json) unless --report "
-      "names another prefix. Nothing is written when calibration fails.");
+      "names another prefix, and for a colour camera the prebuilt lookup table (<out>.lut, "
+      "ratiotemp's fast start) unless --no-prebuilt-table. Nothing is written when calibration "
+      "fails.");
   c->add_option("--dataset", a.dataset, "Dataset folder (manifest.csv, images, roi.png)")
       ->required();
   c->add_option("--profile", a.profile, "Camera profile: shipped name or .json path")
@@ -68,6 +94,9 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
   c->add_option("--threads", a.options.threads, "Threads for reading frames")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
+  c->add_flag("--no-prebuilt-table", a.no_table,
+              "Write no prebuilt lookup table beside a colour model (<out>.lut): ratiotemp then "
+              "fills its table as the first frames need it (seconds on a first run)");
   c->callback([&global, &selected] {
     if (!(a.options.min_temperature_c < a.options.max_temperature_c))
       throw CLI::ValidationError("--min-temperature", "must be below --max-temperature");
@@ -99,14 +128,22 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
       save_model(o.model, a.out);
       write_report_html(o, prefix + ".html");
       write_report_json(o, prefix + ".json");
+      std::vector<std::string> table_lines, warnings = o.warnings;
+      if (!a.no_table) {
+        prebuild_beside(a.out, table_lines, warnings);
+      } else {
+        std::error_code ec;  // a table of an earlier model of that name: never read again
+        std::filesystem::remove(prebuilt_tables_file(a.out), ec);
+      }
       if (!global.quiet) {
-        for (const auto& w : o.warnings) std::cerr << "warning: " << w << "\n";
+        for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
         std::cout << o.verdict << "\n";
         for (const auto& s : o.table4)
           std::printf("  %-22s rms %7.2f degC  mean %7.2f  std %7.2f  (%zu settings)\n",
                       s.name.c_str(), s.rms, s.mean, s.std, s.true_c.size());
         std::cout << "model:  " << a.out << "\nreport: " << prefix << ".html, " << prefix
                   << ".json\n";
+        for (const auto& line : table_lines) std::cout << line << "\n";
       }
       return kExitOk;
     };

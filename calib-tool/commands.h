@@ -46,5 +46,6 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
 void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& selected);
 void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& selected);
 void add_export_command(CLI::App& app, const GlobalOptions& global, Command& selected);
+void add_prebuild_command(CLI::App& app, const GlobalOptions& global, Command& selected);
 
 }  // namespace pyrocam::cli

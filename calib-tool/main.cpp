@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   add_calibrate_command(app, global, selected);
   add_measure_command(app, global, selected);
   add_export_command(app, global, selected);
+  add_prebuild_command(app, global, selected);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -37,9 +37,12 @@ rm -rf "$campaign"
 # Written under another name and renamed: a pipeline started meanwhile, or a calibration that
 # fails half-way, never finds a partial model under the final name.
 partial="${model%.json}.partial-$$.json"
-trap 'rm -f "$partial"' EXIT
+trap 'rm -f "$partial" "$partial.lut"' EXIT
 "$tool" calibrate --dataset "$campaign" --profile "$profile" --out "$partial" \
   --report "${model%.json}-report"
+# A colour model's prebuilt lookup table goes with it, named after it (first: the model's name
+# is what a pipeline waits for).
+if [[ -f $partial.lut ]]; then mv -f "$partial.lut" "$model.lut"; fi
 mv -f "$partial" "$model"
 echo "ensure-model: wrote $model (report: ${model%.json}-report.html)"
 

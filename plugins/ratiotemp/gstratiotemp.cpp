@@ -307,9 +307,7 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
   if (!ok) return FALSE;
   st.model_path = settings.model;
   st.estimators = std::make_unique<pyrocam::EstimatorSelector>(st.model);
-  st.estimators->set_table_cache(pyrocam::table_cache_file(
-      *st.model,
-      settings.table_cache_set ? settings.table_cache : pyrocam::default_table_cache_dir()));
+  rt::set_table_files(*st.estimators, *st.model, settings);
   const pyrocam::EstimatorSelector::Choice choice =
       st.estimators->select(rt::to_library(settings.method));
   st.method = choice.method;
@@ -320,9 +318,9 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
                        "estimator construction or its check failed in start");
     return FALSE;
   }
-  if (!st.estimators->cache_problem().empty())
-    GST_WARNING_OBJECT(self, "table cache not used: %s", st.estimators->cache_problem().c_str());
-  GST_INFO_OBJECT(self, "%zu table blocks from the cache", st.estimators->cache_blocks_read());
+  const bool lut = st.method == pyrocam::Method::kLut;
+  rt::report_table_files(self, *st.estimators, settings.model, lut || !choice.fallback.empty(),
+                         lut);
   if (!choice.fallback.empty())
     GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
                         ("method auto uses likelihood, not lut, for model %s: %s",

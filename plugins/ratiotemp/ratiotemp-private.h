@@ -105,6 +105,16 @@ struct MappedFrame {
   cv::Mat image;
 };
 
+/* The lookup table's files (ratiotemp-tables.cpp): the prebuilt table beside the model and the
+ * table cache, set on the selector before it builds the table; then, when it built one
+ * (`lut_built`), what they gave, as info, or as a warning on the bus for a prebuilt table that
+ * could not be used, or, when the table reads the frames (`lut_used`), for a cold start (no
+ * prebuilt table, nothing cached). */
+void set_table_files(pyrocam::EstimatorSelector& estimators, const pyrocam::ThermalModel& model,
+                     const Settings& settings);
+void report_table_files(GstRatioTemp* self, const pyrocam::EstimatorSelector& estimators,
+                        const std::string& model_path, bool lut_built, bool lut_used);
+
 /* GObject properties: installed by class_init, read and written under the object lock. */
 void install_properties(GObjectClass* klass);
 void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpec* pspec);

@@ -21,6 +21,12 @@ class MlpEstimator : public TemperatureEstimator {
 
 // lut_estimator.cpp: throws InputError unless the model has exactly two ratios.
 std::unique_ptr<TemperatureEstimator> make_lut_estimator(std::shared_ptr<const ThermalModel> model);
+// The same on a grid a table file of the model names (TemperatureEstimator::table_grid of the
+// table that wrote it) instead of the one derived from the model's locus and network (a third of
+// the table's start, and the same grid for a file this build wrote for the model); throws
+// InputError for a grid no model gives.
+std::unique_ptr<TemperatureEstimator> make_lut_estimator_on_grid(
+    std::shared_ptr<const ThermalModel> model, const TemperatureEstimator::TableGrid& grid);
 // likelihood_estimator.cpp: the fast fit.
 std::unique_ptr<TemperatureEstimator> make_likelihood_estimator(
     std::shared_ptr<const ThermalModel> model);

@@ -6,6 +6,8 @@
 #include <stdexcept>
 
 #include "pyrocam/core/error.h"
+#include "runtime/estimator_kinds.h"
+#include "runtime/lut_tables.h"
 #include "runtime/shared_model.h"
 
 namespace pyrocam {
@@ -57,23 +59,54 @@ EstimatorSelector::EstimatorSelector(std::shared_ptr<const ThermalModel> model)
   require_model(model_, "estimator selection");
 }
 
+// The lookup table on the grid its prebuilt table names, when that file is one of this model's:
+// the grid need not be derived again (null otherwise).
+std::unique_ptr<PlaneEstimator> EstimatorSelector::lut_on_prebuilt_grid() const {
+  lut::TableFields f;
+  std::error_code ec;
+  if (prebuilt_file_.empty() || !std::filesystem::exists(prebuilt_file_, ec) ||
+      !lut::read_table_fields(prebuilt_file_, f) || f.fingerprint != model_->fingerprint ||
+      f.space != static_cast<int>(model_->mlp.output_transform()))
+    return nullptr;
+  try {
+    const TemperatureEstimator::TableGrid grid{f.x0, f.y0, f.h * 16, f.across, f.down};
+    return std::make_unique<PlaneEstimator>(model_, make_lut_estimator_on_grid(model_, grid),
+                                            Method::kLut);
+  } catch (const InputError&) {
+    return nullptr;  // load_tables says why
+  }
+}
+
 std::string EstimatorSelector::prepare(Method m) {
   if (m == Method::kLut && lut_checked_ && !lut_problem_.empty()) return lut_problem_;
   auto& slot = estimators_[static_cast<std::size_t>(m)];
   try {
+    bool on_file_grid = false;
+    if (!slot && m == Method::kLut && !lut_checked_) {
+      slot = lut_on_prebuilt_grid();
+      on_file_grid = slot != nullptr;
+    }
     if (!slot) slot = std::make_unique<PlaneEstimator>(model_, m);
     if (m != Method::kLut || lut_checked_) return "";
-    if (!cache_file_.empty() && std::filesystem::exists(cache_file_)) {
+    // The prebuilt table first, then the cache's blocks beyond it (a cache written after it was
+    // read holds its blocks first).
+    const auto load = [&](const std::string& file, std::size_t& read, std::string& problem) {
+      std::error_code ec;
+      if (file.empty() || !std::filesystem::exists(file, ec)) return;
       try {
-        cache_read_ = slot->estimator().load_tables(cache_file_);
+        read = slot->estimator().load_tables(file);
       } catch (const InputError& e) {
-        cache_problem_ = e.what();
+        problem = e.what();
       }
-    }
-    // A cache of this model's table (its fingerprint, grid and version, checksummed) that
+    };
+    load(prebuilt_file_, prebuilt_read_, prebuilt_problem_);
+    if (on_file_grid && !prebuilt_problem_.empty())
+      slot = std::make_unique<PlaneEstimator>(model_, m);  // the grid of a file not used: derived
+    load(cache_file_, cache_read_, cache_problem_);
+    // A table file of this model's table (its fingerprint, grid and version, checksummed) that
     // records that the table passed this very check: the check's answer would be the same.
     const std::string passed = lut_check_verdict();
-    if (cache_read_ > 0 && slot->estimator().tables_verdict() == passed) {
+    if (cache_read_ + prebuilt_read_ > 0 && slot->estimator().tables_verdict() == passed) {
       lut_checked_ = lut_check_skipped_ = true;
       return "";
     }

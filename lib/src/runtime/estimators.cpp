@@ -85,5 +85,6 @@ std::unique_ptr<TemperatureEstimator> make_estimator(std::shared_ptr<const Therm
 std::size_t TemperatureEstimator::save_tables(const std::string&) const { return 0; }
 std::size_t TemperatureEstimator::load_tables(const std::string&) const { return 0; }
 void TemperatureEstimator::set_tables_verdict(const std::string&) const {}
+std::size_t TemperatureEstimator::fill_tables(const std::vector<std::uint32_t>&) const { return 0; }
 
 }  // namespace pyrocam

@@ -1,7 +1,6 @@
 // The lookup-table estimator (Method::kLut): the network tabulated over a colour camera's two
 // ratios, with its per-pixel passes (compiled for AVX2 too).
 #include <sys/mman.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -10,7 +9,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -25,6 +23,7 @@
 #include "pyrocam/core/spectrum.h"
 #include "pyrocam/runtime/model.h"
 #include "runtime/estimator_kinds.h"
+#include "runtime/lut_tables.h"
 
 namespace pyrocam {
 namespace {
@@ -115,22 +114,6 @@ bool interpolate(const float* __restrict c0, const float* __restrict c1, const f
 
 }  // namespace lut
 
-// FNV-1a over 8-byte words (then the tail's bytes), as 16 hex digits: a table cache's checksum,
-// eight times faster than bytewise FNV-1a over its megabytes.
-std::string cache_checksum(const char* data, std::size_t n) {
-  std::uint64_t h = 1469598103934665603ull;
-  std::size_t i = 0;
-  for (; i + 8 <= n; i += 8) {
-    std::uint64_t word;
-    std::memcpy(&word, data + i, 8);
-    h = (h ^ word) * 1099511628211ull;
-  }
-  for (; i < n; ++i) h = (h ^ static_cast<unsigned char>(data[i])) * 1099511628211ull;
-  char text[17];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
-  return text;
-}
-
 // The network tabulated over the colour camera's two ratios x = (s_n0 / ref, s_n1 / ref)
 // themselves, on a uniform grid. A ReLU network is piecewise affine in its inputs (log ratios,
 // when it takes their logarithms, which are close to affine over a cell) and a grid cell is a
@@ -165,17 +148,18 @@ class LutEstimator : public TemperatureEstimator {
   static constexpr std::size_t kMaxCachedBlocks = kMaxBlocks / 2;
   static constexpr std::size_t kBlockFloats = 4 * kBlockCells * kBlockCells;
   static constexpr std::size_t kBlockBytes = kBlockFloats * sizeof(float);
+  // A block in a table file: the network at its nodes, row after row (kBlockNodes^2 floats).
+  static constexpr std::size_t kNodeFloats = kBlockNodes * kBlockNodes;
+  static constexpr std::size_t kNodeBytes = kNodeFloats * sizeof(float);
   // The blocks live in one arena: address space for the budget and some slack, committed by the
   // kernel page by page as blocks are filled, on 2 MB pages where it gives them (a frame's table
   // reads then need a few TLB entries instead of one per 4 KB block: most of their cost).
   static constexpr std::size_t kArenaBlocks = kMaxBlocks + 512;
   static constexpr std::size_t kHugePage = std::size_t{2} << 20;
   static constexpr std::size_t kArenaMappingBytes = kArenaBlocks * kBlockBytes + kHugePage;
-  // Bump when a block's values would change (grid rule, network arithmetic, output space).
-  // (3: the header ends with the tables' verdict.)
-  static constexpr const char* kCacheMagic = "pyrocam lookup-table cache 3\n";
 
-  explicit LutEstimator(std::shared_ptr<const ThermalModel> model)
+  // grid: that of a table file of this model (make_lut_estimator_on_grid), or null to derive it.
+  LutEstimator(std::shared_ptr<const ThermalModel> model, const TableGrid* grid)
       : TemperatureEstimator(std::move(model)), mlp_(model_) {
     const ThermalModel& m = *model_;
     const Normalisation& n = m.profile().normalisation;
@@ -187,6 +171,28 @@ class LutEstimator : public TemperatureEstimator {
     num0_ = n.numerators[0];
     num1_ = n.numerators[1];
     ref_ = n.reference;
+    if (grid)
+      take_grid(*grid);
+    else
+      derive_grid();
+    cells_x_ = static_cast<float>(blocks_x_ * kBlockCells);
+    cells_y_ = static_cast<float>(blocks_y_ * kBlockCells);
+    inv_h_ = static_cast<float>(1 / h_);
+    offset_x_ = static_cast<float>(x0_ / h_);
+    offset_y_ = static_cast<float>(y0_ / h_);
+    inv_ref_count_ = 1.0f / static_cast<float>(ref_.size());
+    lowest_ = static_cast<float>(m.min_temperature_c + kGuardC);
+    highest_ = static_cast<float>(m.max_temperature_c - kGuardC);
+    const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
+    blocks_.reset(new std::atomic<float*>[slots]);
+    for (std::size_t i = 0; i < slots; ++i) blocks_[i].store(nullptr, std::memory_order_relaxed);
+    reserve_arena();
+  }
+
+  // The grid from the model: its locus's box, widened, and the network's slope along it (a
+  // third of the table's start: the table files name it, make_lut_estimator_on_grid).
+  void derive_grid() {
+    const ThermalModel& m = *model_;
     const Locus locus = make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 1.0);
     // Steepest slope of the network along the locus, degC per unit ratio (L1 over both).
     double slope = 0;
@@ -213,18 +219,21 @@ class LutEstimator : public TemperatureEstimator {
     y0_ = y_lo;
     blocks_x_ = static_cast<int>(std::ceil((x_hi - x_lo) / h_ / kBlockCells));
     blocks_y_ = static_cast<int>(std::ceil((y_hi - y_lo) / h_ / kBlockCells));
-    cells_x_ = static_cast<float>(blocks_x_ * kBlockCells);
-    cells_y_ = static_cast<float>(blocks_y_ * kBlockCells);
-    inv_h_ = static_cast<float>(1 / h_);
-    offset_x_ = static_cast<float>(x0_ / h_);
-    offset_y_ = static_cast<float>(y0_ / h_);
-    inv_ref_count_ = 1.0f / static_cast<float>(ref_.size());
-    lowest_ = static_cast<float>(m.min_temperature_c + kGuardC);
-    highest_ = static_cast<float>(m.max_temperature_c - kGuardC);
-    const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
-    blocks_.reset(new std::atomic<float*>[slots]);
-    for (std::size_t i = 0; i < slots; ++i) blocks_[i].store(nullptr, std::memory_order_relaxed);
-    reserve_arena();
+  }
+
+  // A grid a table file names, checked only for being one derive_grid could give (the file's
+  // checksum and fingerprint tie it to the model; its blocks' values are checked when read).
+  void take_grid(const TableGrid& g) {
+    const double h = g.block_size / kBlockCells;
+    const double cells = static_cast<double>(g.across) * g.down * kBlockCells * kBlockCells;
+    if (!(g.x0 > 0) || !(g.y0 > 0) || !(h > 0) || !std::isfinite(g.x0) || !std::isfinite(g.y0) ||
+        !std::isfinite(h) || g.across <= 0 || g.down <= 0 || cells > 2.0 * kMaxCells)
+      throw InputError("method lut: a table file names an impossible grid");
+    h_ = h;
+    x0_ = g.x0;
+    y0_ = g.y0;
+    blocks_x_ = g.across;
+    blocks_y_ = g.down;
   }
 
   ~LutEstimator() override {
@@ -299,16 +308,13 @@ class LutEstimator : public TemperatureEstimator {
     }
   }
 
-  // The cache file: kCacheMagic, then a header line naming the model's fingerprint, the
-  // output space, the grid, the block count and the verdict ("-" for none), then per block its
-  // index (uint32) and its 4 * kBlockCells^2 floats (host byte order: the cache belongs to one
-  // machine), then the checksum of everything before it (cache_checksum) as a text line.
-  std::string cache_header(std::size_t blocks, const std::string& verdict) const {
+  // The fields of a table file's header (lut_tables.h): the model's fingerprint, the output
+  // space and the grid.
+  std::string table_fields() const {
     char line[256];
-    std::snprintf(line, sizeof line, "%s %d %d %d %.17g %.17g %.17g %zu ",
-                  model_->fingerprint.c_str(), static_cast<int>(space_), blocks_x_, blocks_y_, h_,
-                  x0_, y0_, blocks);
-    return std::string(kCacheMagic) + line + (verdict.empty() ? "-" : verdict) + "\n";
+    std::snprintf(line, sizeof line, "%s %d %d %d %.17g %.17g %.17g", model_->fingerprint.c_str(),
+                  static_cast<int>(space_), blocks_x_, blocks_y_, h_, x0_, y0_);
+    return line;
   }
 
   void set_tables_verdict(const std::string& verdict) const override {
@@ -333,87 +339,65 @@ class LutEstimator : public TemperatureEstimator {
     const bool new_blocks = order.size() > loaded_ && loaded_ < kMaxCachedBlocks;
     if (model_->fingerprint.empty() || order.empty() || (!new_blocks && verdict == loaded_verdict_))
       return 0;
-    std::size_t count = 0;
-    std::string body;
-    for (std::uint32_t index : order) {
-      if (count == kMaxCachedBlocks) break;
-      body.append(reinterpret_cast<const char*>(&index), sizeof index);
-      body.append(reinterpret_cast<const char*>(blocks_[index].load(std::memory_order_acquire)),
-                  kBlockBytes);
-      ++count;
+    if (order.size() > kMaxCachedBlocks) order.resize(kMaxCachedBlocks);
+    std::vector<float> nodes(order.size() * kNodeFloats);
+    std::vector<const float*> values;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      values.push_back(&nodes[k * kNodeFloats]);
+      to_nodes(blocks_[order[k]].load(std::memory_order_acquire), &nodes[k * kNodeFloats]);
     }
-    std::string data = cache_header(count, verdict) + body;
-    data += cache_checksum(data.data(), data.size()) + "\n";
-    const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
-    {
-      std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-      out.write(data.data(), static_cast<std::streamsize>(data.size()));
-      out.close();
-      if (!out) {
-        std::remove(temporary.c_str());
-        throw InputError("could not write the table cache " + temporary);
-      }
-    }
-    if (std::rename(temporary.c_str(), path.c_str()) != 0) {
-      std::remove(temporary.c_str());
-      throw InputError("could not rename the table cache to " + path);
-    }
-    return count;
+    pyrocam::lut::write_table_file(path, table_fields(), verdict, order, values, kNodeBytes);
+    return order.size();
   }
 
   std::size_t load_tables(const std::string& path) const override {
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    if (!in) throw InputError("cannot read the table cache " + path);
-    std::string data(static_cast<std::size_t>(std::max<std::streamoff>(in.tellg(), 0)), '\0');
-    in.seekg(0);
-    in.read(data.data(), static_cast<std::streamsize>(data.size()));
-    if (!in) throw InputError("cannot read the table cache " + path);
-    const std::size_t magic = std::strlen(kCacheMagic);
-    const std::size_t header_end = data.find('\n', magic);
-    if (data.compare(0, magic, kCacheMagic) != 0 || header_end == std::string::npos)
-      throw InputError("the table cache " + path + " is not a table cache of this version");
-    std::size_t count = 0;
-    const std::string header = data.substr(0, header_end + 1);
-    char verdict[64] = "";
-    if (std::sscanf(header.c_str() + magic, "%*s %*d %*d %*d %*g %*g %*g %zu %63s", &count,
-                    verdict) != 2 ||
-        header != cache_header(count, verdict == std::string("-") ? "" : verdict))
-      throw InputError("the table cache " + path +
-                       " is for another model, grid or version (header " +
-                       header.substr(magic, header.size() - magic - 1) + ")");
-    const std::size_t record = sizeof(std::uint32_t) + kBlockBytes;
-    const std::size_t body_end = header.size() + count * record;
-    if (count > kMaxCachedBlocks || data.size() != body_end + 17 ||
-        data.compare(body_end, 17, cache_checksum(data.data(), body_end) + "\n") != 0)
-      throw InputError("the table cache " + path + " is truncated or altered (checksum)");
     const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
-    for (std::size_t k = 0; k < count; ++k) {
-      std::uint32_t index = 0;
-      std::memcpy(&index, data.data() + header.size() + k * record, sizeof index);
-      if (index >= slots)
-        throw InputError("the table cache " + path + " names a block outside the table");
+    const pyrocam::lut::TableFile file =
+        pyrocam::lut::read_table_file(path, table_fields(), kNodeBytes, kMaxCachedBlocks, slots);
+    // The file's values must be the ones this machine computes (a file written with another
+    // byte order or other network arithmetic is refused): its first and last blocks, again.
+    std::vector<float> again(kNodeFloats);
+    for (std::size_t k = 0; k < file.count;
+         k = k == 0 && file.count > 1 ? file.count - 1 : file.count) {
+      compute_nodes(static_cast<int>(file.index(k)) % blocks_x_,
+                    static_cast<int>(file.index(k)) / blocks_x_, again.data());
+      if (std::memcmp(again.data(), file.values(k), kNodeBytes) != 0)
+        throw InputError("the lookup-table file " + path + " holds other values than this " +
+                         "machine computes for block " + std::to_string(file.index(k)) +
+                         " (written by another build, machine or byte order)");
     }
     std::size_t added = 0;
-    for (std::size_t k = 0; k < count; ++k) {
-      const char* at = data.data() + header.size() + k * record;
-      std::uint32_t index = 0;
-      std::memcpy(&index, at, sizeof index);
+    std::vector<float> nodes(kNodeFloats);
+    for (std::size_t k = 0; k < file.count; ++k) {
+      const std::uint32_t index = file.index(k);
       if (blocks_[index].load(std::memory_order_acquire)) continue;
       float* values = allocate_block();
       if (!values) break;  // the arena is used up: the rest is filled as pixels need it
-      std::memcpy(values, at + sizeof index, kBlockBytes);
-      float* expected = nullptr;
-      if (blocks_[index].compare_exchange_strong(expected, values, std::memory_order_acq_rel)) {
-        built_.fetch_add(1, std::memory_order_relaxed);
-        std::lock_guard<std::mutex> lock(order_mutex_);
-        built_order_.push_back(index);
-        ++added;
-      }
+      std::memcpy(nodes.data(), file.values(k), kNodeBytes);
+      from_nodes(nodes.data(), values);
+      if (publish(index, values) == values) ++added;
     }
     loaded_ = built_.load(std::memory_order_acquire);
-    loaded_verdict_ = verdict == std::string("-") ? "" : verdict;
+    loaded_verdict_ = file.verdict;
     set_tables_verdict(loaded_verdict_);
     return added;
+  }
+
+  TableGrid table_grid() const override {
+    return {x0_, y0_, h_ * kBlockCells, blocks_x_, blocks_y_};
+  }
+
+  std::size_t fill_tables(const std::vector<std::uint32_t>& indices) const override {
+    const auto slots = static_cast<std::size_t>(blocks_x_) * static_cast<std::size_t>(blocks_y_);
+    for (std::uint32_t index : indices) {
+      if (index >= slots)
+        throw InputError("fill_tables: block " + std::to_string(index) +
+                         " is outside the lookup table");
+      if (built_.load(std::memory_order_relaxed) >= kMaxCachedBlocks) break;
+      if (!blocks_[index].load(std::memory_order_acquire))
+        build_block(static_cast<int>(index) % blocks_x_, static_cast<int>(index) / blocks_x_);
+    }
+    return built_.load(std::memory_order_relaxed);
   }
 
   std::size_t memory_bytes() const override {
@@ -489,11 +473,8 @@ class LutEstimator : public TemperatureEstimator {
     return mlp_.temperature_c(s);
   }
 
-  // Fills a block with the network at its nodes and publishes it; two threads that need the same
-  // block at once both compute it (the same values) and one copy is kept. Null once kMaxBlocks
-  // are filled.
-  const float* build_block(int bx, int by) const {
-    if (built_.load(std::memory_order_relaxed) >= kMaxBlocks) return nullptr;
+  // The network at a block's nodes, row after row: kNodeFloats values.
+  void compute_nodes(int bx, int by, float* nodes) const {
     Eigen::MatrixXd x(kBlockNodes * kBlockNodes, 2);
     for (int j = 0; j < kBlockNodes; ++j)
       for (int i = 0; i < kBlockNodes; ++i) {
@@ -501,26 +482,56 @@ class LutEstimator : public TemperatureEstimator {
         x(j * kBlockNodes + i, 1) = y0_ + (by * kBlockCells + j) * h_;
       }
     const Eigen::VectorXd t = to_output_space(model_->mlp.predict(x));
-    // Cell after cell, each with its four corners (one 16-byte read per pixel).
-    float* values = allocate_block();
-    if (!values) return nullptr;
+    for (std::size_t k = 0; k < kNodeFloats; ++k)
+      nodes[k] = static_cast<float>(t[static_cast<Eigen::Index>(k)]);
+  }
+
+  // A block's values from its nodes: cell after cell, each with its four corners (one 16-byte
+  // read per pixel), kBlockFloats values; and back (every node is some cell's corner).
+  static void from_nodes(const float* nodes, float* values) {
     for (int j = 0; j < kBlockCells; ++j)
       for (int i = 0; i < kBlockCells; ++i) {
         float* c = &values[static_cast<std::size_t>(4 * (j * kBlockCells + i))];
-        c[0] = static_cast<float>(t[j * kBlockNodes + i]);
-        c[1] = static_cast<float>(t[j * kBlockNodes + i + 1]);
-        c[2] = static_cast<float>(t[(j + 1) * kBlockNodes + i]);
-        c[3] = static_cast<float>(t[(j + 1) * kBlockNodes + i + 1]);
+        c[0] = nodes[j * kBlockNodes + i];
+        c[1] = nodes[j * kBlockNodes + i + 1];
+        c[2] = nodes[(j + 1) * kBlockNodes + i];
+        c[3] = nodes[(j + 1) * kBlockNodes + i + 1];
       }
-    std::atomic<float*>& slot = blocks_[static_cast<std::size_t>(by * blocks_x_ + bx)];
+  }
+  static void to_nodes(const float* values, float* nodes) {
+    for (int j = 0; j < kBlockCells; ++j)
+      for (int i = 0; i < kBlockCells; ++i) {
+        const float* c = &values[static_cast<std::size_t>(4 * (j * kBlockCells + i))];
+        nodes[j * kBlockNodes + i] = c[0];
+        nodes[j * kBlockNodes + i + 1] = c[1];
+        nodes[(j + 1) * kBlockNodes + i] = c[2];
+        nodes[(j + 1) * kBlockNodes + i + 1] = c[3];
+      }
+  }
+
+  // Publishes a block's values unless another thread was first; returns the block's values.
+  float* publish(std::uint32_t index, float* values) const {
     float* expected = nullptr;
-    if (slot.compare_exchange_strong(expected, values, std::memory_order_acq_rel)) {
+    if (blocks_[index].compare_exchange_strong(expected, values, std::memory_order_acq_rel)) {
       built_.fetch_add(1, std::memory_order_relaxed);
       std::lock_guard<std::mutex> lock(order_mutex_);
-      built_order_.push_back(static_cast<std::uint32_t>(by * blocks_x_ + bx));
+      built_order_.push_back(index);
       return values;
     }
     return expected;  // another thread was first (its arena place stays unused)
+  }
+
+  // Fills a block with the network at its nodes and publishes it; two threads that need the same
+  // block at once both compute it (the same values) and one copy is kept. Null once kMaxBlocks
+  // are filled.
+  const float* build_block(int bx, int by) const {
+    if (built_.load(std::memory_order_relaxed) >= kMaxBlocks) return nullptr;
+    float* values = allocate_block();
+    if (!values) return nullptr;
+    float nodes[kNodeFloats];
+    compute_nodes(bx, by, nodes);
+    from_nodes(nodes, values);
+    return publish(static_cast<std::uint32_t>(by * blocks_x_ + bx), values);
   }
 
   // The table holds the network's answer in the space of its output unit (1/T for an
@@ -564,7 +575,12 @@ class LutEstimator : public TemperatureEstimator {
 
 std::unique_ptr<TemperatureEstimator> make_lut_estimator(
     std::shared_ptr<const ThermalModel> model) {
-  return std::make_unique<LutEstimator>(std::move(model));
+  return std::make_unique<LutEstimator>(std::move(model), nullptr);
+}
+
+std::unique_ptr<TemperatureEstimator> make_lut_estimator_on_grid(
+    std::shared_ptr<const ThermalModel> model, const TemperatureEstimator::TableGrid& grid) {
+  return std::make_unique<LutEstimator>(std::move(model), &grid);
 }
 
 }  // namespace pyrocam

@@ -21,6 +21,16 @@ PlaneEstimator::PlaneEstimator(std::shared_ptr<const ThermalModel> model, Method
   set_misfit_probability(misfit_probability);
 }
 
+PlaneEstimator::PlaneEstimator(std::shared_ptr<const ThermalModel> model,
+                               std::unique_ptr<TemperatureEstimator> estimator, Method method)
+    : model_(std::move(model)),
+      estimator_(std::move(estimator)),
+      misfit_(nullptr),
+      method_(method) {
+  if (!estimator_ || !model_ || &estimator_->model() != model_.get())
+    throw InputError("plane estimator: the estimator is not of this model");
+}
+
 void PlaneEstimator::set_partial_bands(TemperatureEstimator::PartialBands partial) {
   if (partial_set_ && partial == partial_) return;  // called per frame: build once
   partial_set_ = true;

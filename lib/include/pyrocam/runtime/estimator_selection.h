@@ -55,11 +55,20 @@ class EstimatorSelector {
   // table is built, before its check (which then checks them too, unless the file records that
   // this model's table passed it); "" (the default): none.
   void set_table_cache(std::string file) { cache_file_ = std::move(file); }
+  // A table prebuilt for the model (prebuilt_tables.h: the model's path + ".lut"), read when the
+  // lookup table is built, before the cache (whose blocks then add to it), and spared the check
+  // as the cache is, and the grid it names spares deriving the table's (a third of its start);
+  // "" (the default): none. A file that is not there is no problem; one that
+  // cannot be used (not such a file, altered, another model's, values this machine would not
+  // compute) adds nothing, and prebuilt_problem() says why.
+  void set_prebuilt_tables(std::string file) { prebuilt_file_ = std::move(file); }
+  std::size_t prebuilt_blocks_read() const { return prebuilt_read_; }
+  const std::string& prebuilt_problem() const { return prebuilt_problem_; }
   // Blocks the cache gave, and why it gave none when it was there but unusable ("" otherwise).
   std::size_t cache_blocks_read() const { return cache_read_; }
   const std::string& cache_problem() const { return cache_problem_; }
-  // Whether the lookup table's check was not run again because the cache recorded that this
-  // model's table passed it.
+  // Whether the lookup table's check was not run again because the cache or the prebuilt table
+  // recorded that this model's table passed it.
   bool lut_check_skipped() const { return lut_check_skipped_; }
   // Writes the table's blocks to the cache file when it holds blocks the file did not give it
   // (creating the folder); returns how many it wrote. Throws InputError when it cannot.
@@ -67,11 +76,12 @@ class EstimatorSelector {
 
  private:
   std::string prepare(Method method);
+  std::unique_ptr<PlaneEstimator> lut_on_prebuilt_grid() const;
 
   std::shared_ptr<const ThermalModel> model_;
   std::array<std::unique_ptr<PlaneEstimator>, 3> estimators_;  // by Method
-  std::string cache_file_, cache_problem_;
-  std::size_t cache_read_ = 0;
+  std::string cache_file_, cache_problem_, prebuilt_file_, prebuilt_problem_;
+  std::size_t cache_read_ = 0, prebuilt_read_ = 0;
   bool lut_checked_ = false;
   bool lut_check_skipped_ = false;
   std::string lut_problem_;  // why the lookup table is not used, once checked

@@ -2,8 +2,10 @@
 // ratiotemp element and `pyrocam-calib measure`.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "pyrocam/runtime/model.h"
 
@@ -67,9 +69,12 @@ class TemperatureEstimator {
   // to `path` atomically (a temporary file, then a rename) when it holds blocks that `path` did
   // not give it, and returns how many it wrote (0: nothing new, or a model without a
   // fingerprint). load_tables adds a file's blocks and returns how many; it throws InputError,
-  // adding none, for a file that is not such a cache, is truncated or altered (checksum), or was
-  // made for another model (fingerprint), grid or version. A block read back holds the values
-  // this machine computed for it, so readings do not change. Other methods keep no tables.
+  // adding none, for a file that is not such a cache, is truncated or altered (checksum), was
+  // made for another model (fingerprint), grid or version, or holds other values than this
+  // machine computes (its first and last blocks are computed again and compared bit for bit:
+  // another build's arithmetic or byte order). A block read back holds the values a block filled
+  // here would, so readings do not change. The prebuilt table shipped beside a model
+  // (prebuilt_tables.h) is such a file too. Other methods keep no tables.
   virtual std::size_t save_tables(const std::string& path) const;
   virtual std::size_t load_tables(const std::string& path) const;
   // A word (no white space; "" for none) kept with the tables in their file: the check the
@@ -77,6 +82,19 @@ class TemperatureEstimator {
   // differs from the one it gave is written again even without new blocks.
   virtual void set_tables_verdict(const std::string& verdict) const;
   virtual std::string tables_verdict() const { return ""; }
+  // The lookup table's grid of blocks over its two ratios (s_n0 / ref, s_n1 / ref): block (i, j),
+  // index j * across + i, covers [x0 + i * size, x0 + (i + 1) * size) by [y0 + j * size, ...).
+  // All 0 for methods without a table.
+  struct TableGrid {
+    double x0 = 0, y0 = 0, block_size = 0;
+    int across = 0, down = 0;
+  };
+  virtual TableGrid table_grid() const { return {}; }
+  // Fills now, in this order, the lookup table's blocks with these indices (those of a prebuilt
+  // table, prebuilt_tables.h) until the table holds as many blocks as its file keeps (half its
+  // budget: 4096); returns how many it holds. The values are those a block filled when a pixel
+  // needs it gets. Throws InputError for an index outside the grid. Other methods: 0.
+  virtual std::size_t fill_tables(const std::vector<std::uint32_t>& blocks) const;
 
   // The analogue gain the signals were taken with, as a factor over the profile's (10^(dB / 20);
   // 1, the default, for frames at 0 dB): the shot noise in DN per electron scales by it

@@ -22,6 +22,10 @@ class PlaneEstimator {
   // misfit_probability: the check's false-rejection probability, 0 = no check.
   PlaneEstimator(std::shared_ptr<const ThermalModel> model, Method method,
                  double misfit_probability = 0);
+  // Around an estimator of `method` made for the model (EstimatorSelector: the lookup table on
+  // the grid its prebuilt table names).
+  PlaneEstimator(std::shared_ptr<const ThermalModel> model,
+                 std::unique_ptr<TemperatureEstimator> estimator, Method method);
   void estimate(const std::vector<cv::Mat>& planes, cv::Mat& temperature_c,
                 cv::Mat* uncertainty_c = nullptr) const;
   // The temperature codes (CV_16U, 0.1 K, 0 = no reading) straight from the planes: the same

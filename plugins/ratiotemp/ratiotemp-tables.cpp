@@ -1,0 +1,51 @@
+/* ratiotemp's lookup-table files at start: the table prebuilt beside the model
+ * (<model>.lut, pyrocam-calib calibrate or prebuild) and the per-machine table cache. Both are read
+ * by the library's EstimatorSelector; here is what the element says about them. */
+#include <filesystem>
+#include <string>
+
+#include "pyrocam/runtime/prebuilt_tables.h"
+#include "ratiotemp-private.h"
+
+#define GST_CAT_DEFAULT gst_ratio_temp_debug
+
+namespace pyrocam::gst::ratiotemp {
+
+void set_table_files(pyrocam::EstimatorSelector& estimators, const pyrocam::ThermalModel& model,
+                     const Settings& settings) {
+  estimators.set_prebuilt_tables(pyrocam::prebuilt_tables_file(settings.model));
+  estimators.set_table_cache(pyrocam::table_cache_file(
+      model, settings.table_cache_set ? settings.table_cache : pyrocam::default_table_cache_dir()));
+}
+
+void report_table_files(GstRatioTemp* self, const pyrocam::EstimatorSelector& estimators,
+                        const std::string& model_path, bool lut_built, bool lut_used) {
+  if (!lut_built) return;
+  const std::string prebuilt = pyrocam::prebuilt_tables_file(model_path);
+  if (!estimators.prebuilt_problem().empty()) {
+    /* Never a wrong reading: the table is filled from the network as pixels need it. */
+    GST_ELEMENT_WARNING(self, RESOURCE, READ,
+                        ("Prebuilt lookup table %s not used: %s", prebuilt.c_str(),
+                         estimators.prebuilt_problem().c_str()),
+                        ("the first frames fill the table from the network instead (slower start); "
+                         "pyrocam-calib prebuild --model %s writes the table again",
+                         model_path.c_str()));
+  } else if (estimators.prebuilt_blocks_read() > 0) {
+    GST_INFO_OBJECT(self, "%zu table blocks from the prebuilt table %s",
+                    estimators.prebuilt_blocks_read(), prebuilt.c_str());
+  }
+  if (!estimators.cache_problem().empty())
+    GST_WARNING_OBJECT(self, "table cache not used: %s", estimators.cache_problem().c_str());
+  GST_INFO_OBJECT(self, "%zu table blocks from the cache", estimators.cache_blocks_read());
+  std::error_code ec;
+  if (lut_used && estimators.prebuilt_blocks_read() == 0 && estimators.cache_blocks_read() == 0 &&
+      estimators.prebuilt_problem().empty() && !std::filesystem::exists(prebuilt, ec))
+    GST_ELEMENT_WARNING(self, RESOURCE, NOT_FOUND,
+                        ("No prebuilt lookup table beside model %s, and none in the table cache: "
+                         "the first frames fill the table (seconds); pyrocam-calib prebuild "
+                         "--model %s writes one",
+                         model_path.c_str(), model_path.c_str()),
+                        ("%s not found", prebuilt.c_str()));
+}
+
+}  // namespace pyrocam::gst::ratiotemp
