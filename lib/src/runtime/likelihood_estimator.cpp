@@ -271,13 +271,18 @@ class LikelihoodEstimator : public LikelihoodFit {
                  static_cast<float>(1e-5 * px.sss + 1e-9), lower, upper);
     const FitBounds fine = fit_bounds(px.sss, ws_norm, w_norm, residual_[1], residual2_[1]);
     // The exhaustive scan's test c[k] <= c[other]: by bounds from all factors in double
-    // precision, exactly only where they overlap.
+    // precision (each sample's once: a candidate's neighbours are often candidates too),
+    // exactly only where they overlap.
+    double low[kMaxCoarse], high[kMaxCoarse];
+    std::uint8_t known[kMaxCoarse];
+    std::memset(known, 0, static_cast<std::size_t>(nc));
+    auto bounds = [&](Eigen::Index k) {
+      if (!known[k]) coarse_bounds(k, p, q, fine, low[k], high[k]), known[k] = 1;
+    };
     auto not_above = [&](Eigen::Index k, Eigen::Index other) {
-      double lk, hk, lo, ho;
-      coarse_bounds(k, p, q, fine, lk, hk);
-      coarse_bounds(other, p, q, fine, lo, ho);
-      if (hk < lo) return true;
-      if (lk > ho) return false;
+      bounds(k), bounds(other);
+      if (high[k] < low[other]) return true;
+      if (low[k] > high[other]) return false;
       return chi2(k * kCoarse, px) <= chi2(other * kCoarse, px);
     };
     // Local minima. A sample surely above a neighbour is none (flags as bytes, scanned eight
@@ -397,15 +402,9 @@ class LikelihoodEstimator : public LikelihoodFit {
     alignas(32) double ssm[kRoom], smm[kRoom];
     approximate_sums(along_.data(), rank_, along2_.data(), rank2_, stride_, lo, hi - lo + 1, p, q,
                      ssm, smm);
-    // The sample the factors find best (largest ssm^2 / smm) bounds the window's least chi2.
     const Eigen::Index count = hi - lo + 1;
-    Eigen::Index at = 0;
-    for (Eigen::Index i = 1; i < count; ++i)
-      if (ssm[i] * ssm[i] * smm[at] > ssm[at] * ssm[at] * smm[i]) at = i;
-    const double least_upper = chi2_upper(ssm[at], smm[at], f);
     alignas(16) std::uint8_t open[kRoom];
-    window_candidates(ssm, smm, count, f.sss - 2 * f.slack - least_upper, f.ssm_error, f.smm_error,
-                      open);
+    window_candidates(ssm, smm, count, f.sss, f.ssm_error, f.smm_error, f.slack, open);
     double exact[2 * kCoarse + 1];
     for (Eigen::Index i = 0; i < count; ++i) exact[i] = NAN;
     Minimum best{around, std::numeric_limits<double>::infinity(), NAN, NAN};

@@ -73,7 +73,9 @@ void project(const double* __restrict ws, const double* __restrict w, int bands,
   }
 }
 
-// Blocks of samples keep their sums in registers; selects, so that the bounds vectorise.
+// Blocks of samples keep their sums in registers, ssm's and smm's summed in the same loop (twice
+// as many independent additions: the sums are bound by the adds' latency, not their number);
+// selects, so that the bounds vectorise.
 PYROCAM_VECTOR_CLONES
 void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
                   std::ptrdiff_t stride, std::ptrdiff_t count, const float* p, const float* q,
@@ -81,11 +83,20 @@ void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
                   float* upper) {
   for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kCoarseBlock) {
     float ssm[kCoarseBlock] = {}, smm[kCoarseBlock] = {};
-    for (int r = 0; r < rank; ++r) {
+    int r = 0;
+    for (; r < rank && r < rank2; ++r) {
+      const float* a = along + r * stride + i0;
+      const float* a2 = along2 + r * stride + i0;
+      for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) {
+        ssm[j] += p[r] * a[j];
+        smm[j] += q[r] * a2[j];
+      }
+    }
+    for (; r < rank; ++r) {
       const float* a = along + r * stride + i0;
       for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) ssm[j] += p[r] * a[j];
     }
-    for (int r = 0; r < rank2; ++r) {
+    for (; r < rank2; ++r) {
       const float* a = along2 + r * stride + i0;
       for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) smm[j] += q[r] * a[j];
     }
@@ -99,27 +110,60 @@ void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
   }
 }
 
+// The least upper bound is sss - g + slack for the largest g = (|ssm| - ssm_error)^2 / (smm +
+// smm_error), the bound chi2_upper gives at that sample (likelihood_bounds.h), found in four lanes
+// (a maximum is exact in any order). A sample is open where (|ssm| + ssm_error)^2 >= bar (smm -
+// smm_error), bar = sss - 2 slack - least upper bound, i.e. its lower bound (chi2_lower) is not
+// above it.
 PYROCAM_VECTOR_CLONES
-void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double bar,
-                       double ssm_error, double smm_error, std::uint8_t* open) {
-  for (std::ptrdiff_t i = 0; i < count; ++i) {
+void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double sss,
+                       double ssm_error, double smm_error, double slack, std::uint8_t* open) {
+  constexpr int kLanes = 4;
+  double most[kLanes] = {0, 0, 0, 0};
+  std::ptrdiff_t i = 0;
+  for (; i + kLanes <= count; i += kLanes)
+    for (int j = 0; j < kLanes; ++j) {
+      const double least = std::max(std::abs(ssm[i + j]) - ssm_error, 0.0);
+      const double g = least * least / (smm[i + j] + smm_error);
+      // A sum that may be 0 gives no bound (NaN or inf fail the test).
+      most[j] = g > most[j] && g < std::numeric_limits<double>::infinity() ? g : most[j];
+    }
+  for (; i < count; ++i) {
+    const double least = std::max(std::abs(ssm[i]) - ssm_error, 0.0);
+    const double g = least * least / (smm[i] + smm_error);
+    most[0] = g > most[0] && g < std::numeric_limits<double>::infinity() ? g : most[0];
+  }
+  const double g = std::max(std::max(most[0], most[1]), std::max(most[2], most[3]));
+  const double least_upper = sss - g + slack;
+  const double bar = sss - 2 * slack - least_upper;
+  for (i = 0; i < count; ++i) {
     const double top = std::abs(ssm[i]) + ssm_error, bottom = smm[i] - smm_error;
     open[i] = !(bottom > 0) || top * top >= bar * bottom;
   }
 }
 
-// Blocks of samples keep their sums in registers.
+// Blocks of samples keep their sums in registers, ssm's and smm's summed in the same loop (as in
+// bounded_chi2).
 PYROCAM_VECTOR_CLONES
 void approximate_sums(const double* along, int rank, const double* along2, int rank2,
                       std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
                       const double* p, const double* q, double* ssm, double* smm) {
   for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kWindowBlock) {
     double a[kWindowBlock] = {}, b[kWindowBlock] = {};
-    for (int r = 0; r < rank; ++r) {
+    int r = 0;
+    for (; r < rank && r < rank2; ++r) {
+      const double* f = along + r * stride + from + i0;
+      const double* f2 = along2 + r * stride + from + i0;
+      for (std::ptrdiff_t j = 0; j < kWindowBlock; ++j) {
+        a[j] += p[r] * f[j];
+        b[j] += q[r] * f2[j];
+      }
+    }
+    for (; r < rank; ++r) {
       const double* f = along + r * stride + from + i0;
       for (std::ptrdiff_t j = 0; j < kWindowBlock; ++j) a[j] += p[r] * f[j];
     }
-    for (int r = 0; r < rank2; ++r) {
+    for (; r < rank2; ++r) {
       const double* f = along2 + r * stride + from + i0;
       for (std::ptrdiff_t j = 0; j < kWindowBlock; ++j) b[j] += q[r] * f[j];
     }

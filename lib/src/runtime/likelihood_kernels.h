@@ -9,7 +9,7 @@ namespace pyrocam {
 
 // Samples per step of bounded_chi2 (long coarse scans, single precision) and approximate_sums
 // (short windows, double precision).
-inline constexpr std::ptrdiff_t kCoarseBlock = 32, kWindowBlock = 8;
+inline constexpr std::ptrdiff_t kCoarseBlock = 32, kWindowBlock = 16;
 inline constexpr int kMaxRank = 16;  // low-rank factors of the likelihood fit's locus
 
 // Bounds of chi2 from factors in single precision at the first `count` samples, into lower
@@ -28,10 +28,11 @@ void approximate_sums(const double* along, int rank, const double* along2, int r
                       const double* p, const double* q, double* ssm, double* smm);
 
 // Flags, into open[0 .. count), the samples whose chi2 (sss - ssm^2 / smm, ssm and smm within
-// ssm_error and smm_error of the values given) may be at most sss - bar: where
-// (|ssm| + ssm_error)^2 >= bar (smm - smm_error), or smm may be 0. Divides nothing (vectorises).
-void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double bar,
-                       double ssm_error, double smm_error, std::uint8_t* open);
+// ssm_error and smm_error of the values given, the exact chi2 within slack of it) may be the
+// least of them: those whose lower bound is not above the least of their upper bounds (or where
+// smm may be 0). Divides only for the upper bounds (vectorises).
+void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double sss,
+                       double ssm_error, double smm_error, double slack, std::uint8_t* open);
 
 // chi2 = sss - ssm^2 / smm of the likelihood fit at one locus sample: ssm = sum (w s) m and
 // smm = sum w m^2 over the bands.
