@@ -100,40 +100,51 @@ void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
       const float* a = along2 + r * stride + i0;
       for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) smm[j] += q[r] * a[j];
     }
+    // One division for both bounds: top^2 / bottom = top^2 over inv and least^2 / over = least^2
+    // bottom inv with inv = 1 / (bottom over), a few roundings more, far inside slack. Where
+    // bottom over is tiny or not positive: no lower bound, and chi2 <= sss.
     for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) {
-      const float x = std::abs(ssm[j]), top = x + ssm_error, bottom = smm[j] - smm_error;
-      const float low = sss - top * top / std::max(bottom, 1e-30f) - slack;
-      lower[i0 + j] = bottom > 0 ? low : -std::numeric_limits<float>::max();
-      const float least = std::max(x - ssm_error, 0.0f);
-      upper[i0 + j] = sss - least * least / (smm[j] + smm_error) + slack;
+      const float x = std::abs(ssm[j]), top = x + ssm_error, least = std::max(x - ssm_error, 0.0f);
+      const float bottom = smm[j] - smm_error, over = smm[j] + smm_error, both = bottom * over;
+      const bool usable = bottom > 0 && both > 1e-30f;
+      const float inv = 1.0f / (usable ? both : 1.0f);
+      lower[i0 + j] =
+          usable ? sss - top * top * over * inv - slack : -std::numeric_limits<float>::max();
+      upper[i0 + j] = sss - (usable ? least * least * bottom * inv : 0.0f) + slack;
     }
   }
 }
 
-// The least upper bound is sss - g + slack for the largest g = (|ssm| - ssm_error)^2 / (smm +
-// smm_error), the bound chi2_upper gives at that sample (likelihood_bounds.h), found in four lanes
-// (a maximum is exact in any order). A sample is open where (|ssm| + ssm_error)^2 >= bar (smm -
-// smm_error), bar = sss - 2 slack - least upper bound, i.e. its lower bound (chi2_lower) is not
-// above it.
+// The least upper bound is sss - g + slack for about the largest g = (|ssm| - ssm_error)^2 / (smm +
+// smm_error), the bound chi2_upper gives at that sample (likelihood_bounds.h). A sample is open
+// where (|ssm| + ssm_error)^2 >= bar (smm - smm_error), bar = sss - 2 slack - least upper bound,
+// i.e. its lower bound (chi2_lower) is not above it.
 PYROCAM_VECTOR_CLONES
 void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double sss,
                        double ssm_error, double smm_error, double slack, std::uint8_t* open) {
+  // Each lane keeps its largest g as a fraction (no division in the loop), compared by cross
+  // products: rounding may pick another sample than the largest, still a bound.
   constexpr int kLanes = 4;
-  double most[kLanes] = {0, 0, 0, 0};
+  double top[kLanes] = {0, 0, 0, 0}, below[kLanes] = {1, 1, 1, 1};
   std::ptrdiff_t i = 0;
   for (; i + kLanes <= count; i += kLanes)
     for (int j = 0; j < kLanes; ++j) {
       const double least = std::max(std::abs(ssm[i + j]) - ssm_error, 0.0);
-      const double g = least * least / (smm[i + j] + smm_error);
-      // A sum that may be 0 gives no bound (NaN or inf fail the test).
-      most[j] = g > most[j] && g < std::numeric_limits<double>::infinity() ? g : most[j];
+      const double t = least * least, b = smm[i + j] + smm_error;
+      const bool more = b > 0 && t * below[j] > top[j] * b;
+      top[j] = more ? t : top[j];
+      below[j] = more ? b : below[j];
     }
   for (; i < count; ++i) {
     const double least = std::max(std::abs(ssm[i]) - ssm_error, 0.0);
-    const double g = least * least / (smm[i] + smm_error);
-    most[0] = g > most[0] && g < std::numeric_limits<double>::infinity() ? g : most[0];
+    const double t = least * least, b = smm[i] + smm_error;
+    if (b > 0 && t * below[0] > top[0] * b) top[0] = t, below[0] = b;
   }
-  const double g = std::max(std::max(most[0], most[1]), std::max(most[2], most[3]));
+  double g = 0;
+  for (int j = 0; j < kLanes; ++j) {
+    const double v = top[j] / below[j];  // chi2_upper's quotient at that sample
+    if (v > g && v < std::numeric_limits<double>::infinity()) g = v;
+  }
   const double least_upper = sss - g + slack;
   const double bar = sss - 2 * slack - least_upper;
   for (i = 0; i < count; ++i) {
