@@ -208,6 +208,7 @@ class LikelihoodEstimator : public LikelihoodFit {
   // off by about 1e-6 anyway: a closer fit only costs multiply-adds), window.
   static constexpr double kCoarseRankTolerance = 1e-6, kWindowRankTolerance = 1e-10;
   static constexpr Eigen::Index kMaxCoarse = 504;  // coarse samples: a 10 000 degC range
+  static_assert(kMaxCoarse <= kMaxMinimumCandidates);
 
   explicit LikelihoodEstimator(std::shared_ptr<const ThermalModel> model)
       : LikelihoodFit(std::move(model)) {
@@ -253,7 +254,7 @@ class LikelihoodEstimator : public LikelihoodFit {
     Weighted px;
     if (!enough_bands(weigh(s, px), px)) return NAN;
     // Projections of w*s and w on the factors.
-    alignas(32) double p[kMaxRank] = {}, q[kMaxRank] = {};
+    alignas(32) double p[kMaxRank], q[kMaxRank];
     alignas(32) float pf[kMaxRank], qf[kMaxRank];
     project(px.ws, px.w, bands_, across_.data(), across2_.data(), p, q, pf, qf);
     double ws2 = 0, w2 = 0;
@@ -286,25 +287,15 @@ class LikelihoodEstimator : public LikelihoodFit {
       if (low[k] > high[other]) return false;
       return chi2(k * kCoarse, px) <= chi2(other * kCoarse, px);
     };
-    // Local minima. A sample surely above a neighbour is none (flags as bytes, scanned eight
-    // at a time: most samples are not minima); the few others are tested.
-    alignas(16) std::uint8_t candidate[kMaxCoarse + 8];
-    std::memset(candidate + nc, 0, 8);
-    candidate[0] = lower[0] <= upper[1];
-    for (Eigen::Index k = 1; k + 1 < nc; ++k)
-      candidate[k] = (lower[k] <= upper[k - 1]) & (lower[k] <= upper[k + 1]);
-    candidate[nc - 1] = lower[nc - 1] <= upper[nc - 2];
+    // Local minima: a sample surely above a neighbour is none, the few others are tested.
+    std::int32_t candidates[kMaxCoarse];
+    const int found = minimum_candidates(lower, upper, nc, candidates);
     Minimum refined[kMaxCoarse];
     std::size_t count = 0;
-    for (Eigen::Index k0 = 0; k0 < nc; k0 += 8) {
-      std::uint64_t word;
-      std::memcpy(&word, candidate + k0, sizeof word);
-      if (!word) continue;
-      for (Eigen::Index k = k0; k < std::min(k0 + 8, nc); ++k) {
-        if (!candidate[k]) continue;
-        if (!((k == 0 || not_above(k, k - 1)) && (k + 1 == nc || not_above(k, k + 1)))) continue;
-        refined[count++] = refine(k * kCoarse, px, p, q, fine);
-      }
+    for (int c = 0; c < found; ++c) {
+      const Eigen::Index k = candidates[c];
+      if (!((k == 0 || not_above(k, k - 1)) && (k + 1 == nc || not_above(k, k + 1)))) continue;
+      refined[count++] = refine(k * kCoarse, px, p, q, fine);
     }
     return decide(refined, count, px);
   }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "detail/vector_clones.h"
@@ -62,6 +63,7 @@ PYROCAM_VECTOR_CLONES
 void project(const double* __restrict ws, const double* __restrict w, int bands,
              const double* __restrict v, const double* __restrict v2, double* __restrict p,
              double* __restrict q, float* __restrict pf, float* __restrict qf) {
+  for (int r = 0; r < kMaxRank; ++r) p[r] = q[r] = 0.0;
   for (int b = 0; b < bands; ++b)
     for (int r = 0; r < kMaxRank; ++r) {
       p[r] += ws[b] * v[b * kMaxRank + r];
@@ -115,6 +117,28 @@ void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
   }
 }
 
+// Flags as bytes (the ends apart, so that the rest vectorises), scanned eight at a time: most
+// samples are not minima.
+PYROCAM_VECTOR_CLONES
+int minimum_candidates(const float* lower, const float* upper, std::ptrdiff_t count,
+                       std::int32_t* at) {
+  alignas(32) std::uint8_t flag[kMaxMinimumCandidates + 8];
+  flag[0] = lower[0] <= upper[1];
+  for (std::ptrdiff_t k = 1; k + 1 < count; ++k)
+    flag[k] = (lower[k] <= upper[k - 1]) & (lower[k] <= upper[k + 1]);
+  flag[count - 1] = lower[count - 1] <= upper[count - 2];
+  std::memset(flag + count, 0, 8);
+  int n = 0;
+  for (std::ptrdiff_t k0 = 0; k0 < count; k0 += 8) {
+    std::uint64_t word;
+    std::memcpy(&word, flag + k0, sizeof word);
+    if (!word) continue;
+    for (std::ptrdiff_t k = k0; k < k0 + 8; ++k)
+      if (flag[k]) at[n++] = static_cast<std::int32_t>(k);
+  }
+  return n;
+}
+
 // The least upper bound is sss - g + slack for about the largest g = (|ssm| - ssm_error)^2 / (smm +
 // smm_error), the bound chi2_upper gives at that sample (likelihood_bounds.h). A sample is open
 // where (|ssm| + ssm_error)^2 >= bar (smm - smm_error), bar = sss - 2 slack - least upper bound,
@@ -124,8 +148,9 @@ void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t coun
                        double ssm_error, double smm_error, double slack, std::uint8_t* open) {
   // Each lane keeps its largest g as a fraction (no division in the loop), compared by cross
   // products: rounding may pick another sample than the largest, still a bound.
-  constexpr int kLanes = 4;
-  double top[kLanes] = {0, 0, 0, 0}, below[kLanes] = {1, 1, 1, 1};
+  constexpr int kLanes = 8;
+  double top[kLanes], below[kLanes];
+  for (int j = 0; j < kLanes; ++j) top[j] = 0.0, below[j] = 1.0;
   std::ptrdiff_t i = 0;
   for (; i + kLanes <= count; i += kLanes)
     for (int j = 0; j < kLanes; ++j) {

@@ -11,6 +11,7 @@ namespace pyrocam {
 // (short windows, double precision).
 inline constexpr std::ptrdiff_t kCoarseBlock = 32, kWindowBlock = 16;
 inline constexpr int kMaxRank = 16;  // low-rank factors of the likelihood fit's locus
+inline constexpr std::ptrdiff_t kMaxMinimumCandidates = 1024;  // samples minimum_candidates takes
 
 // Bounds of chi2 from factors in single precision at the first `count` samples, into lower
 // and upper [0 .. count rounded up to kCoarseBlock): ssm and smm summed from the factors are
@@ -20,6 +21,13 @@ void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
                   std::ptrdiff_t stride, std::ptrdiff_t count, const float* p, const float* q,
                   float sss, float ssm_error, float smm_error, float slack, float* lower,
                   float* upper);
+
+// The samples of bounded_chi2's bounds that may be local minima (2 <= count <=
+// kMaxMinimumCandidates): those
+// whose lower bound is not above the upper bound of either neighbour, their indices into `at` in
+// increasing order. Returns how many.
+int minimum_candidates(const float* lower, const float* upper, std::ptrdiff_t count,
+                       std::int32_t* at);
 
 // The approximate sums ssm = p . along, smm = q . along2 at `count` samples from `from`, into
 // ssm and smm [0 .. count rounded up to kWindowBlock).
@@ -47,7 +55,7 @@ int weigh_bands(const double* __restrict s, int bands, double dim, const double*
                 double* sss);
 
 // Projections p = V^T (w s), q = V2^T w on the factors (bands x kMaxRank each, zero padded), in
-// double and single precision (p and q accumulate: zero them first).
+// double and single precision.
 void project(const double* __restrict ws, const double* __restrict w, int bands,
              const double* __restrict v, const double* __restrict v2, double* __restrict p,
              double* __restrict q, float* __restrict pf, float* __restrict qf);
