@@ -396,7 +396,16 @@ class LikelihoodEstimator : public LikelihoodFit {
                      ssm, smm);
     const Eigen::Index count = hi - lo + 1;
     alignas(16) std::uint8_t open[kRoom];
-    window_candidates(ssm, smm, count, f.sss, f.ssm_error, f.smm_error, f.slack, open);
+    const int opened =
+        window_candidates(ssm, smm, count, f.sss, f.ssm_error, f.smm_error, f.slack, open);
+    if (opened == 1) {  // the usual case: the best sample, with its neighbours for decide
+      const Eigen::Index at = lo + (std::find(open, open + count, 1) - open);
+      if (at == 0 || at == n - 1) return {at, chi2(at, px), NAN, NAN};
+      double c[3];
+      const std::size_t row = static_cast<std::size_t>((at - 1) * bands_);
+      profiled_chi2_three(&rates_[row], &squares_[row], px.ws, px.w, bands_, px.sss, c);
+      return {at, c[1], c[0], c[2]};
+    }
     double exact[2 * kCoarse + 1];
     for (Eigen::Index i = 0; i < count; ++i) exact[i] = NAN;
     Minimum best{around, std::numeric_limits<double>::infinity(), NAN, NAN};

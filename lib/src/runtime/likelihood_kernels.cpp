@@ -32,6 +32,31 @@ double profiled_chi2(const double* m, const double* m2, const double* ws, const 
   return sss - sm * sm / mm;
 }
 
+// Each sample's sums in the order profiled_chi2 adds them; three of them interleaved (their
+// additions are independent).
+PYROCAM_VECTOR_CLONES
+void profiled_chi2_three(const double* m, const double* m2, const double* ws, const double* w,
+                         int bands, double sss, double* chi2) {
+  double ssm[3][4] = {}, smm[3][4] = {};
+  int b = 0;
+  for (; b + 4 <= bands; b += 4)
+    for (int s = 0; s < 3; ++s)
+      for (int k = 0; k < 4; ++k) {
+        ssm[s][k] += ws[b + k] * m[s * bands + b + k];
+        smm[s][k] += w[b + k] * m2[s * bands + b + k];
+      }
+  for (; b < bands; ++b)
+    for (int s = 0; s < 3; ++s) {
+      ssm[s][0] += ws[b] * m[s * bands + b];
+      smm[s][0] += w[b] * m2[s * bands + b];
+    }
+  for (int s = 0; s < 3; ++s) {
+    const double sm = (ssm[s][0] + ssm[s][1]) + (ssm[s][2] + ssm[s][3]);
+    const double mm = (smm[s][0] + smm[s][1]) + (smm[s][2] + smm[s][3]);
+    chi2[s] = sss - sm * sm / mm;
+  }
+}
+
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
 // and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
 // Returns how many bands read. Selects, so that the divisions vectorise.
@@ -144,8 +169,8 @@ int minimum_candidates(const float* lower, const float* upper, std::ptrdiff_t co
 // where (|ssm| + ssm_error)^2 >= bar (smm - smm_error), bar = sss - 2 slack - least upper bound,
 // i.e. its lower bound (chi2_lower) is not above it.
 PYROCAM_VECTOR_CLONES
-void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double sss,
-                       double ssm_error, double smm_error, double slack, std::uint8_t* open) {
+int window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double sss,
+                      double ssm_error, double smm_error, double slack, std::uint8_t* open) {
   // Each lane keeps its largest g as a fraction (no division in the loop), compared by cross
   // products: rounding may pick another sample than the largest, still a bound.
   constexpr int kLanes = 8;
@@ -176,6 +201,9 @@ void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t coun
     const double top = std::abs(ssm[i]) + ssm_error, bottom = smm[i] - smm_error;
     open[i] = !(bottom > 0) || top * top >= bar * bottom;
   }
+  int n = 0;
+  for (i = 0; i < count; ++i) n += open[i];
+  return n;
 }
 
 // Blocks of samples keep their sums in registers, ssm's and smm's summed in the same loop (as in

@@ -38,14 +38,19 @@ void approximate_sums(const double* along, int rank, const double* along2, int r
 // Flags, into open[0 .. count), the samples whose chi2 (sss - ssm^2 / smm, ssm and smm within
 // ssm_error and smm_error of the values given, the exact chi2 within slack of it) may be the
 // least of them: those whose lower bound is not above the least of their upper bounds (or where
-// smm may be 0). Divides only at the end (vectorises).
-void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double sss,
-                       double ssm_error, double smm_error, double slack, std::uint8_t* open);
+// smm may be 0). Returns how many. Divides only at the end (vectorises).
+int window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double sss,
+                      double ssm_error, double smm_error, double slack, std::uint8_t* open);
 
 // chi2 = sss - ssm^2 / smm of the likelihood fit at one locus sample: ssm = sum (w s) m and
 // smm = sum w m^2 over the bands.
 double profiled_chi2(const double* m, const double* m2, const double* ws, const double* w,
                      int bands, double sss);
+
+// profiled_chi2 at three samples side by side (rows m, m + bands, m + 2 bands), into chi2[0 .. 3):
+// the same bits, in one pass.
+void profiled_chi2_three(const double* m, const double* m2, const double* ws, const double* w,
+                         int bands, double sss, double* chi2);
 
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
 // and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
