@@ -33,26 +33,33 @@ double profiled_chi2(const double* m, const double* m2, const double* ws, const 
 }
 
 // Each sample's sums in the order profiled_chi2 adds them; three of them interleaved (their
-// additions are independent).
+// additions are independent), in named lanes that stay in registers.
 PYROCAM_VECTOR_CLONES
 void profiled_chi2_three(const double* m, const double* m2, const double* ws, const double* w,
                          int bands, double sss, double* chi2) {
-  double ssm[3][4] = {}, smm[3][4] = {};
+  const double *m1 = m + bands, *m3 = m + 2 * bands;
+  const double *q1 = m2 + bands, *q3 = m2 + 2 * bands;
+  double a0[4] = {0, 0, 0, 0}, a1[4] = {0, 0, 0, 0}, a2[4] = {0, 0, 0, 0};
+  double b0[4] = {0, 0, 0, 0}, b1[4] = {0, 0, 0, 0}, b2[4] = {0, 0, 0, 0};
   int b = 0;
   for (; b + 4 <= bands; b += 4)
-    for (int s = 0; s < 3; ++s)
-      for (int k = 0; k < 4; ++k) {
-        ssm[s][k] += ws[b + k] * m[s * bands + b + k];
-        smm[s][k] += w[b + k] * m2[s * bands + b + k];
-      }
-  for (; b < bands; ++b)
-    for (int s = 0; s < 3; ++s) {
-      ssm[s][0] += ws[b] * m[s * bands + b];
-      smm[s][0] += w[b] * m2[s * bands + b];
+    for (int k = 0; k < 4; ++k) {
+      a0[k] += ws[b + k] * m[b + k];
+      a1[k] += ws[b + k] * m1[b + k];
+      a2[k] += ws[b + k] * m3[b + k];
+      b0[k] += w[b + k] * m2[b + k];
+      b1[k] += w[b + k] * q1[b + k];
+      b2[k] += w[b + k] * q3[b + k];
     }
+  for (; b < bands; ++b) {
+    a0[0] += ws[b] * m[b], a1[0] += ws[b] * m1[b], a2[0] += ws[b] * m3[b];
+    b0[0] += w[b] * m2[b], b1[0] += w[b] * q1[b], b2[0] += w[b] * q3[b];
+  }
+  const double* a[3] = {a0, a1, a2};
+  const double* c[3] = {b0, b1, b2};
   for (int s = 0; s < 3; ++s) {
-    const double sm = (ssm[s][0] + ssm[s][1]) + (ssm[s][2] + ssm[s][3]);
-    const double mm = (smm[s][0] + smm[s][1]) + (smm[s][2] + smm[s][3]);
+    const double sm = (a[s][0] + a[s][1]) + (a[s][2] + a[s][3]);
+    const double mm = (c[s][0] + c[s][1]) + (c[s][2] + c[s][3]);
     chi2[s] = sss - sm * sm / mm;
   }
 }
@@ -164,45 +171,41 @@ int minimum_candidates(const float* lower, const float* upper, std::ptrdiff_t co
   return n;
 }
 
-// The least upper bound is sss - g + slack for about the largest g = (|ssm| - ssm_error)^2 / (smm +
+// The least upper bound is sss - g + slack for the largest g = (|ssm| - ssm_error)^2 / (smm +
 // smm_error), the bound chi2_upper gives at that sample (likelihood_bounds.h). A sample is open
 // where (|ssm| + ssm_error)^2 >= bar (smm - smm_error), bar = sss - 2 slack - least upper bound,
 // i.e. its lower bound (chi2_lower) is not above it.
 PYROCAM_VECTOR_CLONES
 int window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double sss,
                       double ssm_error, double smm_error, double slack, std::uint8_t* open) {
-  // Each lane keeps its largest g as a fraction (no division in the loop), compared by cross
-  // products: rounding may pick another sample than the largest, still a bound.
-  constexpr int kLanes = 8;
-  double top[kLanes], below[kLanes];
-  for (int j = 0; j < kLanes; ++j) top[j] = 0.0, below[j] = 1.0;
-  std::ptrdiff_t i = 0;
-  for (; i + kLanes <= count; i += kLanes)
-    for (int j = 0; j < kLanes; ++j) {
-      const double least = std::max(std::abs(ssm[i + j]) - ssm_error, 0.0);
-      const double t = least * least, b = smm[i + j] + smm_error;
-      const bool more = b > 0 && t * below[j] > top[j] * b;
-      top[j] = more ? t : top[j];
-      below[j] = more ? b : below[j];
-    }
-  for (; i < count; ++i) {
-    const double least = std::max(std::abs(ssm[i]) - ssm_error, 0.0);
-    const double t = least * least, b = smm[i] + smm_error;
-    if (b > 0 && t * below[0] > top[0] * b) top[0] = t, below[0] = b;
-  }
+  // Each sample's quotient (vectorised divisions), then the largest in four lanes; a sum that
+  // may be 0 (no bound) gives 0.
+  constexpr std::ptrdiff_t kMost = 64;
+  alignas(32) double quotient[kMost];
   double g = 0;
-  for (int j = 0; j < kLanes; ++j) {
-    const double v = top[j] / below[j];  // chi2_upper's quotient at that sample
-    if (v > g && v < std::numeric_limits<double>::infinity()) g = v;
+  for (std::ptrdiff_t from = 0; from < count; from += kMost) {
+    const std::ptrdiff_t part = std::min(kMost, count - from);
+    for (std::ptrdiff_t i = 0; i < part; ++i) {
+      const double least = std::max(std::abs(ssm[from + i]) - ssm_error, 0.0);
+      const double b = smm[from + i] + smm_error;
+      const double v = least * least / (b > 0 ? b : 1.0);
+      quotient[i] = b > 0 && v < std::numeric_limits<double>::infinity() ? v : 0.0;
+    }
+    double most[4] = {0, 0, 0, 0};
+    std::ptrdiff_t i = 0;
+    for (; i + 4 <= part; i += 4)
+      for (int j = 0; j < 4; ++j) most[j] = quotient[i + j] > most[j] ? quotient[i + j] : most[j];
+    for (; i < part; ++i) most[0] = quotient[i] > most[0] ? quotient[i] : most[0];
+    for (int j = 0; j < 4; ++j) g = most[j] > g ? most[j] : g;
   }
   const double least_upper = sss - g + slack;
   const double bar = sss - 2 * slack - least_upper;
-  for (i = 0; i < count; ++i) {
+  for (std::ptrdiff_t i = 0; i < count; ++i) {
     const double top = std::abs(ssm[i]) + ssm_error, bottom = smm[i] - smm_error;
     open[i] = !(bottom > 0) || top * top >= bar * bottom;
   }
   int n = 0;
-  for (i = 0; i < count; ++i) n += open[i];
+  for (std::ptrdiff_t i = 0; i < count; ++i) n += open[i];
   return n;
 }
 

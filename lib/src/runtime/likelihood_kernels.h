@@ -38,7 +38,7 @@ void approximate_sums(const double* along, int rank, const double* along2, int r
 // Flags, into open[0 .. count), the samples whose chi2 (sss - ssm^2 / smm, ssm and smm within
 // ssm_error and smm_error of the values given, the exact chi2 within slack of it) may be the
 // least of them: those whose lower bound is not above the least of their upper bounds (or where
-// smm may be 0). Returns how many. Divides only at the end (vectorises).
+// smm may be 0). Returns how many. Vectorises.
 int window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double sss,
                       double ssm_error, double smm_error, double slack, std::uint8_t* open);
 
