@@ -116,8 +116,13 @@ void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
                   float sss, float ssm_error, float smm_error, float slack, float* lower,
                   float* upper) {
   for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kCoarseBlock) {
-    float ssm[kCoarseBlock] = {}, smm[kCoarseBlock] = {};
-    int r = 0;
+    // The sums start from the first products (zeroed arrays compile to a slow rep stos).
+    float ssm[kCoarseBlock], smm[kCoarseBlock];
+    for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) {
+      ssm[j] = p[0] * along[i0 + j];
+      smm[j] = q[0] * along2[i0 + j];
+    }
+    int r = 1;
     for (; r < rank && r < rank2; ++r) {
       const float* a = along + r * stride + i0;
       const float* a2 = along2 + r * stride + i0;
@@ -216,8 +221,12 @@ void approximate_sums(const double* along, int rank, const double* along2, int r
                       std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
                       const double* p, const double* q, double* ssm, double* smm) {
   for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kWindowBlock) {
-    double a[kWindowBlock] = {}, b[kWindowBlock] = {};
-    int r = 0;
+    double a[kWindowBlock], b[kWindowBlock];  // from the first products, as in bounded_chi2
+    for (std::ptrdiff_t j = 0; j < kWindowBlock; ++j) {
+      a[j] = p[0] * along[from + i0 + j];
+      b[j] = q[0] * along2[from + i0 + j];
+    }
+    int r = 1;
     for (; r < rank && r < rank2; ++r) {
       const double* f = along + r * stride + from + i0;
       const double* f2 = along2 + r * stride + from + i0;

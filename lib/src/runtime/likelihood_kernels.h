@@ -14,9 +14,9 @@ inline constexpr int kMaxRank = 16;  // low-rank factors of the likelihood fit's
 inline constexpr std::ptrdiff_t kMaxMinimumCandidates = 1024;  // samples minimum_candidates takes
 
 // Bounds of chi2 from factors in single precision at the first `count` samples, into lower
-// and upper [0 .. count rounded up to kCoarseBlock): ssm and smm summed from the factors are
-// taken to be off by at most ssm_error and smm_error, and the bounds widened by slack (their
-// own rounding). A lower bound is -FLT_MAX where smm may be 0.
+// and upper [0 .. count rounded up to kCoarseBlock) (rank, rank2 >= 1): ssm and smm summed from the
+// factors are taken to be off by at most ssm_error and smm_error, and the bounds widened by slack
+// (their own rounding). A lower bound is -FLT_MAX where smm may be 0.
 void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
                   std::ptrdiff_t stride, std::ptrdiff_t count, const float* p, const float* q,
                   float sss, float ssm_error, float smm_error, float slack, float* lower,
@@ -30,7 +30,7 @@ int minimum_candidates(const float* lower, const float* upper, std::ptrdiff_t co
                        std::int32_t* at);
 
 // The approximate sums ssm = p . along, smm = q . along2 at `count` samples from `from`, into
-// ssm and smm [0 .. count rounded up to kWindowBlock).
+// ssm and smm [0 .. count rounded up to kWindowBlock) (rank, rank2 >= 1).
 void approximate_sums(const double* along, int rank, const double* along2, int rank2,
                       std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
                       const double* p, const double* q, double* ssm, double* smm);
