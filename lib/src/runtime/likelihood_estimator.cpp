@@ -256,10 +256,9 @@ class LikelihoodEstimator : public LikelihoodFit {
     // Projections of w*s and w on the factors.
     alignas(32) double p[kMaxRank], q[kMaxRank];
     alignas(32) float pf[kMaxRank], qf[kMaxRank];
-    project(px.ws, px.w, bands_, across_.data(), across2_.data(), p, q, pf, qf);
-    double ws2 = 0, w2 = 0;
-    for (int b = 0; b < bands_; ++b) ws2 += px.ws[b] * px.ws[b], w2 += px.w[b] * px.w[b];
-    const double ws_norm = std::sqrt(ws2), w_norm = std::sqrt(w2);
+    double squares[2];
+    project(px.ws, px.w, bands_, across_.data(), across2_.data(), p, q, pf, qf, squares);
+    const double ws_norm = std::sqrt(squares[0]), w_norm = std::sqrt(squares[1]);
 
     // Coarse scan: bounds of chi2 at every coarse sample, in single precision. Single precision
     // sums of up to kMaxRank terms are off by at most 1.1e-6 of sum |p_r a_r| <= |w s| (the

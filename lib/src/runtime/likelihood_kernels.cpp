@@ -90,21 +90,35 @@ int weigh_bands(const double* __restrict s, int bands, double dim, const double*
 }
 
 // Projections p = V^T (w s), q = V2^T w on the factors (bands x kMaxRank each, zero padded), in
-// double and single precision.
+// double and single precision, and |w s|^2, |w|^2. The sums start from the first band's products
+// (zeroed arrays compile to a slow rep stos).
 PYROCAM_VECTOR_CLONES
 void project(const double* __restrict ws, const double* __restrict w, int bands,
              const double* __restrict v, const double* __restrict v2, double* __restrict p,
-             double* __restrict q, float* __restrict pf, float* __restrict qf) {
-  for (int r = 0; r < kMaxRank; ++r) p[r] = q[r] = 0.0;
-  for (int b = 0; b < bands; ++b)
-    for (int r = 0; r < kMaxRank; ++r) {
-      p[r] += ws[b] * v[b * kMaxRank + r];
-      q[r] += w[b] * v2[b * kMaxRank + r];
-    }
+             double* __restrict q, float* __restrict pf, float* __restrict qf,
+             double* __restrict squares) {
+  double a[kMaxRank], c[kMaxRank];
   for (int r = 0; r < kMaxRank; ++r) {
-    pf[r] = static_cast<float>(p[r]);
-    qf[r] = static_cast<float>(q[r]);
+    a[r] = ws[0] * v[r];
+    c[r] = w[0] * v2[r];
   }
+  double ws2 = ws[0] * ws[0], w2 = w[0] * w[0];
+  for (int b = 1; b < bands; ++b) {
+    for (int r = 0; r < kMaxRank; ++r) {
+      a[r] += ws[b] * v[b * kMaxRank + r];
+      c[r] += w[b] * v2[b * kMaxRank + r];
+    }
+    ws2 += ws[b] * ws[b];
+    w2 += w[b] * w[b];
+  }
+  for (int r = 0; r < kMaxRank; ++r) {
+    p[r] = a[r];
+    q[r] = c[r];
+    pf[r] = static_cast<float>(a[r]);
+    qf[r] = static_cast<float>(c[r]);
+  }
+  squares[0] = ws2;
+  squares[1] = w2;
 }
 
 // Blocks of samples keep their sums in registers, ssm's and smm's summed in the same loop (twice

@@ -60,9 +60,10 @@ int weigh_bands(const double* __restrict s, int bands, double dim, const double*
                 double* sss);
 
 // Projections p = V^T (w s), q = V2^T w on the factors (bands x kMaxRank each, zero padded), in
-// double and single precision.
+// double and single precision, and squares = {|w s|^2, |w|^2} (bands >= 1).
 void project(const double* __restrict ws, const double* __restrict w, int bands,
              const double* __restrict v, const double* __restrict v2, double* __restrict p,
-             double* __restrict q, float* __restrict pf, float* __restrict qf);
+             double* __restrict q, float* __restrict pf, float* __restrict qf,
+             double* __restrict squares);
 
 }  // namespace pyrocam
