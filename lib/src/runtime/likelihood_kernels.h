@@ -14,18 +14,17 @@ inline constexpr int kMaxRank = 16;  // low-rank factors of the likelihood fit's
 inline constexpr std::ptrdiff_t kMaxMinimumCandidates = 1024;  // samples minimum_candidates takes
 
 // Bounds of chi2 from factors in single precision at the first `count` samples, into lower
-// and upper [0 .. count rounded up to kCoarseBlock) (rank, rank2 >= 1): ssm and smm summed from the
-// factors are taken to be off by at most ssm_error and smm_error, and the bounds widened by slack
-// (their own rounding). A lower bound is -FLT_MAX where smm may be 0.
+// and upper [0 .. count rounded up to kCoarseBlock) (rank, rank2 >= 1): ssm and smm summed
+// from the factors are taken to be off by at most ssm_error and smm_error, and the bounds
+// widened by slack (their own rounding). A lower bound is -FLT_MAX where smm may be 0.
 void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
                   std::ptrdiff_t stride, std::ptrdiff_t count, const float* p, const float* q,
                   float sss, float ssm_error, float smm_error, float slack, float* lower,
                   float* upper);
 
 // The samples of bounded_chi2's bounds that may be local minima (2 <= count <=
-// kMaxMinimumCandidates): those
-// whose lower bound is not above the upper bound of either neighbour, their indices into `at` in
-// increasing order. Returns how many.
+// kMaxMinimumCandidates): those whose lower bound is not above the upper bound of either
+// neighbour, their indices into `at` in increasing order. Returns how many.
 int minimum_candidates(const float* lower, const float* upper, std::ptrdiff_t count,
                        std::int32_t* at);
 
