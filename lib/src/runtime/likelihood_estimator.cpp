@@ -204,9 +204,11 @@ class ExhaustiveLikelihoodEstimator : public LikelihoodFit {
 // (the unit tests compare both on noisy pixels, with saturated, dim and NaN bands).
 class LikelihoodEstimator : public LikelihoodFit {
  public:
-  // Row error left by the factors (rows have unit length): coarse, window.
-  static constexpr double kCoarseRankTolerance = 1e-8, kWindowRankTolerance = 1e-10;
+  // Row error left by the factors (rows have unit length): coarse (single precision sums are
+  // off by about 1e-6 anyway: a closer fit only costs multiply-adds), window.
+  static constexpr double kCoarseRankTolerance = 1e-6, kWindowRankTolerance = 1e-10;
   static constexpr Eigen::Index kMaxCoarse = 504;  // coarse samples: a 10 000 degC range
+  static_assert(kMaxCoarse <= kMaxMinimumCandidates);
 
   explicit LikelihoodEstimator(std::shared_ptr<const ThermalModel> model)
       : LikelihoodFit(std::move(model)) {
@@ -252,12 +254,11 @@ class LikelihoodEstimator : public LikelihoodFit {
     Weighted px;
     if (!enough_bands(weigh(s, px), px)) return NAN;
     // Projections of w*s and w on the factors.
-    alignas(32) double p[kMaxRank] = {}, q[kMaxRank] = {};
+    alignas(32) double p[kMaxRank], q[kMaxRank];
     alignas(32) float pf[kMaxRank], qf[kMaxRank];
-    project(px.ws, px.w, bands_, across_.data(), across2_.data(), p, q, pf, qf);
-    double ws2 = 0, w2 = 0;
-    for (int b = 0; b < bands_; ++b) ws2 += px.ws[b] * px.ws[b], w2 += px.w[b] * px.w[b];
-    const double ws_norm = std::sqrt(ws2), w_norm = std::sqrt(w2);
+    double squares[2];
+    project(px.ws, px.w, bands_, across_.data(), across2_.data(), p, q, pf, qf, squares);
+    const double ws_norm = std::sqrt(squares[0]), w_norm = std::sqrt(squares[1]);
 
     // Coarse scan: bounds of chi2 at every coarse sample, in single precision. Single precision
     // sums of up to kMaxRank terms are off by at most 1.1e-6 of sum |p_r a_r| <= |w s| (the
@@ -271,34 +272,29 @@ class LikelihoodEstimator : public LikelihoodFit {
                  static_cast<float>(1e-5 * px.sss + 1e-9), lower, upper);
     const FitBounds fine = fit_bounds(px.sss, ws_norm, w_norm, residual_[1], residual2_[1]);
     // The exhaustive scan's test c[k] <= c[other]: by bounds from all factors in double
-    // precision, exactly only where they overlap.
+    // precision (each sample's once: a candidate's neighbours are often candidates too),
+    // exactly only where they overlap.
+    double low[kMaxCoarse], high[kMaxCoarse];
+    std::uint8_t known[kMaxCoarse];
+    std::memset(known, 0, static_cast<std::size_t>(nc));
+    auto bounds = [&](Eigen::Index k) {
+      if (!known[k]) coarse_bounds(k, p, q, fine, low[k], high[k]), known[k] = 1;
+    };
     auto not_above = [&](Eigen::Index k, Eigen::Index other) {
-      double lk, hk, lo, ho;
-      coarse_bounds(k, p, q, fine, lk, hk);
-      coarse_bounds(other, p, q, fine, lo, ho);
-      if (hk < lo) return true;
-      if (lk > ho) return false;
+      bounds(k), bounds(other);
+      if (high[k] < low[other]) return true;
+      if (low[k] > high[other]) return false;
       return chi2(k * kCoarse, px) <= chi2(other * kCoarse, px);
     };
-    // Local minima. A sample surely above a neighbour is none (flags as bytes, scanned eight
-    // at a time: most samples are not minima); the few others are tested.
-    alignas(16) std::uint8_t candidate[kMaxCoarse + 8];
-    std::memset(candidate + nc, 0, 8);
-    candidate[0] = lower[0] <= upper[1];
-    for (Eigen::Index k = 1; k + 1 < nc; ++k)
-      candidate[k] = (lower[k] <= upper[k - 1]) & (lower[k] <= upper[k + 1]);
-    candidate[nc - 1] = lower[nc - 1] <= upper[nc - 2];
+    // Local minima: a sample surely above a neighbour is none, the few others are tested.
+    std::int32_t candidates[kMaxCoarse];
+    const int found = minimum_candidates(lower, upper, nc, candidates);
     Minimum refined[kMaxCoarse];
     std::size_t count = 0;
-    for (Eigen::Index k0 = 0; k0 < nc; k0 += 8) {
-      std::uint64_t word;
-      std::memcpy(&word, candidate + k0, sizeof word);
-      if (!word) continue;
-      for (Eigen::Index k = k0; k < std::min(k0 + 8, nc); ++k) {
-        if (!candidate[k]) continue;
-        if (!((k == 0 || not_above(k, k - 1)) && (k + 1 == nc || not_above(k, k + 1)))) continue;
-        refined[count++] = refine(k * kCoarse, px, p, q, fine);
-      }
+    for (int c = 0; c < found; ++c) {
+      const Eigen::Index k = candidates[c];
+      if (!((k == 0 || not_above(k, k - 1)) && (k + 1 == nc || not_above(k, k + 1)))) continue;
+      refined[count++] = refine(k * kCoarse, px, p, q, fine);
     }
     return decide(refined, count, px);
   }
@@ -397,15 +393,18 @@ class LikelihoodEstimator : public LikelihoodFit {
     alignas(32) double ssm[kRoom], smm[kRoom];
     approximate_sums(along_.data(), rank_, along2_.data(), rank2_, stride_, lo, hi - lo + 1, p, q,
                      ssm, smm);
-    // The sample the factors find best (largest ssm^2 / smm) bounds the window's least chi2.
     const Eigen::Index count = hi - lo + 1;
-    Eigen::Index at = 0;
-    for (Eigen::Index i = 1; i < count; ++i)
-      if (ssm[i] * ssm[i] * smm[at] > ssm[at] * ssm[at] * smm[i]) at = i;
-    const double least_upper = chi2_upper(ssm[at], smm[at], f);
     alignas(16) std::uint8_t open[kRoom];
-    window_candidates(ssm, smm, count, f.sss - 2 * f.slack - least_upper, f.ssm_error, f.smm_error,
-                      open);
+    const int opened =
+        window_candidates(ssm, smm, count, f.sss, f.ssm_error, f.smm_error, f.slack, open);
+    if (opened == 1) {  // the usual case: the best sample, with its neighbours for decide
+      const Eigen::Index at = lo + (std::find(open, open + count, 1) - open);
+      if (at == 0 || at == n - 1) return {at, chi2(at, px), NAN, NAN};
+      double c[3];
+      const std::size_t row = static_cast<std::size_t>((at - 1) * bands_);
+      profiled_chi2_three(&rates_[row], &squares_[row], px.ws, px.w, bands_, px.sss, c);
+      return {at, c[1], c[0], c[2]};
+    }
     double exact[2 * kCoarse + 1];
     for (Eigen::Index i = 0; i < count; ++i) exact[i] = NAN;
     Minimum best{around, std::numeric_limits<double>::infinity(), NAN, NAN};

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "detail/vector_clones.h"
@@ -31,6 +32,38 @@ double profiled_chi2(const double* m, const double* m2, const double* ws, const 
   return sss - sm * sm / mm;
 }
 
+// Each sample's sums in the order profiled_chi2 adds them; three of them interleaved (their
+// additions are independent), in named lanes that stay in registers.
+PYROCAM_VECTOR_CLONES
+void profiled_chi2_three(const double* m, const double* m2, const double* ws, const double* w,
+                         int bands, double sss, double* chi2) {
+  const double *m1 = m + bands, *m3 = m + 2 * bands;
+  const double *q1 = m2 + bands, *q3 = m2 + 2 * bands;
+  double a0[4] = {0, 0, 0, 0}, a1[4] = {0, 0, 0, 0}, a2[4] = {0, 0, 0, 0};
+  double b0[4] = {0, 0, 0, 0}, b1[4] = {0, 0, 0, 0}, b2[4] = {0, 0, 0, 0};
+  int b = 0;
+  for (; b + 4 <= bands; b += 4)
+    for (int k = 0; k < 4; ++k) {
+      a0[k] += ws[b + k] * m[b + k];
+      a1[k] += ws[b + k] * m1[b + k];
+      a2[k] += ws[b + k] * m3[b + k];
+      b0[k] += w[b + k] * m2[b + k];
+      b1[k] += w[b + k] * q1[b + k];
+      b2[k] += w[b + k] * q3[b + k];
+    }
+  for (; b < bands; ++b) {
+    a0[0] += ws[b] * m[b], a1[0] += ws[b] * m1[b], a2[0] += ws[b] * m3[b];
+    b0[0] += w[b] * m2[b], b1[0] += w[b] * q1[b], b2[0] += w[b] * q3[b];
+  }
+  const double* a[3] = {a0, a1, a2};
+  const double* c[3] = {b0, b1, b2};
+  for (int s = 0; s < 3; ++s) {
+    const double sm = (a[s][0] + a[s][1]) + (a[s][2] + a[s][3]);
+    const double mm = (c[s][0] + c[s][1]) + (c[s][2] + c[s][3]);
+    chi2[s] = sss - sm * sm / mm;
+  }
+}
+
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
 // and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
 // Returns how many bands read. Selects, so that the divisions vectorise.
@@ -57,69 +90,170 @@ int weigh_bands(const double* __restrict s, int bands, double dim, const double*
 }
 
 // Projections p = V^T (w s), q = V2^T w on the factors (bands x kMaxRank each, zero padded), in
-// double and single precision.
+// double and single precision, and |w s|^2, |w|^2. The sums start from the first band's products
+// (zeroed arrays compile to a slow rep stos).
 PYROCAM_VECTOR_CLONES
 void project(const double* __restrict ws, const double* __restrict w, int bands,
              const double* __restrict v, const double* __restrict v2, double* __restrict p,
-             double* __restrict q, float* __restrict pf, float* __restrict qf) {
-  for (int b = 0; b < bands; ++b)
-    for (int r = 0; r < kMaxRank; ++r) {
-      p[r] += ws[b] * v[b * kMaxRank + r];
-      q[r] += w[b] * v2[b * kMaxRank + r];
-    }
+             double* __restrict q, float* __restrict pf, float* __restrict qf,
+             double* __restrict squares) {
+  double a[kMaxRank], c[kMaxRank];
   for (int r = 0; r < kMaxRank; ++r) {
-    pf[r] = static_cast<float>(p[r]);
-    qf[r] = static_cast<float>(q[r]);
+    a[r] = ws[0] * v[r];
+    c[r] = w[0] * v2[r];
   }
+  double ws2 = ws[0] * ws[0], w2 = w[0] * w[0];
+  for (int b = 1; b < bands; ++b) {
+    for (int r = 0; r < kMaxRank; ++r) {
+      a[r] += ws[b] * v[b * kMaxRank + r];
+      c[r] += w[b] * v2[b * kMaxRank + r];
+    }
+    ws2 += ws[b] * ws[b];
+    w2 += w[b] * w[b];
+  }
+  for (int r = 0; r < kMaxRank; ++r) {
+    p[r] = a[r];
+    q[r] = c[r];
+    pf[r] = static_cast<float>(a[r]);
+    qf[r] = static_cast<float>(c[r]);
+  }
+  squares[0] = ws2;
+  squares[1] = w2;
 }
 
-// Blocks of samples keep their sums in registers; selects, so that the bounds vectorise.
+// Blocks of samples keep their sums in registers, ssm's and smm's summed in the same loop (twice
+// as many independent additions: the sums are bound by the adds' latency, not their number);
+// selects, so that the bounds vectorise.
 PYROCAM_VECTOR_CLONES
 void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
                   std::ptrdiff_t stride, std::ptrdiff_t count, const float* p, const float* q,
                   float sss, float ssm_error, float smm_error, float slack, float* lower,
                   float* upper) {
   for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kCoarseBlock) {
-    float ssm[kCoarseBlock] = {}, smm[kCoarseBlock] = {};
-    for (int r = 0; r < rank; ++r) {
+    // The sums start from the first products (zeroed arrays compile to a slow rep stos).
+    float ssm[kCoarseBlock], smm[kCoarseBlock];
+    for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) {
+      ssm[j] = p[0] * along[i0 + j];
+      smm[j] = q[0] * along2[i0 + j];
+    }
+    int r = 1;
+    for (; r < rank && r < rank2; ++r) {
+      const float* a = along + r * stride + i0;
+      const float* a2 = along2 + r * stride + i0;
+      for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) {
+        ssm[j] += p[r] * a[j];
+        smm[j] += q[r] * a2[j];
+      }
+    }
+    for (; r < rank; ++r) {
       const float* a = along + r * stride + i0;
       for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) ssm[j] += p[r] * a[j];
     }
-    for (int r = 0; r < rank2; ++r) {
+    for (; r < rank2; ++r) {
       const float* a = along2 + r * stride + i0;
       for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) smm[j] += q[r] * a[j];
     }
+    // One division for both bounds: top^2 / bottom = top^2 over inv and least^2 / over = least^2
+    // bottom inv with inv = 1 / (bottom over), a few roundings more, far inside slack. Where
+    // bottom over is tiny or not positive: no lower bound, and chi2 <= sss.
     for (std::ptrdiff_t j = 0; j < kCoarseBlock; ++j) {
-      const float x = std::abs(ssm[j]), top = x + ssm_error, bottom = smm[j] - smm_error;
-      const float low = sss - top * top / std::max(bottom, 1e-30f) - slack;
-      lower[i0 + j] = bottom > 0 ? low : -std::numeric_limits<float>::max();
-      const float least = std::max(x - ssm_error, 0.0f);
-      upper[i0 + j] = sss - least * least / (smm[j] + smm_error) + slack;
+      const float x = std::abs(ssm[j]), top = x + ssm_error, least = std::max(x - ssm_error, 0.0f);
+      const float bottom = smm[j] - smm_error, over = smm[j] + smm_error, both = bottom * over;
+      const bool usable = bottom > 0 && both > 1e-30f;
+      const float inv = 1.0f / (usable ? both : 1.0f);
+      lower[i0 + j] =
+          usable ? sss - top * top * over * inv - slack : -std::numeric_limits<float>::max();
+      upper[i0 + j] = sss - (usable ? least * least * bottom * inv : 0.0f) + slack;
     }
   }
 }
 
+// Flags as bytes (the ends apart, so that the rest vectorises), scanned eight at a time: most
+// samples are not minima.
 PYROCAM_VECTOR_CLONES
-void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double bar,
-                       double ssm_error, double smm_error, std::uint8_t* open) {
+int minimum_candidates(const float* lower, const float* upper, std::ptrdiff_t count,
+                       std::int32_t* at) {
+  alignas(32) std::uint8_t flag[kMaxMinimumCandidates + 8];
+  flag[0] = lower[0] <= upper[1];
+  for (std::ptrdiff_t k = 1; k + 1 < count; ++k)
+    flag[k] = (lower[k] <= upper[k - 1]) & (lower[k] <= upper[k + 1]);
+  flag[count - 1] = lower[count - 1] <= upper[count - 2];
+  std::memset(flag + count, 0, 8);
+  int n = 0;
+  for (std::ptrdiff_t k0 = 0; k0 < count; k0 += 8) {
+    std::uint64_t word;
+    std::memcpy(&word, flag + k0, sizeof word);
+    if (!word) continue;
+    for (std::ptrdiff_t k = k0; k < k0 + 8; ++k)
+      if (flag[k]) at[n++] = static_cast<std::int32_t>(k);
+  }
+  return n;
+}
+
+// The least upper bound is sss - g + slack for the largest g = (|ssm| - ssm_error)^2 / (smm +
+// smm_error), the bound chi2_upper gives at that sample (likelihood_bounds.h). A sample is open
+// where (|ssm| + ssm_error)^2 >= bar (smm - smm_error), bar = sss - 2 slack - least upper bound,
+// i.e. its lower bound (chi2_lower) is not above it.
+PYROCAM_VECTOR_CLONES
+int window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double sss,
+                      double ssm_error, double smm_error, double slack, std::uint8_t* open) {
+  // Each sample's quotient (vectorised divisions), then the largest in four lanes; a sum that
+  // may be 0 (no bound) gives 0.
+  constexpr std::ptrdiff_t kMost = 64;
+  alignas(32) double quotient[kMost];
+  double g = 0;
+  for (std::ptrdiff_t from = 0; from < count; from += kMost) {
+    const std::ptrdiff_t part = std::min(kMost, count - from);
+    for (std::ptrdiff_t i = 0; i < part; ++i) {
+      const double least = std::max(std::abs(ssm[from + i]) - ssm_error, 0.0);
+      const double b = smm[from + i] + smm_error;
+      const double v = least * least / (b > 0 ? b : 1.0);
+      quotient[i] = b > 0 && v < std::numeric_limits<double>::infinity() ? v : 0.0;
+    }
+    double most[4] = {0, 0, 0, 0};
+    std::ptrdiff_t i = 0;
+    for (; i + 4 <= part; i += 4)
+      for (int j = 0; j < 4; ++j) most[j] = quotient[i + j] > most[j] ? quotient[i + j] : most[j];
+    for (; i < part; ++i) most[0] = quotient[i] > most[0] ? quotient[i] : most[0];
+    for (int j = 0; j < 4; ++j) g = most[j] > g ? most[j] : g;
+  }
+  const double least_upper = sss - g + slack;
+  const double bar = sss - 2 * slack - least_upper;
   for (std::ptrdiff_t i = 0; i < count; ++i) {
     const double top = std::abs(ssm[i]) + ssm_error, bottom = smm[i] - smm_error;
     open[i] = !(bottom > 0) || top * top >= bar * bottom;
   }
+  int n = 0;
+  for (std::ptrdiff_t i = 0; i < count; ++i) n += open[i];
+  return n;
 }
 
-// Blocks of samples keep their sums in registers.
+// Blocks of samples keep their sums in registers, ssm's and smm's summed in the same loop (as in
+// bounded_chi2).
 PYROCAM_VECTOR_CLONES
 void approximate_sums(const double* along, int rank, const double* along2, int rank2,
                       std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
                       const double* p, const double* q, double* ssm, double* smm) {
   for (std::ptrdiff_t i0 = 0; i0 < count; i0 += kWindowBlock) {
-    double a[kWindowBlock] = {}, b[kWindowBlock] = {};
-    for (int r = 0; r < rank; ++r) {
+    double a[kWindowBlock], b[kWindowBlock];  // from the first products, as in bounded_chi2
+    for (std::ptrdiff_t j = 0; j < kWindowBlock; ++j) {
+      a[j] = p[0] * along[from + i0 + j];
+      b[j] = q[0] * along2[from + i0 + j];
+    }
+    int r = 1;
+    for (; r < rank && r < rank2; ++r) {
+      const double* f = along + r * stride + from + i0;
+      const double* f2 = along2 + r * stride + from + i0;
+      for (std::ptrdiff_t j = 0; j < kWindowBlock; ++j) {
+        a[j] += p[r] * f[j];
+        b[j] += q[r] * f2[j];
+      }
+    }
+    for (; r < rank; ++r) {
       const double* f = along + r * stride + from + i0;
       for (std::ptrdiff_t j = 0; j < kWindowBlock; ++j) a[j] += p[r] * f[j];
     }
-    for (int r = 0; r < rank2; ++r) {
+    for (; r < rank2; ++r) {
       const double* f = along2 + r * stride + from + i0;
       for (std::ptrdiff_t j = 0; j < kWindowBlock; ++j) b[j] += q[r] * f[j];
     }

@@ -9,34 +9,47 @@ namespace pyrocam {
 
 // Samples per step of bounded_chi2 (long coarse scans, single precision) and approximate_sums
 // (short windows, double precision).
-inline constexpr std::ptrdiff_t kCoarseBlock = 32, kWindowBlock = 8;
+inline constexpr std::ptrdiff_t kCoarseBlock = 32, kWindowBlock = 16;
 inline constexpr int kMaxRank = 16;  // low-rank factors of the likelihood fit's locus
+inline constexpr std::ptrdiff_t kMaxMinimumCandidates = 1024;  // samples minimum_candidates takes
 
 // Bounds of chi2 from factors in single precision at the first `count` samples, into lower
-// and upper [0 .. count rounded up to kCoarseBlock): ssm and smm summed from the factors are
-// taken to be off by at most ssm_error and smm_error, and the bounds widened by slack (their
-// own rounding). A lower bound is -FLT_MAX where smm may be 0.
+// and upper [0 .. count rounded up to kCoarseBlock) (rank, rank2 >= 1): ssm and smm summed
+// from the factors are taken to be off by at most ssm_error and smm_error, and the bounds
+// widened by slack (their own rounding). A lower bound is -FLT_MAX where smm may be 0.
 void bounded_chi2(const float* along, int rank, const float* along2, int rank2,
                   std::ptrdiff_t stride, std::ptrdiff_t count, const float* p, const float* q,
                   float sss, float ssm_error, float smm_error, float slack, float* lower,
                   float* upper);
 
+// The samples of bounded_chi2's bounds that may be local minima (2 <= count <=
+// kMaxMinimumCandidates): those whose lower bound is not above the upper bound of either
+// neighbour, their indices into `at` in increasing order. Returns how many.
+int minimum_candidates(const float* lower, const float* upper, std::ptrdiff_t count,
+                       std::int32_t* at);
+
 // The approximate sums ssm = p . along, smm = q . along2 at `count` samples from `from`, into
-// ssm and smm [0 .. count rounded up to kWindowBlock).
+// ssm and smm [0 .. count rounded up to kWindowBlock) (rank, rank2 >= 1).
 void approximate_sums(const double* along, int rank, const double* along2, int rank2,
                       std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
                       const double* p, const double* q, double* ssm, double* smm);
 
 // Flags, into open[0 .. count), the samples whose chi2 (sss - ssm^2 / smm, ssm and smm within
-// ssm_error and smm_error of the values given) may be at most sss - bar: where
-// (|ssm| + ssm_error)^2 >= bar (smm - smm_error), or smm may be 0. Divides nothing (vectorises).
-void window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double bar,
-                       double ssm_error, double smm_error, std::uint8_t* open);
+// ssm_error and smm_error of the values given, the exact chi2 within slack of it) may be the
+// least of them: those whose lower bound is not above the least of their upper bounds (or where
+// smm may be 0). Returns how many. Vectorises.
+int window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count, double sss,
+                      double ssm_error, double smm_error, double slack, std::uint8_t* open);
 
 // chi2 = sss - ssm^2 / smm of the likelihood fit at one locus sample: ssm = sum (w s) m and
 // smm = sum w m^2 over the bands.
 double profiled_chi2(const double* m, const double* m2, const double* ws, const double* w,
                      int bands, double sss);
+
+// profiled_chi2 at three samples side by side (rows m, m + bands, m + 2 bands), into chi2[0 .. 3):
+// the same bits, in one pass.
+void profiled_chi2_three(const double* m, const double* m2, const double* ws, const double* w,
+                         int bands, double sss, double* chi2);
 
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
 // and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
@@ -46,9 +59,10 @@ int weigh_bands(const double* __restrict s, int bands, double dim, const double*
                 double* sss);
 
 // Projections p = V^T (w s), q = V2^T w on the factors (bands x kMaxRank each, zero padded), in
-// double and single precision (p and q accumulate: zero them first).
+// double and single precision, and squares = {|w s|^2, |w|^2} (bands >= 1).
 void project(const double* __restrict ws, const double* __restrict w, int bands,
              const double* __restrict v, const double* __restrict v2, double* __restrict p,
-             double* __restrict q, float* __restrict pf, float* __restrict qf);
+             double* __restrict q, float* __restrict pf, float* __restrict qf,
+             double* __restrict squares);
 
 }  // namespace pyrocam

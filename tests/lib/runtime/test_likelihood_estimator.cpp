@@ -134,6 +134,72 @@ TEST(LikelihoodEstimator, fast_fit_is_the_exhaustive_fit_on_edge_pixels_5x5) {
   expect_same_on_edge_pixels(test_model("test-model-nir5x5.json"));
 }
 
+// Two minima whose chi2 differ by about the ambiguity margin: three bands read, two of them a
+// pair whose ratio turns over (the same ratio at a temperature below the turn and at its twin
+// above), the third swept from too dim to too bright for the first temperature, so that the twin
+// fits first worse, then about as well (no reading), then better. Both fits read each pixel
+// bit for bit alike, and the sweeps cross the no-reading decision.
+void expect_same_near_twin_minima(const std::shared_ptr<const ThermalModel>& model) {
+  const ThermalModel& m = *model;
+  const int bands = m.profile().band_count();
+  const Locus locus = make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 1.0);
+  const Eigen::Index n = locus.size();
+  const auto fast = make_estimator(model, Method::kLikelihood);
+  const auto exhaustive = make_exhaustive_likelihood_estimator(model);
+  fast->set_allow_partial(true);
+  exhaustive->set_allow_partial(true);
+  const double saturation = saturation_signal_dn(m);
+  std::size_t pairs = 0, disagree = 0, read = 0, flips = 0;
+  for (int i = 0; i < bands && pairs < 4; ++i)
+    for (int j = i + 1; j < bands && pairs < 4; ++j) {
+      // The ratio's turn, a temperature well below it and its twin above it.
+      const Eigen::ArrayXd ratio = locus.rates.col(i).array() / locus.rates.col(j).array();
+      Eigen::Index turn;
+      ratio.maxCoeff(&turn);
+      if (turn < 200 || turn > n - 200) ratio.minCoeff(&turn);
+      if (turn < 200 || turn > n - 200) continue;  // monotonic, or turning near an end
+      const Eigen::Index below = turn - 150;
+      Eigen::Index twin = turn + 1;
+      for (Eigen::Index t = turn + 1; t < n; ++t)
+        if (std::abs(ratio[t] - ratio[below]) < std::abs(ratio[twin] - ratio[below])) twin = t;
+      if (twin + 5 >= n) continue;
+      ++pairs;
+      const int third = (j + 1) % bands == i ? (j + 2) % bands : (j + 1) % bands;
+      const Eigen::RowVectorXd rates = locus.rates.row(below);
+      for (double peak : {0.05, 0.2, 0.6}) {
+        double previous = 0;
+        for (int k = 0; k <= 400; ++k) {
+          std::vector<double> s(static_cast<std::size_t>(bands), NAN);
+          const double scale = peak * saturation / std::max(rates[i], rates[j]);
+          s[static_cast<std::size_t>(i)] = scale * rates[i];
+          s[static_cast<std::size_t>(j)] = scale * rates[j];
+          s[static_cast<std::size_t>(third)] = scale * rates[third] * (0.25 + k * 0.01);
+          const double a = fast->temperature_c(s.data()), e = exhaustive->temperature_c(s.data());
+          if (!(a == e || (std::isnan(a) && std::isnan(e)))) {
+            ++disagree;
+            ADD_FAILURE() << "bands " << i << ", " << j << ", " << third << ", step " << k
+                          << ": fast " << a << ", exhaustive " << e;
+          }
+          read += !std::isnan(e);
+          if (k > 0 && std::isnan(previous) != std::isnan(e)) ++flips;
+          previous = e;
+        }
+      }
+    }
+  ASSERT_GT(pairs, 0u);
+  EXPECT_EQ(disagree, 0u);
+  EXPECT_GT(read, 0u);
+  EXPECT_GE(flips, pairs);  // into or out of the ambiguous readings
+}
+
+TEST(LikelihoodEstimator, fast_fit_is_the_exhaustive_fit_near_twin_minima_colour) {
+  expect_same_near_twin_minima(test_model("test-model-rgb.json"));
+}
+
+TEST(LikelihoodEstimator, fast_fit_is_the_exhaustive_fit_near_twin_minima_5x5) {
+  expect_same_near_twin_minima(test_model("test-model-nir5x5.json"));
+}
+
 TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {
   const auto fast = make_estimator(test_model("test-model-nir5x5.json"), Method::kLikelihood);
   fast->set_allow_partial(true);
