@@ -259,6 +259,7 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
     return measure_recording(m);
   }
   FrameMeasurer measurer(shared_model, options);
+  load_prebuilt_table(measurer, options, a.model, global.quiet);
   const MeasureInputs in = measure_inputs(a, model);
   std::ofstream csv = open_stats_csv(a.out);
   ProgressPrinter progress(global, "measuring");

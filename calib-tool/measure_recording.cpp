@@ -11,6 +11,7 @@
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/image_io.h"
 #include "pyrocam/core/temperature_codes.h"
+#include "pyrocam/runtime/prebuilt_tables.h"
 #include "recording.h"
 
 namespace pyrocam::cli {
@@ -44,12 +45,28 @@ void dark_from_tags(const std::map<std::string, std::string>& fields, const std:
 
 }  // namespace
 
+void load_prebuilt_table(const FrameMeasurer& measurer, const MeasureOptions& options,
+                         const std::string& model_path, bool quiet) {
+  if (options.method != Method::kLut) return;
+  const std::string file = prebuilt_tables_file(model_path);
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) return;
+  try {
+    measurer.load_tables(file);
+  } catch (const InputError& e) {
+    if (!quiet)
+      std::cerr << "warning: prebuilt lookup table " << file << " not used (" << e.what()
+                << "); the table is filled from the network as frames need it\n";
+  }
+}
+
 int measure_recording(const RecordingMeasure& m) {
   const auto segments = recording_segments(m.recording, "raw-");
   const std::string model_pattern = lower(m.model->profile().mosaic.pattern);
   const std::filesystem::path out(m.out);
   std::filesystem::create_directories(out);
   FrameMeasurer measurer(m.model, m.options);
+  load_prebuilt_table(measurer, m.options, m.model_path, m.quiet);
   ExportWriter writer(
       {"", (out / "temperature.npy").string(), (out / "temperature.csv").string(), m.peak_window});
   cv::Mat dark;  // CV_32F or a raw image of the frames' size, from the first frame on

@@ -24,4 +24,10 @@ struct RecordingMeasure {
 
 int measure_recording(const RecordingMeasure& m);
 
+// The model's prebuilt lookup table (model path + ".lut") into the measurer when its method reads
+// a table and the file is there: the same readings, a faster first frame. A file that cannot be
+// used is said on stderr (unless quiet) and the table is filled as frames need it.
+void load_prebuilt_table(const FrameMeasurer& measurer, const MeasureOptions& options,
+                         const std::string& model_path, bool quiet);
+
 }  // namespace pyrocam::cli

@@ -482,6 +482,41 @@ TEST_F(CliMeasure, measure_method_auto_reads_with_the_method_the_library_chooses
   EXPECT_EQ(read_text(out / "stats.csv"), read_text(by_name / "stats.csv"));
 }
 
+// measure reads the model's prebuilt lookup table as ratiotemp does: the same temperatures with
+// it, without it and with a damaged one, which gets a warning naming it.
+TEST_F(CliMeasure, measure_reads_the_prebuilt_table_with_the_same_temperatures) {
+  const auto source = test_model("test-model-rgb.json");
+  if (!std::filesystem::exists(source.string() + ".lut"))
+    GTEST_SKIP() << "the test model has no prebuilt table";
+  const auto model = dir / "m.json", table = dir / "m.json.lut";
+  std::filesystem::copy_file(source, model);
+  const auto measure = [&](const std::string& name) {
+    const ToolRun r = run_tool("measure --model " + quoted(model) + " --dataset " + quoted(data) +
+                                   " --method lut --out " + quoted(dir / name),
+                               dir);
+    EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    return r.err;
+  };
+  const std::string without = measure("without");
+  std::filesystem::copy_file(source.string() + ".lut", table);
+  const std::string with = measure("with");
+  EXPECT_EQ(with.find("prebuilt lookup table"), std::string::npos) << with;
+  {
+    std::fstream f(table, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(-40, std::ios::end);
+    f.put('x');  // inside the last block's values: the checksum no longer holds
+  }
+  const std::string damaged = measure("damaged");
+  EXPECT_NE(damaged.find("warning: prebuilt lookup table " + table.string() + " not used"),
+            std::string::npos)
+      << damaged;
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "without")) {
+    const auto name = entry.path().filename();
+    EXPECT_EQ(read_text(dir / "with" / name), read_text(entry.path())) << name;
+    EXPECT_EQ(read_text(dir / "damaged" / name), read_text(entry.path())) << name;
+  }
+}
+
 // The median_c column of the first frame's row of a measure stats.csv (NaN without one).
 double first_median_c(const std::filesystem::path& stats_csv) {
   std::istringstream lines(read_text(stats_csv));

@@ -2,8 +2,10 @@
 // estimation (PlaneEstimator), for `pyrocam-calib measure`.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "pyrocam/runtime/demosaic.h"
@@ -39,6 +41,13 @@ class FrameMeasurer {
   void measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& temperature_c,
                cv::Mat* uncertainty_c = nullptr);
   cv::Size output_size(cv::Size raw) const;
+  // Adds a table file's blocks (the model's prebuilt lookup table, prebuilt_tables.h) to the
+  // estimator's table: the same readings, without filling those blocks on the first frames.
+  // Returns how many it added (0 for a method without a table); throws InputError as
+  // TemperatureEstimator::load_tables, adding none.
+  std::size_t load_tables(const std::string& path) const {
+    return planes_estimator_.estimator().load_tables(path);
+  }
 
  private:
   std::shared_ptr<const ThermalModel> model_;
