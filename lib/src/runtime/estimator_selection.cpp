@@ -69,7 +69,8 @@ std::unique_ptr<PlaneEstimator> EstimatorSelector::lut_on_prebuilt_grid() const 
       f.space != static_cast<int>(model_->mlp.output_transform()))
     return nullptr;
   try {
-    const TemperatureEstimator::TableGrid grid{f.x0, f.y0, f.h * 16, f.across, f.down};
+    const TemperatureEstimator::TableGrid grid{f.x0, f.y0, f.h * lut::kBlockCells, f.across,
+                                               f.down};
     return std::make_unique<PlaneEstimator>(model_, make_lut_estimator_on_grid(model_, grid),
                                             Method::kLut);
   } catch (const InputError&) {

@@ -136,6 +136,8 @@ bool interpolate(const float* __restrict c0, const float* __restrict c1, const f
 class LutEstimator : public TemperatureEstimator {
  public:
   static constexpr int kBlockShift = 4, kBlockCells = 1 << kBlockShift;
+  static_assert(kBlockCells == pyrocam::lut::kBlockCells,
+                "table files name the grid by its cell size");
   static constexpr int kBlockNodes = kBlockCells + 1;  // per side; edges stored in both blocks
   static constexpr double kMarginLn = 1.0;
   static constexpr double kCellChangeC = 4.0;

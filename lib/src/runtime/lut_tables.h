@@ -19,6 +19,8 @@ namespace pyrocam::lut {
 // (3: the header ends with the tables' verdict; 4: blocks as their nodes, not their cells'
 // corners: 3.5 times smaller.)
 inline constexpr const char* kTableFileMagic = "pyrocam lookup-table cache 4\n";
+// Cells along each side of a block: a header's cell size h times this is the block's size.
+inline constexpr int kBlockCells = 16;
 
 // FNV-1a over 8-byte words (then the tail's bytes), as 16 hex digits: eight times faster than
 // bytewise FNV-1a over a file's megabytes.
