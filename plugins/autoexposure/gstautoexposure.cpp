@@ -34,6 +34,15 @@
  * without a double `gain` property gets one warning and exposure control only. With max-gain 0
  * (the default) the gain is left as it is.
  *
+ * #GstAutoExposure:bracket brackets the exposure with a camera whose frames do not carry it
+ * (aravissrc): the camera's exposure cycles through the controlled exposure times each factor,
+ * each held for #GstAutoExposure:latency + 1 frames, and only the last frame of each step
+ * passes, with its exposure as a PyrocamExposureMeta: the frames before it may have been taken
+ * with either exposure, and thermalfuse could not rank them. The first factor's frames are kept
+ * at the target; thermalfuse frames=N (N factors) fuses one cycle. The output rate is the
+ * camera's divided by latency + 1. Exposures the factors take outside the range are clamped,
+ * with a warning. (pyrocamsrc, whose frames carry their exposure, has its own bracket property.)
+ *
  * Every change posts an element message "pyrocam-exposure" (exposure-us, previous-us, gain-db,
  * previous-gain-db, level-dn, saturated, clamped, timestamp).
  *
@@ -48,6 +57,12 @@
  * gst-launch-1.0 aravissrc exposure=2000 ! video/x-bayer,format=rggb ! \
  *     autoexposure dark-level=12 max-exposure=20000 ! darksub dark-level=12 ! demosaic25 ! \
  *     ratiotemp model=model.json ! fakesink
+ * ]| A 2500 degC core and a 1300 degC rim in one output frame, from a GigE camera that takes an
+ * exposure change two frames after it is set:
+ * |[
+ * gst-launch-1.0 aravissrc exposure=2000 ! video/x-bayer,format=rggb ! \
+ *     autoexposure dark-level=12 latency=2 bracket=1,8 ! darksub dark-level=12 ! demosaic25 ! \
+ *     ratiotemp model=model.json ! thermalfuse frames=2 ! fakesink
  * ]| With gain once the exposure is at 20 ms, up to 12 dB:
  * |[
  * gst-launch-1.0 pyrocamsrc scene=plate temperature=900 exposure=1000 ! \
@@ -62,16 +77,20 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
+#include "autoexposure-private.h"
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
 #include "pyrocam-meta.h"
+#include "pyrocam/runtime/bracket_fusion.h"
 #include "pyrocam/runtime/exposure_control.h"
 
-GST_DEBUG_CATEGORY_STATIC(gst_auto_exposure_debug);
+GST_DEBUG_CATEGORY(gst_auto_exposure_debug);
 #define GST_CAT_DEFAULT gst_auto_exposure_debug
 
 namespace pg = pyrocam::gst;
+using namespace pyrocam::gst::autoexposure;
 
 namespace {
 
@@ -87,59 +106,12 @@ enum {
   PROP_LATENCY,
   PROP_CAMERA,
   PROP_MAX_GAIN,
+  PROP_BRACKET,
 };
 
 constexpr const char* EXPOSURE_MESSAGE = "pyrocam-exposure";
-constexpr double DEFAULT_TARGET = 0.7;
-constexpr guint DEFAULT_HOT_PIXELS = 50;
-constexpr double DEFAULT_DARK_LEVEL = 0;
-constexpr double DEFAULT_MIN_EXPOSURE =
-    1e-3;  // the simulated cameras need well below 1 us when hot
-constexpr double DEFAULT_MAX_EXPOSURE = 1e6;
-constexpr double DEFAULT_MAX_STEP = 8;
-constexpr double DEFAULT_TOLERANCE = 0.1;
-constexpr guint DEFAULT_LATENCY = 3;
-constexpr double DEFAULT_MAX_GAIN = 0;  // dB: the gain is left as it is
-constexpr double MAX_MAX_GAIN = 48;
-
-struct Settings {
-  double target = DEFAULT_TARGET;
-  guint hot_pixels = DEFAULT_HOT_PIXELS;
-  double dark_level = DEFAULT_DARK_LEVEL;
-  double min_exposure_us = DEFAULT_MIN_EXPOSURE, max_exposure_us = DEFAULT_MAX_EXPOSURE;
-  double max_step = DEFAULT_MAX_STEP;
-  double tolerance = DEFAULT_TOLERANCE;
-  guint latency = DEFAULT_LATENCY;
-  double max_gain_db = DEFAULT_MAX_GAIN;
-  std::string camera;  // element name; empty: the first source upstream
-  guint serial = 0;    // bumped by every change
-};
-
-struct State {
-  pg::RawFormat format;
-  double saturation_dn = 255;
-  GstElement* camera = nullptr;  // owned reference; null: not looked for yet or none
-  bool camera_looked_up = false;
-  double property_min_us = 0, property_max_us = G_MAXDOUBLE;
-  bool has_gain = false;  // the camera has a writable double `gain` property
-  double gain_property_min_db = 0, gain_property_max_db = G_MAXDOUBLE;
-  bool warned_no_gain = false;
-  std::unique_ptr<pyrocam::ExposureController> controller;
-  std::unique_ptr<pyrocam::SettingInEffect> in_effect;  // for frames without their own meta
-  guint serial = G_MAXUINT;
-  bool warned_limit = false;
-  ~State() {
-    if (camera) gst_object_unref(camera);
-  }
-};
 
 }  // namespace
-
-struct _GstAutoExposure {
-  GstBaseTransform parent;
-  Settings* settings;
-  State* state;
-};
 
 G_DEFINE_TYPE(GstAutoExposure, gst_auto_exposure, GST_TYPE_BASE_TRANSFORM);
 GST_ELEMENT_REGISTER_DEFINE(autoexposure, "autoexposure", GST_RANK_NONE, GST_TYPE_AUTO_EXPOSURE);
@@ -168,93 +140,80 @@ static gboolean gst_auto_exposure_set_caps(GstBaseTransform* trans, GstCaps* inc
   return TRUE;
 }
 
-/* The camera whose exposure is set: the named element, or the first element upstream without a
- * sink pad (through queues, capsfilters and tees). */
-static GstElement* find_camera(GstAutoExposure* self, const std::string& name) {
-  if (!name.empty()) {
-    GstObject* top = GST_OBJECT(self);
-    while (GST_OBJECT_PARENT(top)) top = GST_OBJECT_PARENT(top);
-    return GST_IS_BIN(top) ? gst_bin_get_by_name_recurse_up(GST_BIN(top), name.c_str()) : nullptr;
-  }
-  GstElement* element = GST_ELEMENT(gst_object_ref(self));
-  for (int hops = 0; hops < 64; ++hops) {
-    GstPad* sink = gst_element_get_static_pad(element, "sink");
-    if (!sink && element != GST_ELEMENT(self)) return element;
-    GstPad* peer = sink ? gst_pad_get_peer(sink) : nullptr;
-    if (sink) gst_object_unref(sink);
-    gst_object_unref(element);
-    if (!peer) return nullptr;
-    element = gst_pad_get_parent_element(peer);
-    gst_object_unref(peer);
-    if (!element) return nullptr;
-  }
-  gst_object_unref(element);
-  return nullptr;
+/* The element message every change of the exposure (or gain) posts. */
+static void post_exposure_message(GstAutoExposure* self, const pyrocam::ExposureCommand& command,
+                                  const pyrocam::ExposureSetting& previous,
+                                  const pyrocam::HotLevel& level, GstClockTime pts) {
+  gst_element_post_message(
+      GST_ELEMENT(self),
+      gst_message_new_element(
+          GST_OBJECT(self),
+          gst_structure_new(
+              EXPOSURE_MESSAGE, "exposure-us", G_TYPE_DOUBLE, command.exposure_us, "previous-us",
+              G_TYPE_DOUBLE, previous.exposure_us, "gain-db", G_TYPE_DOUBLE, command.gain_db,
+              "previous-gain-db", G_TYPE_DOUBLE, previous.gain_db, "level-dn", G_TYPE_DOUBLE,
+              level.level_dn, "saturated", G_TYPE_BOOLEAN, level.clipped, "clamped", G_TYPE_BOOLEAN,
+              command.clamped, "timestamp", G_TYPE_UINT64, static_cast<guint64>(pts), nullptr)));
 }
 
-static void look_up_camera(GstAutoExposure* self, const Settings& settings) {
+/* Sets the camera's exposure (and, when it is controlled, its gain). */
+static void set_camera(GstAutoExposure* self, double exposure_us, std::optional<double> gain_db) {
   State& st = *self->state;
-  st.camera_looked_up = true;
-  GstElement* camera = find_camera(self, settings.camera);
-  if (!camera) {
-    GST_ELEMENT_WARNING(
-        self, RESOURCE, SETTINGS,
-        ("No camera found %s: exposure control is off",
-         settings.camera.empty() ? "upstream" : ("named " + settings.camera).c_str()),
-        ("find_camera returned nothing"));
-    return;
+  if (gain_db) {
+    const double gain = std::clamp(*gain_db, st.gain_property_min_db, st.gain_property_max_db);
+    g_object_set(st.camera, "exposure", exposure_us, "gain", gain, nullptr);
+  } else {
+    g_object_set(st.camera, "exposure", exposure_us, nullptr);
   }
-  GParamSpec* spec = g_object_class_find_property(G_OBJECT_GET_CLASS(camera), "exposure");
-  if (!spec || G_PARAM_SPEC_VALUE_TYPE(spec) != G_TYPE_DOUBLE ||
-      !(spec->flags & G_PARAM_WRITABLE)) {
-    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
-                        ("Camera %s has no exposure property (a writable number of "
-                         "microseconds): exposure control is off",
-                         GST_OBJECT_NAME(camera)),
-                        ("element type %s", G_OBJECT_TYPE_NAME(camera)));
-    gst_object_unref(camera);
-    return;
-  }
-  st.property_min_us = G_PARAM_SPEC_DOUBLE(spec)->minimum;
-  st.property_max_us = G_PARAM_SPEC_DOUBLE(spec)->maximum;
-  GParamSpec* gain = g_object_class_find_property(G_OBJECT_GET_CLASS(camera), "gain");
-  st.has_gain = gain && G_PARAM_SPEC_VALUE_TYPE(gain) == G_TYPE_DOUBLE &&
-                (gain->flags & G_PARAM_WRITABLE) && (gain->flags & G_PARAM_READABLE);
-  if (st.has_gain) {
-    st.gain_property_min_db = G_PARAM_SPEC_DOUBLE(gain)->minimum;
-    st.gain_property_max_db = G_PARAM_SPEC_DOUBLE(gain)->maximum;
-  }
-  st.camera = camera;
-  GST_INFO_OBJECT(self, "controlling the exposure of %s (%s gain property)",
-                  GST_OBJECT_NAME(camera), st.has_gain ? "with a" : "without");
 }
 
-/* The controller's settings from the properties and the camera's property ranges. */
-static pyrocam::ExposureControlSettings controller_settings(GstAutoExposure* self,
-                                                            const Settings& settings) {
+/* Bracketing by the camera's setting (see the element's doc): one frame per step passes, the
+ * first factor's frames drive the base exposure, and each step sets the camera to base x its
+ * factor. Returns whether the frame passes. */
+static bool bracket_frame(GstAutoExposure* self, const Settings& settings, GstBuffer* buffer,
+                          const std::optional<pyrocam::ExposureSetting>& known,
+                          const pyrocam::ExposureSetting& current, bool& failed) {
   State& st = *self->state;
-  pyrocam::ExposureControlSettings c;
-  c.target = settings.target;
-  c.dark_dn = settings.dark_level;
-  c.saturation_dn = st.saturation_dn;
-  // The camera property's range too: a value outside it would not be set at all.
-  c.min_exposure_us = std::max({settings.min_exposure_us, st.property_min_us, 1e-3});
-  c.max_exposure_us = std::min(settings.max_exposure_us, st.property_max_us);
-  c.max_step = settings.max_step;
-  c.tolerance = settings.tolerance;
-  c.latency_frames = static_cast<int>(settings.latency);
-  // Gain 0 dB must be settable for the exposure-first rule; else exposure control only.
-  const bool gain_usable = st.has_gain && st.gain_property_min_db <= 0;
-  if (settings.max_gain_db > 0 && !gain_usable && !st.warned_no_gain) {
-    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
-                        ("Camera %s has no gain property (a writable number of dB from 0): "
-                         "max-gain is ignored, only the exposure is controlled",
-                         GST_OBJECT_NAME(st.camera)),
-                        ("element type %s", G_OBJECT_TYPE_NAME(st.camera)));
-    st.warned_no_gain = true;
+  const bool controls_gain = st.controller->settings().max_gain_db > 0;
+  const pyrocam::CameraBracket::Step step = st.bracket->next_frame();
+  const bool keep = step.keep && known.has_value();
+  if (keep && step.first) {
+    pyrocam::HotLevel level;
+    std::optional<pyrocam::ExposureCommand> command;
+    // The frame as if taken with the base: the controller's answer is a new base.
+    const pyrocam::ExposureSetting taken{known->exposure_us / step.factor, known->gain_db};
+    if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not measure the frame", [&] {
+          pg::MappedImage image;
+          image.map_raw(buffer, st.format);
+          level = pyrocam::hot_level(image.image(), static_cast<int>(settings.hot_pixels),
+                                     st.saturation_dn);
+          command = st.controller->update(level, taken, st.base);
+        })) {
+      failed = true;
+      return false;
+    }
+    if (command) {
+      const pyrocam::ExposureSetting previous = st.base;
+      st.base = {command->exposure_us, controls_gain ? command->gain_db : current.gain_db};
+      post_exposure_message(self, *command, previous, level, GST_BUFFER_PTS(buffer));
+    }
   }
-  c.max_gain_db = gain_usable ? std::min(settings.max_gain_db, st.gain_property_max_db) : 0.0;
-  return c;
+  if (step.set) {
+    const pyrocam::ExposureControlSettings& c = st.controller->settings();
+    const double wanted = st.base.exposure_us * step.next_factor;
+    const double exposure = std::clamp(wanted, c.min_exposure_us, c.max_exposure_us);
+    if (exposure != wanted && !st.warned_bracket_limit)
+      GST_ELEMENT_WARNING(
+          self, RESOURCE, SETTINGS,
+          ("The bracket's exposure %g us (%g x %g) is outside the camera's range "
+           "%g..%g us: clamped",
+           wanted, st.base.exposure_us, step.next_factor, c.min_exposure_us, c.max_exposure_us),
+          ("bracket exposure clamped"));
+    st.warned_bracket_limit = st.warned_bracket_limit || exposure != wanted;
+    set_camera(self, exposure,
+               controls_gain ? std::optional<double>(st.base.gain_db) : std::nullopt);
+  }
+  return keep;
 }
 
 static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, GstBuffer* buffer) {
@@ -268,6 +227,9 @@ static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, Gst
     if (!PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "Bad exposure control settings", [&] {
           st.controller = std::make_unique<pyrocam::ExposureController>(c);
           st.in_effect = std::make_unique<pyrocam::SettingInEffect>(c.latency_frames);
+          st.bracket = settings.bracket.empty() ? nullptr
+                                                : std::make_unique<pyrocam::CameraBracket>(
+                                                      settings.bracket, c.latency_frames);
         }))
       return GST_FLOW_ERROR;
     st.serial = settings.serial;
@@ -279,11 +241,35 @@ static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, Gst
   pyrocam::ExposureSetting current;
   g_object_get(st.camera, "exposure", &current.exposure_us, nullptr);
   if (st.has_gain) g_object_get(st.camera, "gain", &current.gain_db, nullptr);
+  // aravissrc's -1 is "not set": the camera's own gain, taken as 0 dB (its usual default).
+  current.gain_db = std::max(current.gain_db, 0.0);
   // A frame that does not say what it was taken with gets the camera's setting once that is
   // known to have reached it, for everything downstream (ratiotemp's noise model, thermalfuse).
   const std::optional<pyrocam::ExposureSetting> in_effect = st.in_effect->frame_setting(current);
   if (!frame && in_effect)
     pyrocam_buffer_add_exposure_meta(buffer, in_effect->exposure_us, in_effect->gain_db);
+  if (!(current.exposure_us > 0)) {
+    // Not set either (aravissrc's -1): nothing to scale from, so start from a set value.
+    const pyrocam::ExposureControlSettings& c = st.controller->settings();
+    const double start = std::clamp(DEFAULT_START_EXPOSURE, c.min_exposure_us, c.max_exposure_us);
+    if (!st.warned_no_exposure)
+      GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                          ("Camera %s reports no exposure (%g): exposure control starts from %g us",
+                           GST_OBJECT_NAME(st.camera), current.exposure_us, start),
+                          ("exposure property not set"));
+    st.warned_no_exposure = true;  // once, should the camera keep reporting none
+    g_object_set(st.camera, "exposure", start, nullptr);
+    st.controller->set_by_caller({start, current.gain_db});
+    return GST_FLOW_OK;
+  }
+  if (st.bracket) {
+    if (st.base.exposure_us <= 0) st.base = current;  // the camera as it streamed
+    bool failed = false;
+    const bool keep =
+        bracket_frame(self, settings, buffer, frame ? frame : in_effect, current, failed);
+    if (failed) return GST_FLOW_ERROR;
+    return keep ? GST_FLOW_OK : GST_BASE_TRANSFORM_FLOW_DROPPED;
+  }
   pyrocam::HotLevel level;
   std::optional<pyrocam::ExposureCommand> command;
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not measure the frame", [&] {
@@ -309,36 +295,38 @@ static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, Gst
   GST_DEBUG_OBJECT(self, "level %g DN%s: exposure %g -> %g us, gain %g -> %g dB", level.level_dn,
                    level.clipped ? " (saturated)" : "", previous.exposure_us, command->exposure_us,
                    previous.gain_db, command->gain_db);
-  if (controls_gain) {
-    const double gain =
-        std::clamp(command->gain_db, st.gain_property_min_db, st.gain_property_max_db);
-    g_object_set(st.camera, "exposure", command->exposure_us, "gain", gain, nullptr);
-  } else {
-    g_object_set(st.camera, "exposure", command->exposure_us, nullptr);
-  }
-  gst_element_post_message(
-      GST_ELEMENT(self),
-      gst_message_new_element(
-          GST_OBJECT(self),
-          gst_structure_new(EXPOSURE_MESSAGE, "exposure-us", G_TYPE_DOUBLE, command->exposure_us,
-                            "previous-us", G_TYPE_DOUBLE, previous.exposure_us, "gain-db",
-                            G_TYPE_DOUBLE, command->gain_db, "previous-gain-db", G_TYPE_DOUBLE,
-                            previous.gain_db, "level-dn", G_TYPE_DOUBLE, level.level_dn,
-                            "saturated", G_TYPE_BOOLEAN, level.clipped, "clamped", G_TYPE_BOOLEAN,
-                            command->clamped, "timestamp", G_TYPE_UINT64,
-                            static_cast<guint64>(GST_BUFFER_PTS(buffer)), nullptr)));
+  set_camera(self, command->exposure_us,
+             controls_gain ? std::optional<double>(command->gain_db) : std::nullopt);
+  post_exposure_message(self, *command, previous, level, GST_BUFFER_PTS(buffer));
   return GST_FLOW_OK;
+}
+
+static void reset_state(GstAutoExposure* self) {
+  delete self->state;
+  self->state = new State();  // drops the camera reference
 }
 
 static gboolean gst_auto_exposure_start(GstBaseTransform* trans) {
   GstAutoExposure* self = GST_AUTO_EXPOSURE(trans);
-  delete self->state;
-  self->state = new State();
+  const Settings settings = pg::locked_copy(self, *self->settings);
+  std::string why;
+  try {
+    const std::vector<double> factors = pyrocam::parse_bracket(settings.bracket_text);
+    if (!factors.empty()) pyrocam::CameraBracket(factors, static_cast<int>(settings.latency));
+  } catch (const std::exception& e) {
+    why = e.what();
+  }
+  if (!why.empty()) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings, why, "the bracket property is not usable");
+    return FALSE;
+  }
+  reset_state(self);
   return TRUE;
 }
 
 static gboolean gst_auto_exposure_stop(GstBaseTransform* trans) {
-  return gst_auto_exposure_start(trans);  // drops the camera reference
+  reset_state(GST_AUTO_EXPOSURE(trans));
+  return TRUE;
 }
 
 static void gst_auto_exposure_set_property(GObject* object, guint prop_id, const GValue* value,
@@ -377,6 +365,17 @@ static void gst_auto_exposure_set_property(GObject* object, guint prop_id, const
     case PROP_CAMERA: {
       const char* v = g_value_get_string(value);
       s.camera = v ? v : "";
+      break;
+    }
+    case PROP_BRACKET: {
+      const char* v = g_value_get_string(value);
+      s.bracket_text = v ? v : "";
+      try {
+        s.bracket = pyrocam::parse_bracket(s.bracket_text);
+      } catch (const std::exception& e) {
+        GST_WARNING_OBJECT(self, "%s", e.what());  // start() refuses to run
+        s.bracket.clear();
+      }
       break;
     }
     default:
@@ -421,6 +420,9 @@ static void gst_auto_exposure_get_property(GObject* object, guint prop_id, GValu
       break;
     case PROP_CAMERA:
       g_value_set_string(value, s.camera.empty() ? nullptr : s.camera.c_str());
+      break;
+    case PROP_BRACKET:
+      g_value_set_string(value, s.bracket_text.c_str());
       break;
     default:
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
@@ -511,6 +513,20 @@ static void gst_auto_exposure_class_init(GstAutoExposureClass* klass) {
                           nullptr,
                           static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
                                                    GST_PARAM_MUTABLE_READY)));
+
+  g_object_class_install_property(
+      gobject_class, PROP_BRACKET,
+      g_param_spec_string(
+          "bracket", "Exposure bracket",
+          "Exposure factors the camera's exposure cycles through, comma-separated, 2 to 16 of "
+          "0.001..1000 times the controlled exposure (the first factor's frames are kept at the "
+          "target), e.g. 1,8 for thermalfuse frames=2: each is held for latency + 1 frames and "
+          "only the last frame of each passes, with its exposure; for cameras whose frames do "
+          "not carry their exposure (aravissrc; pyrocamsrc has its own bracket). Empty (the "
+          "default): no bracketing",
+          "",
+          static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                   GST_PARAM_MUTABLE_READY)));
 
   gst_element_class_set_static_metadata(
       element_class, "Exposure control for thermal reading", "Filter/Analyzer/Video",

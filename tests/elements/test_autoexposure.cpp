@@ -331,5 +331,81 @@ TEST(AutoExposure, EachFramesExposureTravelsThroughTheChainAsAMeta) {
   EXPECT_GT(exposures[2], 0);
 }
 
+// Bracketing a camera whose frames do not carry their exposure: each factor held for latency + 1
+// = 3 frames and only the last frame of each step passes, with the exposure it was taken with.
+// The white test pattern saturates at every exposure, so each first-factor frame steps the base
+// down by max-step (8): frame 3 at 1000 us (base 1000 -> 125), frame 6 at 4 x 125, frame 9 at
+// 125 (base -> 15.625), frame 12 at 4 x 15.625 / 2 ... as the controller commands.
+TEST(AutoExposure, BracketsACameraWithoutFrameExposuresOneKnownFramePerStep) {
+  REQUIRE_ELEMENT("autoexposure");
+  REQUIRE_ELEMENT("videotestsrc");
+  ASSERT_TRUE(register_exposure_only_source());
+  g_test_exposure_us = 1000;
+  const RunResult r =
+      run("exposureonlysrc num-buffers=13 pattern=white ! "
+          "video/x-raw,format=GRAY8,width=64,height=48 ! autoexposure latency=2 bracket=1,4 ! "
+          "fakesink name=sink",
+          0, 0, 0);
+  EXPECT_TRUE(r.eos);
+  const std::vector<double> expected{1000, 4 * 125.0, 125, 4 * 125.0 / 8};
+  ASSERT_EQ(r.exposures.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i)
+    EXPECT_DOUBLE_EQ(r.exposures[i], expected[i]) << "output frame " << i;
+  EXPECT_DOUBLE_EQ(g_test_exposure_us, 125.0 / 8);  // set after frame 12: the next step's
+  EXPECT_TRUE(r.warnings.empty());
+}
+
+// With the simulated camera (its frames carry their exposure) and latency 0 every frame after
+// the first passes, alternating the factors, and exposure control keeps the first factor's
+// frames (2 x the base) at the target, the others at half of it. The start is dim, not
+// saturated: each step is the controller's ratio, applied to the base (not to 2 x the base).
+TEST(AutoExposure, BracketKeepsTheFirstFactorsFramesAtTheTarget) {
+  REQUIRE_ELEMENT("autoexposure");
+  const RunResult r =
+      run("pyrocamsrc name=camera scene=plate exposure=2 num-buffers=41 ! "
+          "video/x-bayer,width=320,height=240,framerate=30/1 ! "
+          "autoexposure dark-level=50 latency=0 bracket=2,1 ! fakesink name=sink sync=false",
+          1400, 1400, 0);
+  ASSERT_TRUE(r.eos);
+  ASSERT_EQ(r.levels.size(), 40u);
+  const double half_target = kDark + 0.5 * (kTarget - kDark);
+  for (std::size_t i = 20; i < 40; i += 2) {
+    EXPECT_TRUE(near_target(r.levels[i])) << "frame " << i << ": " << r.levels[i];
+    EXPECT_NEAR(r.levels[i + 1], half_target, 0.15 * (kTarget - kDark)) << "frame " << i + 1;
+    EXPECT_DOUBLE_EQ(r.exposures[i + 1], 0.5 * r.exposures[i]);
+  }
+}
+
+TEST(AutoExposure, AnUnusableBracketIsAnErrorNamingIt) {
+  REQUIRE_ELEMENT("autoexposure");
+  const std::string head =
+      "pyrocamsrc num-buffers=2 ! video/x-bayer,width=64,height=48 ! autoexposure bracket=";
+  expect_error(run_pipeline(head + "1 ! fakesink"), GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS,
+               {"2 to 16"});
+  expect_error(run_pipeline(head + "1,x ! fakesink"), GST_RESOURCE_ERROR,
+               GST_RESOURCE_ERROR_SETTINGS, {"'x'", "exposure factor"});
+}
+
+// A camera whose exposure reads as not set (aravissrc's -1) has nothing to scale from: one
+// warning, the control starts from 1 ms and then works as usual.
+TEST(AutoExposure, ACameraWithoutAnExposureSetStartsFromOneMillisecond) {
+  REQUIRE_ELEMENT("autoexposure");
+  REQUIRE_ELEMENT("videotestsrc");
+  ASSERT_TRUE(register_exposure_only_source());
+  g_test_exposure_us = -1;
+  const RunResult r =
+      run("exposureonlysrc num-buffers=6 pattern=white ! "
+          "video/x-raw,format=GRAY8,width=64,height=48 ! autoexposure latency=1 ! "
+          "fakesink name=sink",
+          0, 0, 0);
+  EXPECT_TRUE(r.eos);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("reports no exposure"), std::string::npos) << r.warnings[0];
+  ASSERT_EQ(r.exposures.size(), 6u);
+  EXPECT_EQ(r.exposures[0], -1);        // unknown: no meta
+  EXPECT_EQ(r.exposures[2], 1000);      // the start, once it has held for the latency
+  EXPECT_LT(g_test_exposure_us, 1000);  // saturated: stepped down from there
+}
+
 }  // namespace
 }  // namespace pyrocam::test

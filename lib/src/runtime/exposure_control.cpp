@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/noise_model.h"
+#include "pyrocam/runtime/bracket_fusion.h"
 
 namespace pyrocam {
 
@@ -143,6 +145,40 @@ std::optional<ExposureSetting> SettingInEffect::frame_setting(const ExposureSett
       !std::isfinite(current.gain_db))
     return std::nullopt;
   return current;
+}
+
+CameraBracket::CameraBracket(std::vector<double> factors, int latency_frames)
+    : factors_(std::move(factors)), latency_(latency_frames) {
+  if (factors_.size() < 2 || static_cast<int>(factors_.size()) > kMaxBracketFrames)
+    throw InputError("exposure bracket: 2 to " + std::to_string(kMaxBracketFrames) +
+                     " exposure factors are needed, not " + std::to_string(factors_.size()));
+  for (double f : factors_)
+    if (!(f >= kMinBracketFactor && f <= kMaxBracketFactor))
+      throw InputError("exposure bracket: factor " + std::to_string(f) + " is outside " +
+                       std::to_string(kMinBracketFactor) + ".." +
+                       std::to_string(kMaxBracketFactor));
+  if (latency_frames < 0)
+    throw InputError("exposure bracket: latency " + std::to_string(latency_frames) +
+                     " frames (must be 0 or more)");
+}
+
+CameraBracket::Step CameraBracket::next_frame() {
+  Step s;
+  if (frames_in_step_ < 0) {
+    frames_in_step_ = 0;
+    s.set = true;
+    s.next_factor = factors_[0];
+    return s;
+  }
+  if (++frames_in_step_ <= latency_) return s;
+  s.keep = true;
+  s.first = step_ == 0;
+  s.factor = factors_[step_];
+  step_ = (step_ + 1) % factors_.size();
+  frames_in_step_ = 0;
+  s.set = true;
+  s.next_factor = factors_[step_];
+  return s;
 }
 
 }  // namespace pyrocam

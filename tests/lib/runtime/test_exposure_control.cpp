@@ -278,5 +278,47 @@ TEST(SettingInEffect, KnowsAFramesSettingOnlyOnceAChangeHasHadTimeToReachIt) {
   EXPECT_THROW(SettingInEffect{-1}, InputError);
 }
 
+// Bracketing by the camera's setting: each factor is held for latency + 1 frames and the last
+// frame of each step is the one kept; that frame's setting, as SettingInEffect sees it, is the
+// step's (a camera whose property holds what was set after each frame passes).
+TEST(CameraBracket, KeepsTheLastFrameOfEachStepTakenWithItsFactor) {
+  const std::vector<double> factors{1, 8, 0.25};
+  for (int latency : {0, 1, 3}) {
+    CameraBracket bracket(factors, latency);
+    SettingInEffect in_effect(latency);
+    const double base = 400;
+    double camera_us = 1000;  // as the camera streamed before the bracket began
+    std::vector<double> kept_us;
+    std::vector<int> kept_frames;
+    int first_steps = 0;
+    for (int frame = 0; frame < 40; ++frame) {
+      const std::optional<ExposureSetting> taken = in_effect.frame_setting({camera_us, 0});
+      const CameraBracket::Step step = bracket.next_frame();
+      if (step.keep) {
+        ASSERT_TRUE(taken.has_value()) << "latency " << latency << ", frame " << frame;
+        EXPECT_EQ(taken->exposure_us, base * step.factor) << "latency " << latency;
+        kept_us.push_back(taken->exposure_us);
+        kept_frames.push_back(frame);
+        first_steps += step.first;
+        EXPECT_EQ(step.first, step.factor == factors[0]);
+      }
+      EXPECT_TRUE(step.set || frame == 0 || !step.keep);
+      if (step.set) camera_us = base * step.next_factor;
+    }
+    // Frame 0 starts the first step; then one kept frame every latency + 1 frames, cycling.
+    const int period = latency + 1;
+    ASSERT_EQ(kept_frames.size(), static_cast<std::size_t>(39 / period)) << "latency " << latency;
+    for (std::size_t i = 0; i < kept_frames.size(); ++i) {
+      EXPECT_EQ(kept_frames[i], static_cast<int>(i + 1) * period);
+      EXPECT_EQ(kept_us[i], base * factors[i % factors.size()]);
+    }
+    EXPECT_EQ(first_steps, static_cast<int>((kept_frames.size() + 2) / 3));
+  }
+  EXPECT_THROW(CameraBracket({1}, 1), InputError);      // nothing to bracket
+  EXPECT_THROW(CameraBracket({1, 0}, 1), InputError);   // a factor out of range
+  EXPECT_THROW(CameraBracket({1, 2}, -1), InputError);  // a negative latency
+  EXPECT_THROW(CameraBracket(std::vector<double>(17, 1.0), 0), InputError);  // too many
+}
+
 }  // namespace
 }  // namespace pyrocam

@@ -4,8 +4,10 @@
 // when allowed, the analogue gain. Frame-by-frame logic only; the autoexposure element feeds it.
 #pragma once
 
+#include <cstddef>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <vector>
 
 namespace pyrocam {
 
@@ -65,6 +67,12 @@ class ExposureController {
   // without it, the setting last commanded (or `current` at the start) after latency_frames.
   std::optional<ExposureCommand> update(const HotLevel& level, std::optional<ExposureSetting> frame,
                                         const ExposureSetting& current);
+  // The camera was set to `setting` by the caller (not by a command of update()): frames
+  // without their own settings are taken with it after latency_frames, as after a command.
+  void set_by_caller(const ExposureSetting& setting) {
+    commanded_ = setting;
+    frames_since_command_ = 0;
+  }
   const ExposureControlSettings& settings() const { return settings_; }
   // Whether the last frame wanted an exposure outside the camera's range (clamped to it).
   bool at_limit() const { return at_limit_; }
@@ -93,6 +101,33 @@ class SettingInEffect {
   int latency_;
   std::optional<ExposureSetting> last_;
   int unchanged_ = 0;  // frames since last_ was first read (capped at latency_)
+};
+
+// Exposure bracketing by the camera's own setting, for cameras whose frames do not say what they
+// were taken with (aravissrc): the camera is set to base x each factor in turn and each setting
+// is held for latency + 1 frames, so that the last frame of a step is known to be taken with it
+// (SettingInEffect). That frame is the step's; the frames before it may be either exposure and
+// are not used. Only the sequence of frames is kept here; the caller sets the camera.
+class CameraBracket {
+ public:
+  // factors: two or more (parse_bracket's range); latency_frames >= 0. Throws InputError.
+  CameraBracket(std::vector<double> factors, int latency_frames);
+  struct Step {
+    bool keep = false;   // the last frame of a step: taken with its setting
+    bool first = false;  // ... of the first factor's step (the one exposure control reads)
+    double factor = 1;   // the factor a kept frame was taken with
+    bool set = false;    // set the camera to base x next_factor now (after this frame)
+    double next_factor = 1;
+  };
+  // One frame, in stream order. The first frame starts the first step.
+  Step next_frame();
+  const std::vector<double>& factors() const { return factors_; }
+
+ private:
+  std::vector<double> factors_;
+  int latency_;
+  std::size_t step_ = 0;
+  int frames_in_step_ = -1;  // frames since the step was set; -1: none set yet
 };
 
 }  // namespace pyrocam
