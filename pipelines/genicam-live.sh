@@ -18,7 +18,9 @@
 #   WATCHDOG_MS  longest wait for a frame, in ms                      [2000]
 #   NUM_BUFFERS  frames before the view ends; -1 runs until Ctrl-C    [-1]
 #   LATENCY_MS   how long the picture waits for its temperature overlay, ms [100]
-#   EXPOSURE_CONTROLautoexposure after the camera: the hottest region neither saturates nor goes dim (1) [0]
+#   EXPOSURE_CONTROL autoexposure after the camera: the hottest region neither saturates nor goes dim (1) [0]
+#   EXPOSURE_LATENCY frames from setting an exposure to the first frame taken with it, for autoexposure [3]
+#   BRACKET          exposure factors the camera cycles through (autoexposure brackets it; one frame passes per EXPOSURE_LATENCY + 1), fused by thermalfuse (high dynamic range), e.g. 1,8 []
 #   PEAK_MARKER  ring the frame's peak and write its temperature on the overlay (1) [0]
 #   ALARM_C      thermalalarm: a pyrocam-alarm message when the peak stays above this, degC []
 #   SINK         where the view goes                                  [autovideosink]
@@ -70,7 +72,7 @@ set +e
 # error at once (Aravis may then take seconds to let go of the vanished camera). The filter
 # ignores Ctrl-C so that the launcher can still print while it stops.
 "$launch" "${launch_options[@]}" \
-  "${camera[@]}" ! $CAPS ! watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
+  "${camera[@]}" ! $CAPS ! "${exposure_control[@]}" watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
   "${thermal_chain[@]}" ! "${colormap_to_mix[@]}" \
   "${overlay_mix[@]}" ! videoconvert ! $SINK \
   2>&1 | (

@@ -43,13 +43,24 @@ BRACKET=${BRACKET:-}
 [[ -z $ALARM_C || $ALARM_C =~ ^[0-9]+([.][0-9]+)?$ ]] || { echo "$name: ALARM_C must be a temperature in degC, not '$ALARM_C'" >&2; exit 2; }
 [[ $LATENCY_MS =~ ^[0-9]+$ ]] || { echo "$name: LATENCY_MS must be a whole number of milliseconds, not '$LATENCY_MS'" >&2; exit 2; }
 # BRACKET: the camera cycles through these exposure factors and thermalfuse fuses each cycle
-# (high dynamic range); the simulated camera only: aravissrc frames carry no exposure.
+# (high dynamic range). The simulated camera brackets itself (its frames say their exposure);
+# another camera (aravissrc, genicam-live) is bracketed by autoexposure, which holds each
+# exposure for EXPOSURE_LATENCY + 1 frames and passes the last frame of each, with its exposure.
+EXPOSURE_LATENCY=${EXPOSURE_LATENCY:-}
+[[ -z $EXPOSURE_LATENCY || $EXPOSURE_LATENCY =~ ^[0-9]+$ ]] || { echo "$name: EXPOSURE_LATENCY must be a whole number of frames, not '$EXPOSURE_LATENCY'" >&2; exit 2; }
 bracket_frames=0
+bracket_by_autoexposure=0
 if [[ -n $BRACKET ]]; then
   [[ $BRACKET =~ ^[0-9.]+(,[0-9.]+)*$ ]] || { echo "$name: BRACKET must be exposure factors separated by commas (e.g. 1,0.333,0.111,0.037,0.012,0.004), not '$BRACKET'" >&2; exit 2; }
-  [[ $SOURCE == pyrocamsrc* ]] || { echo "$name: BRACKET needs the simulated camera (SOURCE=pyrocamsrc ...): other cameras' frames carry no exposure to fuse by" >&2; exit 2; }
-  [[ $EXPOSURE_CONTROL == 0 ]] || { echo "$name: BRACKET and EXPOSURE_CONTROL=1 do not go together: the exposure control would chase the bracket's levels" >&2; exit 2; }
-  SOURCE="$SOURCE bracket=$BRACKET"
+  if [[ $SOURCE == pyrocamsrc* && $name != genicam-live ]]; then
+    [[ $EXPOSURE_CONTROL == 0 ]] || { echo "$name: BRACKET and EXPOSURE_CONTROL=1 do not go together with the simulated camera: the exposure control would chase its bracket's levels" >&2; exit 2; }
+    SOURCE="$SOURCE bracket=$BRACKET"
+  elif [[ $SOURCE == aravissrc* || $name == genicam-live ]]; then
+    bracket_by_autoexposure=1
+  else
+    echo "$name: BRACKET needs a camera whose exposure can be set: the simulated one (SOURCE=pyrocamsrc ...) or a GenICam camera (SOURCE=aravissrc ...), not '$SOURCE'" >&2
+    exit 2
+  fi
   bracket_frames=$(($(tr -cd , <<<"$BRACKET" | wc -c) + 1))
 fi
 
@@ -57,10 +68,14 @@ set -f # SOURCE, CAPS and DARK split on spaces into the launcher's words
 # The camera, ending in the tee `camera`; the watchdog ends the pipeline with an error when the
 # camera sends nothing for WATCHDOG_MS.
 # EXPOSURE_CONTROL=1 puts autoexposure after it (its dark level darksub's, when DARK gives one).
+# A bracket of another camera than the simulated one is autoexposure's (above).
 exposure_control=()
-if [[ $EXPOSURE_CONTROL == 1 ]]; then
+if [[ $EXPOSURE_CONTROL == 1 || $bracket_by_autoexposure == 1 ]]; then
   dark_level=$(sed -n 's/^dark-level=\([0-9.]*\)$/\1/p' <<<"$DARK")
-  exposure_control=(autoexposure ${dark_level:+dark-level=$dark_level} !)
+  exposure_control=(autoexposure ${dark_level:+dark-level=$dark_level}
+    ${EXPOSURE_LATENCY:+latency=$EXPOSURE_LATENCY})
+  ((bracket_by_autoexposure == 0)) || exposure_control+=("bracket=$BRACKET")
+  exposure_control+=(!)
 fi
 camera_chain=($SOURCE num-buffers="$NUM_BUFFERS" ! $CAPS ! "${exposure_control[@]}"
   watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera)

@@ -385,4 +385,29 @@ void FakeGigECamera::thaw() {
   if (process_) process_->signal_group(SIGCONT);
 }
 
+Video decode_segment(const std::string& path) {
+  return pull_frames("filesrc location=\"" + path +
+                     "\" ! matroskademux ! avdec_ffv1 ! video/x-raw,format=GRAY16_LE ! "
+                     "appsink name=out");
+}
+
+std::string rgb_model() { return test_model("test-model-rgb.json"); }
+
+std::vector<Bytes> frames_in_files(const std::string& dir, const std::string& prefix) {
+  std::vector<Bytes> out;
+  for (const auto& f : files_in(dir, prefix, ".rgba")) out.push_back(read_bytes(f));
+  return out;
+}
+
+std::string raw_sink(const ScratchDir& dir, const std::string& prefix) {
+  return "video/x-raw,format=RGBA ! multifilesink sync=false location=\"" +
+         (dir / (prefix + "%05d.rgba")).string() + "\"";
+}
+
+void PipelineTest::SetUp() {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp", "thermalcolormap"})
+    REQUIRE_ELEMENT(e);
+  ASSERT_TRUE(std::filesystem::exists(rgb_model())) << rgb_model();
+}
+
 }  // namespace pyrocam::test

@@ -13,6 +13,9 @@
 #include <string>
 #include <vector>
 
+#include "element_support.h"
+#include "test_support.h"
+
 namespace pyrocam::test {
 
 using Bytes = std::vector<std::uint8_t>;
@@ -117,6 +120,24 @@ class FakeGigECamera {
   int lock_fd_ = -1;
   std::optional<Process> process_;
   std::string error_;
+};
+
+// The temperature frames (GRAY16_LE) of a recorded segment (Matroska, FFV1).
+Video decode_segment(const std::string& path);
+// The colour test model (tests/data), which the pipeline tests run their scripts with.
+std::string rgb_model();
+// Raw RGBA frames written one per file by multifilesink (raw_sink), in order.
+std::vector<Bytes> frames_in_files(const std::string& dir, const std::string& prefix);
+// A sink description writing RGBA frames as `prefix`NNNNN.rgba files in `dir`.
+std::string raw_sink(const ScratchDir& dir, const std::string& prefix);
+
+// A script test: the elements the scripts need and the colour model, and a scratch folder for
+// their outputs and logs.
+class PipelineTest : public ::testing::Test {
+ protected:
+  void SetUp() override;
+  ScratchDir dir{"pipeline"};
+  std::string log(const std::string& name) const { return (dir / (name + ".log")).string(); }
 };
 
 }  // namespace pyrocam::test

@@ -67,17 +67,6 @@ Bytes expected_view(const Bytes& mosaic) {
   return rgba;
 }
 
-std::vector<Bytes> frames_in_files(const std::string& dir, const std::string& prefix) {
-  std::vector<Bytes> out;
-  for (const auto& f : files_in(dir, prefix, ".rgba")) out.push_back(read_bytes(f));
-  return out;
-}
-
-std::string raw_sink(const ScratchDir& dir, const std::string& prefix) {
-  return "video/x-raw,format=RGBA ! multifilesink sync=false location=\"" +
-         (dir / (prefix + "%05d.rgba")).string() + "\"";
-}
-
 class Pipelines5x5 : public ::testing::Test {
  protected:
   void SetUp() override {
