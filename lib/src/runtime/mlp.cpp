@@ -440,7 +440,7 @@ json Mlp::to_json() const {
           {"layers", std::move(layers)}};
 }
 
-Mlp Mlp::from_json(const json& j) {
+Mlp Mlp::from_json(const json& j, std::optional<std::vector<MlpLayer>> read_layers) {
   const std::string top = "the MLP object";
   const json& format = require(j, "format", top);
   if (!format.is_string() || format.get<std::string>() != "pyrocam-mlp") {
@@ -486,22 +486,27 @@ Mlp Mlp::from_json(const json& j) {
   input.scale = read_vector(require(j, "input_scale", top), "input_scale");
   const double output_mean = read_number(require(j, "output_mean", top), "output_mean");
   const double output_scale = read_number(require(j, "output_scale", top), "output_scale");
-  const json& layers_json = require(j, "layers", top);
-  if (!layers_json.is_array() || layers_json.empty()) {
-    throw MlpError("mlp json: \"layers\" must be a non-empty array");
-  }
-  if (layers_json.size() > static_cast<std::size_t>(kMlpMaxLayers)) {
-    throw MlpError("mlp json: \"layers\" holds " + std::to_string(layers_json.size()) +
-                   " layers; at most " + std::to_string(kMlpMaxLayers) + " supported");
-  }
   std::vector<MlpLayer> layers;
-  for (std::size_t l = 0; l < layers_json.size(); ++l) {
-    const std::string name = "layers[" + std::to_string(l) + "]";
-    MlpLayer layer;
-    layer.weights = read_matrix(require(layers_json[l], "weights", name), name + ".weights");
-    layer.bias = read_vector(require(layers_json[l], "bias", name), name + ".bias");
-    layers.push_back(std::move(layer));
+  if (read_layers) {
+    layers = std::move(*read_layers);
+  } else {
+    const json& layers_json = require(j, "layers", top);
+    if (!layers_json.is_array() || layers_json.empty()) {
+      throw MlpError("mlp json: \"layers\" must be a non-empty array");
+    }
+    if (layers_json.size() > static_cast<std::size_t>(kMlpMaxLayers)) {
+      throw MlpError("mlp json: \"layers\" holds " + std::to_string(layers_json.size()) +
+                     " layers; at most " + std::to_string(kMlpMaxLayers) + " supported");
+    }
+    for (std::size_t l = 0; l < layers_json.size(); ++l) {
+      const std::string name = "layers[" + std::to_string(l) + "]";
+      MlpLayer layer;
+      layer.weights = read_matrix(require(layers_json[l], "weights", name), name + ".weights");
+      layer.bias = read_vector(require(layers_json[l], "bias", name), name + ".bias");
+      layers.push_back(std::move(layer));
+    }
   }
+  if (layers.empty()) throw MlpError("mlp json: \"layers\" must be a non-empty array");
   try {
     return Mlp(input_transform, std::move(input), output_transform, output_mean, output_scale,
                std::move(layers));

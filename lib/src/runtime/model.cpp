@@ -7,11 +7,16 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <optional>
 #include <sstream>
+#include <string_view>
 #include <system_error>
 #include <thread>
+#include <utility>
 
 #include "detail/json_input.h"
+#include "detail/json_text.h"
+#include "mlp_layers_text.h"
 #include "pyrocam/core/error.h"
 
 namespace pyrocam {
@@ -90,54 +95,21 @@ double number_within(const json& j, const std::string& what, double lo, double h
   return v;
 }
 
-// The end of the JSON value that starts at text[i] (after any white space), or npos when it is
-// not well formed as far as brackets and strings go.
-std::size_t value_end(const std::string& text, std::size_t i) {
-  int depth = 0;
-  bool in_string = false, escaped = false;
-  for (; i < text.size(); ++i) {
-    const char c = text[i];
-    if (in_string) {
-      if (escaped)
-        escaped = false;
-      else if (c == '\\')
-        escaped = true;
-      else if (c == '"') {
-        in_string = false;
-        if (depth == 0) return i + 1;  // a string on its own (a key)
-      }
-    } else if (c == '"') {
-      in_string = true;
-    } else if (c == '[' || c == '{') {
-      ++depth;
-    } else if (c == ']' || c == '}') {
-      if (depth == 0) return i;  // a number or literal ends at its container's end
-      if (--depth == 0) return i + 1;
-    } else if (depth == 0 && (c == ',' || c == ' ' || c == '\n' || c == '\t' || c == '\r')) {
-      return i;
-    }
-  }
-  return std::string::npos;
-}
-
 // fnv1a_hex(payload.dump()) without the dump, from the file's own text, when the file is as
 // save_model writes it: dump() is the payload's text with the white space outside strings left
 // out. "" when the payload is not found (then the caller dumps the parsed payload).
 std::string payload_text_checksum(const std::string& text) {
-  auto skip_space = [&](std::size_t i) {
-    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
-    return i;
-  };
+  auto skip_space = [&](std::size_t i) { return detail::json_skip_space(text, i); };
   std::string found;  // the payload's checksum
   std::size_t i = skip_space(0);
   if (i >= text.size() || text[i] != '{') return "";
   for (i = skip_space(i + 1); i < text.size() && text[i] == '"';) {
-    const std::size_t key_end = value_end(text, i);
+    const std::size_t key_end = detail::json_value_end(text, i);
     if (key_end == std::string::npos) return "";
     const bool payload = text.compare(i, key_end - i, "\"payload\"") == 0;
     i = skip_space(key_end);
     if (i >= text.size() || text[i] != ':') return "";
-    const std::size_t start = skip_space(i + 1), end = value_end(text, start);
+    const std::size_t start = skip_space(i + 1), end = detail::json_value_end(text, start);
     if (end == std::string::npos) return "";
     if (payload) {
       // The parser keeps the last of two payloads: with two, the dump decides.
@@ -261,13 +233,38 @@ ThermalModel load_model(const std::filesystem::path& path) {
       if (t.joinable()) t.join();
     }
   } join{checksum_thread};
+  auto parse = [&](const std::string& json_text) {
+    try {
+      return parse_bounded_json(json_text, where);
+    } catch (const json::exception& e) {
+      throw InputError(where +
+                       ": not a complete JSON model file (truncated or corrupt): " + e.what());
+    }
+  };
+  // The network's layers, most of the text, are read by a faster scanner than the parser
+  // (mlp_layers_text.h), and the parser reads the rest with the layers left as []. Anything the
+  // scanner does not read, and any error in the rest, goes through the parser whole: it names
+  // what is wrong, where it is in the file.
+  std::optional<std::vector<MlpLayer>> layers;
   json file;
-  try {
-    file = parse_bounded_json(text, where);
-  } catch (const json::exception& e) {
-    throw InputError(where +
-                     ": not a complete JSON model file (truncated or corrupt): " + e.what());
+  std::optional<std::pair<std::size_t, std::size_t>> span;
+  if (const auto payload_span = detail::json_member_span(text, 0, "payload"))
+    if (const auto mlp_span = detail::json_member_span(text, payload_span->first, "mlp"))
+      span = detail::json_member_span(text, mlp_span->first, "layers");
+  if (span)
+    layers = detail::read_layers_text(
+        std::string_view(text).substr(span->first, span->second - span->first));
+  if (layers) {
+    std::string rest;
+    rest.reserve(text.size() - (span->second - span->first) + 2);
+    rest.append(text, 0, span->first).append("[]").append(text, span->second);
+    try {
+      file = parse_bounded_json(rest, where);
+    } catch (const std::exception&) {
+      layers.reset();
+    }
   }
+  if (!layers) file = parse(text);
   try {
     if (!file.is_object() || file.value("format", std::string()) != kModelFormat)
       throw InputError(where + ": not a pyrocam thermal model (format is not \"" +
@@ -277,11 +274,16 @@ ThermalModel load_model(const std::filesystem::path& path) {
       throw InputError(where + ": model format version " + std::to_string(version) +
                        ", this build reads version " + std::to_string(kModelFormatVersion) +
                        "; recalibrate with this pyrocam-calib");
-    const json& payload = file.at("payload");
     // The file's own text first (no dump of megabytes); a payload written in another layout
-    // (another program's white space or number format) is checked as before, by its dump.
+    // (another program's white space or number format) is checked as before, by its dump, for
+    // which the layers must be parsed too.
     const std::string checksum = file.value("checksum_fnv1a64", std::string());
     if (checksum_thread.joinable()) checksum_thread.join();
+    if (layers && (from_text.empty() || from_text != checksum)) {
+      layers.reset();
+      file = parse(text);
+    }
+    const json& payload = file.at("payload");
     if ((from_text.empty() || from_text != checksum) && fnv1a_hex(payload.dump()) != checksum)
       throw InputError(where + ": checksum mismatch: the model file was edited or corrupted");
 
@@ -308,7 +310,7 @@ ThermalModel load_model(const std::filesystem::path& path) {
     m.min_temperature_c = range[0];
     m.max_temperature_c = range[1];
     try {
-      m.mlp = Mlp::from_json(payload.at("mlp"));
+      m.mlp = Mlp::from_json(payload.at("mlp"), std::move(layers));
     } catch (const std::exception& e) {
       throw InputError(where + ": MLP: " + e.what());
     }

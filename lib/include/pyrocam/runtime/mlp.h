@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <nlohmann/json_fwd.hpp>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -113,7 +114,10 @@ class Mlp {
   nlohmann::json to_json() const;
   // Throws MlpError naming the key or element at fault: missing keys, wrong types, unknown
   // versions or transforms, shapes that do not chain, non-finite numbers, non-positive scales.
-  static Mlp from_json(const nlohmann::json& j);
+  // `layers`, when given, are the layers already read (the model loader reads them from the
+  // file's text, faster): j's "layers" is then not read.
+  static Mlp from_json(const nlohmann::json& j,
+                       std::optional<std::vector<MlpLayer>> layers = std::nullopt);
 
  private:
   void check_and_prepare();  // validates parts, builds the single-precision copies
