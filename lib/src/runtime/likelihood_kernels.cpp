@@ -237,6 +237,20 @@ int window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count
   return n;
 }
 
+// Summed r after r into explicit lanes (left to itself the compiler transposes the basis).
+PYROCAM_VECTOR_CLONES
+void to_window_basis(const double* basis, int rank, const double* x, double* out) {
+  static_assert(kMaxWindowRank == 8);
+  Lanes low = {0, 0, 0, 0}, high = low;
+  for (int r = 0; r < rank; ++r) {
+    const Lanes xr = {x[r], x[r], x[r], x[r]};
+    low += xr * lanes_at(basis + r * kMaxWindowRank);
+    high += xr * lanes_at(basis + r * kMaxWindowRank + 4);
+  }
+  std::memcpy(out, &low, sizeof low);
+  std::memcpy(out + 4, &high, sizeof high);
+}
+
 // Blocks of samples keep their sums in registers, ssm's and smm's summed in the same loop (as in
 // bounded_chi2).
 PYROCAM_VECTOR_CLONES
