@@ -198,8 +198,10 @@ class ExhaustiveLikelihoodEstimator : public LikelihoodFit {
 //  - coarse scan in single precision: a sample whose lower bound is above a neighbour's upper
 //    bound is no local minimum; the few others are tested with double precision bounds from
 //    all factors, then exactly;
-//  - refinement window in double precision from all factors: only samples whose lower bound is
-//    not above the least upper bound can be the best, and only they are evaluated exactly.
+//  - refinement window in double precision from the window's own basis of the factors' rows
+//    (window_factors: 5 directions where all factors take 11 or 12): only samples whose lower
+//    bound is not above the least upper bound can be the best, and only they are evaluated
+//    exactly.
 // So the answer and the no-reading decisions are those of the exhaustive scan by construction
 // (the unit tests compare both on noisy pixels, with saturated, dim and NaN bands).
 class LikelihoodEstimator : public LikelihoodFit {
@@ -208,6 +210,9 @@ class LikelihoodEstimator : public LikelihoodFit {
   // off by about 1e-6 anyway: a closer fit only costs multiply-adds), window.
   static constexpr double kCoarseRankTolerance = 1e-6, kWindowRankTolerance = 1e-10;
   static constexpr Eigen::Index kMaxCoarse = 504;  // coarse samples: a 10 000 degC range
+  // Room for a refinement window's samples and the reads of approximate_sums' last block.
+  static constexpr Eigen::Index kWindowRoom =
+      (2 * kCoarse + 1 + kWindowBlock - 1) / kWindowBlock * kWindowBlock;
   static_assert(kMaxCoarse <= kMaxMinimumCandidates);
 
   explicit LikelihoodEstimator(std::shared_ptr<const ThermalModel> model)
@@ -237,6 +242,9 @@ class LikelihoodEstimator : public LikelihoodFit {
     coarse_stride_ = padded(coarse_count_);
     factor(unit, across_, rank_, coarse_rank_, along_, coarse_along_, residual_);
     factor(squares, across2_, rank2_, coarse_rank2_, along2_, coarse_along2_, residual2_);
+    window_factors(along_, rank_, window_rank_, window_basis_, window_along_, window_residual_);
+    window_factors(along2_, rank2_, window_rank2_, window_basis2_, window_along2_,
+                   window_residual2_);
     // All factors of each coarse sample side by side (read sample by sample).
     pad_ = (rank_ + 3) / 4 * 4;
     point_width_ = pad_ + (rank2_ + 3) / 4 * 4;
@@ -271,6 +279,8 @@ class LikelihoodEstimator : public LikelihoodFit {
                  static_cast<float>(w_norm * (residual2_[0] + 2e-6)),
                  static_cast<float>(1e-5 * px.sss + 1e-9), lower, upper);
     const FitBounds fine = fit_bounds(px.sss, ws_norm, w_norm, residual_[1], residual2_[1]);
+    const FitBounds window = fit_bounds(px.sss, ws_norm, w_norm, residual_[1] + window_residual_,
+                                        residual2_[1] + window_residual2_);
     // The exhaustive scan's test c[k] <= c[other]: by bounds from all factors in double
     // precision (each sample's once: a candidate's neighbours are often candidates too),
     // exactly only where they overlap.
@@ -294,7 +304,7 @@ class LikelihoodEstimator : public LikelihoodFit {
     for (int c = 0; c < found; ++c) {
       const Eigen::Index k = candidates[c];
       if (!((k == 0 || not_above(k, k - 1)) && (k + 1 == nc || not_above(k, k + 1)))) continue;
-      refined[count++] = refine(k * kCoarse, px, p, q, fine);
+      refined[count++] = refine(k * kCoarse, px, p, q, window);
     }
     return decide(refined, count, px);
   }
@@ -388,12 +398,17 @@ class LikelihoodEstimator : public LikelihoodFit {
     const Eigen::Index n = locus_.size();
     const Eigen::Index lo = std::max<Eigen::Index>(0, around - kCoarse);
     const Eigen::Index hi = std::min<Eigen::Index>(n - 1, around + kCoarse);
-    constexpr Eigen::Index kRoom =
-        (2 * kCoarse + 1 + kWindowBlock - 1) / kWindowBlock * kWindowBlock;
+    constexpr Eigen::Index kRoom = kWindowRoom;
+    // The window's own bases: p and q in them, then the sums at its samples.
+    const std::size_t k = static_cast<std::size_t>(around / kCoarse);
+    alignas(32) double pw[kMaxWindowRank], qw[kMaxWindowRank];
+    to_window_basis(&window_basis_[k * kMaxRank * kMaxWindowRank], rank_, p, pw);
+    to_window_basis(&window_basis2_[k * kMaxRank * kMaxWindowRank], rank2_, q, qw);
     alignas(32) double ssm[kRoom], smm[kRoom];
-    approximate_sums(along_.data(), rank_, along2_.data(), rank2_, stride_, lo, hi - lo + 1, p, q,
-                     ssm, smm);
     const Eigen::Index count = hi - lo + 1;
+    approximate_sums(&window_along_[k * kRoom * window_rank_], window_rank_,
+                     &window_along2_[k * kRoom * window_rank2_], window_rank2_, kRoom, 0, count, pw,
+                     qw, ssm, smm);
     alignas(16) std::uint8_t open[kRoom];
     const int opened =
         window_candidates(ssm, smm, count, f.sss, f.ssm_error, f.smm_error, f.slack, open);
@@ -419,7 +434,70 @@ class LikelihoodEstimator : public LikelihoodFit {
     return best;
   }
 
+  // A refinement window's rows of the factors (`along`, rank wide, lo to hi around a coarse
+  // sample) change smoothly over its 41 degC: they span few directions (5 on the test model,
+  // where all factors take 11 or 12). Per window, an orthonormal basis of them grown as in factor
+  // (basis: kMaxRank x kMaxWindowRank, zero padded, as to_window_basis reads it) and the rows'
+  // coordinates in it (coordinates: window_rank x kWindowRoom), so that a window's sums cost
+  // window_rank multiply-adds per sample instead of rank. residual: the largest row error the
+  // bases leave (on top of the factors' own); with a projection p = V^T (w s), |p| <= |w s|, the
+  // sums are off by at most |w s| times it. A model that needed more than kMaxWindowRank
+  // directions would only get looser bounds.
+  void window_factors(const std::vector<double>& along, int rank, int& window_rank,
+                      std::vector<double>& basis, std::vector<double>& coordinates,
+                      double& residual) const {
+    const Eigen::Index n = locus_.size();
+    std::vector<Eigen::MatrixXd> rows(static_cast<std::size_t>(coarse_count_)), bases(rows.size());
+    window_rank = 1;
+    for (Eigen::Index k = 0; k < coarse_count_; ++k) {
+      const Eigen::Index lo = std::max<Eigen::Index>(0, k * kCoarse - kCoarse);
+      const Eigen::Index hi = std::min<Eigen::Index>(n - 1, k * kCoarse + kCoarse);
+      Eigen::MatrixXd& a = rows[static_cast<std::size_t>(k)];
+      a.resize(hi - lo + 1, rank);
+      for (Eigen::Index i = 0; i < a.rows(); ++i)
+        for (int r = 0; r < rank; ++r)
+          a(i, r) = along[static_cast<std::size_t>(r * stride_ + lo + i)];
+      Eigen::MatrixXd left = a, v(rank, 0);
+      for (int r = 0; r < std::min(rank, kMaxWindowRank); ++r) {
+        Eigen::Index worst;
+        const double norm = left.rowwise().norm().maxCoeff(&worst);
+        if (norm <= kWindowRankTolerance) break;
+        Eigen::VectorXd dir = left.row(worst).transpose() / norm;
+        for (int pass = 0; pass < 2; ++pass) dir -= v * (v.transpose() * dir);
+        dir.normalize();
+        left -= (left * dir) * dir.transpose();
+        v.conservativeResize(Eigen::NoChange, r + 1);
+        v.col(r) = dir;
+      }
+      window_rank = std::max(window_rank, static_cast<int>(v.cols()));
+      bases[static_cast<std::size_t>(k)] = v;
+    }
+    basis.assign(static_cast<std::size_t>(coarse_count_ * kMaxRank * kMaxWindowRank), 0.0);
+    coordinates.assign(static_cast<std::size_t>(coarse_count_ * window_rank * kWindowRoom), 0.0);
+    residual = 0;
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      Eigen::MatrixXd v = Eigen::MatrixXd::Zero(rank, window_rank);
+      v.leftCols(bases[k].cols()) = bases[k];
+      const Eigen::MatrixXd av = rows[k] * v;
+      // From the stored coordinates, so that the bounds hold for what the fit computes.
+      const Eigen::MatrixXd off = rows[k] - av * v.transpose();
+      residual = std::max(residual, 2 * off.rowwise().norm().maxCoeff() + 1e-15);
+      for (int j = 0; j < window_rank; ++j) {
+        for (int r = 0; r < rank; ++r)
+          basis[(k * kMaxRank + static_cast<std::size_t>(r)) * kMaxWindowRank +
+                static_cast<std::size_t>(j)] = v(r, j);
+        for (Eigen::Index i = 0; i < av.rows(); ++i)
+          coordinates[(k * static_cast<std::size_t>(window_rank) + static_cast<std::size_t>(j)) *
+                          kWindowRoom +
+                      static_cast<std::size_t>(i)] = av(i, j);
+      }
+    }
+  }
+
   int rank_ = 0, rank2_ = 0, coarse_rank_ = 0, coarse_rank2_ = 0;
+  int window_rank_ = 0, window_rank2_ = 0;
+  std::vector<double> window_basis_, window_basis2_, window_along_, window_along2_;
+  double window_residual_ = 0, window_residual2_ = 0;
   Eigen::Index stride_ = 0, coarse_count_ = 0, coarse_stride_ = 0;
   std::vector<double> across_, across2_, along_, along2_;
   std::vector<float> coarse_along_, coarse_along2_;

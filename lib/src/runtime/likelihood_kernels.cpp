@@ -10,56 +10,66 @@
 
 namespace pyrocam {
 
+namespace {
+
+// Four doubles that the compiler keeps in one AVX register (two SSE ones in the baseline
+// version): lane k sums bands b + k, as the four partial sums below are specified. Read from
+// any double (aligned(8), may_alias); passed by reference only (by value the baseline's ABI
+// differs).
+typedef double Lanes __attribute__((vector_size(32), aligned(8), may_alias));
+
+inline const Lanes& lanes_at(const double* at) { return *reinterpret_cast<const Lanes*>(at); }
+
+inline double lane_sum(const Lanes& v) { return (v[0] + v[1]) + (v[2] + v[3]); }
+
+}  // namespace
+
 // chi2 = sss - ssm^2 / smm of the likelihood fit at one locus sample: ssm = sum (w s) m and
 // smm = sum w m^2 over the bands, each in four partial sums added in a fixed order (the same
 // bits in every compiled version).
 PYROCAM_VECTOR_CLONES
 double profiled_chi2(const double* m, const double* m2, const double* ws, const double* w,
                      int bands, double sss) {
-  double ssm[4] = {0, 0, 0, 0}, smm[4] = {0, 0, 0, 0};
+  Lanes ssm = {0, 0, 0, 0}, smm = {0, 0, 0, 0};
   int b = 0;
-  for (; b + 4 <= bands; b += 4)
-    for (int k = 0; k < 4; ++k) {
-      ssm[k] += ws[b + k] * m[b + k];
-      smm[k] += w[b + k] * m2[b + k];
-    }
+  for (; b + 4 <= bands; b += 4) {
+    ssm += lanes_at(ws + b) * lanes_at(m + b);
+    smm += lanes_at(w + b) * lanes_at(m2 + b);
+  }
   for (; b < bands; ++b) {
     ssm[0] += ws[b] * m[b];
     smm[0] += w[b] * m2[b];
   }
-  const double sm = (ssm[0] + ssm[1]) + (ssm[2] + ssm[3]);
-  const double mm = (smm[0] + smm[1]) + (smm[2] + smm[3]);
+  const double sm = lane_sum(ssm), mm = lane_sum(smm);
   return sss - sm * sm / mm;
 }
 
 // Each sample's sums in the order profiled_chi2 adds them; three of them interleaved (their
-// additions are independent), in named lanes that stay in registers.
+// additions are independent), in explicit lanes (left to itself the compiler shuffles the rows
+// into place and spills the sums).
 PYROCAM_VECTOR_CLONES
 void profiled_chi2_three(const double* m, const double* m2, const double* ws, const double* w,
                          int bands, double sss, double* chi2) {
   const double *m1 = m + bands, *m3 = m + 2 * bands;
   const double *q1 = m2 + bands, *q3 = m2 + 2 * bands;
-  double a0[4] = {0, 0, 0, 0}, a1[4] = {0, 0, 0, 0}, a2[4] = {0, 0, 0, 0};
-  double b0[4] = {0, 0, 0, 0}, b1[4] = {0, 0, 0, 0}, b2[4] = {0, 0, 0, 0};
+  Lanes a0 = {0, 0, 0, 0}, a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
   int b = 0;
-  for (; b + 4 <= bands; b += 4)
-    for (int k = 0; k < 4; ++k) {
-      a0[k] += ws[b + k] * m[b + k];
-      a1[k] += ws[b + k] * m1[b + k];
-      a2[k] += ws[b + k] * m3[b + k];
-      b0[k] += w[b + k] * m2[b + k];
-      b1[k] += w[b + k] * q1[b + k];
-      b2[k] += w[b + k] * q3[b + k];
-    }
+  for (; b + 4 <= bands; b += 4) {
+    const Lanes x = lanes_at(ws + b), y = lanes_at(w + b);
+    a0 += x * lanes_at(m + b);
+    a1 += x * lanes_at(m1 + b);
+    a2 += x * lanes_at(m3 + b);
+    b0 += y * lanes_at(m2 + b);
+    b1 += y * lanes_at(q1 + b);
+    b2 += y * lanes_at(q3 + b);
+  }
   for (; b < bands; ++b) {
     a0[0] += ws[b] * m[b], a1[0] += ws[b] * m1[b], a2[0] += ws[b] * m3[b];
     b0[0] += w[b] * m2[b], b1[0] += w[b] * q1[b], b2[0] += w[b] * q3[b];
   }
-  const double* a[3] = {a0, a1, a2};
-  const double* c[3] = {b0, b1, b2};
+  const Lanes a[3] = {a0, a1, a2}, c[3] = {b0, b1, b2};
   for (int s = 0; s < 3; ++s) {
-    const double sm = (a[s][0] + a[s][1]) + (a[s][2] + a[s][3]);
-    const double mm = (c[s][0] + c[s][1]) + (c[s][2] + c[s][3]);
+    const double sm = lane_sum(a[s]), mm = lane_sum(c[s]);
     chi2[s] = sss - sm * sm / mm;
   }
 }
@@ -226,6 +236,20 @@ int window_candidates(const double* ssm, const double* smm, std::ptrdiff_t count
   int n = 0;
   for (std::ptrdiff_t i = 0; i < count; ++i) n += open[i];
   return n;
+}
+
+// Summed r after r into explicit lanes (left to itself the compiler transposes the basis).
+PYROCAM_VECTOR_CLONES
+void to_window_basis(const double* basis, int rank, const double* x, double* out) {
+  static_assert(kMaxWindowRank == 8);
+  Lanes low = {0, 0, 0, 0}, high = low;
+  for (int r = 0; r < rank; ++r) {
+    const Lanes xr = {x[r], x[r], x[r], x[r]};
+    low += xr * lanes_at(basis + r * kMaxWindowRank);
+    high += xr * lanes_at(basis + r * kMaxWindowRank + 4);
+  }
+  std::memcpy(out, &low, sizeof low);
+  std::memcpy(out + 4, &high, sizeof high);
 }
 
 // Blocks of samples keep their sums in registers, ssm's and smm's summed in the same loop (as in

@@ -10,7 +10,8 @@ namespace pyrocam {
 // Samples per step of bounded_chi2 (long coarse scans, single precision) and approximate_sums
 // (short windows, double precision).
 inline constexpr std::ptrdiff_t kCoarseBlock = 32, kWindowBlock = 16;
-inline constexpr int kMaxRank = 16;  // low-rank factors of the likelihood fit's locus
+inline constexpr int kMaxRank = 16;       // low-rank factors of the likelihood fit's locus
+inline constexpr int kMaxWindowRank = 8;  // a refinement window's own basis of them
 inline constexpr std::ptrdiff_t kMaxMinimumCandidates = 1024;  // samples minimum_candidates takes
 
 // Bounds of chi2 from factors in single precision at the first `count` samples, into lower
@@ -33,6 +34,10 @@ int minimum_candidates(const float* lower, const float* upper, std::ptrdiff_t co
 void approximate_sums(const double* along, int rank, const double* along2, int rank2,
                       std::ptrdiff_t stride, std::ptrdiff_t from, std::ptrdiff_t count,
                       const double* p, const double* q, double* ssm, double* smm);
+
+// x (projections on `rank` factors) in a refinement window's basis (kMaxRank x kMaxWindowRank,
+// zero padded): out[j] = sum_r x[r] basis[r][j] for j < kMaxWindowRank.
+void to_window_basis(const double* basis, int rank, const double* x, double* out);
 
 // Flags, into open[0 .. count), the samples whose chi2 (sss - ssm^2 / smm, ssm and smm within
 // ssm_error and smm_error of the values given, the exact chi2 within slack of it) may be the
