@@ -382,14 +382,16 @@ static GstFlowReturn gst_demosaic25_transform(GstBaseTransform* trans, GstBuffer
     st.planes.resize(static_cast<std::size_t>(st.bands));
     for (int b = 0; b < st.bands; ++b)
       st.planes[static_cast<std::size_t>(b)] = out.plane(b, st.out_width, st.out_height);
-    pyrocam::demosaic(in.image(), st.layout, st.method, st.planes, st.no_signal_dn);
     const double spread = pg::locked_copy(self, self->settings->mixed_pixels);
     if (spread > 0) {
       pyrocam::FootprintCheck check;
       check.relative_spread = spread;
       check.noise = st.noise;
       check.skip_below_dn = st.skip_below_dn;
-      pyrocam::mark_mixed_pixels(in.image(), st.layout, st.method, check, st.planes);
+      pyrocam::demosaic_marking_mixed(in.image(), st.layout, st.method, check, st.planes,
+                                      st.no_signal_dn);
+    } else {
+      pyrocam::demosaic(in.image(), st.layout, st.method, st.planes, st.no_signal_dn);
     }
   });
   return ok ? GST_FLOW_OK : GST_FLOW_ERROR;

@@ -49,4 +49,11 @@ std::size_t mark_mixed_pixels(const cv::Mat& mosaic, const MosaicLayout& layout,
                               DemosaicMethod method, const FootprintCheck& check,
                               std::vector<cv::Mat>& planes);
 
+// demosaic, then mark_mixed_pixels, with the same results; for bilinear Bayer in one pass: each
+// block of rows is checked as soon as it is demosaicked, while its mosaic rows are in cache
+// (the separate pass read the whole mosaic from memory again).
+std::size_t demosaic_marking_mixed(const cv::Mat& mosaic, const MosaicLayout& layout,
+                                   DemosaicMethod method, const FootprintCheck& check,
+                                   std::vector<cv::Mat>& planes, float no_signal_dn);
+
 }  // namespace pyrocam
