@@ -114,11 +114,16 @@ void bench_colour(const Options& o, const pyrocam::ThermalModel& m, const std::s
   row.colour_bayer = run_chain("bayer2rgb", caps, raw, o.frames, o.warmup);
   print_run("bayer2rgb alone", row.colour_bayer);
   const Run* bayer = &row.colour_bayer;
-  if (detailed)
+  if (detailed) {
     print_run(
         "darksub ! demosaic25 (no ratiotemp)",
         run_chain("darksub dark-level=50" + q + " ! demosaic25", caps, raw, o.frames, o.warmup),
         bayer);
+    print_run("the same, demosaic25 mixed-pixels=0.2",
+              run_chain("darksub dark-level=50" + q + " ! demosaic25 mixed-pixels=0.2", caps, raw,
+                        o.frames, o.warmup),
+              bayer);
+  }
   const std::string chain = "darksub dark-level=50" + q + " ! demosaic25" + q +
                             " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
                             " misfit-probability=" + o.misfit_probability;
