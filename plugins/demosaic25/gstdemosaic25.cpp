@@ -68,8 +68,8 @@ namespace {
 enum { PROP_0, PROP_METHOD, PROP_PROFILE, PROP_MIXED_PIXELS };
 
 constexpr GstDemosaic25Method DEFAULT_METHOD = GST_DEMOSAIC25_METHOD_AUTO;
-// Off by default: the check costs several times the demosaicking (measured with
-// bench_chain), more than the 15 % of the colour chain a default may cost.
+// Off by default: it costs under the 15 % of the colour chain a default may cost, but it takes
+// most readings of small melt pools at a fixed exposure (their steep sides; docs/elements.md).
 constexpr double DEFAULT_MIXED_PIXELS = 0;
 
 struct Settings {
@@ -498,8 +498,9 @@ static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
           "samples of one band differing by more than "
           "this share of the largest plus 5 noise standard deviations gets no reading (NaN in "
           "every band): at a sharp edge they see different temperatures and read wild (0..10; "
-          "0 = no check, the default; 0.2 suits melt pools and plates; the noise model is the "
-          "profile's, else the shipped colour camera's scaled to the bit depth)",
+          "0 = no check, the default; 0.5 suits melt pools and plates: a gradient that makes a "
+          "band's interpolation err as much as noise does at the dim threshold; the noise model "
+          "is the profile's, else the shipped colour camera's scaled to the bit depth)",
           0.0, pyrocam::kMaxRelativeSpread, DEFAULT_MIXED_PIXELS,
           static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
                                    GST_PARAM_MUTABLE_PLAYING)));
