@@ -114,11 +114,16 @@ void bench_colour(const Options& o, const pyrocam::ThermalModel& m, const std::s
   row.colour_bayer = run_chain("bayer2rgb", caps, raw, o.frames, o.warmup);
   print_run("bayer2rgb alone", row.colour_bayer);
   const Run* bayer = &row.colour_bayer;
-  if (detailed)
+  if (detailed) {
     print_run(
         "darksub ! demosaic25 (no ratiotemp)",
         run_chain("darksub dark-level=50" + q + " ! demosaic25", caps, raw, o.frames, o.warmup),
         bayer);
+    print_run("the same, demosaic25 mixed-pixels=0.5",
+              run_chain("darksub dark-level=50" + q + " ! demosaic25 mixed-pixels=0.5", caps, raw,
+                        o.frames, o.warmup),
+              bayer);
+  }
   const std::string chain = "darksub dark-level=50" + q + " ! demosaic25" + q +
                             " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
                             " misfit-probability=" + o.misfit_probability;
@@ -127,10 +132,10 @@ void bench_colour(const Options& o, const pyrocam::ThermalModel& m, const std::s
     print_run("darksub ! demosaic25 ! ratiotemp method=lut", row.colour_lut, bayer);
     if (detailed) {
       // The same with demosaic25's mixed-pixel check (off by default): what the check costs.
-      const std::string checked = "darksub dark-level=50" + q + " ! demosaic25 mixed-pixels=0.2" +
+      const std::string checked = "darksub dark-level=50" + q + " ! demosaic25 mixed-pixels=0.5" +
                                   q + " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
                                   " misfit-probability=" + o.misfit_probability;
-      print_run("the same, demosaic25 mixed-pixels=0.2",
+      print_run("the same, demosaic25 mixed-pixels=0.5",
                 run_chain(checked + " method=lut", caps, raw, o.frames, o.warmup), bayer);
       const std::string matched = "darksub dark-level=50" + q + " ! demosaic25 method=matched" + q +
                                   " ! ratiotemp stats-interval=0 model=" + o.rgb_model +

@@ -28,6 +28,7 @@ struct MeasureArgs {
   std::string method = "mlp", demosaic = "auto", format = "png";
   double saturation = -1;
   double misfit_probability = 0;
+  double mixed_pixels = 0;                       // MeasureOptions::footprint_spread
   double e_slope = 0, e_slope_uncertainty = -1;  // %/100 nm
   double gain_db = 0;
   bool allow_partial = false;
@@ -131,6 +132,7 @@ MeasureOptions measure_options(const MeasureArgs& a,
   options.saturation_level_dn = a.saturation;
   options.uncertainty = a.uncertainty;
   options.misfit_probability = a.misfit_probability;
+  options.footprint_spread = a.mixed_pixels;
   options.allow_partial = a.allow_partial;
   options.emissivity_slope = a.e_slope / 100;
   options.emissivity_slope_u = a.e_slope_uncertainty / 100;
@@ -324,6 +326,12 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
                 "(matched for 5x5 mosaics, bilinear for Bayer); 5x5 mosaics are binned by "
                 "bilinear and bin2x2")
       ->check(CLI::IsMember({"bilinear", "bin2x2", "matched", "auto"}))
+      ->capture_default_str();
+  c->add_option("--mixed-pixels", a.mixed_pixels,
+                "Bayer: no reading where a band's samples under the pixel's footprint differ "
+                "by more than this share of the largest plus 5 noise standard deviations (a "
+                "sharp edge; demosaic25 mixed-pixels; 0 = no check, e.g. 0.5)")
+      ->check(CLI::Range(0.0, kMaxRelativeSpread))
       ->capture_default_str();
   c->add_option("--saturation", a.saturation, "Raw saturation level, DN (-1: the model's)")
       ->capture_default_str();

@@ -68,8 +68,8 @@ namespace {
 enum { PROP_0, PROP_METHOD, PROP_PROFILE, PROP_MIXED_PIXELS };
 
 constexpr GstDemosaic25Method DEFAULT_METHOD = GST_DEMOSAIC25_METHOD_AUTO;
-// Off by default: the check costs several times the demosaicking (measured with
-// bench_chain), more than the 15 % of the colour chain a default may cost.
+// Off by default: it costs under the 15 % of the colour chain a default may cost, but it takes
+// most readings of small melt pools at a fixed exposure (their steep sides; docs/elements.md).
 constexpr double DEFAULT_MIXED_PIXELS = 0;
 
 struct Settings {
@@ -382,14 +382,16 @@ static GstFlowReturn gst_demosaic25_transform(GstBaseTransform* trans, GstBuffer
     st.planes.resize(static_cast<std::size_t>(st.bands));
     for (int b = 0; b < st.bands; ++b)
       st.planes[static_cast<std::size_t>(b)] = out.plane(b, st.out_width, st.out_height);
-    pyrocam::demosaic(in.image(), st.layout, st.method, st.planes, st.no_signal_dn);
     const double spread = pg::locked_copy(self, self->settings->mixed_pixels);
     if (spread > 0) {
       pyrocam::FootprintCheck check;
       check.relative_spread = spread;
       check.noise = st.noise;
       check.skip_below_dn = st.skip_below_dn;
-      pyrocam::mark_mixed_pixels(in.image(), st.layout, st.method, check, st.planes);
+      pyrocam::demosaic_marking_mixed(in.image(), st.layout, st.method, check, st.planes,
+                                      st.no_signal_dn);
+    } else {
+      pyrocam::demosaic(in.image(), st.layout, st.method, st.planes, st.no_signal_dn);
     }
   });
   return ok ? GST_FLOW_OK : GST_FLOW_ERROR;
@@ -496,8 +498,9 @@ static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
           "samples of one band differing by more than "
           "this share of the largest plus 5 noise standard deviations gets no reading (NaN in "
           "every band): at a sharp edge they see different temperatures and read wild (0..10; "
-          "0 = no check, the default; 0.2 suits melt pools and plates; the noise model is the "
-          "profile's, else the shipped colour camera's scaled to the bit depth)",
+          "0 = no check, the default; 0.5 suits melt pools and plates: a gradient that makes a "
+          "band's interpolation err as much as noise does at the dim threshold; the noise model "
+          "is the profile's, else the shipped colour camera's scaled to the bit depth)",
           0.0, pyrocam::kMaxRelativeSpread, DEFAULT_MIXED_PIXELS,
           static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
                                    GST_PARAM_MUTABLE_PLAYING)));

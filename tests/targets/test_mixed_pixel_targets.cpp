@@ -1,13 +1,13 @@
 // Sharp edges and mixed pixels (targets): the colour camera's readings of plates and melt pools
-// with bilinear demosaicking, with and without the footprint check (mixed_pixels.h), and with
-// moment-matched demosaicking (demosaic_matched.cpp) without the check. A reading is wild when it
-// is more than max(150 degC, 10 % of the truth in degC) off the truth; interior pixels are those
-// whose 5x5 neighbourhood is one temperature (within 1 % in kelvin) and that read bilinear without
-// the check. Target: wild readings <= 0.5 % of all readings, >= 95 % of interior pixels keep a
-// reading. The model is the camera's true QE with the likelihood fit, so that only the edges are
-// measured, not the calibration. Scenes: the simulator's plates and melt pools, and melt pools
-// of another shape (a parabolic profile from the peak down to 1300 degC, then a sharp edge to a
-// cold background), which the simulator does not make.
+// with bilinear demosaicking, with and without the footprint check (mixed_pixels.h, at its
+// suggested relative spread), and with moment-matched demosaicking (demosaic_matched.cpp) without
+// the check. A reading is wild when it is more than max(150 degC, 10 % of the truth in degC) off
+// the truth; interior pixels are those whose 5x5 neighbourhood is one temperature (within 1 % in
+// kelvin) and that read bilinear without the check. Target: wild readings <= 0.5 % of all readings,
+// >= 95 % of interior pixels keep a reading. The model is the camera's true QE with the likelihood
+// fit, so that only the edges are measured, not the calibration. Scenes: the simulator's plates and
+// melt pools, and melt pools of another shape (a parabolic profile from the peak down to 1300 degC,
+// then a sharp edge to a cold background), which the simulator does not make.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -141,9 +141,16 @@ TEST(MixedPixelTargets, FewWildReadingsOnPlatesAndTheInteriorKept) {
   EXPECT_LE(percent(on.plates.wild, on.plates.readings), 0.5);
   EXPECT_GE(percent(on.plates.interior_read, on.plates.interior), 95);
   EXPECT_GE(percent(on.other_pools.interior_read, on.other_pools.interior), 95);
-  // Melt pools (not met, see docs): their wild readings are not mixed pixels but dim bands at
-  // the cooler rim; the check must not add to them beyond what it removes.
+  // Melt pools (not met, see docs/elements.md): their wild readings are not mixed pixels. No
+  // footprint of one holds a sample without light, and each is within 2.7 of its own standard
+  // uncertainty (90-680 degC): dim bands in the parabolic pools' cooler part, and on the
+  // simulator's pools noise on the steep sides and bilinear's curvature error at the peak. The
+  // check must not add to them beyond what it removes, nor take the pools' steep sides (measured:
+  // 658 of the simulator pools' 735 readings stay, all 2710 of the parabolic pools'; with a
+  // relative spread of 0.2, 114 and 2557).
   EXPECT_LE(on.other_pools.wild, off.other_pools.wild);
+  EXPECT_GE(on.pools.readings, off.pools.readings * 8 / 10);
+  EXPECT_GE(on.other_pools.readings, off.other_pools.readings * 95 / 100);
   // Matched: the bands' interpolation errors cancel in their ratios, and samples without light
   // (a cold background) make a band dim instead of mixing into it: the target on every scene
   // without the check. It loses the ring of pixels whose 5x5 kernel reaches past an edge.
@@ -230,9 +237,10 @@ TEST(MeltPoolCoreTargets, TheCoreReadsWhenExposedForThePeak) {
   for (double e : exposed.errors) std::printf(" %.0f", e);
   std::printf("\n");
   // A fixed exposure leaves most cores without a reading (saturated or dim); exposed for the
-  // peak (autoexposure) every core reads. The 10 degC target on the core median is not met (see
-  // the figures): the simulated pools' cores are a few pixels across, so noise and the
-  // interpolation across their steep sides stay in the median.
+  // peak (autoexposure) every core reads (the mixed-pixel check at its suggested 0.5 would keep
+  // them all too: 100 % of the core's pixels; 95.2 % at 0.2). The 10 degC target on
+  // the core median is not met (see the figures): the simulated pools' cores are a few pixels
+  // across, so noise and the interpolation across their steep sides stay in the median.
   EXPECT_GE(fixed.without_reading, fixed.frames / 2);
   EXPECT_EQ(exposed.without_reading, 0);
   EXPECT_GE(exposed.read_fraction, 0.95);

@@ -49,13 +49,15 @@ void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& te
   subtract_dark(raw, dark_f, options_.saturation_level_dn, signal_);
   std::vector<SignalNoise> noise;
   for (int b = 0; b < profile.band_count(); ++b) noise.push_back(signal_noise(profile, b));
-  demosaic(signal_, profile.mosaic, options_.demosaic, planes_,
-           static_cast<float>(no_signal_level_dn(noise)));
+  const auto no_signal_dn = static_cast<float>(no_signal_level_dn(noise));
   if (options_.footprint_spread > 0) {
     FootprintCheck check;
     check.relative_spread = options_.footprint_spread;
     check.noise = noise;
-    mark_mixed_pixels(signal_, model_->profile().mosaic, options_.demosaic, check, planes_);
+    demosaic_marking_mixed(signal_, profile.mosaic, options_.demosaic, check, planes_,
+                           no_signal_dn);
+  } else {
+    demosaic(signal_, profile.mosaic, options_.demosaic, planes_, no_signal_dn);
   }
   planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);
 }

@@ -9,6 +9,7 @@
 
 #include "pyrocam/core/error.h"
 #include "pyrocam/runtime/demosaic.h"
+#include "pyrocam/runtime/mixed_pixels.h"
 
 namespace pyrocam {
 namespace {
@@ -143,6 +144,44 @@ TEST(Demosaic, large_frames_split_over_threads_give_the_same_result) {
       for (int x = 0; x < img.cols; ++x)
         EXPECT_EQ(planes[b].at<float>(y0, x), part[b].at<float>(4, x)) << b << " " << x;
   }
+}
+
+// The fused pass (each block of rows checked as it is demosaicked, on the threads) marks what
+// the separate one marks: bit for bit, on a frame large enough to be split, with an odd width,
+// plates with sharp edges, saturated samples and a dim background left out by the skip level.
+TEST(Demosaic, marking_mixed_pixels_while_demosaicking_gives_the_separate_passes_result) {
+  cv::Mat img(530, 611, CV_32F);
+  cv::randn(img, 0, 1.5);
+  cv::RNG rng(7);
+  for (int i = 0; i < 40; ++i) {
+    const int x = rng.uniform(0, 560), y = rng.uniform(0, 480), w = rng.uniform(3, 50);
+    const cv::Mat block = img(cv::Rect(x, y, w, rng.uniform(3, 50)));
+    block += cv::Scalar(rng.uniform(10.0, 200.0));  // hot objects, some overlapping
+  }
+  for (int i = 0; i < 200; ++i) img.at<float>(rng.uniform(0, 530), rng.uniform(0, 611)) = kInf;
+  FootprintCheck check;
+  check.noise = {{0.03, 0.23}, {0.06, 0.43}, {0.12, 1.2}};
+  check.skip_below_dn = 20;
+  for (const char* pattern : {"RGGB", "GBRG"})
+    for (DemosaicMethod method :
+         {DemosaicMethod::kBilinear, DemosaicMethod::kMatched, DemosaicMethod::kBinCells}) {
+      const MosaicLayout m = MosaicLayout::bayer(pattern);
+      std::vector<cv::Mat> separate, fused;
+      demosaic(img, m, method, separate, 5.5f);
+      const std::size_t marked = mark_mixed_pixels(img, m, method, check, separate);
+      EXPECT_GT(marked, 100u) << pattern;
+      EXPECT_EQ(demosaic_marking_mixed(img, m, method, check, fused, 5.5f), marked) << pattern;
+      for (int b = 0; b < 3; ++b) {
+        cv::Mat differ;
+        // NaN == NaN is false: compare the marks, then the values elsewhere.
+        cv::compare(separate[b] != separate[b], fused[b] != fused[b], differ, cv::CMP_NE);
+        EXPECT_EQ(cv::countNonZero(differ), 0) << pattern << " band " << b;
+        cv::patchNaNs(separate[b], -1);
+        cv::patchNaNs(fused[b], -1);
+        cv::compare(separate[b], fused[b], differ, cv::CMP_NE);
+        EXPECT_EQ(cv::countNonZero(differ), 0) << pattern << " band " << b;
+      }
+    }
 }
 
 // A mosaic whose band b reads 100 b + q(x, y), with q quadratic: each band's kernel mean is

@@ -5,6 +5,7 @@
 // with positive weights.
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <string>
@@ -58,6 +59,14 @@ cv::Size demosaic_output_size(const MosaicLayout& layout, DemosaicMethod method,
 void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod method,
               std::vector<cv::Mat>& planes,
               float no_signal_dn = -std::numeric_limits<float>::infinity());
+
+// The same, calling `rows_done(y0, y1)` once output rows [y0, y1) are written, from the thread
+// that wrote them: for bilinear Bayer in blocks of a few rows, while the mosaic rows around
+// them are still in cache (mark_mixed_pixels' pass, fused); for the other methods once, for
+// all rows.
+void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod method,
+              std::vector<cv::Mat>& planes, float no_signal_dn,
+              const std::function<void(int, int)>& rows_done);
 
 // The mosaic samples (offsets from the pixel) that kMatched draws band `band` from at a pixel
 // of column parity px and row parity py: its footprint, for the mixed-pixel check.

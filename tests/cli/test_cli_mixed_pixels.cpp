@@ -1,0 +1,71 @@
+// pyrocam-calib measure --mixed-pixels: demosaic25's mixed-pixel check on a simulated plate. The
+// pixels whose footprint crosses the plate's edge lose their readings, the others keep theirs
+// unchanged; off by default; out-of-range values are refused.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "pyrocam/core/image_io.h"
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
+#include "test_support.h"
+
+namespace pyrocam {
+namespace {
+
+using test::ScratchDir;
+namespace fs = std::filesystem;
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+// Runs pyrocam-calib quietly; returns its exit code.
+int calib(const std::string& args) {
+  const std::string command = "timeout 120 '" + std::string(PYROCAM_CALIB_TOOL) + "' -q " + args +
+                              " < /dev/null > /dev/null 2>&1";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+fs::path test_model(const std::string& name) {
+  const char* dir = std::getenv("PYROCAM_TEST_MODEL_DIR");
+  return fs::path(dir ? dir : ".") / name;
+}
+
+TEST(CliMixedPixels, measure_drops_the_plates_edge_and_keeps_its_inside) {
+  const fs::path model = test_model("test-model-rgb.json");
+  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ScratchDir dir{"cli-mixed"};
+  Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 6});
+  SceneSequenceSettings s;
+  s.kind = SceneKind::kPlate;
+  s.temperatures_c = {1200};
+  s.width = 100;
+  s.height = 100;
+  write_scene_sequence(dir / "plate", camera, s);
+  const std::string base =
+      "measure --model " + q(model) + " --dataset " + q(dir / "plate") + " --method likelihood";
+  ASSERT_EQ(calib(base + " --out " + q(dir / "plain")), 0);
+  ASSERT_EQ(calib(base + " --mixed-pixels 0.5 --out " + q(dir / "checked")), 0);
+  ASSERT_EQ(calib(base + " --mixed-pixels 0 --out " + q(dir / "off")), 0);
+  const cv::Mat plain = read_raw_image(dir / "plain" / "0000_temperature.png"),
+                checked = read_raw_image(dir / "checked" / "0000_temperature.png"),
+                off = read_raw_image(dir / "off" / "0000_temperature.png");
+  const int read_plain = cv::countNonZero(plain), read_checked = cv::countNonZero(checked);
+  // The edge's pixels (about 4 of the plate's 60 or so per row and column) go, the rest stays.
+  EXPECT_LT(read_checked, read_plain);
+  EXPECT_GT(read_checked, read_plain / 2);
+  cv::Mat kept = checked != 0, same;
+  cv::compare(plain, checked, same, cv::CMP_EQ);
+  EXPECT_EQ(cv::countNonZero(same & kept), read_checked);
+  // Off by default: 0 reads as without the option.
+  EXPECT_EQ(cv::countNonZero(plain != off), 0);
+  for (const std::string bad : {"-0.1", "11"})
+    EXPECT_NE(calib(base + " --mixed-pixels " + bad + " --out " + q(dir / "bad")), 0) << bad;
+}
+
+}  // namespace
+}  // namespace pyrocam
