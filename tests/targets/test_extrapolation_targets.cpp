@@ -65,12 +65,15 @@ Figures evaluate(const std::string& profile_name, bool references) {
 TEST(ExtrapolationTargets, colour) {
   const Figures plain = evaluate("rgb-reference", false);
   const Figures refs = evaluate("rgb-reference", true);
-  EXPECT_LT(plain.in_range, 0.8);        // target: no worse than before (0.8)
-  EXPECT_LT(refs.range_700_2600, 5.0);   // target 5 degC rms with three reference rows
-  EXPECT_LT(plain.range_1800_2600, 75);  // target 15, NOT MET: 52 measured; a regression bound
-  // Coverage target 95 +- 3 %, NOT MET: 31 of 72 measured (28 before the posterior's shape
-  // changes beyond the model); a regression bound.
-  EXPECT_GE(plain.covered, 26);
+  EXPECT_LT(plain.in_range, 0.8);       // target: no worse than before (0.8)
+  EXPECT_LT(refs.range_700_2600, 5.0);  // target 5 degC rms with three reference rows
+  // Target 15, NOT MET: 38 measured (52 before the shape changes joined the fit); a regression
+  // bound. The figures are deterministic (portable maths), so the margins guard against
+  // regressions, not noise.
+  EXPECT_LT(plain.range_1800_2600, 55);
+  // Coverage target 95 +- 3 %, NOT MET: 50 of 72 measured (31 before the joint fit, 28 before
+  // the posterior's shape changes beyond the model); a regression bound.
+  EXPECT_GE(plain.covered, 44);
 }
 
 TEST(ExtrapolationTargets, multispectral) {
@@ -78,9 +81,10 @@ TEST(ExtrapolationTargets, multispectral) {
   const Figures refs = evaluate("nir5x5-reference", true);
   EXPECT_LT(plain.in_range, 1.2);       // target: no worse than before (1.2)
   EXPECT_LT(refs.range_700_2600, 5.0);  // target 5 degC rms with three reference rows
-  EXPECT_LT(plain.range_800_2600, 20);  // target 10, NOT MET: 12.3 measured; a regression bound
-  // Coverage target 95 +- 3 %, NOT MET: 62 of 72 measured (54 before the shape changes).
-  EXPECT_GE(plain.covered, 55);
+  EXPECT_LT(plain.range_800_2600, 10);  // target 10: 6.9 measured (12.3 before the joint fit)
+  // Coverage target 95 +- 3 %: 72 of 72 measured (62 before the joint fit), above the target's
+  // band: the interval is wider than these units need. Asserted as a lower bound only.
+  EXPECT_GE(plain.covered, 65);
 }
 
 }  // namespace

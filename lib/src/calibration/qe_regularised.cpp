@@ -72,6 +72,9 @@ class RegularisedModel {
   int band_count() const { return nb_; }
   Eigen::Index wavelengths() const { return q0_.cols(); }
   bool bounded(Eigen::Index k) const { return k >= leak_offset() && k < furnace_offset(); }
+  // A fixed change of each band's QE beyond the model's parameters (bands x wavelengths), added
+  // before the clamp: the discrepancy part of the joint fit (fit_qe_regularised).
+  void set_shape_change(const Eigen::MatrixXd& change) { shape_change_ = change; }
 
   Eigen::VectorXd start() const {
     Eigen::VectorXd th = Eigen::VectorXd::Zero(size());
@@ -118,6 +121,7 @@ class RegularisedModel {
     const Eigen::ArrayXd s = s_shifted * opt.array();
     const Eigen::VectorXd leak = leak_ * th.segment(leak_offset(), nk_);
     Eigen::VectorXd q = (s * band * common).matrix() + sensor.cwiseProduct(leak);
+    if (shape_change_.rows() > 0) q += shape_change_.row(b).transpose();
     const Eigen::ArrayXd positive = (q.array() > 0).cast<double>();  // Q >= 0 by clamping
     q = q.cwiseMax(0.0);
     if (dq) {
@@ -360,7 +364,7 @@ class RegularisedModel {
   const CalibrationRates& data_;
   const Problem& p_;
   const RegularisedOptions& o_;
-  Eigen::MatrixXd q0_, leak_;
+  Eigen::MatrixXd q0_, leak_, shape_change_;
   Eigen::ArrayXd x_, edge_weight_;
   Eigen::VectorXd gain0_, sigma_;
   std::vector<double> ref_t_;
@@ -463,45 +467,76 @@ Discrepancy discrepancy_basis(const CameraProfile& profile, const Eigen::MatrixX
   return d;
 }
 
-// Draws theta ~ N(theta*, (J^T J)^-1) over the free parameters, jointly with the
-// discrepancy's shape changes.
-std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eigen::VectorXd& th,
-                                        const CameraProfile& profile, const RegularisedOptions& o) {
-  std::vector<QeSample> out;
-  if (o.posterior_samples <= 0) return out;
+// The problem linearised at theta jointly with the discrepancy's amplitudes delta: the free
+// parameters' and delta's Jacobian with delta's prior rows below, and its normal matrix.
+struct JointLinearisation {
+  std::vector<Eigen::Index> free;
+  Eigen::MatrixXd ja;
+  Eigen::VectorXd residual;  // at (theta, delta)
+  Eigen::LLT<Eigen::MatrixXd> llt;
+  bool ok = false;
+};
+
+JointLinearisation linearise(const RegularisedModel& model, const Eigen::VectorXd& th,
+                             const Discrepancy& shape, const Eigen::VectorXd& delta) {
+  JointLinearisation l;
   Eigen::VectorXd res;
   Eigen::MatrixXd jac;
   model.evaluate(th, res, &jac);
-  std::vector<Eigen::Index> free;
   // Leak bumps held at their bound stay there: sampling them and clamping would break the
   // correlations that keep a sample on the data.
   for (Eigen::Index k = 0; k < model.size(); ++k)
-    if (!model.fixed(k) && !(model.bounded(k) && th[k] <= 0)) free.push_back(k);
+    if (!model.fixed(k) && !(model.bounded(k) && th[k] <= 0)) l.free.push_back(k);
+  const Eigen::MatrixXd jd =
+      shape.dq.empty() ? Eigen::MatrixXd(jac.rows(), 0) : model.data_jacobian(th, shape.dq);
+  const auto nf = static_cast<Eigen::Index>(l.free.size()), nd = jd.cols();
+  // Data rows come first in the residual vector; the parameters' priors follow.
+  l.ja = Eigen::MatrixXd::Zero(jac.rows() + nd, nf + nd);
+  for (Eigen::Index c = 0; c < nf; ++c) l.ja.col(c).head(jac.rows()) = jac.col(l.free[c]);
+  l.ja.block(0, nf, jd.rows(), nd) = jd;
+  l.residual = Eigen::VectorXd::Zero(jac.rows() + nd);
+  l.residual.head(res.size()) = res;
+  for (Eigen::Index k = 0; k < nd; ++k) {
+    l.ja(jac.rows() + k, nf + k) = 1 / shape.sigma[k];
+    l.residual[jac.rows() + k] = delta[k] / shape.sigma[k];
+  }
+  Eigen::MatrixXd h = l.ja.transpose() * l.ja;
+  h.diagonal().array() += 1e-9 * (h.diagonal().array() + 1e-12);
+  l.llt.compute(h);
+  l.ok = l.llt.info() == Eigen::Success;
+  return l;
+}
+
+Eigen::MatrixXd shape_change(const Discrepancy& shape, const Eigen::VectorXd& delta) {
+  Eigen::MatrixXd change(static_cast<Eigen::Index>(shape.dq.size()),
+                         shape.dq.empty() ? 0 : shape.dq[0].rows());
+  for (std::size_t b = 0; b < shape.dq.size(); ++b)
+    change.row(static_cast<Eigen::Index>(b)) = (shape.dq[b] * delta).transpose();
+  return change;
+}
+
+// Draws theta ~ N(theta*, (J^T J)^-1) over the free parameters, jointly with the
+// discrepancy's shape changes (around delta, already in the model's QE).
+std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eigen::VectorXd& th,
+                                        const Discrepancy& shape, const Eigen::VectorXd& delta,
+                                        const RegularisedOptions& o) {
+  std::vector<QeSample> out;
+  if (o.posterior_samples <= 0) return out;
+  const JointLinearisation l = linearise(model, th, shape, delta);
+  if (!l.ok) return out;
   const int bands = model.band_count();
   Eigen::MatrixXd fitted(bands, model.wavelengths());
   for (int b = 0; b < bands; ++b) fitted.row(b) = model.qe(b, th).transpose();
   std::vector<Eigen::MatrixXd> dq_dtheta;
   for (int b = 0; b < bands; ++b) dq_dtheta.push_back(model.qe_jacobian(b, th));
-  const Discrepancy shape = discrepancy_basis(profile, fitted, o);
-  const Eigen::MatrixXd jd =
-      shape.dq.empty() ? Eigen::MatrixXd(jac.rows(), 0) : model.data_jacobian(th, shape.dq);
-  const auto nf = static_cast<Eigen::Index>(free.size()), nd = jd.cols();
-  // Data rows come first in the residual vector; the parameters' priors follow.
-  Eigen::MatrixXd ja = Eigen::MatrixXd::Zero(jac.rows() + nd, nf + nd);
-  for (Eigen::Index c = 0; c < nf; ++c) ja.col(c).head(jac.rows()) = jac.col(free[c]);
-  ja.block(0, nf, jd.rows(), nd) = jd;
-  for (Eigen::Index k = 0; k < nd; ++k) ja(jac.rows() + k, nf + k) = 1 / shape.sigma[k];
-  Eigen::MatrixXd h = ja.transpose() * ja;
-  h.diagonal().array() += 1e-9 * (h.diagonal().array() + 1e-12);
-  const Eigen::LLT<Eigen::MatrixXd> llt(h);
-  if (llt.info() != Eigen::Success) return out;
+  const auto nf = static_cast<Eigen::Index>(l.free.size()), nd = l.ja.cols() - nf;
   Random rng(mix(o.posterior_seed));
   for (int s = 0; s < o.posterior_samples; ++s) {
     Eigen::VectorXd z(nf + nd);
     for (Eigen::Index c = 0; c < nf + nd; ++c) z[c] = rng.normal();
-    const Eigen::VectorXd delta = llt.matrixU().solve(z);  // covariance (U^T U)^-1
+    const Eigen::VectorXd step_all = l.llt.matrixU().solve(z);  // covariance (U^T U)^-1
     Eigen::VectorXd step = Eigen::VectorXd::Zero(model.size());
-    for (Eigen::Index c = 0; c < nf; ++c) step[free[c]] = delta[c];
+    for (Eigen::Index c = 0; c < nf; ++c) step[l.free[c]] = step_all[c];
     // The sample is taken to first order, as the approximation is: the parameters and the
     // shape changes trade against each other along directions the data hold, and the model's
     // own nonlinearity (clamps, warps) would break that balance and leave samples off the data.
@@ -511,7 +546,7 @@ std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eig
     for (int b = 0; b < bands; ++b) {
       Eigen::VectorXd qb = fitted.row(b).transpose() +
                            dq_dtheta[static_cast<std::size_t>(b)] * model.qe_parameters(b, step);
-      if (nd > 0) qb += shape.dq[static_cast<std::size_t>(b)] * delta.tail(nd);
+      if (nd > 0) qb += shape.dq[static_cast<std::size_t>(b)] * step_all.tail(nd);
       q.system_qe.row(b) = qb.transpose();
       q.gains[b] = model.gain(b, th) * (1 + step[b]);
     }
@@ -539,7 +574,44 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
     if (std::abs(portable::log(misfit / o.relative_noise)) < portable::log(1.5)) break;
     o.relative_noise = misfit;
   }
-  const RegularisedModel model(profile, data, p, o);
+  RegularisedModel model(profile, data, p, o);
+  // The discrepancy joins the fit: a Gauss-Newton step of its amplitudes (with the parameters,
+  // at their priors) then the model's parameters refitted with that shape change fixed, a few
+  // times. Fitted with theta alone, what the model cannot shape is pushed into parameters that
+  // can (leaks, edges) and extrapolates with them; with the shape free the data are explained
+  // as the priors find likeliest.
+  Discrepancy shape;
+  Eigen::VectorXd delta;
+  if (options.discrepancy_fit_passes > 0 || options.posterior_samples > 0) {
+    Eigen::MatrixXd fitted(profile.band_count(), profile.grid.size());
+    for (int b = 0; b < profile.band_count(); ++b) fitted.row(b) = model.qe(b, th).transpose();
+    shape = discrepancy_basis(profile, fitted, options);
+    delta = Eigen::VectorXd::Zero(shape.sigma.size());
+  }
+  const auto joint_cost = [&](const Eigen::VectorXd& t, const Eigen::VectorXd& d) {
+    Eigen::VectorXd res;
+    model.evaluate(t, res, nullptr);
+    return res.squaredNorm() + (d.array() / shape.sigma.array()).square().sum();
+  };
+  double cost = delta.size() > 0 ? joint_cost(th, delta) : 0.0;
+  for (int pass = 0; pass < options.discrepancy_fit_passes && delta.size() > 0; ++pass) {
+    const JointLinearisation l = linearise(model, th, shape, delta);
+    if (!l.ok) break;
+    const Eigen::VectorXd step = -l.llt.solve(l.ja.transpose() * l.residual);
+    const Eigen::VectorXd delta_before = delta, th_before = th;
+    delta += step.tail(delta.size());
+    model.set_shape_change(shape_change(shape, delta));
+    iterations += levenberg_marquardt(model, th, o.max_iterations);
+    const double c = joint_cost(th, delta);
+    if (!(c < cost)) {  // the linear step overshot where the model is not linear: keep the last
+      delta = delta_before, th = th_before;
+      model.set_shape_change(shape_change(shape, delta));
+      break;
+    }
+    const bool converged = cost - c < 1e-6 * cost;
+    cost = c;
+    if (converged) break;
+  }
   QeFitResult r;
   r.solver = QeSolver::kRegularised;
   r.system_qe.resize(profile.band_count(), profile.grid.size());
@@ -549,7 +621,7 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
     r.gains[b] = model.gain(b, th);
   }
   r.diagnostics.iterations = iterations;
-  r.posterior = posterior_samples(model, th, profile, options);
+  r.posterior = posterior_samples(model, th, shape, delta, options);
   finish(profile, p, data, start, r);
   return r;
 }

@@ -75,16 +75,20 @@ struct RegularisedOptions {
   // uncertainty knows that it extrapolates.
   int posterior_samples = 0;
   std::uint64_t posterior_seed = 5;
-  // Shape changes beyond the model, in the posterior only (not fitted): each band's QE times
-  // raised-cosine bumps of this spacing and half width, each bump's relative amplitude
-  // N(0, discrepancy_sigma^2) (a datasheet curve is typical: a unit's broad shape differs by a
-  // few %), and leaks outside the pass band, bumps of discrepancy_leak_spacing_nm, absolute
-  // transmission N(0, discrepancy_leak^2). Chosen from that physics, not fitted to a family:
-  // bench_extrapolation --coverage prints what they give (--set discrepancy_sigma=0 for none).
+  // Shape changes beyond the model's parameters: each band's QE times raised-cosine bumps of
+  // this spacing and half width, each bump's relative amplitude N(0, discrepancy_sigma^2) (a
+  // datasheet curve is typical: a unit's broad shape differs by a few %), and leaks outside the
+  // pass band, bumps of discrepancy_leak_spacing_nm, absolute transmission
+  // N(0, discrepancy_leak^2). Chosen from that physics, not fitted to a family. They are fitted
+  // jointly with the parameters (discrepancy_fit_passes alternations of a Gauss-Newton step of
+  // their amplitudes and a refit of the rest, each kept only if the whole objective falls) and
+  // vary in the posterior. bench_extrapolation prints what they give (--set
+  // discrepancy_sigma=0 for none, discrepancy_fit_passes=0 for the posterior only).
   double discrepancy_sigma = 0.05;
   double discrepancy_spacing_nm = 50;
   double discrepancy_leak = 0.003;
   double discrepancy_leak_spacing_nm = 10;
+  int discrepancy_fit_passes = 3;
 };
 
 struct QeFitOptions {
