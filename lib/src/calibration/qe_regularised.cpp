@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "calibration/qe_problem.h"
+#include "calibration/qe_shape_bases.h"
 #include "detail/curve_warp.h"
 #include "detail/portable_math.h"
 #include "detail/random.h"
@@ -14,31 +15,6 @@ namespace pyrocam {
 namespace {
 
 using namespace qe_detail;
-
-// Leak bumps: raised cosines of half width `spacing` stepping away from the pass band edges,
-// zero inside the pass band (a leak is what the filter lets through where it should block).
-// `side` marks which blocking region each bump is in, for the smoothness penalty.
-Eigen::MatrixXd leak_basis(const CameraProfile& profile, double spacing, std::vector<int>& side) {
-  const auto& nm = profile.grid.nm();
-  const double lo = profile.filter_pass_band_nm[0], hi = profile.filter_pass_band_nm[1];
-  std::vector<Eigen::VectorXd> cols;
-  side.clear();
-  auto add = [&](double centre, int s) {
-    Eigen::VectorXd c = Eigen::VectorXd::Zero(nm.size());
-    for (Eigen::Index j = 0; j < nm.size(); ++j) {
-      const double x = (nm[j] - centre) / spacing;
-      if (std::abs(x) < 1 && (nm[j] < lo || nm[j] > hi)) c[j] = 0.5 + 0.5 * portable::cos(M_PI * x);
-    }
-    if (c.maxCoeff() > 0) cols.push_back(c), side.push_back(s);
-  };
-  if (spacing > 0) {
-    for (double c = lo; c + spacing > profile.grid.start_nm(); c -= spacing) add(c, -1);
-    for (double c = hi; c - spacing < profile.grid.stop_nm(); c += spacing) add(c, +1);
-  }
-  Eigen::MatrixXd basis(nm.size(), static_cast<Eigen::Index>(cols.size()));
-  for (std::size_t k = 0; k < cols.size(); ++k) basis.col(static_cast<Eigen::Index>(k)) = cols[k];
-  return basis;
-}
 
 // Parameter layout: log gains | per band (tilt, curvature, shift) | common (tilt, lower edge,
 // upper edge) | leak bumps | furnace temperature offsets | per reference (log scale, offset).
@@ -422,51 +398,6 @@ int levenberg_marquardt(const RegularisedModel& model, Eigen::VectorXd& th, int 
   return it;
 }
 
-// Shape changes the model's parameters cannot make (a filter edge's exact form, a coating's
-// ripple, a leak's shape): each band's QE times raised-cosine bumps along the wavelengths, each
-// bump's relative amplitude an independent N(0, sigma^2). They are not fitted (the data cannot
-// tell them from the parameters in the furnace range) but they join the posterior: where the
-// furnace sees them they are held by the data, where it does not they keep their prior spread:
-// the uncertainty of a reading far above the furnace range.
-struct Discrepancy {
-  std::vector<Eigen::MatrixXd> dq;  // per band: d Q_b / d delta, wavelengths x parameters
-  Eigen::VectorXd sigma;
-};
-
-Discrepancy discrepancy_basis(const CameraProfile& profile, const Eigen::MatrixXd& qe,
-                              const RegularisedOptions& o) {
-  Discrepancy d;
-  const auto bands = qe.rows();
-  const double spacing = o.discrepancy_spacing_nm;
-  if (o.discrepancy_sigma <= 0 || spacing <= 0) return d;
-  const Eigen::ArrayXd nm = profile.grid.nm().array();
-  std::vector<std::pair<Eigen::Index, Eigen::VectorXd>> columns;  // band, d Q_b
-  for (double c = profile.grid.start_nm(); c <= profile.grid.stop_nm() + 1e-9; c += spacing) {
-    const Eigen::ArrayXd x = ((nm - c) / spacing).abs();
-    const Eigen::ArrayXd bump = (x < 1).select(0.5 + 0.5 * (M_PI * x).cos(), 0.0);
-    for (Eigen::Index b = 0; b < bands; ++b) {
-      const Eigen::VectorXd change = (qe.row(b).transpose().array() * bump).matrix();
-      if (change.maxCoeff() > 1e-3 * qe.row(b).maxCoeff()) columns.emplace_back(b, change);
-    }
-  }
-  const auto m = static_cast<Eigen::Index>(columns.size());
-  // Leaks of any shape outside the pass band, common to all bands (additive transmission).
-  std::vector<int> side;
-  const Eigen::MatrixXd leak = o.discrepancy_leak > 0
-                                   ? leak_basis(profile, o.discrepancy_leak_spacing_nm, side)
-                                   : Eigen::MatrixXd(qe.cols(), 0);
-  d.dq.assign(static_cast<std::size_t>(bands), Eigen::MatrixXd::Zero(qe.cols(), m + leak.cols()));
-  for (Eigen::Index k = 0; k < m; ++k)
-    d.dq[static_cast<std::size_t>(columns[k].first)].col(k) = columns[k].second;
-  for (Eigen::Index b = 0; b < bands; ++b)
-    d.dq[static_cast<std::size_t>(b)].rightCols(leak.cols()) =
-        leak.array().colwise() * profile.sensor_qe.row(b).transpose().array();
-  d.sigma.resize(m + leak.cols());
-  d.sigma.head(m).setConstant(o.discrepancy_sigma);
-  d.sigma.tail(leak.cols()).setConstant(o.discrepancy_leak);
-  return d;
-}
-
 // The problem linearised at theta jointly with the discrepancy's amplitudes delta: the free
 // parameters' and delta's Jacobian with delta's prior rows below, and its normal matrix.
 struct JointLinearisation {
@@ -505,14 +436,6 @@ JointLinearisation linearise(const RegularisedModel& model, const Eigen::VectorX
   l.llt.compute(h);
   l.ok = l.llt.info() == Eigen::Success;
   return l;
-}
-
-Eigen::MatrixXd shape_change(const Discrepancy& shape, const Eigen::VectorXd& delta) {
-  Eigen::MatrixXd change(static_cast<Eigen::Index>(shape.dq.size()),
-                         shape.dq.empty() ? 0 : shape.dq[0].rows());
-  for (std::size_t b = 0; b < shape.dq.size(); ++b)
-    change.row(static_cast<Eigen::Index>(b)) = (shape.dq[b] * delta).transpose();
-  return change;
 }
 
 // Draws theta ~ N(theta*, (J^T J)^-1) over the free parameters, jointly with the
