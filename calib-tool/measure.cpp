@@ -25,7 +25,8 @@ namespace {
 struct MeasureArgs {
   std::string model, dataset, frame, dark, roi, out, pattern, recording;
   double dark_level = -1;  // --recording: DN
-  std::string method = "mlp", demosaic = "auto", format = "png";
+  std::string method = "auto", demosaic = "auto", format = "png";
+  std::string partial_bands = "safe";
   double saturation = -1;
   double misfit_probability = 0;
   double mixed_pixels = 0;                       // MeasureOptions::footprint_spread
@@ -133,7 +134,8 @@ MeasureOptions measure_options(const MeasureArgs& a,
   options.uncertainty = a.uncertainty;
   options.misfit_probability = a.misfit_probability;
   options.footprint_spread = a.mixed_pixels;
-  options.allow_partial = a.allow_partial;
+  options.allow_partial = a.allow_partial || a.partial_bands == "any";
+  options.safe_partial = a.partial_bands == "safe";
   options.emissivity_slope = a.e_slope / 100;
   options.emissivity_slope_u = a.e_slope_uncertainty / 100;
   if (!std::isfinite(a.gain_db)) throw InputError("--gain-db must be a finite number of dB");
@@ -314,9 +316,9 @@ void add_input_options(CLI::App* c, MeasureArgs& a) {
 void add_output_options(CLI::App* c, MeasureArgs& a) {
   c->add_option("--out", a.out, "Output folder (created)")->required();
   c->add_option("--method", a.method,
-                "Estimator: mlp, lut, likelihood or auto (as ratiotemp's: lut where the model "
-                "has two ratios and its table passes the check against the network, else "
-                "likelihood)")
+                "Estimator: mlp (the paper's network), lut, likelihood or auto (ratiotemp's "
+                "default: lut where the model has two ratios and its table passes the check "
+                "against the network, else likelihood)")
       ->check(CLI::IsMember({"mlp", "lut", "likelihood", "auto"}))
       ->capture_default_str();
   c->add_option("--demosaic", a.demosaic,
@@ -362,9 +364,16 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
       ->check(CLI::IsMember({"png", "tiff"}))
       ->capture_default_str();
   c->add_flag("--uncertainty", a.uncertainty, "Also write the expanded uncertainty (k=2)");
+  c->add_option("--partial-bands", a.partial_bands,
+                "Pixels where some bands are saturated or below the dim threshold (ratiotemp's "
+                "partial-bands): off: no reading; safe: read by the likelihood fit from the rest "
+                "when they include two bands whose ratio is monotonic over the model's range "
+                "(decided from its locus; none for the shipped colour camera, most pairs for "
+                "the 5x5 one); any: from any two")
+      ->check(CLI::IsMember({"off", "safe", "any"}))
+      ->capture_default_str();
   c->add_flag("--allow-partial", a.allow_partial,
-              "likelihood only: read pixels with some bands saturated or dim from the rest (at "
-              "least two; ratiotemp's allow-partial); without it such pixels have no reading");
+              "The same as --partial-bands any (ratiotemp's allow-partial), which it overrides");
 }
 
 }  // namespace

@@ -24,13 +24,9 @@ namespace pyrocam {
 namespace {
 
 using test::png_header;
+using test::read_text;
 using test::ScratchDir;
 using test::write_text;
-
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
 
 struct ToolRun {
   int exit_code = -1;

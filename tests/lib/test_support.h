@@ -21,6 +21,8 @@ class ScratchDir {
   std::filesystem::path path_;
 };
 void write_text(const std::filesystem::path& path, const std::string& text);
+// The file's bytes; empty when it cannot be read.
+std::string read_text(const std::filesystem::path& path);
 // A PNG signature and IHDR chunk (valid CRC) declaring width x height, gray, `bits` deep, cut off
 // there: all a decoder needs to decide what to allocate.
 std::string png_header(std::uint32_t width, std::uint32_t height, int bits);

@@ -1,0 +1,114 @@
+// pyrocam-calib measure reads as ratiotemp does by default: method auto, and pixels with dim or
+// saturated bands read from the rest where that is safe (partial-bands safe). A 5x5 plate
+// exposed at 0.6 times the usual exposure has some band below the dim threshold in every pixel:
+// with every band required nothing reads.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
+#include "test_support.h"
+
+namespace pyrocam {
+namespace {
+
+using test::ScratchDir;
+namespace fs = std::filesystem;
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+int calib(const std::string& args) {
+  const std::string command = "timeout 120 '" + std::string(PYROCAM_CALIB_TOOL) + "' -q " + args +
+                              " < /dev/null > /dev/null 2>&1";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+fs::path test_model(const std::string& name) {
+  const char* dir = std::getenv("PYROCAM_TEST_MODEL_DIR");
+  return fs::path(dir ? dir : ".") / name;
+}
+
+// The first frame's row of stats.csv, by column name.
+std::map<std::string, std::string> first_stats_row(const fs::path& folder) {
+  std::istringstream in(test::read_text(folder / "stats.csv"));
+  std::string header, row;
+  std::getline(in, header);
+  std::getline(in, row);
+  std::map<std::string, std::string> fields;
+  std::istringstream h(header), r(row);
+  for (std::string name, value; std::getline(h, name, ',');) {
+    std::getline(r, value, ',');
+    fields[name] = value;
+  }
+  return fields;
+}
+
+TEST(CliMeasureDefaults, a_dim_5x5_plate_reads_from_its_good_bands_by_default) {
+  const fs::path model = test_model("test-model-nir5x5.json");
+  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ScratchDir dir{"cli-partial"};
+  Simulator camera(load_profile_by_name("nir5x5-reference"), UnitPerturbation{"typical", 1});
+  SceneSequenceSettings s;
+  s.kind = SceneKind::kPlate;
+  s.temperatures_c = {900};
+  s.width = 100;
+  s.height = 100;
+  write_scene_sequence(dir / "bright", camera, s);
+  s.target_dn = 0.6 * kSceneDefaults.target_dn;
+  write_scene_sequence(dir / "plate", camera, s);
+  const std::string base = "measure --model " + q(model) + " --dataset " + q(dir / "plate");
+  ASSERT_EQ(calib(base + " --out " + q(dir / "default")), 0);
+  ASSERT_EQ(calib(base + " --partial-bands off --out " + q(dir / "off")), 0);
+  ASSERT_EQ(calib(base + " --method likelihood --allow-partial --out " + q(dir / "any")), 0);
+  ASSERT_EQ(calib("measure --model " + q(model) + " --dataset " + q(dir / "bright") +
+                  " --partial-bands off --out " + q(dir / "bright-off")),
+            0);
+  const auto by_default = first_stats_row(dir / "default"), off = first_stats_row(dir / "off"),
+             any = first_stats_row(dir / "any"), bright = first_stats_row(dir / "bright-off");
+  EXPECT_EQ(std::stod(off.at("valid_fraction")), 0.0) << "some band is dim in every pixel";
+  // As many as every band reads at the usual exposure (the ROI's outer ring of macro-pixels
+  // has no reading either way: its kernel reaches the cold background).
+  EXPECT_GT(std::stod(bright.at("valid_fraction")), 0.5);
+  EXPECT_GE(std::stod(by_default.at("valid_fraction")),
+            0.95 * std::stod(bright.at("valid_fraction")));
+  // In range (the test model's furnace reaches 1100 degC): a degree or two from the truth.
+  EXPECT_LT(std::abs(std::stod(by_default.at("truth_median_error_c"))), 3.0);
+  // The plate's 5x5 bands include monotonic pairs: safe reads what any does.
+  EXPECT_EQ(by_default.at("median_c"), any.at("median_c"));
+  EXPECT_EQ(by_default.at("valid_fraction"), any.at("valid_fraction"));
+  EXPECT_NE(calib(base + " --partial-bands some --out " + q(dir / "bad")), 0);
+}
+
+TEST(CliMeasureDefaults, the_default_method_is_ratiotemps_auto) {
+  const fs::path model = test_model("test-model-rgb.json");
+  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ScratchDir dir{"cli-auto"};
+  Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 1});
+  SceneSequenceSettings s;
+  s.kind = SceneKind::kPlate;
+  s.temperatures_c = {1000};
+  s.width = 64;
+  s.height = 64;
+  write_scene_sequence(dir / "plate", camera, s);
+  const std::string base = "measure --model " + q(model) + " --dataset " + q(dir / "plate");
+  ASSERT_EQ(calib(base + " --out " + q(dir / "default")), 0);
+  ASSERT_EQ(calib(base + " --method auto --out " + q(dir / "auto")), 0);
+  ASSERT_EQ(calib(base + " --method mlp --out " + q(dir / "mlp")), 0);
+  EXPECT_EQ(test::read_text(dir / "default" / "0000_temperature.png"),
+            test::read_text(dir / "auto" / "0000_temperature.png"));
+  // The table reads the network to within its tolerance, not to the bit.
+  EXPECT_NE(test::read_text(dir / "default" / "0000_temperature.png"),
+            test::read_text(dir / "mlp" / "0000_temperature.png"));
+}
+
+}  // namespace
+}  // namespace pyrocam
