@@ -221,7 +221,7 @@ void write_frame_images(const MeasureArgs& a, const std::string& stem, const cv:
 // One frame measured: its images written and its row of stats.csv.
 void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
                    const ThermalModel& model, const MeasureOptions& options,
-                   FrameMeasurer& measurer, std::ostream& csv) {
+                   FrameMeasurer& measurer, std::ostream& csv, bool quiet) {
   const cv::Mat raw = read_raw_image(j.frame);
   const cv::Mat dark = read_raw_image(j.dark, raw.size(), "the frame " + j.frame.string());
   cv::Mat t, u;
@@ -230,6 +230,15 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
   cv::Mat mask;
   if (!in.roi.empty()) cv::resize(in.roi, mask, t.size(), 0, 0, cv::INTER_NEAREST);
   const RegionStats s = region_stats(t, mask);
+  if (!quiet && s.pixels > 0 && s.valid_fraction < 0.5) {
+    // A frame that reads little says why, so that the exposure can be put right.
+    const FrameMeasurer::Unread why = measurer.unread(t, mask);
+    std::cerr << "warning: " << j.frame.filename().string() << ": " << s.valid << " of " << s.pixels
+              << " pixels of the ROI read; " << why.saturated
+              << " have a saturated band (shorten the exposure), " << why.dim
+              << " a band below the dim threshold (" << model.profile().thresholds.inference_dim_dn
+              << " DN; lengthen it)\n";
+  }
   TruthScore ts;
   if (!j.truth.empty()) {
     const cv::Mat truth = read_raw_image(j.truth, raw.size(), "the frame");
@@ -268,7 +277,7 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
   std::ofstream csv = open_stats_csv(a.out);
   ProgressPrinter progress(global, "measuring");
   for (std::size_t i = 0; i < in.jobs.size(); ++i) {
-    measure_frame(in.jobs[i], a, in, model, options, measurer, csv);
+    measure_frame(in.jobs[i], a, in, model, options, measurer, csv, global.quiet);
     progress(i + 1, in.jobs.size());
   }
   if (!csv) throw InputError(a.out + "/stats.csv: write failed");

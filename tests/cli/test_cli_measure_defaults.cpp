@@ -1,7 +1,7 @@
 // pyrocam-calib measure reads as ratiotemp does by default: method auto, and pixels with dim or
 // saturated bands read from the rest where that is safe (partial-bands safe). A 5x5 plate
 // exposed at 0.6 times the usual exposure has some band below the dim threshold in every pixel:
-// with every band required nothing reads.
+// with every band required nothing reads. A frame whose ROI reads little says why.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -30,6 +30,14 @@ int calib(const std::string& args) {
                               " < /dev/null > /dev/null 2>&1";
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// Runs pyrocam-calib (not quiet); returns its standard error, empty when it failed.
+std::string calib_stderr(const std::string& args, const fs::path& log) {
+  const std::string command = "timeout 120 '" + std::string(PYROCAM_CALIB_TOOL) + "' " + args +
+                              " < /dev/null > /dev/null 2> '" + log.string() + "'";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? test::read_text(log) : std::string();
 }
 
 fs::path test_model(const std::string& name) {
@@ -108,6 +116,41 @@ TEST(CliMeasureDefaults, the_default_method_is_ratiotemps_auto) {
   // The table reads the network to within its tolerance, not to the bit.
   EXPECT_NE(test::read_text(dir / "default" / "0000_temperature.png"),
             test::read_text(dir / "mlp" / "0000_temperature.png"));
+}
+
+TEST(CliMeasureDefaults, a_frame_that_reads_little_says_why) {
+  const fs::path model = test_model("test-model-rgb.json");
+  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ScratchDir dir{"cli-why"};
+  Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 1});
+  SceneSequenceSettings s;
+  s.kind = SceneKind::kPlate;
+  s.temperatures_c = {1000};
+  s.width = 64;
+  s.height = 64;
+  write_scene_sequence(dir / "good", camera, s);
+  s.target_dn = 50 * kSceneDefaults.target_dn;  // every band far beyond saturation
+  write_scene_sequence(dir / "bright", camera, s);
+  s.target_dn = 0.02 * kSceneDefaults.target_dn;  // every band far below the dim threshold
+  write_scene_sequence(dir / "dark", camera, s);
+  const auto run = [&](const std::string& data) {
+    return calib_stderr("measure --model " + q(model) + " --dataset " + q(dir / data) + " --out " +
+                            q(dir / (data + "-t")),
+                        dir / (data + ".log"));
+  };
+  const std::string bright = run("bright"), dark = run("dark"), good = run("good");
+  const auto pixels = first_stats_row(dir / "good-t").at("pixels");
+  EXPECT_NE(bright.find("0 of " + pixels + " pixels of the ROI read; " + pixels +
+                        " have a saturated band (shorten the exposure), 0 a band below"),
+            std::string::npos)
+      << bright;
+  EXPECT_NE(dark.find("0 of " + pixels +
+                      " pixels of the ROI read; 0 have a saturated band "
+                      "(shorten the exposure), " +
+                      pixels + " a band below the dim threshold"),
+            std::string::npos)
+      << dark;
+  EXPECT_EQ(good.find("pixels of the ROI read"), std::string::npos) << good;
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "pyrocam/runtime/frame_measurer.h"
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <utility>
 
@@ -27,6 +28,27 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
 
 cv::Size FrameMeasurer::output_size(cv::Size raw) const {
   return demosaic_output_size(model_->profile().mosaic, options_.demosaic, raw);
+}
+
+FrameMeasurer::Unread FrameMeasurer::unread(const cv::Mat& temperature_c,
+                                            const cv::Mat& mask) const {
+  Unread u;
+  const auto dim = static_cast<float>(model_->profile().thresholds.inference_dim_dn);
+  for (int y = 0; y < temperature_c.rows; ++y)
+    for (int x = 0; x < temperature_c.cols; ++x) {
+      if (std::isfinite(temperature_c.at<float>(y, x))) continue;
+      if (!mask.empty() && mask.at<std::uint8_t>(y, x) == 0) continue;
+      bool saturated = false, dim_band = false;
+      for (const cv::Mat& plane : planes_) {
+        if (plane.size() != temperature_c.size()) continue;
+        const float v = plane.at<float>(y, x);
+        saturated |= std::isinf(v) && v > 0;
+        dim_band |= v < dim;
+      }
+      u.saturated += saturated;
+      u.dim += !saturated && dim_band;
+    }
+  return u;
 }
 
 void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& temperature_c,

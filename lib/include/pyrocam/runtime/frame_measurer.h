@@ -41,6 +41,13 @@ class FrameMeasurer {
   void measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& temperature_c,
                cv::Mat* uncertainty_c = nullptr);
   cv::Size output_size(cv::Size raw) const;
+  // Why pixels of the last frame measured have no reading: of those under `mask` (CV_8U of the
+  // output's size, non-zero = counted; empty: all) without a reading in `temperature_c`, how many
+  // have a saturated band and how many (of the rest) a band below the model's dim threshold.
+  struct Unread {
+    long saturated = 0, dim = 0;
+  };
+  Unread unread(const cv::Mat& temperature_c, const cv::Mat& mask) const;
   // Adds a table file's blocks (the model's prebuilt lookup table, prebuilt_tables.h) to the
   // estimator's table: the same readings, without filling those blocks on the first frames.
   // Returns how many it added (0 for a method without a table); throws InputError as
