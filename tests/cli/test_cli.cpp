@@ -453,15 +453,6 @@ TEST_F(CliMeasure, measure_rejects_a_dataset_that_does_not_name_its_mosaic_n) {
       << r.err;
 }
 
-TEST_F(CliMeasure, measure_reads_the_plate_with_the_matching_model) {
-  const ToolRun r = run_tool("-q measure --model " + quoted(test_model("test-model-rgb.json")) +
-                                 " --dataset " + quoted(data) + " --out " + quoted(out),
-                             dir);
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::string stats = read_text(out / "stats.csv");
-  EXPECT_NE(stats.find("0000.pgm,"), std::string::npos) << stats;
-}
-
 TEST_F(CliMeasure, measure_method_auto_reads_with_the_method_the_library_chooses) {
   const auto model = test_model("test-model-rgb.json");
   const std::string chosen = method_name(choose_method(

@@ -3,7 +3,6 @@
 // exposed at 0.6 times the usual exposure has some band below the dim threshold in every pixel:
 // with every band required nothing reads. A frame whose ROI reads little says why.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -13,24 +12,13 @@
 #include <string>
 #include <vector>
 
-#include "pyrocam/simulation/scenes.h"
-#include "pyrocam/simulation/simulator.h"
+#include "cli_support.h"
 #include "test_support.h"
 
-namespace pyrocam {
+namespace pyrocam::test {
 namespace {
 
-using test::ScratchDir;
 namespace fs = std::filesystem;
-
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
-
-int calib(const std::string& args) {
-  const std::string command = "timeout 120 '" + std::string(PYROCAM_CALIB_TOOL) + "' -q " + args +
-                              " < /dev/null > /dev/null 2>&1";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
 
 // Runs pyrocam-calib (not quiet); returns its standard error, empty when it failed.
 std::string calib_stderr(const std::string& args, const fs::path& log) {
@@ -38,11 +26,6 @@ std::string calib_stderr(const std::string& args, const fs::path& log) {
                               " < /dev/null > /dev/null 2> '" + log.string() + "'";
   const int status = std::system(command.c_str());
   return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? test::read_text(log) : std::string();
-}
-
-fs::path test_model(const std::string& name) {
-  const char* dir = std::getenv("PYROCAM_TEST_MODEL_DIR");
-  return fs::path(dir ? dir : ".") / name;
 }
 
 // The first frame's row of stats.csv, by column name.
@@ -64,15 +47,8 @@ TEST(CliMeasureDefaults, a_dim_5x5_plate_reads_from_its_good_bands_by_default) {
   const fs::path model = test_model("test-model-nir5x5.json");
   if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
   ScratchDir dir{"cli-partial"};
-  Simulator camera(load_profile_by_name("nir5x5-reference"), UnitPerturbation{"typical", 1});
-  SceneSequenceSettings s;
-  s.kind = SceneKind::kPlate;
-  s.temperatures_c = {900};
-  s.width = 100;
-  s.height = 100;
-  write_scene_sequence(dir / "bright", camera, s);
-  s.target_dn = 0.6 * kSceneDefaults.target_dn;
-  write_scene_sequence(dir / "plate", camera, s);
+  write_plate(dir / "bright", "nir5x5-reference", 1, 900, 100);
+  write_plate(dir / "plate", "nir5x5-reference", 1, 900, 100, 0.6);
   const std::string base = "measure --model " + q(model) + " --dataset " + q(dir / "plate");
   ASSERT_EQ(calib(base + " --out " + q(dir / "default")), 0);
   ASSERT_EQ(calib(base + " --partial-bands off --out " + q(dir / "off")), 0);
@@ -100,13 +76,7 @@ TEST(CliMeasureDefaults, the_default_method_is_ratiotemps_auto) {
   const fs::path model = test_model("test-model-rgb.json");
   if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
   ScratchDir dir{"cli-auto"};
-  Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 1});
-  SceneSequenceSettings s;
-  s.kind = SceneKind::kPlate;
-  s.temperatures_c = {1000};
-  s.width = 64;
-  s.height = 64;
-  write_scene_sequence(dir / "plate", camera, s);
+  write_plate(dir / "plate", "rgb-reference", 1, 1000, 64);
   const std::string base = "measure --model " + q(model) + " --dataset " + q(dir / "plate");
   ASSERT_EQ(calib(base + " --out " + q(dir / "default")), 0);
   ASSERT_EQ(calib(base + " --method auto --out " + q(dir / "auto")), 0);
@@ -122,17 +92,9 @@ TEST(CliMeasureDefaults, a_frame_that_reads_little_says_why) {
   const fs::path model = test_model("test-model-rgb.json");
   if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
   ScratchDir dir{"cli-why"};
-  Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 1});
-  SceneSequenceSettings s;
-  s.kind = SceneKind::kPlate;
-  s.temperatures_c = {1000};
-  s.width = 64;
-  s.height = 64;
-  write_scene_sequence(dir / "good", camera, s);
-  s.target_dn = 50 * kSceneDefaults.target_dn;  // every band far beyond saturation
-  write_scene_sequence(dir / "bright", camera, s);
-  s.target_dn = 0.02 * kSceneDefaults.target_dn;  // every band far below the dim threshold
-  write_scene_sequence(dir / "dark", camera, s);
+  write_plate(dir / "good", "rgb-reference", 1, 1000, 64);
+  write_plate(dir / "bright", "rgb-reference", 1, 1000, 64, 50);  // far beyond saturation
+  write_plate(dir / "dark", "rgb-reference", 1, 1000, 64, 0.02);  // far below the dim threshold
   const auto run = [&](const std::string& data) {
     return calib_stderr("measure --model " + q(model) + " --dataset " + q(dir / data) + " --out " +
                             q(dir / (data + "-t")),
@@ -154,4 +116,4 @@ TEST(CliMeasureDefaults, a_frame_that_reads_little_says_why) {
 }
 
 }  // namespace
-}  // namespace pyrocam
+}  // namespace pyrocam::test

@@ -2,50 +2,26 @@
 // pixels whose footprint crosses the plate's edge lose their readings, the others keep theirs
 // unchanged; off by default; out-of-range values are refused.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "cli_support.h"
 #include "pyrocam/core/image_io.h"
-#include "pyrocam/simulation/scenes.h"
-#include "pyrocam/simulation/simulator.h"
 #include "test_support.h"
 
-namespace pyrocam {
+namespace pyrocam::test {
 namespace {
 
-using test::ScratchDir;
 namespace fs = std::filesystem;
-
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
-
-// Runs pyrocam-calib quietly; returns its exit code.
-int calib(const std::string& args) {
-  const std::string command = "timeout 120 '" + std::string(PYROCAM_CALIB_TOOL) + "' -q " + args +
-                              " < /dev/null > /dev/null 2>&1";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-fs::path test_model(const std::string& name) {
-  const char* dir = std::getenv("PYROCAM_TEST_MODEL_DIR");
-  return fs::path(dir ? dir : ".") / name;
-}
 
 TEST(CliMixedPixels, measure_drops_the_plates_edge_and_keeps_its_inside) {
   const fs::path model = test_model("test-model-rgb.json");
   if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
   ScratchDir dir{"cli-mixed"};
-  Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 6});
-  SceneSequenceSettings s;
-  s.kind = SceneKind::kPlate;
-  s.temperatures_c = {1200};
-  s.width = 100;
-  s.height = 100;
-  write_scene_sequence(dir / "plate", camera, s);
+  write_plate(dir / "plate", "rgb-reference", 6, 1200, 100);
   const std::string base =
       "measure --model " + q(model) + " --dataset " + q(dir / "plate") + " --method likelihood";
   ASSERT_EQ(calib(base + " --out " + q(dir / "plain")), 0);
@@ -68,4 +44,4 @@ TEST(CliMixedPixels, measure_drops_the_plates_edge_and_keeps_its_inside) {
 }
 
 }  // namespace
-}  // namespace pyrocam
+}  // namespace pyrocam::test

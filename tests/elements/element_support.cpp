@@ -3,6 +3,9 @@
 #include <gst/controller/gstdirectcontrolbinding.h>
 #include <gst/controller/gstinterpolationcontrolsource.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace pyrocam::test {
 
 bool have_element(const char* name) {
@@ -138,6 +141,56 @@ void HarnessTest::TearDown() {
   }
   if (h) gst_harness_teardown(h);
   h = nullptr;
+}
+
+std::string test_model_path(const std::string& name) {
+  const char* dir = g_getenv("PYROCAM_TEST_MODEL_DIR");
+  return std::string(dir ? dir : ".") + "/" + name;
+}
+
+double field_double(const GstStructure* s, const char* name) {
+  double v = NAN;
+  EXPECT_TRUE(gst_structure_get_double(s, name, &v)) << name;
+  return v;
+}
+
+void free_all(std::vector<GstStructure*>& v) {
+  for (GstStructure* s : v) gst_structure_free(s);
+  v.clear();
+}
+
+std::size_t count_nonzero(const std::vector<std::uint16_t>& v) {
+  return static_cast<std::size_t>(std::count_if(v.begin(), v.end(), [](auto c) { return c; }));
+}
+
+// The bytes of every buffer that reaches the fakesink named "sink" of a pipeline run to EOS.
+std::vector<std::vector<std::uint8_t>> sink_frames(const std::string& description,
+                                                   GstClockTime timeout) {
+  std::vector<std::vector<std::uint8_t>> frames;
+  GError* error = nullptr;
+  GstElement* pipeline = gst_parse_launch(description.c_str(), &error);
+  EXPECT_TRUE(pipeline && !error) << (error ? error->message : "");
+  if (error) g_error_free(error);
+  if (!pipeline) return frames;
+  GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
+  g_object_set(sink, "signal-handoffs", TRUE, nullptr);
+  g_signal_connect(sink, "handoff",
+                   G_CALLBACK(+[](GstElement*, GstBuffer* b, GstPad*, gpointer out) {
+                     static_cast<std::vector<std::vector<std::uint8_t>>*>(out)->push_back(
+                         values_of<std::uint8_t>(b));
+                   }),
+                   &frames);
+  GstBus* bus = gst_element_get_bus(pipeline);
+  gst_element_set_state(pipeline, GST_STATE_PLAYING);
+  GstMessage* msg = gst_bus_timed_pop_filtered(
+      bus, timeout, static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
+  EXPECT_TRUE(msg && GST_MESSAGE_TYPE(msg) == GST_MESSAGE_EOS) << description;
+  if (msg) gst_message_unref(msg);
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(bus);
+  gst_object_unref(sink);
+  gst_object_unref(pipeline);
+  return frames;
 }
 
 void HarnessTest::start(const std::string& launch, const std::string& src_caps) {

@@ -6,6 +6,7 @@
 #include <gst/gst.h>
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstring>
 #include <initializer_list>
 #include <limits>
@@ -81,6 +82,23 @@ std::vector<T> push_pull(GstHarness* h, GstBuffer* in) {
 void push_flush(GstHarness* h);
 // Pushes EOS and says whether it came out of the element.
 bool eos_passes(GstHarness* h);
+
+// A test model of the build (PYROCAM_TEST_MODEL_DIR, else the working folder) by file name.
+std::string test_model_path(const std::string& name);
+
+// A double field of a structure (a message's), NaN and a test failure when it has none.
+double field_double(const GstStructure* s, const char* name);
+
+// Frees the structures and empties the vector.
+void free_all(std::vector<GstStructure*>& v);
+
+// How many values are not 0 (codes with a reading).
+std::size_t count_nonzero(const std::vector<std::uint16_t>& v);
+
+// The bytes of every buffer that reaches the fakesink named "sink" of a pipeline run to EOS
+// (a test failure when it ends otherwise or not within `timeout`).
+std::vector<std::vector<std::uint8_t>> sink_frames(const std::string& description,
+                                                   GstClockTime timeout = 30 * GST_SECOND);
 
 // The caps on the harness's sink pad as a string ("" if none).
 std::string sink_caps(GstHarness* h);

@@ -1,6 +1,7 @@
 // ratiotemp: caps for colour and 5x5 bands, codes against the library for every method and
 // for the uncertainty, no-reading marks through the chain, live method/region changes, the
-// statistics message against region_stats, flush/EOS, and bus errors for bad models and caps.
+// statistics message against region_stats, flush/EOS, the peak (test_ratiotemp_errors.cpp: whole
+// pipelines and the bus errors for bad models and caps).
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -22,12 +23,8 @@
 namespace pyrocam::test {
 namespace {
 
-std::string model_path(const char* name) {
-  const char* dir = g_getenv("PYROCAM_TEST_MODEL_DIR");
-  return std::string(dir ? dir : ".") + "/" + name;
-}
-std::string rgb_model_path() { return model_path("test-model-rgb.json"); }
-std::string nir_model_path() { return model_path("test-model-nir5x5.json"); }
+std::string rgb_model_path() { return test_model_path("test-model-rgb.json"); }
+std::string nir_model_path() { return test_model_path("test-model-nir5x5.json"); }
 
 // The test models, loaded once per binary.
 const std::shared_ptr<const ThermalModel>& rgb_model() {
@@ -148,10 +145,6 @@ std::vector<std::uint16_t> gray16_of(GstBuffer* buffer, int w, int h) {
   return v;
 }
 
-std::size_t count_nonzero(const std::vector<std::uint16_t>& v) {
-  return static_cast<std::size_t>(std::count_if(v.begin(), v.end(), [](auto c) { return c; }));
-}
-
 class RatioTemp : public HarnessTest {
  protected:
   RatioTemp() : HarnessTest("ratiotemp") {}
@@ -211,11 +204,6 @@ class RatioTemp : public HarnessTest {
   GstElement* element = nullptr;
   std::vector<std::string> warnings;
 };
-
-void free_all(std::vector<GstStructure*>& v) {
-  for (GstStructure* s : v) gst_structure_free(s);
-  v.clear();
-}
 
 TEST_F(RatioTemp, bayer_bands_negotiate_to_gray16_of_the_same_size) {
   start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 7, 5));
@@ -558,11 +546,6 @@ TEST_F(RatioTemp, lut_asked_for_while_playing_with_the_5x5_model_is_refused_n) {
   EXPECT_NE(warnings[0].find("likelihood"), std::string::npos) << warnings[0];
 }
 
-double field_double(const GstStructure* s, const char* name) {
-  double v = NAN;
-  EXPECT_TRUE(gst_structure_get_double(s, name, &v)) << name;
-  return v;
-}
 guint64 field_uint64(const GstStructure* s, const char* name) {
   guint64 v = 0;
   EXPECT_TRUE(gst_structure_get_uint64(s, name, &v)) << name;
@@ -657,253 +640,16 @@ TEST_F(RatioTemp, survives_flush_and_eos) {
   ASSERT_EQ(gst_element_set_state(h->element, GST_STATE_PLAYING), GST_STATE_CHANGE_SUCCESS);
 }
 
-// Runs a pipeline to EOS or error, collecting the statistics messages.
-struct StatsRun {
-  BusResult result;
-  std::vector<GstStructure*> stats;
-  ~StatsRun() { free_all(stats); }
-};
-void run_with_stats(const std::string& description, StatsRun* run) {
-  GError* error = nullptr;
-  GstElement* pipeline = gst_parse_launch(description.c_str(), &error);
-  ASSERT_TRUE(pipeline && !error) << (error ? error->message : "");
-  GstBus* bus = gst_element_get_bus(pipeline);
-  gst_element_set_state(pipeline, GST_STATE_PLAYING);
-  for (;;) {
-    GstMessage* msg = gst_bus_timed_pop_filtered(
-        bus, 30 * GST_SECOND,
-        static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR | GST_MESSAGE_ELEMENT));
-    if (!msg) {
-      run->result.timed_out = true;
-      break;
-    }
-    const GstMessageType type = GST_MESSAGE_TYPE(msg);
-    if (type == GST_MESSAGE_ELEMENT) {
-      const GstStructure* s = gst_message_get_structure(msg);
-      if (s && gst_structure_has_name(s, "pyrocam-temperature-stats"))
-        run->stats.push_back(gst_structure_copy(s));
-    } else if (type == GST_MESSAGE_EOS) {
-      run->result.eos = true;
-    } else {
-      GError* err = nullptr;
-      gst_message_parse_error(msg, &err, nullptr);
-      run->result.error = true;
-      run->result.message = err->message;
-      g_error_free(err);
-    }
-    gst_message_unref(msg);
-    if (type != GST_MESSAGE_ELEMENT) break;
-  }
-  gst_element_set_state(pipeline, GST_STATE_NULL);
-  gst_object_unref(bus);
-  gst_object_unref(pipeline);
-}
-
-TEST(RatioTempPipeline, simulated_plate_reads_its_temperature_through_the_chain) {
-  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp", "thermalcolormap"})
-    REQUIRE_ELEMENT(e);
-  StatsRun run;
-  // The plate fills the central 60 %: the region is well inside it.
-  run_with_stats(
-      "pyrocamsrc scene=plate temperature=1050 num-buffers=3 ! "
-      "video/x-bayer,width=80,height=60 ! darksub dark-level=50 ! demosaic25 ! "
-      "ratiotemp stats-interval=1 region=30,20,20,20 model=" +
-          rgb_model_path() + " ! thermalcolormap ! fakesink",
-      &run);
-  ASSERT_TRUE(run.result.eos) << run.result.message;
-  ASSERT_EQ(run.stats.size(), 3u);
-  for (const GstStructure* s : run.stats) {
-    EXPECT_GT(field_double(s, "region-valid-fraction"), 0.9);
-    // A test model (short training) on a simulated typical unit: within 50 degC.
-    EXPECT_NEAR(field_double(s, "region-median-c"), 1050, 50);
-    // The cold background has no reading.
-    EXPECT_LT(field_double(s, "valid-fraction"), 0.7);
-  }
-}
-
-TEST(RatioTempPipeline, snapshot_camera_through_the_chain) {
-  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
-  StatsRun run;
-  run_with_stats(
-      "pyrocamsrc profile=nir5x5-reference scene=plate temperature=1000 num-buffers=2 ! "
-      "video/x-raw,width=100,height=50 ! darksub dark-level=50 pattern=5x5 ! demosaic25 ! "
-      "ratiotemp stats-interval=1 region=8,4,4,2 model=" +
-          nir_model_path() + " ! fakesink",
-      &run);
-  ASSERT_TRUE(run.result.eos) << run.result.message;
-  ASSERT_EQ(run.stats.size(), 2u);
-  int w = 0;
-  EXPECT_TRUE(gst_structure_get_int(run.stats[0], "width", &w));
-  EXPECT_EQ(w, 20);
-  EXPECT_STREQ(gst_structure_get_string(run.stats[0], "method"), "likelihood");
-  EXPECT_NEAR(field_double(run.stats[0], "region-median-c"), 1000, 50);
-}
-
-// The bytes of every buffer that reaches the fakesink named "sink" of a pipeline run to EOS.
-std::vector<std::vector<std::uint8_t>> sink_frames(const std::string& description) {
-  std::vector<std::vector<std::uint8_t>> frames;
-  GError* error = nullptr;
-  GstElement* pipeline = gst_parse_launch(description.c_str(), &error);
-  EXPECT_TRUE(pipeline && !error) << (error ? error->message : "");
-  if (error) g_error_free(error);
-  if (!pipeline) return frames;
-  GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
-  g_object_set(sink, "signal-handoffs", TRUE, nullptr);
-  g_signal_connect(sink, "handoff",
-                   G_CALLBACK(+[](GstElement*, GstBuffer* b, GstPad*, gpointer out) {
-                     static_cast<std::vector<std::vector<std::uint8_t>>*>(out)->push_back(
-                         values_of<std::uint8_t>(b));
-                   }),
-                   &frames);
-  GstBus* bus = gst_element_get_bus(pipeline);
-  gst_element_set_state(pipeline, GST_STATE_PLAYING);
-  GstMessage* msg = gst_bus_timed_pop_filtered(
-      bus, 30 * GST_SECOND, static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
-  EXPECT_TRUE(msg && GST_MESSAGE_TYPE(msg) == GST_MESSAGE_EOS) << description;
-  if (msg) gst_message_unref(msg);
-  gst_element_set_state(pipeline, GST_STATE_NULL);
-  gst_object_unref(bus);
-  gst_object_unref(sink);
-  gst_object_unref(pipeline);
-  return frames;
-}
-
-TEST(RatioTempPipeline, temperatures_survive_an_ffv1_recording_bit_exactly) {
-  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
-  for (const char* e : {"avenc_ffv1", "avdec_ffv1", "matroskamux", "matroskademux"})
-    if (!have_element(e)) GTEST_SKIP() << e << " is not installed (gstreamer1.0-libav, -good)";
-  ScratchDir dir("ratiotemp-ffv1");
-  const std::string file = (dir / "t.mkv").string();
-  const auto direct = sink_frames(
-      "pyrocamsrc scene=plate temperature=1200 num-buffers=3 ! video/x-bayer,width=32,height=24 ! "
-      "darksub dark-level=50 ! demosaic25 ! ratiotemp model=" +
-      rgb_model_path() + " ! tee name=t ! queue ! avenc_ffv1 ! matroskamux ! filesink location=" +
-      file + " t. ! queue ! fakesink name=sink");
-  ASSERT_EQ(direct.size(), 3u);
-  const auto codes = std::vector<std::uint16_t>(
-      reinterpret_cast<const std::uint16_t*>(direct[0].data()),
-      reinterpret_cast<const std::uint16_t*>(direct[0].data() + direct[0].size()));
-  EXPECT_GT(count_nonzero(codes), 100u);  // the plate reads
-  const auto back = sink_frames("filesrc location=" + file +
-                                " ! matroskademux ! avdec_ffv1 ! video/x-raw,format=GRAY16_LE ! "
-                                "fakesink name=sink");
-  EXPECT_EQ(back, direct);
-}
-
-const std::string kColourChain =
-    "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! "
-    "demosaic25 ! ";
-const std::string kSnapshotChain =
-    "pyrocamsrc num-buffers=1 profile=nir5x5-reference ! video/x-raw,width=20,height=10 ! "
-    "darksub dark-level=50 pattern=5x5 ! demosaic25 ! ";
-
-// Runs `chain` into a ratiotemp (its launch words) and a fakesink.
-BusResult run_chain(const std::string& chain, const std::string& ratiotemp) {
-  return run_pipeline(chain + ratiotemp + " ! fakesink");
-}
-
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-TEST(RatioTempErrors, rejects_a_5x5_mosaic_with_a_colour_model_n) {
-  // darksub used to read the untagged 5x5 mosaic as RGGB: plausible temperatures, all wrong.
-  REQUIRE_ELEMENT("ratiotemp");
-  const auto r = run_pipeline(
-      "pyrocamsrc num-buffers=1 profile=nir5x5-reference ! video/x-raw,width=20,height=10 ! "
-      "darksub dark-level=5 ! demosaic25 ! ratiotemp model=" +
-      rgb_model_path() + " ! fakesink");
-  ASSERT_TRUE(r.error) << "ran to the end with a colour model on a 5x5 mosaic";
-  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION, {"5x5", "bayer"});
-}
-
-TEST(RatioTempErrors, rejects_5x5_bands_in_another_order_than_the_models_n) {
-  REQUIRE_ELEMENT("ratiotemp");
-  const auto r = run_pipeline(
-      "videotestsrc num-buffers=1 ! video/x-raw,format=GRAY8,width=20,height=10,pattern=5x5,"
-      "band-map=(string)\"1,0,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24\" ! "
-      "darksub dark-level=5 ! demosaic25 ! ratiotemp model=" +
-      nir_model_path() + " ! fakesink");
-  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION,
-               {"in the order 0,1,2", "in the order 1,0,2"});
-}
-
-TEST(RatioTempErrors, rejects_a_saturation_level_above_the_models_n) {
-  // darksub would pass 220..239 DN unmarked, which the model's camera calls saturated.
-  REQUIRE_ELEMENT("ratiotemp");
-  const auto r = run_pipeline(
-      "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 "
-      "saturation-level=240 ! demosaic25 ! ratiotemp model=" +
-      rgb_model_path() + " ! fakesink");
-  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION, {"from 240 DN", "220 DN"});
-}
-
-TEST(RatioTempErrors, rejects_running_without_a_model_n) {
-  REQUIRE_ELEMENT("ratiotemp");
-  const auto r = run_chain(kColourChain, "ratiotemp");
-  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS, {"model"});
-}
-
-TEST(RatioTempErrors, rejects_a_missing_model_n) {
-  REQUIRE_ELEMENT("ratiotemp");
-  const auto r = run_chain(kColourChain, "ratiotemp model=/nonexistent/cam.json");
-  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_NOT_FOUND, {"/nonexistent/cam.json"});
-}
-
-TEST(RatioTempErrors, rejects_a_truncated_model_n) {
-  REQUIRE_ELEMENT("ratiotemp");
-  ScratchDir dir("ratiotemp-truncated");
-  const std::string text = read_text(rgb_model_path());
-  ASSERT_GT(text.size(), 1000u);
-  write_text(dir / "cam.json", text.substr(0, text.size() / 2));
-  const auto r = run_chain(kColourChain, "ratiotemp model=" + (dir / "cam.json").string());
-  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_READ, {"cam.json"});
-}
-
-TEST(RatioTempErrors, rejects_a_model_of_another_version_n) {
-  REQUIRE_ELEMENT("ratiotemp");
-  ScratchDir dir("ratiotemp-version");
-  nlohmann::json j = nlohmann::json::parse(read_text(rgb_model_path()));
-  j["version"] = kModelFormatVersion + 1;
-  write_text(dir / "cam.json", j.dump());
-  const auto r = run_chain(kColourChain, "ratiotemp model=" + (dir / "cam.json").string());
-  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_READ, {"cam.json"});
-}
-
-TEST(RatioTempErrors, rejects_a_band_count_mismatch_n) {
-  REQUIRE_ELEMENT("ratiotemp");
-  const auto r = run_chain(kColourChain, "ratiotemp model=" + nir_model_path());
-  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION, {"25 bands", "3 bands"});
-  EXPECT_EQ(r.source.rfind("ratiotemp", 0), 0u) << r.source;
-}
-
-TEST(RatioTempErrors, rejects_a_colour_model_on_a_snapshot_camera_n) {
-  REQUIRE_ELEMENT("ratiotemp");
-  const auto r = run_chain(kSnapshotChain, "ratiotemp model=" + rgb_model_path());
-  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION,
-               {"3 bands of a bayer", "25 bands of a 5x5"});
-}
-
-TEST(RatioTempErrors, rejects_lut_with_the_5x5_model_n) {
-  REQUIRE_ELEMENT("ratiotemp");
-  const auto r = run_chain(kSnapshotChain, "ratiotemp method=lut model=" + nir_model_path());
-  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS, {"lut", "two ratios"});
-}
-
-TEST(RatioTempErrors, rejects_a_lookup_table_that_disagrees_with_the_network_n) {
+TEST(RatioTempLut, rejects_a_lookup_table_that_disagrees_with_the_network_n) {
   REQUIRE_ELEMENT("ratiotemp");
   if (rgb_auto_method() == Method::kLut)
     GTEST_SKIP() << "the test model's lookup table passes its check";
-  const auto r = run_chain(kColourChain, "ratiotemp method=lut model=" + rgb_model_path());
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=1 ! video/x-bayer,width=20,height=10 ! darksub dark-level=50 ! "
+      "demosaic25 ! ratiotemp method=lut model=" +
+      rgb_model_path() + " ! fakesink");
   expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS,
                {"lookup table differs from its network by up to"});
-}
-
-TEST(RatioTempErrors, rejects_an_invalid_region_n) {
-  REQUIRE_ELEMENT("ratiotemp");
-  const auto r = run_chain(kColourChain, "ratiotemp region=10,10,0,5 model=" + rgb_model_path());
-  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS, {"10,10,0,5"});
 }
 
 // A plate at 1000 degC with a 7x7 hot spot at 1400 centred on (12, 7) and one wild pixel at

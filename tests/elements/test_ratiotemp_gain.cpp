@@ -32,30 +32,7 @@ std::vector<double> plate_values(const std::string& camera, const std::string& o
       ",height=" + std::to_string(kHeight) +
       " ! darksub dark-level=50 ! demosaic25 ! ratiotemp method=likelihood output=" + output +
       " model=" + rgb_model_path() + " ! fakesink name=sink";
-  std::vector<std::vector<std::uint8_t>> frames;
-  GError* error = nullptr;
-  GstElement* pipeline = gst_parse_launch(description.c_str(), &error);
-  EXPECT_TRUE(pipeline && !error) << (error ? error->message : "");
-  if (error) g_error_free(error);
-  if (!pipeline) return {};
-  GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
-  g_object_set(sink, "signal-handoffs", TRUE, nullptr);
-  g_signal_connect(sink, "handoff",
-                   G_CALLBACK(+[](GstElement*, GstBuffer* b, GstPad*, gpointer out) {
-                     static_cast<std::vector<std::vector<std::uint8_t>>*>(out)->push_back(
-                         values_of<std::uint8_t>(b));
-                   }),
-                   &frames);
-  GstBus* bus = gst_element_get_bus(pipeline);
-  gst_element_set_state(pipeline, GST_STATE_PLAYING);
-  GstMessage* msg = gst_bus_timed_pop_filtered(
-      bus, 60 * GST_SECOND, static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
-  EXPECT_TRUE(msg && GST_MESSAGE_TYPE(msg) == GST_MESSAGE_EOS) << description;
-  if (msg) gst_message_unref(msg);
-  gst_element_set_state(pipeline, GST_STATE_NULL);
-  gst_object_unref(bus);
-  gst_object_unref(sink);
-  gst_object_unref(pipeline);
+  const auto frames = sink_frames(description, 60 * GST_SECOND);
   const bool uncertainty = output == "uncertainty";
   const int stride = GST_ROUND_UP_4(2 * kWidth);
   std::vector<double> values;

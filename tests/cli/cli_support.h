@@ -1,0 +1,47 @@
+// What the CLI test files share: running pyrocam-calib as a child process, the test models,
+// simulated plates.
+#pragma once
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
+
+namespace pyrocam::test {
+
+inline std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+// Runs pyrocam-calib quietly with `args` (shell-quoted where needed), stdin closed; returns its
+// exit code.
+inline int calib(const std::string& args) {
+  const std::string command = "timeout 120 '" + std::string(PYROCAM_CALIB_TOOL) + "' -q " + args +
+                              " < /dev/null > /dev/null 2>&1";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// A test model of the build (PYROCAM_TEST_MODEL_DIR) by file name.
+inline std::filesystem::path test_model(const std::string& name) {
+  const char* dir = std::getenv("PYROCAM_TEST_MODEL_DIR");
+  return std::filesystem::path(dir ? dir : ".") / name;
+}
+
+// A dataset of one plate frame at t_c by the typical unit `seed` of `profile`, its brightest band
+// `exposure_scale` times the scenes' usual level above dark.
+inline void write_plate(const std::filesystem::path& folder, const std::string& profile,
+                        std::uint64_t seed, double t_c, int size, double exposure_scale = 1) {
+  Simulator camera(load_profile_by_name(profile), UnitPerturbation{"typical", seed});
+  SceneSequenceSettings s;
+  s.kind = SceneKind::kPlate;
+  s.temperatures_c = {t_c};
+  s.width = size;
+  s.height = size;
+  s.target_dn = exposure_scale * kSceneDefaults.target_dn;
+  write_scene_sequence(folder, camera, s);
+}
+
+}  // namespace pyrocam::test
