@@ -404,8 +404,9 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       "--pattern rggb --out t --uncertainty\n"
       "  pyrocam-calib measure --model other.json --recording out/run1 --method lut --out t2\n"
       "With --recording (a raw recording, record.sh RAW=1) the output is OUT/temperature.npy\n"
-      "and OUT/temperature.csv as `pyrocam-calib export` writes them; give --method as the\n"
-      "recording's (its temperature tags say it, e.g. lut) to reproduce the recorded codes.");
+      "and OUT/temperature.csv as `pyrocam-calib export` writes them; with the recording's\n"
+      "method (the default, auto, as ratiotemp's; its temperature tags say which) the codes\n"
+      "are the recorded ones.");
   add_input_options(c, a);
   add_output_options(c, a);
   c->callback([&global, &selected, c] {
