@@ -71,6 +71,8 @@ constexpr GstDemosaic25Method DEFAULT_METHOD = GST_DEMOSAIC25_METHOD_AUTO;
 // Off by default: it costs under the 15 % of the colour chain a default may cost, but it takes
 // most readings of small melt pools at a fixed exposure (their steep sides; docs/elements.md).
 constexpr double DEFAULT_MIXED_PIXELS = 0;
+// The shipped colour camera, whose noise the mixed-pixel check assumes without a profile.
+constexpr const char* kColourCameraProfile = "rgb-reference";
 
 struct Settings {
   GstDemosaic25Method method = DEFAULT_METHOD;
@@ -297,13 +299,29 @@ static gboolean gst_demosaic25_set_caps(GstBaseTransform* trans, GstCaps* incaps
       throw pyrocam::InputError("the mosaic is smaller than one period");
   });
   if (!ok) return FALSE;
-  // The noise of the mixed-pixel check: the profile's, else that of the shipped colour
-  // camera's sensor (0.03 DN per electron and 6 electrons read noise at 8 bits) scaled to the
-  // stream's bit depth.
+  // The noise of the mixed-pixel check: the profile's, else, for a Bayer mosaic, that of the
+  // shipped colour camera band by band (what pyrocam-calib measure uses for its models) scaled
+  // to the stream's bit depth, else its red band's (0.03 DN per electron, 6 electrons read
+  // noise at 8 bits) for every band.
   st.noise = st.profile_noise;
   int depth = 8;
   gst_structure_get_int(gst_caps_get_structure(incaps, 0), "bit-depth", &depth);
   const double scale = std::ldexp(1.0, depth - 8);
+  if (static_cast<int>(st.noise.size()) < st.bands &&
+      st.layout.kind == pyrocam::MosaicLayout::Kind::kBayer) {
+    try {
+      const pyrocam::CameraProfile colour = pyrocam::load_profile_by_name(kColourCameraProfile);
+      const double s = std::ldexp(1.0, depth - colour.bit_depth);
+      if (colour.band_count() == st.bands)
+        for (int b = 0; b < st.bands; ++b) {
+          const pyrocam::SignalNoise n = pyrocam::signal_noise(colour, b);
+          st.noise.push_back(pyrocam::SignalNoise{n.shot_gain * s, n.floor_dn2 * s * s});
+        }
+    } catch (const std::exception& e) {
+      GST_WARNING_OBJECT(self, "no %s profile for the mixed-pixel check's noise: %s",
+                         kColourCameraProfile, e.what());
+    }
+  }
   if (static_cast<int>(st.noise.size()) < st.bands)
     st.noise.assign(static_cast<std::size_t>(st.bands),
                     pyrocam::SignalNoise{0.03 * scale, 0.23 * scale * scale});

@@ -1,5 +1,6 @@
 // demosaic25: caps in both directions, planes against the library, marks through darksub and
 // demosaic25, 5x5 macro-pixels, profile band map, flush/EOS, bus errors.
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <limits>
@@ -9,6 +10,7 @@
 #include "pyrocam/core/noise_model.h"
 #include "pyrocam/core/profile.h"
 #include "pyrocam/runtime/demosaic.h"
+#include "pyrocam/runtime/mixed_pixels.h"
 
 namespace pyrocam::test {
 namespace {
@@ -96,6 +98,46 @@ TEST_F(Demosaic25, mixed_pixels_at_a_sharp_edge_get_no_reading_and_the_rest_stay
         else
           EXPECT_EQ(checked[i], plain[i]) << b << " " << x << "," << y;
       }
+}
+
+// Without a profile the check's noise is the shipped colour camera's, band by band (its green
+// and blue samples are noisier than its red: 0.06 and 0.12 against 0.03 DN per electron), so
+// that demosaic25 mixed-pixels=0.5 marks what pyrocam-calib measure --mixed-pixels 0.5 marks
+// for a model of that camera. A hot spot whose samples differ band by band near the allowance.
+TEST_F(Demosaic25, mixed_pixel_check_without_a_profile_uses_the_colour_cameras_noise) {
+  constexpr int kW = 24, kH = 16;
+  std::vector<float> mosaic(kW * kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const double r2 = ((x - 11.3) * (x - 11.3) + (y - 7.6) * (y - 7.6)) / 16.0;
+      mosaic[static_cast<std::size_t>(y * kW + x)] =
+          static_cast<float>(5 + 180 * std::exp(-r2) + ((x * 7 + y * 3) % 5));
+    }
+  const CameraProfile profile = load_profile_by_name("rgb-reference");
+  const auto marked = [&](const std::vector<SignalNoise>& noise) {
+    FootprintCheck check;
+    check.relative_spread = 0.5;
+    check.noise = noise;
+    cv::Mat in(kH, kW, CV_32F, mosaic.data());
+    std::vector<cv::Mat> planes;
+    demosaic_marking_mixed(in, profile.mosaic, DemosaicMethod::kBilinear, check, planes,
+                           static_cast<float>(no_signal_level_dn(noise)));
+    std::vector<float> out;
+    for (const cv::Mat& p : planes) out.insert(out.end(), p.begin<float>(), p.end<float>());
+    return out;
+  };
+  std::vector<SignalNoise> noise, red_everywhere;
+  for (int b = 0; b < profile.band_count(); ++b) noise.push_back(signal_noise(profile, b));
+  red_everywhere.assign(noise.size(), noise[0]);
+  const auto expected = marked(noise);
+  const auto nan_count = [](const std::vector<float>& v) {
+    return std::count_if(v.begin(), v.end(), [](float f) { return std::isnan(f); });
+  };
+  // The scene tells the two noise models apart, and it has marks to compare.
+  ASSERT_GT(nan_count(expected), 0);
+  ASSERT_NE(nan_count(marked(red_everywhere)), nan_count(expected));
+  start("demosaic25 mixed-pixels=0.5", mosaic_caps("rggb", kW, kH));
+  expect_same(run(mosaic), expected);
 }
 
 TEST_F(Demosaic25, matched_gives_no_band_mixing_a_cold_background_into_a_lit_one) {
