@@ -50,7 +50,28 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
     const double mean = n > 0 ? sum / n : 0;
     u.push_back(n > 1 ? std::sqrt(std::max(0.0, (sum2 - n * mean * mean) / (n - 1))) : NAN);
   }
-  return u;
+  // Where no sample reads (the cold end of a 5x5 model's range, where some band is dim even in
+  // a well exposed pixel) the nearest temperature's value: a model holds a number at every
+  // temperature of its table (a NaN would make it unreadable), and pixels read there from
+  // their other bands still have this term. None at all: no term.
+  std::vector<double> filled = u;
+  bool any = false;
+  for (std::size_t i = 0; i < u.size(); ++i) {
+    if (std::isfinite(u[i])) {
+      any = true;
+      continue;
+    }
+    for (std::size_t d = 1; d < u.size(); ++d) {
+      const double below = i >= d ? u[i - d] : NAN, above = i + d < u.size() ? u[i + d] : NAN;
+      if (std::isfinite(below) || std::isfinite(above)) {
+        filled[i] = std::isfinite(below) && std::isfinite(above) ? std::max(below, above)
+                    : std::isfinite(below)                       ? below
+                                                                 : above;
+        break;
+      }
+    }
+  }
+  return any ? filled : std::vector<double>{};
 }
 
 std::vector<double> emissivity_uncertainty(const ThermalModel& m, const UncertaintyModel& u) {

@@ -173,6 +173,15 @@ void save_model(const ThermalModel& m, const std::filesystem::path& path) {
   payload["temperature_range_c"] = {m.min_temperature_c, m.max_temperature_c};
   payload["mlp"] = m.mlp.to_json();
   const UncertaintyModel& u = m.uncertainty;
+  // JSON has no NaN: it would be written as null and the model refused when loaded.
+  for (const auto& [name, values] : {std::pair{"u_calibration_c", &u.u_calibration_c},
+                                     {"u_emissivity_c", &u.u_emissivity_c},
+                                     {"u_qe_model_c", &u.u_qe_model_c},
+                                     {"temperature_c", &u.temperature_c}})
+    for (std::size_t i = 0; i < values->size(); ++i)
+      if (!std::isfinite((*values)[i]))
+        throw InputError(path.string() + ": not written: uncertainty." + name + "[" +
+                         std::to_string(i) + "] is not a number");
   payload["uncertainty"] = {{"temperature_c", u.temperature_c},
                             {"u_calibration_c", u.u_calibration_c},
                             {"u_emissivity_c", u.u_emissivity_c},

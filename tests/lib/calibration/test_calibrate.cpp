@@ -187,6 +187,24 @@ TEST(ModelFile, keeps_the_qe_model_term_and_adds_it) {
   EXPECT_NEAR(back.uncertainty.systematic_u_c(2000), std::sqrt(without * without + 16), 1e-12);
 }
 
+// JSON has no NaN: a term that is not a number is refused when saving (it would be written as
+// null and the model refused when loaded), and no file is left.
+TEST(ModelFile, refuses_to_save_an_uncertainty_that_is_not_a_number_n) {
+  ScratchDir dir("model-nan");
+  ThermalModel m = small_model(load_profile_by_name("rgb-reference"));
+  m.uncertainty.u_qe_model_c = {NAN, 4.0};
+  try {
+    save_model(m, dir / "m.json");
+    ADD_FAILURE() << "saved";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("uncertainty.u_qe_model_c[0] is not a number"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "m.json"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "m.json.partial"));
+}
+
 class ModelFileDamage : public ::testing::Test {
  protected:
   void SetUp() override {

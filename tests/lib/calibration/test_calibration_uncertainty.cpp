@@ -5,6 +5,7 @@
 
 #include "calibration/synthetic_calibration.h"
 #include "pyrocam/calibration/calibration_uncertainty.h"
+#include "pyrocam/runtime/estimators.h"
 
 namespace pyrocam {
 namespace {
@@ -101,6 +102,37 @@ TEST(UncertaintyModel, tabulates_every_50_degc_and_the_emissivity_term_grows_wit
     SCOPED_TRACE(u.temperature_c[i]);
     EXPECT_GT(shifted[i], u.u_emissivity_c[i]);
   }
+}
+
+// A 5x5 camera well exposed at 400 degC has a band too dim to read, so no posterior sample reads
+// there: the model still gets a number (the nearest temperature's). A calibrated hostile unit
+// wrote null there, and load_model refused its own model.
+TEST(QeModelUncertainty, a_temperature_no_sample_reads_gets_the_nearest_value) {
+  const CameraProfile p = load_profile_by_name("nir5x5-reference");
+  const CameraModel camera{p, p.system_qe(), Eigen::VectorXd::Ones(p.band_count())};
+  auto model = std::make_shared<ThermalModel>();
+  model->camera = camera;
+  model->datasheet_qe = p.system_qe();
+  model->min_temperature_c = 200;
+  model->max_temperature_c = 1300;
+  Eigen::VectorXd s = camera.rates(400);
+  s *= 150 / s.maxCoeff();
+  ASSERT_TRUE(std::isnan(make_estimator(model, Method::kLikelihood)->temperature_c(s.data())))
+      << "the test needs a temperature that does not read";
+  std::vector<QeSample> posterior;
+  for (int k = 0; k < 8; ++k) {
+    Eigen::VectorXd gains = Eigen::VectorXd::Ones(p.band_count());
+    for (Eigen::Index b = 0; b < gains.size(); ++b) gains[b] += 0.01 * std::sin(3.0 * k + b);
+    posterior.push_back(QeSample{p.system_qe(), gains});
+  }
+  const std::vector<double> u =
+      qe_model_uncertainty(camera, posterior, {400, 500, 600, 700, 800, 900});
+  ASSERT_EQ(u.size(), 6u);
+  for (double v : u) EXPECT_TRUE(std::isfinite(v));
+  std::size_t first = 0;  // the first temperature that reads
+  while (first < u.size() && u[first] == u[0]) ++first;
+  EXPECT_GT(first, 0u);
+  EXPECT_GT(u[0], 0.0);
 }
 
 }  // namespace
