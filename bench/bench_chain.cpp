@@ -119,10 +119,11 @@ void bench_colour(const Options& o, const pyrocam::ThermalModel& m, const std::s
         "darksub ! demosaic25 (no ratiotemp)",
         run_chain("darksub dark-level=50" + q + " ! demosaic25", caps, raw, o.frames, o.warmup),
         bayer);
-    print_run("the same, demosaic25 mixed-pixels=0.5",
-              run_chain("darksub dark-level=50" + q + " ! demosaic25 mixed-pixels=0.5", caps, raw,
-                        o.frames, o.warmup),
-              bayer);
+    print_run(
+        "the same, demosaic25 method=bilinear mixed-pixels=0.5",
+        run_chain("darksub dark-level=50" + q + " ! demosaic25 method=bilinear mixed-pixels=0.5",
+                  caps, raw, o.frames, o.warmup),
+        bayer);
   }
   const std::string chain = "darksub dark-level=50" + q + " ! demosaic25" + q +
                             " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
@@ -131,17 +132,18 @@ void bench_colour(const Options& o, const pyrocam::ThermalModel& m, const std::s
     row.colour_lut = run_chain(chain + " method=lut", caps, raw, o.frames, o.warmup);
     print_run("darksub ! demosaic25 ! ratiotemp method=lut", row.colour_lut, bayer);
     if (detailed) {
-      // The same with demosaic25's mixed-pixel check (off by default): what the check costs.
-      const std::string checked = "darksub dark-level=50" + q + " ! demosaic25 mixed-pixels=0.5" +
-                                  q + " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
-                                  " misfit-probability=" + o.misfit_probability;
-      print_run("the same, demosaic25 mixed-pixels=0.5",
-                run_chain(checked + " method=lut", caps, raw, o.frames, o.warmup), bayer);
-      const std::string matched = "darksub dark-level=50" + q + " ! demosaic25 method=matched" + q +
-                                  " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
-                                  " misfit-probability=" + o.misfit_probability;
-      print_run("the same, demosaic25 method=matched",
-                run_chain(matched + " method=lut", caps, raw, o.frames, o.warmup), bayer);
+      // The same with bilinear demosaicking (the default is matched), without and with the
+      // mixed-pixel check: what matched and the check cost.
+      const auto with = [&](const std::string& demosaic) {
+        return "darksub dark-level=50" + q + " ! demosaic25 " + demosaic + q +
+               " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
+               " misfit-probability=" + o.misfit_probability + " method=lut";
+      };
+      print_run("the same, demosaic25 method=bilinear",
+                run_chain(with("method=bilinear"), caps, raw, o.frames, o.warmup), bayer);
+      print_run("the same, demosaic25 method=bilinear mixed-pixels=0.5",
+                run_chain(with("method=bilinear mixed-pixels=0.5"), caps, raw, o.frames, o.warmup),
+                bayer);
     }
   }
   if (!detailed) return;

@@ -334,8 +334,8 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
                 "Demosaicking: bilinear, bin2x2, matched (every band through a kernel of the "
                 "same spread: no colour shift on hot spots, no wild ratios at edges to a cold "
                 "background; 5x5 mosaics: each band read at the cell's centre) or auto "
-                "(matched for 5x5 mosaics, bilinear for Bayer); 5x5 mosaics are binned by "
-                "bilinear and bin2x2")
+                "(matched, as demosaic25's default); 5x5 mosaics are binned by bilinear and "
+                "bin2x2")
       ->check(CLI::IsMember({"bilinear", "bin2x2", "matched", "auto"}))
       ->capture_default_str();
   c->add_option("--mixed-pixels", a.mixed_pixels,

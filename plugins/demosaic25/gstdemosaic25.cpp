@@ -17,8 +17,9 @@
  *   reading is that of the temperature field seen through one blur; a sample without light
  *   (below 5 noise-floor standard deviations) makes the bands drawn from it dim, so pixels at
  *   an edge to a cold background have no reading instead of a wild one. It costs about 1.6
- *   times bilinear's demosaicking; a pool a few pixels across loses most of its readings with
- *   it (its kernel reaches samples without light on the pool's steep sides).
+ *   times bilinear's demosaicking (+6 % on the whole chain). A pool a few pixels across keeps
+ *   few readings with it (its kernel reaches samples without light or saturated ones on the
+ *   pool's steep sides), but right ones: bilinear's extra readings there are largely wild.
  * - 5x5 snapshot mosaics give 25 bands, one reading per 5x5 macro-pixel (output width/5 x
  *   height/5, as the paper); band index = row * 5 + column in the cell, or the band map of the
  *   camera profile named by #GstDemosaic25:profile. Each band is sampled at its own place in
@@ -31,8 +32,7 @@
  *   noise, which the noise model does not know: the uncertainty output and the misfit check
  *   are conservative with it.
  *
- * #GstDemosaic25:method auto (the default) is matched for 5x5 mosaics and bilinear for Bayer
- * (where matched leaves small pools with few readings).
+ * #GstDemosaic25:method auto (the default) is matched, for 5x5 and Bayer mosaics alike.
  *
  * With a #GstDemosaic25:profile, a stream whose mosaic pattern (from the caps) is not the
  * profile's, or whose 5x5 band-map caps field (pyrocamsrc sets it from its profile) differs
@@ -135,7 +135,7 @@ GType gst_demosaic25_method_get_type(void) {
        "Moment-matched interpolation, full resolution: every band through a kernel of the same "
        "spread, samples without light make a band dim",
        "matched"},
-      {GST_DEMOSAIC25_METHOD_AUTO, "matched for 5x5 mosaics, bilinear for Bayer", "auto"},
+      {GST_DEMOSAIC25_METHOD_AUTO, "matched, for 5x5 and Bayer mosaics", "auto"},
       {0, nullptr, nullptr},
   };
   if (g_once_init_enter(&type)) {
@@ -497,7 +497,7 @@ static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
           "background; about 1.6 times bilinear's cost). 5x5 mosaics give one reading "
           "per macro-pixel: matched reads each band at the cell's centre "
           "(interpolated over 3x3 cells), bilinear and bin2x2 where it sits in the "
-          "cell. auto: matched for 5x5, bilinear for Bayer",
+          "cell. auto: matched",
           GST_TYPE_DEMOSAIC25_METHOD, DEFAULT_METHOD, ready));
   g_object_class_install_property(
       gobject_class, PROP_PROFILE,
@@ -516,7 +516,7 @@ static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
           "samples of one band differing by more than "
           "this share of the largest plus 5 noise standard deviations gets no reading (NaN in "
           "every band): at a sharp edge they see different temperatures and read wild (0..10; "
-          "0 = no check, the default; 0.5 suits melt pools and plates: a gradient that makes a "
+          "0 = no check, the default; 0.5 suits method=bilinear: a gradient that makes a "
           "band's interpolation err as much as noise does at the dim threshold; the noise model "
           "is the profile's, else the shipped colour camera's scaled to the bit depth)",
           0.0, pyrocam::kMaxRelativeSpread, DEFAULT_MIXED_PIXELS,

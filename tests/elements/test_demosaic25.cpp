@@ -71,7 +71,7 @@ void Demosaic25::expect_library_planes(const char* launch, const std::string& pa
 }
 
 TEST_F(Demosaic25, bilinear_keeps_full_resolution) {
-  expect_library_planes("demosaic25", "gbrg", DemosaicMethod::kBilinear);
+  expect_library_planes("demosaic25 method=bilinear", "gbrg", DemosaicMethod::kBilinear);
   const std::string caps = sink_caps(h);
   for (const char* part : {"video/x-pyrocam-bands", "bands=(int)3", "width=(int)8", "height=(int)6",
                            "layout=(string)bayer", "format=(string)F32LE"})
@@ -84,7 +84,7 @@ TEST_F(Demosaic25, mixed_pixels_at_a_sharp_edge_get_no_reading_and_the_rest_stay
   std::vector<float> mosaic(8 * 6);
   for (int y = 0; y < 6; ++y)
     for (int x = 0; x < 8; ++x) mosaic[y * 8 + x] = x < 4 ? 100.f + 3.f * x : 2.f;
-  start("demosaic25 mixed-pixels=0.2", mosaic_caps("rggb", 8, 6));
+  start("demosaic25 method=bilinear mixed-pixels=0.2", mosaic_caps("rggb", 8, 6));
   const auto checked = run(mosaic);
   const auto plain = library(mosaic, 8, 6, MosaicLayout::bayer("RGGB"), DemosaicMethod::kBilinear);
   ASSERT_EQ(checked.size(), plain.size());
@@ -136,7 +136,7 @@ TEST_F(Demosaic25, mixed_pixel_check_without_a_profile_uses_the_colour_cameras_n
   // The scene tells the two noise models apart, and it has marks to compare.
   ASSERT_GT(nan_count(expected), 0);
   ASSERT_NE(nan_count(marked(red_everywhere)), nan_count(expected));
-  start("demosaic25 mixed-pixels=0.5", mosaic_caps("rggb", kW, kH));
+  start("demosaic25 method=bilinear mixed-pixels=0.5", mosaic_caps("rggb", kW, kH));
   expect_same(run(mosaic), expected);
 }
 
@@ -212,6 +212,30 @@ TEST_F(Demosaic25, snapshot_gives_25_bands_per_macro_pixel) {
   const std::string caps = sink_caps(h);
   for (const char* part : {"bands=(int)25", "width=(int)2", "height=(int)3", "layout=(string)5x5"})
     EXPECT_NE(caps.find(part), std::string::npos) << part << " in " << caps;
+}
+
+// The default (auto) is matched for Bayer too: the library's, with the shipped colour camera's
+// level of samples without light at 8 bits (5.5 DN), so a sample below it makes a band dim.
+TEST_F(Demosaic25, bayer_default_is_matched_at_full_resolution) {
+  constexpr int kW = 12, kH = 10;
+  auto mosaic = ramp(kW, kH);
+  for (int x = 0; x < kW; ++x) mosaic[static_cast<std::size_t>(9 * kW + x)] = 3.f;  // no light
+  start("demosaic25", mosaic_caps("bggr", kW, kH));
+  const auto out = run(mosaic);
+  const CameraProfile colour = load_profile_by_name("rgb-reference");
+  std::vector<SignalNoise> noise;
+  for (int b = 0; b < colour.band_count(); ++b) noise.push_back(signal_noise(colour, b));
+  const float no_signal = static_cast<float>(no_signal_level_dn(noise));
+  EXPECT_NEAR(no_signal, 5.5f, 0.1f);
+  expect_same(out, library(mosaic, kW, kH, MosaicLayout::bayer("BGGR"), DemosaicMethod::kMatched,
+                           no_signal));
+  const auto bilinear =
+      library(mosaic, kW, kH, MosaicLayout::bayer("BGGR"), DemosaicMethod::kBilinear);
+  ASSERT_EQ(out.size(), bilinear.size());
+  int differ = 0, dim = 0;
+  for (std::size_t i = 0; i < out.size(); ++i) differ += out[i] != bilinear[i], dim += out[i] == 0;
+  EXPECT_GT(differ, static_cast<int>(out.size()) / 2);
+  EXPECT_GT(dim, 0);  // the row without light made the bands near it dim
 }
 
 TEST_F(Demosaic25, snapshot_bands_are_read_at_the_cell_centre_by_default) {

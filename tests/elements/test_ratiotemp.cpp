@@ -10,6 +10,8 @@
 #include <optional>
 
 #include "element_support.h"
+#include "pyrocam/core/noise_model.h"
+#include "pyrocam/core/profile.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/demosaic.h"
@@ -177,8 +179,10 @@ class RatioTemp : public HarnessTest {
     return v;
   }
   // The same with darksub (dark level 50) and demosaic25 in front, fed raw 8x8 RGGB frames.
-  void start_on_raw_frames(const std::string& ratiotemp) {
-    start("darksub dark-level=50 ! demosaic25 ! " + ratiotemp,
+  // Bilinear demosaicking: the saturated pixel's neighbours are the 3x3 it reaches.
+  void start_on_raw_frames(const std::string& ratiotemp,
+                           const std::string& demosaic = "demosaic25 method=bilinear") {
+    start("darksub dark-level=50 ! " + demosaic + " ! " + ratiotemp,
           "video/x-bayer,format=rggb,width=8,height=8,framerate=30/1");
   }
   // Element messages of a name posted so far.
@@ -422,12 +426,14 @@ std::vector<std::uint8_t> raw_bayer_frame(const ThermalModel& m, double t_c) {
 }
 
 // The library's chain on a raw frame: dark level 50, default saturation, bilinear, estimator.
-std::vector<std::uint16_t> library_chain(const std::vector<std::uint8_t>& raw, Method method) {
+std::vector<std::uint16_t> library_chain(const std::vector<std::uint8_t>& raw, Method method,
+                                         DemosaicMethod demosaic_method = DemosaicMethod::kBilinear,
+                                         float no_signal_dn = 0) {
   cv::Mat signal;
   subtract_dark_level(cv::Mat(8, 8, CV_8U, const_cast<std::uint8_t*>(raw.data())), 50,
                       default_saturation_level(8), signal);
   std::vector<cv::Mat> planes;
-  demosaic(signal, MosaicLayout::bayer("RGGB"), DemosaicMethod::kBilinear, planes);
+  demosaic(signal, MosaicLayout::bayer("RGGB"), demosaic_method, planes, no_signal_dn);
   return codes_of(encode_decikelvin(library(rgb_model(), method, planes).t));
 }
 
@@ -445,6 +451,28 @@ TEST_F(RatioTemp, saturated_pixel_stays_no_reading_through_darksub_and_demosaic2
   EXPECT_EQ(out[1 * 8 + 7], 0);  // dim corner
   EXPECT_NEAR(out[6 * 8 + 1] / 10.0 - 273.15, 1300, 60);
   EXPECT_GT(count_nonzero(out), 40u);
+}
+
+// demosaic25's default for Bayer (matched) draws each band from a 5x5 footprint: the saturated
+// pixel takes every reading within two pixels of it.
+TEST_F(RatioTemp, saturated_pixel_takes_the_matched_footprint_with_the_default_demosaic) {
+  for (const char* e : {"darksub", "demosaic25"}) REQUIRE_ELEMENT(e);
+  start_on_raw_frames("ratiotemp method=mlp model=" + rgb_model_path(), "demosaic25");
+  auto raw = raw_bayer_frame(*rgb_model(), 1300);
+  raw[4 * 8 + 4] = 255;  // an R pixel, saturated
+  const auto out = run(raw, 8, 8);
+  ASSERT_EQ(out.size(), 64u);
+  const CameraProfile colour = load_profile_by_name("rgb-reference");
+  std::vector<SignalNoise> noise;
+  for (int b = 0; b < colour.band_count(); ++b) noise.push_back(signal_noise(colour, b));
+  EXPECT_EQ(out, library_chain(raw, Method::kMlp, DemosaicMethod::kMatched,
+                               static_cast<float>(no_signal_level_dn(noise))));
+  int read_near = 0;
+  for (int y = 2; y <= 6; ++y)
+    for (int x = 2; x <= 6; ++x) read_near += out[y * 8 + x] != 0;
+  EXPECT_LT(read_near, 25 - 9);  // more than bilinear's 3x3 lost
+  EXPECT_EQ(out[4 * 8 + 4], 0);
+  EXPECT_GT(count_nonzero(out), 0u);
 }
 
 TEST_F(RatioTemp, saturated_area_has_no_reading_with_the_default_method) {

@@ -66,12 +66,15 @@ Video reference_stream_view(int frames) {
 }
 
 // The melt pool must give readings, or a bit-exact comparison of empty frames would prove little.
+// At 160x120 the simulated pool is 5 pixels in radius and its core saturates: demosaic25's
+// matched kernels read about 5 rim pixels a frame (bilinear read 18, half of them more than
+// 150 degC off).
 void expect_readings(const Video& temperatures) {
   std::size_t valid = 0;
   for (const Bytes& f : temperatures.frames)
     for (std::size_t i = 0; i + 1 < f.size(); i += 2) valid += (f[i] | f[i + 1]) != 0;
-  EXPECT_GE(valid, temperatures.frames.size() * 10)
-      << "the reference frames hold fewer than 10 readings a frame";
+  EXPECT_GE(valid, temperatures.frames.size() * 3)
+      << "the reference frames hold fewer than 3 readings a frame";
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -22,8 +22,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kWidth = 160, kHeight = 120, kFps = 30, kFrames = 30;  // two 0.5 s segments
-const std::string kCaps = "video/x-bayer,width=160,height=120,framerate=30/1";
+// 320x240: the simulated pool is 10 pixels in radius, enough readings a frame for a window peak
+// (at 160x120, 5 pixels, matched demosaicking reads only its rim: about 6 a frame).
+constexpr int kWidth = 320, kHeight = 240, kFps = 30, kFrames = 30;  // two 0.5 s segments
+const std::string kCaps = "video/x-bayer,width=320,height=240,framerate=30/1";
 const std::string kScene = "pyrocamsrc scene=melt-pool seed=7";
 constexpr int kStatsIntervalMs = 100;
 
@@ -143,7 +145,7 @@ class Recordings : public ::testing::Test {
   static std::vector<std::string> segments() {
     return files_in(rec.string(), "temperature-", ".mkv");
   }
-  // The reference frames' codes, rows without padding (160 pixels: none).
+  // The reference frames' codes, rows without padding (320 pixels: none).
   static std::string reference_bytes() {
     std::string all;
     for (const Bytes& f : reference->frames) all.append(f.begin(), f.end());
@@ -287,7 +289,7 @@ TEST_F(Recordings, python_example_reads_the_recording_in_celsius) {
                   log),
       0)
       << read_text(log);
-  EXPECT_NE(read_text(log).find("# 30 frames of 160x120; pyrocam-recording"), std::string::npos)
+  EXPECT_NE(read_text(log).find("# 30 frames of 320x240; pyrocam-recording"), std::string::npos)
       << read_text(log);
   const Npy n = read_npy(npy);
   EXPECT_EQ(n.descr, "<f4");
@@ -412,7 +414,7 @@ TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_anoth
   const Env env = {{"MODEL", rgb_model()},
                    {"OUT", rec.string()},
                    {"SOURCE", kScene},
-                   {"CAPS", "video/x-bayer,format=rggb,width=160,height=120,framerate=30/1"},
+                   {"CAPS", "video/x-bayer,format=rggb,width=320,height=240,framerate=30/1"},
                    {"NUM_BUFFERS", std::to_string(kFrames)},
                    {"SEGMENT_SECONDS", "0.5"},
                    {"RAW", "1"}};

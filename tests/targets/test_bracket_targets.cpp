@@ -2,11 +2,15 @@
 // filmed at six exposures, the longest for the rim (its hotter part saturates), the shortest
 // for the core (its rim is dim), read one by one and fused (BracketFusion: each pixel from the
 // most exposed frame where it reads). Target: readings on >= 90 % of the pixels hotter than
-// 1300 degC; measured 90.6 % (76 % with four exposures 3 times apart, whose shortest leaves the
-// hottest cores saturated; 42 % with two a factor 20 apart), and fused readings no wilder (more
-// than max(150 degC, 10 %) off the truth) than the single exposures'. The model is the camera's
-// true QE with the likelihood fit, so that the dynamic range is measured, not the calibration.
-// The scene holds still over the bracket.
+// 1300 degC, with no more than 0.5 % of them wild (more than max(150 degC, 10 %) off the
+// truth). With demosaic25's default, matched, measured 63.9 % read and 0.02 % wild: NOT MET.
+// Bilinear demosaicking read 90.6 %, but 11 % of its fused readings were wild: on the steep
+// sides of the simulator's pools (a factor 2.5 in brightness per pixel) a band interpolated
+// from the neighbours at +-1 pixel is off by tens of percent; matched's kernels reach +-2
+// pixels, a brightness range no exposure holds between the dim and the saturation thresholds
+// there, so those pixels have no reading instead. The model is the camera's true QE with the
+// likelihood fit, so that the dynamic range is measured, not the calibration. The scene holds
+// still over the bracket.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -60,13 +64,18 @@ struct Coverage {
   double wild_percent() const { return 100.0 * wild / std::max(readings, 1L); }
 };
 
-TEST(BracketTargets, TheCoreAndTheRimReadInOneFusedFrame) {
+struct BracketStudy {
+  Coverage long_only, short_only, fused;
+};
+
+BracketStudy study(DemosaicMethod demosaic) {
   const CameraProfile p = load_profile_by_name("rgb-reference");
   const UnitPerturbation unit = UnitPerturbation::parse("typical", 3);
   auto model = std::make_shared<ThermalModel>();
   model->camera = CameraModel{p, true_system_qe(p, unit), Eigen::VectorXd::Ones(p.band_count())};
   MeasureOptions options;
   options.method = Method::kLikelihood;
+  options.demosaic = demosaic;
   FrameMeasurer measurer(model, options);
   Simulator camera(p, unit, 17);
   // The longest exposure puts a 1400 degC surface's brightest band at 70 % of the usable range;
@@ -79,7 +88,8 @@ TEST(BracketTargets, TheCoreAndTheRimReadInOneFusedFrame) {
   const double long_us = camera.exposure_for(1400, target_dn);
   constexpr double ratio = 3;
   constexpr int n = 6;
-  Coverage long_only, short_only, fused;
+  BracketStudy b;
+  Coverage &long_only = b.long_only, &short_only = b.short_only, &fused = b.fused;
   auto frame = [&](const cv::Mat& truth_with_nan) {
     cv::Mat truth = truth_with_nan.clone();
     cv::patchNaNs(truth, 0);  // NaN: the scene's cold background
@@ -100,19 +110,37 @@ TEST(BracketTargets, TheCoreAndTheRimReadInOneFusedFrame) {
   };
   for (int i = 0; i < 60; i += 4) frame(melt_pool_scene(kW, kH, i, 60));
   for (double peak : {1500.0, 2000.0, 2500.0}) frame(parabolic_pool(peak));
-  for (const auto& [name, c] : {std::pair{"long exposure", long_only},
-                                {"short exposure (1/243)", short_only},
-                                {"fused", fused}})
+  return b;
+}
+
+void print(const char* demosaic, const BracketStudy& b) {
+  std::printf("%s demosaicking\n", demosaic);
+  for (const auto& [name, c] : {std::pair{"long exposure", b.long_only},
+                                {"short exposure (1/243)", b.short_only},
+                                {"fused", b.fused}})
     std::printf(
-        "%-22s %5.1f %% of %ld pixels hotter than 1300 degC read; %.2f %% of %ld "
+        "  %-22s %5.1f %% of %ld pixels hotter than 1300 degC read; %.2f %% of %ld "
         "readings wild\n",
         name, c.read_percent(), c.hot, c.wild_percent(), c.readings);
-  // Measured 90.6 % fused, 23.8 % for the longest alone (seeded simulation: the loose bound
-  // covers another libm's noise draws).
-  EXPECT_GE(fused.read_percent(), 88);
+}
+
+TEST(BracketTargets, TheCoreAndTheRimReadInOneFusedFrame) {
+  const BracketStudy matched = study(DemosaicMethod::kAuto),
+                     bilinear = study(DemosaicMethod::kBilinear);
+  print("matched (the default)", matched);
+  print("bilinear", bilinear);
+  const Coverage& fused = matched.fused;
+  // Seeded simulation: the loose bounds cover another libm's noise draws. Coverage: a regression
+  // bound (measured 63.9 %; the target of 90 % is not met, see above).
+  EXPECT_GE(fused.read_percent(), 58);
   EXPECT_GE(fused.read_percent(),
-            2.5 * std::max(long_only.read_percent(), short_only.read_percent()));
-  EXPECT_LE(fused.wild_percent(), std::max(long_only.wild_percent(), short_only.wild_percent()));
+            2.5 * std::max(matched.long_only.read_percent(), matched.short_only.read_percent()));
+  EXPECT_LE(fused.wild_percent(), 0.5);
+  EXPECT_LE(fused.wild_percent(),
+            std::max(matched.long_only.wild_percent(), matched.short_only.wild_percent()) + 0.05);
+  // What the default gives up: bilinear reads more pixels, many of them wild.
+  EXPECT_GT(bilinear.fused.read_percent(), fused.read_percent());
+  EXPECT_GT(bilinear.fused.wild_percent(), 2);
 }
 
 }  // namespace

@@ -83,6 +83,7 @@ Study run(double spread, DemosaicMethod demosaic = DemosaicMethod::kBilinear) {
   model->camera = CameraModel{p, qe, Eigen::VectorXd::Ones(p.band_count())};
   MeasureOptions plain_options;
   plain_options.method = Method::kLikelihood;
+  plain_options.demosaic = DemosaicMethod::kBilinear;
   MeasureOptions checked_options = plain_options;
   checked_options.footprint_spread = spread;
   checked_options.demosaic = demosaic;

@@ -206,10 +206,9 @@ DemosaicMethod parse_demosaic_method(const std::string& name) {
                    "' (use bilinear, bin2x2, matched or auto)");
 }
 
-DemosaicMethod resolve_demosaic_method(DemosaicMethod method, const MosaicLayout& layout) {
+DemosaicMethod resolve_demosaic_method(DemosaicMethod method, const MosaicLayout& /*layout*/) {
   if (method != DemosaicMethod::kAuto) return method;
-  return layout.kind == MosaicLayout::Kind::kBayer ? DemosaicMethod::kBilinear
-                                                   : DemosaicMethod::kMatched;
+  return DemosaicMethod::kMatched;
 }
 
 cv::Size demosaic_output_size(const MosaicLayout& layout, DemosaicMethod method, cv::Size input) {

@@ -33,9 +33,10 @@ enum class DemosaicMethod {
   // the cell's centre over 3x3 cells, variance 0.25 cell^2 along each axis. Marks spread over
   // the larger footprint.
   kMatched,
-  // kMatched for snapshot mosaics (it costs little there and reads their melt pools), kBilinear
-  // for Bayer (kMatched leaves a pool a few pixels across with few readings: its 5x5 kernel
-  // reaches samples without light on the pool's steep sides).
+  // kMatched, for snapshot mosaics (it costs little there and reads their melt pools) and for
+  // Bayer: bilinear's extra readings on small pools and steep sides are largely wild (the
+  // simulated pool at 160x120: 52 % of them more than 150 degC off, against 1.4 % with
+  // kMatched), so a pool a few pixels across has few readings, but right ones.
   kAuto,
 };
 
