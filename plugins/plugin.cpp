@@ -4,6 +4,7 @@
 #include "autoexposure/gstautoexposure.h"
 #include "darksub/gstdarksub.h"
 #include "demosaic25/gstdemosaic25.h"
+#include "mosaicfuse/gstmosaicfuse.h"
 #include "pyrocamsrc/gstpyrocamsrc.h"
 #include "ratiotemp/gstratiotemp.h"
 #include "thermalalarm/gstthermalalarm.h"
@@ -21,6 +22,7 @@ static gboolean plugin_init(GstPlugin* plugin) {
   ok |= GST_ELEMENT_REGISTER(thermalalarm, plugin);
   ok |= GST_ELEMENT_REGISTER(thermaloverlay, plugin);
   ok |= GST_ELEMENT_REGISTER(thermalfuse, plugin);
+  ok |= GST_ELEMENT_REGISTER(mosaicfuse, plugin);
   ok |= GST_ELEMENT_REGISTER(autoexposure, plugin);
   return ok;
 }

@@ -69,6 +69,16 @@ void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& te
                      std::to_string(profile.bit_depth) + "-bit single-channel frames");
   const cv::Mat dark_f = dark.type() == CV_32F ? dark : dark_from_image(dark);
   subtract_dark(raw, dark_f, options_.saturation_level_dn, signal_);
+  measure_signal(signal_, temperature_c, uncertainty_c);
+}
+
+void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c,
+                                   cv::Mat* uncertainty_c) {
+  const CameraProfile& profile = model_->profile();
+  if (signal.type() != CV_32F)
+    throw InputError("dark-subtracted mosaic: must be float32, one value per sensor pixel");
+  profile.mosaic.check_whole_periods(signal.cols, signal.rows,
+                                     "mosaic for a model of " + profile.name);
   std::vector<SignalNoise> noise;
   for (int b = 0; b < profile.band_count(); ++b) noise.push_back(signal_noise(profile, b));
   const auto no_signal_dn = static_cast<float>(no_signal_level_dn(noise));
@@ -76,10 +86,9 @@ void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& te
     FootprintCheck check;
     check.relative_spread = options_.footprint_spread;
     check.noise = noise;
-    demosaic_marking_mixed(signal_, profile.mosaic, options_.demosaic, check, planes_,
-                           no_signal_dn);
+    demosaic_marking_mixed(signal, profile.mosaic, options_.demosaic, check, planes_, no_signal_dn);
   } else {
-    demosaic(signal_, profile.mosaic, options_.demosaic, planes_, no_signal_dn);
+    demosaic(signal, profile.mosaic, options_.demosaic, planes_, no_signal_dn);
   }
   planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);
 }

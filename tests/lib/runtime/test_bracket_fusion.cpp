@@ -1,7 +1,9 @@
 // Exposure-bracket fusion: each pixel from the most exposed frame that reads it.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <opencv2/core.hpp>
 
 #include "pyrocam/core/error.h"
@@ -67,6 +69,61 @@ TEST(BracketFusion, BadInputIsRefused) {
   EXPECT_THROW(fusion.add(frame(1, 2, 3, 4), 0, out), InputError);
   EXPECT_THROW(fusion.add(frame(1, 2, 3, 4), NAN, out), InputError);
   EXPECT_THROW(fusion.add(cv::Mat_<float>(1, 4, 1.f), 10, out), InputError);
+}
+
+constexpr float kSat = std::numeric_limits<float>::infinity();
+constexpr float kNone = std::numeric_limits<float>::quiet_NaN();
+
+// A 1x5 dark-subtracted mosaic.
+cv::Mat mosaic(float a, float b, float c, float d, float e) {
+  return (cv::Mat_<float>(1, 5) << a, b, c, d, e);
+}
+
+void expect_samples(const cv::Mat& m, std::vector<float> want) {
+  ASSERT_EQ(m.total(), want.size());
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    const float v = m.at<float>(0, static_cast<int>(i));
+    if (std::isnan(want[i]))
+      EXPECT_TRUE(std::isnan(v)) << i;
+    else
+      EXPECT_EQ(v, want[i]) << i;
+  }
+}
+
+TEST(MosaicBracketFusion, EachSampleFromTheMostExposedFrameScaledToIt) {
+  MosaicBracketFusion fusion(3);
+  cv::Mat out;
+  // Long exposure (light 900): samples 0 and 4 saturated, 3 no reading.
+  EXPECT_EQ(fusion.add(mosaic(kSat, 150, 12, kNone, kSat), 900, out), 900);
+  expect_samples(out, {kSat, 150, 12, kNone, kSat});
+  // A third of it: sample 0 reads, 4 is still saturated.
+  EXPECT_EQ(fusion.add(mosaic(100, 50.5f, 4, kNone, kSat), 300, out), 900);
+  expect_samples(out, {300, 150, 12, kNone, kSat});
+  // A ninth: sample 4 reads now, scaled by 9; sample 3 has no number in any frame: NaN; the
+  // most exposed frame is still the reference.
+  cv::Mat in_place = mosaic(40, 17, 1.5f, kSat, 100);
+  EXPECT_EQ(fusion.add(in_place, 100, in_place), 900);
+  expect_samples(in_place, {300, 150, 12, kNone, 900});
+  // The next frame replaces the long one: the reference is the frame of light 300 now.
+  EXPECT_EQ(fusion.add(mosaic(kSat, kSat, kSat, kSat, kSat), 50, out), 300);
+  expect_samples(out, {100, 50.5f, 4, kNone, 300});
+}
+
+TEST(MosaicBracketFusion, SaturatedEverywhereStaysSaturatedAndBadInputIsRefused) {
+  MosaicBracketFusion fusion(2);
+  cv::Mat out;
+  fusion.add(mosaic(kSat, 1, 2, 3, 4), 10, out);
+  fusion.add(mosaic(kSat, 1, 2, 3, 4), 5, out);
+  EXPECT_EQ(out.at<float>(0, 0), kSat);
+  // A new size starts anew: nothing to fuse with.
+  cv::Mat wide = cv::Mat(1, 6, CV_32F, cv::Scalar(7));
+  EXPECT_EQ(fusion.add(wide, 1, out), 1);
+  EXPECT_EQ(cv::countNonZero(out != 7), 0);
+  EXPECT_THROW(fusion.add(cv::Mat(1, 5, CV_16U, cv::Scalar(1)), 10, out), InputError);
+  EXPECT_THROW(fusion.add(mosaic(1, 2, 3, 4, 5), 0, out), InputError);
+  EXPECT_THROW(fusion.add(mosaic(1, 2, 3, 4, 5), std::nan(""), out), InputError);
+  EXPECT_THROW(MosaicBracketFusion(0), InputError);
+  EXPECT_THROW(MosaicBracketFusion(kMaxBracketFrames + 1), InputError);
 }
 
 }  // namespace

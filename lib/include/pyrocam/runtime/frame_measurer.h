@@ -40,6 +40,10 @@ class FrameMeasurer {
   FrameMeasurer(std::shared_ptr<const ThermalModel> model, const MeasureOptions& options);
   void measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& temperature_c,
                cv::Mat* uncertainty_c = nullptr);
+  // The same from a dark-subtracted mosaic (CV_32F, +INF saturated, NaN no reading, as
+  // subtract_dark gives it, or fused from a bracket by MosaicBracketFusion).
+  void measure_signal(const cv::Mat& signal, cv::Mat& temperature_c,
+                      cv::Mat* uncertainty_c = nullptr);
   cv::Size output_size(cv::Size raw) const;
   // Why pixels of the last frame measured have no reading: of those under `mask` (CV_8U of the
   // output's size, non-zero = counted; empty: all) without a reading in `temperature_c`, how many
