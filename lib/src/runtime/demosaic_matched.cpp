@@ -12,9 +12,13 @@
 // seen through one common blur, as an optical blur would give.
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <vector>
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 #include "detail/vector_clones.h"
 #include "pyrocam/runtime/demosaic.h"
@@ -93,13 +97,35 @@ RowFn row_fn(Kernel k) {
 }
 
 // out = even[0], odd[0], even[1], ...; -INF (no signal) becomes 0 (dim) when `no_signal`.
+// With `stream`, the stores bypass the cache (see demosaic_matched_bayer); the caller fences.
 PYROCAM_VECTOR_CLONES
 void interleave(const float* __restrict even, const float* __restrict odd, float* __restrict out,
-                int width, bool no_signal) {
+                int width, bool no_signal, bool stream) {
   constexpr float kMinusInf = -std::numeric_limits<float>::infinity();
   const int pairs = width / 2;
+  int i0 = 0;
+#if defined(__SSE2__)
+  const auto misaligned = reinterpret_cast<std::uintptr_t>(out) & 15;
+  if (stream && no_signal && (misaligned == 0 || misaligned == 8) && pairs > 0) {
+    if (misaligned == 8) {  // one pair the usual way, then every store is on 16 bytes
+      out[0] = even[0] == kMinusInf ? 0.f : even[0];
+      out[1] = odd[0] == kMinusInf ? 0.f : odd[0];
+      i0 = 1;
+    }
+    const __m128 minus_inf = _mm_set1_ps(kMinusInf);
+    for (; i0 + 4 <= pairs; i0 += 4) {
+      __m128 e = _mm_loadu_ps(even + i0), o = _mm_loadu_ps(odd + i0);
+      e = _mm_andnot_ps(_mm_cmpeq_ps(e, minus_inf), e);  // -INF to 0 (+0: its bits cleared)
+      o = _mm_andnot_ps(_mm_cmpeq_ps(o, minus_inf), o);
+      _mm_stream_ps(out + 2 * i0, _mm_unpacklo_ps(e, o));
+      _mm_stream_ps(out + 2 * i0 + 4, _mm_unpackhi_ps(e, o));
+    }
+  }
+#else
+  (void)stream;
+#endif
   if (no_signal) {
-    for (int i = 0; i < pairs; ++i) {
+    for (int i = i0; i < pairs; ++i) {
       out[2 * i] = even[i] == kMinusInf ? 0.f : even[i];
       out[2 * i + 1] = odd[i] == kMinusInf ? 0.f : odd[i];
     }
@@ -185,6 +211,10 @@ void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, f
   // Padded column p goes to half row p / 2 of its parity: even (p even) or odd.
   const int half = padded_width / 2 + 1;
   const int n_even = (width + 1) / 2, n_odd = width / 2;  // output columns of each parity
+  // Planes larger than the caches go to memory before the next element reads them: storing
+  // them past the cache saves reading each line in first (a 2048x2048 frame: 7 instead of
+  // 12 CPU ms). Small ones stay in the cache for it.
+  const bool stream = 3.0 * 4.0 * static_cast<double>(mosaic.total()) >= 16.0 * 1024 * 1024;
   auto run = [&](const cv::Range& r) {
     // The five input rows around the output row, split by parity: a ring, each row read once
     // per chunk; then the row sums v and c and the outputs, split too.
@@ -224,9 +254,12 @@ void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, f
         fn[0](r0_even, r0_odd, v_even, v_odd, c_even, c_odd, out_even, n_even);
         fn[1](r0_odd, r0_even + 1, v_odd, v_even + 1, c_odd, c_even + 1, out_odd, n_odd);
         interleave(out_even, out_odd, planes[static_cast<std::size_t>(b)].ptr<float>(y), width,
-                   mark_no_signal);
+                   mark_no_signal, stream);
       }
     }
+#if defined(__SSE2__)
+    if (stream) _mm_sfence();  // the streamed planes are complete before another thread reads
+#endif
   };
   if (static_cast<double>(mosaic.total()) < 512.0 * 512.0)
     run(cv::Range(0, height));

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numeric>
 
@@ -143,6 +144,35 @@ TEST(Demosaic, large_frames_split_over_threads_give_the_same_result) {
     for (int b = 0; b < 3; ++b)
       for (int x = 0; x < img.cols; ++x)
         EXPECT_EQ(planes[b].at<float>(y0, x), part[b].at<float>(4, x)) << b << " " << x;
+  }
+}
+
+// Matched planes of 16 MiB and more are stored past the cache: the same values as the rows of
+// small frames cut from the same mosaic (stored the usual way), saturated, missing and unlit
+// samples included, at the odd row offsets the stores' alignment depends on.
+TEST(Demosaic, matched_large_frames_stored_past_the_cache_give_the_rows_of_small_ones) {
+  const MosaicLayout m = MosaicLayout::bayer("GRBG");
+  cv::Mat img(1040, 1402, CV_32F);
+  cv::randu(img, 0, 200);  // a tenth below the no-light level of 20
+  for (int k = 0; k < 3000; ++k) {
+    img.at<float>((k * 7919) % img.rows, (k * 104729) % img.cols) =
+        k % 2 ? std::numeric_limits<float>::infinity() : std::numeric_limits<float>::quiet_NaN();
+  }
+  ASSERT_GE(3.0 * 4 * static_cast<double>(img.total()), 16.0 * 1024 * 1024);
+  std::vector<cv::Mat> planes;
+  demosaic(img, m, DemosaicMethod::kMatched, planes, 20.f);
+  for (int y0 : {6, 517, 1032}) {  // rows starting 16-byte aligned and not
+    std::vector<cv::Mat> part;
+    const int start = (y0 - 4) & ~1;  // an even row: the cut keeps the pattern
+    demosaic(img.rowRange(start, start + 11).clone(), m, DemosaicMethod::kMatched, part, 20.f);
+    for (int b = 0; b < 3; ++b)
+      for (int x = 0; x < img.cols; ++x) {
+        const float want = part[b].at<float>(y0 - start, x), got = planes[b].at<float>(y0, x);
+        if (std::isnan(want))
+          EXPECT_TRUE(std::isnan(got)) << b << " " << y0 << "," << x;
+        else
+          EXPECT_EQ(std::memcmp(&got, &want, sizeof got), 0) << b << " " << y0 << "," << x;
+      }
   }
 }
 
