@@ -458,9 +458,11 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
   g_object_class_install_property(
       gobject_class, PROP_AUTO_SMOOTHING,
       g_param_spec_double("auto-smoothing", "Auto range smoothing",
-                          "Share of the newest frame in the auto range, an exponential moving "
-                          "average of each frame's min and max (0.001..1; 1 = no smoothing, "
-                          "0.1 settles in about 20 frames)",
+                          "Share of the newest frame in the auto range as it narrows, an "
+                          "exponential moving average of each frame's min and max; it widens "
+                          "at once to take in a frame's range, so no reading is painted as "
+                          "another temperature (0.001..1; 1 = no smoothing, 0.1 settles in "
+                          "about 20 frames)",
                           0.001, 1.0, DEFAULT_AUTO_SMOOTHING, display));
   g_object_class_install_property(
       gobject_class, PROP_AUTO_TRIM,

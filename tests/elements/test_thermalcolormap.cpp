@@ -121,19 +121,21 @@ TEST_F(ThermalColormap, controlled_isotherm_follows_the_controller_by_buffer_tim
   }
 }
 
-TEST_F(ThermalColormap, auto_range_follows_the_frames_smoothly) {
+TEST_F(ThermalColormap, auto_range_widens_at_once_and_narrows_smoothly) {
   start("thermalcolormap range-mode=auto auto-smoothing=0.5 palette=grey", nullptr, 2, 1);
   // First frame: its own range, so the hot end is white and the cold end black.
   auto out = run({code_of(1000), code_of(2000)});
   EXPECT_EQ(out[0], 0);
   EXPECT_EQ(out[4], 255);
-  // A hotter frame moves the range only half way: 1000 degC is now below the minimum (1100).
+  // A hotter frame: the top takes in 2200 degC at once (white is 2200, not a clipped 2100), the
+  // bottom rises only half way (1100).
   out = run({code_of(1200), code_of(2200)});
   ColormapSettings s;
   s.palette = Palette::kGrey;
   s.min_c = 1100;
-  s.max_c = 2100;
+  s.max_c = 2200;
   EXPECT_EQ(out, library({code_of(1200), code_of(2200)}, s));
+  EXPECT_EQ(out[4], 255);
 }
 
 TEST_F(ThermalColormap, scale_bar_is_opaque_over_invalid_pixels) {

@@ -225,8 +225,10 @@ void AutoRange::update(std::optional<std::pair<double, double>> frame_range, dou
       max_ = frame_range->second;
       have_ = true;
     } else {
-      min_ += w * (frame_range->first - min_);
-      max_ += w * (frame_range->second - max_);
+      // Widen at once: a reading outside the range would be painted as its end, a colour that
+      // names another temperature. Narrow smoothly, so that the view does not flicker.
+      min_ = std::min(min_ + w * (frame_range->first - min_), frame_range->first);
+      max_ = std::max(max_ + w * (frame_range->second - max_), frame_range->second);
     }
   }
   if (have_ && max_ - min_ < kMinSpanC) {

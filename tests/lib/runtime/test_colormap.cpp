@@ -73,15 +73,20 @@ TEST(Colormap, valid_range_skips_no_reading) {
   EXPECT_FALSE(valid_range_c(cv::Mat(2, 2, CV_16U, cv::Scalar(0))));
 }
 
-TEST(Colormap, auto_range_smooths_and_keeps_a_span) {
+TEST(Colormap, auto_range_widens_at_once_narrows_smoothly_and_keeps_a_span) {
   AutoRange r;
   r.update(std::make_pair(1000.0, 2000.0), 0.5);
   EXPECT_EQ(r.min_c(), 1000);
+  // Hotter: the top takes in the new maximum at once, the bottom rises half way.
   r.update(std::make_pair(1200.0, 2200.0), 0.5);
   EXPECT_EQ(r.min_c(), 1100);
-  EXPECT_EQ(r.max_c(), 2100);
+  EXPECT_EQ(r.max_c(), 2200);
   r.update(std::nullopt, 0.5);
-  EXPECT_EQ(r.max_c(), 2100);
+  EXPECT_EQ(r.max_c(), 2200);
+  // Cooler: the bottom at once, the top half way down.
+  r.update(std::make_pair(900.0, 1800.0), 0.5);
+  EXPECT_EQ(r.min_c(), 900);
+  EXPECT_EQ(r.max_c(), 2000);
   AutoRange flat;
   flat.update(std::make_pair(1500.0, 1500.0), 1);
   EXPECT_DOUBLE_EQ(flat.max_c() - flat.min_c(), AutoRange::kMinSpanC);

@@ -80,9 +80,10 @@ inline constexpr double kMaxTrimPercent = 10;
 std::optional<std::pair<double, double>> trimmed_range_c(const cv::Mat& decikelvin,
                                                          double trim_percent);
 
-// Auto range that does not flicker: an exponential moving average of each frame's valid range;
-// `weight` (0..1] is the share of the newest frame (1 = no smoothing). The range is kept at
-// least min_span_c wide.
+// Auto range that does not flicker and never paints a reading as another temperature: it widens
+// at once to take in a frame's range (a reading beyond an end would get that end's colour) and
+// narrows as an exponential moving average of the frames' ranges, `weight` (0..1] being the
+// share of the newest frame (1 = no smoothing). The range is kept at least min_span_c wide.
 class AutoRange {
  public:
   void reset() { have_ = false; }
