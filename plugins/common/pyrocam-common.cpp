@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "pyrocam/runtime/bracket_fusion.h"
+
 namespace pyrocam::gst {
 
 bool parse_raw_caps(GstCaps* caps, RawFormat* out) {
@@ -215,6 +217,26 @@ ErrorKind profile_error_kind(const std::string& name) {
   std::error_code ec;
   return looks_like_file && !std::filesystem::exists(name, ec) ? ErrorKind::kNotFound
                                                                : ErrorKind::kRead;
+}
+
+GParamSpec* bracket_frames_param(guint default_frames) {
+  return g_param_spec_uint("frames", "Frames",
+                           "Consecutive frames fused: the length of the camera's exposure cycle "
+                           "(1..16; 1: none, frames pass unchanged)",
+                           1, pyrocam::kMaxBracketFrames, default_frames,
+                           static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                                    GST_PARAM_MUTABLE_PLAYING));
+}
+
+void warn_frame_without_exposure(GstElement* element, bool& warned) {
+  if (warned) return;
+  warned = true;
+  GST_ELEMENT_WARNING(element, STREAM, FORMAT,
+                      ("A frame without its exposure: passed on unfused (frames of unknown "
+                       "exposure cannot be ranked; the source must attach "
+                       "PyrocamExposureMeta, as pyrocamsrc does, or autoexposure once a camera's "
+                       "exposure has held for its latency)"),
+                      ("no PyrocamExposureMeta on the buffer"));
 }
 
 void post_error(GstElement* element, ErrorKind kind, const std::string& user,

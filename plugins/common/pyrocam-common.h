@@ -126,6 +126,12 @@ void copy_dimensions(const GstStructure* from, GstStructure* to);
 /* Sets `field` to the list `list_text` serialises, e.g. PYROCAM_BAYER_FORMATS. */
 void set_list_field(GstStructure* s, const char* field, const char* list_text);
 
+/* The `frames` property of the exposure-bracket fusions (thermalfuse, mosaicfuse). */
+GParamSpec* bracket_frames_param(guint default_frames);
+/* The STREAM FORMAT warning of a bracket fusion that passed a frame without
+ * PyrocamExposureMeta on unfused: once, when `warned` is false (it is then set). */
+void warn_frame_without_exposure(GstElement* element, bool& warned);
+
 /* How a failure is reported on the bus (STYLE.md: errors carry a domain, a user message and a
  * debug message). */
 enum class ErrorKind {

@@ -138,16 +138,7 @@ static GstFlowReturn gst_mosaic_fuse_transform_ip(GstBaseTransform* trans, GstBu
   PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(buffer);
   if (meta == nullptr || !(meta->exposure_us > 0)) {
     st.reset();
-    if (!st.warned_no_exposure) {
-      st.warned_no_exposure = true;
-      GST_ELEMENT_WARNING(
-          self, STREAM, FORMAT,
-          ("A frame without its exposure: passed on unfused (frames of unknown "
-           "exposure cannot be scaled to each other; the source must attach "
-           "PyrocamExposureMeta, as pyrocamsrc does, or autoexposure once a camera's "
-           "exposure has held for its latency)"),
-          ("no PyrocamExposureMeta on the buffer"));
-    }
+    pg::warn_frame_without_exposure(GST_ELEMENT(self), st.warned_no_exposure);
     return GST_FLOW_OK;
   }
   const Exposure now{meta->exposure_us * pyrocam::analogue_gain_factor(meta->gain_db),
@@ -207,14 +198,8 @@ static void gst_mosaic_fuse_class_init(GstMosaicFuseClass* klass) {
   gobject_class->get_property = gst_mosaic_fuse_get_property;
   gobject_class->finalize = gst_mosaic_fuse_finalize;
 
-  g_object_class_install_property(
-      gobject_class, PROP_FRAMES,
-      g_param_spec_uint("frames", "Frames",
-                        "Consecutive frames fused: the length of the camera's exposure cycle "
-                        "(1..16; 1: none, frames pass unchanged)",
-                        1, pyrocam::kMaxBracketFrames, DEFAULT_FRAMES,
-                        static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
-                                                 GST_PARAM_MUTABLE_PLAYING)));
+  g_object_class_install_property(gobject_class, PROP_FRAMES,
+                                  pg::bracket_frames_param(DEFAULT_FRAMES));
 
   gst_element_class_add_static_pad_template(element_class, &sink_template);
   gst_element_class_add_static_pad_template(element_class, &src_template);

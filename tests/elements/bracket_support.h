@@ -1,0 +1,71 @@
+// Runs a pipeline ending in `fakesink name=sink` and keeps each buffer's values and the
+// exposure of its PyrocamExposureMeta, with the warnings on the bus: for the bracket fusions'
+// tests (thermalfuse, mosaicfuse).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "element_support.h"
+#include "pyrocam-meta.h"
+
+namespace pyrocam::test {
+
+template <typename T>
+struct BracketFrame {
+  std::vector<T> values;
+  double exposure_us = -1;  // -1: no exposure metadata
+};
+
+template <typename T>
+struct BracketRun {
+  std::vector<BracketFrame<T>> frames;
+  std::vector<std::string> warnings;
+  bool eos = false;
+};
+
+template <typename T>
+void on_bracket_frame(GstElement*, GstBuffer* buffer, GstPad*, gpointer data) {
+  // By the API's registered name: the plugin registered it, the test does not link it.
+  const GType api = g_type_from_name("PyrocamExposureMetaAPI");
+  const auto* meta =
+      api ? reinterpret_cast<const PyrocamExposureMeta*>(gst_buffer_get_meta(buffer, api))
+          : nullptr;
+  static_cast<std::vector<BracketFrame<T>>*>(data)->push_back(
+      {values_of<T>(buffer), meta ? meta->exposure_us : -1});
+}
+
+template <typename T>
+BracketRun<T> run_bracket(const std::string& launch) {
+  BracketRun<T> r;
+  GstElement* pipeline = gst_parse_launch(launch.c_str(), nullptr);
+  if (pipeline == nullptr) return r;
+  GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
+  g_object_set(sink, "signal-handoffs", TRUE, nullptr);
+  g_signal_connect(sink, "handoff", G_CALLBACK(on_bracket_frame<T>), &r.frames);
+  gst_element_set_state(pipeline, GST_STATE_PLAYING);
+  GstBus* bus = gst_element_get_bus(pipeline);
+  for (;;) {
+    GstMessage* m = gst_bus_timed_pop_filtered(
+        bus, 60 * GST_SECOND,
+        static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR | GST_MESSAGE_WARNING));
+    if (m == nullptr) break;
+    const GstMessageType type = GST_MESSAGE_TYPE(m);
+    if (type == GST_MESSAGE_WARNING) {
+      GError* e = nullptr;
+      gst_message_parse_warning(m, &e, nullptr);
+      r.warnings.push_back(e->message);
+      g_error_free(e);
+    }
+    r.eos = type == GST_MESSAGE_EOS;
+    gst_message_unref(m);
+    if (type != GST_MESSAGE_WARNING) break;
+  }
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(bus);
+  gst_object_unref(sink);
+  gst_object_unref(pipeline);
+  return r;
+}
+
+}  // namespace pyrocam::test
