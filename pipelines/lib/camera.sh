@@ -46,6 +46,10 @@ BRACKET=${BRACKET:-}
 # (high dynamic range). The simulated camera brackets itself (its frames say their exposure);
 # another camera (aravissrc, genicam-live) is bracketed by autoexposure, which holds each
 # exposure for EXPOSURE_LATENCY + 1 frames and passes the last frame of each, with its exposure.
+# BRACKET_FUSION=mosaics fuses the dark-subtracted mosaics instead (mosaicfuse before
+# demosaic25): more of a still pool's hot pixels read, but a moving pool's read wild.
+BRACKET_FUSION=${BRACKET_FUSION:-readings}
+[[ $BRACKET_FUSION == readings || $BRACKET_FUSION == mosaics ]] || { echo "$name: BRACKET_FUSION must be readings or mosaics, not '$BRACKET_FUSION'" >&2; exit 2; }
 EXPOSURE_LATENCY=${EXPOSURE_LATENCY:-}
 [[ -z $EXPOSURE_LATENCY || $EXPOSURE_LATENCY =~ ^[0-9]+$ ]] || { echo "$name: EXPOSURE_LATENCY must be a whole number of frames, not '$EXPOSURE_LATENCY'" >&2; exit 2; }
 bracket_frames=0
@@ -104,7 +108,11 @@ else
   demosaic=(demosaic25)
 fi
 # Camera frames to temperatures (0.1 K codes): `"${thermal_chain[@]}" ! ...`.
-thermal_chain=(camera. ! queue ! darksub $DARK ! "${demosaic[@]}" ! ratiotemp "model=$MODEL")
+mosaic_fusion=()
+((bracket_frames == 0)) || [[ $BRACKET_FUSION != mosaics ]] ||
+  mosaic_fusion=(mosaicfuse "frames=$bracket_frames" !)
+thermal_chain=(camera. ! queue ! darksub $DARK ! "${mosaic_fusion[@]}" "${demosaic[@]}" !
+  ratiotemp "model=$MODEL")
 # The temperature overlay (transparent where there is no reading) over the camera's image:
 # link a colour-mapped branch to mix.overlay_sink, then `"${overlay_mix[@]}" ! ...` gives RGBA
 # frames. thermaloverlay pairs each camera frame with the overlay of the same frame and waits for
@@ -137,7 +145,8 @@ fi
 [[ -z $ALARM_CSV ]] || launch_options+=("--alarm-csv=$ALARM_CSV")
 # BRACKET: thermalfuse after ratiotemp (after the statistics' words, which are ratiotemp's), so
 # that the alarm watches fused frames.
-((bracket_frames == 0)) || thermal_chain+=(! thermalfuse "frames=$bracket_frames")
+((bracket_frames == 0)) || [[ $BRACKET_FUSION != readings ]] ||
+  thermal_chain+=(! thermalfuse "frames=$bracket_frames")
 # ALARM_C: thermalalarm after ratiotemp, on the frame's peak for 5 frames (after the statistics'
 # words above, which are ratiotemp's).
 [[ -z $ALARM_C ]] || thermal_chain+=(! thermalalarm "threshold-c=$ALARM_C" statistic=peak)

@@ -335,10 +335,27 @@ TEST_F(Record, bracket_records_the_fused_frames) {
   EXPECT_TRUE(recorded.frames == fused.frames);
   EXPECT_FALSE(fused.frames == single.frames) << "the fusion changed nothing: a weak test";
 
+  // BRACKET_FUSION=mosaics: mosaicfuse between darksub and demosaic25 instead.
+  env["BRACKET_FUSION"] = "mosaics";
+  env["OUT"] = (dir / "rec-mosaics").string();
+  const ScriptRun mosaics = run_script("record.sh", {}, env, log("record-mosaics"), kRunLimit);
+  ASSERT_EQ(mosaics.status, 0) << mosaics.log;
+  const auto mosaic_files = files_in((dir / "rec-mosaics").string(), "temperature-", ".mkv");
+  ASSERT_EQ(mosaic_files.size(), 1u);
+  const Video recorded_mosaics = decode_segment(mosaic_files[0]);
+  const Video fused_mosaics = pull_frames(
+      kScene + " bracket=" + bracket + " num-buffers=" + std::to_string(kFrames) + " ! " + kCaps +
+      " ! darksub " + kDark + " ! mosaicfuse frames=3 ! demosaic25 ! ratiotemp model=\"" +
+      rgb_model() + "\" ! appsink name=out");
+  ASSERT_EQ(fused_mosaics.frames.size(), static_cast<std::size_t>(kFrames)) << fused_mosaics.error;
+  EXPECT_TRUE(recorded_mosaics.frames == fused_mosaics.frames);
+  EXPECT_FALSE(fused_mosaics.frames == fused.frames) << "the same as fusing readings";
+
   for (const auto& [key, value] :
        std::vector<std::pair<std::string, std::string>>{{"BRACKET", "1,zero"},
                                                         {"SOURCE", "videotestsrc"},
                                                         {"EXPOSURE_CONTROL", "1"},
+                                                        {"BRACKET_FUSION", "pixels"},
                                                         {"RAW", "1"}}) {
     Env bad = settings(kScene, 2);
     bad["BRACKET"] = "1,0.1";
