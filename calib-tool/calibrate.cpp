@@ -56,8 +56,11 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
       "fails.");
   c->add_option("--dataset", a.dataset, "Dataset folder (manifest.csv, images, roi.png)")
       ->required();
-  c->add_option("--profile", a.profile, "Camera profile: shipped name or .json path")
-      ->capture_default_str();
+  CLI::Option* profile_option =
+      c->add_option("--profile", a.profile,
+                    "Camera profile: shipped name or .json path (default: rgb-reference, or "
+                    "nir5x5-reference for a dataset whose mosaic.txt says 5x5)")
+          ->capture_default_str();
   c->add_option("--out", a.out, "Model file to write")->capture_default_str();
   c->add_option("--report", a.report, "Report path prefix (default: the model's, minus .json)");
   c->add_option("--solver", a.options.qe_solver,
@@ -97,12 +100,22 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
   c->add_flag("--no-prebuilt-table", a.no_table,
               "Write no prebuilt lookup table beside a colour model (<out>.lut): ratiotemp then "
               "fills its table as the first frames need it (seconds on a first run)");
-  c->callback([&global, &selected] {
+  c->callback([&global, &selected, profile_option] {
     if (!(a.options.min_temperature_c < a.options.max_temperature_c))
       throw CLI::ValidationError("--min-temperature", "must be below --max-temperature");
-    selected = [&global] {
+    selected = [&global, profile_option] {
       const Dataset dataset = Dataset::open(a.dataset);
-      const CameraProfile profile = load_profile_by_name(a.profile);
+      // Without --profile, a 5x5 dataset is the shipped 5x5 camera's, not the colour default.
+      std::string profile_name = a.profile;
+      if (profile_option->count() == 0 && dataset.mosaic_pattern() == "5x5") {
+        profile_name = "nir5x5-reference";
+        if (!global.quiet)
+          std::fprintf(stderr,
+                       "calibrate: the dataset's mosaic is 5x5 and no --profile was given: "
+                       "using the shipped %s\n",
+                       profile_name.c_str());
+      }
+      const CameraProfile profile = load_profile_by_name(profile_name);
       std::string current;
       const auto t0 = std::chrono::steady_clock::now();
       double last = -1;

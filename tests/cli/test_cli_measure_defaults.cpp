@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli_support.h"
+#include "pyrocam/runtime/model.h"
 #include "test_support.h"
 
 namespace pyrocam::test {
@@ -115,6 +116,30 @@ TEST(CliMeasureDefaults, a_frame_that_reads_little_says_why) {
             std::string::npos)
       << dark;
   EXPECT_EQ(good.find("pixels of the ROI read"), std::string::npos) << good;
+}
+
+// calibrate without --profile: a dataset whose mosaic.txt says 5x5 is the shipped 5x5 camera's
+// (it says so), not the colour default, which would refuse it; a --profile given still decides.
+TEST(CliCalibrateDefaults, a_5x5_dataset_without_a_profile_is_the_shipped_5x5_cameras) {
+  ScratchDir dir{"cli-5x5-profile"};
+  ASSERT_EQ(
+      calib("simulate campaign --profile nir5x5-reference --temperatures 900 950 1000 1050 1100 "
+            "--exposures 12 --frames 1 --size 50x50 --roi-area 600 --out " +
+            q(dir / "furnace")),
+      0);
+  const std::string fast = " --epochs 1 --polish-iterations 0 --mc-refits 0 --no-prebuilt-table";
+  const std::string err = calib_stderr(
+      "calibrate --dataset " + q(dir / "furnace") + " --out " + q(dir / "model.json") + fast,
+      dir / "calibrate.log");
+  EXPECT_NE(err.find("the dataset's mosaic is 5x5 and no --profile was given: using the shipped "
+                     "nir5x5-reference"),
+            std::string::npos)
+      << test::read_text(dir / "calibrate.log");
+  EXPECT_EQ(load_model((dir / "model.json").string()).profile().name, "nir5x5-reference");
+  EXPECT_NE(calib("calibrate --dataset " + q(dir / "furnace") + " --profile rgb-reference --out " +
+                  q(dir / "colour.json") + fast),
+            0);
+  EXPECT_FALSE(fs::exists(dir / "colour.json"));
 }
 
 }  // namespace
