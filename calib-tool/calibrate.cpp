@@ -64,7 +64,9 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
   c->add_option("--out", a.out, "Model file to write")->capture_default_str();
   c->add_option("--report", a.report, "Report path prefix (default: the model's, minus .json)");
   c->add_option("--solver", a.options.qe_solver,
-                "QE solver: auto (lower held-out error), paper, regularised, datasheet")
+                "QE solver: auto (the lower held-out error; paper only when more than 10 % "
+                "lower, as in range the two often tie and beyond it paper's fit can be far off), "
+                "paper, regularised, datasheet")
       ->check(CLI::IsMember({"auto", "paper", "regularised", "datasheet"}))
       ->capture_default_str();
   c->add_option("--min-temperature", a.options.min_temperature_c, "Locus start, degC")

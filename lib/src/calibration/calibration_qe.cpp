@@ -39,11 +39,16 @@ Eigen::MatrixXd rate_residuals(const CameraModel& cam, const std::vector<double>
   return r;
 }
 
+double ranked_held_out_residual(const std::string& solver, double held_out_residual) {
+  return solver == "paper" ? held_out_residual / (1 - kPaperSolverMargin) : held_out_residual;
+}
+
 QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& datasheet,
                           const std::vector<double>& t_c, const Eigen::MatrixXd& rates,
                           const std::string& qe_solver, const StageProgress& progress,
                           const std::vector<ReferenceRates>& references) {
-  // QE optimisation: every requested solver, chosen by held-out (cross-validation) residual.
+  // QE optimisation: every requested solver, chosen by held-out (cross-validation) residual
+  // (ranked_held_out_residual).
   std::vector<std::string> solvers;
   if (qe_solver == "auto")
     solvers = {"paper", "regularised"};
@@ -84,8 +89,9 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
     rep.held_out_residual = rms_of(cv.heldout_residual);
     rep.seconds = since(t0);
     best.reports.push_back(rep);
-    if (rep.held_out_residual < best_held_out) {
-      best_held_out = rep.held_out_residual;
+    const double ranked = ranked_held_out_residual(solvers[s], rep.held_out_residual);
+    if (ranked < best_held_out) {
+      best_held_out = ranked;
       best.system_qe = fit.system_qe;
       best.band_scale = fit.gains;
       best.solver = solvers[s];

@@ -65,6 +65,34 @@ TEST(ChooseSystemQe, the_datasheet_solver_keeps_the_datasheet_qe_and_reports_its
   EXPECT_EQ(stages, (std::vector<std::string>{"optimising QE (datasheet)", "optimising QE"}));
 }
 
+// auto keeps the regularised solver unless the paper's beats it on held-out rates by more than
+// the margin: the figures of hostile 5x5 units (a tie to 1 %) and of colour units (regularised
+// 19 % lower), and a paper fit that would be clearly better.
+TEST(ChooseSystemQe, auto_takes_the_paper_solver_only_when_clearly_better_held_out) {
+  const auto ranked = ranked_held_out_residual;
+  EXPECT_GT(ranked("paper", 0.0110), ranked("regularised", 0.0111));
+  EXPECT_GT(ranked("paper", 0.0111), ranked("regularised", 0.0111 * 1.1));
+  EXPECT_GT(ranked("paper", 0.0171), ranked("regularised", 0.0139));
+  EXPECT_LT(ranked("paper", 0.0111 * 0.85), ranked("regularised", 0.0111));
+  EXPECT_EQ(ranked("regularised", 0.02), 0.02);
+  EXPECT_EQ(ranked("datasheet", 0.02), 0.02);
+  // A hostile 5x5 unit's rates: both fitted and reported, the regularised one kept.
+  const CameraProfile p = load_profile_by_name("nir5x5-reference");
+  const Simulator unit(p, UnitPerturbation{"hostile", 1});
+  const CameraModel true_cam{p, unit.system_qe(), Eigen::VectorXd::Ones(p.band_count())};
+  const std::vector<double> t_c = {800, 850, 900, 950, 1000, 1050, 1100};
+  const QeChoice c =
+      choose_system_qe(p, p.system_qe(), t_c, test::furnace_rates(true_cam, t_c), "auto");
+  ASSERT_EQ(c.reports.size(), 2u);
+  EXPECT_EQ(c.reports[0].solver, "paper");
+  EXPECT_EQ(c.reports[1].solver, "regularised");
+  const bool paper_far_better =
+      c.reports[0].held_out_residual < 0.9 * c.reports[1].held_out_residual;
+  EXPECT_EQ(c.solver, paper_far_better ? "paper" : "regularised")
+      << c.reports[0].held_out_residual << " " << c.reports[1].held_out_residual;
+  EXPECT_FALSE(c.posterior.empty() && c.solver == "regularised");
+}
+
 TEST(ChooseSystemQe, a_fitted_qe_that_explains_the_rates_better_replaces_the_datasheet) {
   const CameraProfile p = load_profile_by_name("rgb-reference");
   const Eigen::MatrixXd sheet = p.system_qe();
