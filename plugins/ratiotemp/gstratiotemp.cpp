@@ -14,8 +14,10 @@
  * (profile `inference_dim_dn`, 20 DN for the shipped profiles) and #GstRatioTemp:partial-bands
  * does not read it from the rest. With partial-bands=safe (the default) the likelihood fit reads
  * such a pixel from the bands left when two of them have a ratio monotonic over the model's
- * whole range (decided from the model's locus when the element starts): two bands whose ratio
- * turns over pin such fits near the turning point, a reading that looks right and is not. The
+ * whole range (decided from the model's locus when the element starts) and the noise alone
+ * leaves the reading within 50 degC (one standard deviation, from the fit's chi2 curvature): two
+ * bands whose ratio turns over pin such fits near the turning point, and a few bands near the
+ * noise read hundreds of degrees off; readings that look right and are not. The
  * shipped 5x5 camera has 198 such pairs of 300, so a pixel with a few dim bands reads; the
  * shipped colour camera has none (each of its ratios turns over somewhere in 500..3500 degC),
  * so its pixels still need all three bands. partial-bands=any (or the older

@@ -113,7 +113,8 @@ void install_properties(GObjectClass* gobject_class) {
                         "threshold: off: no reading; safe: read by the likelihood fit from the "
                         "rest when they include two bands whose ratio is monotonic over the "
                         "model's range (decided from its locus; none for the shipped colour "
-                        "camera, most pairs for the 5x5 one); any: from any two",
+                        "camera, most pairs for the 5x5 one) and the noise alone leaves the "
+                        "reading within 50 degC (one standard deviation); any: from any two",
                         GST_TYPE_RATIO_TEMP_PARTIAL, DEFAULT_PARTIAL_BANDS, playing));
   g_object_class_install_property(
       gobject_class, PROP_MISFIT_PROBABILITY,

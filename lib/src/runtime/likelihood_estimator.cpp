@@ -119,6 +119,10 @@ class LikelihoodFit : public TemperatureEstimator {
     return false;
   }
 
+  bool all_bands(const Weighted& px) const {
+    return std::all_of(px.w, px.w + bands_, [](double w) { return w != 0.0; });
+  }
+
   int weigh(const double* s, Weighted& px) const {
     return weigh_bands(s, bands_, dim_dn_, shot_gain_, noise_floor_, px.w, px.ws, &px.sss);
   }
@@ -150,6 +154,11 @@ class LikelihoodFit : public TemperatureEstimator {
     const double denom = cm - 2 * best_chi2 + cp;
     const double offset = denom > 0 ? 0.5 * (cm - cp) / denom : 0.0;
     const double step = locus_.temperature_c[1] - locus_.temperature_c[0];
+    // A safe partial reading must also be precise: chi2 rises by 1 at one standard deviation,
+    // so with the curvature denom / step^2 the noise alone leaves sqrt(2 / curvature).
+    if (partial_ == PartialBands::kSafe && !all_bands(px) &&
+        !(denom > 0 && step * std::sqrt(2 / denom) <= kMaxPartialSigmaC))
+      return NAN;
     return in_range(locus_.temperature_c[best] + std::clamp(offset, -1.0, 1.0) * step);
   }
 

@@ -46,9 +46,13 @@ class TemperatureEstimator {
   // reading with every method; kSafe when a pair of the bands left has a ratio monotonic over
   // the model's whole range (decided from the model's locus: for the colour camera green/blue
   // but not red/green, whose ratio turns over and can pin the fit near its turning point, a
-  // reading that looks right and is not); kAny with any two. The network and its table always
-  // need every band (PlaneEstimator::set_partial_bands reads such pixels by the fit).
+  // reading that looks right and is not), and when the noise alone leaves that reading within
+  // kMaxPartialSigmaC (one standard deviation, from the fit's chi2 curvature: a few noisy bands
+  // at the dim end of a melt pool otherwise read hundreds of degrees off, within their own
+  // uncertainty); kAny with any two. The network and its table always need every band
+  // (PlaneEstimator::set_partial_bands reads such pixels by the fit).
   enum class PartialBands { kOff, kSafe, kAny };
+  static constexpr double kMaxPartialSigmaC = 50;
   void set_partial_bands(PartialBands p) {
     partial_ = p;
     min_bands_ = p == PartialBands::kOff ? bands_ : 2;
