@@ -188,6 +188,17 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
       !(s.reference_uncertainty_c > 0 && std::isfinite(s.reference_uncertainty_c)))
     throw InputError("campaign: the reference temperature uncertainty must be a number > 0 degC");
   camera.profile().mosaic.check_whole_periods(s.width, s.height, "campaign frame size");
+  // Checked before anything is written, so a refused campaign leaves no folders behind.
+  const double aspect = 1.2;  // a plate seen at an angle
+  const double ry = std::sqrt(s.roi_area_px / (M_PI * aspect)), rx = aspect * ry;
+  if (!(s.roi_area_px > 0) || rx > 0.48 * s.width || ry > 0.48 * s.height) {
+    const double ry_max = std::min(0.48 * s.height, 0.48 * s.width / aspect);
+    std::ostringstream m;
+    m << "campaign: an ROI of " << s.roi_area_px << " px (--roi-area) does not fit a " << s.width
+      << "x" << s.height << " frame: it takes from 1 to "
+      << std::floor(M_PI * aspect * ry_max * ry_max) << " px there";
+    throw InputError(m.str());
+  }
   std::filesystem::create_directories(folder / "frames");
   std::filesystem::create_directories(folder / "darks");
   if (!s.reference_temperatures_c.empty())
@@ -203,12 +214,6 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
   const std::vector<double> exposures = sweep(s.first_exposure_us);
 
   cv::Mat roi = cv::Mat::zeros(s.height, s.width, CV_8U);
-  const double aspect = 1.2;  // a plate seen at an angle
-  const double ry = std::sqrt(s.roi_area_px / (M_PI * aspect)), rx = aspect * ry;
-  if (rx > 0.48 * s.width || ry > 0.48 * s.height)
-    throw InputError("campaign: an ROI of " + std::to_string(s.roi_area_px) +
-                     " px does not fit a " + std::to_string(s.width) + "x" +
-                     std::to_string(s.height) + " frame");
   for (int y = 0; y < s.height; ++y)
     for (int x = 0; x < s.width; ++x) {
       const double dx = (x + 0.5 - s.width / 2.0) / rx, dy = (y + 0.5 - s.height / 2.0) / ry;

@@ -56,6 +56,28 @@ class DatasetFiles : public ::testing::Test {
   ScratchDir dir{"dataset"};
 };
 
+// An ROI larger than the frame holds is refused before anything is written, with the largest
+// that fits.
+TEST(SimulatedCampaign, refuses_an_roi_the_frame_cannot_hold_and_writes_nothing_n) {
+  ScratchDir dir{"campaign-roi"};
+  Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 3});
+  CampaignSettings s = tiny_campaign();
+  s.roi_area_px = 6000;  // the CLI's default, on a 40x32 frame
+  const std::filesystem::path folder = dir / "campaign";
+  try {
+    write_furnace_campaign(folder, camera, s);
+    ADD_FAILURE() << "wrote a campaign whose ROI does not fit";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("an ROI of 6000 px (--roi-area) does not fit a 40x32 "
+                                         "frame: it takes from 1 to 889 px there"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(folder));
+  s.roi_area_px = 889;  // the largest, accepted
+  EXPECT_NO_THROW(write_furnace_campaign(folder, camera, s));
+}
+
 TEST_F(DatasetFiles, simulated_campaign_round_trips) {
   const Dataset d = Dataset::open(dir.path());
   EXPECT_EQ(d.width(), 40);
