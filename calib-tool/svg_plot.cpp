@@ -27,6 +27,30 @@ std::vector<double> axis_ticks(double lo, double hi) {
   return t;
 }
 
+// A tick's label with the digits that tell it from its neighbours `step` away (an axis of R^2
+// values from 0.9999990 to 0.9999998 otherwise reads 1, 1, 1).
+std::string tick_label(double v, double step) {
+  if (!(step > 0) || !std::isfinite(step)) return fmt(v);
+  const int exponent = static_cast<int>(std::floor(std::log10(step)));
+  const double mantissa = step / std::pow(10.0, exponent);
+  const int extra = std::abs(mantissa - std::round(mantissa)) > 1e-6 ? 1 : 0;  // 2.5, 0.25
+  char buf[48];
+  if (v == 0 || (std::abs(v) < 1e5 && std::abs(v) >= 1e-3)) {
+    std::snprintf(buf, sizeof buf, "%.*f", std::clamp(extra - exponent, 0, 15), v);
+  } else {
+    const int magnitude = static_cast<int>(std::floor(std::log10(std::abs(v))));
+    std::snprintf(buf, sizeof buf, "%.*g", std::clamp(magnitude - exponent + 1 + extra, 2, 15), v);
+  }
+  return buf;
+}
+
+std::vector<std::string> tick_labels(const std::vector<double>& ticks) {
+  const double step = ticks.size() > 1 ? ticks[1] - ticks[0] : 0;
+  std::vector<std::string> labels;
+  for (double v : ticks) labels.push_back(tick_label(v, step));
+  return labels;
+}
+
 }  // namespace
 
 std::string html_escape(const std::string& s) {
@@ -81,15 +105,19 @@ std::string svg_plot(const PlotSpec& spec, const std::vector<Series>& series) {
     << html_escape(spec.title) << "</text>";
   o << "<rect x='" << l << "' y='" << t << "' width='" << w - l - r << "' height='" << h - t - b
     << "' fill='none' stroke='#333'/>";
-  for (double v : axis_ticks(x0, x1)) {
+  const std::vector<double> x_ticks = axis_ticks(x0, x1), y_ticks = axis_ticks(y0, y1);
+  const std::vector<std::string> x_labels = tick_labels(x_ticks), y_labels = tick_labels(y_ticks);
+  for (std::size_t i = 0; i < x_ticks.size(); ++i) {
+    const double v = x_ticks[i];
     o << "<line x1='" << px(v) << "' x2='" << px(v) << "' y1='" << t << "' y2='" << h - b
       << "' stroke='#eee'/><text x='" << px(v) << "' y='" << h - b + 14 << "' text-anchor='middle'>"
-      << fmt(v) << "</text>";
+      << x_labels[i] << "</text>";
   }
-  for (double v : axis_ticks(y0, y1)) {
+  for (std::size_t i = 0; i < y_ticks.size(); ++i) {
+    const double v = y_ticks[i];
     o << "<line x1='" << l << "' x2='" << w - r << "' y1='" << py(v) << "' y2='" << py(v)
       << "' stroke='#eee'/><text x='" << l - 4 << "' y='" << py(v) + 4 << "' text-anchor='end'>"
-      << (spec.log_y ? fmt(std::pow(10, v)) : fmt(v)) << "</text>";
+      << (spec.log_y ? fmt(std::pow(10, v)) : y_labels[i]) << "</text>";
   }
   o << "<text x='" << (l + w - r) / 2 << "' y='" << h - 8 << "' text-anchor='middle'>"
     << html_escape(spec.x_label) << "</text>";
