@@ -201,7 +201,7 @@ std::ofstream open_stats_csv(const std::string& out) {
   std::filesystem::create_directories(out);
   std::ofstream csv(std::filesystem::path(out) / "stats.csv");
   csv << "file,exposure_us,nominal_c,pixels,valid_fraction,min_c,max_c,mean_c,median_c,"
-         "truth_pixels,truth_valid,truth_rms_c,truth_median_error_c\n";
+         "truth_pixels,truth_valid,truth_rms_c,truth_median_error_c,median_u_c\n";
   return csv;
 }
 
@@ -250,7 +250,8 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
   csv << j.frame.filename().string() << "," << fmt(j.exposure_us) << "," << fmt(j.nominal_c) << ","
       << s.pixels << "," << fmt(s.valid_fraction) << "," << fmt(s.min_c) << "," << fmt(s.max_c)
       << "," << fmt(s.mean_c) << "," << fmt(s.median_c) << "," << ts.pixels << "," << ts.valid
-      << "," << fmt(ts.rms_c) << "," << fmt(ts.median_error_c) << "\n";
+      << "," << fmt(ts.rms_c) << "," << fmt(ts.median_error_c) << ","
+      << fmt(a.uncertainty ? measurer.median_uncertainty_c(t, u, mask) : NAN) << "\n";
 }
 
 // The whole subcommand once the arguments are checked.
@@ -395,7 +396,8 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
   c->footer(
       "Output: <stem>_temperature.png (16-bit, 0.1 K units, 0 = no reading), optionally\n"
       "<stem>_uncertainty.png (expanded, k=2, 0.1 K units), and stats.csv with ROI statistics\n"
-      "per frame (and errors against truth/<stem>.png when the dataset has true temperatures).\n"
+      "per frame (and errors against truth/<stem>.png when the dataset has true temperatures;\n"
+      "with --uncertainty, median_u_c: the expanded uncertainty (k=2) of the ROI's median).\n"
       "A raw frame does not say which mosaic it was taken through: --pattern names it, or\n"
       "the dataset's mosaic.txt (written by `pyrocam-calib simulate`); it must match the\n"
       "model's, else nothing is measured.\n"

@@ -4,7 +4,9 @@
 // with every band required nothing reads. A frame whose ROI reads little says why.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
@@ -13,6 +15,7 @@
 #include <vector>
 
 #include "cli_support.h"
+#include "pyrocam/core/image_io.h"
 #include "pyrocam/runtime/model.h"
 #include "test_support.h"
 
@@ -116,6 +119,35 @@ TEST(CliMeasureDefaults, a_frame_that_reads_little_says_why) {
             std::string::npos)
       << dark;
   EXPECT_EQ(good.find("pixels of the ROI read"), std::string::npos) << good;
+}
+
+// --uncertainty adds the ROI median's own expanded uncertainty to stats.csv: the systematic
+// terms whole (the median has them too) with the noise of many readings, so more than the
+// systematic terms alone and less than a single reading's.
+TEST(CliMeasureDefaults, uncertainty_gives_the_rois_median_its_own) {
+  const fs::path model = test_model("test-model-rgb.json");
+  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ScratchDir dir{"cli-median-u"};
+  write_plate(dir / "plate", "rgb-reference", 1, 1000, 64);
+  const std::string base = "measure --model " + q(model) + " --dataset " + q(dir / "plate");
+  ASSERT_EQ(calib(base + " --uncertainty --out " + q(dir / "u")), 0);
+  ASSERT_EQ(calib(base + " --out " + q(dir / "plain")), 0);
+  EXPECT_TRUE(first_stats_row(dir / "plain").at("median_u_c").empty());
+  const auto row = first_stats_row(dir / "u");
+  const double u = std::stod(row.at("median_u_c")), median = std::stod(row.at("median_c"));
+  const ThermalModel m = load_model(model.string());
+  EXPECT_GE(u, m.uncertainty.coverage_factor * m.uncertainty.systematic_u_c(median) - 0.01);
+  // A single reading's: the per-pixel image (0.1 K units, 0 = no reading).
+  const cv::Mat image = read_raw_image(dir / "u" / "0000_uncertainty.png");
+  std::vector<double> each;
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x)
+      if (image.at<std::uint16_t>(y, x) > 0) each.push_back(0.1 * image.at<std::uint16_t>(y, x));
+  ASSERT_GT(each.size(), 100u);
+  std::nth_element(each.begin(), each.begin() + static_cast<long>(each.size() / 2), each.end());
+  EXPECT_LT(u, each[each.size() / 2]);
+  // In range the median reads well within it.
+  EXPECT_LE(std::abs(std::stod(row.at("truth_median_error_c"))), u);
 }
 
 // calibrate without --profile: a dataset whose mosaic.txt says 5x5 is the shipped 5x5 camera's

@@ -1,9 +1,12 @@
 #include "pyrocam/runtime/frame_measurer.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/noise_model.h"
@@ -49,6 +52,39 @@ FrameMeasurer::Unread FrameMeasurer::unread(const cv::Mat& temperature_c,
       u.dim += !saturated && dim_band;
     }
   return u;
+}
+
+double FrameMeasurer::median_uncertainty_c(const cv::Mat& temperature_c,
+                                           const cv::Mat& uncertainty_c,
+                                           const cv::Mat& mask) const {
+  const TemperatureEstimator& estimator = planes_estimator_.estimator();
+  const double k = model_->uncertainty.coverage_factor;
+  std::vector<double> readings, noise;
+  for (int y = 0; y < temperature_c.rows; ++y)
+    for (int x = 0; x < temperature_c.cols; ++x) {
+      const double t = temperature_c.at<float>(y, x), u = uncertainty_c.at<float>(y, x);
+      if (!std::isfinite(t) || !std::isfinite(u)) continue;
+      if (!mask.empty() && mask.at<std::uint8_t>(y, x) == 0) continue;
+      const double systematic = estimator.systematic_u_c(t);
+      readings.push_back(t);
+      noise.push_back(std::sqrt(std::max(0.0, (u / k) * (u / k) - systematic * systematic)));
+    }
+  if (readings.empty()) return NAN;
+  const auto median = [](std::vector<double>& v) {
+    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    return *mid;
+  };
+  const double t_median = median(readings), u_noise = median(noise);
+  const DemosaicMethod method =
+      resolve_demosaic_method(options_.demosaic, model_->profile().mosaic);
+  const bool bayer = model_->profile().mosaic.kind == MosaicLayout::Kind::kBayer;
+  const double reach = method == DemosaicMethod::kBinCells           ? 1
+                       : method == DemosaicMethod::kMatched && bayer ? 25
+                                                                     : 9;
+  const double n_eff = std::max(1.0, static_cast<double>(readings.size()) / reach);
+  const double systematic = estimator.systematic_u_c(t_median);
+  return k * std::sqrt(systematic * systematic + M_PI / 2 * u_noise * u_noise / n_eff);
 }
 
 void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& temperature_c,

@@ -52,6 +52,17 @@ class FrameMeasurer {
     long saturated = 0, dim = 0;
   };
   Unread unread(const cv::Mat& temperature_c, const cv::Mat& mask) const;
+  // The expanded uncertainty (the model's coverage factor k) of the median of the readings under
+  // `mask` (as in unread), from the frame's temperatures and per-pixel expanded uncertainties
+  // (measure's uncertainty_c): the systematic terms at the median (calibration, emissivity:
+  // common to every pixel, so the median keeps them whole) and the readings' noise, which a
+  // median of n readings reduces by sqrt(pi/2 / n_eff). Neighbouring readings share their
+  // demosaicking footprints' samples, so their noise is not independent: n_eff is n divided by
+  // the number of readings one sample reaches (25 for matched Bayer, 9 for bilinear and for
+  // matched 5x5 cells, 1 binned). The noise term is the median of the readings' own. NaN
+  // without a reading.
+  double median_uncertainty_c(const cv::Mat& temperature_c, const cv::Mat& uncertainty_c,
+                              const cv::Mat& mask) const;
   // Adds a table file's blocks (the model's prebuilt lookup table, prebuilt_tables.h) to the
   // estimator's table: the same readings, without filling those blocks on the first frames.
   // Returns how many it added (0 for a method without a table); throws InputError as
