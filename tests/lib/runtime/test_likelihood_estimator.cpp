@@ -17,6 +17,13 @@
 namespace pyrocam::test {
 namespace {
 
+// Whether every band of pixel s reads (a number at or above the dim threshold).
+bool every_band_reads(const ThermalModel& m, const double* s) {
+  return std::all_of(s, s + m.profile().band_count(), [&](double v) {
+    return std::isfinite(v) && v >= m.profile().thresholds.inference_dim_dn;
+  });
+}
+
 // With saturated, NaN and dim bands among them: the fit drops bands (partial readings allowed),
 // and with two left the locus may pass the same ratios twice (an ambiguous reading). Without
 // partial readings the pixels with such bands have none, and the others read as with them.
@@ -37,9 +44,7 @@ void expect_fast_fit_is_exhaustive_fit(const std::shared_ptr<const ThermalModel>
     e.at<float>(0, static_cast<int>(i)) =
         static_cast<float>(exhaustive->temperature_c(px.pixel(i)));
     const double* s = px.pixel(i);
-    const bool all_read = std::all_of(s, s + px.bands, [&](double v) {
-      return std::isfinite(v) && v >= m.profile().thresholds.inference_dim_dn;
-    });
+    const bool all_read = every_band_reads(m, s);
     const double strict_reading = strict->temperature_c(s);
     if (!all_read) {
       EXPECT_TRUE(std::isnan(strict_reading)) << "pixel " << i;
@@ -230,9 +235,7 @@ TEST(LikelihoodEstimator, safe_partial_readings_need_a_monotonic_pair) {
     std::size_t partial = 0, safe_read = 0;
     for (std::size_t i = 0; i < px.size(); ++i) {
       const double* s = px.pixel(i);
-      const bool all_read = std::all_of(s, s + px.bands, [&](double v) {
-        return std::isfinite(v) && v >= m.profile().thresholds.inference_dim_dn;
-      });
+      const bool all_read = every_band_reads(m, s);
       const double a = any->temperature_c(s), b = safe->temperature_c(s);
       if (all_read || std::isnan(b)) {
         if (all_read) {
@@ -245,9 +248,7 @@ TEST(LikelihoodEstimator, safe_partial_readings_need_a_monotonic_pair) {
     }
     for (std::size_t i = 0; i < px.size(); ++i) {
       const double* s = px.pixel(i);
-      partial += !std::all_of(s, s + px.bands, [&](double v) {
-        return std::isfinite(v) && v >= m.profile().thresholds.inference_dim_dn;
-      });
+      partial += !every_band_reads(m, s);
     }
     ASSERT_GT(partial, 50u);
     if (colour)
@@ -299,9 +300,7 @@ TEST(LikelihoodEstimator, safe_partial_readings_must_be_precise) {
   std::size_t kept = 0, refused = 0;
   for (std::size_t i = 0; i < px.size(); ++i) {
     const double* s = px.pixel(i);
-    const bool all_read = std::all_of(s, s + px.bands, [&](double v) {
-      return std::isfinite(v) && v >= m.profile().thresholds.inference_dim_dn;
-    });
+    const bool all_read = every_band_reads(m, s);
     const double a = any->temperature_c(s), b = safe->temperature_c(s);
     if (all_read || std::isnan(a)) continue;
     const double sigma = fit_sigma_c(m, s, a);
