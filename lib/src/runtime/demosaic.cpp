@@ -218,6 +218,13 @@ cv::Size demosaic_output_size(const MosaicLayout& layout, DemosaicMethod method,
   return {input.width / layout.period_width, input.height / layout.period_height};
 }
 
+int demosaic_sample_reach(const MosaicLayout& layout, DemosaicMethod method) {
+  method = resolve_demosaic_method(method, layout);
+  const bool bayer = layout.kind == MosaicLayout::Kind::kBayer;
+  if (method == DemosaicMethod::kMatched) return bayer ? 25 : 9;
+  return method == DemosaicMethod::kBilinear && bayer ? 9 : 1;  // snapshots bin otherwise
+}
+
 void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod method,
               std::vector<cv::Mat>& planes, float no_signal_dn) {
   demosaic(mosaic, layout, method, planes, no_signal_dn, {});

@@ -76,12 +76,7 @@ double FrameMeasurer::median_uncertainty_c(const cv::Mat& temperature_c,
     return *mid;
   };
   const double t_median = median(readings), u_noise = median(noise);
-  const DemosaicMethod method =
-      resolve_demosaic_method(options_.demosaic, model_->profile().mosaic);
-  const bool bayer = model_->profile().mosaic.kind == MosaicLayout::Kind::kBayer;
-  const double reach = method == DemosaicMethod::kBinCells           ? 1
-                       : method == DemosaicMethod::kMatched && bayer ? 25
-                                                                     : 9;
+  const double reach = demosaic_sample_reach(model_->profile().mosaic, options_.demosaic);
   const double n_eff = std::max(1.0, static_cast<double>(readings.size()) / reach);
   const double systematic = estimator.systematic_u_c(t_median);
   return k * std::sqrt(systematic * systematic + M_PI / 2 * u_noise * u_noise / n_eff);

@@ -100,6 +100,29 @@ TEST(Demosaic, snapshot_gives_one_reading_per_macro_pixel_in_band_map_order) {
   EXPECT_EQ(planes[0].at<float>(0, 1), img.at<float>(4, 9));
 }
 
+// How many readings one sample reaches: for matched Bayer the span of its kernels' footprints,
+// squared; for snapshots matched reads each band from the 3x3 cells around, other methods bin.
+TEST(Demosaic, sample_reach_follows_the_footprints) {
+  const MosaicLayout bayer = MosaicLayout::bayer("RGGB");
+  int span = 0;
+  for (int band = 0; band < 3; ++band)
+    for (int py = 0; py < 2; ++py)
+      for (int px = 0; px < 2; ++px)
+        for (const cv::Point& p : matched_footprint(bayer, band, px, py))
+          span = std::max({span, std::abs(p.x), std::abs(p.y)});
+  EXPECT_EQ(demosaic_sample_reach(bayer, DemosaicMethod::kMatched),
+            (2 * span + 1) * (2 * span + 1));
+  EXPECT_EQ(demosaic_sample_reach(bayer, DemosaicMethod::kAuto), (2 * span + 1) * (2 * span + 1));
+  EXPECT_EQ(demosaic_sample_reach(bayer, DemosaicMethod::kBilinear), 9);
+  EXPECT_EQ(demosaic_sample_reach(bayer, DemosaicMethod::kBinCells), 1);
+  std::vector<int> map(25);
+  std::iota(map.begin(), map.end(), 0);
+  const MosaicLayout snapshot = MosaicLayout::snapshot(5, 5, map);
+  EXPECT_EQ(demosaic_sample_reach(snapshot, DemosaicMethod::kMatched), 9);
+  EXPECT_EQ(demosaic_sample_reach(snapshot, DemosaicMethod::kBilinear), 1);
+  EXPECT_EQ(demosaic_sample_reach(snapshot, DemosaicMethod::kBinCells), 1);
+}
+
 TEST(Demosaic, writes_into_caller_planes) {
   const MosaicLayout m = MosaicLayout::bayer("RGGB");
   std::vector<float> buffer(3 * 2 * 2, -1.f);

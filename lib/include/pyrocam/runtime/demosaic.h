@@ -50,6 +50,11 @@ DemosaicMethod parse_demosaic_method(const std::string& name);
 // incomplete trailing cell are dropped).
 cv::Size demosaic_output_size(const MosaicLayout& layout, DemosaicMethod method, cv::Size input);
 
+// How many output pixels one mosaic sample reaches at most (its noise is shared by that many
+// readings): 25 for matched Bayer (5x5 kernels), 9 for bilinear Bayer (3x3) and for matched
+// snapshot cells (3x3 cells), 1 for binning (and snapshots with any other method, which bin).
+int demosaic_sample_reach(const MosaicLayout& layout, DemosaicMethod method);
+
 // Fills one CV_32F plane per band (plane index = the layout's band index: R, G, B for Bayer).
 // `planes` may wrap a caller's buffer: planes of the right size and type are written in place,
 // others are (re)allocated. Snapshot layouts are always binned. Throws InputError if the mosaic

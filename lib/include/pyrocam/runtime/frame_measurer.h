@@ -58,8 +58,8 @@ class FrameMeasurer {
   // common to every pixel, so the median keeps them whole) and the readings' noise, which a
   // median of n readings reduces by sqrt(pi/2 / n_eff). Neighbouring readings share their
   // demosaicking footprints' samples, so their noise is not independent: n_eff is n divided by
-  // the number of readings one sample reaches (25 for matched Bayer, 9 for bilinear and for
-  // matched 5x5 cells, 1 binned). The noise term is the median of the readings' own. NaN
+  // the number of readings one sample reaches (demosaic_sample_reach). The noise term is the
+  // median of the readings' own. NaN
   // without a reading.
   double median_uncertainty_c(const cv::Mat& temperature_c, const cv::Mat& uncertainty_c,
                               const cv::Mat& mask) const;
