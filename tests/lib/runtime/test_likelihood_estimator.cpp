@@ -264,21 +264,15 @@ double fit_sigma_c(const ThermalModel& m, const double* s, double t_c) {
   const CameraProfile& p = m.profile();
   const Eigen::VectorXd rate = m.camera.rates(t_c);
   const Eigen::VectorXd slope = m.camera.rates(t_c + 0.5) - m.camera.rates(t_c - 0.5);  // per degC
-  double wss = 0, wmm = 0;
+  double wss = 0, wmm = 0, wmd = 0, wdd = 0;
   for (int b = 0; b < p.band_count(); ++b) {
     if (!(std::isfinite(s[b]) && s[b] >= p.thresholds.inference_dim_dn)) continue;
     const SignalNoise n = signal_noise(p, b);
     const double w = 1 / (n.shot_gain * s[b] + n.floor_dn2);
     wss += w * s[b] * rate[b], wmm += w * rate[b] * rate[b];
-  }
-  const double scale = wss / wmm;
-  double wmd = 0, wdd = 0;
-  for (int b = 0; b < p.band_count(); ++b) {
-    if (!(std::isfinite(s[b]) && s[b] >= p.thresholds.inference_dim_dn)) continue;
-    const SignalNoise n = signal_noise(p, b);
-    const double w = 1 / (n.shot_gain * s[b] + n.floor_dn2);
     wmd += w * rate[b] * slope[b], wdd += w * slope[b] * slope[b];
   }
+  const double scale = wss / wmm;
   const double information = scale * scale * (wdd - wmd * wmd / wmm);
   return information > 0 ? 1 / std::sqrt(information) : INFINITY;
 }
