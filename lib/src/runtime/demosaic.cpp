@@ -13,35 +13,73 @@ void prepare_planes(std::vector<cv::Mat>& planes, int bands, cv::Size size) {
   for (cv::Mat& p : planes) p.create(size, CV_32F);  // no-op when it already fits
 }
 
-// Each band is the mean of its pixels in each period cell.
+// One sensor row's samples into the band rows they belong to: out[cx][x] = row[x * pw + cx]
+// (one pass over the row, which stays in cache, instead of one strided pass per band).
+void deinterleave_row(const float* __restrict row, int pw, int out_w, float* const* out) {
+  if (pw == 5) {  // the snapshot cameras: a fixed stride the compiler unrolls
+    float* __restrict o0 = out[0];
+    float* __restrict o1 = out[1];
+    float* __restrict o2 = out[2];
+    float* __restrict o3 = out[3];
+    float* __restrict o4 = out[4];
+    for (int x = 0; x < out_w; ++x) {
+      const float* in = row + 5 * x;
+      o0[x] = in[0], o1[x] = in[1], o2[x] = in[2], o3[x] = in[3], o4[x] = in[4];
+    }
+    return;
+  }
+  for (int x = 0; x < out_w; ++x)
+    for (int cx = 0; cx < pw; ++cx) out[cx][x] = row[x * pw + cx];
+}
+
+// Each band is the mean of its pixels in each period cell; rows of cells in parallel.
 void bin_cells(const cv::Mat& in, const MosaicLayout& layout, std::vector<cv::Mat>& planes) {
   const int pw = layout.period_width, ph = layout.period_height;
   const int bands = layout.band_count();
   std::vector<int> members(static_cast<std::size_t>(bands), 0);
   for (int b : layout.band_map) ++members[static_cast<std::size_t>(b)];
+  const bool one_each = std::all_of(members.begin(), members.end(), [](int m) { return m == 1; });
   const int out_w = planes[0].cols, out_h = planes[0].rows;
-  for (int y = 0; y < out_h; ++y) {
-    for (int b = 0; b < bands; ++b) {
-      float* o = planes[static_cast<std::size_t>(b)].ptr<float>(y);
-      const float scale = 1.0f / static_cast<float>(members[static_cast<std::size_t>(b)]);
-      bool first = true;
-      for (int cy = 0; cy < ph; ++cy) {
-        const float* row = in.ptr<float>(y * ph + cy);
-        for (int cx = 0; cx < pw; ++cx) {
-          if (layout.band_map[static_cast<std::size_t>(cy * pw + cx)] != b) continue;
-          const float* src = row + cx;
-          if (first) {
-            for (int x = 0; x < out_w; ++x) o[x] = src[x * pw];
-            first = false;
-          } else {
-            for (int x = 0; x < out_w; ++x) o[x] += src[x * pw];
+  auto rows = [&](const cv::Range& range) {
+    std::vector<float*> out(static_cast<std::size_t>(pw));
+    for (int y = range.start; y < range.end; ++y) {
+      if (one_each) {  // a snapshot mosaic: every sample is its band's reading
+        for (int cy = 0; cy < ph; ++cy) {
+          for (int cx = 0; cx < pw; ++cx)
+            out[static_cast<std::size_t>(cx)] =
+                planes[static_cast<std::size_t>(layout.band_map[static_cast<std::size_t>(
+                           cy * pw + cx)])]
+                    .ptr<float>(y);
+          deinterleave_row(in.ptr<float>(y * ph + cy), pw, out_w, out.data());
+        }
+        continue;
+      }
+      for (int b = 0; b < bands; ++b) {
+        float* o = planes[static_cast<std::size_t>(b)].ptr<float>(y);
+        const float scale = 1.0f / static_cast<float>(members[static_cast<std::size_t>(b)]);
+        bool first = true;
+        for (int cy = 0; cy < ph; ++cy) {
+          const float* row = in.ptr<float>(y * ph + cy);
+          for (int cx = 0; cx < pw; ++cx) {
+            if (layout.band_map[static_cast<std::size_t>(cy * pw + cx)] != b) continue;
+            const float* src = row + cx;
+            if (first) {
+              for (int x = 0; x < out_w; ++x) o[x] = src[x * pw];
+              first = false;
+            } else {
+              for (int x = 0; x < out_w; ++x) o[x] += src[x * pw];
+            }
           }
         }
+        if (scale != 1.0f)
+          for (int x = 0; x < out_w; ++x) o[x] *= scale;
       }
-      if (scale != 1.0f)
-        for (int x = 0; x < out_w; ++x) o[x] *= scale;
     }
-  }
+  };
+  if (static_cast<double>(in.total()) < 512.0 * 512.0)
+    rows(cv::Range(0, out_h));
+  else
+    cv::parallel_for_(cv::Range(0, out_h), rows, 4.0);
 }
 
 // How a band is obtained at a pixel of a given parity.

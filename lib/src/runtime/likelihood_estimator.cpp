@@ -70,6 +70,31 @@ class LikelihoodFit : public TemperatureEstimator {
       }
   }
 
+  // In chunks of pixels: those with fewer bands that read than the fit needs (the cold
+  // background, most of a melt pool's frame) get no reading from a count over the band planes,
+  // without the per-pixel weights (which cost about as much again as the count of all bands).
+  void estimate(const float* const* planes, std::size_t n, float* out) const override {
+    constexpr std::size_t kChunk = 256;
+    alignas(64) std::int32_t reading[kChunk];
+    auto dim_f = static_cast<float>(dim_dn_);
+    if (static_cast<double>(dim_f) < dim_dn_)
+      dim_f = std::nextafter(dim_f, std::numeric_limits<float>::infinity());
+    const int needed = std::min(min_bands_, bands_);
+    double s[kMaxBands];
+    for (std::size_t start = 0; start < n; start += kChunk) {
+      const std::size_t m = std::min(kChunk, n - start);
+      count_reading_bands(planes, bands_, start, m, dim_f, reading);
+      for (std::size_t k = 0; k < m; ++k) {
+        if (reading[k] < needed) {
+          out[start + k] = NAN;
+          continue;
+        }
+        for (int b = 0; b < bands_; ++b) s[b] = planes[b][start + k];
+        out[start + k] = static_cast<float>(temperature_c(s));
+      }
+    }
+  }
+
  protected:
   struct Minimum {
     Eigen::Index index;

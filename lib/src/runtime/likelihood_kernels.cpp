@@ -99,6 +99,20 @@ int weigh_bands(const double* __restrict s, int bands, double dim, const double*
   return valid;
 }
 
+// Per pixel, how many of its bands read as weigh_bands decides: counted band after band over
+// the pixels, in single precision (dim_f is the least float whose double is at least the
+// threshold, so the comparison is weigh_bands' own).
+PYROCAM_VECTOR_CLONES
+void count_reading_bands(const float* const* planes, int bands, std::size_t from, std::size_t n,
+                         float dim_f, std::int32_t* __restrict reading) {
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  for (std::size_t k = 0; k < n; ++k) reading[k] = 0;
+  for (int b = 0; b < bands; ++b) {
+    const float* __restrict v = planes[b] + from;
+    for (std::size_t k = 0; k < n; ++k) reading[k] += v[k] >= dim_f && v[k] < kInf ? 1 : 0;
+  }
+}
+
 // Projections p = V^T (w s), q = V2^T w on the factors (bands x kMaxRank each, zero padded), in
 // double and single precision, and |w s|^2, |w|^2. The sums start from the first band's products
 // (zeroed arrays compile to a slow rep stos).

@@ -63,6 +63,12 @@ int weigh_bands(const double* __restrict s, int bands, double dim, const double*
                 const double* __restrict floor, double* __restrict w, double* __restrict ws,
                 double* sss);
 
+// reading[k] = how many of pixel from + k's bands read as weigh_bands decides (finite and at
+// least the threshold), for k < n: planes[b] is band b's row; dim_f is the least float whose
+// double value is at least weigh_bands' threshold (so the two agree). Vectorises.
+void count_reading_bands(const float* const* planes, int bands, std::size_t from, std::size_t n,
+                         float dim_f, std::int32_t* reading);
+
 // Projections p = V^T (w s), q = V2^T w on the factors (bands x kMaxRank each, zero padded), in
 // double and single precision, and squares = {|w s|^2, |w|^2} (bands >= 1).
 void project(const double* __restrict ws, const double* __restrict w, int bands,

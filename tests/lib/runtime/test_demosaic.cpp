@@ -100,6 +100,53 @@ TEST(Demosaic, snapshot_gives_one_reading_per_macro_pixel_in_band_map_order) {
   EXPECT_EQ(planes[0].at<float>(0, 1), img.at<float>(4, 9));
 }
 
+// Binning a frame large enough to be split over threads: every band of every cell is its
+// sample (the band map's place), for the 5x5 period and another one (4x3), with a partial
+// trailing cell; Bayer's two greens are averaged.
+TEST(Demosaic, binning_large_frames_takes_each_band_from_its_place_in_every_cell) {
+  std::vector<int> map5(25);
+  std::iota(map5.begin(), map5.end(), 0);
+  std::reverse(map5.begin(), map5.end());
+  std::vector<int> map43(12);
+  std::iota(map43.begin(), map43.end(), 0);
+  std::swap(map43[1], map43[10]);
+  for (const MosaicLayout& m :
+       {MosaicLayout::snapshot(5, 5, map5), MosaicLayout::snapshot(4, 3, map43)}) {
+    cv::Mat img(1087, 1023, CV_32F);
+    cv::randu(img, -5, 250);
+    img.at<float>(7, 9) = kInf;
+    img.at<float>(8, 9) = std::numeric_limits<float>::quiet_NaN();
+    std::vector<cv::Mat> planes;
+    demosaic(img, m, DemosaicMethod::kBinCells, planes);
+    ASSERT_EQ(planes.size(), m.band_map.size());
+    const int pw = m.period_width, ph = m.period_height;
+    ASSERT_EQ(planes[0].size(), cv::Size(1023 / pw, 1087 / ph));
+    long mismatches = 0;
+    for (int cy = 0; cy < planes[0].rows; ++cy)
+      for (int cx = 0; cx < planes[0].cols; ++cx)
+        for (int y = 0; y < ph; ++y)
+          for (int x = 0; x < pw; ++x) {
+            const float want = img.at<float>(cy * ph + y, cx * pw + x);
+            const float got = planes[static_cast<std::size_t>(m.band_at(x, y))].at<float>(cy, cx);
+            mismatches += !(got == want || (std::isnan(got) && std::isnan(want)));
+          }
+    EXPECT_EQ(mismatches, 0) << m.pattern;
+  }
+  const MosaicLayout bayer = MosaicLayout::bayer("GRBG");
+  cv::Mat img(1024, 1030, CV_32F);
+  cv::randu(img, 0, 200);
+  std::vector<cv::Mat> planes;
+  demosaic(img, bayer, DemosaicMethod::kBinCells, planes);
+  for (int cy : {0, 300, 511})
+    for (int cx : {0, 400, 514}) {
+      const int y = 2 * cy, x = 2 * cx;
+      EXPECT_EQ(planes[0].at<float>(cy, cx), img.at<float>(y, x + 1));
+      EXPECT_EQ(planes[2].at<float>(cy, cx), img.at<float>(y + 1, x));
+      EXPECT_FLOAT_EQ(planes[1].at<float>(cy, cx),
+                      0.5f * (img.at<float>(y, x) + img.at<float>(y + 1, x + 1)));
+    }
+}
+
 // How many readings one sample reaches: for matched Bayer the span of its kernels' footprints,
 // squared; for snapshots matched reads each band from the 3x3 cells around, other methods bin.
 TEST(Demosaic, sample_reach_follows_the_footprints) {

@@ -216,6 +216,70 @@ TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {
   EXPECT_TRUE(std::isnan(fast->temperature_c(s.data())));
 }
 
+// A row of pixels through estimate (which skips the pixels with too few bands that read before
+// weighing them) gives each pixel's temperature_c, whatever the partial-band rule, with bands at
+// the dim threshold's float and just under it, NaN and saturated among them.
+TEST(LikelihoodEstimator, a_rows_readings_are_its_pixels_readings) {
+  for (const char* name : {"test-model-rgb.json", "test-model-nir5x5.json"}) {
+    SCOPED_TRACE(name);
+    const auto model = test_model(name);
+    const ThermalModel& m = *model;
+    const int bands = m.profile().band_count();
+    NoisyPixels px = noisy_pixels(m, kSweepC, 60, 1, 400, saturation_signal_dn(m), 0.1, 17);
+    const double dim = m.profile().thresholds.inference_dim_dn;
+    auto at_dim = static_cast<float>(dim);
+    if (static_cast<double>(at_dim) < dim) at_dim = std::nextafter(at_dim, INFINITY);
+    const float under_dim = std::nextafter(at_dim, 0.f);
+    // Pixels of a hot plate with k of their bands set to the threshold or just under it, and
+    // the plate dimmed until its dimmest band sits there (a reading only if that band counts).
+    const std::size_t hot = px.size() - 1;
+    for (float edge : {at_dim, under_dim}) {
+      for (int k = 0; k <= bands; ++k) {
+        std::vector<double> s(px.pixel(hot), px.pixel(hot) + bands);
+        for (int b = 0; b < k; ++b) s[static_cast<std::size_t>(b)] = edge;
+        px.signals.insert(px.signals.end(), s.begin(), s.end());
+      }
+      std::vector<double> s(px.pixel(hot), px.pixel(hot) + bands);
+      const auto dimmest = std::min_element(s.begin(), s.end());
+      const double scale = edge / *dimmest;
+      for (double& v : s) v = static_cast<float>(v * scale);
+      *dimmest = edge;
+      px.signals.insert(px.signals.end(), s.begin(), s.end());
+    }
+    std::vector<int> reading_counts(static_cast<std::size_t>(bands) + 1, 0);
+    for (std::size_t i = 0; i < px.size(); ++i) {
+      const double* s = px.pixel(i);
+      ++reading_counts[static_cast<std::size_t>(std::count_if(
+          s, s + bands, [&](double v) { return v >= dim && v < INFINITY; }))];
+    }
+    for (int k : {0, 1, 2, bands}) EXPECT_GT(reading_counts[static_cast<std::size_t>(k)], 0) << k;
+    const std::vector<cv::Mat> planes = as_planes(px);
+    std::vector<const float*> rows;
+    for (const cv::Mat& p : planes) rows.push_back(p.ptr<float>(0));
+    for (auto partial : {TemperatureEstimator::PartialBands::kOff,
+                         TemperatureEstimator::PartialBands::kSafe,
+                         TemperatureEstimator::PartialBands::kAny}) {
+      for (const auto& fit : {make_estimator(model, Method::kLikelihood),
+                              make_exhaustive_likelihood_estimator(model)}) {
+        fit->set_partial_bands(partial);
+        std::vector<float> row(px.size());
+        fit->estimate(rows.data(), px.size(), row.data());
+        std::size_t differ = 0, read = 0;
+        for (std::size_t i = 0; i < px.size(); ++i) {
+          std::vector<double> s(static_cast<std::size_t>(bands));
+          for (int b = 0; b < bands; ++b)
+            s[static_cast<std::size_t>(b)] = rows[static_cast<std::size_t>(b)][i];
+          const auto one = static_cast<float>(fit->temperature_c(s.data()));
+          differ += !(one == row[i] || (std::isnan(one) && std::isnan(row[i])));
+          read += std::isfinite(row[i]);
+        }
+        EXPECT_EQ(differ, 0u) << static_cast<int>(partial);
+        EXPECT_GT(read, px.size() / 10) << static_cast<int>(partial);
+      }
+    }
+  }
+}
+
 // Safe partial readings: a pixel with unusable bands reads from the rest only when two of them
 // have a ratio monotonic over the model's range. The shipped colour camera has no such pair
 // (each of its ratios turns over), the 5x5 one has many: its dim-band pixels read, and as
