@@ -47,8 +47,8 @@ void bin_cells(const cv::Mat& in, const MosaicLayout& layout, std::vector<cv::Ma
         for (int cy = 0; cy < ph; ++cy) {
           for (int cx = 0; cx < pw; ++cx)
             out[static_cast<std::size_t>(cx)] =
-                planes[static_cast<std::size_t>(layout.band_map[static_cast<std::size_t>(
-                           cy * pw + cx)])]
+                planes[static_cast<std::size_t>(
+                           layout.band_map[static_cast<std::size_t>(cy * pw + cx)])]
                     .ptr<float>(y);
           deinterleave_row(in.ptr<float>(y * ph + cy), pw, out_w, out.data());
         }

@@ -249,16 +249,16 @@ TEST(LikelihoodEstimator, a_rows_readings_are_its_pixels_readings) {
     std::vector<int> reading_counts(static_cast<std::size_t>(bands) + 1, 0);
     for (std::size_t i = 0; i < px.size(); ++i) {
       const double* s = px.pixel(i);
-      ++reading_counts[static_cast<std::size_t>(std::count_if(
-          s, s + bands, [&](double v) { return v >= dim && v < INFINITY; }))];
+      ++reading_counts[static_cast<std::size_t>(
+          std::count_if(s, s + bands, [&](double v) { return v >= dim && v < INFINITY; }))];
     }
     for (int k : {0, 1, 2, bands}) EXPECT_GT(reading_counts[static_cast<std::size_t>(k)], 0) << k;
     const std::vector<cv::Mat> planes = as_planes(px);
     std::vector<const float*> rows;
     for (const cv::Mat& p : planes) rows.push_back(p.ptr<float>(0));
-    for (auto partial : {TemperatureEstimator::PartialBands::kOff,
-                         TemperatureEstimator::PartialBands::kSafe,
-                         TemperatureEstimator::PartialBands::kAny}) {
+    for (auto partial :
+         {TemperatureEstimator::PartialBands::kOff, TemperatureEstimator::PartialBands::kSafe,
+          TemperatureEstimator::PartialBands::kAny}) {
       for (const auto& fit : {make_estimator(model, Method::kLikelihood),
                               make_exhaustive_likelihood_estimator(model)}) {
         fit->set_partial_bands(partial);
