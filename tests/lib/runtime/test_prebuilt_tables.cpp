@@ -105,16 +105,16 @@ Fills fills(const std::string& file, const NoisyPixels& px) {
   const std::vector<cv::Mat> planes = as_planes(px);
   Fills f;
   const PlaneEstimator lazy(model, Method::kLut);
-  const std::size_t empty = lazy.estimator().memory_bytes();
+  const std::size_t empty = lazy.estimator().fill_tables({});
   cv::Mat lazy_c;
   lazy.estimate(planes, lazy_c);
-  f.lazy = (lazy.estimator().memory_bytes() - empty) / 4096;
+  f.lazy = lazy.estimator().fill_tables({}) - empty;
   const PlaneEstimator prebuilt(model, Method::kLut);
   prebuilt.estimator().load_tables(file);
-  const std::size_t loaded = prebuilt.estimator().memory_bytes();
+  const std::size_t loaded = prebuilt.estimator().fill_tables({});
   cv::Mat prebuilt_c;
   prebuilt.estimate(planes, prebuilt_c);
-  f.prebuilt = (prebuilt.estimator().memory_bytes() - loaded) / 4096;
+  f.prebuilt = prebuilt.estimator().fill_tables({}) - loaded;
   f.differing = differing(lazy_c, prebuilt_c);
   return f;
 }
