@@ -152,6 +152,15 @@ void split_row(const float* __restrict row, int n, float no_signal, float* __res
   if (n & 1) even[n / 2] = row[n - 1] < no_signal ? kMinusInf : row[n - 1];
 }
 
+// Whether any of the n samples has light: at or above `no_signal`, or a mark (NaN, +INF), which
+// the kernels carry to the band value as they do any sample with light.
+PYROCAM_VECTOR_CLONES
+bool any_lit(const float* __restrict p, int n, float no_signal) {
+  std::int32_t lit = 0;
+  for (int i = 0; i < n; ++i) lit |= p[i] < no_signal ? 0 : 1;
+  return lit != 0;
+}
+
 // a + b element by element (the row sums v and c).
 PYROCAM_VECTOR_CLONES
 void add_rows(const float* __restrict a, const float* __restrict b, float* __restrict out, int n) {
@@ -215,16 +224,30 @@ void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, f
   // them past the cache saves reading each line in first (a 2048x2048 frame: 7 instead of
   // 12 CPU ms). Small ones stay in the cache for it.
   const bool stream = 3.0 * 4.0 * static_cast<double>(mosaic.total()) >= 16.0 * 1024 * 1024;
+  // The cold background around a melt pool or a filament is most of the frame: a block of
+  // output columns whose kernels reach only samples without light has every band value -INF,
+  // i.e. 0, which is written without running the kernels. Blocks of kBlock column pairs; output
+  // pair i reads the input pairs i..i+2, so output block K reads input blocks K and K + 1.
+  constexpr int kBlock = 32;
+  const int blocks = (half + kBlock - 1) / kBlock;
+  const int out_blocks = (n_even + kBlock - 1) / kBlock;
   auto run = [&](const cv::Range& r) {
     // The five input rows around the output row, split by parity: a ring, each row read once
     // per chunk; then the row sums v and c and the outputs, split too.
-    std::vector<float> buffer(static_cast<std::size_t>(2 * (5 + 2 + 2) * half + padded_width));
-    auto ring = [&](int yy) { return buffer.data() + ((yy + 2 * kReach) % 5) * 2 * half; };
+    std::vector<float> buffer(
+        static_cast<std::size_t>(2 * (5 + 2 + 2) * half + padded_width + half));
+    auto slot = [&](int yy) { return (yy + 2 * kReach) % 5; };
+    auto ring = [&](int yy) { return buffer.data() + slot(yy) * 2 * half; };
     float* v = buffer.data() + 10 * half;  // even half, then odd half
     float* c = v + 2 * half;
     float* out_even = c + 2 * half;
     float* out_odd = out_even + half;
     float* padded = out_odd + half;
+    float* zeros = padded + padded_width;  // band values of blocks without light
+    std::fill(zeros, zeros + half, 0.f);
+    // Per ring row and input block: whether a sample has light (all do without the level).
+    std::vector<std::uint8_t> lit(static_cast<std::size_t>(5 * blocks), 1);
+    std::vector<std::uint8_t> out_lit(static_cast<std::size_t>(out_blocks), 1);
     auto load = [&](int yy) {
       // Mirrored without repeating the edge, which keeps the pattern (as the bilinear method).
       const float* src =
@@ -239,22 +262,57 @@ void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, f
       // (with a saturated +INF sample: NaN, no reading); the band value then reads as dim.
       float* even = ring(yy);
       split_row(padded, padded_width, no_signal_dn, even, even + half);
+      if (!mark_no_signal) return;
+      std::uint8_t* row_lit = lit.data() + slot(yy) * blocks;
+      for (int k = 0; k < blocks; ++k) {
+        const int p0 = 2 * kBlock * k, p1 = std::min(padded_width, p0 + 2 * kBlock);
+        row_lit[k] = p0 < p1 && any_lit(padded + p0, p1 - p0, no_signal_dn);
+      }
     };
     for (int yy = r.start - kReach; yy < r.start + kReach; ++yy) load(yy);
     for (int y = r.start; y < r.end; ++y) {
       load(y + kReach);
-      add_rows(ring(y - 1), ring(y + 1), v, 2 * half);
-      add_rows(ring(y - 2), ring(y + 2), c, 2 * half);
+      if (mark_no_signal) {
+        std::fill(out_lit.begin(), out_lit.end(), 0);
+        for (int s = 0; s < 5; ++s) {
+          const std::uint8_t* row_lit = lit.data() + s * blocks;
+          for (int k = 0; k < out_blocks; ++k)
+            out_lit[k] |= row_lit[k] | (k + 1 < blocks ? row_lit[k + 1] : 0);
+        }
+      }
       const float *r0_even = ring(y), *r0_odd = r0_even + half;
       const float *v_even = v, *v_odd = v + half, *c_even = c, *c_odd = c + half;
-      for (int b = 0; b < 3; ++b) {
-        const auto& fn = rows_of[b][y & 1];
-        // Output column 2i: padded 2i + 2, so x - 2 is even[i] and x - 1 odd[i]; column 2i + 1:
-        // padded 2i + 3, so x - 2 is odd[i] and x - 1 even[i + 1].
-        fn[0](r0_even, r0_odd, v_even, v_odd, c_even, c_odd, out_even, n_even);
-        fn[1](r0_odd, r0_even + 1, v_odd, v_even + 1, c_odd, c_even + 1, out_odd, n_odd);
-        interleave(out_even, out_odd, planes[static_cast<std::size_t>(b)].ptr<float>(y), width,
-                   mark_no_signal, stream);
+      for (int k0 = 0; k0 < out_blocks;) {
+        int k1 = k0 + 1;
+        while (k1 < out_blocks && out_lit[k1] == out_lit[k0]) ++k1;
+        // Output pairs [i0, i1): columns [2 i0, x1).
+        const int i0 = kBlock * k0, i1 = std::min(kBlock * k1, n_even);
+        const int x1 = std::min(2 * i1, width);
+        if (!out_lit[k0]) {
+          for (std::size_t b = 0; b < 3; ++b)
+            interleave(zeros, zeros, planes[b].ptr<float>(y) + 2 * i0, x1 - 2 * i0, true, stream);
+          k0 = k1;
+          continue;
+        }
+        const int sums = std::min(i1 + 2, half) - i0;  // the row sums' pairs the kernels read
+        add_rows(ring(y - 1) + i0, ring(y + 1) + i0, v + i0, sums);
+        add_rows(ring(y - 1) + half + i0, ring(y + 1) + half + i0, v + half + i0, sums);
+        add_rows(ring(y - 2) + i0, ring(y + 2) + i0, c + i0, sums);
+        add_rows(ring(y - 2) + half + i0, ring(y + 2) + half + i0, c + half + i0, sums);
+        const int n_e = i1 - i0, n_o = std::max(0, std::min(i1, n_odd) - i0);
+        for (int b = 0; b < 3; ++b) {
+          const auto& fn = rows_of[b][y & 1];
+          // Output column 2i: padded 2i + 2, so x - 2 is even[i] and x - 1 odd[i]; column
+          // 2i + 1: padded 2i + 3, so x - 2 is odd[i] and x - 1 even[i + 1].
+          fn[0](r0_even + i0, r0_odd + i0, v_even + i0, v_odd + i0, c_even + i0, c_odd + i0,
+                out_even + i0, n_e);
+          fn[1](r0_odd + i0, r0_even + 1 + i0, v_odd + i0, v_even + 1 + i0, c_odd + i0,
+                c_even + 1 + i0, out_odd + i0, n_o);
+          interleave(out_even + i0, out_odd + i0,
+                     planes[static_cast<std::size_t>(b)].ptr<float>(y) + 2 * i0, x1 - 2 * i0,
+                     mark_no_signal, stream);
+        }
+        k0 = k1;
       }
     }
 #if defined(__SSE2__)

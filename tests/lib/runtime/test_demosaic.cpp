@@ -246,6 +246,47 @@ TEST(Demosaic, matched_large_frames_stored_past_the_cache_give_the_rows_of_small
   }
 }
 
+// Blocks of columns whose kernels reach only samples without light are written as dim without
+// running the kernels. A NaN sample every 64 columns of every row has "light" (it is a mark),
+// so every block of the second frame takes the kernels' path: away from the NaNs' reach both
+// frames must give the same bits. Hot rectangles with unlit samples among them on a cold
+// background, a small frame with an odd width and one large enough to be split and streamed.
+TEST(Demosaic, matched_blocks_without_light_give_what_the_kernels_give) {
+  for (const cv::Size size : {cv::Size(203, 40), cv::Size(1402, 1040)}) {
+    const MosaicLayout m = MosaicLayout::bayer("GBRG");
+    cv::Mat img(size, CV_32F);
+    cv::randu(img, 0, 5);  // below the no-light level of 5: the cold background
+    cv::RNG rng(11);
+    for (int i = 0; i < 12; ++i) {
+      const int w = rng.uniform(1, 90), h = rng.uniform(1, 30);
+      cv::Mat hot =
+          img(cv::Rect(rng.uniform(0, size.width - w), rng.uniform(0, size.height - h), w, h));
+      cv::randu(hot, 0, 200);  // lit, with unlit samples among them
+    }
+    img.at<float>(size.height / 2, size.width / 3) = kInf;
+    cv::Mat every_block_lit = img.clone();
+    const auto near_a_nan = [](int x) { return x % 64 >= 28 && x % 64 <= 32; };
+    for (int y = 0; y < size.height; ++y)
+      for (int x = 30; x < size.width; x += 64) every_block_lit.at<float>(y, x) = std::nanf("");
+    std::vector<cv::Mat> skipped, computed;
+    demosaic(img, m, DemosaicMethod::kMatched, skipped, 5.f);
+    demosaic(every_block_lit, m, DemosaicMethod::kMatched, computed, 5.f);
+    long zeros = 0, compared = 0;
+    for (int b = 0; b < 3; ++b)
+      for (int y = 0; y < size.height; ++y)
+        for (int x = 0; x < size.width; ++x) {
+          if (near_a_nan(x)) continue;
+          const float want = computed[b].at<float>(y, x), got = skipped[b].at<float>(y, x);
+          ++compared, zeros += want == 0.f;
+          if (std::isnan(want))
+            EXPECT_TRUE(std::isnan(got)) << b << " " << y << "," << x;
+          else
+            ASSERT_EQ(std::memcmp(&got, &want, sizeof got), 0) << b << " " << y << "," << x;
+        }
+    EXPECT_GT(zeros, compared / 2) << size;  // most of the frame is cold background
+  }
+}
+
 // The fused pass (each block of rows checked as it is demosaicked, on the threads) marks what
 // the separate one marks: bit for bit, on a frame large enough to be split, with an odd width,
 // plates with sharp edges, saturated samples and a dim background left out by the skip level.
