@@ -62,6 +62,21 @@
  *   Memory: plane after plane (band 0 first), each width * height floats, rows without padding;
  *   a buffer holds exactly bands * width * height * 4 bytes.
  *
+ * video/x-pyrocam-bands(memory:PyrocamMosaic): the same band planes, not yet computed (the fused
+ *   path between demosaic25 and ratiotemp when they are linked: the planes are demosaicked a
+ *   strip of rows at a time where they are read, and never cross memory). demosaic25 offers it
+ *   for Bayer mosaics with method matched (auto) and no mixed-pixel check, after the plain
+ *   bands, so that any other element gets the planes; ratiotemp asks for it first.
+ *   Fields as x-pyrocam-bands (bands=3, layout=bayer, width and height the mosaic's), and:
+ *   pattern         (string) rggb, bggr, grbg or gbrg: the Bayer pattern, as in
+ *                   x-pyrocam-mosaic.
+ *   no-signal-level (double) the level in DN below which a sample holds no light (matched
+ *                   demosaicking makes every band value drawn from it dim): demosaic25's,
+ *                   from its profile's noise and the stream's bit depth; set when demosaic25
+ *                   fixes its caps.
+ *   Memory: the dark-subtracted mosaic as in x-pyrocam-mosaic (width * height floats, the same
+ *   marks): demosaic25 passes darksub's buffer on untouched.
+ *
  * Temperatures: video/x-raw, format=(string)GRAY16_LE, one value per pixel in units of 0.1 K
  *   (e.g. 14732 = 1473.2 K = 1200.05 degC); 0 means "no reading" (saturated, too dim, invalid).
  *   The code and its conversions are defined once, in the library:
@@ -107,6 +122,15 @@
   PYROCAM_BANDS_MEDIA_TYPE                                                   \
   ", format = (string) F32LE, bands = (int) [ 1, max ], " PYROCAM_SIZE_RANGE \
   ", " PYROCAM_FRAMERATE_RANGE ", layout = (string) " PYROCAM_LAYOUTS
+
+/* The band planes as the mosaic they are demosaicked from (the fused path, see above). */
+#define PYROCAM_CAPS_FEATURE_MOSAIC "memory:PyrocamMosaic"
+#define PYROCAM_FIELD_NO_SIGNAL_LEVEL "no-signal-level"
+#define PYROCAM_FUSED_BANDS_CAPS                                                              \
+  PYROCAM_BANDS_MEDIA_TYPE "(" PYROCAM_CAPS_FEATURE_MOSAIC                                    \
+                           "), format = (string) F32LE, bands = (int) 3, " PYROCAM_SIZE_RANGE \
+                           ", " PYROCAM_FRAMERATE_RANGE                                       \
+                           ", layout = (string) bayer, pattern = (string) " PYROCAM_BAYER_FORMATS
 
 /* Colour-mapped temperatures (thermalcolormap's output, thermaloverlay's overlay input) and the
  * camera images thermaloverlay lays them on: 4 bytes a pixel, alpha (or padding) last. */

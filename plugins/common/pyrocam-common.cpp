@@ -150,6 +150,14 @@ void ensure_buffer_pool(GstQuery* query, gsize size) {
   gst_object_unref(pool);
 }
 
+bool is_fused_bands(const GstCaps* caps, guint index) {
+  if (!caps || index >= gst_caps_get_size(caps)) return false;
+  const GstCapsFeatures* features = gst_caps_get_features(caps, index);
+  return gst_structure_has_name(gst_caps_get_structure(caps, index), PYROCAM_BANDS_MEDIA_TYPE) &&
+         features && !gst_caps_features_is_any(features) &&
+         gst_caps_features_contains(features, PYROCAM_CAPS_FEATURE_MOSAIC);
+}
+
 gsize frame_size_of_caps(GstCaps* caps) {
   if (!caps || gst_caps_get_size(caps) < 1) return 0;
   const GstStructure* s = gst_caps_get_structure(caps, 0);
@@ -158,8 +166,9 @@ gsize frame_size_of_caps(GstCaps* caps) {
     return gst_video_info_from_caps(&info, caps) ? GST_VIDEO_INFO_SIZE(&info) : 0;
   }
   const int width = structure_int(s, "width", 0), height = structure_int(s, "height", 0);
-  // x-pyrocam-mosaic carries no bands field: one plane.
-  const int planes = gst_structure_has_name(s, PYROCAM_BANDS_MEDIA_TYPE)
+  // x-pyrocam-mosaic carries no bands field: one plane; so do fused bands (their mosaic).
+  const int planes = is_fused_bands(caps) ? 1
+                     : gst_structure_has_name(s, PYROCAM_BANDS_MEDIA_TYPE)
                          ? structure_int(s, "bands", 0)
                      : gst_structure_has_name(s, PYROCAM_MOSAIC_MEDIA_TYPE) ? 1
                                                                             : 0;

@@ -93,9 +93,13 @@ T locked_copy(gpointer object, const T& value) {
 void ensure_buffer_pool(GstQuery* query, gsize size);
 
 /* Bytes of one frame as fixed caps describe it: x-pyrocam-mosaic (one float32 plane),
- * x-pyrocam-bands (`bands` float32 planes) or video/x-raw (GstVideoInfo, with its strides); 0
- * when the caps do not say. */
+ * x-pyrocam-bands (`bands` float32 planes; with the memory:PyrocamMosaic feature the mosaic's
+ * one) or video/x-raw (GstVideoInfo, with its strides); 0 when the caps do not say. */
 gsize frame_size_of_caps(GstCaps* caps);
+
+/* Whether structure `index` of the caps is the band planes as their mosaic (the fused path,
+ * PYROCAM_CAPS_FEATURE_MOSAIC). */
+bool is_fused_bands(const GstCaps* caps, guint index = 0);
 
 /* GstBaseTransform::decide_allocation of the pyrocam filters, which derive from GstBaseTransform
  * directly: a pool of output frames (ensure_buffer_pool) when downstream offers none, then

@@ -34,6 +34,12 @@
  *
  * #GstDemosaic25:method auto (the default) is matched, for 5x5 and Bayer mosaics alike.
  *
+ * Linked to ratiotemp (directly or through a queue), a Bayer mosaic with method matched (or
+ * auto) and no mixed-pixel check takes the fused path: the elements agree on
+ * video/x-pyrocam-bands(memory:PyrocamMosaic), this element passes the mosaic on untouched and
+ * ratiotemp demosaics it a strip of rows at a time where it reads it, so that the float planes
+ * never cross memory; the readings are the same. Any other downstream element gets the planes.
+ *
  * With a #GstDemosaic25:profile, a stream whose mosaic pattern (from the caps) is not the
  * profile's, or whose 5x5 band-map caps field (pyrocamsrc sets it from its profile) differs
  * from the profile's band map, is refused (CORE NEGOTIATION naming both). Without a profile the
@@ -147,11 +153,19 @@ GType gst_demosaic25_method_get_type(void) {
 
 static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
     "sink", GST_PAD_SINK, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_MOSAIC_CAPS));
-static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
-    "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_BANDS_CAPS));
+static GstStaticPadTemplate src_template =
+    GST_STATIC_PAD_TEMPLATE("src", GST_PAD_SRC, GST_PAD_ALWAYS,
+                            GST_STATIC_CAPS(PYROCAM_BANDS_CAPS "; " PYROCAM_FUSED_BANDS_CAPS));
 
 static Settings copy_settings(GstDemosaic25* self) {
   return pg::locked_copy(self, *self->settings);
+}
+
+/* Whether the settings let demosaic25 hand its planes on as their mosaic (the fused path): a
+ * Bayer mosaic with method matched and no mixed-pixel check (the defaults). */
+static bool fused_path_allowed(const Settings& s) {
+  return (s.method == GST_DEMOSAIC25_METHOD_MATCHED || s.method == GST_DEMOSAIC25_METHOD_AUTO) &&
+         s.mixed_pixels == 0;
 }
 
 /* A dimension scaled by 1/divisor (forward) or by divisor (backward, any remainder allowed). */
@@ -181,9 +195,12 @@ static GstCaps* gst_demosaic25_transform_caps(GstBaseTransform* trans, GstPadDir
   const int bayer_divisor = settings.method == GST_DEMOSAIC25_METHOD_BIN2X2 ? 2 : 1;
   const std::string profile_band_map = pg::locked_copy(self, self->state->profile_band_map);
   const bool forward = direction == GST_PAD_SINK;
+  const bool fusable = fused_path_allowed(settings);
   GstCaps* result = gst_caps_new_empty();
   for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
     const GstStructure* s = gst_caps_get_structure(caps, i);
+    // Fused bands come from a Bayer mosaic demosaicked with matched, without the check.
+    if (!forward && pg::is_fused_bands(caps, i) && !fusable) continue;
     /* Which layouts this structure allows. */
     bool bayer = true, snapshot = true;
     const char* fixed = gst_structure_get_string(s, forward ? "pattern" : "layout");
@@ -219,10 +236,22 @@ static GstCaps* gst_demosaic25_transform_caps(GstBaseTransform* trans, GstPadDir
         }
       }
       if (forward) pg::copy_fields(s, out, {PYROCAM_FIELD_SATURATION_LEVEL});
+      if (!forward && pg::is_fused_bands(caps, i)) pg::copy_fields(s, out, {"pattern"});
       scale_dimension(s, out, "width", divisor, forward);
       scale_dimension(s, out, "height", divisor, forward);
       pg::copy_fields(s, out, {"framerate"});
+      // The planes as their mosaic, after the planes themselves: ratiotemp asks for it first,
+      // any other element (or a sink taking anything) gets the planes.
+      GstStructure* fused = forward && !snap && fusable ? gst_structure_copy(out) : nullptr;
       result = gst_caps_merge_structure(result, out);
+      if (fused) {
+        if (const char* p = gst_structure_get_string(s, "pattern"))
+          gst_structure_set(fused, "pattern", G_TYPE_STRING, p, nullptr);
+        else
+          pg::set_list_field(fused, "pattern", PYROCAM_BAYER_FORMATS);
+        result = gst_caps_merge_structure_full(
+            result, fused, gst_caps_features_new(PYROCAM_CAPS_FEATURE_MOSAIC, nullptr));
+      }
     }
   }
   if (filter) {
@@ -245,6 +274,58 @@ static gboolean gst_demosaic25_transform_size(GstBaseTransform* /*trans*/,
       direction == GST_PAD_SINK ? static_cast<gsize>(pg::structure_int(s, "bands", 0)) : 1;
   *othersize = w * h * planes * sizeof(float);
   return *othersize > 0;
+}
+
+/* The bit depth of a mosaic's caps (8 without the field). */
+static int stream_bit_depth(GstCaps* caps) {
+  int depth = 8;
+  gst_structure_get_int(gst_caps_get_structure(caps, 0), "bit-depth", &depth);
+  return depth;
+}
+
+/* The noise of the stream's bands, for the mixed-pixel check and matched's no-light level: the
+ * profile's, else, for a Bayer mosaic, that of the shipped colour camera band by band (what
+ * pyrocam-calib measure uses for its models) scaled to the stream's bit depth, else its red
+ * band's (0.03 DN per electron, 6 electrons read noise at 8 bits) for every band. */
+static std::vector<pyrocam::SignalNoise> stream_noise(GstDemosaic25* self, const State& st,
+                                                      int bands, pyrocam::MosaicLayout::Kind kind,
+                                                      int depth) {
+  std::vector<pyrocam::SignalNoise> noise = st.profile_noise;
+  const double scale = std::ldexp(1.0, depth - 8);
+  if (static_cast<int>(noise.size()) < bands && kind == pyrocam::MosaicLayout::Kind::kBayer) {
+    try {
+      const pyrocam::CameraProfile colour = pyrocam::load_profile_by_name(kColourCameraProfile);
+      const double s = std::ldexp(1.0, depth - colour.bit_depth);
+      if (colour.band_count() == bands)
+        for (int b = 0; b < bands; ++b) {
+          const pyrocam::SignalNoise n = pyrocam::signal_noise(colour, b);
+          noise.push_back(pyrocam::SignalNoise{n.shot_gain * s, n.floor_dn2 * s * s});
+        }
+    } catch (const std::exception& e) {
+      GST_WARNING_OBJECT(self, "no %s profile for the mixed-pixel check's noise: %s",
+                         kColourCameraProfile, e.what());
+    }
+  }
+  if (static_cast<int>(noise.size()) < bands)
+    noise.assign(static_cast<std::size_t>(bands),
+                 pyrocam::SignalNoise{0.03 * scale, 0.23 * scale * scale});
+  return noise;
+}
+
+/* Fused bands carry the no-light level ratiotemp demosaics with: set here, once the input is
+ * known. */
+static GstCaps* gst_demosaic25_fixate_caps(GstBaseTransform* trans, GstPadDirection direction,
+                                           GstCaps* caps, GstCaps* othercaps) {
+  GstDemosaic25* self = GST_DEMOSAIC25(trans);
+  othercaps = gst_caps_fixate(othercaps);
+  if (direction != GST_PAD_SINK || !pg::is_fused_bands(othercaps)) return othercaps;
+  othercaps = gst_caps_make_writable(othercaps);
+  const std::vector<pyrocam::SignalNoise> noise = stream_noise(
+      self, *self->state, 3, pyrocam::MosaicLayout::Kind::kBayer, stream_bit_depth(caps));
+  gst_structure_set(
+      gst_caps_get_structure(othercaps, 0), PYROCAM_FIELD_NO_SIGNAL_LEVEL, G_TYPE_DOUBLE,
+      static_cast<double>(static_cast<float>(pyrocam::no_signal_level_dn(noise))), nullptr);
+  return othercaps;
 }
 
 static gboolean gst_demosaic25_set_caps(GstBaseTransform* trans, GstCaps* incaps,
@@ -299,39 +380,31 @@ static gboolean gst_demosaic25_set_caps(GstBaseTransform* trans, GstCaps* incaps
       throw pyrocam::InputError("the mosaic is smaller than one period");
   });
   if (!ok) return FALSE;
-  // The noise of the mixed-pixel check: the profile's, else, for a Bayer mosaic, that of the
-  // shipped colour camera band by band (what pyrocam-calib measure uses for its models) scaled
-  // to the stream's bit depth, else its red band's (0.03 DN per electron, 6 electrons read
-  // noise at 8 bits) for every band.
-  st.noise = st.profile_noise;
-  int depth = 8;
-  gst_structure_get_int(gst_caps_get_structure(incaps, 0), "bit-depth", &depth);
-  const double scale = std::ldexp(1.0, depth - 8);
-  if (static_cast<int>(st.noise.size()) < st.bands &&
-      st.layout.kind == pyrocam::MosaicLayout::Kind::kBayer) {
-    try {
-      const pyrocam::CameraProfile colour = pyrocam::load_profile_by_name(kColourCameraProfile);
-      const double s = std::ldexp(1.0, depth - colour.bit_depth);
-      if (colour.band_count() == st.bands)
-        for (int b = 0; b < st.bands; ++b) {
-          const pyrocam::SignalNoise n = pyrocam::signal_noise(colour, b);
-          st.noise.push_back(pyrocam::SignalNoise{n.shot_gain * s, n.floor_dn2 * s * s});
-        }
-    } catch (const std::exception& e) {
-      GST_WARNING_OBJECT(self, "no %s profile for the mixed-pixel check's noise: %s",
-                         kColourCameraProfile, e.what());
-    }
-  }
-  if (static_cast<int>(st.noise.size()) < st.bands)
-    st.noise.assign(static_cast<std::size_t>(st.bands),
-                    pyrocam::SignalNoise{0.03 * scale, 0.23 * scale * scale});
+  const int depth = stream_bit_depth(incaps);
+  st.noise = stream_noise(self, st, st.bands, st.layout.kind, depth);
   // Footprints all below the dim threshold give pixels without a reading whatever the check
   // says: the profile's threshold, else the shipped profiles' 20 DN at 8 bits.
-  st.skip_below_dn = static_cast<float>(st.profile_dim_dn >= 0 ? st.profile_dim_dn : 20 * scale);
+  st.skip_below_dn = static_cast<float>(st.profile_dim_dn >= 0 ? st.profile_dim_dn
+                                                               : 20 * std::ldexp(1.0, depth - 8));
   st.no_signal_dn = static_cast<float>(pyrocam::no_signal_level_dn(st.noise));
+  // The fused path: the planes go on as their mosaic, which ratiotemp demosaics the same way.
+  const bool fused = pg::is_fused_bands(outcaps);
+  if (fused) {
+    double level = NAN;
+    gst_structure_get_double(out, PYROCAM_FIELD_NO_SIGNAL_LEVEL, &level);
+    if (!fused_path_allowed(settings) || st.layout.kind != pyrocam::MosaicLayout::Kind::kBayer ||
+        static_cast<float>(level) != st.no_signal_dn) {
+      PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation, "Unsupported output format",
+                         "fused bands asked for without a Bayer mosaic, method matched and no "
+                         "mixed-pixel check, or with another no-signal level");
+      return FALSE;
+    }
+  }
+  gst_base_transform_set_passthrough(trans, fused);
   st.configured = true;
-  GST_INFO_OBJECT(self, "%dx%d %s -> %d bands of %dx%d", st.in_width, st.in_height, pattern,
-                  st.bands, st.out_width, st.out_height);
+  GST_INFO_OBJECT(self, "%dx%d %s -> %d bands of %dx%d%s", st.in_width, st.in_height, pattern,
+                  st.bands, st.out_width, st.out_height,
+                  fused ? " (fused: the mosaic passes on, ratiotemp demosaics it)" : "");
   return TRUE;
 }
 
@@ -418,31 +491,39 @@ static GstFlowReturn gst_demosaic25_transform(GstBaseTransform* trans, GstBuffer
 static void gst_demosaic25_set_property(GObject* object, guint prop_id, const GValue* value,
                                         GParamSpec* pspec) {
   GstDemosaic25* self = GST_DEMOSAIC25(object);
-  pg::ObjectLock lock(self);
-  Settings& s = *self->settings;
-  const bool running = GST_STATE(self) > GST_STATE_READY;
-  switch (prop_id) {
-    case PROP_METHOD:
-      if (running)
-        GST_WARNING_OBJECT(self, "method can only change in NULL or READY");
-      else
-        s.method = static_cast<GstDemosaic25Method>(g_value_get_enum(value));
-      break;
-    case PROP_MIXED_PIXELS:
-      s.mixed_pixels = g_value_get_double(value);
-      break;
-    case PROP_PROFILE:
-      if (running) {
-        GST_WARNING_OBJECT(self, "profile can only change in NULL or READY");
-      } else {
-        const char* v = g_value_get_string(value);
-        s.profile = v ? v : "";
+  bool reconfigure = false;
+  {
+    pg::ObjectLock lock(self);
+    Settings& s = *self->settings;
+    const bool running = GST_STATE(self) > GST_STATE_READY;
+    switch (prop_id) {
+      case PROP_METHOD:
+        if (running)
+          GST_WARNING_OBJECT(self, "method can only change in NULL or READY");
+        else
+          s.method = static_cast<GstDemosaic25Method>(g_value_get_enum(value));
+        break;
+      case PROP_MIXED_PIXELS: {
+        const double spread = g_value_get_double(value);
+        // Turning the check on or off while playing starts or ends the fused path.
+        if ((spread == 0) != (s.mixed_pixels == 0)) reconfigure = true;
+        s.mixed_pixels = spread;
+        break;
       }
-      break;
-    default:
-      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
-      break;
+      case PROP_PROFILE:
+        if (running) {
+          GST_WARNING_OBJECT(self, "profile can only change in NULL or READY");
+        } else {
+          const char* v = g_value_get_string(value);
+          s.profile = v ? v : "";
+        }
+        break;
+      default:
+        G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+        break;
+    }
   }
+  if (reconfigure) gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
 }
 
 static void gst_demosaic25_get_property(GObject* object, guint prop_id, GValue* value,
@@ -532,6 +613,7 @@ static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
 
   trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_transform_caps);
   trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_demosaic25_transform_size);
+  trans_class->fixate_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_fixate_caps);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_set_caps);
   trans_class->decide_allocation = GST_DEBUG_FUNCPTR(pg::decide_allocation);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_demosaic25_start);

@@ -7,7 +7,11 @@
  * (#GstRatioTemp:model). The output is video/x-raw, format=GRAY16_LE, of the same width,
  * height and framerate: one value per pixel in units of 0.1 K (14732 = 1473.2 K = 1200.05 degC)
  * and 0 for "no reading", so temperatures can be recorded losslessly (e.g. avenc_ffv1 !
- * matroskamux) and read back by any tool.
+ * matroskamux) and read back by any tool. Linked to demosaic25 demosaicking a Bayer mosaic with
+ * method matched, it asks for the bands as their mosaic (video/x-pyrocam-bands with the
+ * memory:PyrocamMosaic feature, the fused path) and demosaics it here, 16 rows at a time, each
+ * strip read while it is in the cache: the same readings without the float planes crossing
+ * memory, and blocks of columns without light skipped.
  *
  * A pixel has no reading (0) when the estimate falls outside the model's temperature range, or
  * when a band is saturated (+INF), without a reading (NaN) or below the model's dim threshold
@@ -178,6 +182,11 @@ struct pyrocam::gst::ratiotemp::State {
   int width = 0, height = 0, bands = 0;
   GstVideoInfo out_info{};
   std::vector<cv::Mat> planes;  // headers onto the input buffer
+  // The fused path (demosaic25 linked to this element): the input is the planes' mosaic,
+  // demosaicked here a strip at a time with demosaic25's settings from the caps.
+  bool fused = false;
+  pyrocam::MosaicLayout mosaic_layout;
+  float no_signal_dn = 0;
   cv::Mat temperature_c, uncertainty_c;
   GstClockTime last_stats = GST_CLOCK_TIME_NONE;
   guint64 frames = 0;  // since start or the last flush
@@ -195,8 +204,9 @@ using rt::State;
 G_DEFINE_TYPE(GstRatioTemp, gst_ratio_temp, GST_TYPE_BASE_TRANSFORM);
 GST_ELEMENT_REGISTER_DEFINE(ratiotemp, "ratiotemp", GST_RANK_NONE, GST_TYPE_RATIO_TEMP);
 
-static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
-    "sink", GST_PAD_SINK, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_BANDS_CAPS));
+static GstStaticPadTemplate sink_template =
+    GST_STATIC_PAD_TEMPLATE("sink", GST_PAD_SINK, GST_PAD_ALWAYS,
+                            GST_STATIC_CAPS(PYROCAM_FUSED_BANDS_CAPS "; " PYROCAM_BANDS_CAPS));
 static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
     "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_TEMPERATURE_CAPS));
 
@@ -270,9 +280,22 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
     return FALSE;
   }
   st.planes.assign(static_cast<std::size_t>(st.bands), cv::Mat());
+  st.fused = pg::is_fused_bands(incaps);
+  if (st.fused) {
+    const char* pattern = gst_structure_get_string(in, "pattern");
+    double level = NAN;
+    gst_structure_get_double(in, PYROCAM_FIELD_NO_SIGNAL_LEVEL, &level);
+    if (!pattern || !std::isfinite(level)) {
+      PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation, "Unsupported band format",
+                         "fused bands without a pattern or a no-signal-level");
+      return FALSE;
+    }
+    st.mosaic_layout = pg::layout_for_pattern(pattern);
+    st.no_signal_dn = static_cast<float>(level);
+  }
   st.configured = true;
-  GST_INFO_OBJECT(self, "%d bands of %dx%d (%s) -> GRAY16_LE", st.bands, st.width, st.height,
-                  layout);
+  GST_INFO_OBJECT(self, "%d bands of %dx%d (%s) -> GRAY16_LE%s", st.bands, st.width, st.height,
+                  layout, st.fused ? " (fused: demosaicked here, a strip at a time)" : "");
   return TRUE;
 }
 
@@ -490,9 +513,12 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
   const bool ok =
       PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not estimate temperatures", [&] {
         pg::MappedImage in;
-        in.map_float(inbuf, st.width, st.height, st.bands, GST_MAP_READ);
-        for (int b = 0; b < st.bands; ++b)
-          st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
+        in.map_float(inbuf, st.width, st.height, st.fused ? 1 : st.bands, GST_MAP_READ);
+        if (!st.fused)
+          for (int b = 0; b < st.bands; ++b)
+            st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
+        const pyrocam::PlaneEstimator::MatchedMosaic mosaic{in.image(), st.mosaic_layout,
+                                                            st.no_signal_dn};
         pyrocam::PlaneEstimator& chosen = st.estimators->estimator(st.method);
         // The frame's gain scales its shot noise per DN; rebuilt only when it changes.
         const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(inbuf);
@@ -509,11 +535,18 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         if (!uncertainty && !stats_due) {
           // Straight into the output frame (the header wraps it; a copy only if it did not fit).
           cv::Mat codes = out.image;
-          estimator.estimate_codes(st.planes, codes);
+          if (st.fused)
+            estimator.estimate_codes(mosaic, codes);
+          else
+            estimator.estimate_codes(st.planes, codes);
           if (codes.data != out.image.data) codes.copyTo(out.image);
           return;
         }
-        estimator.estimate(st.planes, st.temperature_c, uncertainty ? &st.uncertainty_c : nullptr);
+        cv::Mat* u = uncertainty ? &st.uncertainty_c : nullptr;
+        if (st.fused)
+          estimator.estimate(mosaic, st.temperature_c, u);
+        else
+          estimator.estimate(st.planes, st.temperature_c, u);
         if (uncertainty) {
           pyrocam::encode_decikelvin_difference(st.uncertainty_c).copyTo(out.image);
         } else {

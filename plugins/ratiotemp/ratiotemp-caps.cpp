@@ -34,18 +34,26 @@ MappedFrame::~MappedFrame() { gst_video_frame_unmap(&frame); }
 GstCaps* transform_caps(GstBaseTransform* trans, GstPadDirection direction, GstCaps* caps,
                         GstCaps* filter) {
   /* The band count and layout are not restricted to the model's here: set_caps checks them and
-   * names both in its error, which a failed negotiation would not. */
-  GstCaps* templ = gst_caps_from_string(direction == GST_PAD_SINK ? PYROCAM_TEMPERATURE_CAPS
-                                                                  : PYROCAM_BANDS_CAPS);
+   * names both in its error, which a failed negotiation would not. Towards the sink: the fused
+   * bands first (demosaic25 then hands on the mosaic and the planes never cross memory), then
+   * the planes. */
+  const bool to_sink = direction == GST_PAD_SRC;
+  GstCaps* templ = gst_caps_from_string(to_sink ? PYROCAM_FUSED_BANDS_CAPS "; " PYROCAM_BANDS_CAPS
+                                                : PYROCAM_TEMPERATURE_CAPS);
   GstCaps* result = gst_caps_new_empty();
   for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
-    GstStructure* out = gst_structure_copy(gst_caps_get_structure(templ, 0));
-    pg::copy_dimensions(gst_caps_get_structure(caps, i), out);
-    result = gst_caps_merge_structure(result, out);
+    for (guint t = 0; t < gst_caps_get_size(templ); ++t) {
+      GstStructure* out = gst_structure_copy(gst_caps_get_structure(templ, t));
+      pg::copy_dimensions(gst_caps_get_structure(caps, i), out);
+      result = gst_caps_merge_structure_full(
+          result, out, gst_caps_features_copy(gst_caps_get_features(templ, t)));
+    }
   }
   gst_caps_unref(templ);
   if (filter) {
-    GstCaps* tmp = gst_caps_intersect_full(filter, result, GST_CAPS_INTERSECT_FIRST);
+    /* This element's order first towards the sink: it prefers the fused bands. */
+    GstCaps* tmp = to_sink ? gst_caps_intersect_full(result, filter, GST_CAPS_INTERSECT_FIRST)
+                           : gst_caps_intersect_full(filter, result, GST_CAPS_INTERSECT_FIRST);
     gst_caps_unref(result);
     result = tmp;
   }
@@ -64,10 +72,7 @@ gboolean transform_size(GstBaseTransform* trans, GstPadDirection direction, GstC
     *othersize = GST_VIDEO_INFO_SIZE(&info);
     return TRUE;
   }
-  const GstStructure* s = gst_caps_get_structure(othercaps, 0);
-  *othersize = static_cast<gsize>(pg::structure_int(s, "width", 0)) *
-               static_cast<gsize>(pg::structure_int(s, "height", 0)) *
-               static_cast<gsize>(pg::structure_int(s, "bands", 0)) * sizeof(float);
+  *othersize = pg::frame_size_of_caps(othercaps);
   return *othersize > 0;
 }
 

@@ -15,12 +15,14 @@
 #include <cstdint>
 #include <limits>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 #if defined(__SSE2__)
 #include <immintrin.h>
 #endif
 
 #include "detail/vector_clones.h"
+#include "pyrocam/core/error.h"
 #include "pyrocam/runtime/demosaic.h"
 
 namespace pyrocam {
@@ -207,35 +209,44 @@ std::vector<cv::Point> matched_footprint(const MosaicLayout& layout, int band, i
   return at;
 }
 
-void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, float no_signal_dn,
-                            std::vector<cv::Mat>& planes) {
-  constexpr int kReach = 2;
-  constexpr float kInf = std::numeric_limits<float>::infinity();
-  const bool mark_no_signal = no_signal_dn > -kInf;
-  std::array<std::array<std::array<RowFn, 2>, 2>, 3> rows_of{};  // band, row, column parity
-  for (int b = 0; b < 3; ++b)
-    for (int py = 0; py < 2; ++py)
-      for (int px = 0; px < 2; ++px) rows_of[b][py][px] = row_fn(kernel_for(layout, b, px, py));
-  const int width = mosaic.cols, height = mosaic.rows, padded_width = width + 2 * kReach;
-  // Padded column p goes to half row p / 2 of its parity: even (p even) or odd.
-  const int half = padded_width / 2 + 1;
-  const int n_even = (width + 1) / 2, n_odd = width / 2;  // output columns of each parity
-  // Planes larger than the caches go to memory before the next element reads them: storing
-  // them past the cache saves reading each line in first (a 2048x2048 frame: 7 instead of
-  // 12 CPU ms). Small ones stay in the cache for it.
-  const bool stream = 3.0 * 4.0 * static_cast<double>(mosaic.total()) >= 16.0 * 1024 * 1024;
-  // The cold background around a melt pool or a filament is most of the frame: a block of
-  // output columns whose kernels reach only samples without light has every band value -INF,
-  // i.e. 0, which is written without running the kernels. Blocks of kBlock column pairs; output
-  // pair i reads the input pairs i..i+2, so output block K reads input blocks K and K + 1.
-  constexpr int kBlock = 32;
-  const int blocks = (half + kBlock - 1) / kBlock;
-  const int out_blocks = (n_even + kBlock - 1) / kBlock;
-  auto run = [&](const cv::Range& r) {
+namespace {
+
+// Matched Bayer demosaicking of ranges of output rows, for a whole frame or a strip of one.
+//
+// The cold background around a melt pool or a filament is most of the frame: a block of output
+// columns whose kernels reach only samples without light has every band value -INF, i.e. 0,
+// which is written without running the kernels. Blocks of kBlock column pairs; output pair i
+// reads the input pairs i..i+2, so output block K reads input blocks K and K + 1.
+class MatchedBayer {
+ public:
+  static constexpr int kReach = 2, kBlock = kMatchedBlockColumns / 2;
+
+  MatchedBayer(const cv::Mat& mosaic, const MosaicLayout& layout, float no_signal_dn)
+      : mosaic_(mosaic), no_signal_dn_(no_signal_dn) {
+    mark_no_signal_ = no_signal_dn > -std::numeric_limits<float>::infinity();
+    for (int b = 0; b < 3; ++b)
+      for (int py = 0; py < 2; ++py)
+        for (int px = 0; px < 2; ++px) rows_of_[b][py][px] = row_fn(kernel_for(layout, b, px, py));
+    width_ = mosaic.cols, height_ = mosaic.rows, padded_width_ = width_ + 2 * kReach;
+    // Padded column p goes to half row p / 2 of its parity: even (p even) or odd.
+    half_ = padded_width_ / 2 + 1;
+    n_even_ = (width_ + 1) / 2, n_odd_ = width_ / 2;  // output columns of each parity
+    blocks_ = (half_ + kBlock - 1) / kBlock;
+    out_blocks_ = (n_even_ + kBlock - 1) / kBlock;
+  }
+
+  int out_blocks() const { return out_blocks_; }
+
+  // Output rows [y0, y1): band b of row y into out(b, y) (a row of the mosaic's width). With
+  // `stream` the stores bypass the cache and are fenced at the end. With `lit`, one flag per
+  // row and output block from row y0 on: whether a sample its kernels reach has light.
+  template <class Out>
+  void run(int y0, int y1, const Out& out, bool stream, std::uint8_t* lit_out) const {
     // The five input rows around the output row, split by parity: a ring, each row read once
-    // per chunk; then the row sums v and c and the outputs, split too.
+    // per range; then the row sums v and c and the outputs, split too.
+    const int half = half_;
     std::vector<float> buffer(
-        static_cast<std::size_t>(2 * (5 + 2 + 2) * half + padded_width + half));
+        static_cast<std::size_t>(2 * (5 + 2 + 2) * half + padded_width_ + half));
     auto slot = [&](int yy) { return (yy + 2 * kReach) % 5; };
     auto ring = [&](int yy) { return buffer.data() + slot(yy) * 2 * half; };
     float* v = buffer.data() + 10 * half;  // even half, then odd half
@@ -243,54 +254,57 @@ void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, f
     float* out_even = c + 2 * half;
     float* out_odd = out_even + half;
     float* padded = out_odd + half;
-    float* zeros = padded + padded_width;  // band values of blocks without light
+    float* zeros = padded + padded_width_;  // band values of blocks without light
     std::fill(zeros, zeros + half, 0.f);
     // Per ring row and input block: whether a sample has light (all do without the level).
-    std::vector<std::uint8_t> lit(static_cast<std::size_t>(5 * blocks), 1);
-    std::vector<std::uint8_t> out_lit(static_cast<std::size_t>(out_blocks), 1);
+    std::vector<std::uint8_t> lit(static_cast<std::size_t>(5 * blocks_), 1);
+    std::vector<std::uint8_t> out_lit(static_cast<std::size_t>(out_blocks_), 1);
     auto load = [&](int yy) {
       // Mirrored without repeating the edge, which keeps the pattern (as the bilinear method).
       const float* src =
-          mosaic.ptr<float>(cv::borderInterpolate(yy, height, cv::BORDER_REFLECT_101));
-      std::copy(src, src + width, padded + kReach);
+          mosaic_.ptr<float>(cv::borderInterpolate(yy, height_, cv::BORDER_REFLECT_101));
+      std::copy(src, src + width_, padded + kReach);
       for (int k = 1; k <= kReach; ++k) {
-        padded[kReach - k] = src[cv::borderInterpolate(-k, width, cv::BORDER_REFLECT_101)];
-        padded[kReach + width - 1 + k] =
-            src[cv::borderInterpolate(width - 1 + k, width, cv::BORDER_REFLECT_101)];
+        padded[kReach - k] = src[cv::borderInterpolate(-k, width_, cv::BORDER_REFLECT_101)];
+        padded[kReach + width_ - 1 + k] =
+            src[cv::borderInterpolate(width_ - 1 + k, width_, cv::BORDER_REFLECT_101)];
       }
       // A sample without signal becomes -INF, which every kernel sum carries to the band value
       // (with a saturated +INF sample: NaN, no reading); the band value then reads as dim.
       float* even = ring(yy);
-      split_row(padded, padded_width, no_signal_dn, even, even + half);
-      if (!mark_no_signal) return;
-      std::uint8_t* row_lit = lit.data() + slot(yy) * blocks;
-      for (int k = 0; k < blocks; ++k) {
-        const int p0 = 2 * kBlock * k, p1 = std::min(padded_width, p0 + 2 * kBlock);
-        row_lit[k] = p0 < p1 && any_lit(padded + p0, p1 - p0, no_signal_dn);
+      split_row(padded, padded_width_, no_signal_dn_, even, even + half);
+      if (!mark_no_signal_) return;
+      std::uint8_t* row_lit = lit.data() + slot(yy) * blocks_;
+      for (int k = 0; k < blocks_; ++k) {
+        const int p0 = 2 * kBlock * k, p1 = std::min(padded_width_, p0 + 2 * kBlock);
+        row_lit[k] = p0 < p1 && any_lit(padded + p0, p1 - p0, no_signal_dn_);
       }
     };
-    for (int yy = r.start - kReach; yy < r.start + kReach; ++yy) load(yy);
-    for (int y = r.start; y < r.end; ++y) {
+    for (int yy = y0 - kReach; yy < y0 + kReach; ++yy) load(yy);
+    for (int y = y0; y < y1; ++y) {
       load(y + kReach);
-      if (mark_no_signal) {
+      if (mark_no_signal_) {
         std::fill(out_lit.begin(), out_lit.end(), 0);
         for (int s = 0; s < 5; ++s) {
-          const std::uint8_t* row_lit = lit.data() + s * blocks;
-          for (int k = 0; k < out_blocks; ++k)
-            out_lit[k] |= row_lit[k] | (k + 1 < blocks ? row_lit[k + 1] : 0);
+          const std::uint8_t* row_lit = lit.data() + s * blocks_;
+          for (int k = 0; k < out_blocks_; ++k)
+            out_lit[k] |= row_lit[k] | (k + 1 < blocks_ ? row_lit[k + 1] : 0);
         }
       }
+      if (lit_out)
+        std::copy(out_lit.begin(), out_lit.end(),
+                  lit_out + static_cast<std::ptrdiff_t>(y - y0) * out_blocks_);
       const float *r0_even = ring(y), *r0_odd = r0_even + half;
       const float *v_even = v, *v_odd = v + half, *c_even = c, *c_odd = c + half;
-      for (int k0 = 0; k0 < out_blocks;) {
+      for (int k0 = 0; k0 < out_blocks_;) {
         int k1 = k0 + 1;
-        while (k1 < out_blocks && out_lit[k1] == out_lit[k0]) ++k1;
+        while (k1 < out_blocks_ && out_lit[k1] == out_lit[k0]) ++k1;
         // Output pairs [i0, i1): columns [2 i0, x1).
-        const int i0 = kBlock * k0, i1 = std::min(kBlock * k1, n_even);
-        const int x1 = std::min(2 * i1, width);
+        const int i0 = kBlock * k0, i1 = std::min(kBlock * k1, n_even_);
+        const int x1 = std::min(2 * i1, width_);
         if (!out_lit[k0]) {
-          for (std::size_t b = 0; b < 3; ++b)
-            interleave(zeros, zeros, planes[b].ptr<float>(y) + 2 * i0, x1 - 2 * i0, true, stream);
+          for (int b = 0; b < 3; ++b)
+            interleave(zeros, zeros, out(b, y) + 2 * i0, x1 - 2 * i0, true, stream);
           k0 = k1;
           continue;
         }
@@ -299,30 +313,73 @@ void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, f
         add_rows(ring(y - 1) + half + i0, ring(y + 1) + half + i0, v + half + i0, sums);
         add_rows(ring(y - 2) + i0, ring(y + 2) + i0, c + i0, sums);
         add_rows(ring(y - 2) + half + i0, ring(y + 2) + half + i0, c + half + i0, sums);
-        const int n_e = i1 - i0, n_o = std::max(0, std::min(i1, n_odd) - i0);
+        const int n_e = i1 - i0, n_o = std::max(0, std::min(i1, n_odd_) - i0);
         for (int b = 0; b < 3; ++b) {
-          const auto& fn = rows_of[b][y & 1];
+          const auto& fn = rows_of_[b][y & 1];
           // Output column 2i: padded 2i + 2, so x - 2 is even[i] and x - 1 odd[i]; column
           // 2i + 1: padded 2i + 3, so x - 2 is odd[i] and x - 1 even[i + 1].
           fn[0](r0_even + i0, r0_odd + i0, v_even + i0, v_odd + i0, c_even + i0, c_odd + i0,
                 out_even + i0, n_e);
           fn[1](r0_odd + i0, r0_even + 1 + i0, v_odd + i0, v_even + 1 + i0, c_odd + i0,
                 c_even + 1 + i0, out_odd + i0, n_o);
-          interleave(out_even + i0, out_odd + i0,
-                     planes[static_cast<std::size_t>(b)].ptr<float>(y) + 2 * i0, x1 - 2 * i0,
-                     mark_no_signal, stream);
+          interleave(out_even + i0, out_odd + i0, out(b, y) + 2 * i0, x1 - 2 * i0, mark_no_signal_,
+                     stream);
         }
         k0 = k1;
       }
     }
 #if defined(__SSE2__)
-    if (stream) _mm_sfence();  // the streamed planes are complete before another thread reads
+    if (stream) _mm_sfence();  // the streamed rows are complete before another thread reads
 #endif
-  };
+  }
+
+ private:
+  const cv::Mat& mosaic_;
+  float no_signal_dn_;
+  bool mark_no_signal_ = false;
+  std::array<std::array<std::array<RowFn, 2>, 2>, 3> rows_of_{};  // band, row, column parity
+  int width_ = 0, height_ = 0, padded_width_ = 0, half_ = 0, n_even_ = 0, n_odd_ = 0;
+  int blocks_ = 0, out_blocks_ = 0;
+};
+
+}  // namespace
+
+void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, float no_signal_dn,
+                            std::vector<cv::Mat>& planes) {
+  const MatchedBayer matched(mosaic, layout, no_signal_dn);
+  // Planes larger than the caches go to memory before the next element reads them: storing
+  // them past the cache saves reading each line in first (a 2048x2048 frame: 7 instead of
+  // 12 CPU ms). Small ones stay in the cache for it.
+  const bool stream = 3.0 * 4.0 * static_cast<double>(mosaic.total()) >= 16.0 * 1024 * 1024;
+  const auto out = [&](int b, int y) { return planes[static_cast<std::size_t>(b)].ptr<float>(y); };
   if (static_cast<double>(mosaic.total()) < 512.0 * 512.0)
-    run(cv::Range(0, height));
+    matched.run(0, mosaic.rows, out, stream, nullptr);
   else
-    cv::parallel_for_(cv::Range(0, height), run, 2.0);
+    cv::parallel_for_(
+        cv::Range(0, mosaic.rows),
+        [&](const cv::Range& r) { matched.run(r.start, r.end, out, stream, nullptr); }, 2.0);
+}
+
+int matched_bayer_blocks(int width) {
+  return ((width + 1) / 2 + MatchedBayer::kBlock - 1) / MatchedBayer::kBlock;
+}
+
+void demosaic_matched_bayer_rows(const cv::Mat& mosaic, const MosaicLayout& layout,
+                                 float no_signal_dn, int y0, int y1, std::vector<cv::Mat>& strip,
+                                 std::vector<std::uint8_t>& lit) {
+  if (mosaic.type() != CV_32F || layout.kind != MosaicLayout::Kind::kBayer || mosaic.cols < 2 ||
+      mosaic.rows < 2)
+    throw InputError("matched demosaicking of rows takes a CV_32F Bayer mosaic of 2x2 or more");
+  if (!(0 <= y0 && y0 <= y1 && y1 <= mosaic.rows))
+    throw InputError("rows " + std::to_string(y0) + ".." + std::to_string(y1) +
+                     " are not rows of a mosaic of " + std::to_string(mosaic.rows));
+  const MatchedBayer matched(mosaic, layout, no_signal_dn);
+  strip.resize(3);
+  for (cv::Mat& plane : strip) plane.create(y1 - y0, mosaic.cols, CV_32F);
+  lit.resize(static_cast<std::size_t>(y1 - y0) * static_cast<std::size_t>(matched.out_blocks()));
+  matched.run(
+      y0, y1, [&](int b, int y) { return strip[static_cast<std::size_t>(b)].ptr<float>(y - y0); },
+      false, lit.data());
 }
 
 namespace {

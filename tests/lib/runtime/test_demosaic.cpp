@@ -287,6 +287,51 @@ TEST(Demosaic, matched_blocks_without_light_give_what_the_kernels_give) {
   }
 }
 
+// The fused path's strips are the whole frame's rows bit for bit, at the frame's top and bottom
+// (mirrored) and inside it, with an odd width; a block flagged without light has band values
+// 0, and every block with a nonzero value is flagged lit.
+TEST(Demosaic, matched_strips_are_the_frames_rows) {
+  const MosaicLayout m = MosaicLayout::bayer("BGGR");
+  cv::Mat img(61, 331, CV_32F);
+  cv::randu(img, 0, 5);  // the cold background, below the no-light level of 5
+  cv::Mat hot = img(cv::Rect(150, 20, 40, 9));
+  cv::randu(hot, 0, 200);
+  img.at<float>(22, 160) = kInf;
+  img.at<float>(25, 170) = std::nanf("");
+  std::vector<cv::Mat> frame;
+  demosaic(img, m, DemosaicMethod::kMatched, frame, 5.f);
+  const int blocks = matched_bayer_blocks(img.cols);
+  ASSERT_EQ(blocks, (img.cols + kMatchedBlockColumns - 1) / kMatchedBlockColumns);
+  std::vector<cv::Mat> strip;
+  std::vector<std::uint8_t> lit;
+  int unlit = 0;
+  for (const auto& [y0, y1] : {std::pair{0, 7}, {7, 23}, {22, 30}, {30, 60}, {60, 61}, {0, 61}}) {
+    demosaic_matched_bayer_rows(img, m, 5.f, y0, y1, strip, lit);
+    ASSERT_EQ(strip.size(), 3u);
+    ASSERT_EQ(lit.size(), static_cast<std::size_t>((y1 - y0) * blocks));
+    for (int b = 0; b < 3; ++b)
+      for (int y = y0; y < y1; ++y)
+        for (int x = 0; x < img.cols; ++x) {
+          const float want = frame[b].at<float>(y, x), got = strip[b].at<float>(y - y0, x);
+          const bool block_lit = lit[(y - y0) * blocks + x / kMatchedBlockColumns] != 0;
+          unlit += !block_lit;
+          if (!block_lit) {
+            EXPECT_EQ(got, 0.f) << b << " " << y << "," << x;
+          }
+          if (std::isnan(want))
+            EXPECT_TRUE(std::isnan(got)) << b << " " << y << "," << x;
+          else
+            ASSERT_EQ(std::memcmp(&got, &want, sizeof got), 0) << b << " " << y << "," << x;
+        }
+  }
+  EXPECT_GT(unlit, 0);
+  EXPECT_THROW(demosaic_matched_bayer_rows(img, m, 5.f, 5, 62, strip, lit), InputError);
+  std::vector<int> map(25);
+  std::iota(map.begin(), map.end(), 0);
+  const MosaicLayout snapshot = MosaicLayout::snapshot(5, 5, map);
+  EXPECT_THROW(demosaic_matched_bayer_rows(img, snapshot, 5.f, 0, 5, strip, lit), InputError);
+}
+
 // The fused pass (each block of rows checked as it is demosaicked, on the threads) marks what
 // the separate one marks: bit for bit, on a frame large enough to be split, with an odd width,
 // plates with sharp edges, saturated samples and a dim background left out by the skip level.

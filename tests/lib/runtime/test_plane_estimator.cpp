@@ -8,8 +8,13 @@
 #include <opencv2/core.hpp>
 
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/noise_model.h"
 #include "pyrocam/core/temperature_codes.h"
+#include "pyrocam/runtime/darksub.h"
+#include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/plane_estimator.h"
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
 #include "runtime/estimator_test_support.h"
 
 namespace pyrocam::test {
@@ -75,6 +80,92 @@ TEST(PlaneEstimator, an_analogue_gain_grows_the_uncertainty_not_the_reading) {
     EXPECT_THROW(estimator.set_analogue_gain(0), InputError);
     EXPECT_THROW(estimator.set_analogue_gain(NAN), InputError);
   }
+}
+
+// Bit-for-bit equality of two CV_32F images, NaN at the same places.
+int differing(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat marks;
+  cv::compare(a != a, b != b, marks, cv::CMP_NE);
+  cv::Mat x = a.clone(), y = b.clone();
+  cv::patchNaNs(x, -1);
+  cv::patchNaNs(y, -1);
+  return cv::countNonZero(marks) + cv::countNonZero(x != y);
+}
+
+// The fused path (strips demosaicked and read while in cache, dark blocks skipped) gives what
+// demosaicking the whole frame and reading its planes gives: temperatures, uncertainties and
+// codes, for every method and the settings that change what a pixel reads. Simulated frames of
+// an odd size with a saturated melt pool (and its dim rim) on a cold background and a plate
+// with noise, exposure and analogue gain varied.
+TEST(PlaneEstimator, the_fused_path_reads_what_the_planes_read) {
+  const auto model = test_model("test-model-rgb.json");
+  const CameraProfile& p = model->profile();
+  Simulator camera(p, UnitPerturbation::parse("typical", 2), 5);
+  std::vector<SignalNoise> noise;
+  for (int b = 0; b < p.band_count(); ++b) noise.push_back(signal_noise(p, b));
+  const float no_signal = static_cast<float>(no_signal_level_dn(noise));
+  std::vector<cv::Mat> mosaics;
+  for (int i : {2, 7}) {
+    const cv::Mat raw =
+        camera.render(melt_pool_scene(331, 131, i, 10), camera.exposure_for(1800, 150, 0.35), 0.35);
+    mosaics.emplace_back();
+    subtract_dark_level(raw, p.dark_offset_dn, p.thresholds.inference_saturation_dn,
+                        mosaics.back());
+  }
+  const cv::Mat plate = camera.render(plate_scene(203, 97, 1300), camera.exposure_for(1300, 120));
+  mosaics.emplace_back();
+  subtract_dark_level(plate, p.dark_offset_dn, p.thresholds.inference_saturation_dn,
+                      mosaics.back());
+  struct Setting {
+    Method method;
+    TemperatureEstimator::PartialBands partial;
+    double misfit, slope, gain;
+  };
+  using Partial = TemperatureEstimator::PartialBands;
+  for (const Setting& s : {Setting{Method::kLut, Partial::kSafe, 0, 0, 1},
+                           Setting{Method::kLut, Partial::kAny, 1e-3, 0, 2},
+                           Setting{Method::kLikelihood, Partial::kAny, 0, 0.02, 1},
+                           Setting{Method::kLikelihood, Partial::kOff, 1e-3, 0, 1},
+                           Setting{Method::kMlp, Partial::kSafe, 0, -0.01, 1}}) {
+    SCOPED_TRACE(method_name(s.method));
+    PlaneEstimator estimator(model, s.method, s.misfit);
+    estimator.set_partial_bands(s.partial);
+    estimator.set_emissivity_slope(s.slope, s.slope != 0 ? 0.01 : -1);
+    estimator.set_analogue_gain(s.gain);
+    for (const cv::Mat& mosaic : mosaics) {
+      const PlaneEstimator::MatchedMosaic fused{mosaic, p.mosaic, no_signal};
+      std::vector<cv::Mat> planes;
+      demosaic(mosaic, p.mosaic, DemosaicMethod::kMatched, planes, no_signal);
+      cv::Mat t, u, codes, t_fused, u_fused, codes_fused;
+      estimator.estimate(planes, t, &u);
+      estimator.estimate_codes(planes, codes);
+      estimator.estimate(fused, t_fused, &u_fused);
+      estimator.estimate_codes(fused, codes_fused);
+      EXPECT_EQ(differing(t, t_fused), 0);
+      EXPECT_EQ(differing(u, u_fused), 0);
+      ASSERT_EQ(codes_fused.type(), CV_16U);
+      EXPECT_EQ(cv::countNonZero(codes != codes_fused), 0);
+      EXPECT_GT(cv::countNonZero(codes), 30);        // something read
+      EXPECT_GT(cv::countNonZero(codes == 0), 100);  // and something did not
+    }
+  }
+}
+
+TEST(PlaneEstimator, the_fused_path_refuses_what_it_cannot_read) {
+  const auto model = test_model("test-model-rgb.json");
+  const PlaneEstimator estimator(model, Method::kLut);
+  cv::Mat t, codes;
+  std::vector<int> map(25);
+  for (int i = 0; i < 25; ++i) map[static_cast<std::size_t>(i)] = i;
+  const cv::Mat mosaic(20, 20, CV_32F, cv::Scalar(50));
+  EXPECT_THROW(estimator.estimate_codes({mosaic, MosaicLayout::snapshot(5, 5, map), 5}, codes),
+               InputError);
+  EXPECT_THROW(estimator.estimate({cv::Mat(20, 20, CV_8U), MosaicLayout::bayer("RGGB"), 5}, t),
+               InputError);
+  const auto nir = test_model("test-model-nir5x5.json");
+  EXPECT_THROW(PlaneEstimator(nir, Method::kLikelihood)
+                   .estimate_codes({mosaic, MosaicLayout::bayer("RGGB"), 5}, codes),
+               InputError);
 }
 
 TEST(PlaneEstimator, refuses_no_model_n) {

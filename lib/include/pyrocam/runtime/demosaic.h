@@ -5,6 +5,7 @@
 // with positive weights.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <opencv2/core.hpp>
@@ -87,5 +88,19 @@ void register_snapshot_bands(const MosaicLayout& layout, float no_signal_dn,
 // kMatched for a Bayer layout, into planes of the mosaic's size (no checks: see demosaic).
 void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, float dim_dn,
                             std::vector<cv::Mat>& planes);
+
+// The fused path (demosaic25 linked to ratiotemp): kMatched Bayer demosaicking a strip of rows
+// at a time, so that the band planes never leave the cache. Output rows [y0, y1) of
+// demosaic_matched_bayer's planes, the same values bit for bit, into `strip` (three planes of
+// y1 - y0 rows, (re)allocated when their size differs), and in `lit`, per row and block of
+// kMatchedBlockColumns columns (matched_bayer_blocks(width) a row), 0 where every sample the
+// block's kernels reach is below `no_signal_dn` (its band values are then all 0: dim), else 1.
+// Throws InputError for a mosaic that is not a CV_32F Bayer mosaic of 2x2 or more, or rows
+// outside it.
+inline constexpr int kMatchedBlockColumns = 64;
+int matched_bayer_blocks(int width);
+void demosaic_matched_bayer_rows(const cv::Mat& mosaic, const MosaicLayout& layout,
+                                 float no_signal_dn, int y0, int y1, std::vector<cv::Mat>& strip,
+                                 std::vector<std::uint8_t>& lit);
 
 }  // namespace pyrocam

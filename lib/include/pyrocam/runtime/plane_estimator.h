@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "pyrocam/core/mosaic.h"
 #include "pyrocam/runtime/emissivity.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/misfit.h"
@@ -32,6 +33,22 @@ class PlaneEstimator {
   // values as encode_decikelvin(estimate()), without the float image in memory. `codes` may wrap
   // a caller's buffer (written in place when its size and type fit).
   void estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat& codes) const;
+
+  // The fused path (demosaic25 linked to ratiotemp): the band planes of a dark-subtracted Bayer
+  // mosaic (CV_32F, DN, the darksub marks) demosaicked with kMatched and `no_signal_dn` a strip
+  // of rows at a time, each strip read while it is in the cache, so that the planes never cross
+  // memory: the results of demosaic(mosaic, layout, kMatched, planes, no_signal_dn) followed by
+  // estimate() or estimate_codes(), bit for bit. Blocks of columns without light (every band 0,
+  // dim) get no reading without being read. Throws InputError unless the layout is Bayer with
+  // the model's band count and the mosaic CV_32F.
+  struct MatchedMosaic {
+    cv::Mat mosaic;
+    MosaicLayout layout;
+    float no_signal_dn = 0;
+  };
+  void estimate(const MatchedMosaic& source, cv::Mat& temperature_c,
+                cv::Mat* uncertainty_c = nullptr) const;
+  void estimate_codes(const MatchedMosaic& source, cv::Mat& codes) const;
   // What reads the pixels: the method's estimator, or with an emissivity slope its
   // EmissivitySlopeEstimator.
   const TemperatureEstimator& estimator() const {
@@ -70,6 +87,16 @@ class PlaneEstimator {
   cv::Size checked_size(const std::vector<cv::Mat>& planes) const;
   // Both estimates: the rows' temperatures into `out` (and the misfit check).
   void estimate_row(const float* const* rows, std::size_t n, float* out) const;
+  // Uncertainties of the n readings `t` of the rows into `out` (NaN where no reading).
+  void uncertainty_row(const float* const* rows, std::size_t n, const float* t, float* out) const;
+  // Throws InputError for a source the fused path cannot read with this model.
+  void check_matched_mosaic(const MatchedMosaic& source) const;
+  // The fused path's strips: for each row of each strip, `lit_run(y, x0, x1, rows, scratch)` for
+  // runs of blocks with light (rows: the bands' values at x0; scratch: room for a row of floats)
+  // and `dark_run(y, x0, x1)` for the others.
+  template <class LitRun, class DarkRun>
+  void for_each_strip(const MatchedMosaic& source, const LitRun& lit_run,
+                      const DarkRun& dark_run) const;
 
   std::shared_ptr<const ThermalModel> model_;
   std::shared_ptr<TemperatureEstimator> estimator_;

@@ -1,0 +1,192 @@
+// The fused path between demosaic25 and ratiotemp: the two agree on the band planes as their
+// mosaic (video/x-pyrocam-bands(memory:PyrocamMosaic)) when linked, and the recording is then the
+// one the planes give, byte for byte; other elements get the planes; turning the mixed-pixel
+// check on while playing goes back to the planes; fused caps without what ratiotemp needs are
+// refused.
+#include <string>
+#include <vector>
+
+#include "element_support.h"
+#include "pyrocam-caps.h"
+
+namespace pyrocam::test {
+namespace {
+
+// Colour frames of the simulated camera (a melt pool whose core saturates, hot and cold
+// frames) up to demosaic25.
+std::string colour_chain(int frames) {
+  return "pyrocamsrc num-buffers=" + std::to_string(frames) +
+         " scene=melt-pool ! video/x-bayer,width=320,height=240 ! darksub dark-level=50 ! "
+         "demosaic25 name=d ! ";
+}
+
+// The caps on an element's pad once a pipeline has prerolled (empty if it did not).
+struct Negotiated {
+  std::string caps;
+  bool fused = false;
+};
+Negotiated negotiated(const std::string& description, const char* element, const char* pad) {
+  Negotiated n;
+  GError* error = nullptr;
+  GstElement* pipeline = gst_parse_launch(description.c_str(), &error);
+  EXPECT_TRUE(pipeline && !error) << (error ? error->message : "");
+  if (error) g_error_free(error);
+  if (!pipeline) return n;
+  EXPECT_NE(gst_element_set_state(pipeline, GST_STATE_PAUSED), GST_STATE_CHANGE_FAILURE);
+  EXPECT_EQ(gst_element_get_state(pipeline, nullptr, nullptr, 20 * GST_SECOND),
+            GST_STATE_CHANGE_SUCCESS);
+  GstElement* e = gst_bin_get_by_name(GST_BIN(pipeline), element);
+  if (e) {
+    GstPad* p = gst_element_get_static_pad(e, pad);
+    if (GstCaps* caps = gst_pad_get_current_caps(p)) {
+      gchar* text = gst_caps_to_string(caps);
+      n.caps = text;
+      g_free(text);
+      n.fused =
+          gst_caps_features_contains(gst_caps_get_features(caps, 0), PYROCAM_CAPS_FEATURE_MOSAIC);
+      gst_caps_unref(caps);
+    }
+    gst_object_unref(p);
+    gst_object_unref(e);
+  }
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(pipeline);
+  return n;
+}
+
+TEST(FusedPath, demosaic25_and_ratiotemp_agree_on_it_and_read_what_the_planes_read) {
+  REQUIRE_ELEMENT("ratiotemp");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const std::string ratiotemp = "ratiotemp name=r model=" + test_model_path("test-model-rgb.json");
+  for (const char* settings : {"", " output=uncertainty", " method=likelihood partial-bands=any"}) {
+    SCOPED_TRACE(settings);
+    const std::string fused = colour_chain(8) + ratiotemp + settings + " ! fakesink name=sink";
+    // A capsfilter of plain bands between them keeps the planes.
+    const std::string planes = colour_chain(8) + "video/x-pyrocam-bands ! " + ratiotemp + settings +
+                               " ! fakesink name=sink";
+    const Negotiated n = negotiated(fused, "r", "sink");
+    EXPECT_TRUE(n.fused) << n.caps;
+    EXPECT_NE(n.caps.find("no-signal-level=(double)"), std::string::npos) << n.caps;
+    EXPECT_FALSE(negotiated(planes, "r", "sink").fused);
+    const auto a = sink_frames(fused), b = sink_frames(planes);
+    ASSERT_EQ(a.size(), 8u);
+    ASSERT_EQ(b.size(), 8u);
+    std::size_t read = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(a[i], b[i]) << "frame " << i;
+      for (std::size_t k = 0; k + 1 < a[i].size(); k += 2) read += a[i][k] || a[i][k + 1];
+    }
+    EXPECT_GT(read, 100u);  // the pools read, so the comparison means something
+  }
+}
+
+TEST(FusedPath, a_queue_between_them_keeps_it) {
+  REQUIRE_ELEMENT("ratiotemp");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const Negotiated n = negotiated(colour_chain(1) + "queue ! ratiotemp name=r model=" +
+                                      test_model_path("test-model-rgb.json") + " ! fakesink",
+                                  "r", "sink");
+  EXPECT_TRUE(n.fused) << n.caps;
+}
+
+TEST(FusedPath, other_elements_and_other_settings_get_the_planes) {
+  REQUIRE_ELEMENT("demosaic25");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  // A sink that takes anything gets the planes, three of the frame's size.
+  const Negotiated sink = negotiated(colour_chain(1) + "fakesink name=s", "s", "sink");
+  EXPECT_FALSE(sink.fused) << sink.caps;
+  EXPECT_NE(sink.caps.find("video/x-pyrocam-bands"), std::string::npos) << sink.caps;
+  const auto frames = sink_frames(colour_chain(2) + "fakesink name=sink");
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].size(), 3u * 320 * 240 * sizeof(float));
+  // Settings the fused path does not do: the planes, to ratiotemp too.
+  const std::string model = test_model_path("test-model-rgb.json");
+  for (const char* demosaic :
+       {"demosaic25 method=bilinear", "demosaic25 mixed-pixels=0.5", "demosaic25 method=bin2x2"}) {
+    const std::string chain =
+        "pyrocamsrc num-buffers=1 scene=melt-pool ! video/x-bayer,width=160,height=120 ! "
+        "darksub dark-level=50 ! " +
+        std::string(demosaic) + " ! ratiotemp name=r model=" + model + " ! fakesink";
+    const Negotiated n = negotiated(chain, "r", "sink");
+    EXPECT_FALSE(n.fused) << demosaic << ": " << n.caps;
+    EXPECT_NE(n.caps.find("video/x-pyrocam-bands"), std::string::npos) << demosaic;
+  }
+}
+
+class FusedHarness : public HarnessTest {
+ protected:
+  FusedHarness() : HarnessTest("ratiotemp") {}
+  void TearDown() override {
+    if (demosaic) gst_object_unref(demosaic);
+    demosaic = nullptr;
+    HarnessTest::TearDown();
+  }
+  std::string src_caps_of_demosaic() {
+    GstPad* pad = gst_element_get_static_pad(demosaic, "src");
+    GstCaps* caps = gst_pad_get_current_caps(pad);
+    gst_object_unref(pad);
+    if (!caps) return "";
+    gchar* text = gst_caps_to_string(caps);
+    std::string s = text;
+    g_free(text);
+    gst_caps_unref(caps);
+    return s;
+  }
+  GstElement* demosaic = nullptr;
+};
+
+// A raw 16x12 RGGB frame: a hot block with a sharp edge on a cold background, one saturated.
+std::vector<std::uint8_t> raw_frame() {
+  std::vector<std::uint8_t> v(16 * 12, 50);
+  for (int y = 3; y < 9; ++y)
+    for (int x = 4; x < 12; ++x) v[static_cast<std::size_t>(y * 16 + x)] = 180;
+  v[5 * 16 + 6] = 255;
+  return v;
+}
+
+TEST_F(FusedHarness, the_mixed_pixel_check_turned_on_while_playing_goes_back_to_the_planes) {
+  start("darksub dark-level=50 ! demosaic25 ! ratiotemp model=" +
+            test_model_path("test-model-rgb.json"),
+        "video/x-bayer,format=rggb,width=16,height=12,framerate=30/1");
+  demosaic = find_element(h, "demosaic25");
+  ASSERT_NE(demosaic, nullptr);
+  GstBuffer* out = push_pull_buffer(h, buffer_from(raw_frame()));
+  ASSERT_NE(out, nullptr);
+  gst_buffer_unref(out);
+  EXPECT_NE(src_caps_of_demosaic().find(PYROCAM_CAPS_FEATURE_MOSAIC), std::string::npos);
+  g_object_set(demosaic, "mixed-pixels", 0.5, nullptr);
+  out = push_pull_buffer(h, buffer_from(raw_frame()));
+  ASSERT_NE(out, nullptr);
+  gst_buffer_unref(out);
+  const std::string caps = src_caps_of_demosaic();
+  EXPECT_EQ(caps.find(PYROCAM_CAPS_FEATURE_MOSAIC), std::string::npos) << caps;
+  EXPECT_NE(caps.find("video/x-pyrocam-bands"), std::string::npos) << caps;
+  // And back.
+  g_object_set(demosaic, "mixed-pixels", 0.0, nullptr);
+  out = push_pull_buffer(h, buffer_from(raw_frame()));
+  ASSERT_NE(out, nullptr);
+  gst_buffer_unref(out);
+  EXPECT_NE(src_caps_of_demosaic().find(PYROCAM_CAPS_FEATURE_MOSAIC), std::string::npos);
+}
+
+TEST_F(FusedHarness, fused_bands_without_a_no_signal_level_are_refused_n) {
+  start("ratiotemp model=" + test_model_path("test-model-rgb.json"),
+        "video/x-pyrocam-bands(memory:PyrocamMosaic),format=F32LE,bands=3,width=8,height=6,"
+        "framerate=30/1,layout=bayer,pattern=rggb");
+  attach_bus();
+  GstBuffer* in = buffer_from(std::vector<float>(8 * 6, 50.f));
+  EXPECT_EQ(gst_harness_push(h, in), GST_FLOW_NOT_NEGOTIATED);
+  GstMessage* m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR);
+  ASSERT_NE(m, nullptr);
+  GError* err = nullptr;
+  gchar* debug = nullptr;
+  gst_message_parse_error(m, &err, &debug);
+  EXPECT_EQ(err->domain, GST_CORE_ERROR);
+  EXPECT_NE(std::string(debug).find("no-signal-level"), std::string::npos) << debug;
+  g_error_free(err);
+  g_free(debug);
+  gst_message_unref(m);
+}
+
+}  // namespace
+}  // namespace pyrocam::test
