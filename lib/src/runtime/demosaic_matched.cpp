@@ -239,7 +239,8 @@ class MatchedBayer {
 
   // Output rows [y0, y1): band b of row y into out(b, y) (a row of the mosaic's width). With
   // `stream` the stores bypass the cache and are fenced at the end. With `lit`, one flag per
-  // row and output block from row y0 on: whether a sample its kernels reach has light.
+  // row and output block from row y0 on: whether a sample its kernels reach has light; the
+  // blocks without are then left unwritten (their values are 0), else written as 0.
   template <class Out>
   void run(int y0, int y1, const Out& out, bool stream, std::uint8_t* lit_out) const {
     // The five input rows around the output row, split by parity: a ring, each row read once
@@ -303,8 +304,9 @@ class MatchedBayer {
         const int i0 = kBlock * k0, i1 = std::min(kBlock * k1, n_even_);
         const int x1 = std::min(2 * i1, width_);
         if (!out_lit[k0]) {
-          for (int b = 0; b < 3; ++b)
-            interleave(zeros, zeros, out(b, y) + 2 * i0, x1 - 2 * i0, true, stream);
+          if (!lit_out)
+            for (int b = 0; b < 3; ++b)
+              interleave(zeros, zeros, out(b, y) + 2 * i0, x1 - 2 * i0, true, stream);
           k0 = k1;
           continue;
         }

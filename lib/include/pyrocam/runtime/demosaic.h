@@ -94,7 +94,8 @@ void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, f
 // demosaic_matched_bayer's planes, the same values bit for bit, into `strip` (three planes of
 // y1 - y0 rows, (re)allocated when their size differs), and in `lit`, per row and block of
 // kMatchedBlockColumns columns (matched_bayer_blocks(width) a row), 0 where every sample the
-// block's kernels reach is below `no_signal_dn` (its band values are then all 0: dim), else 1.
+// block's kernels reach is below `no_signal_dn`, else 1. A block flagged 0 is left unwritten in
+// `strip`: its band values are all 0 (dim).
 // Throws InputError for a mosaic that is not a CV_32F Bayer mosaic of 2x2 or more, or rows
 // outside it.
 inline constexpr int kMatchedBlockColumns = 64;
