@@ -106,8 +106,8 @@ bool eos_passes(GstHarness* h) {
   return eos;
 }
 
-std::string sink_caps(GstHarness* h) {
-  GstCaps* caps = gst_pad_get_current_caps(h->sinkpad);
+std::string current_caps(GstPad* pad) {
+  GstCaps* caps = gst_pad_get_current_caps(pad);
   if (!caps) return "";
   gchar* s = gst_caps_to_string(caps);
   std::string out = s;
@@ -115,6 +115,8 @@ std::string sink_caps(GstHarness* h) {
   gst_caps_unref(caps);
   return out;
 }
+
+std::string sink_caps(GstHarness* h) { return current_caps(h->sinkpad); }
 
 GstElement* find_element(GstHarness* h, const char* factory) {
   return gst_harness_find_element(h, factory);

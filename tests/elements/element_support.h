@@ -100,6 +100,8 @@ std::size_t count_nonzero(const std::vector<std::uint16_t>& v);
 std::vector<std::vector<std::uint8_t>> sink_frames(const std::string& description,
                                                    GstClockTime timeout = 30 * GST_SECOND);
 
+// The caps on a pad as a string ("" if none).
+std::string current_caps(GstPad* pad);
 // The caps on the harness's sink pad as a string ("" if none).
 std::string sink_caps(GstHarness* h);
 

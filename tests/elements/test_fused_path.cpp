@@ -38,14 +38,8 @@ Negotiated negotiated(const std::string& description, const char* element, const
   GstElement* e = gst_bin_get_by_name(GST_BIN(pipeline), element);
   if (e) {
     GstPad* p = gst_element_get_static_pad(e, pad);
-    if (GstCaps* caps = gst_pad_get_current_caps(p)) {
-      gchar* text = gst_caps_to_string(caps);
-      n.caps = text;
-      g_free(text);
-      n.fused =
-          gst_caps_features_contains(gst_caps_get_features(caps, 0), PYROCAM_CAPS_FEATURE_MOSAIC);
-      gst_caps_unref(caps);
-    }
+    n.caps = current_caps(p);
+    n.fused = n.caps.find(PYROCAM_CAPS_FEATURE_MOSAIC) != std::string::npos;
     gst_object_unref(p);
     gst_object_unref(e);
   }
@@ -123,14 +117,9 @@ class FusedHarness : public HarnessTest {
   }
   std::string src_caps_of_demosaic() {
     GstPad* pad = gst_element_get_static_pad(demosaic, "src");
-    GstCaps* caps = gst_pad_get_current_caps(pad);
+    std::string caps = current_caps(pad);
     gst_object_unref(pad);
-    if (!caps) return "";
-    gchar* text = gst_caps_to_string(caps);
-    std::string s = text;
-    g_free(text);
-    gst_caps_unref(caps);
-    return s;
+    return caps;
   }
   GstElement* demosaic = nullptr;
 };
