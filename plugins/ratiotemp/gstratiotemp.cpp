@@ -281,18 +281,18 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
   }
   st.planes.assign(static_cast<std::size_t>(st.bands), cv::Mat());
   st.fused = pg::is_fused_bands(incaps);
-  if (st.fused) {
-    const char* pattern = gst_structure_get_string(in, "pattern");
-    double level = NAN;
-    gst_structure_get_double(in, PYROCAM_FIELD_NO_SIGNAL_LEVEL, &level);
-    if (!pattern || !std::isfinite(level)) {
-      PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation, "Unsupported band format",
-                         "fused bands without a pattern or a no-signal-level");
-      return FALSE;
-    }
-    st.mosaic_layout = pg::layout_for_pattern(pattern);
-    st.no_signal_dn = static_cast<float>(level);
-  }
+  if (st.fused &&
+      !PYROCAM_GUARDED(self, pg::ErrorKind::kNegotiation, "Unsupported band format", [&] {
+        const char* pattern = gst_structure_get_string(in, "pattern");
+        double level = NAN;
+        gst_structure_get_double(in, PYROCAM_FIELD_NO_SIGNAL_LEVEL, &level);
+        if (!pattern || !std::isfinite(level))
+          throw pyrocam::InputError("fused bands (" PYROCAM_CAPS_FEATURE_MOSAIC
+                                    ") need a pattern and a no-signal-level");
+        st.mosaic_layout = pg::layout_for_pattern(pattern);
+        st.no_signal_dn = static_cast<float>(level);
+      }))
+    return FALSE;
   st.configured = true;
   GST_INFO_OBJECT(self, "%d bands of %dx%d (%s) -> GRAY16_LE%s", st.bands, st.width, st.height,
                   layout, st.fused ? " (fused: demosaicked here, a strip at a time)" : "");

@@ -171,7 +171,7 @@ TEST_F(FusedHarness, fused_bands_without_a_no_signal_level_are_refused_n) {
   gchar* debug = nullptr;
   gst_message_parse_error(m, &err, &debug);
   EXPECT_EQ(err->domain, GST_CORE_ERROR);
-  EXPECT_NE(std::string(debug).find("no-signal-level"), std::string::npos) << debug;
+  EXPECT_NE(std::string(err->message).find("no-signal-level"), std::string::npos) << err->message;
   g_error_free(err);
   g_free(debug);
   gst_message_unref(m);
