@@ -41,8 +41,8 @@ int main(int argc, char** argv) {
   app.add_option("--vary", variations, "change the profile's unit variation (study), e.g. leak=0");
   bool coverage = false;
   app.add_flag("--coverage", coverage,
-               "also the QE model uncertainty from posterior samples, and how often the k=2 "
-               "interval covers the error at 1500-2600 degC");
+               "also the QE model uncertainty (posterior samples and the prior-sensitivity fits), "
+               "and how often the k=2 interval covers the error at 1500-2600 degC");
   CLI11_PARSE(app, argc, argv);
   QeFitOptions fit_options;
   RegularisedOptions& ro = fit_options.regularised;
@@ -122,7 +122,7 @@ int main(int argc, char** argv) {
                   references.empty() ? "" : ", with reference rows");
       for (double t : temps) std::printf(" %6.0f", t);
       std::printf("   rms:in  1000-1400 1800-2600 800-2600\n");
-      int covered = 0, counted = 0, covered_combined = 0;
+      int covered = 0, counted = 0, covered_combined = 0, covered_posterior = 0;
       for (int u = 1; u <= units; ++u) {
         const Eigen::MatrixXd truth =
             true_system_qe(profile, UnitPerturbation::parse(family, static_cast<std::uint64_t>(u)));
@@ -145,7 +145,9 @@ int main(int argc, char** argv) {
         std::printf("   %4d", u);
         for (double v : e) std::printf(" %6.1f", v);
         if (coverage) {
-          const std::vector<double> u = qe_model_uncertainty(model, fit.posterior, temps);
+          const std::vector<double> u = qe_model_uncertainty(
+              model, fit.posterior, temps, prior_sensitivity_fits(profile, data, options));
+          const std::vector<double> u_posterior = qe_model_uncertainty(model, fit.posterior, temps);
           // The emissivity term ratiotemp adds by default (e-slope-uncertainty 1 %/100 nm): the
           // reading of a grey-assuming model for rates with that slope.
           const Eigen::MatrixXd tilted =
@@ -159,6 +161,7 @@ int main(int argc, char** argv) {
             std::printf(" %6.1f", u[i]);
             if (temps[i] < 1500) continue;
             covered += std::abs(e[i]) <= 2 * u[i], ++counted;
+            covered_posterior += std::abs(e[i]) <= 2 * u_posterior[i];
             covered_combined += std::abs(e[i]) <= 2 * std::hypot(u[i], u_e[i]);
           }
           std::printf("\n       ");
@@ -168,9 +171,10 @@ int main(int argc, char** argv) {
       }
       if (coverage)
         std::printf(
-            "   k=2 coverage at 1500-2600 degC: %d of %d (%.1f %%); with the default emissivity "
-            "term too: %d (%.1f %%)\n",
-            covered, counted, 100.0 * covered / std::max(1, counted), covered_combined,
+            "   k=2 coverage at 1500-2600 degC: %d of %d (%.1f %%; the posterior's spread alone "
+            "%d, %.1f %%); with the default emissivity term too: %d (%.1f %%)\n",
+            covered, counted, 100.0 * covered / std::max(1, counted), covered_posterior,
+            100.0 * covered_posterior / std::max(1, counted), covered_combined,
             100.0 * covered_combined / std::max(1, counted));
     }
   }

@@ -20,7 +20,8 @@ constexpr double kWellExposedDn = 150;
 
 std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
                                          const std::vector<QeSample>& posterior,
-                                         const std::vector<double>& temperatures_c) {
+                                         const std::vector<double>& temperatures_c,
+                                         const std::vector<QeSample>& prior_fits) {
   std::vector<double> u;
   if (posterior.size() < 2) return u;
   const double lo = *std::min_element(temperatures_c.begin(), temperatures_c.end());
@@ -48,7 +49,14 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
       sum += d, sum2 += d * d, ++n;
     }
     const double mean = n > 0 ? sum / n : 0;
-    u.push_back(n > 1 ? std::sqrt(std::max(0.0, (sum2 - n * mean * mean) / (n - 1))) : NAN);
+    double prior = 0;
+    for (const QeSample& s : prior_fits) {
+      const double d = read(CameraModel{fitted.profile, s.system_qe, s.gains}, t) - nominal;
+      if (std::isfinite(d)) prior = std::max(prior, std::abs(d));
+    }
+    u.push_back(
+        n > 1 ? std::hypot(std::sqrt(std::max(0.0, (sum2 - n * mean * mean) / (n - 1))), prior)
+              : NAN);
   }
   // Where no sample reads (the cold end of a 5x5 model's range, where some band is dim even in
   // a well exposed pixel) the nearest temperature's value: a model holds a number at every

@@ -243,6 +243,24 @@ QeFitResult fit_qe(const CameraProfile& profile, const CalibrationRates& data,
              : fit_qe_regularised(profile, data, options.regularised);
 }
 
+std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
+                                             const CalibrationRates& data,
+                                             const QeFitOptions& options, double factor) {
+  std::vector<QeSample> fits;
+  if (options.solver != QeSolver::kRegularised) return fits;
+  for (const double f : {factor, 1 / factor}) {
+    RegularisedOptions o = options.regularised;
+    o.posterior_samples = 0;
+    for (double* sigma :
+         {&o.tilt_sigma, &o.curvature_sigma, &o.shift_sigma_nm, &o.common_tilt_sigma,
+          &o.edge_shift_sigma_nm, &o.leak_sigma, &o.discrepancy_sigma, &o.discrepancy_leak})
+      *sigma *= f;
+    const QeFitResult fit = fit_qe_regularised(profile, data, o);
+    fits.push_back(QeSample{fit.system_qe, fit.gains});
+  }
+  return fits;
+}
+
 Eigen::VectorXd fitted_signal_rates(const CameraProfile& profile, const QeFitResult& fit,
                                     double temperature_k, double emissivity) {
   return fit.gains.cwiseProduct(signal_rates(profile, fit.system_qe, temperature_k, emissivity));

@@ -91,6 +91,8 @@ TEST(ChooseSystemQe, auto_takes_the_paper_solver_only_when_clearly_better_held_o
   EXPECT_EQ(c.solver, paper_far_better ? "paper" : "regularised")
       << c.reports[0].held_out_residual << " " << c.reports[1].held_out_residual;
   EXPECT_FALSE(c.posterior.empty() && c.solver == "regularised");
+  // The chosen regularised fit comes with its prior-sensitivity fits, the paper's with none.
+  EXPECT_EQ(c.prior_fits.size(), c.solver == "regularised" ? 2u : 0u);
 }
 
 TEST(ChooseSystemQe, a_fitted_qe_that_explains_the_rates_better_replaces_the_datasheet) {

@@ -135,5 +135,31 @@ TEST(QeModelUncertainty, a_temperature_no_sample_reads_gets_the_nearest_value) {
   EXPECT_GT(u[0], 0.0);
 }
 
+// A prior fit that reads as the model does adds nothing; one that reads otherwise adds its
+// difference in quadrature, so the term never shrinks.
+TEST(QeModelUncertainty, prior_fits_add_the_reading_change_they_make) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  const CameraModel camera{p, p.system_qe(), Eigen::VectorXd::Ones(p.band_count())};
+  std::vector<QeSample> posterior;
+  for (int k = 0; k < 8; ++k) {
+    Eigen::VectorXd gains = Eigen::VectorXd::Ones(p.band_count());
+    for (Eigen::Index b = 0; b < gains.size(); ++b) gains[b] += 0.002 * std::sin(3.0 * k + b);
+    posterior.push_back(QeSample{p.system_qe(), gains});
+  }
+  const std::vector<double> t{900, 1500, 2500};
+  const std::vector<double> alone = qe_model_uncertainty(camera, posterior, t);
+  const std::vector<double> same =
+      qe_model_uncertainty(camera, posterior, t, {QeSample{p.system_qe(), camera.band_scale}});
+  EXPECT_EQ(same, alone);
+  const QeSample tilted{with_emissivity_slope(p, p.system_qe(), 0.05), camera.band_scale};
+  const std::vector<double> wider = qe_model_uncertainty(camera, posterior, t, {tilted});
+  ASSERT_EQ(wider.size(), t.size());
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    SCOPED_TRACE(t[i]);
+    EXPECT_GT(wider[i], alone[i] + 1.0);  // a 5 %/100 nm slope moves readings by degrees
+  }
+  EXPECT_GT(wider[2], wider[0]);  // and more the hotter the body
+}
+
 }  // namespace
 }  // namespace pyrocam

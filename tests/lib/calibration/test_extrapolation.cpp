@@ -144,6 +144,23 @@ TEST(QePosterior, spreads_where_the_furnace_does_not_reach) {
             << "\n";
   EXPECT_LT(u[0], 3.0);       // the furnace range is pinned by the data
   EXPECT_GT(u[2], 3 * u[0]);  // far above it the QE is open and the model says so
+
+  // The priors' own share: fits with them twice as wide and half as wide read the furnace
+  // range alike and part above it, so the term grows there and hardly at all in range.
+  const std::vector<QeSample> prior_fits =
+      prior_sensitivity_fits(p, simulate_calibration_rates(p, truth, {}), options);
+  ASSERT_EQ(prior_fits.size(), 2u);
+  const std::vector<double> with_priors =
+      qe_model_uncertainty(CameraModel{p, fit.system_qe, fit.gains}, fit.posterior, t, prior_fits);
+  std::cout << "with the prior-sensitivity fits: " << with_priors[0] << " " << with_priors[1] << " "
+            << with_priors[2] << "\n";
+  for (std::size_t i = 0; i < t.size(); ++i) EXPECT_GE(with_priors[i], u[i]);
+  EXPECT_LT(with_priors[0], u[0] + 0.5);
+  EXPECT_GT(with_priors[2], u[2] + 0.5);
+  // The paper's solver has no priors to vary.
+  QeFitOptions paper = options;
+  paper.solver = QeSolver::kPaper;
+  EXPECT_TRUE(prior_sensitivity_fits(p, simulate_calibration_rates(p, truth, {}), paper).empty());
 }
 
 }  // namespace

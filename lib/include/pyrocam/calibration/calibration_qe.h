@@ -18,6 +18,7 @@ struct QeChoice {
   std::vector<QeSolverReport> reports;  // every solver tried, in the order tried
   Eigen::MatrixXd qe_spread;            // the chosen fit's cross-validation std (may be empty)
   std::vector<QeSample> posterior;      // plausible QE solutions (regularised fit only)
+  std::vector<QeSample> prior_fits;     // prior_sensitivity_fits (regularised fit only)
   // Per reference row: its reading minus its temperature, datasheet QE and chosen QE.
   std::vector<double> reference_error_before_c, reference_error_after_c;
 };

@@ -23,11 +23,15 @@ UncertaintyModel uncertainty_model(const ThermalModel& model, const std::vector<
 
 // Standard uncertainty at every temperature of what the QE leaves open: the spread (std) of the
 // readings that `fitted`'s likelihood fit gives for a well exposed pixel of each plausible
-// camera in `posterior` (QeFitResult::posterior). Small inside the furnace range, growing where
-// the data do not constrain the QE. Empty without samples.
+// camera in `posterior` (QeFitResult::posterior), combined in quadrature with the largest change
+// of that reading between `fitted` and the fits of `prior_fits` (prior_sensitivity_fits: the
+// posterior is drawn around one choice of priors, and the data above the furnace range do not
+// tell which is right). Small inside the furnace range, growing where the data do not
+// constrain the QE. Empty without samples.
 std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
                                          const std::vector<QeSample>& posterior,
-                                         const std::vector<double>& temperatures_c);
+                                         const std::vector<double>& temperatures_c,
+                                         const std::vector<QeSample>& prior_fits = {});
 
 // |network reading - T| for a graybody whose emissivity has the slope u.emissivity_slope_u, at
 // every u.temperature_c.

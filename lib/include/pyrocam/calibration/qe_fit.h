@@ -158,6 +158,16 @@ Eigen::VectorXd normalised_rate_residuals(const CameraProfile& profile,
 Eigen::VectorXd prediction_residuals(const CameraProfile& profile, const QeFitResult& fit,
                                      const CalibrationRates& data);
 
+// How much the regularised fit depends on its priors, which the furnace cannot decide above its
+// range: the same fit with every prior on the QE's shape (tilts, shifts, the common slope, the
+// filter's edges, leaks and the shape changes beyond the model) `factor` times wider, then
+// `factor` times narrower; the furnace temperatures' prior is kept. Each fits the data about as
+// well as the fit itself and extrapolates otherwise: qe_model_uncertainty takes the largest
+// reading change they make as a term of its own. Empty for the paper's solver.
+std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
+                                             const CalibrationRates& data,
+                                             const QeFitOptions& options, double factor = 2);
+
 // Paper section 3.1: refit leaving out one of `groups` interleaved temperature groups (sorted
 // temperatures, i-th goes to group i % groups).
 struct CrossValidation {
