@@ -57,6 +57,7 @@
 #include <string>
 #include <vector>
 
+#include "demosaic25-private.h"
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
 #include "pyrocam/core/noise_model.h"
@@ -64,69 +65,23 @@
 #include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/mixed_pixels.h"
 
-GST_DEBUG_CATEGORY_STATIC(gst_demosaic25_debug);
+GST_DEBUG_CATEGORY(gst_demosaic25_debug);
 #define GST_CAT_DEFAULT gst_demosaic25_debug
 
 namespace pg = pyrocam::gst;
-
-namespace {
-
-enum { PROP_0, PROP_METHOD, PROP_PROFILE, PROP_MIXED_PIXELS };
-
-constexpr GstDemosaic25Method DEFAULT_METHOD = GST_DEMOSAIC25_METHOD_AUTO;
-// Off by default: it costs under the 15 % of the colour chain a default may cost, but it takes
-// most readings of small melt pools at a fixed exposure (their steep sides; docs/elements.md).
-constexpr double DEFAULT_MIXED_PIXELS = 0;
-// The shipped colour camera, whose noise the mixed-pixel check assumes without a profile.
-constexpr const char* kColourCameraProfile = "rgb-reference";
-
-struct Settings {
-  GstDemosaic25Method method = DEFAULT_METHOD;
-  std::string profile;
-  double mixed_pixels = DEFAULT_MIXED_PIXELS;  // relative spread; 0: no check
-};
-
-struct State {
-  bool have_snapshot_layout = false;  // from the profile, loaded in start()
-  pyrocam::MosaicLayout snapshot_layout;
-  std::string profile_name, profile_pattern;  // the profile's mosaic as a caps pattern
-  std::string profile_band_map;  // band-map text of a 5x5 profile; under the object lock
-  bool configured = false;
-  pyrocam::MosaicLayout layout;
-  pyrocam::DemosaicMethod method = pyrocam::DemosaicMethod::kBilinear;
-  int in_width = 0, in_height = 0, out_width = 0, out_height = 0, bands = 0;
-  std::vector<cv::Mat> planes;                      // headers onto the output buffer, reused
-  std::vector<pyrocam::SignalNoise> profile_noise;  // per band, from the profile; empty: none
-  std::vector<pyrocam::SignalNoise> noise;          // per band, for the stream's bit depth
-  double profile_dim_dn = -1;                       // the profile's dim threshold; <0: none
-  float skip_below_dn = 0;  // the mixed-pixel check leaves footprints dimmer than this alone
-  float no_signal_dn = 0;   // method matched: samples below it hold no light
-};
-
-pyrocam::DemosaicMethod to_library(GstDemosaic25Method m) {
-  switch (m) {
-    case GST_DEMOSAIC25_METHOD_BIN2X2:
-      return pyrocam::DemosaicMethod::kBinCells;
-    case GST_DEMOSAIC25_METHOD_MATCHED:
-      return pyrocam::DemosaicMethod::kMatched;
-    case GST_DEMOSAIC25_METHOD_AUTO:
-      return pyrocam::DemosaicMethod::kAuto;
-    default:
-      return pyrocam::DemosaicMethod::kBilinear;
-  }
-}
-
-bool is_snapshot(const char* pattern) {
-  return pattern && g_str_equal(pattern, PYROCAM_SNAPSHOT_PATTERN_NAME);
-}
-
-}  // namespace
-
-struct _GstDemosaic25 {
-  GstBaseTransform parent;
-  Settings* settings;
-  State* state;
-};
+namespace dm = pyrocam::gst::demosaic25;
+using dm::copy_settings;
+using dm::DEFAULT_METHOD;
+using dm::DEFAULT_MIXED_PIXELS;
+using dm::fused_path_allowed;
+using dm::is_snapshot;
+using dm::kColourCameraProfile;
+using dm::PROP_METHOD;
+using dm::PROP_MIXED_PIXELS;
+using dm::PROP_PROFILE;
+using dm::Settings;
+using dm::State;
+using dm::to_library;
 
 G_DEFINE_TYPE(GstDemosaic25, gst_demosaic25, GST_TYPE_BASE_TRANSFORM);
 GST_ELEMENT_REGISTER_DEFINE(demosaic25, "demosaic25", GST_RANK_NONE, GST_TYPE_DEMOSAIC25);
@@ -156,125 +111,6 @@ static GstStaticPadTemplate sink_template = GST_STATIC_PAD_TEMPLATE(
 static GstStaticPadTemplate src_template =
     GST_STATIC_PAD_TEMPLATE("src", GST_PAD_SRC, GST_PAD_ALWAYS,
                             GST_STATIC_CAPS(PYROCAM_BANDS_CAPS "; " PYROCAM_FUSED_BANDS_CAPS));
-
-static Settings copy_settings(GstDemosaic25* self) {
-  return pg::locked_copy(self, *self->settings);
-}
-
-/* Whether the settings let demosaic25 hand its planes on as their mosaic (the fused path): a
- * Bayer mosaic with method matched and no mixed-pixel check (the defaults). */
-static bool fused_path_allowed(const Settings& s) {
-  return (s.method == GST_DEMOSAIC25_METHOD_MATCHED || s.method == GST_DEMOSAIC25_METHOD_AUTO) &&
-         s.mixed_pixels == 0;
-}
-
-/* A dimension scaled by 1/divisor (forward) or by divisor (backward, any remainder allowed). */
-static void scale_dimension(const GstStructure* from, GstStructure* to, const char* field,
-                            int divisor, bool forward) {
-  const GValue* v = gst_structure_get_value(from, field);
-  if (v && G_VALUE_HOLDS_INT(v)) {
-    const int n = g_value_get_int(v);
-    if (divisor == 1)
-      gst_structure_set(to, field, G_TYPE_INT, n, nullptr);
-    else if (forward)
-      gst_structure_set(to, field, G_TYPE_INT, std::max(1, n / divisor), nullptr);
-    else if (n <= G_MAXINT / divisor - 1)
-      gst_structure_set(to, field, GST_TYPE_INT_RANGE, n * divisor, n * divisor + divisor - 1,
-                        nullptr);
-    else
-      gst_structure_set(to, field, GST_TYPE_INT_RANGE, 1, G_MAXINT, nullptr);
-  } else {
-    gst_structure_set(to, field, GST_TYPE_INT_RANGE, 1, G_MAXINT, nullptr);
-  }
-}
-
-static GstCaps* gst_demosaic25_transform_caps(GstBaseTransform* trans, GstPadDirection direction,
-                                              GstCaps* caps, GstCaps* filter) {
-  GstDemosaic25* self = GST_DEMOSAIC25(trans);
-  const Settings settings = copy_settings(self);
-  const int bayer_divisor = settings.method == GST_DEMOSAIC25_METHOD_BIN2X2 ? 2 : 1;
-  const std::string profile_band_map = pg::locked_copy(self, self->state->profile_band_map);
-  const bool forward = direction == GST_PAD_SINK;
-  const bool fusable = fused_path_allowed(settings);
-  GstCaps* result = gst_caps_new_empty();
-  for (guint i = 0; i < gst_caps_get_size(caps); ++i) {
-    const GstStructure* s = gst_caps_get_structure(caps, i);
-    // Fused bands come from a Bayer mosaic demosaicked with matched, without the check.
-    if (!forward && pg::is_fused_bands(caps, i) && !fusable) continue;
-    /* Which layouts this structure allows. */
-    bool bayer = true, snapshot = true;
-    const char* fixed = gst_structure_get_string(s, forward ? "pattern" : "layout");
-    if (fixed) {
-      snapshot = is_snapshot(fixed);
-      bayer = !snapshot;
-    }
-    for (int pass = 0; pass < 2; ++pass) {
-      const bool snap = pass == 1;
-      if ((snap && !snapshot) || (!snap && !bayer)) continue;
-      const int divisor = snap ? 5 : bayer_divisor;
-      GstStructure* out;
-      if (forward) {
-        out = gst_structure_new(PYROCAM_BANDS_MEDIA_TYPE, "format", G_TYPE_STRING, "F32LE", "bands",
-                                G_TYPE_INT, snap ? 25 : 3, "layout", G_TYPE_STRING,
-                                snap ? PYROCAM_SNAPSHOT_PATTERN_NAME : "bayer", nullptr);
-        if (snap) {
-          /* The band order of the planes: the profile's, else the input's, else row * 5 +
-           * column (set_caps refuses a profile and an input that disagree). */
-          const char* in_map = gst_structure_get_string(s, PYROCAM_FIELD_BAND_MAP);
-          std::string map = profile_band_map.empty() ? (in_map ? in_map : "") : profile_band_map;
-          if (map.empty())
-            map = pg::band_map_text(pg::layout_for_pattern(PYROCAM_SNAPSHOT_PATTERN_NAME));
-          gst_structure_set(out, PYROCAM_FIELD_BAND_MAP, G_TYPE_STRING, map.c_str(), nullptr);
-        }
-      } else {
-        out = gst_structure_new(PYROCAM_MOSAIC_MEDIA_TYPE, "format", G_TYPE_STRING, "F32LE",
-                                "bit-depth", GST_TYPE_INT_RANGE, 1, 16, nullptr);
-        if (snap) {
-          gst_structure_set(out, "pattern", G_TYPE_STRING, PYROCAM_SNAPSHOT_PATTERN_NAME, nullptr);
-        } else {
-          pg::set_list_field(out, "pattern", PYROCAM_BAYER_FORMATS);
-        }
-      }
-      if (forward) pg::copy_fields(s, out, {PYROCAM_FIELD_SATURATION_LEVEL});
-      if (!forward && pg::is_fused_bands(caps, i)) pg::copy_fields(s, out, {"pattern"});
-      scale_dimension(s, out, "width", divisor, forward);
-      scale_dimension(s, out, "height", divisor, forward);
-      pg::copy_fields(s, out, {"framerate"});
-      // The planes as their mosaic, after the planes themselves: ratiotemp asks for it first,
-      // any other element (or a sink taking anything) gets the planes.
-      GstStructure* fused = forward && !snap && fusable ? gst_structure_copy(out) : nullptr;
-      result = gst_caps_merge_structure(result, out);
-      if (fused) {
-        if (const char* p = gst_structure_get_string(s, "pattern"))
-          gst_structure_set(fused, "pattern", G_TYPE_STRING, p, nullptr);
-        else
-          pg::set_list_field(fused, "pattern", PYROCAM_BAYER_FORMATS);
-        result = gst_caps_merge_structure_full(
-            result, fused, gst_caps_features_new(PYROCAM_CAPS_FEATURE_MOSAIC, nullptr));
-      }
-    }
-  }
-  if (filter) {
-    GstCaps* tmp = gst_caps_intersect_full(filter, result, GST_CAPS_INTERSECT_FIRST);
-    gst_caps_unref(result);
-    result = tmp;
-  }
-  GST_DEBUG_OBJECT(self, "transformed %" GST_PTR_FORMAT " to %" GST_PTR_FORMAT, caps, result);
-  return result;
-}
-
-static gboolean gst_demosaic25_transform_size(GstBaseTransform* /*trans*/,
-                                              GstPadDirection direction, GstCaps* /*caps*/,
-                                              gsize /*size*/, GstCaps* othercaps,
-                                              gsize* othersize) {
-  const GstStructure* s = gst_caps_get_structure(othercaps, 0);
-  const gsize w = static_cast<gsize>(pg::structure_int(s, "width", 0));
-  const gsize h = static_cast<gsize>(pg::structure_int(s, "height", 0));
-  const gsize planes =
-      direction == GST_PAD_SINK ? static_cast<gsize>(pg::structure_int(s, "bands", 0)) : 1;
-  *othersize = w * h * planes * sizeof(float);
-  return *othersize > 0;
-}
 
 /* The bit depth of a mosaic's caps (8 without the field). */
 static int stream_bit_depth(GstCaps* caps) {
@@ -611,8 +447,8 @@ static void gst_demosaic25_class_init(GstDemosaic25Class* klass) {
   gst_element_class_add_static_pad_template(element_class, &sink_template);
   gst_element_class_add_static_pad_template(element_class, &src_template);
 
-  trans_class->transform_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_transform_caps);
-  trans_class->transform_size = GST_DEBUG_FUNCPTR(gst_demosaic25_transform_size);
+  trans_class->transform_caps = GST_DEBUG_FUNCPTR(dm::transform_caps);
+  trans_class->transform_size = GST_DEBUG_FUNCPTR(dm::transform_size);
   trans_class->fixate_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_fixate_caps);
   trans_class->set_caps = GST_DEBUG_FUNCPTR(gst_demosaic25_set_caps);
   trans_class->decide_allocation = GST_DEBUG_FUNCPTR(pg::decide_allocation);

@@ -438,27 +438,10 @@ static GstClockTime frame_position(const State& st, GstBuffer* buffer) {
 
 static void post_stats(GstRatioTemp* self, const Settings& settings, GstBuffer* buffer) {
   State& st = *self->state;
-  const int w = st.temperature_c.cols, h = st.temperature_c.rows;
-  if (settings.peak_window_set && settings.peak_window > 0 && !rt::peak_fits(settings, w, h)) {
-    // Once per window and frame size; the default window stays quiet on tiny frames.
-    const std::string misfit =
-        std::to_string(settings.peak_window) + "/" + std::to_string(w) + "x" + std::to_string(h);
-    if (misfit != st.peak_warned)
-      GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
-                          ("%s: peak-window %u is larger than the %dx%d frame; no peak in the "
-                           "statistics",
-                           GST_OBJECT_NAME(self), settings.peak_window, w, h),
-                          ("the window must fit in the frame"));
-    st.peak_warned = misfit;
-  }
-  GstStructure* s =
-      rt::stats_structure(st.temperature_c, settings, &GST_BASE_TRANSFORM(self)->segment,
-                          GST_BUFFER_PTS(buffer), st.method);
-  gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), s));
+  rt::post_stats(self, settings, st.temperature_c, GST_BUFFER_PTS(buffer), st.method,
+                 st.peak_warned);
 }
 
-/* Pushes the stream's tags downstream when what they say has changed (the first frame, a new
- * method or e-slope, new upstream tags), before the frame they describe. */
 static void push_recording_tags(GstRatioTemp* self, const Settings& settings) {
   State& st = *self->state;
   rt::RecordingInfo info;
@@ -469,12 +452,7 @@ static void push_recording_tags(GstRatioTemp* self, const Settings& settings) {
   info.uncertainty = settings.output == GST_RATIO_TEMP_OUTPUT_UNCERTAINTY;
   info.e_slope = settings.e_slope;
   info.exposure_us = rt::exposure_us_of(st.upstream_tags.get());
-  std::string comment = rt::recording_comment(info);
-  if (comment == st.pushed_comment) return;
-  GST_INFO_OBJECT(self, "tags: %s", comment.c_str());
-  st.pushed_comment = std::move(comment);
-  gst_pad_push_event(GST_BASE_TRANSFORM_SRC_PAD(self),
-                     gst_event_new_tag(rt::recording_tags(info, st.upstream_tags.get())));
+  rt::push_recording_tags(self, info, st.upstream_tags.get(), st.pushed_comment);
 }
 
 static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer* inbuf,

@@ -1,6 +1,7 @@
 /* ratiotemp's parts shared by its source files: the property values (ratiotemp-properties.cpp),
- * the formats (ratiotemp-caps.cpp), the statistics message (ratiotemp-stats.cpp) and the element
- * struct; gstratiotemp.cpp has the negotiation, the estimator switching and the streaming. */
+ * the formats (ratiotemp-caps.cpp), the statistics message (ratiotemp-stats.cpp), the
+ * recording's tags (ratiotemp-tags.cpp) and the element struct; gstratiotemp.cpp has the
+ * negotiation, the estimator switching and the streaming. */
 #pragma once
 
 #include <gst/gst.h>
@@ -66,6 +67,10 @@ struct State;  // streaming state, gstratiotemp.cpp
  * peak_fits(). */
 GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& settings,
                               const GstSegment* segment, GstClockTime pts, Method method);
+/* Posts that structure as an element message, warning once per window and frame size when the
+ * user's peak-window does not fit (peak_warned: the last misfit warned about). */
+void post_stats(GstRatioTemp* self, const Settings& settings, const cv::Mat& temperature_c,
+                GstClockTime pts, Method method, std::string& peak_warned);
 
 /* What a recording of the output says about itself (ratiotemp-tags.cpp): pushed downstream as
  * the stream's title and comment before the first frame and again when it changes. */
@@ -83,6 +88,11 @@ std::string recording_comment(const RecordingInfo& info);
 GstTagList* recording_tags(const RecordingInfo& info, const GstTagList* upstream);
 /* The exposure in a capturing-shutter-speed tag, in microseconds; negative when absent. */
 double exposure_us_of(const GstTagList* tags);
+/* Pushes the stream's tags downstream when what they say has changed (the first frame, a new
+ * method or e-slope, new upstream tags), before the frame they describe; pushed_comment: the
+ * comment last pushed. */
+void push_recording_tags(GstRatioTemp* self, const RecordingInfo& info, const GstTagList* upstream,
+                         std::string& pushed_comment);
 
 /* The library's request for a method property value (ratiotemp-properties.cpp). */
 pyrocam::MethodRequest to_library(GstRatioTempMethod method);

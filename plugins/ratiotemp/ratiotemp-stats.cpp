@@ -4,6 +4,8 @@
 #include "pyrocam/runtime/region_stats.h"
 #include "ratiotemp-private.h"
 
+#define GST_CAT_DEFAULT gst_ratio_temp_debug
+
 namespace pyrocam::gst::ratiotemp {
 namespace {
 
@@ -83,6 +85,26 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& sett
     set_peak_fields(s, "region-", part_peak, r.tl());
   }
   return s;
+}
+
+void post_stats(GstRatioTemp* self, const Settings& settings, const cv::Mat& temperature_c,
+                GstClockTime pts, Method method, std::string& peak_warned) {
+  const int w = temperature_c.cols, h = temperature_c.rows;
+  if (settings.peak_window_set && settings.peak_window > 0 && !peak_fits(settings, w, h)) {
+    // Once per window and frame size; the default window stays quiet on tiny frames.
+    const std::string misfit =
+        std::to_string(settings.peak_window) + "/" + std::to_string(w) + "x" + std::to_string(h);
+    if (misfit != peak_warned)
+      GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                          ("%s: peak-window %u is larger than the %dx%d frame; no peak in the "
+                           "statistics",
+                           GST_OBJECT_NAME(self), settings.peak_window, w, h),
+                          ("the window must fit in the frame"));
+    peak_warned = misfit;
+  }
+  GstStructure* s =
+      stats_structure(temperature_c, settings, &GST_BASE_TRANSFORM(self)->segment, pts, method);
+  gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), s));
 }
 
 }  // namespace pyrocam::gst::ratiotemp

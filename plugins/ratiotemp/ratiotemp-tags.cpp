@@ -6,8 +6,11 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <utility>
 
 #include "ratiotemp-private.h"
+
+#define GST_CAT_DEFAULT gst_ratio_temp_debug
 
 namespace pyrocam::gst::ratiotemp {
 namespace {
@@ -65,6 +68,16 @@ GstTagList* recording_tags(const RecordingInfo& info, const GstTagList* upstream
                    recording_title(info.uncertainty).c_str(), GST_TAG_COMMENT,
                    recording_comment(info).c_str(), nullptr);
   return tags;
+}
+
+void push_recording_tags(GstRatioTemp* self, const RecordingInfo& info, const GstTagList* upstream,
+                         std::string& pushed_comment) {
+  std::string comment = recording_comment(info);
+  if (comment == pushed_comment) return;
+  GST_INFO_OBJECT(self, "tags: %s", comment.c_str());
+  pushed_comment = std::move(comment);
+  gst_pad_push_event(GST_BASE_TRANSFORM_SRC_PAD(self),
+                     gst_event_new_tag(recording_tags(info, upstream)));
 }
 
 }  // namespace pyrocam::gst::ratiotemp
