@@ -90,12 +90,6 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
     rep.seconds = since(t0);
     best.reports.push_back(rep);
     const double ranked = ranked_held_out_residual(solvers[s], rep.held_out_residual);
-    if (ranked < best_held_out && !fit.posterior.empty()) {
-      report_stage(progress, "prior sensitivity (" + solvers[s] + ")", s, solvers.size());
-      best.prior_fits = prior_sensitivity_fits(profile, data, qo);
-    } else if (ranked < best_held_out) {
-      best.prior_fits.clear();
-    }
     if (ranked < best_held_out) {
       best_held_out = ranked;
       best.system_qe = fit.system_qe;
@@ -103,6 +97,9 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
       best.solver = solvers[s];
       best.qe_spread = cv.qe_spread;
       best.posterior = fit.posterior;
+      if (qo.solver == QeSolver::kRegularised)
+        report_stage(progress, "prior sensitivity (" + solvers[s] + ")", s, solvers.size());
+      best.prior_fits = prior_sensitivity_fits(profile, data, qo);  // none for the paper's
       best.reference_error_before_c = fit.diagnostics.reference_error_before_c;
       best.reference_error_after_c = fit.diagnostics.reference_error_after_c;
     }
