@@ -1,9 +1,8 @@
 #include "pyrocam/core/locus.h"
 
 #include <cmath>
-#include <exception>
-#include <system_error>
-#include <thread>
+
+#include "detail/two_halves.h"
 
 namespace pyrocam {
 
@@ -26,37 +25,8 @@ Locus make_locus(const CameraModel& camera, double min_c, double max_c, double s
       l.ratios.row(i) = normalised_ratios(camera.profile.normalisation, r).transpose();
     }
   };
-  // The estimators build a locus of thousands of rows when an element starts (Planck's law at
-  // every wavelength: about 25 ms for the 3001 rows of a 5x5 model on one core), so the second
-  // half runs on another core. Each row is computed alone: the values do not depend on the split.
-  constexpr Eigen::Index kRowsWorthAThread = 512;
-  if (n < kRowsWorthAThread || std::thread::hardware_concurrency() < 2) {
-    rows(0, n);
-    return l;
-  }
-  const Eigen::Index half = n / 2;
-  std::exception_ptr failed;
-  std::thread second;
-  try {
-    second = std::thread([&] {
-      try {
-        rows(half, n);
-      } catch (...) {
-        failed = std::current_exception();
-      }
-    });
-  } catch (const std::system_error&) {  // no thread to be had: all here
-    rows(0, n);
-    return l;
-  }
-  try {
-    rows(0, half);
-  } catch (...) {
-    second.join();
-    throw;
-  }
-  second.join();
-  if (failed) std::rethrow_exception(failed);
+  // The estimators build a locus of thousands of rows when an element starts.
+  detail::in_two_halves(n, Eigen::Index{512}, rows);
   return l;
 }
 

@@ -1,10 +1,13 @@
 #include "pyrocam/core/physics.h"
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
 #include "detail/portable_math.h"
+#include "detail/vector_clones.h"
 
 namespace pyrocam {
 
@@ -54,12 +57,69 @@ Eigen::Index WavelengthGrid::index_of(double wavelength_nm) const {
   return i;
 }
 
+namespace {
+
+// Four doubles (and four 64-bit integers) that the compiler keeps in one AVX register, two SSE
+// ones in the baseline version.
+typedef double Quad __attribute__((vector_size(32)));
+typedef std::int64_t QuadInt __attribute__((vector_size(32)));
+
+// Beyond this portable::exp overflows; from 0.5 on portable::expm1 is exp(x) - 1.
+constexpr double kExpMainLow = 0.5, kExpMainHigh = 709.782712893383973096;
+
+// portable::expm1 on four x within [kExpMainLow, kExpMainHigh]: its exp's main path operation
+// for operation (the same constants and order, so the same bits; the library is built without
+// fused multiply-adds). Results by reference: a vector returned by value changes the baseline's ABI.
+inline void expm1_main_path(const Quad& x, Quad& out) {
+  constexpr double kLn2Hi = 6.93147180369123816490e-01;
+  constexpr double kLn2Lo = 1.90821492927058770002e-10;
+  constexpr double kInvLn2 = 1.44269504088896338700e+00;
+  constexpr double kP1 = 1.66666666666666019037e-01, kP2 = -2.77777777770155933842e-03,
+                   kP3 = 6.61375632143793436117e-05, kP4 = -1.65339022054652515390e-06,
+                   kP5 = 4.13813679705723846039e-08;
+  const QuadInt k = __builtin_convertvector(kInvLn2 * x + 0.5, QuadInt);  // x > 0: truncates
+  const Quad kd = __builtin_convertvector(k, Quad);
+  const Quad hi = x - kd * kLn2Hi, lo = kd * kLn2Lo, r = hi - lo;
+  const Quad t = r * r;
+  const Quad c = r - t * (kP1 + t * (kP2 + t * (kP3 + t * (kP4 + t * kP5))));
+  const Quad y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi);
+  const QuadInt half = k / 2;
+  const Quad first = reinterpret_cast<Quad>((half + 1023) << 52);
+  const Quad second = reinterpret_cast<Quad>((k - half + 1023) << 52);
+  out = y * first * second - 1.0;
+}
+
+}  // namespace
+
+// Four wavelengths at a time where Planck's exponent lies on portable::exp's main path (every
+// temperature these cameras see): the same bits as planck_photon_radiance times the weight, at a
+// fraction of its cost (its divisions pipeline across the lanes). Other wavelengths go through
+// planck_photon_radiance itself.
+PYROCAM_VECTOR_CLONES
 Eigen::VectorXd weighted_photon_radiance(const WavelengthGrid& grid, double temperature_k,
                                          double emissivity) {
-  Eigen::VectorXd out(grid.size());
-  for (Eigen::Index i = 0; i < grid.size(); ++i)
-    out[i] = planck_photon_radiance(grid.nm()[i] * 1e-9, temperature_k, emissivity) *
-             grid.weights_m()[i];
+  const Eigen::Index n = grid.size();
+  Eigen::VectorXd out(n);
+  const double* nm = grid.nm().data();
+  const double* weight = grid.weights_m().data();
+  const double scale = emissivity * 2.0 * kSpeedOfLight;
+  Eigen::Index i = 0;
+  for (; i + 4 <= n; i += 4) {
+    Quad wavelength, w;
+    std::memcpy(&wavelength, nm + i, sizeof wavelength);
+    std::memcpy(&w, weight + i, sizeof w);
+    wavelength = wavelength * 1e-9;
+    const Quad x = kC2 / (wavelength * temperature_k);
+    bool main_path = true;
+    for (int j = 0; j < 4; ++j) main_path &= x[j] >= kExpMainLow && x[j] <= kExpMainHigh;
+    if (!main_path) break;
+    Quad em1;
+    expm1_main_path(x, em1);
+    const Quad radiance = scale / (wavelength * wavelength * wavelength * wavelength) / em1 * w;
+    std::memcpy(out.data() + i, &radiance, sizeof radiance);
+  }
+  for (; i < n; ++i)
+    out[i] = planck_photon_radiance(nm[i] * 1e-9, temperature_k, emissivity) * weight[i];
   return out;
 }
 

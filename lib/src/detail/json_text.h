@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstring>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -19,23 +20,26 @@ inline std::size_t json_skip_space(const std::string& text, std::size_t i) {
 }
 
 // The end of the JSON value that starts at text[i] (after any white space), or npos when it is
-// not well formed as far as brackets and strings go.
+// not well formed as far as brackets and strings go. A model file is megabytes of numbers inside
+// arrays, so inside a container everything but brackets and quotes is skipped in a tight loop,
+// and a string's body up to its next quote or backslash.
 inline std::size_t json_value_end(const std::string& text, std::size_t i) {
+  const char* p = text.data();
+  const std::size_t n = text.size();
+  const auto structural = [](char c) {
+    return c == '"' || c == '[' || c == ']' || c == '{' || c == '}';
+  };
   int depth = 0;
-  bool in_string = false, escaped = false;
-  for (; i < text.size(); ++i) {
-    const char c = text[i];
-    if (in_string) {
-      if (escaped)
-        escaped = false;
-      else if (c == '\\')
-        escaped = true;
-      else if (c == '"') {
-        in_string = false;
-        if (depth == 0) return i + 1;  // a string on its own (a key)
-      }
-    } else if (c == '"') {
-      in_string = true;
+  while (i < n) {
+    if (depth > 0)  // strcspn scans many bytes at a time; it stops early at a NUL byte
+      while (i < n && !structural(p[i])) i += p[i] ? std::strcspn(p + i, "\"[]{}") : 1;
+    if (i >= n) break;
+    const char c = p[i];
+    if (c == '"') {
+      for (++i; i < n && p[i] != '"'; ++i)
+        if (p[i] == '\\') ++i;  // the escaped character is no quote
+      if (i >= n) break;
+      if (depth == 0) return i + 1;  // a string on its own (a key)
     } else if (c == '[' || c == '{') {
       ++depth;
     } else if (c == ']' || c == '}') {
@@ -44,6 +48,7 @@ inline std::size_t json_value_end(const std::string& text, std::size_t i) {
     } else if (depth == 0 && (c == ',' || json_space(c))) {
       return i;
     }
+    ++i;
   }
   return std::string::npos;
 }

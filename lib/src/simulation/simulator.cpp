@@ -8,6 +8,7 @@
 
 #include "detail/portable_math.h"
 #include "detail/random.h"
+#include "detail/two_halves.h"
 #include "pyrocam/core/dataset.h"
 #include "pyrocam/core/image_io.h"
 #include "pyrocam/core/noise_model.h"
@@ -26,8 +27,12 @@ Simulator::Simulator(CameraProfile profile, Eigen::MatrixXd system_qe, std::uint
     throw InputError("simulator: system QE shape does not match the profile " + profile_.name);
   const int n = static_cast<int>(kTableStopC - kTableStartC) + 1;
   rate_table_.resize(profile_.band_count(), n);
-  for (int i = 0; i < n; ++i)
-    rate_table_.col(i) = electron_rates(profile_, system_qe_, celsius_to_kelvin(kTableStartC + i));
+  // Built when a simulated camera starts: half of it on another core.
+  detail::in_two_halves(n, 512, [&](int from, int to) {
+    for (int i = from; i < to; ++i)
+      rate_table_.col(i) =
+          electron_rates(profile_, system_qe_, celsius_to_kelvin(kTableStartC + i));
+  });
 }
 
 double Simulator::electron_rate(int band, double temperature_c) const {

@@ -89,6 +89,24 @@ TEST(PhotonIntegral, flat_qe_over_wide_grid_gives_the_closed_form) {
   }
 }
 
+// weighted_photon_radiance takes four wavelengths at a time where it can; every value must be
+// planck_photon_radiance's times the weight to the bit, on the fast path and off it (exponents
+// beyond exp's range at 20 K, below 0.5 in the far infrared and at 10^5 K), on grids whose size
+// is not a multiple of four.
+TEST(PhotonIntegral, weighted_radiance_is_the_scalar_formula_to_the_bit) {
+  const WavelengthGrid grids[] = {{350, 1100, 5}, {400, 1000, 1}, {50, 200000, 3}, {400, 402, 1}};
+  for (const WavelengthGrid& grid : grids)
+    for (double t : {20.0, 373.15, 773.15, 1773.15, 2500.0, 3773.15, 1e5})
+      for (double emissivity : {1.0, 0.37}) {
+        const Eigen::VectorXd w = weighted_photon_radiance(grid, t, emissivity);
+        ASSERT_EQ(w.size(), grid.size());
+        for (Eigen::Index i = 0; i < grid.size(); ++i)
+          ASSERT_EQ(w[i], planck_photon_radiance(grid.nm()[i] * 1e-9, t, emissivity) *
+                              grid.weights_m()[i])
+              << grid.nm()[i] << " nm, " << t << " K, emissivity " << emissivity;
+      }
+}
+
 TEST(PhotonIntegral, energy_integral_gives_stefan_boltzmann) {
   const double t = 2000;
   const WavelengthGrid grid(50, 100000, 1);
