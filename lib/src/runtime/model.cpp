@@ -226,20 +226,41 @@ ThermalModel load_model(const std::filesystem::path& path) {
   while (in.read(block.data(), static_cast<std::streamsize>(block.size())) || in.gcount() > 0)
     text.append(block.data(), static_cast<std::size_t>(in.gcount()));
   if (in.bad()) throw InputError(where + ": model file unreadable");
-  // The checksum of the payload's text (about a fifth of the parse's time) on another core
-  // meanwhile; payload_text_checksum throws nothing but allocation failures.
+  // The network's layers, most of the text, are read by a faster scanner than the parser
+  // (mlp_layers_text.h), and the parser reads the rest with the layers left as []. Anything the
+  // scanner does not read, and any error in the rest, goes through the parser whole: it names
+  // what is wrong, where it is in the file.
+  std::optional<std::pair<std::size_t, std::size_t>> span;
+  if (const auto payload_span = detail::json_member_span(text, 0, "payload"))
+    if (const auto mlp_span = detail::json_member_span(text, payload_span->first, "mlp"))
+      span = detail::json_member_span(text, mlp_span->first, "layers");
+  // The checksum of the payload's text on another core while the parser reads the rest. The
+  // layers' scan goes with whichever takes less: the parser takes about six times as long per
+  // byte as the checksum (measured on both test models), so with a rest of more than a sixth of
+  // the file (a 5x5 model's profile and QE) the scan goes with the checksum. Neither throws but
+  // on allocation failure.
+  const std::size_t layer_bytes = span ? span->second - span->first : 0;
+  const bool layers_beside_checksum = span && 6 * (text.size() - layer_bytes) > text.size();
   std::string from_text;
+  std::optional<std::vector<MlpLayer>> layers;
+  const auto read_layers = [&] {
+    if (span)
+      layers = detail::read_layers_text(std::string_view(text).substr(span->first, layer_bytes));
+  };
+  const auto checksum_and_layers = [&] {
+    try {
+      from_text = payload_text_checksum(text);
+      if (layers_beside_checksum) read_layers();
+    } catch (...) {
+      from_text.clear();  // the dump decides
+      layers.reset();     // the parser reads them
+    }
+  };
   std::thread checksum_thread;
   try {
-    checksum_thread = std::thread([&] {
-      try {
-        from_text = payload_text_checksum(text);
-      } catch (...) {
-        from_text.clear();  // the dump decides
-      }
-    });
+    checksum_thread = std::thread(checksum_and_layers);
   } catch (const std::system_error&) {
-    from_text = payload_text_checksum(text);
+    checksum_and_layers();
   }
   struct Join {
     std::thread& t;
@@ -255,29 +276,21 @@ ThermalModel load_model(const std::filesystem::path& path) {
                        ": not a complete JSON model file (truncated or corrupt): " + e.what());
     }
   };
-  // The network's layers, most of the text, are read by a faster scanner than the parser
-  // (mlp_layers_text.h), and the parser reads the rest with the layers left as []. Anything the
-  // scanner does not read, and any error in the rest, goes through the parser whole: it names
-  // what is wrong, where it is in the file.
-  std::optional<std::vector<MlpLayer>> layers;
+  if (!layers_beside_checksum) read_layers();
   json file;
-  std::optional<std::pair<std::size_t, std::size_t>> span;
-  if (const auto payload_span = detail::json_member_span(text, 0, "payload"))
-    if (const auto mlp_span = detail::json_member_span(text, payload_span->first, "mlp"))
-      span = detail::json_member_span(text, mlp_span->first, "layers");
-  if (span)
-    layers = detail::read_layers_text(
-        std::string_view(text).substr(span->first, span->second - span->first));
-  if (layers) {
+  bool rest_parsed = false;
+  if (span) {
     std::string rest;
     rest.reserve(text.size() - (span->second - span->first) + 2);
     rest.append(text, 0, span->first).append("[]").append(text, span->second);
     try {
       file = parse_bounded_json(rest, where);
-    } catch (const std::exception&) {
-      layers.reset();
+      rest_parsed = true;
+    } catch (const std::exception&) {  // the parser reads the whole text below and names it
     }
   }
+  if (checksum_thread.joinable()) checksum_thread.join();
+  if (!rest_parsed) layers.reset();
   if (!layers) file = parse(text);
   try {
     if (!file.is_object() || file.value("format", std::string()) != kModelFormat)
@@ -292,7 +305,6 @@ ThermalModel load_model(const std::filesystem::path& path) {
     // (another program's white space or number format) is checked as before, by its dump, for
     // which the layers must be parsed too.
     const std::string checksum = file.value("checksum_fnv1a64", std::string());
-    if (checksum_thread.joinable()) checksum_thread.join();
     if (layers && (from_text.empty() || from_text != checksum)) {
       layers.reset();
       file = parse(text);
