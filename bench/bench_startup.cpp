@@ -6,6 +6,8 @@
 //
 // Usage: bench_startup --model M.json [--profile P] [--pattern 5x5] [--runs N] [--library-only]
 //        [--cache-dir DIR]
+//        (--pattern 5x5 without --profile simulates the nir5x5-reference sensor; a pipeline
+//        that gives no reading prints the error and exits 1)
 //        (GST_PLUGIN_PATH and PYROCAM_PROFILE_DIR as for the chains; the cache goes to a
 //        temporary folder, emptied before the cold run, or to DIR, kept: a second invocation
 //        then measures a warm start in a fresh process)
@@ -74,6 +76,22 @@ double first_reading_ms(const std::string& description) {
     }
     if (f.seen) ms = std::chrono::duration<double, std::milli>(f.at - t0).count();
     g_mutex_unlock(&f.lock);
+  }
+  if (ms < 0) {  // say why: a pipeline that never reads must not print as a time
+    GstBus* bus = gst_element_get_bus(pipeline);
+    if (GstMessage* m = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
+      GError* err = nullptr;
+      gchar* debug = nullptr;
+      gst_message_parse_error(m, &err, &debug);
+      std::fprintf(stderr, "pipeline failed: %s (%s)\n", err ? err->message : "?",
+                   debug ? debug : "");
+      g_clear_error(&err);
+      g_free(debug);
+      gst_message_unref(m);
+    } else {
+      std::fprintf(stderr, "pipeline failed: no reading within 30 s\n");
+    }
+    gst_object_unref(bus);
   }
   gst_element_set_state(pipeline, GST_STATE_NULL);  // writes the table cache
   gst_object_unref(src);
@@ -168,6 +186,8 @@ int main(int argc, char** argv) {
         argv[0]);
     return 2;
   }
+  // The simulated camera's default profile is a colour one: a 5x5 chain needs the 5x5 sensor.
+  if (pattern == "5x5" && profile.empty()) profile = "nir5x5-reference";
   const bool own_dir = cache_dir.empty();
   const std::filesystem::path dir = own_dir ? std::filesystem::temp_directory_path() /
                                                   ("bench-startup-" + std::to_string(getpid()))
@@ -183,11 +203,18 @@ int main(int argc, char** argv) {
     return 0;
   }
   std::printf("%s\n", description.c_str());
-  std::printf("  %s: first reading %.1f ms after PLAYING\n",
-              own_dir ? "cold (no cache)" : "first run", first_reading_ms(description));
-  for (int r = 0; r < runs; ++r)
-    std::printf("  warm run %d: first reading %.1f ms after PLAYING\n", r + 1,
-                first_reading_ms(description));
+  for (int r = 0; r <= runs; ++r) {
+    const double ms = first_reading_ms(description);
+    if (ms < 0) {
+      if (own_dir) std::filesystem::remove_all(dir);
+      return 1;
+    }
+    if (r == 0)
+      std::printf("  %s: first reading %.1f ms after PLAYING\n",
+                  own_dir ? "cold (no cache)" : "first run", ms);
+    else
+      std::printf("  warm run %d: first reading %.1f ms after PLAYING\n", r, ms);
+  }
   breakdown(model, dir.string());
   if (own_dir) std::filesystem::remove_all(dir);
   return 0;
