@@ -290,8 +290,9 @@ void uncertainty_section(const CalibrationOutcome& o, std::ostream& h) {
   if (!u.u_qe_model_c.empty())
     h << "<p>u QE model: the spread of the readings of QE solutions that fit the furnace (and "
          "reference) data about equally well (posterior samples of the fit), with the largest "
-         "change of the reading when the fit's priors are made twice as wide or half as wide. It "
-         "grows where the model extrapolates beyond the data.</p>";
+         "change of the reading when the fit's priors are made twice as wide or half as wide "
+         "(never less than nearer the furnace range). It grows where the model extrapolates "
+         "beyond the data.</p>";
 }
 
 // Reference rows: each source beyond the furnace read with the datasheet QE and the fitted QE.

@@ -1,5 +1,6 @@
-// Targets above the furnace (rate level, no images): for six seeded hostile units of each camera,
-// the QE fit's reading error from 700 to 2600 degC without and with three reference rows
+// Targets above the furnace (rate level, no images): for seeded hostile units of each camera
+// (twenty colour, six 5x5: a colour unit's fit takes a second, a 5x5 one's five), the QE fit's
+// reading error from 700 to 2600 degC without and with three reference rows
 // (1324 / 1738 / 2474 degC), and how often the k=2 interval of the QE-model uncertainty (the
 // posterior's spread and the prior-sensitivity fits, as pyrocam-calib computes it) covers it at
 // 1500-2600 degC. Prints every figure; asserts the targets that hold with loose bounds and,
@@ -21,16 +22,16 @@ struct Figures {
   int covered = 0, counted = 0;
 };
 
-Figures evaluate(const std::string& profile_name, bool references) {
+Figures evaluate(const std::string& profile_name, bool references, int units) {
   const CameraProfile p = load_profile_by_name(profile_name);
   std::vector<double> temps;
   for (double t = 700; t <= 2600; t += 100) temps.push_back(t);
   double ss[4] = {0, 0, 0, 0};
   int n[4] = {0, 0, 0, 0};
   Figures f;
-  std::printf("%s, hostile units%s\n", profile_name.c_str(),
+  std::printf("%s, %d hostile units%s\n", profile_name.c_str(), units,
               references ? ", three reference rows" : "");
-  for (std::uint64_t unit = 1; unit <= 6; ++unit) {
+  for (std::uint64_t unit = 1; unit <= static_cast<std::uint64_t>(units); ++unit) {
     const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse("hostile", unit));
     RateCampaign campaign;
     campaign.seed = 100 + unit;
@@ -68,23 +69,25 @@ Figures evaluate(const std::string& profile_name, bool references) {
 }
 
 TEST(ExtrapolationTargets, colour) {
-  const Figures plain = evaluate("rgb-reference", false);
-  const Figures refs = evaluate("rgb-reference", true);
+  const Figures plain = evaluate("rgb-reference", false, 20);
+  const Figures refs = evaluate("rgb-reference", true, 20);
   EXPECT_LT(plain.in_range, 0.8);       // target: no worse than before (0.8)
   EXPECT_LT(refs.range_700_2600, 5.0);  // target 5 degC rms with three reference rows
-  // Target 15, NOT MET: 38 measured (52 before the shape changes joined the fit); a regression
-  // bound. The figures are deterministic (portable maths), so the margins guard against
-  // regressions, not noise.
+  // Target 15, NOT MET: 35.8 measured over these 20 units (38.4 over the first 6; 52 there before
+  // the shape changes joined the fit); a regression bound. The figures are deterministic
+  // (portable maths), so the margins guard against regressions, not noise.
   EXPECT_LT(plain.range_1800_2600, 55);
-  // Coverage target 95 +- 3 %, NOT MET: 61 of 72 measured (50 with the posterior's spread alone,
-  // before the prior-sensitivity fits joined the term; 31 before the joint fit, 28 before the
-  // posterior's shape changes beyond the model); a regression bound.
-  EXPECT_GE(plain.covered, 56);
+  // Coverage target 95 +- 3 %: 230 of 240 measured (95.8 %; 184 with the posterior's spread
+  // alone). Before the prior term's outward envelope 226, before the prior-sensitivity fits
+  // joined the term 184. Over the first six units alone it is 64 of 72 (88.9 %): six units are
+  // too few to tell (a unit's twelve temperatures are covered or missed together).
+  EXPECT_GE(plain.covered, 0.92 * plain.counted);
+  EXPECT_LE(plain.covered, 0.98 * plain.counted);
 }
 
 TEST(ExtrapolationTargets, multispectral) {
-  const Figures plain = evaluate("nir5x5-reference", false);
-  const Figures refs = evaluate("nir5x5-reference", true);
+  const Figures plain = evaluate("nir5x5-reference", false, 6);
+  const Figures refs = evaluate("nir5x5-reference", true, 6);
   EXPECT_LT(plain.in_range, 1.2);       // target: no worse than before (1.2)
   EXPECT_LT(refs.range_700_2600, 5.0);  // target 5 degC rms with three reference rows
   EXPECT_LT(plain.range_800_2600, 10);  // target 10: 6.9 measured (12.3 before the joint fit)

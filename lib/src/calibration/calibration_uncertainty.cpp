@@ -18,6 +18,29 @@ namespace {
 constexpr double kWellExposedDn = 150;
 }  // namespace
 
+namespace {
+
+// What a prior fit's reading change is worth as a term: it changes sign where the fit's curve
+// crosses the nominal one, and an accident of that crossing is no knowledge. So the term never
+// shrinks going away from the temperature where it is least (the furnace range, where the data
+// hold every fit): at each temperature the largest value between there and it.
+void outward_envelope(const std::vector<double>& temperatures_c, std::vector<double>& term) {
+  std::vector<std::size_t> order(term.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return temperatures_c[a] < temperatures_c[b]; });
+  const auto least =
+      std::min_element(order.begin(), order.end(),
+                       [&](std::size_t a, std::size_t b) { return term[a] < term[b]; }) -
+      order.begin();
+  for (std::ptrdiff_t k = least + 1; k < static_cast<std::ptrdiff_t>(order.size()); ++k)
+    term[order[k]] = std::max(term[order[k]], term[order[k - 1]]);
+  for (std::ptrdiff_t k = least - 1; k >= 0; --k)
+    term[order[k]] = std::max(term[order[k]], term[order[k + 1]]);
+}
+
+}  // namespace
+
 std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
                                          const std::vector<QeSample>& posterior,
                                          const std::vector<double>& temperatures_c,
@@ -39,6 +62,7 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
     s *= kWellExposedDn / s.maxCoeff();
     return reader->temperature_c(s.data());
   };
+  std::vector<double> spread, prior;
   for (double t : temperatures_c) {
     const double nominal = read(fitted, t);
     double sum = 0, sum2 = 0;
@@ -49,15 +73,15 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
       sum += d, sum2 += d * d, ++n;
     }
     const double mean = n > 0 ? sum / n : 0;
-    double prior = 0;
+    spread.push_back(n > 1 ? std::sqrt(std::max(0.0, (sum2 - n * mean * mean) / (n - 1))) : NAN);
+    prior.push_back(0);
     for (const QeSample& s : prior_fits) {
       const double d = read(CameraModel{fitted.profile, s.system_qe, s.gains}, t) - nominal;
-      if (std::isfinite(d)) prior = std::max(prior, std::abs(d));
+      if (std::isfinite(d)) prior.back() = std::max(prior.back(), std::abs(d));
     }
-    u.push_back(
-        n > 1 ? std::hypot(std::sqrt(std::max(0.0, (sum2 - n * mean * mean) / (n - 1))), prior)
-              : NAN);
   }
+  outward_envelope(temperatures_c, prior);
+  for (std::size_t i = 0; i < spread.size(); ++i) u.push_back(std::hypot(spread[i], prior[i]));
   // Where no sample reads (the cold end of a 5x5 model's range, where some band is dim even in
   // a well exposed pixel) the nearest temperature's value: a model holds a number at every
   // temperature of its table (a NaN would make it unreadable), and pixels read there from

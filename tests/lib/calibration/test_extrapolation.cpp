@@ -163,5 +163,29 @@ TEST(QePosterior, spreads_where_the_furnace_does_not_reach) {
   EXPECT_TRUE(prior_sensitivity_fits(p, simulate_calibration_rates(p, truth, {}), paper).empty());
 }
 
+// A prior fit's reading crosses the model's somewhere above the furnace (hostile colour unit 1:
+// between 1600 and 1800 degC), where its change is near zero; that is no knowledge, and the
+// term must not dip there (it did: 13.5, 12.2, 9.7 degC at 1500, 1600 and 1700 degC).
+TEST(QePosterior, the_prior_term_never_shrinks_away_from_the_furnace) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse("hostile", 1));
+  RateCampaign campaign;
+  campaign.seed = 101;  // as the extrapolation study's unit 1
+  const CalibrationRates data = simulate_calibration_rates(p, truth, campaign);
+  QeFitOptions options;
+  options.regularised.posterior_samples = 48;
+  const QeFitResult fit = fit_qe(p, data, options);
+  const CameraModel model{p, fit.system_qe, fit.gains};
+  std::vector<double> t;
+  for (double c = 2600; c >= 1100; c -= 100) t.push_back(c);  // any order
+  const std::vector<double> u =
+      qe_model_uncertainty(model, fit.posterior, t, prior_sensitivity_fits(p, data, options));
+  ASSERT_EQ(u.size(), t.size());
+  for (std::size_t i = 0; i + 1 < t.size(); ++i) {
+    SCOPED_TRACE(t[i]);
+    EXPECT_GE(u[i], u[i + 1]);
+  }
+}
+
 }  // namespace
 }  // namespace pyrocam

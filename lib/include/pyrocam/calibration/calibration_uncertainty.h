@@ -26,8 +26,9 @@ UncertaintyModel uncertainty_model(const ThermalModel& model, const std::vector<
 // camera in `posterior` (QeFitResult::posterior), combined in quadrature with the largest change
 // of that reading between `fitted` and the fits of `prior_fits` (prior_sensitivity_fits: the
 // posterior is drawn around one choice of priors, and the data above the furnace range do not
-// tell which is right). Small inside the furnace range, growing where the data do not
-// constrain the QE. Empty without samples.
+// tell which is right); that change is taken as its envelope outward from the temperature
+// where it is least, as a crossing of the curves is no knowledge. Small inside the furnace
+// range, growing where the data do not constrain the QE. Empty without samples.
 std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
                                          const std::vector<QeSample>& posterior,
                                          const std::vector<double>& temperatures_c,
