@@ -90,7 +90,9 @@ TEST(ExtrapolationTargets, multispectral) {
   const Figures refs = evaluate("nir5x5-reference", true, 6);
   EXPECT_LT(plain.in_range, 1.2);       // target: no worse than before (1.2)
   EXPECT_LT(refs.range_700_2600, 5.0);  // target 5 degC rms with three reference rows
-  EXPECT_LT(plain.range_800_2600, 10);  // target 10: 6.9 measured (12.3 before the joint fit)
+  // Target 10: 6.9 measured over these six units (12.3 before the joint fit), but 11.2 over the
+  // first twenty (bench_extrapolation --units 20): met here, not over a larger sample.
+  EXPECT_LT(plain.range_800_2600, 10);
   // Coverage target 95 +- 3 %: 72 of 72 measured (62 before the joint fit), above the target's
   // band: the interval is wider than these units need. Asserted as a lower bound only.
   EXPECT_GE(plain.covered, 65);
