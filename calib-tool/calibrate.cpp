@@ -1,6 +1,7 @@
 // `pyrocam-calib calibrate`: furnace dataset + camera profile -> model file and report.
 #include "pyrocam/calibration/calibrate.h"
 
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -94,6 +95,13 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
                 "Monte-Carlo QE refits for the thermocouple uncertainty")
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
+  c->add_option("--thermocouple-tolerance", a.options.thermocouple_tolerance_c,
+                "Tolerance of the furnace's thermocouple, +-degC (0 to 50; read as a rectangular "
+                "distribution, as IEC 60584-2 states tolerances; the default is class 1 at "
+                "1100 degC): the calibration term's refits move the furnace temperatures within "
+                "it (without refits its standard uncertainty, tolerance / sqrt(3), is the term)")
+      ->check(CLI::Range(0.0, 50.0))
+      ->capture_default_str();
   c->add_option("--seed", a.options.seed, "Seed (MLP training, Monte-Carlo)")
       ->capture_default_str();
   c->add_option("--threads", a.options.threads, "Threads for reading frames")
@@ -105,6 +113,8 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
   c->callback([&global, &selected, profile_option] {
     if (!(a.options.min_temperature_c < a.options.max_temperature_c))
       throw CLI::ValidationError("--min-temperature", "must be below --max-temperature");
+    if (!std::isfinite(a.options.thermocouple_tolerance_c))  // CLI::Range lets NaN through
+      throw CLI::ValidationError("--thermocouple-tolerance", "must be a number from 0 to 50");
     selected = [&global, profile_option] {
       const Dataset dataset = Dataset::open(a.dataset);
       // Without --profile, a 5x5 dataset is the shipped 5x5 camera's, not the colour default.

@@ -174,5 +174,37 @@ TEST(CliCalibrateDefaults, a_5x5_dataset_without_a_profile_is_the_shipped_5x5_ca
   EXPECT_FALSE(fs::exists(dir / "colour.json"));
 }
 
+// calibrate --thermocouple-tolerance: the furnace's thermocouple as the user knows it (a
+// calibrated one is far better than class 1), kept in the model and, without refits, its
+// rectangular standard uncertainty is the calibration term. A tolerance that is no number from
+// 0 to 50 degC is bad usage, named, and no model is written.
+TEST(CliCalibrateDefaults, the_thermocouple_tolerance_is_the_users) {
+  ScratchDir dir{"cli-thermocouple"};
+  ASSERT_EQ(calib("simulate campaign --temperatures 900 950 1000 1050 1100 --exposures 12 "
+                  "--frames 1 --size 64x64 --roi-area 600 --out " +
+                  q(dir / "furnace")),
+            0);
+  const std::string calibrate = "calibrate --dataset " + q(dir / "furnace") +
+                                " --epochs 1 --polish-iterations 0 --mc-refits 0 "
+                                "--no-prebuilt-table --thermocouple-tolerance ";
+  ASSERT_EQ(calib(calibrate + "1.5 --out " + q(dir / "model.json")), 0);
+  const ThermalModel m = load_model((dir / "model.json").string());
+  EXPECT_EQ(m.uncertainty.thermocouple_tolerance_c, 1.5);
+  ASSERT_FALSE(m.uncertainty.u_calibration_c.empty());
+  for (double u : m.uncertainty.u_calibration_c) EXPECT_NEAR(u, 1.5 / std::sqrt(3.0), 1e-9);
+  for (const std::string bad : {"-1", "51", "nan", "warm"}) {
+    const fs::path log = dir / "bad.log", out = dir / "bad.json";
+    const std::string command = "timeout 120 '" + std::string(PYROCAM_CALIB_TOOL) + "' -q " +
+                                calibrate + bad + " --out " + q(out) +
+                                " < /dev/null > /dev/null 2> " + q(log);
+    const int status = std::system(command.c_str());
+    ASSERT_TRUE(WIFEXITED(status)) << bad;
+    EXPECT_EQ(WEXITSTATUS(status), 2) << bad;
+    EXPECT_NE(test::read_text(log).find("--thermocouple-tolerance"), std::string::npos)
+        << bad << ": " << test::read_text(log);
+    EXPECT_FALSE(fs::exists(out)) << bad;
+  }
+}
+
 }  // namespace
 }  // namespace pyrocam::test
