@@ -14,19 +14,20 @@ namespace pyrocam {
 using calibration_detail::report_stage;
 
 namespace {
+
 // The brightest band of a well exposed pixel, DN (as extrapolation_errors exposes).
 constexpr double kWellExposedDn = 150;
-}  // namespace
-
-namespace {
 
 // What a prior fit's reading change is worth as a term: it changes sign where the fit's curve
 // crosses the nominal one, and an accident of that crossing is no knowledge. So the term never
 // shrinks going away from the temperature where it is least (the furnace range, where the data
-// hold every fit): at each temperature the largest value between there and it.
+// hold every fit): at each temperature the largest value between there and it. NaN (no reading
+// there) neither counts nor changes.
 void outward_envelope(const std::vector<double>& temperatures_c, std::vector<double>& term) {
-  std::vector<std::size_t> order(term.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < term.size(); ++i)
+    if (std::isfinite(term[i])) order.push_back(i);
+  if (order.empty()) return;
   std::sort(order.begin(), order.end(),
             [&](std::size_t a, std::size_t b) { return temperatures_c[a] < temperatures_c[b]; });
   const auto least =
@@ -74,7 +75,7 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
     }
     const double mean = n > 0 ? sum / n : 0;
     spread.push_back(n > 1 ? std::sqrt(std::max(0.0, (sum2 - n * mean * mean) / (n - 1))) : NAN);
-    prior.push_back(0);
+    prior.push_back(std::isfinite(nominal) ? 0.0 : NAN);
     for (const QeSample& s : prior_fits) {
       const double d = read(CameraModel{fitted.profile, s.system_qe, s.gains}, t) - nominal;
       if (std::isfinite(d)) prior.back() = std::max(prior.back(), std::abs(d));
