@@ -74,8 +74,8 @@ int main(int argc, char** argv) {
       ro.discrepancy_spacing_nm = value;
     else if (key == "discrepancy_leak")
       ro.discrepancy_leak = value;
-    else if (key == "discrepancy_fit_passes")
-      ro.discrepancy_fit_passes = static_cast<int>(value);
+    else if (key == "fit_discrepancy")
+      ro.fit_discrepancy = value != 0;
     else if (key == "discrepancy_leak_spacing_nm")
       ro.discrepancy_leak_spacing_nm = value;
     else if (key == "relative_noise")

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "calibration/levenberg_marquardt.h"
 #include "calibration/qe_problem.h"
 #include "calibration/qe_shape_bases.h"
 #include "detail/curve_warp.h"
@@ -154,15 +155,18 @@ class RegularisedModel {
       const Eigen::VectorXd q = qe(b, th, opt, &dopt, jac ? &dq : nullptr);
       const double kg = gain(b, th) * g(b);
       const Eigen::Index off = nb_ + b * kPerBand;
+      // Every radiance row times the QE's derivatives at once (wdq.row(i) = w_i dq).
+      Eigen::MatrixXd rad_dq, rrad_dq;
+      if (jac) rad_dq.noalias() = rad * dq, rrad_dq.noalias() = rrad * dq;
       // One observation: value = kg * scale * w.q against `measured`, in units of its noise.
       const auto observe = [&](const Eigen::RowVectorXd& w, const Eigen::RowVectorXd& dw,
-                               double scale, double measured, Eigen::Index t_param,
-                               Eigen::Index scale_param) {
+                               const Eigen::MatrixXd& wdq, Eigen::Index w_row, double scale,
+                               double measured, Eigen::Index t_param, Eigen::Index scale_param) {
         const double value = kg * scale * w.dot(q), unit = 1.0 / (o_.relative_noise * measured);
         Eigen::RowVectorXd j;
         if (jac) {
           j = Eigen::RowVectorXd::Zero(n);
-          const Eigen::RowVectorXd d = kg * scale * unit * (w * dq);
+          const Eigen::RowVectorXd d = kg * scale * unit * wdq.row(w_row);
           j[b] = value * unit;
           j.segment(off, kPerBand) = d.head(kPerBand);
           j.segment(common_offset(), kCommon) = d.segment(kPerBand, kCommon);
@@ -173,12 +177,13 @@ class RegularisedModel {
         row((value - measured) * unit, std::move(j));
       };
       for (Eigen::Index i : p_.valid[b])
-        observe(rad.row(i), drad.row(i), 1.0, data_.rates(b, i), furnace_offset() + i, -1);
+        observe(rad.row(i), drad.row(i), rad_dq, i, 1.0, data_.rates(b, i), furnace_offset() + i,
+                -1);
       for (Eigen::Index r = 0; r < nr_; ++r) {
         const double m = data_.references[r].rates[b];
         if (!usable(m)) continue;
         const Eigen::Index c = reference_offset() + 2 * r;
-        observe(rrad.row(r), drrad.row(r), portable::exp(th[c]), m, c + 1, c);
+        observe(rrad.row(r), drrad.row(r), rrad_dq, r, portable::exp(th[c]), m, c + 1, c);
       }
     }
     priors(th, n, jac != nullptr, row);
@@ -193,27 +198,40 @@ class RegularisedModel {
 
   // evaluate()'s data rows (furnace, then references, band by band, before the priors)
   // differentiated by linear changes of the QE: dq[b] holds d Q_b / d delta, wavelengths x m.
-  Eigen::MatrixXd data_jacobian(const Eigen::VectorXd& th,
-                                const std::vector<Eigen::MatrixXd>& dq) const {
+  Eigen::MatrixXd data_jacobian(const Eigen::VectorXd& th, const Discrepancy& shape) const {
     Eigen::MatrixXd rad, drad, rrad, drrad;
     radiance(data_.temperatures_c, th.segment(furnace_offset(), nt_), rad, drad);
     Eigen::VectorXd ref_offsets(nr_);
     for (Eigen::Index r = 0; r < nr_; ++r) ref_offsets[r] = th[reference_offset() + 2 * r + 1];
     radiance(ref_t_, ref_offsets, rrad, drrad);
-    std::vector<Eigen::RowVectorXd> rows;
+    const Eigen::VectorXd opt = optics(th);
+    Eigen::Index count = 0;
+    for (int b = 0; b < nb_; ++b) {
+      count += static_cast<Eigen::Index>(p_.valid[b].size());
+      for (Eigen::Index r = 0; r < nr_; ++r) count += usable(data_.references[r].rates[b]);
+    }
+    Eigen::MatrixXd j = Eigen::MatrixXd::Zero(count, shape.sigma.size());
+    Eigen::Index row = 0;
     for (int b = 0; b < nb_; ++b) {
       const double kg = gain(b, th) * g(b);
+      // Each data row's radiance in its own units; where the QE is clamped at 0 a small change
+      // of it changes nothing.
+      Eigen::MatrixXd w(static_cast<Eigen::Index>(p_.valid[b].size()) + nr_, rad.cols());
+      Eigen::Index rows = 0;
       for (Eigen::Index i : p_.valid[b])
-        rows.push_back(kg / (o_.relative_noise * data_.rates(b, i)) * rad.row(i) * dq[b]);
+        w.row(rows++) = kg / (o_.relative_noise * data_.rates(b, i)) * rad.row(i);
       for (Eigen::Index r = 0; r < nr_; ++r) {
         const double m = data_.references[r].rates[b];
         if (!usable(m)) continue;
         const double scale = portable::exp(th[reference_offset() + 2 * r]);
-        rows.push_back(kg * scale / (o_.relative_noise * m) * rrad.row(r) * dq[b]);
+        w.row(rows++) = kg * scale / (o_.relative_noise * m) * rrad.row(r);
       }
+      const Eigen::VectorXd positive = (qe(b, th, opt, nullptr).array() > 0).cast<double>();
+      const auto k = static_cast<std::size_t>(b);
+      j(Eigen::seqN(row, rows), shape.used[k]) =
+          (w.topRows(rows) * positive.asDiagonal()) * shape.dq_used[k];
+      row += rows;
     }
-    Eigen::MatrixXd j(static_cast<Eigen::Index>(rows.size()), dq.empty() ? 0 : dq[0].cols());
-    for (std::size_t r = 0; r < rows.size(); ++r) j.row(static_cast<Eigen::Index>(r)) = rows[r];
     return j;
   }
 
@@ -350,53 +368,45 @@ class RegularisedModel {
   Eigen::Index nk_ = 0, nt_ = 0, nr_ = 0;
 };
 
-// Levenberg-Marquardt with the leak bumps bounded below by zero: a bump at its bound whose
-// gradient points outwards is held there (active set), and steps are projected. Returns the
-// iterations taken.
-int levenberg_marquardt(const RegularisedModel& model, Eigen::VectorXd& th, int max_iterations) {
-  const Eigen::Index n = model.size();
-  Eigen::VectorXd res, res_new;
-  Eigen::MatrixXd jac;
-  model.evaluate(th, res, &jac);
-  double cost = res.squaredNorm(), mu = 1e-3;
-  int it = 0;
-  bool converged = false;
-  for (; it < max_iterations && !converged; ++it) {
-    const Eigen::VectorXd grad = jac.transpose() * res;
-    std::vector<Eigen::Index> free;
-    for (Eigen::Index k = 0; k < n; ++k)
-      if (!model.fixed(k) && (!model.bounded(k) || th[k] > 0 || grad[k] < 0)) free.push_back(k);
-    const auto nf = static_cast<Eigen::Index>(free.size());
-    Eigen::MatrixXd jf(jac.rows(), nf);
-    Eigen::VectorXd gf(nf);
-    for (Eigen::Index c = 0; c < nf; ++c) jf.col(c) = jac.col(free[c]), gf[c] = grad[free[c]];
-    const Eigen::MatrixXd h = jf.transpose() * jf;
-    bool improved = false;
-    for (int tries = 0; tries < 12 && !improved; ++tries) {
-      Eigen::MatrixXd a = h;
-      a.diagonal() += mu * (h.diagonal().array() + 1e-12).matrix();
-      const Eigen::VectorXd step = a.ldlt().solve(-gf);
-      Eigen::VectorXd trial = th;
-      for (Eigen::Index c = 0; c < nf; ++c) trial[free[c]] += step[c];
-      for (Eigen::Index k = 0; k < n; ++k)
-        if (model.bounded(k)) trial[k] = std::max(trial[k], 0.0);
-      model.evaluate(trial, res_new, nullptr);
-      const double c_new = res_new.squaredNorm();
-      if (c_new < cost) {
-        const double gain = cost - c_new;
-        th = trial, mu = std::max(mu / 3, 1e-9);
-        improved = true;
-        converged = gain < 1e-10 * cost + 1e-14;
-        cost = c_new;
-        model.evaluate(th, res, &jac);
-      } else {
-        mu *= 4;
-      }
-    }
-    if (!improved) break;
+// The regularised model with the discrepancy's amplitudes as parameters too, x = (theta, delta),
+// each amplitude held by its prior: the joint fit (fit_qe_regularised). The additive leaks are
+// bounded below by zero, as the model's own leaks: a transmission added where the filter should
+// block (a band's QE falls through the relative shape changes). Negative ones only met the
+// clamp at Q = 0, where the fit stalled.
+class JointModel {
+ public:
+  JointModel(RegularisedModel& model, const Discrepancy& shape)
+      : model_(model), shape_(shape), nt_(model.size()), nd_(shape.sigma.size()) {}
+
+  Eigen::Index size() const { return nt_ + nd_; }
+  bool fixed(Eigen::Index k) const { return k < nt_ && model_.fixed(k); }
+  bool bounded(Eigen::Index k) const {
+    return k < nt_ ? model_.bounded(k) : k >= size() - shape_.additive_leaks;
   }
-  return it;
-}
+
+  // Leaves the model with x's shape change.
+  void evaluate(const Eigen::VectorXd& x, Eigen::VectorXd& res, Eigen::MatrixXd* jac) const {
+    const Eigen::VectorXd th = x.head(nt_), delta = x.tail(nd_);
+    model_.set_shape_change(shape_change(shape_, delta));
+    Eigen::VectorXd r;
+    Eigen::MatrixXd j;
+    model_.evaluate(th, r, jac ? &j : nullptr);
+    res.resize(r.size() + nd_);
+    res << r, delta.cwiseQuotient(shape_.sigma);
+    if (!jac) return;
+    // The data rows come first in the model's residual vector, its priors after them.
+    const Eigen::MatrixXd jd = model_.data_jacobian(th, shape_);
+    jac->setZero(res.size(), size());
+    jac->topLeftCorner(j.rows(), nt_) = j;
+    jac->block(0, nt_, jd.rows(), nd_) = jd;
+    jac->bottomRightCorner(nd_, nd_) = shape_.sigma.cwiseInverse().asDiagonal();
+  }
+
+ private:
+  RegularisedModel& model_;
+  const Discrepancy& shape_;
+  Eigen::Index nt_, nd_;
+};
 
 // The problem linearised at theta jointly with the discrepancy's amplitudes delta: the free
 // parameters' and delta's Jacobian with delta's prior rows below, and its normal matrix.
@@ -419,7 +429,7 @@ JointLinearisation linearise(const RegularisedModel& model, const Eigen::VectorX
   for (Eigen::Index k = 0; k < model.size(); ++k)
     if (!model.fixed(k) && !(model.bounded(k) && th[k] <= 0)) l.free.push_back(k);
   const Eigen::MatrixXd jd =
-      shape.dq.empty() ? Eigen::MatrixXd(jac.rows(), 0) : model.data_jacobian(th, shape.dq);
+      shape.dq.empty() ? Eigen::MatrixXd(jac.rows(), 0) : model.data_jacobian(th, shape);
   const auto nf = static_cast<Eigen::Index>(l.free.size()), nd = jd.cols();
   // Data rows come first in the residual vector; the parameters' priors follow.
   l.ja = Eigen::MatrixXd::Zero(jac.rows() + nd, nf + nd);
@@ -485,56 +495,50 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
   const auto start = Clock::now();
   const Problem p = prepare(profile, data);
   RegularisedOptions o = options;
-  Eigen::VectorXd th;
   int iterations = 0;
+  // The model's parameters alone at the starting weight: the fit the discrepancy's shape changes
+  // are laid around.
+  Eigen::VectorXd th;
+  Discrepancy shape;
+  {
+    const RegularisedModel first(profile, data, p, o);
+    th = first.start();
+    iterations += levenberg_marquardt(first, th, o.max_iterations);
+    if (options.fit_discrepancy || options.posterior_samples > 0) {
+      Eigen::MatrixXd fitted(profile.band_count(), profile.grid.size());
+      for (int b = 0; b < profile.band_count(); ++b) fitted.row(b) = first.qe(b, th).transpose();
+      shape = discrepancy_basis(profile, fitted, options);
+    }
+  }
+  Eigen::VectorXd delta = Eigen::VectorXd::Zero(shape.sigma.size());
+  const bool joint = options.fit_discrepancy && delta.size() > 0;
+  // With the discrepancy's shape changes the fit is joint: fitted with theta alone, what the
+  // model cannot shape is pushed into parameters that can (leaks, edges) and extrapolates with
+  // them; with the shape free the data are explained as the priors find likeliest.
   // Reweighting: the data's weight against the priors is 1 / relative_noise; refit with the
-  // misfit actually reached (noise-free data earn tighter fits, noisy data stronger priors).
-  for (int pass = 0; pass < std::max(1, options.noise_passes); ++pass) {
-    const RegularisedModel model(profile, data, p, o);
-    if (th.size() == 0) th = model.start();
-    iterations += levenberg_marquardt(model, th, o.max_iterations);
-    const double misfit = std::clamp(model.data_rms(th), options.min_relative_noise, 0.05);
-    if (std::abs(portable::log(misfit / o.relative_noise)) < portable::log(1.5)) break;
+  // misfit actually reached (noise-free data earn tighter fits, noisy data stronger priors),
+  // each fit from the last one, until the weight holds. Carried from the loosest weight to the
+  // data's own, the joint fit ends in the same one of its minima for data that differ a little
+  // (started at the data's weight it could end in another, tens of degrees apart at 2600 degC).
+  const int passes = std::max(1, options.noise_passes);
+  for (int pass = 0; pass < passes; ++pass) {
+    RegularisedModel m(profile, data, p, o);
+    if (joint) {
+      const JointModel joint_model(m, shape);
+      Eigen::VectorXd x(th.size() + delta.size());
+      x << th, delta;
+      iterations += levenberg_marquardt(joint_model, x, o.max_iterations);
+      th = x.head(th.size()), delta = x.tail(delta.size());
+      m.set_shape_change(shape_change(shape, delta));  // not the last trial's
+    } else {
+      iterations += levenberg_marquardt(m, th, o.max_iterations);
+    }
+    const double misfit = std::clamp(m.data_rms(th), options.min_relative_noise, 0.05);
+    if (pass + 1 == passes || std::abs(portable::log(misfit / o.relative_noise)) < 0.02) break;
     o.relative_noise = misfit;
   }
   RegularisedModel model(profile, data, p, o);
-  // The discrepancy joins the fit: a Gauss-Newton step of its amplitudes (with the parameters,
-  // at their priors) then the model's parameters refitted with that shape change fixed, a few
-  // times. Fitted with theta alone, what the model cannot shape is pushed into parameters that
-  // can (leaks, edges) and extrapolates with them; with the shape free the data are explained
-  // as the priors find likeliest.
-  Discrepancy shape;
-  Eigen::VectorXd delta;
-  if (options.discrepancy_fit_passes > 0 || options.posterior_samples > 0) {
-    Eigen::MatrixXd fitted(profile.band_count(), profile.grid.size());
-    for (int b = 0; b < profile.band_count(); ++b) fitted.row(b) = model.qe(b, th).transpose();
-    shape = discrepancy_basis(profile, fitted, options);
-    delta = Eigen::VectorXd::Zero(shape.sigma.size());
-  }
-  const auto joint_cost = [&](const Eigen::VectorXd& t, const Eigen::VectorXd& d) {
-    Eigen::VectorXd res;
-    model.evaluate(t, res, nullptr);
-    return res.squaredNorm() + (d.array() / shape.sigma.array()).square().sum();
-  };
-  double cost = delta.size() > 0 ? joint_cost(th, delta) : 0.0;
-  for (int pass = 0; pass < options.discrepancy_fit_passes && delta.size() > 0; ++pass) {
-    const JointLinearisation l = linearise(model, th, shape, delta);
-    if (!l.ok) break;
-    const Eigen::VectorXd step = -l.llt.solve(l.ja.transpose() * l.residual);
-    const Eigen::VectorXd delta_before = delta, th_before = th;
-    delta += step.tail(delta.size());
-    model.set_shape_change(shape_change(shape, delta));
-    iterations += levenberg_marquardt(model, th, o.max_iterations);
-    const double c = joint_cost(th, delta);
-    if (!(c < cost)) {  // the linear step overshot where the model is not linear: keep the last
-      delta = delta_before, th = th_before;
-      model.set_shape_change(shape_change(shape, delta));
-      break;
-    }
-    const bool converged = cost - c < 1e-6 * cost;
-    cost = c;
-    if (converged) break;
-  }
+  if (delta.size() > 0) model.set_shape_change(shape_change(shape, delta));
   QeFitResult r;
   r.solver = QeSolver::kRegularised;
   r.system_qe.resize(profile.band_count(), profile.grid.size());

@@ -62,6 +62,14 @@ Discrepancy discrepancy_basis(const CameraProfile& profile, const Eigen::MatrixX
   d.sigma.resize(m + leak.cols());
   d.sigma.head(m).setConstant(o.discrepancy_sigma);
   d.sigma.tail(leak.cols()).setConstant(o.discrepancy_leak);
+  d.additive_leaks = leak.cols();
+  for (const Eigen::MatrixXd& dq_b : d.dq) {
+    std::vector<Eigen::Index> used;
+    for (Eigen::Index c = 0; c < dq_b.cols(); ++c)
+      if (!dq_b.col(c).isZero(0)) used.push_back(c);
+    d.dq_used.push_back(dq_b(Eigen::all, used));
+    d.used.push_back(std::move(used));
+  }
   return d;
 }
 
@@ -69,7 +77,8 @@ Eigen::MatrixXd shape_change(const Discrepancy& shape, const Eigen::VectorXd& de
   Eigen::MatrixXd change(static_cast<Eigen::Index>(shape.dq.size()),
                          shape.dq.empty() ? 0 : shape.dq[0].rows());
   for (std::size_t b = 0; b < shape.dq.size(); ++b)
-    change.row(static_cast<Eigen::Index>(b)) = (shape.dq[b] * delta).transpose();
+    change.row(static_cast<Eigen::Index>(b)) =
+        (shape.dq_used[b] * delta(shape.used[b])).transpose();
   return change;
 }
 

@@ -23,6 +23,11 @@ Eigen::MatrixXd leak_basis(const CameraProfile& profile, double spacing, std::ve
 struct Discrepancy {
   std::vector<Eigen::MatrixXd> dq;  // per band: d Q_b / d delta, wavelengths x parameters
   Eigen::VectorXd sigma;
+  Eigen::Index additive_leaks = 0;  // the last amplitudes: leaks, transmission added (>= 0)
+  // Per band: the amplitudes that change it (its own shape changes and the leaks), and dq's
+  // columns of them side by side.
+  std::vector<std::vector<Eigen::Index>> used;
+  std::vector<Eigen::MatrixXd> dq_used;
 };
 
 // The basis around the QE `qe` (bands x wavelengths); empty when the options turn it off.

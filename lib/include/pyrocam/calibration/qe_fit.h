@@ -52,7 +52,7 @@ struct PaperSearchOptions {
 // datasheet's.
 struct RegularisedOptions {
   double relative_noise = 0.005;     // expected relative rms error of a measured rate (the start)
-  int noise_passes = 3;              // refits weighting the data by the misfit reached, at most
+  int noise_passes = 4;              // fits weighting the data by the misfit reached, at most
   double min_relative_noise = 2e-4;  // floor of that estimate
   double tilt_sigma = 0.02;          // per 100 nm
   double curvature_sigma = 0.0;      // per (100 nm)^2; off: trades against the leak, worse highs
@@ -78,17 +78,17 @@ struct RegularisedOptions {
   // Shape changes beyond the model's parameters: each band's QE times raised-cosine bumps of
   // this spacing and half width, each bump's relative amplitude N(0, discrepancy_sigma^2) (a
   // datasheet curve is typical: a unit's broad shape differs by a few %), and leaks outside the
-  // pass band, bumps of discrepancy_leak_spacing_nm, absolute transmission
-  // N(0, discrepancy_leak^2). Chosen from that physics, not fitted to a family. They are fitted
-  // jointly with the parameters (discrepancy_fit_passes alternations of a Gauss-Newton step of
-  // their amplitudes and a refit of the rest, each kept only if the whole objective falls) and
-  // vary in the posterior. bench_extrapolation prints what they give (--set
-  // discrepancy_sigma=0 for none, discrepancy_fit_passes=0 for the posterior only).
+  // pass band, bumps of discrepancy_leak_spacing_nm, absolute transmission added, at least 0,
+  // with a prior N(0, discrepancy_leak^2). Chosen from that physics, not fitted to a family.
+  // With fit_discrepancy they are fitted jointly with the parameters (one Levenberg-Marquardt
+  // fit of both, in every reweighting pass), and they vary in the posterior. bench_extrapolation
+  // prints what they give (--set discrepancy_sigma=0 for none, fit_discrepancy=0 for the
+  // posterior only).
   double discrepancy_sigma = 0.05;
   double discrepancy_spacing_nm = 50;
   double discrepancy_leak = 0.003;
   double discrepancy_leak_spacing_nm = 10;
-  int discrepancy_fit_passes = 3;
+  bool fit_discrepancy = true;
 };
 
 struct QeFitOptions {
