@@ -98,8 +98,9 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
   c->add_option("--thermocouple-tolerance", a.options.thermocouple_tolerance_c,
                 "Tolerance of the furnace's thermocouple, +-degC (0 to 50; read as a rectangular "
                 "distribution, as IEC 60584-2 states tolerances; the default is class 1 at "
-                "1100 degC): the calibration term's refits move the furnace temperatures within "
-                "it (without refits its standard uncertainty, tolerance / sqrt(3), is the term)")
+                "1100 degC): the calibration term's refits move the furnace temperatures by a "
+                "deviation linear in temperature, within it at the coldest and the hottest step "
+                "(without refits its standard uncertainty, tolerance / sqrt(3), is the term)")
       ->check(CLI::Range(0.0, 50.0))
       ->capture_default_str();
   c->add_option("--seed", a.options.seed, "Seed (MLP training, Monte-Carlo)")

@@ -109,14 +109,20 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
 
 std::vector<double> emissivity_uncertainty(const ThermalModel& m, const UncertaintyModel& u) {
   const CameraProfile& profile = m.profile();
-  const CameraModel tilted{profile,
-                           with_emissivity_slope(profile, m.camera.system_qe, u.emissivity_slope_u),
-                           m.camera.band_scale};
+  // Both signs of the slope: at an end of the range the reading one of them implies lies
+  // outside it, where the network cannot follow, and that shift alone would read as none.
+  std::vector<CameraModel> tilted;
+  for (double slope : {u.emissivity_slope_u, -u.emissivity_slope_u})
+    tilted.push_back(CameraModel{profile, with_emissivity_slope(profile, m.camera.system_qe, slope),
+                                 m.camera.band_scale});
   std::vector<double> u_emissivity_c;
   for (double t : u.temperature_c) {
-    const Eigen::VectorXd x = normalised_ratios(profile.normalisation, tilted.rates(t));
-    const double shifted = m.mlp.predict(x.data());
-    u_emissivity_c.push_back(std::abs(shifted - t));
+    double largest = 0;
+    for (const CameraModel& camera : tilted) {
+      const Eigen::VectorXd x = normalised_ratios(profile.normalisation, camera.rates(t));
+      largest = std::max(largest, std::abs(m.mlp.predict(x.data()) - t));
+    }
+    u_emissivity_c.push_back(largest);
   }
   return u_emissivity_c;
 }
@@ -133,11 +139,19 @@ std::vector<double> thermocouple_uncertainty(const ThermalModel& m, const Uncert
   const auto tc_error = [&](Random& r) {
     return r.uniform(-u.thermocouple_tolerance_c, u.thermocouple_tolerance_c);
   };
+  // A thermocouple's deviation from its reference function is one smooth curve over the
+  // campaign, not a new error at each step (the furnace's own scatter from step to step is what
+  // the QE fit's temperature offsets take up): each refit moves the furnace temperatures by a
+  // deviation linear in temperature, drawn within the tolerance at the coldest and the hottest.
+  const auto [coldest, hottest] = std::minmax_element(t_c.begin(), t_c.end());
+  const double t_lo = t_c.empty() ? 0 : *coldest, t_hi = t_c.empty() ? 0 : *hottest;
   for (int k = 0; k < u.monte_carlo_refits; ++k) {
     report_stage(progress, "Monte-Carlo refits", static_cast<std::size_t>(k),
                  static_cast<std::size_t>(u.monte_carlo_refits));
+    const double at_lo = tc_error(rng), at_hi = tc_error(rng);
     std::vector<double> t_perturbed = t_c;
-    for (double& t : t_perturbed) t += tc_error(rng);
+    for (double& t : t_perturbed)
+      t += t_hi > t_lo ? at_lo + (at_hi - at_lo) * (t - t_lo) / (t_hi - t_lo) : at_lo;
     std::vector<ReferenceRates> references_perturbed = references;
     for (ReferenceRates& r : references_perturbed)
       r.temperature_c += r.temperature_uncertainty_c * reference_error(reference_rng);

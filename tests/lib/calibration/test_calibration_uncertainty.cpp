@@ -5,7 +5,9 @@
 
 #include "calibration/synthetic_calibration.h"
 #include "pyrocam/calibration/calibration_uncertainty.h"
+#include "pyrocam/calibration/extrapolation_study.h"
 #include "pyrocam/runtime/estimators.h"
+#include "pyrocam/simulation/simulator.h"
 
 namespace pyrocam {
 namespace {
@@ -64,6 +66,38 @@ TEST(ThermocoupleUncertainty, grows_with_the_tolerance_and_is_zero_without_it) {
     EXPECT_NEAR(exact[i], 0, 1e-6);  // every refit sees the same temperatures
     EXPECT_GT(loose[i], 0.01);
     EXPECT_GT(looser[i], loose[i]);
+  }
+}
+
+// The term is the thermocouple's, not the fit's: on a hostile colour unit (the fit of its
+// furnace rates, where the readings above the furnace depend most on the data) a tolerance a
+// hundred times smaller gives a term about a hundred times smaller at 1800-2600 degC. While
+// the fit stopped at its iteration limit, where it then was, a tolerance of 0.01 degC already
+// gave a term of degrees there.
+TEST(ThermocoupleUncertainty, follows_the_tolerance_above_the_furnace) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse("hostile", 1));
+  RateCampaign campaign;
+  campaign.seed = 101;
+  const CalibrationRates data = simulate_calibration_rates(p, truth, campaign);
+  const QeFitResult fit = fit_qe(p, data);
+  ThermalModel m;
+  m.qe_solver = "regularised";
+  m.min_temperature_c = 500;
+  m.max_temperature_c = 3000;
+  m.camera = CameraModel{p, fit.system_qe, fit.gains};
+  const std::vector<double> grid = {1800, 2200, 2600};
+  const Eigen::MatrixXd rates = data.rates.transpose();
+  const auto u1 = thermocouple_uncertainty(m, table_at(grid, 1, 4), data.temperatures_c, rates, 1);
+  const auto u001 =
+      thermocouple_uncertainty(m, table_at(grid, 0.01, 4), data.temperatures_c, rates, 1);
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    SCOPED_TRACE(grid[i]);
+    EXPECT_GT(u1[i], 0.1);  // a degree's deviation does reach the high range
+    // Linear for small deviations: the same draws scaled, so the ratio is near 100; the bounds
+    // leave a factor two for the fit's own tolerance and the curvature at 1 degC.
+    EXPECT_GT(u1[i] / u001[i], 50);
+    EXPECT_LT(u1[i] / u001[i], 200);
   }
 }
 

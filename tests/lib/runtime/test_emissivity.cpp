@@ -160,7 +160,7 @@ TEST(EmissivitySlope, the_uncertainty_has_the_emissivity_term_of_the_chosen_slop
   EXPECT_EQ(none.emissivity_u_c(1500), 0);
   EXPECT_LE(none.systematic_u_c(1500), lik->systematic_u_c(1500));
   // Near alpha = 0 the computed sensitivity continues the model's table: the table is
-  // |network(alpha = u) - T|, one-sided and with the network's own error, the computed term
+  // the larger |network(alpha = +-u) - T|, with the network's own error, the computed term
   // |dT/d alpha| u a central difference of the likelihood fit.
   const EmissivitySlopeEstimator tiny(lik, 1e-4);
   for (std::size_t i = 0; i < um.temperature_c.size(); ++i) {

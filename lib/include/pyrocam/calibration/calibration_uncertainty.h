@@ -34,13 +34,15 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
                                          const std::vector<double>& temperatures_c,
                                          const std::vector<QeSample>& prior_fits = {});
 
-// |network reading - T| for a graybody whose emissivity has the slope u.emissivity_slope_u, at
-// every u.temperature_c.
+// |network reading - T| for a graybody whose emissivity has the slope u.emissivity_slope_u or
+// its opposite, the larger of the two, at every u.temperature_c.
 std::vector<double> emissivity_uncertainty(const ThermalModel& model, const UncertaintyModel& u);
 
 // Standard uncertainty at every u.temperature_c of the temperature the model's rates imply,
-// over u.monte_carlo_refits QE refits (solver model.qe_solver) with furnace temperatures off by
-// up to +-u.thermocouple_tolerance_c (uniform; drawn from `seed`) and each reference's
+// over u.monte_carlo_refits QE refits (solver model.qe_solver) with the furnace temperatures
+// moved by a thermocouple deviation linear in temperature, uniform within
+// +-u.thermocouple_tolerance_c at the coldest and at the hottest (drawn from `seed`), and each
+// reference's
 // temperature off by a normal draw of its temperature_uncertainty_c (a stream of its own, so
 // that the furnace draws do not depend on the references).
 std::vector<double> thermocouple_uncertainty(const ThermalModel& model, const UncertaintyModel& u,
