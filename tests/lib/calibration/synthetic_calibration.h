@@ -2,12 +2,15 @@
 // model built on it, without a dataset on disk.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "pyrocam/calibration/calibration_outcome.h"
+#include "pyrocam/calibration/extrapolation_study.h"
 #include "pyrocam/calibration/mlp_training.h"
 #include "pyrocam/core/locus.h"
 #include "pyrocam/core/profile.h"
+#include "pyrocam/simulation/simulator.h"
 
 namespace pyrocam::test {
 
@@ -35,6 +38,22 @@ inline ThermalModel small_model(const CameraProfile& profile, double min_c, doub
   options.polish_iterations = 200;
   m.mlp = train_mlp(locus.ratios, locus.temperature_c, options);
   return m;
+}
+
+// A hostile unit's true QE and the furnace rates bench_extrapolation simulates for it (rate
+// level, its campaign seed 100 + unit).
+struct HostileCampaign {
+  Eigen::MatrixXd truth;
+  CalibrationRates data;
+};
+
+inline HostileCampaign hostile_campaign(const CameraProfile& profile, std::uint64_t unit) {
+  HostileCampaign c;
+  c.truth = true_system_qe(profile, UnitPerturbation::parse("hostile", unit));
+  RateCampaign campaign;
+  campaign.seed = 100 + unit;
+  c.data = simulate_calibration_rates(profile, c.truth, campaign);
+  return c;
 }
 
 }  // namespace pyrocam::test

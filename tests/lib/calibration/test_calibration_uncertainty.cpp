@@ -5,9 +5,7 @@
 
 #include "calibration/synthetic_calibration.h"
 #include "pyrocam/calibration/calibration_uncertainty.h"
-#include "pyrocam/calibration/extrapolation_study.h"
 #include "pyrocam/runtime/estimators.h"
-#include "pyrocam/simulation/simulator.h"
 
 namespace pyrocam {
 namespace {
@@ -76,10 +74,7 @@ TEST(ThermocoupleUncertainty, grows_with_the_tolerance_and_is_zero_without_it) {
 // gave a term of degrees there.
 TEST(ThermocoupleUncertainty, follows_the_tolerance_above_the_furnace) {
   const CameraProfile p = load_profile_by_name("rgb-reference");
-  const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse("hostile", 1));
-  RateCampaign campaign;
-  campaign.seed = 101;
-  const CalibrationRates data = simulate_calibration_rates(p, truth, campaign);
+  const CalibrationRates data = test::hostile_campaign(p, 1).data;
   const QeFitResult fit = fit_qe(p, data);
   ThermalModel m;
   m.qe_solver = "regularised";

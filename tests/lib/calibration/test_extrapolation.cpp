@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "calibration/synthetic_calibration.h"
 #include "pyrocam/calibration/calibration_uncertainty.h"
 #include "pyrocam/calibration/extrapolation_study.h"
 #include "pyrocam/simulation/simulator.h"
@@ -194,10 +195,7 @@ TEST(QePosterior, the_prior_term_never_shrinks_away_from_the_furnace) {
 // 29 degC for such a change.
 TEST(QeFit, a_hundredth_of_a_degree_in_the_furnace_moves_the_high_range_by_little) {
   const CameraProfile p = load_profile_by_name("rgb-reference");
-  const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse("hostile", 1));
-  RateCampaign campaign;
-  campaign.seed = 101;
-  const CalibrationRates data = simulate_calibration_rates(p, truth, campaign);
+  const auto [truth, data] = test::hostile_campaign(p, 1);
   const QeFitResult fit = fit_qe(p, data);
   const CameraModel model{p, fit.system_qe, fit.gains};
   const std::vector<double> hot = {1800, 2200, 2600};
