@@ -277,7 +277,10 @@ void uncertainty_section(const CalibrationOutcome& o, std::ostream& h) {
   h << "<h2>Uncertainty model (GUM)</h2><p>Systematic terms; each pixel adds its own signal-noise "
        "term at inference. Thermocouple ±"
     << num(u.thermocouple_tolerance_c, 1) << " °C (rectangular) by " << u.monte_carlo_refits
-    << " Monte-Carlo refits; emissivity slope u(α) = " << u.emissivity_slope_u << " per 100 nm.</p>"
+    << " Monte-Carlo refits, each with one deviation of the thermocouple, linear in temperature "
+       "and within the tolerance at the coldest and the hottest furnace step; emissivity slope "
+       "u(α) = "
+    << u.emissivity_slope_u << " per 100 nm, either sign.</p>"
     << svg_plot({"Systematic uncertainty", "temperature (°C)", "°C", false, 1000, 300}, [&] {
          std::vector<Series> series{
              {"u calibration (k=1)", u.temperature_c, u.u_calibration_c, colour(0)},
