@@ -394,10 +394,11 @@ class JointModel {
     res.resize(r.size() + nd_);
     res << r, delta.cwiseQuotient(shape_.sigma);
     if (!jac) return;
-    // The data rows come first in the model's residual vector, its priors after them.
-    const Eigen::MatrixXd jd = model_.data_jacobian(th, shape_);
     jac->setZero(res.size(), size());
     jac->topLeftCorner(j.rows(), nt_) = j;
+    if (nd_ == 0) return;
+    // The data rows come first in the model's residual vector, its priors after them.
+    const Eigen::MatrixXd jd = model_.data_jacobian(th, shape_);
     jac->block(0, nt_, jd.rows(), nd_) = jd;
     jac->bottomRightCorner(nd_, nd_) = shape_.sigma.cwiseInverse().asDiagonal();
   }
@@ -408,40 +409,26 @@ class JointModel {
   Eigen::Index nt_, nd_;
 };
 
-// The problem linearised at theta jointly with the discrepancy's amplitudes delta: the free
-// parameters' and delta's Jacobian with delta's prior rows below, and its normal matrix.
+// The joint problem linearised at x = (theta, delta): its free parameters and the Cholesky
+// factor of their normal matrix. Leak bumps held at their bound (the model's and the
+// discrepancy's additive ones) stay there: sampling them and clamping would break the
+// correlations that keep a sample on the data, and sampling them without a clamp gives
+// negative transmissions.
 struct JointLinearisation {
   std::vector<Eigen::Index> free;
-  Eigen::MatrixXd ja;
-  Eigen::VectorXd residual;  // at (theta, delta)
   Eigen::LLT<Eigen::MatrixXd> llt;
   bool ok = false;
 };
 
-JointLinearisation linearise(const RegularisedModel& model, const Eigen::VectorXd& th,
-                             const Discrepancy& shape, const Eigen::VectorXd& delta) {
+JointLinearisation linearise(const JointModel& joint, const Eigen::VectorXd& x) {
   JointLinearisation l;
-  Eigen::VectorXd res;
+  Eigen::VectorXd residual;
   Eigen::MatrixXd jac;
-  model.evaluate(th, res, &jac);
-  // Leak bumps held at their bound stay there: sampling them and clamping would break the
-  // correlations that keep a sample on the data.
-  for (Eigen::Index k = 0; k < model.size(); ++k)
-    if (!model.fixed(k) && !(model.bounded(k) && th[k] <= 0)) l.free.push_back(k);
-  const Eigen::MatrixXd jd =
-      shape.dq.empty() ? Eigen::MatrixXd(jac.rows(), 0) : model.data_jacobian(th, shape);
-  const auto nf = static_cast<Eigen::Index>(l.free.size()), nd = jd.cols();
-  // Data rows come first in the residual vector; the parameters' priors follow.
-  l.ja = Eigen::MatrixXd::Zero(jac.rows() + nd, nf + nd);
-  for (Eigen::Index c = 0; c < nf; ++c) l.ja.col(c).head(jac.rows()) = jac.col(l.free[c]);
-  l.ja.block(0, nf, jd.rows(), nd) = jd;
-  l.residual = Eigen::VectorXd::Zero(jac.rows() + nd);
-  l.residual.head(res.size()) = res;
-  for (Eigen::Index k = 0; k < nd; ++k) {
-    l.ja(jac.rows() + k, nf + k) = 1 / shape.sigma[k];
-    l.residual[jac.rows() + k] = delta[k] / shape.sigma[k];
-  }
-  Eigen::MatrixXd h = l.ja.transpose() * l.ja;
+  joint.evaluate(x, residual, &jac);
+  for (Eigen::Index k = 0; k < joint.size(); ++k)
+    if (!joint.fixed(k) && !(joint.bounded(k) && x[k] <= 0)) l.free.push_back(k);
+  const Eigen::MatrixXd ja = jac(Eigen::all, l.free);
+  Eigen::MatrixXd h = ja.transpose() * ja;
   h.diagonal().array() += 1e-9 * (h.diagonal().array() + 1e-12);
   l.llt.compute(h);
   l.ok = l.llt.info() == Eigen::Success;
@@ -450,26 +437,30 @@ JointLinearisation linearise(const RegularisedModel& model, const Eigen::VectorX
 
 // Draws theta ~ N(theta*, (J^T J)^-1) over the free parameters, jointly with the
 // discrepancy's shape changes (around delta, already in the model's QE).
-std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eigen::VectorXd& th,
+std::vector<QeSample> posterior_samples(RegularisedModel& model, const Eigen::VectorXd& th,
                                         const Discrepancy& shape, const Eigen::VectorXd& delta,
                                         const RegularisedOptions& o) {
   std::vector<QeSample> out;
   if (o.posterior_samples <= 0) return out;
-  const JointLinearisation l = linearise(model, th, shape, delta);
+  const JointModel joint(model, shape);
+  Eigen::VectorXd x(joint.size());
+  x << th, delta;
+  const JointLinearisation l = linearise(joint, x);
   if (!l.ok) return out;
   const int bands = model.band_count();
   Eigen::MatrixXd fitted(bands, model.wavelengths());
   for (int b = 0; b < bands; ++b) fitted.row(b) = model.qe(b, th).transpose();
   std::vector<Eigen::MatrixXd> dq_dtheta;
   for (int b = 0; b < bands; ++b) dq_dtheta.push_back(model.qe_jacobian(b, th));
-  const auto nf = static_cast<Eigen::Index>(l.free.size()), nd = l.ja.cols() - nf;
+  const auto nf = static_cast<Eigen::Index>(l.free.size()), nd = delta.size();
   Random rng(mix(o.posterior_seed));
   for (int s = 0; s < o.posterior_samples; ++s) {
-    Eigen::VectorXd z(nf + nd);
-    for (Eigen::Index c = 0; c < nf + nd; ++c) z[c] = rng.normal();
-    const Eigen::VectorXd step_all = l.llt.matrixU().solve(z);  // covariance (U^T U)^-1
-    Eigen::VectorXd step = Eigen::VectorXd::Zero(model.size());
-    for (Eigen::Index c = 0; c < nf; ++c) step[l.free[c]] = step_all[c];
+    Eigen::VectorXd z(nf);
+    for (Eigen::Index c = 0; c < nf; ++c) z[c] = rng.normal();
+    const Eigen::VectorXd free_step = l.llt.matrixU().solve(z);  // covariance (U^T U)^-1
+    Eigen::VectorXd joint_step = Eigen::VectorXd::Zero(joint.size());
+    joint_step(l.free) = free_step;
+    const Eigen::VectorXd step = joint_step.head(model.size());
     // The sample is taken to first order, as the approximation is: the parameters and the
     // shape changes trade against each other along directions the data hold, and the model's
     // own nonlinearity (clamps, warps) would break that balance and leave samples off the data.
@@ -479,7 +470,7 @@ std::vector<QeSample> posterior_samples(const RegularisedModel& model, const Eig
     for (int b = 0; b < bands; ++b) {
       Eigen::VectorXd qb = fitted.row(b).transpose() +
                            dq_dtheta[static_cast<std::size_t>(b)] * model.qe_parameters(b, step);
-      if (nd > 0) qb += shape.dq[static_cast<std::size_t>(b)] * step_all.tail(nd);
+      if (nd > 0) qb += shape.dq[static_cast<std::size_t>(b)] * joint_step.tail(nd);
       q.system_qe.row(b) = qb.transpose();
       q.gains[b] = model.gain(b, th) * (1 + step[b]);
     }

@@ -166,7 +166,8 @@ TEST(QePosterior, spreads_where_the_furnace_does_not_reach) {
 
 // A prior fit's reading crosses the model's somewhere above the furnace (hostile colour unit 1:
 // between 1600 and 1800 degC), where its change is near zero; that is no knowledge, and the
-// term must not dip there (it did: 13.5, 12.2, 9.7 degC at 1500, 1600 and 1700 degC).
+// term must not dip there (it did: 13.5, 12.2, 9.7 degC at 1500, 1600 and 1700 degC). Nor where
+// the posterior samples' readings pivot (1.08 degC at 1100, 0.86 at 1200 degC).
 TEST(QePosterior, the_prior_term_never_shrinks_away_from_the_furnace) {
   const CameraProfile p = load_profile_by_name("rgb-reference");
   const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse("hostile", 1));
@@ -178,11 +179,12 @@ TEST(QePosterior, the_prior_term_never_shrinks_away_from_the_furnace) {
   const QeFitResult fit = fit_qe(p, data, options);
   const CameraModel model{p, fit.system_qe, fit.gains};
   std::vector<double> t;
-  for (double c = 2600; c >= 1100; c -= 100) t.push_back(c);  // any order
+  for (double c = 2600; c >= 700; c -= 100) t.push_back(c);  // any order
   const std::vector<double> u =
       qe_model_uncertainty(model, fit.posterior, t, prior_sensitivity_fits(p, data, options));
   ASSERT_EQ(u.size(), t.size());
-  for (std::size_t i = 0; i + 1 < t.size(); ++i) {
+  // From the furnace's top (1100 degC) up.
+  for (std::size_t i = 0; i + 1 < t.size() && t[i + 1] >= 1100; ++i) {
     SCOPED_TRACE(t[i]);
     EXPECT_GE(u[i], u[i + 1]);
   }
