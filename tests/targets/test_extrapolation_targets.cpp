@@ -88,13 +88,13 @@ TEST(ExtrapolationTargets, colour) {
   const Figures refs = evaluate("rgb-reference", true, 20);
   EXPECT_LT(plain.in_range, 0.8);       // target: no worse than before (0.8)
   EXPECT_LT(refs.range_700_2600, 5.0);  // target 5 degC rms with three reference rows
-  // Target 15, NOT MET: 37.6 measured over these 20 units (35.8 before the fit converged, 38.4
-  // over the first 6; 52 there before the shape changes joined the fit); a regression bound. The
-  // figures are deterministic (portable maths), so the margins guard against regressions, not
-  // noise.
-  EXPECT_LT(plain.range_1800_2600, 55);
+  // Target 15, NOT MET: 29.9 measured over these 20 units (37.6 while the furnace offsets'
+  // trend was held at zero, 35.8 before the fit converged; 33.1 over the first 6, 52 there
+  // before the shape changes joined the fit); a regression bound. The figures are deterministic
+  // (portable maths), so the margins guard against regressions, not noise.
+  EXPECT_LT(plain.range_1800_2600, 45);
   // Coverage target 95 +- 3 % for the interval a reading carries: with the default emissivity
-  // term 224 of 240 measured (93.3 %). The QE-model term alone covers 220 (91.7 %, 174 with the
+  // term 224 of 240 measured (93.3 %). The QE-model term alone covers 223 (92.9 %, 214 with the
   // posterior's spread alone), a regression bound: it covered 230 while the fit stopped at its
   // iteration limit, where a hundredth of a degree's change of the furnace data moved the
   // readings at 2600 degC by tens of degrees and widened the prior-sensitivity fits' spread by
@@ -110,9 +110,9 @@ TEST(ExtrapolationTargets, multispectral) {
   const Figures refs = evaluate("nir5x5-reference", true, 6);
   EXPECT_LT(plain.in_range, 1.2);       // target: no worse than before (1.2)
   EXPECT_LT(refs.range_700_2600, 5.0);  // target 5 degC rms with three reference rows
-  // Target 10: 7.9 measured over these six units (6.9 before the fit converged, 12.3 before the
-  // joint fit), but 12.3 over the first twenty (bench_extrapolation --units 20): met here, not
-  // over a larger sample.
+  // Target 10: 7.7 measured over these six units (7.9 with the offsets' trend held at zero, 6.9
+  // before the fit converged, 12.3 before the joint fit), but 12.0 over the first twenty
+  // (bench_extrapolation --units 20): met here, not over a larger sample.
   EXPECT_LT(plain.range_800_2600, 10);
   // Coverage target 95 +- 3 %: 72 of 72 measured (62 before the joint fit), above the target's
   // band: the interval is wider than these units need. Asserted as a lower bound only.

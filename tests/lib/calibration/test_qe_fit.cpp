@@ -120,7 +120,15 @@ TEST_F(ColourQeFit, both_solvers_fit_and_regularised_extrapolates) {
   EXPECT_EQ(paper.diagnostics.iterations, 400);
   EXPECT_LT(paper.diagnostics.residual_after.maxCoeff(), 0.01);
   EXPECT_LT(reg.diagnostics.residual_after.maxCoeff(), 0.01);
-  EXPECT_LE(reg.diagnostics.residual_after.mean(), paper.diagnostics.residual_after.mean());
+  // In range the readings are what the fit is for: its residual at the nominal temperatures
+  // also holds what it takes for the plate's own temperature (each step's offset, 1.5 degC
+  // prior), so it may lie above the unregularised search's.
+  const std::vector<double> in_range = {700, 800, 900, 1000, 1100};
+  const double in_paper = max_temperature_error(p, paper, q_true, in_range);
+  const double in_reg = max_temperature_error(p, reg, q_true, in_range);
+  std::cout << "|dT| 700-1100: paper " << in_paper << ", regularised " << in_reg << "\n";
+  EXPECT_LT(in_reg, 1.0);
+  EXPECT_LT(in_reg, in_paper);
   // The QE moved where the leak is (700-900 nm), by about the leak's size.
   const Eigen::Index i800 = p.grid.index_of(800);
   EXPECT_GT(reg.system_qe(0, i800) - p.system_qe()(0, i800), 0.002);
