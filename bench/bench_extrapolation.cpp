@@ -80,6 +80,10 @@ int main(int argc, char** argv) {
       ro.discrepancy_leak_spacing_nm = value;
     else if (key == "relative_noise")
       ro.relative_noise = value;
+    else if (key == "noise_passes")
+      ro.noise_passes = static_cast<int>(value);
+    else if (key == "min_relative_noise")
+      ro.min_relative_noise = value;
     else if (key == "leverage") {
       if (value == 0) ro.use_temperatures_c.clear();
     } else {
