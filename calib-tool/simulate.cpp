@@ -94,6 +94,10 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
                 "at each step (furnace and thermocouple; 0: exact; truth in furnace-truth.csv)")
       ->check(CLI::Range(0.0, 50.0))
       ->capture_default_str();
+  c->add_option("--furnace-seed", campaign.furnace_seed,
+                "Seed of the plate's temperature errors (--furnace-error): campaigns that differ "
+                "in it are independent furnace runs")
+      ->capture_default_str();
   c->add_option("--reference", campaign.reference_temperatures_c,
                 "Reference sources beyond the furnace, nominal degC, comma separated (e.g. "
                 "1324,1738,2474: fixed-point cells): manifest rows of kind reference, each with "
