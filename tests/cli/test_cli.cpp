@@ -292,25 +292,6 @@ TEST_F(CliReferenceDataset, simulate_writes_reference_rows_with_their_uncertaint
   EXPECT_EQ(std::count(truth.begin(), truth.end(), '\n'), 8);
 }
 
-// Campaigns meant as independent furnace runs draw the plate's errors from their own seed; the
-// same seed gives the same errors.
-TEST(CliSimulate, campaign_furnace_seed_draws_the_plate_errors) {
-  ScratchDir dir("cli");
-  const auto truth = [&](const std::string& name, int seed) {
-    const ToolRun r = run_tool(
-        "-q simulate campaign --profile rgb-reference --temperatures 1000 1100 --exposures 2 "
-        "--frames 1 --size 16x16 --roi-area 50 --furnace-seed " +
-            std::to_string(seed) + " --out " + quoted(dir / name),
-        dir);
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    return read_text(dir / name / "furnace-truth.csv");
-  };
-  const std::string a = truth("a", 1), b = truth("b", 2), again = truth("again", 1);
-  EXPECT_EQ(std::count(a.begin(), a.end(), '\n'), 3);  // header and two steps
-  EXPECT_NE(a, b);
-  EXPECT_EQ(a, again);
-}
-
 TEST_F(CliReferenceDataset, calibrate_writes_a_model_from_a_dataset_with_references) {
   const ToolRun r = calibrate_with("");
   EXPECT_EQ(r.exit_code, 0) << r.err;
