@@ -18,6 +18,17 @@ struct CameraOptions {
   std::uint64_t noise_seed = 7;
 };
 
+// An unsigned option would take -3 as 2^64 - 3.
+CLI::Validator seed_check() {
+  return CLI::Validator(
+      [](std::string& value) {
+        return value.find_first_not_of("0123456789") == std::string::npos
+                   ? std::string()
+                   : "a seed is a whole number from 0 up, not " + value;
+      },
+      "SEED");
+}
+
 void add_camera_options(CLI::App* cmd, CameraOptions& o) {
   cmd->add_option(
          "--profile", o.profile,
@@ -29,8 +40,11 @@ void add_camera_options(CLI::App* cmd, CameraOptions& o) {
       ->check(CLI::IsMember({"datasheet", "typical", "hostile"}))
       ->capture_default_str();
   cmd->add_option("--unit-seed", o.unit_seed, "Seed of the unit's deviation")
+      ->check(seed_check())
       ->capture_default_str();
-  cmd->add_option("--noise-seed", o.noise_seed, "Seed of the sensor noise")->capture_default_str();
+  cmd->add_option("--noise-seed", o.noise_seed, "Seed of the sensor noise")
+      ->check(seed_check())
+      ->capture_default_str();
 }
 
 Simulator make_camera(const CameraOptions& o) {
@@ -97,6 +111,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
   c->add_option("--furnace-seed", campaign.furnace_seed,
                 "Seed of the plate's temperature errors (--furnace-error): campaigns that differ "
                 "in it are independent furnace runs")
+      ->check(seed_check())
       ->capture_default_str();
   c->add_option("--reference", campaign.reference_temperatures_c,
                 "Reference sources beyond the furnace, nominal degC, comma separated (e.g. "

@@ -31,5 +31,17 @@ TEST(CliSimulate, campaign_furnace_seed_draws_the_plate_errors) {
   EXPECT_EQ(a, again);
 }
 
+// An unsigned option would read -3 as 2^64 - 3 and write a campaign nobody asked for.
+TEST(CliSimulate, campaign_rejects_a_negative_seed_n) {
+  ScratchDir dir("cli");
+  for (const char* option : {"--furnace-seed", "--noise-seed", "--unit-seed"}) {
+    EXPECT_EQ(calib("simulate campaign --profile rgb-reference " + std::string(option) +
+                    " -3 --out " + q(dir / "c")),
+              2)
+        << option;
+    EXPECT_FALSE(std::filesystem::exists(dir / "c")) << option;
+  }
+}
+
 }  // namespace
 }  // namespace pyrocam
