@@ -127,6 +127,9 @@ int main(int argc, char** argv) {
       for (double t : temps) std::printf(" %6.0f", t);
       std::printf("   rms:in  1000-1400 1800-2600 800-2600\n");
       int covered = 0, counted = 0, covered_combined = 0, covered_posterior = 0;
+      // Over the family's units per temperature: the mean error (a bias the units share, which
+      // more units do not average away) and the rms.
+      std::vector<double> sum(temps.size(), 0.0), sum2(temps.size(), 0.0);
       for (int u = 1; u <= units; ++u) {
         const Eigen::MatrixXd truth =
             true_system_qe(profile, UnitPerturbation::parse(family, static_cast<std::uint64_t>(u)));
@@ -148,6 +151,7 @@ int main(int argc, char** argv) {
         };
         std::printf("   %4d", u);
         for (double v : e) std::printf(" %6.1f", v);
+        for (std::size_t i = 0; i < temps.size(); ++i) sum[i] += e[i], sum2[i] += e[i] * e[i];
         if (coverage) {
           const std::vector<double> u = qe_model_uncertainty(
               model, fit.posterior, temps, prior_sensitivity_fits(profile, data, options));
@@ -173,6 +177,11 @@ int main(int argc, char** argv) {
         std::printf("   %5.2f %8.2f %9.2f %8.2f   (fit %.1f s)\n", rms(700, 1100), rms(1000, 1400),
                     rms(1800, 2600), rms(800, 2600), fit.diagnostics.wall_time_s);
       }
+      std::printf("   mean");
+      for (double v : sum) std::printf(" %6.1f", v / units);
+      std::printf("\n    rms");
+      for (double v : sum2) std::printf(" %6.1f", std::sqrt(v / units));
+      std::printf("\n");
       if (coverage)
         std::printf(
             "   k=2 coverage at 1500-2600 degC: %d of %d (%.1f %%; the posterior's spread alone "
