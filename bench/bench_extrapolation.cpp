@@ -84,6 +84,12 @@ int main(int argc, char** argv) {
       ro.noise_passes = static_cast<int>(value);
     else if (key == "min_relative_noise")
       ro.min_relative_noise = value;
+    else if (key == "leak_terms")  // 0 select, 1 keep, 2 drop
+      ro.leak_terms = value == 1   ? LeakTerms::kKeep
+                      : value == 2 ? LeakTerms::kDrop
+                                   : LeakTerms::kSelect;
+    else if (key == "leak_test_level")
+      ro.leak_test_level = value;
     else if (key == "leverage") {
       if (value == 0) ro.use_temperatures_c.clear();
     } else {
@@ -154,7 +160,8 @@ int main(int argc, char** argv) {
         for (std::size_t i = 0; i < temps.size(); ++i) sum[i] += e[i], sum2[i] += e[i] * e[i];
         if (coverage) {
           const std::vector<double> u = qe_model_uncertainty(
-              model, fit.posterior, temps, prior_sensitivity_fits(profile, data, options));
+              model, fit.posterior, temps,
+              prior_sensitivity_fits(profile, data, holding_leak_decision(options, fit)));
           const std::vector<double> u_posterior = qe_model_uncertainty(model, fit.posterior, temps);
           // The emissivity term ratiotemp adds by default (e-slope-uncertainty 1 %/100 nm): the
           // reading of a grey-assuming model for rates with that slope.
@@ -174,8 +181,13 @@ int main(int argc, char** argv) {
           }
           std::printf("\n       ");
         }
-        std::printf("   %5.2f %8.2f %9.2f %8.2f   (fit %.1f s)\n", rms(700, 1100), rms(1000, 1400),
-                    rms(1800, 2600), rms(800, 2600), fit.diagnostics.wall_time_s);
+        const QeFitDiagnostics& d = fit.diagnostics;
+        std::printf("   %5.2f %8.2f %9.2f %8.2f   (fit %.1f s; leak terms %s", rms(700, 1100),
+                    rms(1000, 1400), rms(1800, 2600), rms(800, 2600), d.wall_time_s,
+                    d.leak_terms ? "kept" : "dropped");
+        if (std::isfinite(d.leak_chi2_gain))
+          std::printf(": chi2 gain %.1f against %.1f", d.leak_chi2_gain, d.leak_chi2_threshold);
+        std::printf(")\n");
       }
       std::printf("   mean");
       for (double v : sum) std::printf(" %6.1f", v / units);

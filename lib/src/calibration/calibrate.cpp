@@ -140,7 +140,7 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   out.table4 = evaluate_estimators(m, out.rates, locus, sheet_camera, opt.locus_step_c);
   report_stage(progress, "evaluating", 1, 1);
 
-  m.uncertainty = uncertainty_model(m, t_c, rates, opt, progress, references);
+  m.uncertainty = uncertainty_model(m, t_c, rates, opt, progress, references, qe.leak_terms);
   m.uncertainty.u_qe_model_c =
       qe_model_uncertainty(m.camera, qe.posterior, m.uncertainty.temperature_c, qe.prior_fits);
   for (std::size_t r = 0; r < references.size(); ++r) {

@@ -1,6 +1,8 @@
 #include "pyrocam/calibration/calibration_qe.h"
 
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "calibration/stage_support.h"
 #include "pyrocam/calibration/qe_fit.h"
@@ -38,6 +40,24 @@ Eigen::MatrixXd rate_residuals(const CameraModel& cam, const std::vector<double>
   }
   return r;
 }
+
+namespace {
+
+std::string leak_terms_text(const QeFitResult& fit) {
+  if (fit.solver != QeSolver::kRegularised) return "";
+  const QeFitDiagnostics& d = fit.diagnostics;
+  std::string text = d.leak_terms ? "kept" : "dropped";
+  if (std::isfinite(d.leak_chi2_gain)) {
+    char figures[160];
+    std::snprintf(figures, sizeof figures, " (chi2 gain %.1f %s %.1f, %d amplitudes)",
+                  d.leak_chi2_gain, d.leak_terms ? ">" : "<=", d.leak_chi2_threshold,
+                  d.leak_amplitudes);
+    text += figures;
+  }
+  return text;
+}
+
+}  // namespace
 
 double ranked_held_out_residual(const std::string& solver, double held_out_residual) {
   return solver == "paper" ? held_out_residual / (1 - kPaperSolverMargin) : held_out_residual;
@@ -81,6 +101,9 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
       return std::sqrt(v.array().square().mean());
     };
     rep.calibration_residual = rms_of(fit.diagnostics.residual_after);
+    rep.leak_terms = leak_terms_text(fit);
+    // The folds and the prior-sensitivity fits vary the model this fit chose.
+    qo = holding_leak_decision(qo, fit);
     rep.qe_change_rms = rms_of(fit.diagnostics.qe_change_rms);
     report_stage(progress, "cross-validating QE (" + solvers[s] + ")", s, solvers.size());
     QeFitOptions folds = qo;
@@ -100,6 +123,8 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
       if (qo.solver == QeSolver::kRegularised)
         report_stage(progress, "prior sensitivity (" + solvers[s] + ")", s, solvers.size());
       best.prior_fits = prior_sensitivity_fits(profile, data, qo);  // none for the paper's
+      best.leak_terms =
+          qo.solver == QeSolver::kRegularised ? qo.regularised.leak_terms : LeakTerms::kSelect;
       best.reference_error_before_c = fit.diagnostics.reference_error_before_c;
       best.reference_error_after_c = fit.diagnostics.reference_error_after_c;
     }

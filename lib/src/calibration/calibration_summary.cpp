@@ -73,6 +73,7 @@ nlohmann::json outcome_summary(const CalibrationOutcome& o) {
                        {"calibration_residual_rms", s.calibration_residual},
                        {"held_out_residual_rms", s.held_out_residual},
                        {"qe_change_rms", s.qe_change_rms},
+                       {"leak_terms", s.leak_terms},
                        {"seconds", s.seconds}});
   j["solvers"] = solvers;
   j["rate_residual_rms"] = {{"datasheet", rms_finite(o.rate_residual_datasheet)},

@@ -134,7 +134,8 @@ std::vector<double> thermocouple_uncertainty(const ThermalModel& m, const Uncert
                                              const std::vector<double>& t_c,
                                              const Eigen::MatrixXd& rates, std::uint64_t seed,
                                              const StageProgress& progress,
-                                             const std::vector<ReferenceRates>& references) {
+                                             const std::vector<ReferenceRates>& references,
+                                             LeakTerms leak_terms) {
   std::vector<std::vector<double>> refit_t(u.temperature_c.size());
   Random rng(seed ^ 0x7C0FFEEull);
   Random reference_rng(seed ^ 0x8EFE8E4CEull);
@@ -160,6 +161,7 @@ std::vector<double> thermocouple_uncertainty(const ThermalModel& m, const Uncert
       r.temperature_c += r.temperature_uncertainty_c * reference_error(reference_rng);
     QeFitOptions qo;
     qo.solver = m.qe_solver == "paper" ? QeSolver::kPaper : QeSolver::kRegularised;
+    qo.regularised.leak_terms = leak_terms;
     const QeFitResult fit = fit_qe(
         m.profile(), CalibrationRates{t_perturbed, rates.transpose(), references_perturbed}, qo);
     const CameraModel cam{m.profile(), fit.system_qe, fit.gains};
@@ -188,7 +190,8 @@ std::vector<double> thermocouple_uncertainty(const ThermalModel& m, const Uncert
 UncertaintyModel uncertainty_model(const ThermalModel& m, const std::vector<double>& t_c,
                                    const Eigen::MatrixXd& rates, const CalibrationOptions& opt,
                                    const StageProgress& progress,
-                                   const std::vector<ReferenceRates>& references) {
+                                   const std::vector<ReferenceRates>& references,
+                                   LeakTerms leak_terms) {
   // Uncertainty model: emissivity slope and thermocouple tolerance as functions of T.
   UncertaintyModel u;
   u.thermocouple_tolerance_c = opt.thermocouple_tolerance_c;
@@ -196,7 +199,8 @@ UncertaintyModel uncertainty_model(const ThermalModel& m, const std::vector<doub
   for (double t = opt.min_temperature_c; t <= opt.max_temperature_c + 1e-9; t += 50)
     u.temperature_c.push_back(t);
   u.u_emissivity_c = emissivity_uncertainty(m, u);
-  u.u_calibration_c = thermocouple_uncertainty(m, u, t_c, rates, opt.seed, progress, references);
+  u.u_calibration_c =
+      thermocouple_uncertainty(m, u, t_c, rates, opt.seed, progress, references, leak_terms);
   return u;
 }
 

@@ -243,6 +243,13 @@ QeFitResult fit_qe(const CameraProfile& profile, const CalibrationRates& data,
              : fit_qe_regularised(profile, data, options.regularised);
 }
 
+QeFitOptions holding_leak_decision(QeFitOptions options, const QeFitResult& fit) {
+  if (fit.solver == QeSolver::kRegularised)
+    options.regularised.leak_terms =
+        fit.diagnostics.leak_terms ? LeakTerms::kKeep : LeakTerms::kDrop;
+  return options;
+}
+
 std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
                                              const CalibrationRates& data,
                                              const QeFitOptions& options, double factor) {

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
+#include <utility>
 
 #include "calibration/levenberg_marquardt.h"
 #include "calibration/qe_problem.h"
@@ -235,6 +237,42 @@ class RegularisedModel {
     return j;
   }
 
+  // The sum of squared relative misfits of the furnace and reference rates (each reference at
+  // its fitted scale and temperature), and their count.
+  std::pair<double, std::size_t> data_misfit(const Eigen::VectorXd& th) const {
+    Eigen::MatrixXd rad, drad, rrad, drrad;
+    radiance(data_.temperatures_c, th.segment(furnace_offset(), nt_), rad, drad);
+    Eigen::VectorXd ref_offsets(nr_);
+    for (Eigen::Index r = 0; r < nr_; ++r) ref_offsets[r] = th[reference_offset() + 2 * r + 1];
+    radiance(ref_t_, ref_offsets, rrad, drrad);
+    const Eigen::VectorXd opt = optics(th);
+    double ss = 0;
+    std::size_t count = 0;
+    for (int b = 0; b < nb_; ++b) {
+      const Eigen::VectorXd q = qe(b, th, opt, nullptr);
+      const double kg = gain(b, th) * g(b);
+      for (Eigen::Index i : p_.valid[b]) {
+        const double e = kg * rad.row(i).dot(q) / data_.rates(b, i) - 1;
+        ss += e * e, ++count;
+      }
+      for (Eigen::Index r = 0; r < nr_; ++r) {
+        const double m = data_.references[r].rates[b];
+        if (!usable(m)) continue;
+        const double e =
+            kg * portable::exp(th[reference_offset() + 2 * r]) * rrad.row(r).dot(q) / m - 1;
+        ss += e * e, ++count;
+      }
+    }
+    return {ss, count};
+  }
+
+  // The leak bumps the priors leave free.
+  int free_leak_bumps() const {
+    int n = 0;
+    for (Eigen::Index k = leak_offset(); k < furnace_offset(); ++k) n += !fixed(k);
+    return n;
+  }
+
   // rms relative misfit of the furnace rates.
   double data_rms(const Eigen::VectorXd& th) const {
     Eigen::MatrixXd rad, drad;
@@ -461,30 +499,35 @@ std::vector<QeSample> posterior_samples(RegularisedModel& model, const Eigen::Ve
   return out;
 }
 
-}  // namespace
-
-QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRates& data,
-                               const RegularisedOptions& options) {
-  const auto start = Clock::now();
-  const Problem p = prepare(profile, data);
-  RegularisedOptions o = options;
+// One fit of the model `options` describe, with what its posterior needs.
+struct ModelFit {
+  RegularisedOptions weighted;  // the options with the data's weight the reweighting reached
+  Eigen::VectorXd th, delta;
+  Discrepancy shape;
   int iterations = 0;
+  double data_ss = 0;       // sum of squared relative misfits of furnace and reference rates
+  std::size_t data_n = 0;   // and their count
+  int leak_amplitudes = 0;  // free leak bumps and, fitted jointly, additive leaks
+};
+
+ModelFit fit_model(const CameraProfile& profile, const CalibrationRates& data, const Problem& p,
+                   const RegularisedOptions& options) {
+  ModelFit f;
+  RegularisedOptions o = options;
   // The model's parameters alone at the starting weight: the fit the discrepancy's shape changes
   // are laid around.
-  Eigen::VectorXd th;
-  Discrepancy shape;
   {
     const RegularisedModel first(profile, data, p, o);
-    th = first.start();
-    iterations += levenberg_marquardt(first, th, o.max_iterations);
+    f.th = first.start();
+    f.iterations += levenberg_marquardt(first, f.th, o.max_iterations);
     if (options.fit_discrepancy || options.posterior_samples > 0) {
       Eigen::MatrixXd fitted(profile.band_count(), profile.grid.size());
-      for (int b = 0; b < profile.band_count(); ++b) fitted.row(b) = first.qe(b, th).transpose();
-      shape = discrepancy_basis(profile, fitted, options);
+      for (int b = 0; b < profile.band_count(); ++b) fitted.row(b) = first.qe(b, f.th).transpose();
+      f.shape = discrepancy_basis(profile, fitted, options);
     }
   }
-  Eigen::VectorXd delta = Eigen::VectorXd::Zero(shape.sigma.size());
-  const bool joint = options.fit_discrepancy && delta.size() > 0;
+  f.delta = Eigen::VectorXd::Zero(f.shape.sigma.size());
+  const bool joint = options.fit_discrepancy && f.delta.size() > 0;
   // With the discrepancy's shape changes the fit is joint: fitted with theta alone, what the
   // model cannot shape is pushed into parameters that can (leaks, edges) and extrapolates with
   // them; with the shape free the data are explained as the priors find likeliest.
@@ -497,31 +540,87 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
   for (int pass = 0; pass < passes; ++pass) {
     RegularisedModel m(profile, data, p, o);
     if (joint) {
-      const JointModel joint_model(m, shape);
-      Eigen::VectorXd x(th.size() + delta.size());
-      x << th, delta;
-      iterations += levenberg_marquardt(joint_model, x, o.max_iterations);
-      th = x.head(th.size()), delta = x.tail(delta.size());
-      m.set_shape_change(shape_change(shape, delta));  // not the last trial's
+      const JointModel joint_model(m, f.shape);
+      Eigen::VectorXd x(f.th.size() + f.delta.size());
+      x << f.th, f.delta;
+      f.iterations += levenberg_marquardt(joint_model, x, o.max_iterations);
+      f.th = x.head(f.th.size()), f.delta = x.tail(f.delta.size());
+      m.set_shape_change(shape_change(f.shape, f.delta));  // not the last trial's
     } else {
-      iterations += levenberg_marquardt(m, th, o.max_iterations);
+      f.iterations += levenberg_marquardt(m, f.th, o.max_iterations);
     }
-    const double misfit = std::clamp(m.data_rms(th), options.min_relative_noise, 0.05);
+    const double misfit = std::clamp(m.data_rms(f.th), options.min_relative_noise, 0.05);
     if (pass + 1 == passes || std::abs(portable::log(misfit / o.relative_noise)) < 0.02) break;
     o.relative_noise = misfit;
   }
+  f.weighted = o;
   RegularisedModel model(profile, data, p, o);
-  if (delta.size() > 0) model.set_shape_change(shape_change(shape, delta));
+  if (f.delta.size() > 0) model.set_shape_change(shape_change(f.shape, f.delta));
+  std::tie(f.data_ss, f.data_n) = model.data_misfit(f.th);
+  f.leak_amplitudes =
+      model.free_leak_bumps() + (joint ? static_cast<int>(f.shape.additive_leaks) : 0);
+  return f;
+}
+
+// The level quantile of chi2 with k degrees of freedom (Wilson and Hilferty's cube-root normal
+// approximation, within 1 % from k = 3 on).
+double chi2_quantile(int k, double level) {
+  // The standard normal quantile by bisection of its tail.
+  double lo = -10, hi = 10;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(mid / std::sqrt(2.0)) > 1 - level ? lo : hi) = mid;
+  }
+  const double z = 0.5 * (lo + hi), a = 2.0 / (9.0 * k);
+  return k * std::pow(1 - a + z * std::sqrt(a), 3);
+}
+
+}  // namespace
+
+QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRates& data,
+                               const RegularisedOptions& options) {
+  const auto start = Clock::now();
+  const Problem p = prepare(profile, data);
+  RegularisedOptions without = options;
+  without.leak_sigma = 0;
+  without.discrepancy_leak = 0;
+  const bool leaks = options.leak_sigma > 0 || options.discrepancy_leak > 0;
   QeFitResult r;
+  ModelFit f;
+  const RegularisedOptions* chosen = &options;
+  if (!leaks || options.leak_terms == LeakTerms::kKeep) {
+    f = fit_model(profile, data, p, options);
+  } else if (options.leak_terms == LeakTerms::kDrop) {
+    f = fit_model(profile, data, p, without);
+    chosen = &without;
+  } else {
+    ModelFit with = fit_model(profile, data, p, options);
+    ModelFit plain = fit_model(profile, data, p, without);
+    // The chi2 gain at the noise the fit with the leaks reaches (the larger model's estimate).
+    const double noise_ss =
+        with.data_ss / static_cast<double>(std::max<std::size_t>(1, with.data_n));
+    r.diagnostics.leak_chi2_gain = (plain.data_ss - with.data_ss) / std::max(noise_ss, 1e-300);
+    r.diagnostics.leak_amplitudes = with.leak_amplitudes;
+    r.diagnostics.leak_chi2_threshold =
+        chi2_quantile(std::max(1, with.leak_amplitudes), options.leak_test_level);
+    const bool keep = r.diagnostics.leak_chi2_gain > r.diagnostics.leak_chi2_threshold;
+    const int iterations = with.iterations + plain.iterations;
+    f = keep ? std::move(with) : std::move(plain);
+    f.iterations = iterations;
+    if (!keep) chosen = &without;
+  }
+  r.diagnostics.leak_terms = chosen == &options && leaks;
+  RegularisedModel model(profile, data, p, f.weighted);
+  if (f.delta.size() > 0) model.set_shape_change(shape_change(f.shape, f.delta));
   r.solver = QeSolver::kRegularised;
   r.system_qe.resize(profile.band_count(), profile.grid.size());
   r.gains.resize(profile.band_count());
   for (int b = 0; b < profile.band_count(); ++b) {
-    r.system_qe.row(b) = model.qe(b, th).cwiseMin(1.0).transpose();
-    r.gains[b] = model.gain(b, th);
+    r.system_qe.row(b) = model.qe(b, f.th).cwiseMin(1.0).transpose();
+    r.gains[b] = model.gain(b, f.th);
   }
-  r.diagnostics.iterations = iterations;
-  r.posterior = posterior_samples(model, th, shape, delta, options);
+  r.diagnostics.iterations = f.iterations;
+  r.posterior = posterior_samples(model, f.th, f.shape, f.delta, *chosen);
   finish(profile, p, data, start, r);
   return r;
 }

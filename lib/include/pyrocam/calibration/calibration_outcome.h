@@ -40,6 +40,9 @@ struct QeSolverReport {
   double held_out_residual = NAN;     // the same on temperatures left out of the fit
   double qe_change_rms = NAN;         // rms(Q - Q_datasheet)
   double seconds = 0;
+  // The regularised fit's leak terms: "kept" or "dropped", with the test's figures when it chose
+  // (RegularisedOptions::leak_terms); empty for other solvers.
+  std::string leak_terms;
 };
 
 // A reference row (a source beyond the furnace) against the model: its reading by the scale-free

@@ -19,6 +19,9 @@ struct QeChoice {
   Eigen::MatrixXd qe_spread;            // the chosen fit's cross-validation std (may be empty)
   std::vector<QeSample> posterior;      // plausible QE solutions (regularised fit only)
   std::vector<QeSample> prior_fits;     // prior_sensitivity_fits (regularised fit only)
+  // The chosen fit's leak terms (kKeep or kDrop; kSelect for the paper's fit or the datasheet):
+  // the Monte-Carlo refits of the uncertainty model fit the same model.
+  LeakTerms leak_terms = LeakTerms::kSelect;
   // Per reference row: its reading minus its temperature, datasheet QE and chosen QE.
   std::vector<double> reference_error_before_c, reference_error_after_c;
 };

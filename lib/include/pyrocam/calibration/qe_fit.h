@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -30,6 +31,11 @@ struct CalibrationRates {
 };
 
 enum class QeSolver { kPaper, kRegularised };
+
+// Whether the regularised fit has its leak terms (RegularisedOptions::leak_sigma's bumps and the
+// shape changes' additive leaks): kSelect fits with and without them and keeps them only when
+// the data call for them (RegularisedOptions::leak_test_level).
+enum class LeakTerms { kSelect, kKeep, kDrop };
 const char* to_string(QeSolver solver);
 
 // The paper's search. Defaults are the paper's; fewer sweeps are fine for quick checks.
@@ -89,6 +95,17 @@ struct RegularisedOptions {
   double discrepancy_leak = 0.003;
   double discrepancy_leak_spacing_nm = 10;
   bool fit_discrepancy = true;
+  // Leaks, bounded at 0, take up the rates' noise as leaks where there are none, and a leak
+  // below a short filter edge brightens the hottest readings: a bias above the furnace that more
+  // units do not average away. So with kSelect the leak terms stay only where they improve the
+  // fit beyond chance: where the data's chi2 (at the noise the fit with them reaches) falls by
+  // more than the leak_test_level quantile of chi2 with one degree of freedom per free leak
+  // amplitude. Bounded, penalised amplitudes gain less than that from noise alone (on simulated
+  // units without leaks the gain stays under 4 where the 95 % quantile is 63 for the 5x5
+  // camera's 46 amplitudes), so the test rarely keeps leaks that are not there; the level sets
+  // how clearly a real leak must show in the furnace data to be kept.
+  LeakTerms leak_terms = LeakTerms::kSelect;
+  double leak_test_level = 0.95;
 };
 
 struct QeFitOptions {
@@ -108,6 +125,12 @@ struct QeFitDiagnostics {
   // gains on the furnace) and with the fitted QE.
   std::vector<double> reference_error_before_c, reference_error_after_c;
   int iterations = 0;  // sweeps (paper) or Gauss-Newton iterations (regularised)
+  // Regularised: whether the fit has its leak terms and, where it chose (LeakTerms::kSelect),
+  // the data's chi2 gain with them (at their noise), the test's threshold and the free leak
+  // amplitudes it counted.
+  bool leak_terms = false;
+  double leak_chi2_gain = NAN, leak_chi2_threshold = NAN;
+  int leak_amplitudes = 0;
   double wall_time_s = 0;
 };
 
@@ -137,6 +160,11 @@ QeFitResult fit_qe_paper(const CameraProfile& profile, const CalibrationRates& d
                          const PaperSearchOptions& options = {});
 QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRates& data,
                                const RegularisedOptions& options = {});
+
+// `options` with the leak terms as the regularised `fit` decided (kKeep or kDrop; unchanged for
+// the paper's solver), for fits that vary that one (prior sensitivity, cross-validation folds,
+// Monte-Carlo refits): they then spread the chosen model instead of also deciding again.
+QeFitOptions holding_leak_decision(QeFitOptions options, const QeFitResult& fit);
 
 // The calibrated model's signal rates, DN/s: gains .* signal_rates(profile, system_qe, T).
 Eigen::VectorXd fitted_signal_rates(const CameraProfile& profile, const QeFitResult& fit,
