@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <tuple>
 #include <utility>
 
 #include "calibration/levenberg_marquardt.h"
@@ -148,10 +147,7 @@ class RegularisedModel {
       if (jac) jr.push_back(std::move(j));
     };
     Eigen::MatrixXd rad, drad, rrad, drrad, dopt, dq;
-    radiance(data_.temperatures_c, th.segment(furnace_offset(), nt_), rad, drad);
-    Eigen::VectorXd ref_offsets(nr_);
-    for (Eigen::Index r = 0; r < nr_; ++r) ref_offsets[r] = th[reference_offset() + 2 * r + 1];
-    radiance(ref_t_, ref_offsets, rrad, drrad);
+    data_radiance(th, rad, drad, rrad, drrad);
     const Eigen::VectorXd opt = optics(th, jac ? &dopt : nullptr);
     for (int b = 0; b < nb_; ++b) {
       const Eigen::VectorXd q = qe(b, th, opt, &dopt, jac ? &dq : nullptr);
@@ -202,10 +198,7 @@ class RegularisedModel {
   // differentiated by linear changes of the QE: dq[b] holds d Q_b / d delta, wavelengths x m.
   Eigen::MatrixXd data_jacobian(const Eigen::VectorXd& th, const Discrepancy& shape) const {
     Eigen::MatrixXd rad, drad, rrad, drrad;
-    radiance(data_.temperatures_c, th.segment(furnace_offset(), nt_), rad, drad);
-    Eigen::VectorXd ref_offsets(nr_);
-    for (Eigen::Index r = 0; r < nr_; ++r) ref_offsets[r] = th[reference_offset() + 2 * r + 1];
-    radiance(ref_t_, ref_offsets, rrad, drrad);
+    data_radiance(th, rad, drad, rrad, drrad);
     const Eigen::VectorXd opt = optics(th);
     Eigen::Index count = 0;
     for (int b = 0; b < nb_; ++b) {
@@ -237,33 +230,33 @@ class RegularisedModel {
     return j;
   }
 
-  // The sum of squared relative misfits of the furnace and reference rates (each reference at
-  // its fitted scale and temperature), and their count.
-  std::pair<double, std::size_t> data_misfit(const Eigen::VectorXd& th) const {
+  // Squared relative misfits of the furnace rates and of the reference rates (each reference at
+  // its fitted scale and temperature), summed, and their counts.
+  struct DataMisfit {
+    double furnace_ss = 0, reference_ss = 0;
+    std::size_t furnace_n = 0, reference_n = 0;
+  };
+  DataMisfit data_misfit(const Eigen::VectorXd& th) const {
     Eigen::MatrixXd rad, drad, rrad, drrad;
-    radiance(data_.temperatures_c, th.segment(furnace_offset(), nt_), rad, drad);
-    Eigen::VectorXd ref_offsets(nr_);
-    for (Eigen::Index r = 0; r < nr_; ++r) ref_offsets[r] = th[reference_offset() + 2 * r + 1];
-    radiance(ref_t_, ref_offsets, rrad, drrad);
+    data_radiance(th, rad, drad, rrad, drrad);
     const Eigen::VectorXd opt = optics(th);
-    double ss = 0;
-    std::size_t count = 0;
+    DataMisfit m;
     for (int b = 0; b < nb_; ++b) {
       const Eigen::VectorXd q = qe(b, th, opt, nullptr);
       const double kg = gain(b, th) * g(b);
+      const Eigen::VectorXd sim = kg * (rad * q), ref_sim = kg * (rrad * q);
       for (Eigen::Index i : p_.valid[b]) {
-        const double e = kg * rad.row(i).dot(q) / data_.rates(b, i) - 1;
-        ss += e * e, ++count;
+        const double e = sim[i] / data_.rates(b, i) - 1;
+        m.furnace_ss += e * e, ++m.furnace_n;
       }
       for (Eigen::Index r = 0; r < nr_; ++r) {
-        const double m = data_.references[r].rates[b];
-        if (!usable(m)) continue;
-        const double e =
-            kg * portable::exp(th[reference_offset() + 2 * r]) * rrad.row(r).dot(q) / m - 1;
-        ss += e * e, ++count;
+        const double measured = data_.references[r].rates[b];
+        if (!usable(measured)) continue;
+        const double e = portable::exp(th[reference_offset() + 2 * r]) * ref_sim[r] / measured - 1;
+        m.reference_ss += e * e, ++m.reference_n;
       }
     }
-    return {ss, count};
+    return m;
   }
 
   // The leak bumps the priors leave free.
@@ -275,23 +268,21 @@ class RegularisedModel {
 
   // rms relative misfit of the furnace rates.
   double data_rms(const Eigen::VectorXd& th) const {
-    Eigen::MatrixXd rad, drad;
-    radiance(data_.temperatures_c, th.segment(furnace_offset(), nt_), rad, drad);
-    const Eigen::VectorXd opt = optics(th);
-    double ss = 0;
-    std::size_t count = 0;
-    for (int b = 0; b < nb_; ++b) {
-      const Eigen::VectorXd sim = gain(b, th) * g(b) * (rad * qe(b, th, opt, nullptr));
-      for (Eigen::Index i : p_.valid[b]) {
-        const double e = sim[i] / data_.rates(b, i) - 1;
-        ss += e * e, ++count;
-      }
-    }
-    return std::sqrt(ss / static_cast<double>(count));
+    const DataMisfit m = data_misfit(th);
+    return std::sqrt(m.furnace_ss / static_cast<double>(m.furnace_n));
   }
 
  private:
   double g(int b) const { return profile_.dn_per_electron()[b]; }
+
+  // Radiance rows of the furnace steps and of the references at their fitted temperatures.
+  void data_radiance(const Eigen::VectorXd& th, Eigen::MatrixXd& rad, Eigen::MatrixXd& drad,
+                     Eigen::MatrixXd& rrad, Eigen::MatrixXd& drrad) const {
+    radiance(data_.temperatures_c, th.segment(furnace_offset(), nt_), rad, drad);
+    Eigen::VectorXd ref_offsets(nr_);
+    for (Eigen::Index r = 0; r < nr_; ++r) ref_offsets[r] = th[reference_offset() + 2 * r + 1];
+    radiance(ref_t_, ref_offsets, rrad, drrad);
+  }
 
   // Radiance rows at nominal + offset temperatures, and their derivatives per degC.
   void radiance(const std::vector<double>& nominal_c, const Eigen::VectorXd& offset_c,
@@ -556,7 +547,9 @@ ModelFit fit_model(const CameraProfile& profile, const CalibrationRates& data, c
   f.weighted = o;
   RegularisedModel model(profile, data, p, o);
   if (f.delta.size() > 0) model.set_shape_change(shape_change(f.shape, f.delta));
-  std::tie(f.data_ss, f.data_n) = model.data_misfit(f.th);
+  const RegularisedModel::DataMisfit misfit = model.data_misfit(f.th);
+  f.data_ss = misfit.furnace_ss + misfit.reference_ss;
+  f.data_n = misfit.furnace_n + misfit.reference_n;
   f.leak_amplitudes =
       model.free_leak_bumps() + (joint ? static_cast<int>(f.shape.additive_leaks) : 0);
   return f;
