@@ -17,6 +17,7 @@ namespace {
 
 struct CalibrateArgs {
   std::string dataset, profile = "rgb-reference", out = "model.json", report;
+  std::string leak_terms = "select";
   CalibrationOptions options;
   bool no_table = false;
 };
@@ -70,6 +71,12 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
                 "paper, regularised, datasheet")
       ->check(CLI::IsMember({"auto", "paper", "regularised", "datasheet"}))
       ->capture_default_str();
+  c->add_option("--leak-terms", a.leak_terms,
+                "The regularised QE fit's leaks outside the filter's pass band: select (kept "
+                "only where the furnace data call for them, a chi2 test; fitted to noise they "
+                "read high above the furnace), keep, drop")
+      ->check(CLI::IsMember({"select", "keep", "drop"}))
+      ->capture_default_str();
   c->add_option("--min-temperature", a.options.min_temperature_c, "Locus start, degC")
       ->check(CLI::Range(kModelMinTemperatureC, kModelMaxTemperatureC))
       ->capture_default_str();
@@ -116,6 +123,9 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
       throw CLI::ValidationError("--min-temperature", "must be below --max-temperature");
     if (!std::isfinite(a.options.thermocouple_tolerance_c))  // CLI::Range lets NaN through
       throw CLI::ValidationError("--thermocouple-tolerance", "must be a number from 0 to 50");
+    a.options.leak_terms = a.leak_terms == "keep"   ? LeakTerms::kKeep
+                           : a.leak_terms == "drop" ? LeakTerms::kDrop
+                                                    : LeakTerms::kSelect;
     selected = [&global, profile_option] {
       const Dataset dataset = Dataset::open(a.dataset);
       // Without --profile, a 5x5 dataset is the shipped 5x5 camera's, not the colour default.

@@ -117,8 +117,8 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
 
   // Reference sources beyond the furnace: scale-free constraints on the band ratios.
   const std::vector<ReferenceRates> references = out.rates.reference_rates();
-  QeChoice qe =
-      choose_system_qe(profile, datasheet, t_c, rates, opt.qe_solver, progress, references);
+  QeChoice qe = choose_system_qe(profile, datasheet, t_c, rates, opt.qe_solver, progress,
+                                 references, opt.leak_terms);
   out.solvers = std::move(qe.reports);
   out.qe_spread = std::move(qe.qe_spread);
   ThermalModel& m = out.model;

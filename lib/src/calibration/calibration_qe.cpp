@@ -66,7 +66,7 @@ double ranked_held_out_residual(const std::string& solver, double held_out_resid
 QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& datasheet,
                           const std::vector<double>& t_c, const Eigen::MatrixXd& rates,
                           const std::string& qe_solver, const StageProgress& progress,
-                          const std::vector<ReferenceRates>& references) {
+                          const std::vector<ReferenceRates>& references, LeakTerms leak_terms) {
   // QE optimisation: every requested solver, chosen by held-out (cross-validation) residual
   // (ranked_held_out_residual).
   std::vector<std::string> solvers;
@@ -96,6 +96,7 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
     QeFitOptions qo;
     qo.solver = solvers[s] == "paper" ? QeSolver::kPaper : QeSolver::kRegularised;
     qo.regularised.posterior_samples = kPosteriorSamples;
+    qo.regularised.leak_terms = leak_terms;
     const QeFitResult fit = fit_qe(profile, data, qo);
     const auto rms_of = [](const Eigen::VectorXd& v) {
       return std::sqrt(v.array().square().mean());

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pyrocam/calibration/noisy_locus.h"
+#include "pyrocam/calibration/qe_fit.h"
 #include "pyrocam/calibration/rate_extraction.h"
 #include "pyrocam/runtime/model.h"
 
@@ -14,6 +15,9 @@ namespace pyrocam {
 
 struct CalibrationOptions {
   std::string qe_solver = "auto";  // paper, regularised, auto (lower held-out error), datasheet
+  // The regularised fit's leak terms: chosen by the furnace data (RegularisedOptions::
+  // leak_terms), or always kept or dropped.
+  LeakTerms leak_terms = LeakTerms::kSelect;
   double min_temperature_c = 500, max_temperature_c = 3500, locus_step_c = 1;
   MlpTrainingOptions mlp;
   // Noisy copies of the locus the network is trained on besides it (copies 0: none).

@@ -43,7 +43,8 @@ double ranked_held_out_residual(const std::string& solver, double held_out_resid
 QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& datasheet_qe,
                           const std::vector<double>& t_c, const Eigen::MatrixXd& rates,
                           const std::string& qe_solver, const StageProgress& progress = {},
-                          const std::vector<ReferenceRates>& references = {});
+                          const std::vector<ReferenceRates>& references = {},
+                          LeakTerms leak_terms = LeakTerms::kSelect);
 
 // k_b = measured / modelled rate at the hottest temperature the band has a slope for.
 Eigen::VectorXd band_scale(const CameraProfile& p, const Eigen::MatrixXd& q,
