@@ -181,13 +181,9 @@ int main(int argc, char** argv) {
           }
           std::printf("\n       ");
         }
-        const QeFitDiagnostics& d = fit.diagnostics;
-        std::printf("   %5.2f %8.2f %9.2f %8.2f   (fit %.1f s; leak terms %s", rms(700, 1100),
-                    rms(1000, 1400), rms(1800, 2600), rms(800, 2600), d.wall_time_s,
-                    d.leak_terms ? "kept" : "dropped");
-        if (std::isfinite(d.leak_chi2_gain))
-          std::printf(": chi2 gain %.1f against %.1f", d.leak_chi2_gain, d.leak_chi2_threshold);
-        std::printf(")\n");
+        std::printf("   %5.2f %8.2f %9.2f %8.2f   (fit %.1f s; leak terms %s)\n", rms(700, 1100),
+                    rms(1000, 1400), rms(1800, 2600), rms(800, 2600), fit.diagnostics.wall_time_s,
+                    leak_terms_summary(fit).c_str());
       }
       std::printf("   mean");
       for (double v : sum) std::printf(" %6.1f", v / units);

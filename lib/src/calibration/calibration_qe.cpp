@@ -1,7 +1,6 @@
 #include "pyrocam/calibration/calibration_qe.h"
 
 #include <cmath>
-#include <cstdio>
 #include <string>
 
 #include "calibration/stage_support.h"
@@ -40,24 +39,6 @@ Eigen::MatrixXd rate_residuals(const CameraModel& cam, const std::vector<double>
   }
   return r;
 }
-
-namespace {
-
-std::string leak_terms_text(const QeFitResult& fit) {
-  if (fit.solver != QeSolver::kRegularised) return "";
-  const QeFitDiagnostics& d = fit.diagnostics;
-  std::string text = d.leak_terms ? "kept" : "dropped";
-  if (std::isfinite(d.leak_chi2_gain)) {
-    char figures[160];
-    std::snprintf(figures, sizeof figures, " (chi2 gain %.1f %s %.1f, %d amplitudes)",
-                  d.leak_chi2_gain, d.leak_terms ? ">" : "<=", d.leak_chi2_threshold,
-                  d.leak_amplitudes);
-    text += figures;
-  }
-  return text;
-}
-
-}  // namespace
 
 double ranked_held_out_residual(const std::string& solver, double held_out_residual) {
   return solver == "paper" ? held_out_residual / (1 - kPaperSolverMargin) : held_out_residual;
@@ -102,7 +83,7 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
       return std::sqrt(v.array().square().mean());
     };
     rep.calibration_residual = rms_of(fit.diagnostics.residual_after);
-    rep.leak_terms = leak_terms_text(fit);
+    rep.leak_terms = leak_terms_summary(fit);
     // The folds and the prior-sensitivity fits vary the model this fit chose.
     qo = holding_leak_decision(qo, fit);
     rep.qe_change_rms = rms_of(fit.diagnostics.qe_change_rms);

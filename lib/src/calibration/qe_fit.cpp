@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numeric>
 #include <string>
@@ -248,6 +249,20 @@ QeFitOptions holding_leak_decision(QeFitOptions options, const QeFitResult& fit)
     options.regularised.leak_terms =
         fit.diagnostics.leak_terms ? LeakTerms::kKeep : LeakTerms::kDrop;
   return options;
+}
+
+std::string leak_terms_summary(const QeFitResult& fit) {
+  if (fit.solver != QeSolver::kRegularised) return "";
+  const QeFitDiagnostics& d = fit.diagnostics;
+  std::string text = d.leak_terms ? "kept" : "dropped";
+  if (std::isfinite(d.leak_chi2_gain)) {
+    char figures[160];
+    std::snprintf(figures, sizeof figures, " (chi2 gain %.1f %s %.1f, %d amplitudes)",
+                  d.leak_chi2_gain, d.leak_terms ? ">" : "<=", d.leak_chi2_threshold,
+                  d.leak_amplitudes);
+    text += figures;
+  }
+  return text;
 }
 
 std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,

@@ -108,6 +108,12 @@ TEST(LeakTerms, a_decision_is_held_for_the_fits_that_vary_it) {
   QeFitResult paper_fit;
   paper_fit.solver = QeSolver::kPaper;
   EXPECT_EQ(holding_leak_decision(paper, paper_fit).regularised.leak_terms, LeakTerms::kSelect);
+  // And in words, as the report gives it.
+  EXPECT_EQ(leak_terms_summary(selected).rfind("dropped (chi2 gain 3.5 <= 62.8, 46 amplitudes)", 0),
+            0u)
+      << leak_terms_summary(selected);
+  EXPECT_EQ(leak_terms_summary(fit(u, LeakTerms::kKeep)), "kept");
+  EXPECT_EQ(leak_terms_summary(paper_fit), "");
 }
 
 }  // namespace

@@ -166,6 +166,10 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
 // Monte-Carlo refits): they then spread the chosen model instead of also deciding again.
 QeFitOptions holding_leak_decision(QeFitOptions options, const QeFitResult& fit);
 
+// The regularised fit's leak terms in words: "kept" or "dropped", with the test's chi2 gain,
+// threshold and amplitudes where it chose; empty for the paper's solver.
+std::string leak_terms_summary(const QeFitResult& fit);
+
 // The calibrated model's signal rates, DN/s: gains .* signal_rates(profile, system_qe, T).
 Eigen::VectorXd fitted_signal_rates(const CameraProfile& profile, const QeFitResult& fit,
                                     double temperature_k, double emissivity = 1.0);
