@@ -18,6 +18,7 @@ namespace {
 struct CalibrateArgs {
   std::string dataset, profile = "rgb-reference", out = "model.json", report;
   std::string leak_terms = "select";
+  std::string rate_offsets = "select";
   CalibrationOptions options;
   bool no_table = false;
 };
@@ -77,6 +78,13 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
                 "read high above the furnace), keep, drop")
       ->check(CLI::IsMember({"select", "keep", "drop"}))
       ->capture_default_str();
+  c->add_option("--rate-offsets", a.rate_offsets,
+                "Where each furnace temperature's line of net signal against exposure meets zero "
+                "exposure: select (one offset per band, what the darks left, unless the "
+                "temperatures' own offsets differ beyond the noise, a chi2 test), common (one per "
+                "band), per-step (one per temperature: two to three times noisier rates)")
+      ->check(CLI::IsMember({"select", "common", "per-step"}))
+      ->capture_default_str();
   c->add_option("--min-temperature", a.options.min_temperature_c, "Locus start, degC")
       ->check(CLI::Range(kModelMinTemperatureC, kModelMaxTemperatureC))
       ->capture_default_str();
@@ -126,6 +134,9 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
     a.options.leak_terms = a.leak_terms == "keep"   ? LeakTerms::kKeep
                            : a.leak_terms == "drop" ? LeakTerms::kDrop
                                                     : LeakTerms::kSelect;
+    a.options.rate_offsets = a.rate_offsets == "common"     ? RateOffsets::kCommon
+                             : a.rate_offsets == "per-step" ? RateOffsets::kPerStep
+                                                            : RateOffsets::kSelect;
     selected = [&global, profile_option] {
       const Dataset dataset = Dataset::open(a.dataset);
       // Without --profile, a 5x5 dataset is the shipped 5x5 camera's, not the colour default.

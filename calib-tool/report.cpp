@@ -160,6 +160,8 @@ void rates_section(const CalibrationOutcome& o, std::ostream& h) {
     << svg_plot({"Residual of the optimised model", "temperature (°C)", "modelled/measured − 1 (%)",
                  false, 1000, 300},
                 resid)
+    << "<p>Offsets of the lines of net signal against exposure: "
+    << html_escape(rate_offsets_summary(o.rates.offsets)) << ".</p>"
     << "<p>At the nominal furnace temperatures: where the plate was off its nominal temperature "
        "every band moves together (about 1.5 % per °C at 1000 °C), which the fit takes as that "
        "step's temperature error; what the QE model cannot explain shows as bands moving "

@@ -107,6 +107,7 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   CalibrationOutcome out;
   ExtractOptions eo;
   eo.threads = opt.threads;
+  eo.offsets = opt.rate_offsets;
   out.rates = extract_rates(dataset, profile, eo, [&](std::size_t d, std::size_t t) {
     report_stage(progress, "reading frames", d, t);
   });

@@ -76,6 +76,7 @@ nlohmann::json outcome_summary(const CalibrationOutcome& o) {
                        {"leak_terms", s.leak_terms},
                        {"seconds", s.seconds}});
   j["solvers"] = solvers;
+  j["rate_offsets"] = rate_offsets_summary(o.rates.offsets);
   j["rate_residual_rms"] = {{"datasheet", rms_finite(o.rate_residual_datasheet)},
                             {"optimised", rms_finite(o.rate_residual_optimised)}};
   json t4 = json::array();

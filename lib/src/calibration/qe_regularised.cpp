@@ -11,6 +11,7 @@
 #include "calibration/qe_problem.h"
 #include "calibration/qe_regularised_model.h"
 #include "calibration/qe_shape_bases.h"
+#include "detail/chi2.h"
 #include "detail/portable_math.h"
 #include "detail/random.h"
 
@@ -154,19 +155,6 @@ ModelFit fit_model(const CameraProfile& profile, const CalibrationRates& data, c
   return f;
 }
 
-// The level quantile of chi2 with k degrees of freedom (Wilson and Hilferty's cube-root normal
-// approximation, within 1 % from k = 3 on).
-double chi2_quantile(int k, double level) {
-  // The standard normal quantile by bisection of its tail.
-  double lo = -10, hi = 10;
-  for (int i = 0; i < 100; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (0.5 * std::erfc(mid / std::sqrt(2.0)) > 1 - level ? lo : hi) = mid;
-  }
-  const double z = 0.5 * (lo + hi), a = 2.0 / (9.0 * k);
-  return k * std::pow(1 - a + z * std::sqrt(a), 3);
-}
-
 }  // namespace
 
 QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRates& data,
@@ -194,7 +182,7 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
     r.diagnostics.leak_chi2_gain = (plain.data_ss - with.data_ss) / std::max(noise_ss, 1e-300);
     r.diagnostics.leak_amplitudes = with.leak_amplitudes;
     r.diagnostics.leak_chi2_threshold =
-        chi2_quantile(std::max(1, with.leak_amplitudes), options.leak_test_level);
+        detail::chi2_quantile(std::max(1, with.leak_amplitudes), options.leak_test_level);
     const bool keep = r.diagnostics.leak_chi2_gain > r.diagnostics.leak_chi2_threshold;
     const int iterations = with.iterations + plain.iterations;
     f = keep ? std::move(with) : std::move(plain);

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <thread>
 
+#include "detail/chi2.h"
 #include "pyrocam/core/error.h"
 
 namespace pyrocam {
@@ -106,6 +107,51 @@ std::vector<PointStatus> classify_setting(const CameraProfile& profile, const Se
     st[b] = classify_point(profile, s.raw_mean_dn[b], s.net_mean_dn[b], s.saturated_fraction[b],
                            saturated_limit);
   return st;
+}
+
+// Residual sum of squares of a sweep about a fitted line.
+double residual_ss(const std::vector<double>& x_us, const std::vector<double>& y,
+                   const SlopeFit& f) {
+  if (f.points < 2 || !std::isfinite(f.rate_dn_per_s)) return 0;
+  double ss = 0;
+  for (std::size_t i = 0; i < x_us.size(); ++i) {
+    const double r = y[i] - f.intercept_dn - f.rate_dn_per_s * 1e-6 * x_us[i];
+    ss += r * r;
+  }
+  return ss;
+}
+
+// RateOffsetTest: whether the temperatures' own offsets differ beyond noise from one per band.
+RateOffsetTest test_offsets(const std::vector<std::vector<std::vector<double>>>& x,
+                            const std::vector<std::vector<std::vector<double>>>& y,
+                            const std::vector<std::vector<SlopeFit>>& own,
+                            const std::vector<std::vector<SlopeFit>>& common, double level) {
+  RateOffsetTest test;
+  test.chi2 = 0;
+  test.common_offset_dn = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(x.size()), NAN);
+  for (std::size_t b = 0; b < x.size(); ++b) {
+    double ss_own = 0, ss_common = 0;
+    int lines = 0, residual_dof = 0;
+    for (std::size_t t = 0; t < x[b].size(); ++t) {
+      if (own[b][t].points < 2) continue;
+      ++lines;
+      residual_dof += own[b][t].points - 2;
+      ss_own += residual_ss(x[b][t], y[b][t], own[b][t]);
+      ss_common += residual_ss(x[b][t], y[b][t], common[b][t]);
+      test.common_offset_dn[static_cast<Eigen::Index>(b)] = common[b][t].intercept_dn;
+    }
+    // A band whose lines have no residual freedom says nothing about its noise.
+    if (lines < 2 || residual_dof < 1 || !(ss_own > 0)) continue;
+    test.chi2 += (ss_common - ss_own) / (ss_own / residual_dof);
+    test.degrees_of_freedom += lines - 1;
+  }
+  if (test.degrees_of_freedom > 0) {
+    test.threshold = detail::chi2_quantile(test.degrees_of_freedom, level);
+    test.common = test.chi2 <= test.threshold;
+  } else {
+    test.chi2 = NAN;  // nothing to test: each temperature keeps its own offset
+  }
+  return test;
 }
 
 std::string format_c(double t) {
@@ -217,6 +263,60 @@ SlopeFit fit_line(const std::vector<double>& x_us, const std::vector<double>& y)
   return f;
 }
 
+std::vector<SlopeFit> fit_lines_common_offset(const std::vector<std::vector<double>>& x_us,
+                                              const std::vector<std::vector<double>>& y) {
+  // With the offset c fixed each slope is sum x (y - c) / sum x^2, so each residual is
+  // u - c v, u = y - x Sxy / Sxx and v = 1 - x Sx / Sxx (uncentred sums): c = sum uv / sum v^2.
+  double suv = 0, svv = 0;
+  for (std::size_t t = 0; t < x_us.size(); ++t) {
+    if (x_us[t].size() < 2) continue;
+    double sx = 0, sxx = 0, sxy = 0;
+    for (std::size_t i = 0; i < x_us[t].size(); ++i)
+      sx += x_us[t][i], sxx += x_us[t][i] * x_us[t][i], sxy += x_us[t][i] * y[t][i];
+    for (std::size_t i = 0; i < x_us[t].size(); ++i) {
+      const double u = y[t][i] - x_us[t][i] * sxy / sxx, v = 1 - x_us[t][i] * sx / sxx;
+      suv += u * v;
+      svv += v * v;
+    }
+  }
+  const double offset = svv > 0 ? suv / svv : 0;
+  std::vector<SlopeFit> fits;
+  for (std::size_t t = 0; t < x_us.size(); ++t) {
+    SlopeFit f;
+    f.points = static_cast<int>(x_us[t].size());
+    if (f.points >= 2) {
+      double sxx = 0, sxy = 0, my = 0;
+      for (std::size_t i = 0; i < x_us[t].size(); ++i)
+        sxx += x_us[t][i] * x_us[t][i], sxy += x_us[t][i] * (y[t][i] - offset), my += y[t][i];
+      my /= f.points;
+      const double slope = sxy / sxx;
+      f.rate_dn_per_s = slope * 1e6;
+      f.intercept_dn = offset;
+      double ss = 0, st = 0;
+      for (std::size_t i = 0; i < x_us[t].size(); ++i) {
+        const double r = y[t][i] - offset - slope * x_us[t][i];
+        ss += r * r;
+        st += (y[t][i] - my) * (y[t][i] - my);
+      }
+      f.r_squared = st > 0 ? 1 - ss / st : 1.0;
+    }
+    fits.push_back(f);
+  }
+  return fits;
+}
+
+std::string rate_offsets_summary(const RateOffsetTest& test) {
+  std::ostringstream o;
+  o.precision(1);
+  o << std::fixed;
+  const std::string what = test.common ? "one per band" : "one per temperature";
+  if (!test.tested) return what + " (as asked)";
+  if (!std::isfinite(test.chi2)) return what + " (too few points to test)";
+  o << what << " (chi2 " << test.chi2 << (test.common ? " <= " : " > ") << test.threshold << " on "
+    << test.degrees_of_freedom << " degrees of freedom)";
+  return o.str();
+}
+
 RateTable extract_rates(const Dataset& d, const CameraProfile& profile,
                         const ExtractOptions& options, const ProgressFn& progress) {
   const int bands = profile.band_count();
@@ -312,21 +412,41 @@ RateTable extract_rates(const Dataset& d, const CameraProfile& profile,
     table.settings.push_back(std::move(s));
   }
 
+  // Each band's sweeps, one per temperature: the usable points' exposures and net means.
+  const std::size_t steps = table.temperatures_c.size();
+  std::vector<std::vector<std::vector<double>>> x(static_cast<std::size_t>(bands)), y(x);
+  for (int b = 0; b < bands; ++b) {
+    x[b].resize(steps);
+    y[b].resize(steps);
+    for (std::size_t t = 0; t < steps; ++t)
+      for (std::size_t i = 0; i < table.settings.size(); ++i)
+        if (table.settings[i].temperature_c == table.temperatures_c[t] &&
+            table.status[i][b] == PointStatus::kUsed) {
+          x[b][t].push_back(table.settings[i].exposure_us);
+          y[b][t].push_back(table.settings[i].net_mean_dn[b]);
+        }
+  }
+  std::vector<std::vector<SlopeFit>> own(static_cast<std::size_t>(bands)), common(own);
+  for (int b = 0; b < bands; ++b) {
+    for (std::size_t t = 0; t < steps; ++t) own[b].push_back(fit_line(x[b][t], y[b][t]));
+    common[b] = fit_lines_common_offset(x[b], y[b]);
+  }
+  table.offsets = test_offsets(x, y, own, common, options.offsets_test_level);
+  if (options.offsets != RateOffsets::kSelect) {
+    table.offsets.common = options.offsets == RateOffsets::kCommon;
+    table.offsets.tested = false;
+  }
+  const auto& chosen = table.offsets.common ? common : own;
+
   std::vector<int> usable_per_band(static_cast<std::size_t>(bands), 0);
-  for (double t : table.temperatures_c) {
+  for (std::size_t t = 0; t < steps; ++t) {
     std::vector<SlopeFit> row;
     for (int b = 0; b < bands; ++b) {
-      std::vector<double> x, y;
-      for (std::size_t i = 0; i < table.settings.size(); ++i)
-        if (table.settings[i].temperature_c == t && table.status[i][b] == PointStatus::kUsed) {
-          x.push_back(table.settings[i].exposure_us);
-          y.push_back(table.settings[i].net_mean_dn[b]);
-        }
-      SlopeFit f = fit_line(x, y);
+      SlopeFit f = chosen[b][t];
       if (f.points < 2) {
-        table.warnings.push_back(std::to_string(static_cast<int>(std::lround(t))) + " degC band " +
-                                 profile.band_names[b] + ": " + std::to_string(f.points) +
-                                 " usable point(s), no slope");
+        table.warnings.push_back(
+            std::to_string(static_cast<int>(std::lround(table.temperatures_c[t]))) + " degC band " +
+            profile.band_names[b] + ": " + std::to_string(f.points) + " usable point(s), no slope");
         f.rate_dn_per_s = NAN;
       } else {
         ++usable_per_band[b];

@@ -18,6 +18,9 @@ struct CalibrationOptions {
   // The regularised fit's leak terms: chosen by the furnace data (RegularisedOptions::
   // leak_terms), or always kept or dropped.
   LeakTerms leak_terms = LeakTerms::kSelect;
+  // The furnace lines' offsets (ExtractOptions::offsets): tested, or one per band or per
+  // temperature as asked.
+  RateOffsets rate_offsets = RateOffsets::kSelect;
   double min_temperature_c = 500, max_temperature_c = 3500, locus_step_c = 1;
   MlpTrainingOptions mlp;
   // Noisy copies of the locus the network is trained on besides it (copies 0: none).

@@ -46,6 +46,28 @@ struct ReferenceSweep {
   std::vector<SlopeFit> fits;                    // [band]; NaN rate below 2 usable points
 };
 
+// Where each furnace temperature's line of net signal against exposure meets zero exposure. The
+// dark frames remove the sensor's offset; what they leave (a black level that moved between the
+// darks and the frames, say) is one offset per band, the same at every temperature. A line of
+// its own offset at each temperature absorbs that too, but its slope is about twice as noisy.
+enum class RateOffsets {
+  kSelect,   // one offset per band unless the temperatures' own offsets differ beyond noise
+  kCommon,   // one offset per band, shared by every temperature
+  kPerStep,  // each temperature's line has its own offset
+};
+
+// The test behind RateOffsets::kSelect: chi2 = sum over bands of (RSS with one offset per band -
+// RSS with one per temperature) / s_b^2, s_b^2 the band's residual variance about its own
+// lines, on sum over bands of (temperatures - 1) degrees of freedom; one offset per band when
+// chi2 is at most the chi2 quantile at `level`.
+struct RateOffsetTest {
+  bool common = false;  // the rates are those of one offset per band
+  bool tested = true;   // false: the choice was asked for (ExtractOptions::offsets)
+  double chi2 = NAN, threshold = NAN;
+  int degrees_of_freedom = 0;
+  Eigen::VectorXd common_offset_dn;  // per band; NaN where the band has no line
+};
+
 struct RateTable {
   std::vector<double> temperatures_c;
   std::vector<std::string> band_names;
@@ -56,6 +78,7 @@ struct RateTable {
   // The reference sources, sorted by temperature; apart from the furnace settings above, which
   // they never enter (temperatures_c, settings, fits and rates() are the furnace's alone).
   std::vector<ReferenceSweep> references;
+  RateOffsetTest offsets;  // the furnace lines' offsets (references keep one per sweep)
 
   // temperatures x bands; NaN where a fit is missing.
   Eigen::MatrixXd rates() const;
@@ -66,6 +89,8 @@ struct RateTable {
 struct ExtractOptions {
   double saturated_pixel_fraction = 1e-3;  // more ROI pixels than this at full scale: saturated
   unsigned threads = 2;
+  RateOffsets offsets = RateOffsets::kSelect;
+  double offsets_test_level = 0.99;
 };
 
 using ProgressFn = std::function<void(std::size_t done, std::size_t total)>;
@@ -83,5 +108,14 @@ PointStatus classify_point(const CameraProfile& profile, double raw_mean_dn, dou
 
 // Least-squares line through (exposure_us, net DN); slope returned per second.
 SlopeFit fit_line(const std::vector<double>& exposure_us, const std::vector<double>& net_dn);
+
+// Least-squares lines through several sweeps (exposure_us[i], net_dn[i]) that share one offset:
+// one slope per sweep (NaN below 2 points), each fit's intercept_dn the shared offset.
+std::vector<SlopeFit> fit_lines_common_offset(const std::vector<std::vector<double>>& exposure_us,
+                                              const std::vector<std::vector<double>>& net_dn);
+
+// The words for a table's offsets, for the report: "one per band (chi2 712.3 <= 868.1 on 775
+// degrees of freedom)" and the like.
+std::string rate_offsets_summary(const RateOffsetTest& test);
 
 }  // namespace pyrocam
