@@ -1,0 +1,99 @@
+// pyrocam-calib calibrate's choices of what the fit models, decided by a test on the data by
+// default or as asked: --leak-terms (the regularised QE fit's leaks outside the filter's pass
+// band) and --rate-offsets (where the furnace lines of net signal against exposure meet zero
+// exposure); the report names what was done.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_support.h"
+#include "test_support.h"
+
+namespace pyrocam {
+namespace {
+
+using test::calib;
+using test::q;
+using test::read_text;
+using test::ScratchDir;
+
+class FitChoices : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new ScratchDir("cli");
+    ASSERT_EQ(calib("simulate campaign --profile rgb-reference --temperatures 1000 1025 1050 "
+                    "1075 1100 --exposures 12 --frames 1 --size 32x32 --roi-area 200 --out " +
+                    q(*dir_ / "furnace")),
+              0);
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  // Calibrates with `options`; the report's JSON, and its HTML in `html`.
+  static nlohmann::json calibrate(const std::string& name, const std::string& options,
+                                  std::string* html = nullptr) {
+    const std::filesystem::path model = *dir_ / (name + ".json");
+    EXPECT_EQ(calib("calibrate --dataset " + q(*dir_ / "furnace") + " " + options +
+                    " --epochs 1 --polish-iterations 0 --mc-refits 0 --no-prebuilt-table --out " +
+                    q(model)),
+              0)
+        << options;
+    if (html) *html = read_text(*dir_ / (name + "-report.html"));
+    return nlohmann::json::parse(read_text(*dir_ / (name + "-report.json")));
+  }
+  static ScratchDir* dir_;
+};
+ScratchDir* FitChoices::dir_ = nullptr;
+
+// The regularised solver's row of the report's solver table.
+std::string leak_terms_in(const nlohmann::json& report) {
+  for (const auto& s : report["solvers"])
+    if (s["solver"] == "regularised") return s["leak_terms"].get<std::string>();
+  return "(no regularised solver in the report)";
+}
+
+TEST_F(FitChoices, calibrate_selects_keeps_or_drops_the_leak_terms) {
+  const auto leak_terms = [](const std::string& how) {
+    return leak_terms_in(calibrate("leak-" + how, "--solver regularised --leak-terms " + how));
+  };
+  // Kept or dropped as told, without a test to report.
+  EXPECT_EQ(leak_terms("keep"), "kept");
+  EXPECT_EQ(leak_terms("drop"), "dropped");
+  // Selected: the decision with the test's figures.
+  const std::string selected = leak_terms("select");
+  EXPECT_NE(selected.find("chi2 gain"), std::string::npos) << selected;
+  EXPECT_TRUE(selected.rfind("kept", 0) == 0 || selected.rfind("dropped", 0) == 0) << selected;
+}
+
+TEST_F(FitChoices, calibrate_tests_or_takes_the_rate_offsets_asked_for) {
+  const auto offsets = [](const std::string& how) {
+    std::string html;
+    const std::string words = calibrate(
+        "offsets-" + how, "--solver datasheet --rate-offsets " + how, &html)["rate_offsets"];
+    // The HTML report says it too (with < and > escaped).
+    std::string html_words;
+    for (char c : words) html_words += c == '<' ? "&lt;" : c == '>' ? "&gt;" : std::string(1, c);
+    EXPECT_NE(html.find(html_words), std::string::npos) << html_words;
+    return words;
+  };
+  EXPECT_EQ(offsets("common"), "one per band (as asked)");
+  EXPECT_EQ(offsets("per-step"), "one per temperature (as asked)");
+  const std::string tested = offsets("select");
+  EXPECT_NE(tested.find("degrees of freedom)"), std::string::npos) << tested;
+  EXPECT_TRUE(tested.rfind("one per band (chi2 ", 0) == 0 ||
+              tested.rfind("one per temperature (chi2 ", 0) == 0)
+      << tested;
+}
+
+TEST(CliFitChoices, calibrate_rejects_other_values_n) {
+  ScratchDir dir("cli");
+  for (const std::string option : {"--leak-terms sometimes", "--rate-offsets zero"}) {
+    EXPECT_EQ(calib("calibrate --dataset " + q(dir.path()) + " " + option + " --out " +
+                    q(dir / "m.json")),
+              2)
+        << option;
+    EXPECT_FALSE(std::filesystem::exists(dir / "m.json")) << option;
+  }
+}
+
+}  // namespace
+}  // namespace pyrocam
