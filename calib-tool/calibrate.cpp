@@ -78,11 +78,12 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
                 "read high above the furnace), keep, drop")
       ->check(CLI::IsMember({"select", "keep", "drop"}))
       ->capture_default_str();
-  c->add_option("--rate-offsets", a.rate_offsets,
-                "Where each furnace temperature's line of net signal against exposure meets zero "
-                "exposure: select (one offset per band, what the darks left, unless the "
-                "temperatures' own offsets differ beyond the noise, a chi2 test), common (one per "
-                "band), per-step (one per temperature: the paper's lines, about twice as noisy)")
+  c->add_option(
+       "--rate-offsets", a.rate_offsets,
+       "Where each furnace temperature's line of net signal against exposure meets zero "
+       "exposure: select (one offset per band, what the darks left, unless the "
+       "temperatures' own offsets differ beyond the noise, a chi2 test), common (one per "
+       "band), per-step (one per temperature: the paper's lines, two to three times as noisy)")
       ->check(CLI::IsMember({"select", "common", "per-step"}))
       ->capture_default_str();
   c->add_option("--min-temperature", a.options.min_temperature_c, "Locus start, degC")
