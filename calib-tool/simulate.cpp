@@ -113,6 +113,12 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
                 "in it are independent furnace runs")
       ->check(seed_check())
       ->capture_default_str();
+  c->add_option("--black-level-drift", campaign.black_level_drift_dn,
+                "The furnace frames' black level moves since the darks were taken, linearly "
+                "from 0 at the first temperature to this at the last, DN (-50 to 50; a sensor "
+                "that warms up; 0: none)")
+      ->check(CLI::Range(-50.0, 50.0))
+      ->capture_default_str();
   c->add_option("--reference", campaign.reference_temperatures_c,
                 "Reference sources beyond the furnace, nominal degC, comma separated (e.g. "
                 "1324,1738,2474: fixed-point cells): manifest rows of kind reference, each with "

@@ -84,6 +84,24 @@ TEST_F(FitChoices, calibrate_tests_or_takes_the_rate_offsets_asked_for) {
       << tested;
 }
 
+TEST_F(FitChoices, calibrate_keeps_one_offset_per_temperature_when_the_black_level_drifts) {
+  // The same campaign with the furnace frames' black level drifting 3 DN from the darks'.
+  ASSERT_EQ(calib("simulate campaign --profile rgb-reference --temperatures 1000 1025 1050 1075 "
+                  "1100 --exposures 12 --frames 1 --size 32x32 --roi-area 200 "
+                  "--black-level-drift 3 --out " +
+                  q(*dir_ / "drifted")),
+            0);
+  const std::filesystem::path model = *dir_ / "drifted.json";
+  ASSERT_EQ(calib("calibrate --dataset " + q(*dir_ / "drifted") +
+                  " --solver datasheet --epochs 1 --polish-iterations 0 --mc-refits 0 "
+                  "--no-prebuilt-table --out " +
+                  q(model)),
+            0);
+  const std::string words =
+      nlohmann::json::parse(read_text(*dir_ / "drifted-report.json"))["rate_offsets"];
+  EXPECT_EQ(words.rfind("one per temperature (chi2 ", 0), 0u) << words;
+}
+
 TEST(CliFitChoices, calibrate_rejects_other_values_n) {
   ScratchDir dir("cli");
   for (const std::string option : {"--leak-terms sometimes", "--rate-offsets zero"}) {

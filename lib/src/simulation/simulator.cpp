@@ -123,8 +123,9 @@ cv::Mat Simulator::render(const cv::Mat& temperature_c, double exposure_us, doub
           // The gain amplifies the collected charge; the read noise comes after it.
           e = gain * std::clamp(e, 0.0, nm.full_well_e);
           if (noise_) e += nm.read_noise_e * normal(rng);
-          const double dn = std::clamp(
-              std::round(k[band] * e + profile_.dark_offset_dn + fpn_row[x]), 0.0, max_dn);
+          const double dn = std::clamp(std::round(k[band] * e + profile_.dark_offset_dn +
+                                                  black_level_shift_dn_ + fpn_row[x]),
+                                       0.0, max_dn);
           if (type == CV_8U)
             out.ptr<std::uint8_t>(y)[x] = static_cast<std::uint8_t>(dn);
           else
@@ -189,6 +190,8 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
   if (s.first_exposure_us <= 0) s.first_exposure_us = colour ? 100 : 10000;
   if (s.exposure_count < 1 || s.frames_per_setting < 1 || s.width < 8 || s.height < 8)
     throw InputError("campaign: needs at least one exposure and frame, and 8x8 pixels");
+  if (!std::isfinite(s.black_level_drift_dn))
+    throw InputError("campaign: the black level drift must be a number of DN");
   if (!s.reference_temperatures_c.empty() &&
       !(s.reference_uncertainty_c > 0 && std::isfinite(s.reference_uncertainty_c)))
     throw InputError("campaign: the reference temperature uncertainty must be a number > 0 degC");
@@ -256,7 +259,11 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
   const auto furnace_error = [](Random& r) { return r.normal(); };
   std::ofstream truth(folder / "furnace-truth.csv");
   truth << "nominal_c,true_c\n" << std::setprecision(10);
-  for (double t : s.temperatures_c) {
+  for (std::size_t step = 0; step < s.temperatures_c.size(); ++step) {
+    const double t = s.temperatures_c[step];
+    if (s.black_level_drift_dn != 0)
+      camera.set_black_level_shift(s.black_level_drift_dn * static_cast<double>(step) /
+                                   std::max<double>(1, s.temperatures_c.size() - 1));
     const double true_c = t + s.furnace_error_sigma_c * furnace_error(furnace_rng);
     truth << t << "," << true_c << "\n";
     const cv::Mat plate(s.height, s.width, CV_32F, cv::Scalar(static_cast<float>(true_c)));
@@ -267,6 +274,7 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
         emit(name("frames", stem.str(), k, f), camera.render(plate, exposures[k]),
              FrameKind::kFrame, t, exposures[k]);
   }
+  camera.set_black_level_shift(0);
   for (const ReferencePlan& r : references) {
     truth << r.nominal_c << "," << r.true_c << "\n";
     std::ostringstream stem;

@@ -80,6 +80,22 @@ TEST_F(SimulatedRgb, dark_frames_sit_at_the_offset_plus_dark_current) {
   EXPECT_NEAR(cv::mean(camera.render(cold, exposure))[0], cv::mean(dark)[0], 0.3);
 }
 
+TEST_F(SimulatedRgb, a_black_level_shift_moves_every_frame_after_it) {
+  Simulator camera(profile, UnitPerturbation{"datasheet", 1}, 3);
+  Simulator shifted(profile, UnitPerturbation{"datasheet", 1}, 3);
+  shifted.set_black_level_shift(2.4);
+  const double exposure = 5000;
+  // The same noise draws: the frames differ by the shift, rounded pixel by pixel (the fixed
+  // pattern spreads the rounding, so the mean moves by the shift itself).
+  const double moved = cv::mean(shifted.render_dark(100, 100, exposure))[0] -
+                       cv::mean(camera.render_dark(100, 100, exposure))[0];
+  EXPECT_NEAR(moved, 2.4, 0.1);
+  shifted.set_black_level_shift(0);
+  EXPECT_EQ(cv::norm(shifted.render_dark(100, 100, exposure),
+                     camera.render_dark(100, 100, exposure), cv::NORM_L1),
+            0);
+}
+
 TEST_F(SimulatedRgb, saturation_clips_at_full_scale) {
   Simulator camera(profile, UnitPerturbation{"datasheet", 1});
   const cv::Mat plate(20, 20, CV_32F, cv::Scalar(2500.f));

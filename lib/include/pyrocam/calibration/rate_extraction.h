@@ -48,7 +48,7 @@ struct ReferenceSweep {
 
 // Where each furnace temperature's line of net signal against exposure meets zero exposure. The
 // dark frames remove the sensor's offset; what they leave (a black level that moved between the
-// darks and the frames, say) is one offset per band, the same at every temperature. A line of
+// darks and the frames, say) is one offset per band, the same at every temperature. A line with
 // its own offset at each temperature absorbs that too, but its slope is two to three times as
 // noisy.
 enum class RateOffsets {

@@ -42,6 +42,10 @@ class Simulator {
   const CameraProfile& profile() const { return profile_; }
   const Eigen::MatrixXd& system_qe() const { return system_qe_; }
   void set_noise_enabled(bool on) { noise_ = on; }
+  // Added to the profile's dark offset in every frame rendered from now on, DN (before
+  // quantisation): a black level that moved since the dark frames were taken (the sensor warmed
+  // up, say).
+  void set_black_level_shift(double dn) { black_level_shift_dn_ = dn; }
 
   // Raw mosaic (CV_8U for bit depth 8, else CV_16U) of a temperature map (CV_32F, degC; NaN or
   // below 100 degC emits nothing). Deterministic for a given noise seed and call sequence.
@@ -68,6 +72,7 @@ class Simulator {
   std::uint64_t seed_;
   std::uint64_t frame_counter_ = 0;
   bool noise_ = true;
+  double black_level_shift_dn_ = 0;
   cv::Mat dark_fpn_, prnu_;  // per pixel, fixed for the unit
 };
 
@@ -98,6 +103,10 @@ struct CampaignSettings {
   std::vector<double> reference_temperatures_c;
   double reference_uncertainty_c = kDefaultReferenceUncertaintyC;
   std::uint64_t reference_seed = 13;
+  // The black level of the furnace frames moves since the darks were taken: linearly from 0 at
+  // the first temperature step to this at the last, DN (a sensor that warms up over the
+  // campaign). References keep the darks' black level. 0: none.
+  double black_level_drift_dn = 0;
   int width = 128, height = 128;
   double roi_area_px = 6000;  // elliptical, centred
   std::string image_extension = ".pgm";
