@@ -154,12 +154,15 @@ void split_row(const float* __restrict row, int n, float no_signal, float* __res
   if (n & 1) even[n / 2] = row[n - 1] < no_signal ? kMinusInf : row[n - 1];
 }
 
-// Whether any of the n samples has light: at or above `no_signal`, or a mark (NaN, +INF), which
-// the kernels carry to the band value as they do any sample with light.
+// Whether any of split_row's samples (n_even and n_odd of them) has light: not -INF, its mark of
+// a sample below the no-signal level. A mark of darksub's (NaN, +INF) counts as light: the
+// kernels carry it to the band value as they do any sample with light.
 PYROCAM_VECTOR_CLONES
-bool any_lit(const float* __restrict p, int n, float no_signal) {
+bool any_lit(const float* __restrict even, int n_even, const float* __restrict odd, int n_odd) {
+  constexpr float kMinusInf = -std::numeric_limits<float>::infinity();
   std::int32_t lit = 0;
-  for (int i = 0; i < n; ++i) lit |= p[i] < no_signal ? 0 : 1;
+  for (int i = 0; i < n_even; ++i) lit |= even[i] == kMinusInf ? 0 : 1;
+  for (int i = 0; i < n_odd; ++i) lit |= odd[i] == kMinusInf ? 0 : 1;
   return lit != 0;
 }
 
@@ -246,39 +249,45 @@ class MatchedBayer {
     // The five input rows around the output row, split by parity: a ring, each row read once
     // per range; then the row sums v and c and the outputs, split too.
     const int half = half_;
-    std::vector<float> buffer(
-        static_cast<std::size_t>(2 * (5 + 2 + 2) * half + padded_width_ + half));
+    std::vector<float> buffer(static_cast<std::size_t>(2 * (5 + 2 + 2) * half + half));
     auto slot = [&](int yy) { return (yy + 2 * kReach) % 5; };
     auto ring = [&](int yy) { return buffer.data() + slot(yy) * 2 * half; };
     float* v = buffer.data() + 10 * half;  // even half, then odd half
     float* c = v + 2 * half;
     float* out_even = c + 2 * half;
     float* out_odd = out_even + half;
-    float* padded = out_odd + half;
-    float* zeros = padded + padded_width_;  // band values of blocks without light
+    float* zeros = out_odd + half;  // band values of blocks without light
     std::fill(zeros, zeros + half, 0.f);
     // Per ring row and input block: whether a sample has light (all do without the level).
     std::vector<std::uint8_t> lit(static_cast<std::size_t>(5 * blocks_), 1);
     std::vector<std::uint8_t> out_lit(static_cast<std::size_t>(out_blocks_), 1);
+    // The row padded by kReach columns each side, split by parity straight from the mosaic:
+    // padded column p is the mosaic's p - kReach (kReach is even, so the parities agree),
+    // mirrored without repeating the edge, which keeps the pattern (as the bilinear method). A
+    // sample without signal becomes -INF, which every kernel sum carries to the band value (with
+    // a saturated +INF sample: NaN, no reading); the band value then reads as dim.
+    static_assert(kReach % 2 == 0, "the padded row's parities are the mosaic's");
     auto load = [&](int yy) {
-      // Mirrored without repeating the edge, which keeps the pattern (as the bilinear method).
       const float* src =
           mosaic_.ptr<float>(cv::borderInterpolate(yy, height_, cv::BORDER_REFLECT_101));
-      std::copy(src, src + width_, padded + kReach);
-      for (int k = 1; k <= kReach; ++k) {
-        padded[kReach - k] = src[cv::borderInterpolate(-k, width_, cv::BORDER_REFLECT_101)];
-        padded[kReach + width_ - 1 + k] =
-            src[cv::borderInterpolate(width_ - 1 + k, width_, cv::BORDER_REFLECT_101)];
-      }
-      // A sample without signal becomes -INF, which every kernel sum carries to the band value
-      // (with a saturated +INF sample: NaN, no reading); the band value then reads as dim.
       float* even = ring(yy);
-      split_row(padded, padded_width_, no_signal_dn_, even, even + half);
+      float* odd = even + half;
+      split_row(src, width_, no_signal_dn_, even + kReach / 2, odd + kReach / 2);
+      auto edge = [&](int p, int x) {
+        const float value = src[cv::borderInterpolate(x, width_, cv::BORDER_REFLECT_101)];
+        (p & 1 ? odd : even)[p / 2] =
+            value < no_signal_dn_ ? -std::numeric_limits<float>::infinity() : value;
+      };
+      for (int k = 1; k <= kReach; ++k) {
+        edge(kReach - k, -k);
+        edge(kReach + width_ - 1 + k, width_ - 1 + k);
+      }
       if (!mark_no_signal_) return;
       std::uint8_t* row_lit = lit.data() + slot(yy) * blocks_;
       for (int k = 0; k < blocks_; ++k) {
         const int p0 = 2 * kBlock * k, p1 = std::min(padded_width_, p0 + 2 * kBlock);
-        row_lit[k] = p0 < p1 && any_lit(padded + p0, p1 - p0, no_signal_dn_);
+        row_lit[k] =
+            p0 < p1 && any_lit(even + p0 / 2, (p1 - p0 + 1) / 2, odd + p0 / 2, (p1 - p0) / 2);
       }
     };
     for (int yy = y0 - kReach; yy < y0 + kReach; ++yy) load(yy);
