@@ -1,0 +1,235 @@
+// ratiotemp's statistics: the message against region_stats of the frame, the peak (the hot
+// spot, not a wild pixel), the region that tracks it and a peak window larger than the frame.
+#include "pyrocam/runtime/region_stats.h"
+#include "ratiotemp_support.h"
+
+namespace pyrocam::test {
+namespace {
+
+guint64 field_uint64(const GstStructure* s, const char* name) {
+  guint64 v = 0;
+  EXPECT_TRUE(gst_structure_get_uint64(s, name, &v)) << name;
+  return v;
+}
+
+void expect_stats(const GstStructure* s, const std::string& prefix, const RegionStats& r) {
+  SCOPED_TRACE(prefix);
+  EXPECT_EQ(field_uint64(s, (prefix + "pixels").c_str()), r.pixels);
+  EXPECT_EQ(field_uint64(s, (prefix + "valid").c_str()), r.valid);
+  EXPECT_DOUBLE_EQ(field_double(s, (prefix + "valid-fraction").c_str()), r.valid_fraction);
+  if (r.valid == 0) {
+    EXPECT_FALSE(gst_structure_has_field(s, (prefix + "median-c").c_str()));
+    return;
+  }
+  EXPECT_DOUBLE_EQ(field_double(s, (prefix + "min-c").c_str()), r.min_c);
+  EXPECT_DOUBLE_EQ(field_double(s, (prefix + "max-c").c_str()), r.max_c);
+  EXPECT_DOUBLE_EQ(field_double(s, (prefix + "mean-c").c_str()), r.mean_c);
+  EXPECT_DOUBLE_EQ(field_double(s, (prefix + "median-c").c_str()), r.median_c);
+}
+
+TEST_F(RatioTemp, stats_message_matches_region_stats_of_the_frame) {
+  start("ratiotemp stats-interval=1000000000 region=4,2,10,10 model=" + rgb_model_path(),
+        bands_caps(3, "bayer", 7, 5));
+  auto planes = graybody_planes(*rgb_model(), 7, 5, 900, 1700);
+  for (int b = 0; b < 3; ++b) {  // two pixels without a reading, whatever the method
+    planes[b * 35 + 0] = kInf;
+    planes[b * 35 + 33] = NAN;
+  }
+  std::vector<float> dark(planes.size(), 1.0f);  // every band dim: no reading anywhere
+  // Frames at 0, 0.5, 1.0 and 1.2 s: the first and the third post.
+  run(planes, 7, 5, 0);
+  run(planes, 7, 5, GST_SECOND / 2);
+  run(planes, 7, 5, GST_SECOND);
+  run(dark, 7, 5, GST_SECOND + GST_SECOND / 5);
+  auto s = stats();
+  ASSERT_EQ(s.size(), 2u);
+  const cv::Mat t = library(rgb_model(), rgb_auto_method(), planes, 7, 5).t;
+  const cv::Rect region(4, 2, 3, 3);  // clipped to the 7x5 frame
+  for (std::size_t k = 0; k < 2; ++k) {
+    const GstStructure* m = s[k];
+    EXPECT_EQ(field_uint64(m, "timestamp"), k * GST_SECOND);
+    EXPECT_EQ(field_uint64(m, "running-time"), k * GST_SECOND);
+    EXPECT_EQ(field_uint64(m, "stream-time"), k * GST_SECOND);
+    EXPECT_EQ(gst_structure_get_string(m, "method"), method_name(rgb_auto_method()));
+    int v = 0;
+    EXPECT_TRUE(gst_structure_get_int(m, "width", &v) && v == 7);
+    EXPECT_TRUE(gst_structure_get_int(m, "height", &v) && v == 5);
+    EXPECT_TRUE(gst_structure_get_int(m, "region-x", &v) && v == 4);
+    EXPECT_TRUE(gst_structure_get_int(m, "region-y", &v) && v == 2);
+    EXPECT_TRUE(gst_structure_get_int(m, "region-width", &v) && v == 3);
+    EXPECT_TRUE(gst_structure_get_int(m, "region-height", &v) && v == 3);
+    const RegionStats frame = region_stats(t);
+    EXPECT_EQ(frame.valid, 33u);
+    expect_stats(m, "", frame);
+    const RegionStats reg = region_stats(t(region));
+    EXPECT_EQ(reg.pixels, 9u);
+    EXPECT_EQ(reg.valid, 8u);
+    expect_stats(m, "region-", reg);
+    // The median is reported apart from the mean.
+    EXPECT_NE(field_double(m, "median-c"), field_double(m, "mean-c"));
+  }
+  free_all(s);
+  // A frame without any reading: counts, fraction 0, no temperatures.
+  g_object_set(element, "stats-interval", G_GUINT64_CONSTANT(1), nullptr);
+  run(dark, 7, 5, 3 * GST_SECOND);
+  s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  expect_stats(s[0], "", region_stats(cv::Mat(5, 7, CV_32F, cv::Scalar(NAN))));
+  EXPECT_EQ(field_uint64(s[0], "pixels"), 35u);
+  EXPECT_FALSE(gst_structure_has_field(s[0], "min-c"));
+  free_all(s);
+}
+
+TEST_F(RatioTemp, survives_flush_and_eos) {
+  start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 4));
+  const auto planes = graybody_planes(*rgb_model(), 4, 4, 1000, 1400);
+  const auto expected = library_codes(rgb_model(), rgb_auto_method(), planes, 4, 4);
+  EXPECT_EQ(run(planes, 4, 4, 0), expected);
+  EXPECT_EQ(run(planes, 4, 4, GST_SECOND / 10), expected);
+  auto s = stats();
+  EXPECT_EQ(s.size(), 1u);  // the second frame is within the 1 s default interval
+  free_all(s);
+  push_flush(h);
+  EXPECT_EQ(run(planes, 4, 4, GST_SECOND / 5), expected);
+  s = stats();
+  EXPECT_EQ(s.size(), 1u);  // after a flush the next frame posts
+  free_all(s);
+  EXPECT_TRUE(eos_passes(h));
+  // And it starts again after a state change.
+  ASSERT_EQ(gst_element_set_state(h->element, GST_STATE_READY), GST_STATE_CHANGE_SUCCESS);
+  ASSERT_EQ(gst_element_set_state(h->element, GST_STATE_PLAYING), GST_STATE_CHANGE_SUCCESS);
+}
+
+// A plate at 1000 degC with a 7x7 hot spot at 1400 centred on (12, 7) and one wild pixel at
+// 1750 (a mixed pixel at an edge), as band planes of the colour model.
+std::vector<float> plate_with_spot_and_outlier(int w, int h) {
+  const ThermalModel& m = *rgb_model();
+  const auto plate = graybody_planes(m, w, h, 1000, 1000),
+             spot = graybody_planes(m, w, h, 1400, 1400),
+             wild = graybody_planes(m, w, h, 1750, 1750);
+  std::vector<float> v = plate;
+  const int n = w * h;
+  for (int b = 0; b < m.profile().band_count(); ++b)
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const std::size_t i = static_cast<std::size_t>(b * n + y * w + x);
+        if (std::abs(x - 12) <= 3 && std::abs(y - 7) <= 3) v[i] = spot[i];
+        if (x == 3 && y == 12) v[i] = wild[i];
+      }
+  return v;
+}
+
+TEST_F(RatioTemp, stats_peak_is_the_hot_spot_not_a_wild_pixel) {
+  const int w = 24, h = 16;
+  start("ratiotemp stats-interval=1 region=8,2,12,12 model=" + rgb_model_path(),
+        bands_caps(3, "bayer", w, h));
+  guint window = 0;
+  g_object_get(element, "peak-window", &window, nullptr);
+  EXPECT_EQ(window, 5u);
+  const auto planes = plate_with_spot_and_outlier(w, h);
+  run(planes, w, h, 0);
+  auto s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  const cv::Mat t = library(rgb_model(), rgb_auto_method(), planes, w, h).t;
+  EXPECT_NEAR(field_double(s[0], "max-c"), 1750, 30);  // the wild pixel
+  const RegionPeak want = region_peak(t, 5);
+  EXPECT_DOUBLE_EQ(field_double(s[0], "peak-c"), want.c);
+  EXPECT_NEAR(field_double(s[0], "peak-c"), 1400, 30);
+  int x = -1, y = -1;
+  EXPECT_TRUE(gst_structure_get_int(s[0], "peak-x", &x));
+  EXPECT_TRUE(gst_structure_get_int(s[0], "peak-y", &y));
+  EXPECT_LE(std::abs(x - 12), 1);
+  EXPECT_LE(std::abs(y - 7), 1);
+  // The region's peak: windows inside it, the position in frame pixels.
+  const RegionPeak in_region = region_peak(t(cv::Rect(8, 2, 12, 12)), 5);
+  EXPECT_DOUBLE_EQ(field_double(s[0], "region-peak-c"), in_region.c);
+  EXPECT_TRUE(gst_structure_get_int(s[0], "region-peak-x", &x));
+  EXPECT_TRUE(gst_structure_get_int(s[0], "region-peak-y", &y));
+  EXPECT_EQ(x, in_region.x + 8);
+  EXPECT_EQ(y, in_region.y + 2);
+  free_all(s);
+  // peak-window 0: no peak; even values are refused.
+  g_object_set(element, "peak-window", 4u, nullptr);
+  g_object_get(element, "peak-window", &window, nullptr);
+  EXPECT_EQ(window, 5u);
+  g_object_set(element, "peak-window", 0u, nullptr);
+  run(planes, w, h, GST_SECOND);
+  s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_FALSE(gst_structure_has_field(s[0], "peak-c"));
+  EXPECT_FALSE(gst_structure_has_field(s[0], "region-peak-c"));
+  EXPECT_TRUE(gst_structure_has_field(s[0], "max-c"));
+  free_all(s);
+  EXPECT_TRUE(warnings.empty());
+}
+
+// region-tracks-peak: the region (its size from region) is centred on the frame's peak, moved
+// to stay in the frame, so its statistics are the hot spot's; off, it stays where region says.
+TEST_F(RatioTemp, region_tracks_the_peak) {
+  const int w = 24, h = 16;
+  start(
+      "ratiotemp stats-interval=1 region=0,0,5,5 region-tracks-peak=true model=" + rgb_model_path(),
+      bands_caps(3, "bayer", w, h));
+  const auto planes = plate_with_spot_and_outlier(w, h);  // the 7x7 spot centred at (12, 7)
+  run(planes, w, h, 0);
+  auto s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  int px = -1, py = -1, rx = -1, ry = -1, rw = 0, rh = 0;
+  gboolean tracking = FALSE;
+  ASSERT_TRUE(gst_structure_get_int(s[0], "peak-x", &px));
+  ASSERT_TRUE(gst_structure_get_int(s[0], "peak-y", &py));
+  ASSERT_TRUE(gst_structure_get_int(s[0], "region-x", &rx));
+  ASSERT_TRUE(gst_structure_get_int(s[0], "region-y", &ry));
+  ASSERT_TRUE(gst_structure_get_int(s[0], "region-width", &rw));
+  ASSERT_TRUE(gst_structure_get_int(s[0], "region-height", &rh));
+  ASSERT_TRUE(gst_structure_get_boolean(s[0], "region-tracks-peak", &tracking));
+  EXPECT_TRUE(tracking);
+  EXPECT_EQ(rw, 5);
+  EXPECT_EQ(rh, 5);
+  EXPECT_EQ(rx, px - 2);
+  EXPECT_EQ(ry, py - 2);
+  // The region lies in the spot: its median is the spot's, 1400 degC, not the plate's.
+  EXPECT_NEAR(field_double(s[0], "region-median-c"), 1400, 30);
+  free_all(s);
+  g_object_set(element, "region-tracks-peak", FALSE, nullptr);
+  run(planes, w, h, GST_SECOND);
+  s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  ASSERT_TRUE(gst_structure_get_int(s[0], "region-x", &rx));
+  ASSERT_TRUE(gst_structure_get_boolean(s[0], "region-tracks-peak", &tracking));
+  EXPECT_EQ(rx, 0);
+  EXPECT_FALSE(tracking);
+  EXPECT_NEAR(field_double(s[0], "region-median-c"), 1000, 30);
+  free_all(s);
+  EXPECT_TRUE(warnings.empty());
+}
+
+TEST_F(RatioTemp, peak_window_larger_than_the_frame_warns_once_and_gives_no_peak) {
+  const int w = 24, h = 16;
+  start("ratiotemp name=rt0 stats-interval=1 peak-window=17 model=" + rgb_model_path(),
+        bands_caps(3, "bayer", w, h));
+  const auto planes = plate_with_spot_and_outlier(w, h);
+  run(planes, w, h, 0);
+  run(planes, w, h, GST_SECOND);
+  auto s = stats();
+  ASSERT_EQ(s.size(), 2u);
+  for (const GstStructure* m : s) {
+    EXPECT_FALSE(gst_structure_has_field(m, "peak-c"));
+    EXPECT_TRUE(gst_structure_has_field(m, "median-c"));
+  }
+  free_all(s);
+  ASSERT_EQ(warnings.size(), 1u);  // once, not per message
+  EXPECT_NE(warnings[0].find("rt0"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("peak-window 17"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("24x16"), std::string::npos) << warnings[0];
+  // A window that fits again: the peak is back.
+  g_object_set(element, "peak-window", 15u, nullptr);
+  run(planes, w, h, 2 * GST_SECOND);
+  s = stats();
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_TRUE(gst_structure_has_field(s[0], "peak-c"));
+  free_all(s);
+}
+
+}  // namespace
+}  // namespace pyrocam::test
