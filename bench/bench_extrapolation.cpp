@@ -90,6 +90,8 @@ int main(int argc, char** argv) {
                                    : LeakTerms::kSelect;
     else if (key == "leak_test_level")
       ro.leak_test_level = value;
+    else if (key == "fine_leak_spacing_nm")
+      ro.fine_leak_spacing_nm = value;
     else if (key == "leverage") {
       if (value == 0) ro.use_temperatures_c.clear();
     } else {
@@ -159,10 +161,14 @@ int main(int argc, char** argv) {
         for (double v : e) std::printf(" %6.1f", v);
         for (std::size_t i = 0; i < temps.size(); ++i) sum[i] += e[i], sum2[i] += e[i] * e[i];
         if (coverage) {
+          const double furnace_top =
+              *std::max_element(data.temperatures_c.begin(), data.temperatures_c.end());
           const std::vector<double> u = qe_model_uncertainty(
               model, fit.posterior, temps,
-              prior_sensitivity_fits(profile, data, holding_leak_decision(options, fit)));
-          const std::vector<double> u_posterior = qe_model_uncertainty(model, fit.posterior, temps);
+              prior_sensitivity_fits(profile, data, holding_leak_decision(options, fit)),
+              furnace_top);
+          const std::vector<double> u_posterior =
+              qe_model_uncertainty(model, fit.posterior, temps, {}, furnace_top);
           // The emissivity term ratiotemp adds by default (e-slope-uncertainty 1 %/100 nm): the
           // reading of a grey-assuming model for rates with that slope.
           const Eigen::MatrixXd tilted =

@@ -56,7 +56,7 @@ TEST_F(FitChoices, calibrate_selects_keeps_or_drops_the_leak_terms) {
     return leak_terms_in(calibrate("leak-" + how, "--solver regularised --leak-terms " + how));
   };
   // Kept or dropped as told, without a test to report.
-  EXPECT_EQ(leak_terms("keep"), "kept");
+  EXPECT_EQ(leak_terms("keep"), "kept (bumps every 10 nm)");
   EXPECT_EQ(leak_terms("drop"), "dropped");
   // Selected: the decision with the test's figures.
   const std::string selected = leak_terms("select");

@@ -10,6 +10,7 @@
 // met, that they do not get worse than measured when this test was written.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -50,7 +51,8 @@ Figures evaluate(const std::string& profile_name, bool references, int units) {
     const std::vector<double> u = qe_model_uncertainty(
         model, fit.posterior, temps,
         references ? std::vector<QeSample>{}
-                   : prior_sensitivity_fits(p, data, holding_leak_decision(options, fit)));
+                   : prior_sensitivity_fits(p, data, holding_leak_decision(options, fit)),
+        *std::max_element(data.temperatures_c.begin(), data.temperatures_c.end()));
     // The default emissivity term: the reading of a grey-assuming model for rates with the
     // model's default slope uncertainty.
     const Eigen::MatrixXd tilted =

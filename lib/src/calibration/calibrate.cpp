@@ -143,7 +143,8 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
 
   m.uncertainty = uncertainty_model(m, t_c, rates, opt, progress, references, qe.leak_terms);
   m.uncertainty.u_qe_model_c =
-      qe_model_uncertainty(m.camera, qe.posterior, m.uncertainty.temperature_c, qe.prior_fits);
+      qe_model_uncertainty(m.camera, qe.posterior, m.uncertainty.temperature_c, qe.prior_fits,
+                           *std::max_element(t_c.begin(), t_c.end()));
   for (std::size_t r = 0; r < references.size(); ++r) {
     ReferenceCheck check{references[r].name, references[r].temperature_c,
                          references[r].temperature_uncertainty_c};

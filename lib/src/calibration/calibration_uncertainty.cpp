@@ -21,17 +21,23 @@ constexpr double kWellExposedDn = 150;
 // What a prior fit's reading change is worth as a term: it changes sign where the fit's curve
 // crosses the nominal one, and an accident of that crossing is no knowledge. So the term never
 // shrinks going away from the temperature where it is least (the furnace range, where the data
-// hold every fit): at each temperature the largest value between there and it. NaN (no reading
-// there) neither counts nor changes.
-void outward_envelope(const std::vector<double>& temperatures_c, std::vector<double>& term) {
+// hold every fit; sought at or below `hottest`, the furnace's top, where any is): at each
+// temperature the largest value between there and it. NaN (no reading there) neither counts
+// nor changes.
+void outward_envelope(const std::vector<double>& temperatures_c, std::vector<double>& term,
+                      double hottest) {
   std::vector<std::size_t> order;
   for (std::size_t i = 0; i < term.size(); ++i)
     if (std::isfinite(term[i])) order.push_back(i);
   if (order.empty()) return;
   std::sort(order.begin(), order.end(),
             [&](std::size_t a, std::size_t b) { return temperatures_c[a] < temperatures_c[b]; });
+  // Sorted: the candidates are a prefix.
+  auto end = std::find_if(order.begin(), order.end(),
+                          [&](std::size_t i) { return temperatures_c[i] > hottest; });
+  if (end == order.begin()) end = order.end();
   const auto least =
-      std::min_element(order.begin(), order.end(),
+      std::min_element(order.begin(), end,
                        [&](std::size_t a, std::size_t b) { return term[a] < term[b]; }) -
       order.begin();
   for (std::ptrdiff_t k = least + 1; k < static_cast<std::ptrdiff_t>(order.size()); ++k)
@@ -45,7 +51,8 @@ void outward_envelope(const std::vector<double>& temperatures_c, std::vector<dou
 std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
                                          const std::vector<QeSample>& posterior,
                                          const std::vector<double>& temperatures_c,
-                                         const std::vector<QeSample>& prior_fits) {
+                                         const std::vector<QeSample>& prior_fits,
+                                         double hottest_calibrated_c) {
   std::vector<double> u;
   if (posterior.size() < 2) return u;
   const double lo = *std::min_element(temperatures_c.begin(), temperatures_c.end());
@@ -81,11 +88,11 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
       if (std::isfinite(d)) prior.back() = std::max(prior.back(), std::abs(d));
     }
   }
-  outward_envelope(temperatures_c, prior);
+  outward_envelope(temperatures_c, prior, hottest_calibrated_c);
   for (std::size_t i = 0; i < spread.size(); ++i) u.push_back(std::hypot(spread[i], prior[i]));
   // The samples' readings pivot too, about as the furnace's top holds them (hostile colour
   // unit 1: a spread of 1.08 degC at 1100 degC, 0.86 at 1200), and a pivot is no knowledge.
-  outward_envelope(temperatures_c, u);
+  outward_envelope(temperatures_c, u, hottest_calibrated_c);
   // Where no sample reads (the cold end of a 5x5 model's range, where some band is dim even in
   // a well exposed pixel) the nearest temperature's value: a model holds a number at every
   // temperature of its table (a NaN would make it unreadable), and pixels read there from

@@ -255,12 +255,17 @@ std::string leak_terms_summary(const QeFitResult& fit) {
   if (fit.solver != QeSolver::kRegularised) return "";
   const QeFitDiagnostics& d = fit.diagnostics;
   std::string text = d.leak_terms ? "kept" : "dropped";
+  char bumps[64] = "";
+  if (d.leak_terms && std::isfinite(d.leak_spacing_nm))
+    std::snprintf(bumps, sizeof bumps, "bumps every %.0f nm", d.leak_spacing_nm);
   if (std::isfinite(d.leak_chi2_gain)) {
-    char figures[160];
-    std::snprintf(figures, sizeof figures, " (chi2 gain %.1f %s %.1f, %d amplitudes)",
+    char figures[200];
+    std::snprintf(figures, sizeof figures, " (chi2 gain %.1f %s %.1f, %d amplitudes%s%s)",
                   d.leak_chi2_gain, d.leak_terms ? ">" : "<=", d.leak_chi2_threshold,
-                  d.leak_amplitudes);
+                  d.leak_amplitudes, *bumps ? "; fitted with " : "", bumps);
     text += figures;
+  } else if (*bumps) {
+    text += std::string(" (") + bumps + ")";
   }
   return text;
 }

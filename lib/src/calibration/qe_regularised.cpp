@@ -161,15 +161,21 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
                                const RegularisedOptions& options) {
   const auto start = Clock::now();
   const Problem p = prepare(profile, data);
-  RegularisedOptions without = options;
+  RegularisedOptions without = options, fine = options;
   without.leak_sigma = 0;
   without.discrepancy_leak = 0;
+  if (options.fine_leak_spacing_nm > 0 && options.fine_leak_spacing_nm < options.leak_spacing_nm)
+    fine.leak_spacing_nm = options.fine_leak_spacing_nm;
+  const bool refine = fine.leak_spacing_nm != options.leak_spacing_nm && options.leak_sigma > 0;
   const bool leaks = options.leak_sigma > 0 || options.discrepancy_leak > 0;
   QeFitResult r;
   ModelFit f;
-  const RegularisedOptions* chosen = &options;
-  if (!leaks || options.leak_terms == LeakTerms::kKeep) {
+  const RegularisedOptions* chosen = &fine;
+  if (!leaks) {
     f = fit_model(profile, data, p, options);
+    chosen = &options;
+  } else if (options.leak_terms == LeakTerms::kKeep) {
+    f = fit_model(profile, data, p, fine);
   } else if (options.leak_terms == LeakTerms::kDrop) {
     f = fit_model(profile, data, p, without);
     chosen = &without;
@@ -184,12 +190,19 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
     r.diagnostics.leak_chi2_threshold =
         detail::chi2_quantile(std::max(1, with.leak_amplitudes), options.leak_test_level);
     const bool keep = r.diagnostics.leak_chi2_gain > r.diagnostics.leak_chi2_threshold;
-    const int iterations = with.iterations + plain.iterations;
-    f = keep ? std::move(with) : std::move(plain);
+    int iterations = with.iterations + plain.iterations;
+    if (keep && refine) {
+      f = fit_model(profile, data, p, fine);
+      iterations += f.iterations;
+    } else {
+      f = keep ? std::move(with) : std::move(plain);
+    }
     f.iterations = iterations;
     if (!keep) chosen = &without;
   }
-  r.diagnostics.leak_terms = chosen == &options && leaks;
+  r.diagnostics.leak_terms = chosen != &without && leaks;
+  if (r.diagnostics.leak_terms && chosen->leak_sigma > 0)
+    r.diagnostics.leak_spacing_nm = chosen->leak_spacing_nm;
   RegularisedModel model(profile, data, p, f.weighted);
   if (f.delta.size() > 0) model.set_shape_change(shape_change(f.shape, f.delta));
   r.solver = QeSolver::kRegularised;

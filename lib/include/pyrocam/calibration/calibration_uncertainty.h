@@ -3,6 +3,7 @@
 // tolerance (Monte-Carlo refits of the QE with perturbed furnace temperatures).
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "pyrocam/calibration/calibration_outcome.h"
@@ -29,12 +30,15 @@ UncertaintyModel uncertainty_model(const ThermalModel& model, const std::vector<
 // of that reading between `fitted` and the fits of `prior_fits` (prior_sensitivity_fits: the
 // posterior is drawn around one choice of priors, and the data above the furnace range do not
 // tell which is right); that change is taken as its envelope outward from the temperature
-// where it is least, as a crossing of the curves is no knowledge. Small inside the furnace
-// range, growing where the data do not constrain the QE. Empty without samples.
-std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
-                                         const std::vector<QeSample>& posterior,
-                                         const std::vector<double>& temperatures_c,
-                                         const std::vector<QeSample>& prior_fits = {});
+// where it is least, as a crossing of the curves is no knowledge, and so is the whole term
+// (the samples' readings pivot too). That temperature is sought at or below
+// hottest_calibrated_c (the furnace's hottest step) where it is given: above the furnace the
+// term never shrinks going up. Small inside the furnace range, growing where the data do not
+// constrain the QE. Empty without samples.
+std::vector<double> qe_model_uncertainty(
+    const CameraModel& fitted, const std::vector<QeSample>& posterior,
+    const std::vector<double>& temperatures_c, const std::vector<QeSample>& prior_fits = {},
+    double hottest_calibrated_c = std::numeric_limits<double>::infinity());
 
 // |network reading - T| for a graybody whose emissivity has the slope u.emissivity_slope_u or
 // its opposite, the larger of the two, at every u.temperature_c.

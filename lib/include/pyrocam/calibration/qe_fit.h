@@ -67,9 +67,17 @@ struct RegularisedOptions {
   double common_tilt_sigma = 0.05;   // per 100 nm: ND glass, windows (up to +-30 % / 300 nm)
   double edge_shift_sigma_nm = 5.0;  // each pass-band edge of the optical filter
   double furnace_temperature_sigma_c = 1.5;  // true plate temperature against the nominal
-  double leak_spacing_nm = 25;               // bump spacing (and half width)
-  double leak_sigma = 0.05;                  // absolute filter transmission added by a leak
-  double leak_curvature_sigma = 0.01;        // second difference between neighbouring bumps
+  double leak_spacing_nm = 25;               // bump spacing (and half width) of the test
+  // The bumps' spacing (and half width) in the fit that keeps the leak terms; leak_spacing_nm
+  // where 0 or not finer. Leaks next to a filter edge are narrow, and the furnace cannot tell
+  // their width (the data's chi2 changes by 0 to 4 from 25 nm bumps to 10 nm ones on simulated
+  // units) while their width sets how much of the hot range they light: broad bumps spread a
+  // leak away from the edge, where its share of the signal grows faster with temperature. So
+  // kSelect tests for leaks with the broad bumps (fewer amplitudes: a test with more power) and
+  // fits those it keeps with these; kKeep fits with these.
+  double fine_leak_spacing_nm = 10;
+  double leak_sigma = 0.05;            // absolute filter transmission added by a leak
+  double leak_curvature_sigma = 0.01;  // second difference between neighbouring bumps
   // Extrapolation control. A leak bump whose share of a band's signal grows by a factor L from
   // the hottest calibration temperature to the hottest of use_temperatures_c has its prior
   // sigma divided by L: the furnace barely sees it, the high range would depend on it.
@@ -131,6 +139,7 @@ struct QeFitDiagnostics {
   bool leak_terms = false;
   double leak_chi2_gain = NAN, leak_chi2_threshold = NAN;
   int leak_amplitudes = 0;
+  double leak_spacing_nm = NAN;  // the kept leak bumps' spacing; NaN without leak terms
   double wall_time_s = 0;
 };
 
