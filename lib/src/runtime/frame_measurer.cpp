@@ -25,6 +25,7 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
                              : TemperatureEstimator::PartialBands::kOff);
   planes_estimator_.set_emissivity_slope(options.emissivity_slope, options.emissivity_slope_u);
   planes_estimator_.set_analogue_gain(analogue_gain_factor(options.gain_db));
+  if (options.blur_correction) blur_correction_.emplace(*model_, options.demosaic);
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model_->profile().thresholds.inference_saturation_dn;
 }
@@ -122,6 +123,7 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
     demosaic(signal, profile.mosaic, options_.demosaic, planes_, no_signal_dn);
   }
   planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);
+  if (blur_correction_) blur_correction_->apply(temperature_c);
 }
 
 }  // namespace pyrocam

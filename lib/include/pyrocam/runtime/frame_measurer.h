@@ -5,9 +5,11 @@
 #include <cstddef>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "pyrocam/runtime/blur_bias.h"
 #include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/mixed_pixels.h"
@@ -31,6 +33,8 @@ struct MeasureOptions {
   double footprint_spread = 0;
   // The analogue gain the frames were taken with, dB (PlaneEstimator::set_analogue_gain).
   double gain_db = 0;
+  // Subtract the matched kernel's bias on gradients (blur_bias.h); needs matched demosaicking.
+  bool blur_correction = false;
 };
 
 // One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.
@@ -75,6 +79,7 @@ class FrameMeasurer {
   std::shared_ptr<const ThermalModel> model_;
   MeasureOptions options_;
   PlaneEstimator planes_estimator_;
+  std::optional<BlurBiasCorrection> blur_correction_;
   cv::Mat signal_;
   std::vector<cv::Mat> planes_;
 };
