@@ -34,6 +34,7 @@ struct MeasureArgs {
   double gain_db = 0;
   bool allow_partial = false;
   bool uncertainty = false;
+  bool blur_correction = false;  // MeasureOptions::blur_correction
 };
 
 // Truth comparison at the output resolution: only output pixels whose whole input footprint
@@ -134,6 +135,7 @@ MeasureOptions measure_options(const MeasureArgs& a,
   options.uncertainty = a.uncertainty;
   options.misfit_probability = a.misfit_probability;
   options.footprint_spread = a.mixed_pixels;
+  options.blur_correction = a.blur_correction;
   options.allow_partial = a.allow_partial || a.partial_bands == "any";
   options.safe_partial = a.partial_bands == "safe";
   options.emissivity_slope = a.e_slope / 100;
@@ -345,6 +347,11 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
                 "sharp edge; demosaic25 mixed-pixels; 0 = no check, e.g. 0.5)")
       ->check(CLI::Range(0.0, kMaxRelativeSpread))
       ->capture_default_str();
+  c->add_flag("--blur-correction", a.blur_correction,
+              "Matched demosaicking only: subtract the kernel's bias on steep gradients (a "
+              "footprint's mean signal is that of a hotter surface than its mean temperature: "
+              "+180 degC at 150 degC a pixel near 1400 degC), the gradient taken from the "
+              "readings; off by default");
   c->add_option("--saturation", a.saturation, "Raw saturation level, DN (-1: the model's)")
       ->capture_default_str();
   c->add_option("--misfit-probability", a.misfit_probability,

@@ -50,6 +50,8 @@ BRACKET=${BRACKET:-}
 # demosaic25): more of a still pool's hot pixels read, but a moving pool's read wild.
 BRACKET_FUSION=${BRACKET_FUSION:-readings}
 [[ $BRACKET_FUSION == readings || $BRACKET_FUSION == mosaics ]] || { echo "$name: BRACKET_FUSION must be readings or mosaics, not '$BRACKET_FUSION'" >&2; exit 2; }
+BLUR_CORRECTION=${BLUR_CORRECTION:-}
+[[ -z $BLUR_CORRECTION || $BLUR_CORRECTION =~ ^[01]$ ]] || { echo "$name: BLUR_CORRECTION must be 0 or 1, not '$BLUR_CORRECTION'" >&2; exit 2; }
 EXPOSURE_LATENCY=${EXPOSURE_LATENCY:-}
 [[ -z $EXPOSURE_LATENCY || $EXPOSURE_LATENCY =~ ^[0-9]+$ ]] || { echo "$name: EXPOSURE_LATENCY must be a whole number of frames, not '$EXPOSURE_LATENCY'" >&2; exit 2; }
 bracket_frames=0
@@ -111,8 +113,17 @@ fi
 mosaic_fusion=()
 ((bracket_frames == 0)) || [[ $BRACKET_FUSION != mosaics ]] ||
   mosaic_fusion=(mosaicfuse "frames=$bracket_frames" !)
+# BLUR_CORRECTION=1: ratiotemp blur-correction=true (colour camera: the steep sides of a pool
+# read their mean temperature, not hotter); on by default with BRACKET_FUSION=mosaics, whose
+# longest exposures read those sides.
+if [[ -z $BLUR_CORRECTION ]]; then
+  BLUR_CORRECTION=0
+  ((bracket_frames == 0)) || [[ $BRACKET_FUSION != mosaics ]] || BLUR_CORRECTION=1
+fi
+blur_correction=()
+[[ $BLUR_CORRECTION == 1 && $PROFILE != nir5x5-reference ]] && blur_correction=(blur-correction=true)
 thermal_chain=(camera. ! queue ! darksub $DARK ! "${mosaic_fusion[@]}" "${demosaic[@]}" !
-  ratiotemp "model=$MODEL")
+  ratiotemp "model=$MODEL" "${blur_correction[@]}")
 # The temperature overlay (transparent where there is no reading) over the camera's image:
 # link a colour-mapped branch to mix.overlay_sink, then `"${overlay_mix[@]}" ! ...` gives RGBA
 # frames. thermaloverlay pairs each camera frame with the overlay of the same frame and waits for

@@ -24,6 +24,7 @@ constexpr guint64 DEFAULT_STATS_INTERVAL = GST_SECOND;
 constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
 constexpr GstRatioTempPartial DEFAULT_PARTIAL_BANDS = GST_RATIO_TEMP_PARTIAL_SAFE;
 constexpr double DEFAULT_MISFIT_PROBABILITY = 0.0;
+constexpr gboolean DEFAULT_BLUR_CORRECTION = FALSE;
 constexpr double MAX_MISFIT_PROBABILITY = 0.5;
 constexpr guint DEFAULT_PEAK_WINDOW = 5;              // pyrocam::kDefaultPeakWindow
 constexpr guint MAX_PEAK_WINDOW = 255;                // pyrocam::kMaxPeakWindow
@@ -40,6 +41,7 @@ struct Settings {
   gboolean allow_partial = DEFAULT_ALLOW_PARTIAL;  // true: as partial_bands any
   GstRatioTempPartial partial_bands = DEFAULT_PARTIAL_BANDS;
   double misfit_probability = DEFAULT_MISFIT_PROBABILITY;
+  gboolean blur_correction = DEFAULT_BLUR_CORRECTION;
   std::string region_text;   // as set; empty: no region
   bool region_valid = true;  // region_text is empty or parsed into region
   Region region;

@@ -3,11 +3,14 @@
 // one the planes give, byte for byte; other elements get the planes; turning the mixed-pixel
 // check on while playing goes back to the planes; fused caps without what ratiotemp needs are
 // refused.
+#include <cstring>
 #include <string>
 #include <vector>
 
 #include "element_support.h"
 #include "pyrocam-caps.h"
+#include "pyrocam/runtime/blur_bias.h"
+#include "pyrocam/runtime/model.h"
 
 namespace pyrocam::test {
 namespace {
@@ -72,6 +75,41 @@ TEST(FusedPath, demosaic25_and_ratiotemp_agree_on_it_and_read_what_the_planes_re
     }
     EXPECT_GT(read, 100u);  // the pools read, so the comparison means something
   }
+}
+
+// blur-correction on the fused path: the library's correction of the frame read without it, the
+// same pixels read; on the planes (where the demosaicking is not known) nothing changes.
+TEST(FusedPath, blur_correction_corrects_the_fused_readings_only) {
+  REQUIRE_ELEMENT("ratiotemp");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const std::string model = test_model_path("test-model-rgb.json");
+  const std::string ratiotemp = "ratiotemp model=" + model;
+  const std::string tail = " ! fakesink name=sink";
+  const auto plain = sink_frames(colour_chain(4) + ratiotemp + tail);
+  const auto corrected = sink_frames(colour_chain(4) + ratiotemp + " blur-correction=true" + tail);
+  const auto planes = sink_frames(colour_chain(4) + "video/x-pyrocam-bands ! " + ratiotemp +
+                                  " blur-correction=true" + tail);
+  ASSERT_EQ(plain.size(), 4u);
+  ASSERT_EQ(corrected.size(), 4u);
+  ASSERT_EQ(planes.size(), 4u);
+  const pyrocam::ThermalModel m = pyrocam::load_model(model);
+  const pyrocam::BlurBiasCorrection blur(m, pyrocam::DemosaicMethod::kMatched);
+  std::size_t changed = 0, read = 0;
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    EXPECT_EQ(planes[i], plain[i]) << "frame " << i;
+    cv::Mat codes(240, 320, CV_16U);
+    ASSERT_EQ(plain[i].size(), codes.total() * 2);
+    std::memcpy(codes.data, plain[i].data(), plain[i].size());
+    const cv::Mat before = codes.clone();
+    blur.apply_codes(codes);
+    ASSERT_EQ(corrected[i].size(), plain[i].size());
+    EXPECT_EQ(std::memcmp(codes.data, corrected[i].data(), plain[i].size()), 0) << "frame " << i;
+    read += static_cast<std::size_t>(cv::countNonZero(before));
+    changed += static_cast<std::size_t>(cv::countNonZero(before != codes));
+    EXPECT_EQ(cv::countNonZero(before), cv::countNonZero(codes));
+  }
+  EXPECT_GT(read, 100u);
+  EXPECT_GT(changed, 10u);  // the pools' sides
 }
 
 TEST(FusedPath, a_queue_between_them_keeps_it) {

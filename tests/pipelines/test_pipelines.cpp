@@ -335,7 +335,8 @@ TEST_F(Record, bracket_records_the_fused_frames) {
   EXPECT_TRUE(recorded.frames == fused.frames);
   EXPECT_FALSE(fused.frames == single.frames) << "the fusion changed nothing: a weak test";
 
-  // BRACKET_FUSION=mosaics: mosaicfuse between darksub and demosaic25 instead.
+  // BRACKET_FUSION=mosaics: mosaicfuse between darksub and demosaic25 instead, and ratiotemp's
+  // blur correction (BLUR_CORRECTION's default there).
   env["BRACKET_FUSION"] = "mosaics";
   env["OUT"] = (dir / "rec-mosaics").string();
   const ScriptRun mosaics = run_script("record.sh", {}, env, log("record-mosaics"), kRunLimit);
@@ -346,7 +347,7 @@ TEST_F(Record, bracket_records_the_fused_frames) {
   const Video fused_mosaics = pull_frames(
       kScene + " bracket=" + bracket + " num-buffers=" + std::to_string(kFrames) + " ! " + kCaps +
       " ! darksub " + kDark + " ! mosaicfuse frames=3 ! demosaic25 ! ratiotemp model=\"" +
-      rgb_model() + "\" ! appsink name=out");
+      rgb_model() + "\" blur-correction=true ! appsink name=out");
   ASSERT_EQ(fused_mosaics.frames.size(), static_cast<std::size_t>(kFrames)) << fused_mosaics.error;
   EXPECT_TRUE(recorded_mosaics.frames == fused_mosaics.frames);
   EXPECT_FALSE(fused_mosaics.frames == fused.frames) << "the same as fusing readings";
