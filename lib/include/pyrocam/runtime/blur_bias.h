@@ -45,6 +45,9 @@ class BlurBiasCorrection {
   void apply_codes(cv::Mat& codes) const;
 
  private:
+  template <class LoadRow, class StoreRow>
+  void correct_rows(int rows, int cols, LoadRow load, StoreRow store) const;
+
   double min_c_ = 0, step_c_ = 1;
   std::vector<double> kappa_;  // per locus sample
   double variance_px2_ = 1;
