@@ -75,7 +75,8 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
   c->add_option("--leak-terms", a.leak_terms,
                 "The regularised QE fit's leaks outside the filter's pass band: select (kept "
                 "only where the furnace data call for them, a chi2 test; fitted to noise they "
-                "read high above the furnace), keep, drop")
+                "read high above the furnace), keep, drop; kept leaks are fitted with bumps "
+                "every 10 nm (a leak next to a filter edge is narrow)")
       ->check(CLI::IsMember({"select", "keep", "drop"}))
       ->capture_default_str();
   c->add_option(
