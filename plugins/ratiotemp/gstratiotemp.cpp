@@ -29,12 +29,8 @@
  * temperatures about equally well. With the lut or mlp method the pixels they cannot read go to
  * the likelihood fit under the same rule.
  *
- * With #GstRatioTemp:blur-correction (default off) the readings on the fused path lose matched
- * demosaicking's bias on steep gradients: a band's signal is close to exponential in
- * temperature, so a footprint across a gradient averages to the signal of a hotter surface than
- * its mean temperature, about 0.5 kappa(T) |grad T|^2 (kappa from the model's locus, about
- * 0.016/degC at 1400 degC: +180 degC at 150 degC a pixel). The gradient is taken from the
- * readings; a corrected pixel reads its footprint's mean temperature.
+ * #GstRatioTemp:blur-correction (default off; the fused path only) subtracts matched
+ * demosaicking's bias on steep gradients: +180 degC at 150 degC a pixel near 1400 degC.
  *
  * With #GstRatioTemp:misfit-probability above 0 (e.g. 1e-6; default 0, off) every reading goes
  * through a band-consistency check: the band signals must be those of a graybody within 1 % of
@@ -154,7 +150,6 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -163,7 +158,6 @@
 #include "pyrocam-meta.h"
 #include "pyrocam/core/noise_model.h"
 #include "pyrocam/core/temperature_codes.h"
-#include "pyrocam/runtime/blur_bias.h"
 #include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/model.h"
 #include "pyrocam/runtime/plane_estimator.h"
@@ -176,39 +170,6 @@ GST_DEBUG_CATEGORY(gst_ratio_temp_debug);
 namespace pg = pyrocam::gst;
 namespace rt = pyrocam::gst::ratiotemp;
 using rt::Settings;
-
-/* Streaming state: the model and its estimators are built in start(), the format in set_caps(),
- * all dropped in stop(). The estimators share the model. */
-struct pyrocam::gst::ratiotemp::State {
-  std::shared_ptr<const pyrocam::ThermalModel> model;
-  std::string model_path;
-  std::unique_ptr<pyrocam::EstimatorSelector> estimators;   // builds and keeps them per method
-  pyrocam::Method method = pyrocam::Method::kMlp;           // in use
-  GstRatioTempMethod method_request = rt::DEFAULT_METHOD;   // the property value it came from
-  GstRatioTempMethod refused_request = rt::DEFAULT_METHOD;  // last property value warned about
-  bool refused = false;
-  bool configured = false;
-  int width = 0, height = 0, bands = 0;
-  GstVideoInfo out_info{};
-  std::vector<cv::Mat> planes;  // headers onto the input buffer
-  // The fused path (demosaic25 linked to this element): the input is the planes' mosaic,
-  // demosaicked here a strip at a time with demosaic25's settings from the caps.
-  bool fused = false;
-  pyrocam::MosaicLayout mosaic_layout;
-  float no_signal_dn = 0;
-  std::optional<pyrocam::BlurBiasCorrection> blur;  // on the fused path (matched demosaicking)
-  bool blur_warned = false;                         // blur-correction asked for off that path
-  cv::Mat temperature_c, uncertainty_c;
-  GstClockTime last_stats = GST_CLOCK_TIME_NONE;
-  guint64 frames = 0;  // since start or the last flush
-  guint region_serial_seen = 0;
-  std::string peak_warned;  // the last peak-window/frame misfit warned about
-  struct TagListUnref {
-    void operator()(GstTagList* t) const { gst_tag_list_unref(t); }
-  };
-  std::unique_ptr<GstTagList, TagListUnref> upstream_tags;  // the last stream tags from upstream
-  std::string pushed_comment;  // the recording comment last pushed downstream; empty: none yet
-};
 
 using rt::State;
 

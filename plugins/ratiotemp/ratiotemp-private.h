@@ -1,18 +1,25 @@
 /* ratiotemp's parts shared by its source files: the property values (ratiotemp-properties.cpp),
  * the formats (ratiotemp-caps.cpp), the statistics message (ratiotemp-stats.cpp), the
- * recording's tags (ratiotemp-tags.cpp) and the element struct; gstratiotemp.cpp has the
- * negotiation, the estimator switching and the streaming. */
+ * recording's tags (ratiotemp-tags.cpp), the element struct and its streaming state;
+ * gstratiotemp.cpp has the negotiation, the estimator switching and the streaming. */
 #pragma once
 
 #include <gst/gst.h>
+#include <gst/video/video.h>
 
+#include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "gstratiotemp.h"
 #include "pyrocam-common.h"
+#include "pyrocam/core/mosaic.h"
+#include "pyrocam/runtime/blur_bias.h"
 #include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/estimators.h"
+#include "pyrocam/runtime/model.h"
 
 GST_DEBUG_CATEGORY_EXTERN(gst_ratio_temp_debug);
 
@@ -61,7 +68,38 @@ inline bool peak_fits(const Settings& settings, int width, int height) {
   return w > 0 && w <= width && w <= height;
 }
 
-struct State;  // streaming state, gstratiotemp.cpp
+/* Streaming state: the model and its estimators are built in start(), the format in set_caps(),
+ * all dropped in stop(). The estimators share the model. */
+struct State {
+  std::shared_ptr<const pyrocam::ThermalModel> model;
+  std::string model_path;
+  std::unique_ptr<pyrocam::EstimatorSelector> estimators;  // builds and keeps them per method
+  pyrocam::Method method = pyrocam::Method::kMlp;          // in use
+  GstRatioTempMethod method_request = DEFAULT_METHOD;      // the property value it came from
+  GstRatioTempMethod refused_request = DEFAULT_METHOD;     // last property value warned about
+  bool refused = false;
+  bool configured = false;
+  int width = 0, height = 0, bands = 0;
+  GstVideoInfo out_info{};
+  std::vector<cv::Mat> planes;  // headers onto the input buffer
+  // The fused path (demosaic25 linked to this element): the input is the planes' mosaic,
+  // demosaicked here a strip at a time with demosaic25's settings from the caps.
+  bool fused = false;
+  pyrocam::MosaicLayout mosaic_layout;
+  float no_signal_dn = 0;
+  std::optional<pyrocam::BlurBiasCorrection> blur;  // on the fused path (matched demosaicking)
+  bool blur_warned = false;                         // blur-correction asked for off that path
+  cv::Mat temperature_c, uncertainty_c;
+  GstClockTime last_stats = GST_CLOCK_TIME_NONE;
+  guint64 frames = 0;  // since start or the last flush
+  guint region_serial_seen = 0;
+  std::string peak_warned;  // the last peak-window/frame misfit warned about
+  struct TagListUnref {
+    void operator()(GstTagList* t) const { gst_tag_list_unref(t); }
+  };
+  std::unique_ptr<GstTagList, TagListUnref> upstream_tags;  // the last stream tags from upstream
+  std::string pushed_comment;  // the recording comment last pushed downstream; empty: none yet
+};
 
 /* The "pyrocam-temperature-stats" element message's structure for a frame's temperatures
  * (CV_32F degC, NaN = no reading) at `pts`, with the settings' region when it is valid. Throws
