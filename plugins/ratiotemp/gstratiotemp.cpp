@@ -264,7 +264,6 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
                                     ") need a pattern and a no-signal-level");
         st.mosaic_layout = pg::layout_for_pattern(pattern);
         st.no_signal_dn = static_cast<float>(level);
-        st.blur.emplace(model, pyrocam::DemosaicMethod::kMatched);
       }))
     return FALSE;
   st.configured = true;
@@ -450,9 +449,14 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
                           ("the region property did not parse"));
   }
   const bool uncertainty = settings.output == GST_RATIO_TEMP_OUTPUT_UNCERTAINTY;
+  // The correction's table is made the first time it is asked for on the fused path.
+  if (settings.blur_correction && st.fused && !st.blur &&
+      !PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "Could not set up the blur correction",
+                       [&] { st.blur.emplace(*st.model, pyrocam::DemosaicMethod::kMatched); }))
+    return GST_FLOW_ERROR;
   const pyrocam::BlurBiasCorrection* blur =
       settings.blur_correction && st.blur ? &*st.blur : nullptr;
-  if (settings.blur_correction && !st.blur && !st.blur_warned) {
+  if (settings.blur_correction && !st.fused && !st.blur_warned) {
     st.blur_warned = true;
     GST_ELEMENT_WARNING(self, STREAM, FORMAT,
                         ("blur-correction needs demosaic25 with method matched or auto on a Bayer "

@@ -196,6 +196,32 @@ TEST_F(FusedHarness, the_mixed_pixel_check_turned_on_while_playing_goes_back_to_
   EXPECT_NE(src_caps_of_demosaic().find(PYROCAM_CAPS_FEATURE_MOSAIC), std::string::npos);
 }
 
+TEST_F(FusedHarness, blur_correction_on_plain_planes_warns_once_and_reads_n) {
+  start(
+      "darksub dark-level=50 ! demosaic25 method=bilinear ! ratiotemp blur-correction=true "
+      "model=" +
+          test_model_path("test-model-rgb.json"),
+      "video/x-bayer,format=rggb,width=16,height=12,framerate=30/1");
+  attach_bus();
+  for (int i = 0; i < 2; ++i) {
+    GstBuffer* out = push_pull_buffer(h, buffer_from(raw_frame()));
+    ASSERT_NE(out, nullptr);
+    gst_buffer_unref(out);
+  }
+  int warnings = 0;
+  while (GstMessage* m = gst_bus_pop_filtered(bus, GST_MESSAGE_WARNING)) {
+    GError* err = nullptr;
+    gchar* debug = nullptr;
+    gst_message_parse_warning(m, &err, &debug);
+    EXPECT_NE(std::string(err->message).find("blur-correction"), std::string::npos) << err->message;
+    ++warnings;
+    g_error_free(err);
+    g_free(debug);
+    gst_message_unref(m);
+  }
+  EXPECT_EQ(warnings, 1);
+}
+
 TEST_F(FusedHarness, fused_bands_without_a_no_signal_level_are_refused_n) {
   start("ratiotemp model=" + test_model_path("test-model-rgb.json"),
         "video/x-pyrocam-bands(memory:PyrocamMosaic),format=F32LE,bands=3,width=8,height=6,"
