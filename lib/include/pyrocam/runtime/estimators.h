@@ -44,9 +44,10 @@ class TemperatureEstimator {
   // Whether the likelihood fit may read a pixel from the bands left when some are saturated,
   // missing or dim (at least two of them): kOff (the default) never, such a pixel has no
   // reading with every method; kSafe when a pair of the bands left has a ratio monotonic over
-  // the model's whole range (decided from the model's locus: for the colour camera green/blue
-  // but not red/green, whose ratio turns over and can pin the fit near its turning point, a
-  // reading that looks right and is not), and when the noise alone leaves that reading within
+  // the model's whole range (decided from the model's locus: the shipped 5x5 camera has many
+  // such pairs, the shipped colour camera none, its three ratios turning over between 1000 and
+  // 1500 degC, where a pair can pin the fit near its turning point, a reading that looks right
+  // and is not), and when the noise alone leaves that reading within
   // kMaxPartialSigmaC (one standard deviation, from the fit's chi2 curvature: a few noisy bands
   // at the dim end of a melt pool otherwise read hundreds of degrees off, within their own
   // uncertainty); kAny with any two. The network and its table always need every band
