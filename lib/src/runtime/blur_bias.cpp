@@ -49,6 +49,9 @@ BlurBiasCorrection::BlurBiasCorrection(const ThermalModel& model, DemosaicMethod
     kappa_[static_cast<std::size_t>(n - 1 - i)] =
         kappa_[static_cast<std::size_t>(std::max<Eigen::Index>(n - 1 - kH, 0))];
   }
+  // The row kernel's copy, with the last value once more for its interpolation's upper corner.
+  row_kappa_.assign(kappa_.begin(), kappa_.end());
+  row_kappa_.push_back(row_kappa_.empty() ? 0.f : row_kappa_.back());
 }
 
 double BlurBiasCorrection::kappa_per_c(double t_c) const {
@@ -138,9 +141,7 @@ void BlurBiasCorrection::correct_rows(int rows, int cols, LoadRow load, StoreRow
   constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
   const auto padded = static_cast<std::size_t>(cols) + 2;
   std::vector<float> buffer(4 * padded, kNan);  // three rows, then the output row
-  std::vector<float> kappa(kappa_.begin(), kappa_.end());
-  kappa.push_back(kappa.empty() ? 0.f : kappa.back());
-  const RowKernel k{kappa.data(), static_cast<float>(min_c_), static_cast<float>(1 / step_c_),
+  const RowKernel k{row_kappa_.data(), static_cast<float>(min_c_), static_cast<float>(1 / step_c_),
                     static_cast<float>(std::max<std::size_t>(kappa_.size(), 1) - 1),
                     static_cast<float>(0.5 * variance_px2_)};
   const std::vector<float> nan_row(padded, kNan);

@@ -49,7 +49,8 @@ class BlurBiasCorrection {
   void correct_rows(int rows, int cols, LoadRow load, StoreRow store) const;
 
   double min_c_ = 0, step_c_ = 1;
-  std::vector<double> kappa_;  // per locus sample
+  std::vector<double> kappa_;     // per locus sample
+  std::vector<float> row_kappa_;  // the same in single precision, and the last one again
   double variance_px2_ = 1;
 };
 
