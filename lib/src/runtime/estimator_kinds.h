@@ -30,5 +30,9 @@ std::unique_ptr<TemperatureEstimator> make_lut_estimator_on_grid(
 // likelihood_estimator.cpp: the fast fit.
 std::unique_ptr<TemperatureEstimator> make_likelihood_estimator(
     std::shared_ptr<const ThermalModel> model);
+// Whether a fit of make_likelihood_estimator reads pixels whose bands all read by the descent
+// (likelihood_descent.h): its model's ratio rises steadily and the two paths agreed when it was
+// made.
+bool likelihood_fit_descends(const TemperatureEstimator& estimator);
 
 }  // namespace pyrocam

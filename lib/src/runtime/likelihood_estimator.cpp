@@ -18,6 +18,7 @@
 #include "pyrocam/core/noise_model.h"
 #include "runtime/estimator_kinds.h"
 #include "runtime/likelihood_bounds.h"
+#include "runtime/likelihood_descent.h"
 #include "runtime/likelihood_kernels.h"
 
 namespace pyrocam {
@@ -250,7 +251,7 @@ class LikelihoodEstimator : public LikelihoodFit {
   static_assert(kMaxCoarse <= kMaxMinimumCandidates);
 
   explicit LikelihoodEstimator(std::shared_ptr<const ThermalModel> model)
-      : LikelihoodFit(std::move(model)) {
+      : LikelihoodFit(std::move(model)), descent_(locus_.rates, rates_.data(), squares_.data()) {
     const ThermalModel& m = *model_;
     const Eigen::Index n = locus_.size();
     Eigen::MatrixXd unit(n, bands_), squares(n, bands_);
@@ -290,11 +291,39 @@ class LikelihoodEstimator : public LikelihoodFit {
       for (int r = 0; r < rank2_; ++r)
         at[pad_ + r] = along2_[static_cast<std::size_t>(r * stride_ + k * kCoarse)];
     }
+    // The descent where it gives the scan's answers on this model's own noisy pixels.
+    descends_ = descent_.usable();
+    const std::vector<double> check =
+        LocusDescent::check_pixels(locus_.rates, shot_gain_, noise_floor_, dim_dn_,
+                                   0.9 * m.profile().thresholds.inference_saturation_dn, 7);
+    for (std::size_t i = 0; descends_ && i < check.size(); i += static_cast<std::size_t>(bands_)) {
+      Weighted px;
+      if (!enough_bands(weigh(&check[i], px), px)) continue;
+      const double a = temperature_c(&check[i]), b = scan(px);
+      descends_ = a == b || (std::isnan(a) && std::isnan(b));
+    }
   }
+
+  bool descends() const { return descends_; }
 
   double temperature_c(const double* s) const override {
     Weighted px;
-    if (!enough_bands(weigh(s, px), px)) return NAN;
+    const int reading = weigh(s, px);
+    if (!enough_bands(reading, px)) return NAN;
+    if (descends_ && reading == bands_) {
+      Eigen::Index at;
+      double c[3];
+      if (descent_.descend(s, px.w, px.ws, px.sss, at, c)) {
+        const Minimum best{at, c[1], c[0], c[2]};
+        return decide(&best, 1, px);
+      }
+    }
+    return scan(px);
+  }
+
+ private:
+  // The scan of the whole locus, exhaustive by its bounds.
+  double scan(const Weighted& px) const {
     // Projections of w*s and w on the factors.
     alignas(32) double p[kMaxRank], q[kMaxRank];
     alignas(32) float pf[kMaxRank], qf[kMaxRank];
@@ -343,7 +372,6 @@ class LikelihoodEstimator : public LikelihoodFit {
     return decide(refined, count, px);
   }
 
- private:
   // A pixel's error bounds with factors whose rows are off by at most `residual` (unit rows)
   // and `residual2` (their squares), |w s| and |w| being ws_norm and w_norm. The rounding
   // allowances are far above what double precision loses on these sums (about 1e-14 relative).
@@ -538,6 +566,8 @@ class LikelihoodEstimator : public LikelihoodFit {
   double residual_[2] = {}, residual2_[2] = {};  // row errors: coarse factors, all factors
   std::vector<double> points_;  // per coarse sample: its factors, then its squares' (padded)
   Eigen::Index pad_ = 0, point_width_ = 0;
+  LocusDescent descent_;
+  bool descends_ = false;
 };
 
 }  // namespace
@@ -545,6 +575,11 @@ class LikelihoodEstimator : public LikelihoodFit {
 std::unique_ptr<TemperatureEstimator> make_likelihood_estimator(
     std::shared_ptr<const ThermalModel> model) {
   return std::make_unique<LikelihoodEstimator>(std::move(model));
+}
+
+bool likelihood_fit_descends(const TemperatureEstimator& estimator) {
+  const auto* fit = dynamic_cast<const LikelihoodEstimator*>(&estimator);
+  return fit && fit->descends();
 }
 
 std::unique_ptr<TemperatureEstimator> make_exhaustive_likelihood_estimator(

@@ -99,17 +99,37 @@ int weigh_bands(const double* __restrict s, int bands, double dim, const double*
   return valid;
 }
 
-// Per pixel, how many of its bands read as weigh_bands decides: counted band after band over
-// the pixels, in single precision (dim_f is the least float whose double is at least the
-// threshold, so the comparison is weigh_bands' own).
+// Per pixel, how many of its bands read as weigh_bands decides, in single precision (dim_f is
+// the least float whose double is at least the threshold, so the comparison is weigh_bands'
+// own). Eight pixels at a time over all bands, in vectors of four that SSE2 has too (a plain loop
+// over the bands' rows compiled to scalar code in both versions).
 PYROCAM_VECTOR_CLONES
 void count_reading_bands(const float* const* planes, int bands, std::size_t from, std::size_t n,
                          float dim_f, std::int32_t* __restrict reading) {
+  typedef float Floats __attribute__((vector_size(16), aligned(4), may_alias));
+  typedef std::int32_t Ints __attribute__((vector_size(16), aligned(4), may_alias));
   constexpr float kInf = std::numeric_limits<float>::infinity();
-  for (std::size_t k = 0; k < n; ++k) reading[k] = 0;
-  for (int b = 0; b < bands; ++b) {
-    const float* __restrict v = planes[b] + from;
-    for (std::size_t k = 0; k < n; ++k) reading[k] += v[k] >= dim_f && v[k] < kInf ? 1 : 0;
+  const Floats dim = {dim_f, dim_f, dim_f, dim_f}, inf = {kInf, kInf, kInf, kInf};
+  std::size_t k = 0;
+  for (; k + 8 <= n; k += 8) {
+    Ints low = {0, 0, 0, 0}, high = low;  // -1 per band that reads (vector comparisons)
+    for (int b = 0; b < bands; ++b) {
+      const float* v = planes[b] + from + k;
+      const Floats x = *reinterpret_cast<const Floats*>(v);
+      const Floats y = *reinterpret_cast<const Floats*>(v + 4);
+      low += (x >= dim) & (x < inf);
+      high += (y >= dim) & (y < inf);
+    }
+    *reinterpret_cast<Ints*>(reading + k) = -low;
+    *reinterpret_cast<Ints*>(reading + k + 4) = -high;
+  }
+  for (; k < n; ++k) {
+    std::int32_t count = 0;
+    for (int b = 0; b < bands; ++b) {
+      const float x = planes[b][from + k];
+      count += x >= dim_f && x < kInf ? 1 : 0;
+    }
+    reading[k] = count;
   }
 }
 

@@ -11,7 +11,12 @@
 
 #include "pyrocam/core/locus.h"
 #include "pyrocam/core/noise_model.h"
+#include "pyrocam/runtime/darksub.h"
+#include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/estimators.h"
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
+#include "runtime/estimator_kinds.h"
 #include "runtime/estimator_test_support.h"
 
 namespace pyrocam::test {
@@ -204,6 +209,51 @@ TEST(LikelihoodEstimator, fast_fit_is_the_exhaustive_fit_near_twin_minima_colour
 
 TEST(LikelihoodEstimator, fast_fit_is_the_exhaustive_fit_near_twin_minima_5x5) {
   expect_same_near_twin_minima(test_model("test-model-nir5x5.json"));
+}
+
+// The 5x5 fit reads pixels whose bands all read by a walk down chi2 from a guess
+// (likelihood_descent.h), which proves no global minimum: on frames of cameras unlike the model
+// (hostile units: moved edges, leaks, sloped ND glass), plates from dim to bright and melt pools
+// with their saturated cores and dim rims, it reads every pixel bit for bit as the exhaustive
+// scan. The colour camera's ratios turn over: its fit scans.
+TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_frames_as_the_exhaustive_fit) {
+  EXPECT_FALSE(likelihood_fit_descends(
+      *make_estimator(test_model("test-model-rgb.json"), Method::kLikelihood)));
+  const auto model = test_model("test-model-nir5x5.json");
+  const CameraProfile& p = model->profile();
+  const auto fast = make_estimator(model, Method::kLikelihood);
+  const auto exhaustive = make_exhaustive_likelihood_estimator(model);
+  ASSERT_TRUE(likelihood_fit_descends(*fast));
+  std::size_t read = 0, no_reading = 0;
+  for (int unit = 1; unit <= 2; ++unit) {
+    Simulator camera(p, UnitPerturbation::parse("hostile", unit), 11 + unit);
+    std::vector<cv::Mat> frames;
+    for (double t : {700.0, 1300.0, 2000.0, 2800.0})
+      for (double level : {100.0, 160.0})  // the brightest band's signal, DN (saturates at 170)
+        frames.push_back(camera.render(plate_scene(255, 135, t), camera.exposure_for(t, level)));
+    for (int i : {1, 4})
+      frames.push_back(
+          camera.render(melt_pool_scene(255, 135, i, 5), camera.exposure_for(1900, 150)));
+    for (const cv::Mat& raw : frames) {
+      cv::Mat signal;
+      subtract_dark_level(raw, p.dark_offset_dn, p.thresholds.inference_saturation_dn, signal);
+      std::vector<cv::Mat> planes;
+      demosaic(signal, p.mosaic, DemosaicMethod::kBinCells, planes);
+      std::vector<const float*> rows;
+      for (const cv::Mat& plane : planes) rows.push_back(plane.ptr<float>());
+      const std::size_t n = planes[0].total();
+      std::vector<float> a(n), e(n);
+      fast->estimate(rows.data(), n, a.data());
+      exhaustive->estimate(rows.data(), n, e.data());
+      for (std::size_t k = 0; k < n; ++k) {
+        ASSERT_TRUE(a[k] == e[k] || (std::isnan(a[k]) && std::isnan(e[k])))
+            << "unit " << unit << ", pixel " << k << ": fast " << a[k] << ", exhaustive " << e[k];
+        ++(std::isnan(e[k]) ? no_reading : read);
+      }
+    }
+  }
+  EXPECT_GT(read, 4000u);  // both decisions exercised
+  EXPECT_GT(no_reading, 500u);
 }
 
 TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {

@@ -1,0 +1,104 @@
+// The likelihood fit's short path (see likelihood_descent.h).
+#include "runtime/likelihood_descent.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "runtime/likelihood_kernels.h"
+
+namespace pyrocam {
+
+namespace {
+// A walk that has not settled after this many steps is left to the scan (two on most pixels).
+constexpr int kMaxSteps = 12;
+// The farthest jump to a parabola's vertex, and the step where chi2 curves the other way.
+constexpr double kMaxJump = 200;
+constexpr Eigen::Index kConcaveStep = 20;
+// Cells of the first guess's table: about a third of a sample each on the 5x5 camera.
+constexpr std::size_t kGuesses = 8192;
+}  // namespace
+
+LocusDescent::LocusDescent(const Eigen::MatrixXd& rates, const double* m, const double* m2)
+    : m_(m), m2_(m2), bands_(static_cast<int>(rates.cols())), samples_(rates.rows()) {
+  if (bands_ < 3 || samples_ < 3) return;
+  // How fast each band brightens in the middle of the range; the faster half against the rest.
+  const Eigen::Index mid = samples_ / 2;
+  std::vector<double> slope(static_cast<std::size_t>(bands_));
+  for (int b = 0; b < bands_; ++b)
+    slope[static_cast<std::size_t>(b)] = std::log(rates(mid + 1, b) / rates(mid - 1, b));
+  std::vector<double> sorted = slope;
+  std::nth_element(sorted.begin(), sorted.begin() + bands_ / 2, sorted.end());
+  const double median = sorted[static_cast<std::size_t>(bands_ / 2)];
+  if (!std::isfinite(median)) return;
+  fast_.resize(slope.size());
+  int fast_count = 0;
+  for (std::size_t b = 0; b < slope.size(); ++b) {
+    fast_[b] = slope[b] > median ? 1 : 0;
+    fast_count += slope[b] > median;
+  }
+  if (fast_count == 0 || fast_count == bands_) return;
+  std::vector<double> log_ratio(static_cast<std::size_t>(samples_));
+  for (Eigen::Index i = 0; i < samples_; ++i) {
+    const double fast = rates.row(i) * Eigen::Map<const Eigen::VectorXd>(fast_.data(), bands_);
+    const double r = std::log(fast / (rates.row(i).sum() - fast));
+    if (!std::isfinite(r) || (i > 0 && !(r > log_ratio[static_cast<std::size_t>(i - 1)]))) return;
+    log_ratio[static_cast<std::size_t>(i)] = r;
+  }
+  first_log_ = log_ratio.front();
+  per_log_ = (kGuesses - 1) / (log_ratio.back() - first_log_);
+  guess_.resize(kGuesses);
+  for (std::size_t j = 0; j < guess_.size(); ++j)
+    guess_[j] = std::lower_bound(log_ratio.begin(), log_ratio.end(),
+                                 first_log_ + static_cast<double>(j) / per_log_) -
+                log_ratio.begin();
+  usable_ = true;
+}
+
+bool LocusDescent::descend(const double* s, const double* w, const double* ws, double sss,
+                           Eigen::Index& at, double* chi2) const {
+  double fast = 0, all = 0;
+  for (int b = 0; b < bands_; ++b) fast += fast_[static_cast<std::size_t>(b)] * s[b], all += s[b];
+  const double cell = (std::log(fast / (all - fast)) - first_log_) * per_log_;
+  const auto j = cell > 0 ? std::min(static_cast<std::size_t>(cell), guess_.size() - 1) : 0;
+  at = std::clamp<Eigen::Index>(guess_[j], 1, samples_ - 2);
+  const auto row = [&](Eigen::Index i) { return static_cast<std::size_t>(i * bands_); };
+  for (int step = 0; step < kMaxSteps; ++step) {
+    profiled_chi2_three(m_ + row(at - 1), m2_ + row(at - 1), ws, w, bands_, sss, chi2);
+    if (chi2[1] < chi2[0] && chi2[1] <= chi2[2]) return true;
+    const double curvature = chi2[0] - 2 * chi2[1] + chi2[2];
+    const Eigen::Index down = chi2[0] < chi2[2] ? -1 : 1;
+    Eigen::Index jump = down * kConcaveStep;
+    if (curvature > 0) {
+      const double vertex = std::clamp(0.5 * (chi2[0] - chi2[2]) / curvature, -kMaxJump, kMaxJump);
+      jump = static_cast<Eigen::Index>(vertex + (vertex < 0 ? -0.5 : 0.5));  // nearest
+      if (jump == 0) jump = down;
+    }
+    const Eigen::Index next = std::clamp<Eigen::Index>(at + jump, 1, samples_ - 2);
+    if (next == at) return false;  // the minimum is at an end of the locus
+    at = next;
+  }
+  return false;
+}
+
+std::vector<double> LocusDescent::check_pixels(const Eigen::MatrixXd& rates,
+                                               const double* shot_gain, const double* floor,
+                                               double dim, double bright, Eigen::Index every) {
+  const Eigen::Index bands = rates.cols();
+  std::vector<double> pixels;
+  std::uint64_t state = 20251127;
+  const auto noise = [&] {  // uniform with variance 1, a fixed portable sequence
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (static_cast<double>(state >> 11) / 9007199254740992.0 * 2 - 1) * std::sqrt(3.0);
+  };
+  for (Eigen::Index i = every / 2; i < rates.rows(); i += every) {
+    const double top = rates.row(i).maxCoeff();
+    for (const double peak : {3 * dim, std::sqrt(3 * dim * bright), bright})
+      for (Eigen::Index b = 0; b < bands; ++b) {
+        const double signal = peak * rates(i, b) / top;
+        pixels.push_back(signal + noise() * std::sqrt(shot_gain[b] * signal + floor[b]));
+      }
+  }
+  return pixels;
+}
+
+}  // namespace pyrocam

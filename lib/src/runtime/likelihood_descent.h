@@ -1,0 +1,54 @@
+// The likelihood fit's short path for pixels whose bands all read (likelihood_estimator.cpp): a
+// first guess from a ratio of two band sums, then a walk down chi2 along the locus.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace pyrocam {
+
+// chi2(T) of a pixel whose bands all read has one minimum near the locus when the camera's
+// spectra change shape steadily with temperature (the 5x5 camera's 25 bands). There the
+// exhaustive scan's answer is the 1 degC sample whose chi2 is below both neighbours' that a walk
+// from a good guess reaches: the ratio of the sums of the bands that brighten fastest and of the
+// others, which rises steadily with temperature, read on the locus. The walk jumps to the vertex
+// of the parabola through three samples and stops at a sample below its neighbours: two steps on
+// most pixels, whatever the scene. Where this ratio does not rise steadily (the colour camera's
+// three bands turn over), the descent is not usable. It proves no global minimum: the estimator
+// checks it against the scan on its own model when it is made (check_pixels) and keeps the
+// scan where they differ.
+class LocusDescent {
+ public:
+  // rates (samples x bands, DN/s) and the fit's tables of m and m^2, row after row.
+  LocusDescent(const Eigen::MatrixXd& rates, const double* m, const double* m2);
+
+  bool usable() const { return usable_; }
+
+  // The sample `at` below both neighbours (chi2 at at - 1, at, at + 1 into chi2), reached from
+  // the guess of signals s (every band read; ws = w s, sss = sum w s^2); false where the walk
+  // meets an end of the locus or does not settle (the caller scans instead).
+  bool descend(const double* s, const double* w, const double* ws, double sss, Eigen::Index& at,
+               double* chi2) const;
+
+  // Pixels that the estimator reads both ways when it is made: along the whole locus every
+  // `every` samples, the brightest band at three levels from just above `dim` to `bright` DN,
+  // with noise of the fit's model (shot gain and floor per band) drawn from a fixed sequence.
+  // Pixel after pixel.
+  static std::vector<double> check_pixels(const Eigen::MatrixXd& rates, const double* shot_gain,
+                                          const double* floor, double dim, double bright,
+                                          Eigen::Index every);
+
+ private:
+  const double* m_;
+  const double* m2_;
+  int bands_;
+  Eigen::Index samples_;
+  std::vector<double> fast_;  // per band: 1 where it brightens faster than the median band
+  // The first guess: the sample where the ratio of fast to other bands' sums reaches log ratio
+  // first_log_ + j / per_log_ (lower bound on the locus), j < kGuesses.
+  std::vector<Eigen::Index> guess_;
+  double first_log_ = 0, per_log_ = 0;
+  bool usable_ = false;
+};
+
+}  // namespace pyrocam
