@@ -48,9 +48,10 @@ LocusDescent::LocusDescent(const Eigen::MatrixXd& rates, const double* m, const 
   per_log_ = (kGuesses - 1) / (log_ratio.back() - first_log_);
   guess_.resize(kGuesses);
   for (std::size_t j = 0; j < guess_.size(); ++j)
-    guess_[j] = std::lower_bound(log_ratio.begin(), log_ratio.end(),
-                                 first_log_ + static_cast<double>(j) / per_log_) -
-                log_ratio.begin();
+    guess_[j] =
+        static_cast<std::int32_t>(std::lower_bound(log_ratio.begin(), log_ratio.end(),
+                                                   first_log_ + static_cast<double>(j) / per_log_) -
+                                  log_ratio.begin());
   usable_ = true;
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 namespace pyrocam {
@@ -46,7 +47,7 @@ class LocusDescent {
   std::vector<double> fast_;  // per band: 1 where it brightens faster than the median band
   // The first guess: the sample where the ratio of fast to other bands' sums reaches log ratio
   // first_log_ + j / per_log_ (lower bound on the locus), j < kGuesses.
-  std::vector<Eigen::Index> guess_;
+  std::vector<std::int32_t> guess_;  // int32: half the cache of an index
   double first_log_ = 0, per_log_ = 0;
   bool usable_ = false;
 };
