@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "detail/portable_math.h"
 #include "runtime/likelihood_kernels.h"
 
 namespace pyrocam {
@@ -25,7 +26,7 @@ LocusDescent::LocusDescent(const Eigen::MatrixXd& rates, const double* m, const 
   const Eigen::Index mid = samples_ / 2;
   std::vector<double> slope(static_cast<std::size_t>(bands_));
   for (int b = 0; b < bands_; ++b)
-    slope[static_cast<std::size_t>(b)] = std::log(rates(mid + 1, b) / rates(mid - 1, b));
+    slope[static_cast<std::size_t>(b)] = portable::log(rates(mid + 1, b) / rates(mid - 1, b));
   std::vector<double> sorted = slope;
   std::nth_element(sorted.begin(), sorted.begin() + bands_ / 2, sorted.end());
   const double median = sorted[static_cast<std::size_t>(bands_ / 2)];
@@ -40,7 +41,7 @@ LocusDescent::LocusDescent(const Eigen::MatrixXd& rates, const double* m, const 
   std::vector<double> log_ratio(static_cast<std::size_t>(samples_));
   for (Eigen::Index i = 0; i < samples_; ++i) {
     const double fast = rates.row(i) * Eigen::Map<const Eigen::VectorXd>(fast_.data(), bands_);
-    const double r = std::log(fast / (rates.row(i).sum() - fast));
+    const double r = portable::log(fast / (rates.row(i).sum() - fast));
     if (!std::isfinite(r) || (i > 0 && !(r > log_ratio[static_cast<std::size_t>(i - 1)]))) return;
     log_ratio[static_cast<std::size_t>(i)] = r;
   }
@@ -59,8 +60,9 @@ bool LocusDescent::descend(const double* s, const double* w, const double* ws, d
                            Eigen::Index& at, double* chi2) const {
   double fast = 0, all = 0;
   for (int b = 0; b < bands_; ++b) fast += fast_[static_cast<std::size_t>(b)] * s[b], all += s[b];
-  const double cell = (std::log(fast / (all - fast)) - first_log_) * per_log_;
-  const auto j = cell > 0 ? std::min(static_cast<std::size_t>(cell), guess_.size() - 1) : 0;
+  const double cell = (portable::log(fast / (all - fast)) - first_log_) * per_log_;
+  const double last = static_cast<double>(guess_.size() - 1);
+  const auto j = cell > 0 ? static_cast<std::size_t>(std::min(cell, last)) : 0;  // NaN: 0
   at = std::clamp<Eigen::Index>(guess_[j], 1, samples_ - 2);
   const auto row = [&](Eigen::Index i) { return static_cast<std::size_t>(i * bands_); };
   for (int step = 0; step < kMaxSteps; ++step) {

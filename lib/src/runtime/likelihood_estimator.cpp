@@ -105,10 +105,11 @@ class LikelihoodFit : public TemperatureEstimator {
 
   // A pixel's signals as the fit uses them: inverse noise variances w (0 drops a band:
   // saturated, NaN or dim; the rest still fix the temperature), w*s (0 for a dropped band) and
-  // sum w s^2.
+  // sum w s^2; whether every band reads.
   struct Weighted {
     double w[kMaxBands], ws[kMaxBands];
     double sss;
+    bool complete;
   };
 
   void set_analogue_gain(double factor) override {
@@ -145,12 +146,11 @@ class LikelihoodFit : public TemperatureEstimator {
     return false;
   }
 
-  bool all_bands(const Weighted& px) const {
-    return std::all_of(px.w, px.w + bands_, [](double w) { return w != 0.0; });
-  }
-
   int weigh(const double* s, Weighted& px) const {
-    return weigh_bands(s, bands_, dim_dn_, shot_gain_, noise_floor_, px.w, px.ws, &px.sss);
+    const int reading =
+        weigh_bands(s, bands_, dim_dn_, shot_gain_, noise_floor_, px.w, px.ws, &px.sss);
+    px.complete = reading == bands_;
+    return reading;
   }
 
   // chi2 at locus sample i.
@@ -182,7 +182,7 @@ class LikelihoodFit : public TemperatureEstimator {
     const double step = locus_.temperature_c[1] - locus_.temperature_c[0];
     // A safe partial reading must also be precise: chi2 rises by 1 at one standard deviation,
     // so with the curvature denom / step^2 the noise alone leaves sqrt(2 / curvature).
-    if (partial_ == PartialBands::kSafe && !all_bands(px) &&
+    if (partial_ == PartialBands::kSafe && !px.complete &&
         !(denom > 0 && step * std::sqrt(2 / denom) <= kMaxPartialSigmaC))
       return NAN;
     return in_range(locus_.temperature_c[best] + std::clamp(offset, -1.0, 1.0) * step);
@@ -310,7 +310,7 @@ class LikelihoodEstimator : public LikelihoodFit {
     Weighted px;
     const int reading = weigh(s, px);
     if (!enough_bands(reading, px)) return NAN;
-    if (descends_ && reading == bands_) {
+    if (descends_ && px.complete) {
       Eigen::Index at;
       double c[3];
       if (descent_.descend(s, px.w, px.ws, px.sss, at, c)) {
