@@ -256,6 +256,50 @@ TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_frames_as_the_exhaustive_fi
   EXPECT_GT(no_reading, 500u);
 }
 
+// Pixels far off the locus, where chi2 could have two minima and the walk stop at the wrong
+// one: mixtures of two temperatures (edge pixels), every band off by up to +-100 % with spikes
+// (a camera unlike the model), and spectra spliced from two temperatures band by band. The
+// 5x5 fit reads each as the exhaustive scan, bit for bit, with the same no-reading decisions.
+TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_off_locus_pixels_as_the_exhaustive_fit) {
+  const auto model = test_model("test-model-nir5x5.json");
+  const ThermalModel& m = *model;
+  const int bands = m.profile().band_count();
+  const auto fast = make_estimator(model, Method::kLikelihood);
+  const auto exhaustive = make_exhaustive_likelihood_estimator(model);
+  std::uint64_t state = 4242;
+  auto uniform = [&] {  // a fixed, portable sequence in [0, 1)
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  const double dim = m.profile().thresholds.inference_dim_dn;
+  const double saturated = saturation_signal_dn(m);
+  std::size_t pixels = 0, read = 0, disagree = 0;
+  for (int i = 0; i < 30000; ++i) {
+    const double t1 = 550 + 2900 * uniform(), t2 = 550 + 2900 * uniform();
+    const Eigen::VectorXd a = m.camera.rates(t1) / m.camera.rates(t1).maxCoeff();
+    const Eigen::VectorXd b = m.camera.rates(t2) / m.camera.rates(t2).maxCoeff();
+    Eigen::VectorXd s(bands);
+    const double f = uniform(), spread = i % 3 == 1 ? uniform() : 0;
+    for (int k = 0; k < bands; ++k) {
+      if (i % 3 == 0) s[k] = (1 - f) * a[k] + f * b[k];                      // mixture
+      if (i % 3 == 1) s[k] = a[k] * (1 + spread * (2 * uniform() - 1));      // distorted
+      if (i % 3 == 2) s[k] = uniform() < 0.5 ? a[k] : (0.1 + 3 * f) * b[k];  // spliced
+    }
+    if (i % 7 == 0) s[i % bands] *= 3;  // a spike
+    s *= (0.25 + 0.7 * uniform()) * saturated / s.maxCoeff();
+    if (!(s.minCoeff() >= dim)) continue;  // every band reads: the walk's pixels
+    ++pixels;
+    const double x = fast->temperature_c(s.data()), e = exhaustive->temperature_c(s.data());
+    read += !std::isnan(e);
+    if (!(x == e || (std::isnan(x) && std::isnan(e))) && ++disagree < 10)
+      ADD_FAILURE() << "pixel " << i << ": fast " << x << ", exhaustive " << e;
+  }
+  EXPECT_EQ(disagree, 0u);
+  EXPECT_GT(pixels, 5000u);
+  EXPECT_GT(read, pixels / 2);
+  EXPECT_LT(read, pixels);  // some are no reading (an end of the range)
+}
+
 TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {
   const auto fast = make_estimator(test_model("test-model-nir5x5.json"), Method::kLikelihood);
   fast->set_allow_partial(true);
