@@ -238,7 +238,9 @@ class ExhaustiveLikelihoodEstimator : public LikelihoodFit {
 //    bound is not above the least upper bound can be the best, and only they are evaluated
 //    exactly.
 // So the answer and the no-reading decisions are those of the exhaustive scan by construction
-// (the unit tests compare both on noisy pixels, with saturated, dim and NaN bands).
+// (the unit tests compare both on noisy pixels, with saturated, dim and NaN bands). Pixels whose
+// bands all read take the descent instead where it is usable (likelihood_descent.h): the same
+// answers by comparison, when the fit is made and in the tests, not by construction.
 class LikelihoodEstimator : public LikelihoodFit {
  public:
   // Row error left by the factors (rows have unit length): coarse (single precision sums are
