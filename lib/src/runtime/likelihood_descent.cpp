@@ -93,13 +93,26 @@ std::vector<double> LocusDescent::check_pixels(const Eigen::MatrixXd& rates,
     state = state * 6364136223846793005ULL + 1442695040888963407ULL;
     return (static_cast<double>(state >> 11) / 9007199254740992.0 * 2 - 1) * std::sqrt(3.0);
   };
+  const double middle = std::sqrt(3 * dim * bright);
+  Eigen::VectorXd off(bands);
   for (Eigen::Index i = every / 2; i < rates.rows(); i += every) {
-    const double top = rates.row(i).maxCoeff();
-    for (const double peak : {3 * dim, std::sqrt(3 * dim * bright), bright})
+    const Eigen::VectorXd at = rates.row(i).transpose() / rates.row(i).maxCoeff();
+    for (const double peak : {3 * dim, middle, bright})
       for (Eigen::Index b = 0; b < bands; ++b) {
-        const double signal = peak * rates(i, b) / top;
+        const double signal = peak * at[b];
         pixels.push_back(signal + noise() * std::sqrt(shot_gain[b] * signal + floor[b]));
       }
+    // Off the locus, where chi2 may have two minima: half this temperature's light and half
+    // another's (an edge pixel), and every band off by up to +-50 % (a camera unlike the model).
+    const Eigen::Index j = (i * 7919 + 13) % rates.rows();
+    off = at + rates.row(j).transpose() / rates.row(j).maxCoeff();
+    for (int kind = 0; kind < 2; ++kind) {
+      if (kind == 1)
+        for (Eigen::Index b = 0; b < bands; ++b)
+          off[b] = at[b] * (1 + 0.5 * noise() / std::sqrt(3.0));
+      off *= middle / off.maxCoeff();
+      pixels.insert(pixels.end(), off.data(), off.data() + bands);
+    }
   }
   return pixels;
 }

@@ -33,8 +33,9 @@ class LocusDescent {
 
   // Pixels that the estimator reads both ways when it is made: along the whole locus every
   // `every` samples, the brightest band at three levels from just above `dim` to `bright` DN,
-  // with noise of the fit's model (shot gain and floor per band) drawn from a fixed sequence.
-  // Pixel after pixel.
+  // with noise of the fit's model (shot gain and floor per band) drawn from a fixed sequence,
+  // and two pixels off the locus (a mixture with another temperature, every band off by up to
+  // +-50 %). Pixel after pixel.
   static std::vector<double> check_pixels(const Eigen::MatrixXd& rates, const double* shot_gain,
                                           const double* floor, double dim, double bright,
                                           Eigen::Index every);
