@@ -4,8 +4,8 @@
  *
  * Automatic exposure for thermal reading. Placed right after the camera (raw mosaic: Bayer,
  * GRAY8 or GRAY16_LE, passed through unchanged), it measures the hottest region of each frame
- * (the #GstAutoExposure:hot-pixels-th brightest raw value: the brightest band of the hottest
- * place, a few hot pixels aside) and sets the camera's `exposure` property (microseconds;
+ * (the #GstAutoExposure:hot-pixels-th brightest raw value; by default the brightest, so that
+ * no sample of a small hot core saturates; raise it past a camera's defective bright pixels) and sets the camera's `exposure` property (microseconds;
  * pyrocamsrc and aravissrc have one) so that this level sits at #GstAutoExposure:target of the
  * way from #GstAutoExposure:dark-level to the saturation level (the caps' saturation-level,
  * else darksub's default, 220/255 of the full scale). A camera's automatic exposure aims at a
@@ -284,9 +284,12 @@ static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, Gst
     GST_ELEMENT_WARNING(
         self, RESOURCE, SETTINGS,
         ("The exposure wanted is outside the camera's range %g..%g us (gain up "
-         "to %g dB): clamped (the hottest region reads %g DN)",
+         "to %g dB): clamped (the hottest region reads %g DN%s)",
          st.controller->settings().min_exposure_us, st.controller->settings().max_exposure_us,
-         st.controller->settings().max_gain_db, level.level_dn),
+         st.controller->settings().max_gain_db, level.level_dn,
+         level.clipped ? ", saturated: if the scene is not that bright, a defective pixel may "
+                         "be; raise hot-pixels past the camera's defective pixels"
+                       : ""),
         ("exposure clamped"));
   }
   st.warned_limit = st.controller->at_limit();
@@ -460,8 +463,8 @@ static void gst_auto_exposure_class_init(GstAutoExposureClass* klass) {
       gobject_class, PROP_HOT_PIXELS,
       g_param_spec_uint("hot-pixels", "Hot pixels",
                         "The level measured is the hot-pixels-th brightest raw value of the "
-                        "frame: about the size in sensor pixels of the smallest hot region to "
-                        "expose for (1..1000000)",
+                        "frame (1: the brightest, so that no sample of a hot core saturates; "
+                        "raise it past the camera's defective bright pixels) (1..1000000)",
                         1, 1000000, DEFAULT_HOT_PIXELS, playing));
   g_object_class_install_property(
       gobject_class, PROP_DARK_LEVEL,
