@@ -5,8 +5,9 @@
  * Automatic exposure for thermal reading. Placed right after the camera (raw mosaic: Bayer,
  * GRAY8 or GRAY16_LE, passed through unchanged), it measures the hottest region of each frame
  * (the #GstAutoExposure:hot-pixels-th brightest raw value; by default the brightest, so that
- * no sample of a small hot core saturates; raise it past a camera's defective bright pixels) and sets the camera's `exposure` property (microseconds;
- * pyrocamsrc and aravissrc have one) so that this level sits at #GstAutoExposure:target of the
+ * no sample of a small hot core saturates; raise it past a camera's defective bright pixels)
+ * and sets the camera's `exposure` property (microseconds; pyrocamsrc and aravissrc have one)
+ * so that this level sits at #GstAutoExposure:target of the
  * way from #GstAutoExposure:dark-level to the saturation level (the caps' saturation-level,
  * else darksub's default, 220/255 of the full scale). A camera's automatic exposure aims at a
  * pleasing picture; this one keeps the object of interest readable: not saturated (no reading) and
