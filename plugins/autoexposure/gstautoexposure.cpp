@@ -249,6 +249,9 @@ static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, Gst
   const std::optional<pyrocam::ExposureSetting> in_effect = st.in_effect->frame_setting(current);
   if (!frame && in_effect)
     pyrocam_buffer_add_exposure_meta(buffer, in_effect->exposure_us, in_effect->gain_db);
+  // A camera on its own automatic exposure (pyrocamsrc's 0) whose frames say what they were
+  // taken with: control starts from there (a fixed start far off it saturated the first frames).
+  if (!(current.exposure_us > 0) && frame && frame->exposure_us > 0) current = *frame;
   if (!(current.exposure_us > 0)) {
     // Not set either (aravissrc's -1): nothing to scale from, so start from a set value.
     const pyrocam::ExposureControlSettings& c = st.controller->settings();
