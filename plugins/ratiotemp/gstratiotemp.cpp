@@ -90,6 +90,10 @@
  * - min-c, max-c, mean-c, median-c (double, degC): of the pixels with a reading; absent when
  *   there are none. Prefer the median for a region's temperature: noise biases the mean of
  *   per-pixel temperatures upward;
+ * - saturated (guint64): pixels without a reading where light saturated a band (a band +INF or
+ *   NaN; fused: within the matched kernels' reach of such a sample). Non-zero: the scene's
+ *   hottest part may be there, and peak-c and max-c are lower bounds; a warning says so the
+ *   first time, and again after statistics without any;
  * - peak-c (double, degC), peak-x, peak-y (int, output pixels): the object's peak, robust to
  *   the wild mixed pixels at sharp edges that make max-c: the largest median of the
  *   #GstRatioTemp:peak-window square windows with at least half their pixels read, and that
@@ -98,13 +102,12 @@
  *   core per 2048x2048 frame at window 5, on the frames that post statistics only;
  * - with #GstRatioTemp:region set: region-x, region-y, region-width, region-height (int, the
  *   region clipped to the frame) and region-pixels, region-valid, region-valid-fraction,
- *   region-min-c, region-max-c, region-mean-c, region-median-c, region-peak-c, region-peak-x,
- *   region-peak-y, as above for the region (windows inside the region; the position still in
- *   frame pixels; no peak for a region narrower than the window).
- * A message is posted for the first frame, then for the first frame whose timestamp is at
- * least the interval after the last posted one (after a flush or a new segment, the next
- * frame). Frames without a timestamp count by the framerate; without either, every frame
- * posts.
+ *   region-min-c, region-max-c, region-mean-c, region-median-c, region-saturated,
+ *   region-peak-c, region-peak-x, region-peak-y, as above for the region (windows inside the
+ * region; the position still in frame pixels; no peak for a region narrower than the window). A
+ * message is posted for the first frame, then for the first frame whose timestamp is at least the
+ * interval after the last posted one (after a flush or a new segment, the next frame). Frames
+ * without a timestamp count by the framerate; without either, every frame posts.
  *
  * Recordings describe themselves: before the first frame, and again when the method, the
  * e-slope or upstream's tags change, the element pushes stream tags downstream: title (the
@@ -409,12 +412,6 @@ static GstClockTime frame_position(const State& st, GstBuffer* buffer) {
                                static_cast<guint64>(fps_n));
 }
 
-static void post_stats(GstRatioTemp* self, const Settings& settings, GstBuffer* buffer) {
-  State& st = *self->state;
-  rt::post_stats(self, settings, st.temperature_c, GST_BUFFER_PTS(buffer), st.method,
-                 st.peak_warned);
-}
-
 static void push_recording_tags(GstRatioTemp* self, const Settings& settings) {
   State& st = *self->state;
   rt::RecordingInfo info;
@@ -483,6 +480,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         if (!st.fused)
           for (int b = 0; b < st.bands; ++b)
             st.planes[static_cast<std::size_t>(b)] = in.plane(b, st.width, st.height);
+        if (stats_due) st.saturated_mask = rt::saturated_mask(st, in.image());
         const pyrocam::PlaneEstimator::MatchedMosaic mosaic{in.image(), st.mosaic_layout,
                                                             st.no_signal_dn};
         pyrocam::PlaneEstimator& chosen = st.estimators->estimator(st.method);
@@ -533,7 +531,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
     return GST_FLOW_ERROR;
   if (stats_due) {
     if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not compute temperature statistics",
-                         [&] { post_stats(self, settings, inbuf); }))
+                         [&] { rt::post_stats(self, settings, st, GST_BUFFER_PTS(inbuf)); }))
       return GST_FLOW_ERROR;
     st.last_stats = position;
   }

@@ -90,6 +90,8 @@ struct State {
   std::optional<pyrocam::BlurBiasCorrection> blur;  // on the fused path (matched demosaicking)
   bool blur_warned = false;                         // blur-correction asked for off that path
   cv::Mat temperature_c, uncertainty_c;
+  cv::Mat saturated_mask;          // on frames with statistics: where light saturated a band
+  bool saturation_warned = false;  // since the last statistics without saturated pixels
   GstClockTime last_stats = GST_CLOCK_TIME_NONE;
   guint64 frames = 0;  // since start or the last flush
   guint region_serial_seen = 0;
@@ -101,16 +103,21 @@ struct State {
   std::string pushed_comment;  // the recording comment last pushed downstream; empty: none yet
 };
 
+/* Where light saturated a band of the input frame (CV_8U, 1 there): from the band planes, or on
+ * the fused path from the mosaic, each saturated sample taking the matched kernels' footprint. */
+cv::Mat saturated_mask(const State& st, const cv::Mat& fused_mosaic);
 /* The "pyrocam-temperature-stats" element message's structure for a frame's temperatures
- * (CV_32F degC, NaN = no reading) at `pts`, with the settings' region when it is valid. Throws
+ * (CV_32F degC, NaN = no reading) at `pts`, with the settings' region when it is valid, and the
+ * pixels without a reading inside `saturated` (a CV_8U mask; empty: no such fields). Throws
  * (from the library) before it allocates anything. The peak fields are there only where
  * peak_fits(). */
-GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& settings,
-                              const GstSegment* segment, GstClockTime pts, Method method);
+GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& saturated,
+                              const Settings& settings, const GstSegment* segment, GstClockTime pts,
+                              Method method);
 /* Posts that structure as an element message, warning once per window and frame size when the
- * user's peak-window does not fit (peak_warned: the last misfit warned about). */
-void post_stats(GstRatioTemp* self, const Settings& settings, const cv::Mat& temperature_c,
-                GstClockTime pts, Method method, std::string& peak_warned);
+ * user's peak-window does not fit (st.peak_warned: the last misfit warned about), and once when
+ * saturated pixels appear (again after statistics without any). */
+void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstClockTime pts);
 
 /* What a recording of the output says about itself (ratiotemp-tags.cpp): pushed downstream as
  * the stream's title and comment before the first frame and again when it changes. */

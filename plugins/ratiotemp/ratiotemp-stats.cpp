@@ -1,6 +1,8 @@
 /* ratiotemp's statistics message: frame and region statistics of the temperatures. */
 #include <algorithm>
+#include <cmath>
 
+#include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/region_stats.h"
 #include "ratiotemp-private.h"
 
@@ -39,8 +41,17 @@ RegionPeak peak_of(const cv::Mat& t, const Settings& settings) {
 
 }  // namespace
 
-GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& settings,
-                              const GstSegment* segment, GstClockTime pts, Method method) {
+cv::Mat saturated_mask(const State& st, const cv::Mat& fused_mosaic) {
+  if (!st.fused) return pyrocam::saturated_band_mask(st.planes);
+  // The fused path demosaics with matched kernels: a square of reach samples.
+  const int side = static_cast<int>(std::lround(std::sqrt(
+      pyrocam::demosaic_sample_reach(st.mosaic_layout, pyrocam::DemosaicMethod::kMatched))));
+  return pyrocam::saturated_sample_mask(fused_mosaic, side / 2);
+}
+
+GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& saturated,
+                              const Settings& settings, const GstSegment* segment, GstClockTime pts,
+                              Method method) {
   GstClockTime stream_time = GST_CLOCK_TIME_NONE, running_time = GST_CLOCK_TIME_NONE;
   if (GST_CLOCK_TIME_IS_VALID(pts) && segment->format == GST_FORMAT_TIME) {
     stream_time = gst_segment_to_stream_time(segment, GST_FORMAT_TIME, pts);
@@ -69,12 +80,22 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& sett
       part_peak = peak_of(temperature_c(r), settings);
     }
   }
+  const bool with_saturated = !saturated.empty();
+  const std::size_t saturated_pixels =
+      with_saturated ? pyrocam::count_without_reading(temperature_c, saturated) : 0;
+  const std::size_t region_saturated =
+      with_saturated && with_region && !r.empty()
+          ? pyrocam::count_without_reading(temperature_c(r), saturated(r))
+          : 0;
   GstStructure* s = gst_structure_new(
       STATS_MESSAGE, "timestamp", G_TYPE_UINT64, static_cast<guint64>(pts), "stream-time",
       G_TYPE_UINT64, static_cast<guint64>(stream_time), "running-time", G_TYPE_UINT64,
       static_cast<guint64>(running_time), "method", G_TYPE_STRING, method_name(method).c_str(),
       "width", G_TYPE_INT, temperature_c.cols, "height", G_TYPE_INT, temperature_c.rows, nullptr);
   set_stats_fields(s, "", whole);
+  if (with_saturated)
+    gst_structure_set(s, "saturated", G_TYPE_UINT64, static_cast<guint64>(saturated_pixels),
+                      nullptr);
   set_peak_fields(s, "", whole_peak, cv::Point());
   if (with_region) {
     gst_structure_set(s, "region-x", G_TYPE_INT, r.x, "region-y", G_TYPE_INT, r.y, "region-width",
@@ -82,13 +103,17 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const Settings& sett
                       "region-tracks-peak", G_TYPE_BOOLEAN,
                       settings.region_tracks_peak && whole_peak.found(), nullptr);
     set_stats_fields(s, "region-", region);
+    if (with_saturated)
+      gst_structure_set(s, "region-saturated", G_TYPE_UINT64,
+                        static_cast<guint64>(region_saturated), nullptr);
     set_peak_fields(s, "region-", part_peak, r.tl());
   }
   return s;
 }
 
-void post_stats(GstRatioTemp* self, const Settings& settings, const cv::Mat& temperature_c,
-                GstClockTime pts, Method method, std::string& peak_warned) {
+void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstClockTime pts) {
+  const cv::Mat& temperature_c = st.temperature_c;
+  std::string& peak_warned = st.peak_warned;
   const int w = temperature_c.cols, h = temperature_c.rows;
   if (settings.peak_window_set && settings.peak_window > 0 && !peak_fits(settings, w, h)) {
     // Once per window and frame size; the default window stays quiet on tiny frames.
@@ -102,9 +127,22 @@ void post_stats(GstRatioTemp* self, const Settings& settings, const cv::Mat& tem
                           ("the window must fit in the frame"));
     peak_warned = misfit;
   }
-  GstStructure* s =
-      stats_structure(temperature_c, settings, &GST_BASE_TRANSFORM(self)->segment, pts, method);
+  GstStructure* s = stats_structure(temperature_c, st.saturated_mask, settings,
+                                    &GST_BASE_TRANSFORM(self)->segment, pts, st.method);
+  guint64 saturated = 0;
+  gst_structure_get_uint64(s, "saturated", &saturated);
   gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), s));
+  // A reading missing because the light was too much looks like a cold spot in the statistics
+  // and leaves peak-c at the edge of the saturated part: say so once per appearance.
+  if (saturated > 0 && !st.saturation_warned)
+    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                        ("%s: %" G_GUINT64_FORMAT " pixels have no reading because light "
+                         "saturated a band: the hottest part of the scene may be there, and "
+                         "peak-c and max-c are then only lower bounds; shorten the exposure or "
+                         "put autoexposure in front of darksub",
+                         GST_OBJECT_NAME(self), saturated),
+                        ("statistics at %" GST_TIME_FORMAT, GST_TIME_ARGS(pts)));
+  st.saturation_warned = saturated > 0;
 }
 
 }  // namespace pyrocam::gst::ratiotemp

@@ -141,6 +141,22 @@ inline std::vector<std::uint16_t> gray16_of(GstBuffer* buffer, int w, int h) {
   return v;
 }
 
+// A raw 8x8 RGGB frame of a graybody at t_c whose brightest band is 120 DN above the dark
+// level of 50, with a dim corner.
+inline std::vector<std::uint8_t> raw_bayer_frame(const ThermalModel& m, double t_c) {
+  const Eigen::VectorXd rates = m.camera.rates(t_c);
+  const Eigen::VectorXd dn = rates * (120 / rates.maxCoeff());
+  std::vector<std::uint8_t> raw(64);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) {
+      const int band = (y % 2 == 0 && x % 2 == 0) ? 0 : (y % 2 == 1 && x % 2 == 1) ? 2 : 1;
+      raw[y * 8 + x] = static_cast<std::uint8_t>(std::lround(50 + dn[band]));
+    }
+  for (int y = 0; y < 2; ++y)
+    for (int x = 6; x < 8; ++x) raw[y * 8 + x] = 55;  // 5 DN above dark: too dim
+  return raw;
+}
+
 class RatioTemp : public HarnessTest {
  protected:
   RatioTemp() : HarnessTest("ratiotemp") {}

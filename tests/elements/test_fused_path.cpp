@@ -213,8 +213,12 @@ TEST_F(FusedHarness, blur_correction_on_plain_planes_warns_once_and_reads_n) {
     GError* err = nullptr;
     gchar* debug = nullptr;
     gst_message_parse_warning(m, &err, &debug);
-    EXPECT_NE(std::string(err->message).find("blur-correction"), std::string::npos) << err->message;
-    ++warnings;
+    // The frame's saturated sample has its own warning (the statistics').
+    const std::string text = err->message;
+    if (text.find("saturated a band") == std::string::npos) {
+      EXPECT_NE(text.find("blur-correction"), std::string::npos) << text;
+      ++warnings;
+    }
     g_error_free(err);
     g_free(debug);
     gst_message_unref(m);

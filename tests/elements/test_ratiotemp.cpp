@@ -213,22 +213,6 @@ TEST_F(RatioTemp, e_slope_reads_a_tilted_surface_at_its_temperature) {
   EXPECT_EQ(run(planes, n, 1), grey);
 }
 
-// A raw 8x8 RGGB frame of a graybody at t_c whose brightest band is 120 DN above the dark
-// level of 50, with a dim corner.
-std::vector<std::uint8_t> raw_bayer_frame(const ThermalModel& m, double t_c) {
-  const Eigen::VectorXd rates = m.camera.rates(t_c);
-  const Eigen::VectorXd dn = rates * (120 / rates.maxCoeff());
-  std::vector<std::uint8_t> raw(64);
-  for (int y = 0; y < 8; ++y)
-    for (int x = 0; x < 8; ++x) {
-      const int band = (y % 2 == 0 && x % 2 == 0) ? 0 : (y % 2 == 1 && x % 2 == 1) ? 2 : 1;
-      raw[y * 8 + x] = static_cast<std::uint8_t>(std::lround(50 + dn[band]));
-    }
-  for (int y = 0; y < 2; ++y)
-    for (int x = 6; x < 8; ++x) raw[y * 8 + x] = 55;  // 5 DN above dark: too dim
-  return raw;
-}
-
 // The library's chain on a raw frame: dark level 50, default saturation, bilinear, estimator.
 std::vector<std::uint16_t> library_chain(const std::vector<std::uint8_t>& raw, Method method,
                                          DemosaicMethod demosaic_method = DemosaicMethod::kBilinear,

@@ -67,6 +67,9 @@ TEST_F(RatioTemp, stats_message_matches_region_stats_of_the_frame) {
     expect_stats(m, "region-", reg);
     // The median is reported apart from the mean.
     EXPECT_NE(field_double(m, "median-c"), field_double(m, "mean-c"));
+    // Both pixels without a reading have bands without a value from the camera (saturated).
+    EXPECT_EQ(field_uint64(m, "saturated"), 2u);
+    EXPECT_EQ(field_uint64(m, "region-saturated"), 1u);  // (5, 4); (0, 0) is outside
   }
   free_all(s);
   // A frame without any reading: counts, fraction 0, no temperatures.
@@ -77,8 +80,54 @@ TEST_F(RatioTemp, stats_message_matches_region_stats_of_the_frame) {
   expect_stats(s[0], "", region_stats(cv::Mat(5, 7, CV_32F, cv::Scalar(NAN))));
   EXPECT_EQ(field_uint64(s[0], "pixels"), 35u);
   EXPECT_FALSE(gst_structure_has_field(s[0], "min-c"));
+  EXPECT_EQ(field_uint64(s[0], "saturated"), 0u);  // dim, not saturated
   free_all(s);
 }
+
+// A saturated sample through darksub and demosaic25: the statistics count the pixels it left
+// without a reading (its kernels' reach: 3x3 bilinear, 5x5 matched, which ratiotemp demosaics
+// itself), not the dim corner's; a warning says so once, and again after a frame without.
+class SaturatedStats : public RatioTemp {
+ protected:
+  void check(const std::string& demosaic, int radius) {
+    for (const char* e : {"darksub", "demosaic25"}) REQUIRE_ELEMENT(e);
+    start_on_raw_frames("ratiotemp stats-interval=1 model=" + rgb_model_path(), demosaic);
+    const auto plain = raw_bayer_frame(*rgb_model(), 1300);
+    auto raw = plain;
+    raw[4 * 8 + 4] = 255;  // an R pixel, saturated
+    const auto out = run(raw, 8, 8, 0);
+    ASSERT_EQ(out.size(), 64u);
+    std::size_t near = 0, none = 0;
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 8; ++x) {
+        none += out[y * 8 + x] == 0;
+        near += out[y * 8 + x] == 0 && std::abs(x - 4) <= radius && std::abs(y - 4) <= radius;
+      }
+    EXPECT_EQ(out[4 * 8 + 4], 0);
+    EXPECT_GT(none, near);  // the dim corner too
+    auto s = stats();
+    ASSERT_EQ(s.size(), 1u);
+    EXPECT_EQ(field_uint64(s[0], "saturated"), near);
+    free_all(s);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("saturated"), std::string::npos) << warnings[0];
+    EXPECT_NE(warnings[0].find("lower bound"), std::string::npos) << warnings[0];
+    run(raw, 8, 8, GST_SECOND);  // still saturated: no second warning
+    run(plain, 8, 8, 2 * GST_SECOND);
+    s = stats();
+    ASSERT_EQ(s.size(), 2u);
+    EXPECT_EQ(field_uint64(s[1], "saturated"), 0u);
+    free_all(s);
+    EXPECT_EQ(warnings.size(), 1u);
+    run(raw, 8, 8, 3 * GST_SECOND);  // saturated again: warned again
+    s = stats();
+    free_all(s);
+    EXPECT_EQ(warnings.size(), 2u);
+  }
+};
+
+TEST_F(SaturatedStats, bilinear_planes) { check("demosaic25 method=bilinear", 1); }
+TEST_F(SaturatedStats, matched_on_the_fused_path) { check("demosaic25", 2); }
 
 TEST_F(RatioTemp, survives_flush_and_eos) {
   start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 4));

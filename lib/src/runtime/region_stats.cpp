@@ -160,4 +160,51 @@ RegionPeak region_peak(const cv::Mat& t, int window, const cv::Mat& mask) {
   }
 }
 
+namespace {
+// 1 where a sample holds no value from the camera: +INF (saturated) or NaN; -INF (demosaicking's
+// mark of a sample without light) is a value, 0.
+void mark_unread(const cv::Mat& values, cv::Mat& mask) {
+  for (int y = 0; y < values.rows; ++y) {
+    const float* v = values.ptr<float>(y);
+    std::uint8_t* m = mask.ptr<std::uint8_t>(y);
+    for (int x = 0; x < values.cols; ++x)
+      m[x] |= std::isnan(v[x]) || v[x] == std::numeric_limits<float>::infinity() ? 1 : 0;
+  }
+}
+}  // namespace
+
+cv::Mat saturated_band_mask(const std::vector<cv::Mat>& planes) {
+  if (planes.empty()) throw InputError("saturation mask: no band planes");
+  cv::Mat mask = cv::Mat::zeros(planes.front().size(), CV_8U);
+  for (const cv::Mat& p : planes) {
+    if (p.type() != CV_32F || p.size() != mask.size())
+      throw InputError("saturation mask: band planes must be CV_32F of one size");
+    mark_unread(p, mask);
+  }
+  return mask;
+}
+
+cv::Mat saturated_sample_mask(const cv::Mat& mosaic, int radius) {
+  if (mosaic.type() != CV_32F) throw InputError("saturation mask: the mosaic must be CV_32F");
+  if (radius < 0) throw InputError("saturation mask: negative radius");
+  cv::Mat mask = cv::Mat::zeros(mosaic.size(), CV_8U);
+  mark_unread(mosaic, mask);
+  if (radius > 0)
+    cv::dilate(mask, mask,
+               cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * radius + 1, 2 * radius + 1)));
+  return mask;
+}
+
+std::size_t count_without_reading(const cv::Mat& temperature_c, const cv::Mat& mask) {
+  if (temperature_c.type() != CV_32F || mask.type() != CV_8U || mask.size() != temperature_c.size())
+    throw InputError("saturation count: a CV_32F image and a CV_8U mask of its size are needed");
+  std::size_t n = 0;
+  for (int y = 0; y < mask.rows; ++y) {
+    const float* t = temperature_c.ptr<float>(y);
+    const std::uint8_t* m = mask.ptr<std::uint8_t>(y);
+    for (int x = 0; x < mask.cols; ++x) n += m[x] != 0 && std::isnan(t[x]);
+  }
+  return n;
+}
+
 }  // namespace pyrocam

@@ -165,6 +165,40 @@ TEST(RegionPeak, matches_the_window_by_window_definition) {
 }
 
 // Cost on a camera-sized frame: run with --gtest_also_run_disabled_tests.
+// Where light saturated a band: +INF or NaN in any plane (not -INF, demosaicking's mark of a
+// sample without light), or within the kernels' reach of such a mosaic sample; counted only
+// where the pixel has no reading.
+TEST(Saturation, marks_unread_band_values_and_counts_pixels_without_a_reading_there) {
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  cv::Mat red(3, 4, CV_32F, cv::Scalar(100)), green = red.clone();
+  red.at<float>(0, 1) = kInf;
+  green.at<float>(2, 3) = kNaN;
+  green.at<float>(1, 0) = -kInf;
+  const cv::Mat mask = saturated_band_mask({red, green});
+  EXPECT_EQ(cv::countNonZero(mask), 2);
+  EXPECT_EQ(mask.at<std::uint8_t>(0, 1), 1);
+  EXPECT_EQ(mask.at<std::uint8_t>(2, 3), 1);
+  EXPECT_EQ(mask.at<std::uint8_t>(1, 0), 0);
+  cv::Mat t(3, 4, CV_32F, cv::Scalar(1500));
+  t.at<float>(0, 1) = kNaN;                       // saturated, no reading: counts
+  t.at<float>(1, 1) = kNaN;                       // no reading, nothing saturated: does not
+  EXPECT_EQ(count_without_reading(t, mask), 1u);  // (2, 3) has a reading: does not
+  EXPECT_THROW(saturated_band_mask({}), InputError);
+  EXPECT_THROW(saturated_band_mask({red, cv::Mat(2, 4, CV_32F)}), InputError);
+  EXPECT_THROW(count_without_reading(t, cv::Mat(2, 4, CV_8U)), InputError);
+
+  cv::Mat mosaic(8, 9, CV_32F, cv::Scalar(50));
+  mosaic.at<float>(5, 3) = kInf;
+  mosaic.at<float>(0, 8) = kNaN;
+  const cv::Mat reach = saturated_sample_mask(mosaic, 2);
+  EXPECT_EQ(cv::countNonZero(reach), 25 + 3 * 3);  // the corner's square clipped to 3x3
+  EXPECT_EQ(reach.at<std::uint8_t>(3, 1), 1);
+  EXPECT_EQ(reach.at<std::uint8_t>(7, 5), 1);
+  EXPECT_EQ(reach.at<std::uint8_t>(2, 3), 0);
+  EXPECT_EQ(cv::countNonZero(saturated_sample_mask(mosaic, 0)), 2);
+  EXPECT_THROW(saturated_sample_mask(mosaic, -1), InputError);
+}
+
 TEST(RegionPeak, DISABLED_timing_2048x2048) {
   cv::Mat t = noisy_plate(2048, 2048, 735, 5, 3);
   for (int i = 0; i < 4000; ++i) t.at<float>((i * 7919) % 2048, (i * 104729) % 2048) = 2500;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstddef>
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace pyrocam {
 
@@ -36,5 +37,19 @@ inline constexpr int kMaxPeakWindow = 255;
 // medians of the few windows that can beat the best found so far.
 RegionPeak region_peak(const cv::Mat& temperature_c, int window = kDefaultPeakWindow,
                        const cv::Mat& mask = cv::Mat());
+
+// Where light saturated the camera: a pixel without a reading there may be the hottest of the
+// scene, so a peak or maximum read around it is only a lower bound. As a CV_8U mask (1 = a band
+// without a value from the camera), from band planes (CV_32F, all of one size): some band +INF
+// (a saturated sample) or NaN (saturated samples of opposite signs in a demosaicking kernel, or
+// a sample darksub marked without a reading). Throws InputError for no planes or planes of
+// another type or size.
+cv::Mat saturated_band_mask(const std::vector<cv::Mat>& planes);
+// The same from a dark-subtracted mosaic (CV_32F) that is demosaicked into pixels of its own
+// size: the pixels within `radius` samples (a square, the kernels' reach) of a +INF or NaN one.
+cv::Mat saturated_sample_mask(const cv::Mat& mosaic, int radius);
+// How many pixels of a CV_32F temperature image have no reading (NaN) where mask (CV_8U of the
+// same size) is non-zero.
+std::size_t count_without_reading(const cv::Mat& temperature_c, const cv::Mat& mask);
 
 }  // namespace pyrocam
