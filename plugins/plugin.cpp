@@ -1,7 +1,8 @@
-/* The pyrocam plugin: registers the elements, nothing more. */
+/* The pyrocam plugin: registers the elements and their buffer metas. */
 #include <gst/gst.h>
 
 #include "autoexposure/gstautoexposure.h"
+#include "common/pyrocam-meta.h"
 #include "darksub/gstdarksub.h"
 #include "demosaic25/gstdemosaic25.h"
 #include "mosaicfuse/gstmosaicfuse.h"
@@ -24,6 +25,10 @@ static gboolean plugin_init(GstPlugin* plugin) {
   ok |= GST_ELEMENT_REGISTER(thermalfuse, plugin);
   ok |= GST_ELEMENT_REGISTER(mosaicfuse, plugin);
   ok |= GST_ELEMENT_REGISTER(autoexposure, plugin);
+  // Now rather than with the first buffer that carries one, so that an application can look
+  // them up by name (gst_meta_get_info) and attach them to frames of its own.
+  pyrocam_exposure_meta_get_info();
+  pyrocam_saturation_meta_get_info();
   return ok;
 }
 

@@ -293,4 +293,21 @@ bool parse_region(const std::string& text, Region* out) {
   return ok;
 }
 
+cv::Rect saturated_rect(const PyrocamSaturationMeta* meta, int width, int height, int reach) {
+  if (!meta || meta->samples == 0 || meta->width <= 0 || meta->height <= 0 ||
+      meta->frame_width <= 0 || meta->frame_height <= 0)
+    return {};
+  const auto down = [](gint v, int to, gint from) {
+    return static_cast<int>(static_cast<gint64>(v) * to / from);
+  };
+  const auto up = [](gint v, int to, gint from) {
+    return static_cast<int>((static_cast<gint64>(v) * to + from - 1) / from);
+  };
+  const cv::Rect r(cv::Point(down(meta->x, width, meta->frame_width) - reach,
+                             down(meta->y, height, meta->frame_height) - reach),
+                   cv::Point(up(meta->x + meta->width, width, meta->frame_width) + reach,
+                             up(meta->y + meta->height, height, meta->frame_height) + reach));
+  return r & cv::Rect(0, 0, width, height);
+}
+
 }  // namespace pyrocam::gst

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "pyrocam-caps.h"
+#include "pyrocam-meta.h"
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/mosaic.h"
 
@@ -135,6 +136,13 @@ GParamSpec* bracket_frames_param(guint default_frames);
 /* The STREAM FORMAT warning of a bracket fusion that passed a frame without
  * PyrocamExposureMeta on unfused: once, when `warned` is false (it is then set). */
 void warn_frame_without_exposure(GstElement* element, bool& warned);
+
+/* The part of a width x height frame that holds the saturated samples `meta` names (scaled from
+ * the meta's frame, widened by `reach` pixels and clipped); empty without a meta or samples. */
+cv::Rect saturated_rect(const PyrocamSaturationMeta* meta, int width, int height, int reach);
+/* What the temperature elements widen it by: the reach of demosaic25's kernels (matched Bayer:
+ * 2 pixels; matched 5x5 cells: 1 macro-pixel). */
+constexpr int SATURATION_REACH = 2;
 
 /* How a failure is reported on the bus (STYLE.md: errors carry a domain, a user message and a
  * debug message). */

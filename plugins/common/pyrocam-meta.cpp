@@ -44,3 +44,58 @@ PyrocamExposureMeta* pyrocam_buffer_add_exposure_meta(GstBuffer* buffer, gdouble
   }
   return m;
 }
+
+GType pyrocam_saturation_meta_api_get_type(void) {
+  static GType type = 0;
+  static const gchar* tags[] = {nullptr};  // none: consumers scale the rectangle themselves
+  if (g_once_init_enter(&type)) {
+    GType t = gst_meta_api_type_register("PyrocamSaturationMetaAPI", tags);
+    g_once_init_leave(&type, t);
+  }
+  return type;
+}
+
+static gboolean saturation_meta_init(GstMeta* meta, gpointer /*params*/, GstBuffer* /*buffer*/) {
+  auto* m = reinterpret_cast<PyrocamSaturationMeta*>(meta);
+  m->samples = 0;
+  m->x = m->y = m->width = m->height = 0;
+  m->frame_width = m->frame_height = 0;
+  return TRUE;
+}
+
+static gboolean saturation_meta_transform(GstBuffer* dest, GstMeta* meta, GstBuffer* /*buffer*/,
+                                          GQuark /*type*/, gpointer /*data*/) {
+  auto* m = reinterpret_cast<PyrocamSaturationMeta*>(meta);
+  return pyrocam_buffer_set_saturation_meta(dest, m->samples, m->x, m->y, m->width, m->height,
+                                            m->frame_width, m->frame_height) != nullptr;
+}
+
+const GstMetaInfo* pyrocam_saturation_meta_get_info(void) {
+  static const GstMetaInfo* info = nullptr;
+  if (g_once_init_enter(&info)) {
+    const GstMetaInfo* i = gst_meta_register(
+        PYROCAM_SATURATION_META_API_TYPE, "PyrocamSaturationMeta", sizeof(PyrocamSaturationMeta),
+        saturation_meta_init, nullptr, saturation_meta_transform);
+    g_once_init_leave(&info, i);
+  }
+  return info;
+}
+
+PyrocamSaturationMeta* pyrocam_buffer_set_saturation_meta(GstBuffer* buffer, guint64 samples,
+                                                          gint x, gint y, gint width, gint height,
+                                                          gint frame_width, gint frame_height) {
+  auto* m = pyrocam_buffer_get_saturation_meta(buffer);
+  if (!m)
+    m = reinterpret_cast<PyrocamSaturationMeta*>(
+        gst_buffer_add_meta(buffer, pyrocam_saturation_meta_get_info(), nullptr));
+  if (m) {
+    m->samples = samples;
+    m->x = x;
+    m->y = y;
+    m->width = width;
+    m->height = height;
+    m->frame_width = frame_width;
+    m->frame_height = frame_height;
+  }
+  return m;
+}

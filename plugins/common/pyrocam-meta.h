@@ -23,4 +23,29 @@ PyrocamExposureMeta* pyrocam_buffer_add_exposure_meta(GstBuffer* buffer, gdouble
 #define pyrocam_buffer_get_exposure_meta(b) \
   ((PyrocamExposureMeta*)gst_buffer_get_meta((b), PYROCAM_EXPOSURE_META_API_TYPE))
 
+/* PyrocamSaturationMeta: where the camera's light saturated a frame. darksub attaches it to
+ * every subtracted frame (samples 0 when none); without API tags it travels with the frame's
+ * exposure through demosaic25 and ratiotemp, so that the elements reading temperatures
+ * (thermalcolormap's peak readout, thermalalarm) know that a part of the frame without a
+ * reading was too bright to read rather than cold: its temperature is above what the rest of
+ * the frame reads. The rectangle is in pixels of a frame_width x frame_height frame (darksub's
+ * mosaic); an element whose frames have another size (5x5 band planes) scales it. */
+typedef struct {
+  GstMeta meta;
+  guint64 samples;                /* raw samples at or above the saturation level; 0: none */
+  gint x, y, width, height;       /* the smallest rectangle holding them; 0 x 0 when none */
+  gint frame_width, frame_height; /* the frame those pixels are of */
+} PyrocamSaturationMeta;
+
+GType pyrocam_saturation_meta_api_get_type(void);
+#define PYROCAM_SATURATION_META_API_TYPE (pyrocam_saturation_meta_api_get_type())
+const GstMetaInfo* pyrocam_saturation_meta_get_info(void);
+
+/* Adds the meta, or overwrites the buffer's own (one per buffer). */
+PyrocamSaturationMeta* pyrocam_buffer_set_saturation_meta(GstBuffer* buffer, guint64 samples,
+                                                          gint x, gint y, gint width, gint height,
+                                                          gint frame_width, gint frame_height);
+#define pyrocam_buffer_get_saturation_meta(b) \
+  ((PyrocamSaturationMeta*)gst_buffer_get_meta((b), PYROCAM_SATURATION_META_API_TYPE))
+
 G_END_DECLS

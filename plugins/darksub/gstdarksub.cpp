@@ -376,16 +376,22 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
                               : st.saturation_level >= 0
                                   ? st.saturation_level
                                   : pyrocam::default_saturation_level(st.bit_depth);
+    pyrocam::SaturatedSamples saturated;
     if (const cv::Mat* dark = frame_dark(st)) {
-      pyrocam::subtract_dark(raw.image(), *dark, saturation, out.image());
+      saturated = pyrocam::subtract_dark(raw.image(), *dark, saturation, out.image());
     } else if (settings.dark_level >= 0) {
-      pyrocam::subtract_dark_level(raw.image(), settings.dark_level, saturation, out.image());
+      saturated =
+          pyrocam::subtract_dark_level(raw.image(), settings.dark_level, saturation, out.image());
     } else {
       PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
                          "No dark frame: set location, dark-level or emit capture-dark",
                          "location is empty, dark-level < 0 and no dark was captured");
       ret = GST_FLOW_ERROR;
+      return;
     }
+    const cv::Rect& box = saturated.bounds;
+    pyrocam_buffer_set_saturation_meta(outbuf, saturated.count, box.x, box.y, box.width, box.height,
+                                       st.format.width, st.format.height);
   });
   return ok ? ret : GST_FLOW_ERROR;
 }

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "element_support.h"
+#include "pyrocam-meta.h"
 #include "pyrocam/core/image_io.h"
 #include "pyrocam/runtime/darksub.h"
 #include "test_support.h"
@@ -63,6 +64,30 @@ TEST_F(DarkSub, bayer_caps_give_mosaic_caps_and_library_values) {
   EXPECT_NE(caps.find("format=(string)F32LE"), std::string::npos) << caps;
   // Cameras that send rows without padding are read too.
   EXPECT_EQ(push_pull<float>(h, buffer_from(raw)), expected(raw, 6, 4, 50, 220));
+}
+
+// Each frame carries where it saturated (PyrocamSaturationMeta, found by the API's registered
+// name: the test does not link the plugin).
+TEST_F(DarkSub, frames_carry_their_saturated_samples) {
+  start("darksub dark-level=50", kRggb6x4);
+  for (const bool saturated : {true, false}) {
+    auto raw = frame6x4();
+    if (!saturated) raw[7] = 200;
+    GstBuffer* out = gst_harness_push_and_pull(h, padded6x4(raw));
+    ASSERT_NE(out, nullptr);
+    const GType api = g_type_from_name("PyrocamSaturationMetaAPI");
+    ASSERT_NE(api, G_TYPE_INVALID);
+    const auto* m = reinterpret_cast<const PyrocamSaturationMeta*>(gst_buffer_get_meta(out, api));
+    ASSERT_NE(m, nullptr);
+    EXPECT_EQ(m->samples, saturated ? 1u : 0u);
+    EXPECT_EQ(m->x, saturated ? 1 : 0);  // sample 7 of a 6-wide frame
+    EXPECT_EQ(m->y, saturated ? 1 : 0);
+    EXPECT_EQ(m->width, saturated ? 1 : 0);
+    EXPECT_EQ(m->height, saturated ? 1 : 0);
+    EXPECT_EQ(m->frame_width, 6);
+    EXPECT_EQ(m->frame_height, 4);
+    gst_buffer_unref(out);
+  }
 }
 
 TEST_F(DarkSub, gray8_caps_use_the_pattern_property) {

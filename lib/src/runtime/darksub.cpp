@@ -1,9 +1,11 @@
 #include "pyrocam/runtime/darksub.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "pyrocam/core/error.h"
 
@@ -16,38 +18,63 @@ std::string size_text(const cv::Mat& m) {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-// One row; __restrict lets the compiler vectorise the select.
+// One row; __restrict lets the compiler vectorise the select. Returns the saturated samples.
 template <typename T>
-void subtract_row(const T* __restrict r, const float* __restrict d, float* __restrict o, int n,
-                  float saturation) {
+int subtract_row(const T* __restrict r, const float* __restrict d, float* __restrict o, int n,
+                 float saturation) {
+  int saturated = 0;
   for (int x = 0; x < n; ++x) {
     const float v = static_cast<float>(r[x]);
-    o[x] = v >= saturation ? kInf : v - d[x];
+    const float signal = v - d[x];  // unconditionally, or the loop does not vectorise
+    saturated += v >= saturation;
+    o[x] = v >= saturation ? kInf : signal;
   }
+  return saturated;
 }
 
 template <typename T>
-void subtract_level_row(const T* __restrict r, float level, float* __restrict o, int n,
-                        float saturation) {
+int subtract_level_row(const T* __restrict r, float level, float* __restrict o, int n,
+                       float saturation) {
+  int saturated = 0;
   for (int x = 0; x < n; ++x) {
     const float v = static_cast<float>(r[x]);
+    saturated += v >= saturation;
     o[x] = v >= saturation ? kInf : v - level;
   }
+  return saturated;
 }
 
-// Runs row(y) for every row, over two threads for large frames.
+// Runs row(y) for every row, over two threads for large frames, and sums up the saturated
+// samples that the rows return and their bounds (from `out`'s +INF, on the rows with any).
 template <typename Row>
-void for_rows(const cv::Mat& m, Row row) {
+SaturatedSamples for_rows(const cv::Mat& m, const cv::Mat& out, Row row) {
+  std::vector<int> per_row(static_cast<std::size_t>(m.rows));
   if (m.total() < 512u * 512u) {
-    for (int y = 0; y < m.rows; ++y) row(y);
-    return;
+    for (int y = 0; y < m.rows; ++y) per_row[static_cast<std::size_t>(y)] = row(y);
+  } else {
+    cv::parallel_for_(
+        cv::Range(0, m.rows),
+        [&](const cv::Range& r) {
+          for (int y = r.start; y < r.end; ++y) per_row[static_cast<std::size_t>(y)] = row(y);
+        },
+        2.0);
   }
-  cv::parallel_for_(
-      cv::Range(0, m.rows),
-      [&](const cv::Range& r) {
-        for (int y = r.start; y < r.end; ++y) row(y);
-      },
-      2.0);
+  SaturatedSamples s;
+  int x0 = m.cols, x1 = -1, y0 = m.rows, y1 = -1;
+  for (int y = 0; y < m.rows; ++y) {
+    if (per_row[static_cast<std::size_t>(y)] == 0) continue;
+    s.count += static_cast<std::size_t>(per_row[static_cast<std::size_t>(y)]);
+    y0 = std::min(y0, y);
+    y1 = y;
+    const float* o = out.ptr<float>(y);
+    int first = 0, last = m.cols - 1;
+    while (o[first] != kInf) ++first;
+    while (o[last] != kInf) --last;
+    x0 = std::min(x0, first);
+    x1 = std::max(x1, last);
+  }
+  if (s.count > 0) s.bounds = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+  return s;
 }
 
 void check_raw(const cv::Mat& raw) {
@@ -67,7 +94,8 @@ double default_saturation_level(int bit_depth) {
   return std::round(220.0 / 255.0 * full_scale_dn(bit_depth));
 }
 
-void subtract_dark(const cv::Mat& raw, const cv::Mat& dark, double saturation_level, cv::Mat& out) {
+SaturatedSamples subtract_dark(const cv::Mat& raw, const cv::Mat& dark, double saturation_level,
+                               cv::Mat& out) {
   check_raw(raw);
   if (dark.type() != CV_32F) throw InputError("dark subtraction: dark frame must be CV_32F");
   if (dark.size() != raw.size())
@@ -78,30 +106,40 @@ void subtract_dark(const cv::Mat& raw, const cv::Mat& dark, double saturation_le
   const float saturation = static_cast<float>(saturation_level);
   const int n = raw.cols;
   if (raw.type() == CV_8U)
-    for_rows(raw, [&](int y) {
-      subtract_row(raw.ptr<std::uint8_t>(y), dark.ptr<float>(y), out.ptr<float>(y), n, saturation);
+    return for_rows(raw, out, [&](int y) {
+      return subtract_row(raw.ptr<std::uint8_t>(y), dark.ptr<float>(y), out.ptr<float>(y), n,
+                          saturation);
     });
-  else
-    for_rows(raw, [&](int y) {
-      subtract_row(raw.ptr<std::uint16_t>(y), dark.ptr<float>(y), out.ptr<float>(y), n, saturation);
-    });
+  return for_rows(raw, out, [&](int y) {
+    return subtract_row(raw.ptr<std::uint16_t>(y), dark.ptr<float>(y), out.ptr<float>(y), n,
+                        saturation);
+  });
 }
 
-void subtract_dark_level(const cv::Mat& raw, double level_dn, double saturation_level,
-                         cv::Mat& out) {
+SaturatedSamples subtract_dark_level(const cv::Mat& raw, double level_dn, double saturation_level,
+                                     cv::Mat& out) {
   check_raw(raw);
   out.create(raw.size(), CV_32F);
   const float saturation = static_cast<float>(saturation_level);
   const float level = static_cast<float>(level_dn);
   const int n = raw.cols;
   if (raw.type() == CV_8U)
-    for_rows(raw, [&](int y) {
-      subtract_level_row(raw.ptr<std::uint8_t>(y), level, out.ptr<float>(y), n, saturation);
+    return for_rows(raw, out, [&](int y) {
+      return subtract_level_row(raw.ptr<std::uint8_t>(y), level, out.ptr<float>(y), n, saturation);
     });
-  else
-    for_rows(raw, [&](int y) {
-      subtract_level_row(raw.ptr<std::uint16_t>(y), level, out.ptr<float>(y), n, saturation);
-    });
+  return for_rows(raw, out, [&](int y) {
+    return subtract_level_row(raw.ptr<std::uint16_t>(y), level, out.ptr<float>(y), n, saturation);
+  });
+}
+
+SaturatedSamples find_saturated(const cv::Mat& signal) {
+  if (signal.type() != CV_32F) throw InputError("saturated samples: the mosaic must be CV_32F");
+  return for_rows(signal, signal, [&](int y) {
+    const float* row = signal.ptr<float>(y);
+    int n = 0;
+    for (int x = 0; x < signal.cols; ++x) n += row[x] == kInf;
+    return n;
+  });
 }
 
 cv::Mat dark_from_image(const cv::Mat& image) {

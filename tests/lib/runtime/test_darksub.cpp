@@ -37,6 +37,28 @@ TEST(DarkSub, subtracts_and_marks_saturation_before_subtraction) {
   EXPECT_TRUE(std::isnan(out.at<float>(1, 2)));
 }
 
+// The samples marked saturated, counted with the rectangle that holds them, on both paths and
+// on a large frame (two threads); NaN (a bad dark) is not saturated.
+TEST(DarkSub, counts_and_bounds_the_saturated_samples) {
+  cv::Mat raw(600, 700, CV_8U, cv::Scalar(100));
+  raw.at<std::uint8_t>(10, 600) = 230;
+  raw.at<std::uint8_t>(500, 20) = 255;
+  raw.at<std::uint8_t>(300, 300) = 220;
+  cv::Mat dark = level_dark(700, 600, 50), a, b;
+  dark.at<float>(5, 5) = std::nanf("");
+  const SaturatedSamples with_dark = subtract_dark(raw, dark, 220, a);
+  const SaturatedSamples with_level = subtract_dark_level(raw, 50, 220, b);
+  for (const SaturatedSamples& s : {with_dark, with_level, find_saturated(a), find_saturated(b)}) {
+    EXPECT_EQ(s.count, 3u);
+    EXPECT_EQ(s.bounds, cv::Rect(cv::Point(20, 10), cv::Point(601, 501)));
+  }
+  const SaturatedSamples none = subtract_dark_level(raw, 50, 256, b);
+  EXPECT_EQ(none.count, 0u);
+  EXPECT_TRUE(none.bounds.empty());
+  EXPECT_EQ(find_saturated(b).count, 0u);
+  EXPECT_THROW(find_saturated(raw), InputError);
+}
+
 TEST(DarkSub, sixteen_bit_frames_and_caller_buffers) {
   cv::Mat raw = (cv::Mat_<std::uint16_t>(1, 3) << 100, 4000, 3522);
   cv::Mat dark = dark_from_image((cv::Mat_<std::uint16_t>(1, 3) << 60, 60, 60));

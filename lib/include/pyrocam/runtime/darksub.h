@@ -3,6 +3,7 @@
 // the saturation level (before subtraction) is +INFINITY, a pixel without a reading NaN.
 #pragma once
 
+#include <cstddef>
 #include <opencv2/core.hpp>
 
 namespace pyrocam {
@@ -13,15 +14,27 @@ int full_scale_dn(int bit_depth);
 // rounded. Throws InputError for a bit depth outside 1..16.
 double default_saturation_level(int bit_depth);
 
+// The samples a subtraction marked saturated: how many, and the smallest rectangle holding them
+// (empty when none).
+struct SaturatedSamples {
+  std::size_t count = 0;
+  cv::Rect bounds;
+};
+
 // out = raw - dark per pixel as CV_32F, with +INF where raw >= saturation_level. raw is CV_8U or
 // CV_16U (any stride), dark CV_32F of the same size (a NaN in the dark gives NaN). out is
 // (re)allocated only if its size or type differs, so it may wrap a caller's buffer. Throws
 // InputError on a size or type mismatch naming both sizes.
-void subtract_dark(const cv::Mat& raw, const cv::Mat& dark, double saturation_level, cv::Mat& out);
+SaturatedSamples subtract_dark(const cv::Mat& raw, const cv::Mat& dark, double saturation_level,
+                               cv::Mat& out);
 
 // The same with a constant dark level (no dark frame to read: less memory traffic).
-void subtract_dark_level(const cv::Mat& raw, double level_dn, double saturation_level,
-                         cv::Mat& out);
+SaturatedSamples subtract_dark_level(const cv::Mat& raw, double level_dn, double saturation_level,
+                                     cv::Mat& out);
+
+// The saturated (+INF) samples of a CV_32F dark-subtracted mosaic, e.g. after fusing a bracket.
+// Throws InputError for another type.
+SaturatedSamples find_saturated(const cv::Mat& signal);
 
 // Converts a dark image read from a file (CV_8U/CV_16U) to the CV_32F dark subtract_dark takes.
 cv::Mat dark_from_image(const cv::Mat& image);
