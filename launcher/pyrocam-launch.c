@@ -43,6 +43,9 @@ typedef struct {
   FILE* file;
 } CsvLog;
 
+/* Columns added later go last, so that readers of older files keep their indices; a table is
+ * easier to read than one name per line. */
+/* clang-format off */
 static const char* const stats_columns[] = {
     "element",       "timestamp",      "stream-time",   "running-time",
     "method",        "width",          "height",        "pixels",
@@ -51,11 +54,14 @@ static const char* const stats_columns[] = {
     "peak-y",        "region-x",       "region-y",      "region-width",
     "region-height", "region-pixels",  "region-valid",  "region-valid-fraction",
     "region-min-c",  "region-max-c",   "region-mean-c", "region-median-c",
-    "region-peak-c", "region-peak-x",  "region-peak-y", NULL};
+    "region-peak-c", "region-peak-x",  "region-peak-y", "saturated",
+    "region-saturated", NULL};
+/* clang-format on */
 static const char* const alarm_columns[] = {
-    "element",     "state",    "active",       "statistic",     "value-c",
-    "threshold-c", "clear-c",  "frames",       "timestamp",     "running-time",
-    "region-x",    "region-y", "region-width", "region-height", NULL};
+    "element",      "state",         "active",    "statistic",
+    "value-c",      "threshold-c",   "clear-c",   "frames",
+    "timestamp",    "running-time",  "region-x",  "region-y",
+    "region-width", "region-height", "saturated", NULL};
 
 typedef struct {
   GMainLoop* loop;

@@ -89,7 +89,10 @@ function makePanel(index, server) {
     const r = s["region-median-c"] !== undefined || s["region-x"] !== undefined ? "region-" : "";
     $("median-label").textContent = r ? "region median" : "median";
     $("median").textContent = fmt(s[r + "median-c"]) + " °C";
-    $("peak").textContent = fmt(s[r + "peak-c"]) + " °C";
+    // Pixels too bright to read: the peak read beside them is only a lower bound.
+    const saturated = s[r + "saturated"] ?? 0;
+    $("peak").textContent = (saturated > 0 ? "≥ " : "") + fmt(s[r + "peak-c"]) + " °C" +
+      (saturated > 0 ? ` (${saturated} px saturated)` : "");
     $("peak-at").textContent = s[r + "peak-x"] !== undefined ? `${s[r + "peak-x"]}, ${s[r + "peak-y"]}` : "–";
     $("minmax").textContent = fmt(s[r + "min-c"], 0) + " / " + fmt(s[r + "max-c"], 0);
     $("valid").textContent = fmt(100 * (s[r + "valid-fraction"] ?? NaN), 1) + " %";
@@ -110,7 +113,8 @@ function makePanel(index, server) {
     threshold = a["threshold-c"] ?? null;
     const raised = a.state === "raised";
     $("alarm").className = "badge " + (raised ? "raised" : "ok");
-    $("alarm").textContent = raised ? `ALARM ${a.statistic} ${fmt(a["value-c"])} °C > ${fmt(a["threshold-c"])}`
+    $("alarm").textContent = raised ? `ALARM ${a.statistic} ${fmt(a["value-c"])} °C` +
+                                        (a.saturated ? " and saturated" : "") + ` > ${fmt(a["threshold-c"])}`
                                     : `alarm clear (< ${fmt(a["threshold-c"])} °C)`;
     if (!quiet) log(`alarm ${a.state}: ${a.statistic} ${fmt(a["value-c"])} °C`);
   }

@@ -43,6 +43,7 @@
 #include "pyrocam-meta.h"
 #include "pyrocam/core/noise_model.h"
 #include "pyrocam/runtime/bracket_fusion.h"
+#include "pyrocam/runtime/darksub.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_mosaic_fuse_debug);
 #define GST_CAT_DEFAULT gst_mosaic_fuse_debug
@@ -148,6 +149,12 @@ static GstFlowReturn gst_mosaic_fuse_transform_ip(GstBaseTransform* trans, GstBu
     mosaic.map_float(buffer, st.width, st.height, 1,
                      static_cast<GstMapFlags>(GST_MAP_READ | GST_MAP_WRITE));
     const double reference = st.fusion->add(mosaic.image(), now.light, mosaic.image());
+    // Saturated now only where no frame of the bracket read: say where, for the elements
+    // downstream (the frame's own meta from darksub says more).
+    const pyrocam::SaturatedSamples saturated = pyrocam::find_saturated(mosaic.image());
+    const cv::Rect& box = saturated.bounds;
+    pyrocam_buffer_set_saturation_meta(buffer, saturated.count, box.x, box.y, box.width, box.height,
+                                       st.width, st.height);
     st.exposures.push_back(now);
     while (static_cast<int>(st.exposures.size()) > frames) st.exposures.pop_front();
     // The values are in the DN of the frame with the most light: say its exposure.

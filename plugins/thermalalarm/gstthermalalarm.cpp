@@ -7,14 +7,22 @@
  * (#GstThermalAlarm:statistic) stays above #GstThermalAlarm:threshold-c for
  * #GstThermalAlarm:frames consecutive frames, and again when it has stayed below threshold-c
  * minus #GstThermalAlarm:hysteresis-c as long. Frames pass through unchanged. Frames without a
- * reading in the region (a saturated core, a camera looking elsewhere) neither count nor break
- * a run, so they never clear a raised alarm.
+ * reading in the region (a camera looking elsewhere) neither count nor break a run, so they
+ * never clear a raised alarm.
+ *
+ * A part too bright for the exposure has no reading either, and the statistic of the rest (a
+ * saturated melt pool's rim) reads below the object. Frames whose PyrocamSaturationMeta (from
+ * darksub, carried through demosaic25 and ratiotemp) puts saturated samples in the region,
+ * within the demosaicking kernels' reach, therefore count as above the threshold by default
+ * (#GstThermalAlarm:saturated-raises): the alarm errs towards raising. With the property off
+ * they count by their readings.
  *
  * The message's fields:
  * - state (string): raised or cleared; active (boolean): true when raised;
  * - statistic (string): median or peak; value-c (double, degC): the statistic of the frame that
  *   changed the state (absent when the alarm was turned off with threshold-c);
  * - threshold-c, clear-c (double, degC): the levels that raise and clear; frames (guint);
+ * - saturated (boolean): the frame that changed the state had saturated samples in the region;
  * - timestamp, running-time (guint64, ns; GST_CLOCK_TIME_NONE when unknown);
  * - region-x, region-y, region-width, region-height (int): the pixels watched (the region
  *   clipped to the frame).
@@ -60,6 +68,7 @@ enum {
   PROP_STATISTIC,
   PROP_REGION,
   PROP_PEAK_WINDOW,
+  PROP_SATURATED_RAISES,
 };
 
 constexpr const char* ALARM_MESSAGE = "pyrocam-alarm";
@@ -70,6 +79,7 @@ constexpr guint DEFAULT_FRAMES = 5;
 constexpr guint MAX_FRAMES = 100000;
 constexpr GstThermalAlarmStatistic DEFAULT_STATISTIC = GST_THERMAL_ALARM_STATISTIC_MEDIAN;
 constexpr guint DEFAULT_PEAK_WINDOW = pyrocam::kDefaultPeakWindow;
+constexpr gboolean DEFAULT_SATURATED_RAISES = TRUE;
 
 struct Settings {
   double threshold_c = DEFAULT_THRESHOLD;
@@ -79,7 +89,8 @@ struct Settings {
   std::string region_text;  // empty: the whole frame; always parses
   pg::Region region;
   guint peak_window = DEFAULT_PEAK_WINDOW;  // odd
-  guint serial = 0;                         // bumped by every change of the alarm rule
+  gboolean saturated_raises = DEFAULT_SATURATED_RAISES;
+  guint serial = 0;  // bumped by every change of the alarm rule
 };
 
 struct State {
@@ -145,7 +156,7 @@ static gboolean gst_thermal_alarm_stop(GstBaseTransform* trans) {
 }
 
 static void post_change(GstThermalAlarm* self, const Settings& settings, double value_c,
-                        const cv::Rect& region, GstClockTime pts) {
+                        bool saturated, const cv::Rect& region, GstClockTime pts) {
   GstBaseTransform* trans = GST_BASE_TRANSFORM(self);
   GstClockTime running_time = GST_CLOCK_TIME_NONE;
   if (GST_CLOCK_TIME_IS_VALID(pts) && trans->segment.format == GST_FORMAT_TIME)
@@ -159,11 +170,13 @@ static void post_change(GstThermalAlarm* self, const Settings& settings, double 
       rule.clear_below_c(), "frames", G_TYPE_UINT, settings.frames, "timestamp", G_TYPE_UINT64,
       static_cast<guint64>(pts), "running-time", G_TYPE_UINT64, static_cast<guint64>(running_time),
       "region-x", G_TYPE_INT, region.x, "region-y", G_TYPE_INT, region.y, "region-width",
-      G_TYPE_INT, region.width, "region-height", G_TYPE_INT, region.height, nullptr);
+      G_TYPE_INT, region.width, "region-height", G_TYPE_INT, region.height, "saturated",
+      G_TYPE_BOOLEAN, saturated, nullptr);
   if (!std::isnan(value_c)) gst_structure_set(s, "value-c", G_TYPE_DOUBLE, value_c, nullptr);
   if (active)
-    GST_WARNING_OBJECT(self, "alarm raised: %s %.1f degC above %.1f degC for %u frames",
-                       statistic_name(settings.statistic), value_c, rule.threshold_c,
+    GST_WARNING_OBJECT(self, "alarm raised: %s %.1f degC%s above %.1f degC for %u frames",
+                       statistic_name(settings.statistic), value_c,
+                       saturated ? " (saturated: counted as)" : "", rule.threshold_c,
                        settings.frames);
   else
     GST_INFO_OBJECT(self, "alarm cleared: %s %.1f degC", statistic_name(settings.statistic),
@@ -215,7 +228,7 @@ static GstFlowReturn gst_thermal_alarm_transform_frame_ip(GstVideoFilter* filter
   const bool off = !(settings.threshold_c > THRESHOLD_OFF);
   if (off) {
     if (st.monitor.update(NAN) != pyrocam::AlarmChange::kNone)
-      post_change(self, settings, NAN, cv::Rect(0, 0, width, height), pts);
+      post_change(self, settings, NAN, false, cv::Rect(0, 0, width, height), pts);
     return GST_FLOW_OK;
   }
   const cv::Rect region = watched_region(self, settings, width, height);
@@ -233,16 +246,22 @@ static GstFlowReturn gst_thermal_alarm_transform_frame_ip(GstVideoFilter* filter
   const cv::Mat codes(height, width, CV_16U, GST_VIDEO_FRAME_PLANE_DATA(frame, 0),
                       static_cast<std::size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(frame, 0)));
   double value_c = NAN;
+  const bool saturated = settings.saturated_raises &&
+                         !(pg::saturated_rect(pyrocam_buffer_get_saturation_meta(frame->buffer),
+                                              width, height, pg::SATURATION_REACH) &
+                           region)
+                              .empty();
   pyrocam::AlarmChange change = pyrocam::AlarmChange::kNone;
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kNumeric, "Could not compute the alarm statistic", [&] {
         const cv::Mat t = pyrocam::decode_decikelvin(codes(region));
         value_c = settings.statistic == GST_THERMAL_ALARM_STATISTIC_PEAK
                       ? pyrocam::region_peak(t, window).c
                       : pyrocam::region_stats(t).median_c;
-        change = st.monitor.update(value_c);
+        change = st.monitor.update(saturated ? INFINITY : value_c);
       }))
     return GST_FLOW_ERROR;
-  if (change != pyrocam::AlarmChange::kNone) post_change(self, settings, value_c, region, pts);
+  if (change != pyrocam::AlarmChange::kNone)
+    post_change(self, settings, value_c, saturated, region, pts);
   return GST_FLOW_OK;
 }
 
@@ -290,6 +309,9 @@ static void gst_thermal_alarm_set_property(GObject* object, guint prop_id, const
                     std::to_string(s.peak_window);
         break;
       }
+      case PROP_SATURATED_RAISES:
+        s.saturated_raises = g_value_get_boolean(value);
+        break;
       default:
         G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
         return;
@@ -324,6 +346,9 @@ static void gst_thermal_alarm_get_property(GObject* object, guint prop_id, GValu
       break;
     case PROP_PEAK_WINDOW:
       g_value_set_uint(value, s.peak_window);
+      break;
+    case PROP_SATURATED_RAISES:
+      g_value_set_boolean(value, s.saturated_raises);
       break;
     default:
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
@@ -389,6 +414,13 @@ static void gst_thermal_alarm_class_init(GstThermalAlarmClass* klass) {
                         "Side in pixels of the square windows whose largest median is the peak "
                         "(odd, 1..255; an even value is refused with a warning)",
                         1, pyrocam::kMaxPeakWindow, DEFAULT_PEAK_WINDOW, playing));
+  g_object_class_install_property(
+      gobject_class, PROP_SATURATED_RAISES,
+      g_param_spec_boolean("saturated-raises", "Saturated raises",
+                           "Count a frame with saturated samples in the region (too bright to "
+                           "read: hotter than its readings) as above the threshold; false: "
+                           "by its readings, which then miss the hottest part",
+                           DEFAULT_SATURATED_RAISES, playing));
 
   gst_element_class_set_static_metadata(
       element_class, "Thermal alarm", "Filter/Analyzer/Video",

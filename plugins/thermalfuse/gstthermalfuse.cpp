@@ -27,7 +27,9 @@
  */
 #include "gstthermalfuse.h"
 
+#include <algorithm>
 #include <cmath>
+#include <deque>
 #include <memory>
 #include <opencv2/core.hpp>
 
@@ -52,10 +54,32 @@ struct Settings {
   guint frames = DEFAULT_FRAMES;
 };
 
+// A held frame's light and saturation (PyrocamSaturationMeta's fields; none: frame_width 0).
+struct HeldSaturation {
+  double light = 0;
+  PyrocamSaturationMeta saturation{};
+};
+
 struct State {
   std::unique_ptr<pyrocam::BracketFusion> fusion;  // of settings' frames; rebuilt on a change
+  std::deque<HeldSaturation> held;                 // the frames the fusion holds, oldest first
   bool warned_no_exposure = false;
 };
+
+/* A pixel saturated in the frame with the least light is saturated in every frame (each band
+ * brighter with more light), so it has no reading in the fused frame either: that frame's
+ * saturation is the fused frame's. */
+void set_fused_saturation(GstBuffer* buffer, const std::deque<HeldSaturation>& fused) {
+  const HeldSaturation* least = nullptr;
+  for (const HeldSaturation& h : fused)
+    if (!least || h.light < least->light) least = &h;
+  if (PyrocamSaturationMeta* own = pyrocam_buffer_get_saturation_meta(buffer))
+    gst_buffer_remove_meta(buffer, &own->meta);
+  if (!least || least->saturation.frame_width <= 0) return;  // not known
+  const PyrocamSaturationMeta& m = least->saturation;
+  pyrocam_buffer_set_saturation_meta(buffer, m.samples, m.x, m.y, m.width, m.height, m.frame_width,
+                                     m.frame_height);
+}
 
 }  // namespace
 
@@ -87,6 +111,7 @@ static gboolean gst_thermal_fuse_set_info(GstVideoFilter* filter, GstCaps*, GstV
                                           GstVideoInfo*) {
   State& st = *GST_THERMAL_FUSE(filter)->state;
   if (st.fusion) st.fusion->reset();
+  st.held.clear();
   return TRUE;
 }
 
@@ -94,6 +119,7 @@ static gboolean gst_thermal_fuse_sink_event(GstBaseTransform* trans, GstEvent* e
   if (GST_EVENT_TYPE(event) == GST_EVENT_FLUSH_STOP) {
     State& st = *GST_THERMAL_FUSE(trans)->state;
     if (st.fusion) st.fusion->reset();
+    st.held.clear();
   }
   return GST_BASE_TRANSFORM_CLASS(gst_thermal_fuse_parent_class)->sink_event(trans, event);
 }
@@ -103,11 +129,14 @@ static GstFlowReturn gst_thermal_fuse_transform_frame_ip(GstVideoFilter* filter,
   GstThermalFuse* self = GST_THERMAL_FUSE(filter);
   State& st = *self->state;
   const int frames = static_cast<int>(pg::locked_copy(self, self->settings->frames));
-  if (!st.fusion || st.fusion->frames() != frames)
+  if (!st.fusion || st.fusion->frames() != frames) {
     st.fusion = std::make_unique<pyrocam::BracketFusion>(frames);
+    st.held.clear();
+  }
   const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(frame->buffer);
   if (meta == nullptr || !(meta->exposure_us > 0)) {
     st.fusion->reset();
+    st.held.clear();
     pg::warn_frame_without_exposure(GST_ELEMENT(self), st.warned_no_exposure);
     return GST_FLOW_OK;
   }
@@ -115,9 +144,23 @@ static GstFlowReturn gst_thermal_fuse_transform_frame_ip(GstVideoFilter* filter,
   cv::Mat codes(GST_VIDEO_FRAME_HEIGHT(frame), GST_VIDEO_FRAME_WIDTH(frame), CV_16U,
                 GST_VIDEO_FRAME_PLANE_DATA(frame, 0),
                 static_cast<std::size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(frame, 0)));
+  const std::size_t before = st.fusion->held();
   const bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not fuse the bracket",
                                   [&] { st.fusion->add(codes, light, codes); });
-  return ok ? GST_FLOW_OK : GST_FLOW_ERROR;
+  if (!ok) return GST_FLOW_ERROR;
+  // The frames fused: those held before and this one, or this one alone where the fusion
+  // started anew (a new frame size).
+  const std::size_t expected =
+      std::min<std::size_t>(before + 1, static_cast<std::size_t>(frames - 1));
+  if (st.fusion->held() < expected) st.held.clear();
+  HeldSaturation now;
+  now.light = light;
+  if (const PyrocamSaturationMeta* m = pyrocam_buffer_get_saturation_meta(frame->buffer))
+    now.saturation = *m;
+  st.held.push_back(now);
+  set_fused_saturation(frame->buffer, st.held);
+  while (st.held.size() > st.fusion->held()) st.held.pop_front();
+  return GST_FLOW_OK;
 }
 
 static void gst_thermal_fuse_set_property(GObject* object, guint prop_id, const GValue* value,

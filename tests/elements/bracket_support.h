@@ -1,6 +1,6 @@
 // Runs a pipeline ending in `fakesink name=sink` and keeps each buffer's values and the
-// exposure of its PyrocamExposureMeta, with the warnings on the bus: for the bracket fusions'
-// tests (thermalfuse, mosaicfuse).
+// exposure of its PyrocamExposureMeta (and its PyrocamSaturationMeta's samples), with the warnings
+// on the bus: for the bracket fusions' tests (thermalfuse, mosaicfuse).
 #pragma once
 
 #include <string>
@@ -14,7 +14,8 @@ namespace pyrocam::test {
 template <typename T>
 struct BracketFrame {
   std::vector<T> values;
-  double exposure_us = -1;  // -1: no exposure metadata
+  double exposure_us = -1;   // -1: no exposure metadata
+  long long saturated = -1;  // PyrocamSaturationMeta's samples; -1: no saturation metadata
 };
 
 template <typename T>
@@ -31,8 +32,13 @@ void on_bracket_frame(GstElement*, GstBuffer* buffer, GstPad*, gpointer data) {
   const auto* meta =
       api ? reinterpret_cast<const PyrocamExposureMeta*>(gst_buffer_get_meta(buffer, api))
           : nullptr;
+  const GType saturation_api = g_type_from_name("PyrocamSaturationMetaAPI");
+  const auto* saturation = saturation_api ? reinterpret_cast<const PyrocamSaturationMeta*>(
+                                                gst_buffer_get_meta(buffer, saturation_api))
+                                          : nullptr;
   static_cast<std::vector<BracketFrame<T>>*>(data)->push_back(
-      {values_of<T>(buffer), meta ? meta->exposure_us : -1});
+      {values_of<T>(buffer), meta ? meta->exposure_us : -1,
+       saturation ? static_cast<long long>(saturation->samples) : -1});
 }
 
 template <typename T>

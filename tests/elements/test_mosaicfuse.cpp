@@ -56,6 +56,18 @@ TEST(MosaicFuse, EachSampleFromTheMostExposedOfTheLastFramesScaledToIt) {
       fused_numbers += std::isfinite(want);
     }
   }
+  // Each fused mosaic says how many of its samples are still saturated; darksub's frames too.
+  std::size_t saturated_plain = 0;
+  for (std::size_t k = 0; k < 9; ++k) {
+    for (const FuseRun* r : {&plain, &fused}) {
+      const auto& v = r->frames[k].values;
+      EXPECT_EQ(r->frames[k].saturated,
+                std::count(v.begin(), v.end(), std::numeric_limits<float>::infinity()))
+          << "frame " << k;
+    }
+    saturated_plain += static_cast<std::size_t>(std::max(0LL, plain.frames[k].saturated));
+  }
+  EXPECT_GT(saturated_plain, 0u);  // the long exposures saturate the pool
   // The bracket matters here: samples came from other frames, and more of them are numbers.
   EXPECT_GT(from_earlier, 0u);
   EXPECT_GT(fused_numbers, plain_numbers);

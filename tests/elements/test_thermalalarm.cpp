@@ -1,8 +1,10 @@
 // thermalalarm: frames pass unchanged; the pyrocam-alarm message on raise and clear with its
 // fields; median against peak (a wild edge pixel raises nothing); region; bad settings.
 #include <cmath>
+#include <opencv2/core.hpp>
 
 #include "element_support.h"
+#include "pyrocam-meta.h"
 
 namespace pyrocam::test {
 namespace {
@@ -32,9 +34,30 @@ class ThermalAlarm : public HarnessTest {
   }
   // Pushes one frame with pts n/30 s, checks it comes out unchanged, and returns the alarm
   // messages it caused.
-  std::vector<GstStructure*> push(const std::vector<std::uint16_t>& codes) {
+  // `saturated`: a PyrocamSaturationMeta naming that rectangle of a frame twice this size (a
+  // colour mosaic of a 5x5-binned stream would be 5x; any other size is scaled alike).
+  std::vector<GstStructure*> push(const std::vector<std::uint16_t>& codes,
+                                  const cv::Rect& saturated = {}) {
     const GstClockTime pts = gst_util_uint64_scale(n_++, GST_SECOND, 30);
-    EXPECT_EQ(push_pull<std::uint16_t>(h, with_pts(buffer_from(codes), pts)), codes);
+    GstBuffer* in = with_pts(buffer_from(codes), pts);
+    if (!saturated.empty()) {
+      // By the meta's registered name: the test does not link the plugin.
+      const GstMetaInfo* info = gst_meta_get_info("PyrocamSaturationMeta");
+      EXPECT_NE(info, nullptr);
+      auto* m =
+          info ? reinterpret_cast<PyrocamSaturationMeta*>(gst_buffer_add_meta(in, info, nullptr))
+               : nullptr;
+      if (m) {
+        m->samples = static_cast<guint64>(saturated.area());
+        m->x = 2 * saturated.x;
+        m->y = 2 * saturated.y;
+        m->width = 2 * saturated.width;
+        m->height = 2 * saturated.height;
+        m->frame_width = 2 * kW;
+        m->frame_height = 2 * kH;
+      }
+    }
+    EXPECT_EQ(push_pull<std::uint16_t>(h, in), codes);
     std::vector<GstStructure*> out;
     while (GstMessage* m = gst_bus_pop(bus)) {
       const GstStructure* s = gst_message_get_structure(m);
@@ -47,10 +70,11 @@ class ThermalAlarm : public HarnessTest {
     return out;
   }
   // The states ("raised"/"cleared", "" for none) of pushing each frame.
-  std::string states(const std::vector<std::vector<std::uint16_t>>& frames) {
+  std::string states(const std::vector<std::vector<std::uint16_t>>& frames,
+                     const cv::Rect& saturated = {}) {
     std::string out;
     for (const auto& f : frames) {
-      auto messages = push(f);
+      auto messages = push(f, saturated);
       EXPECT_LE(messages.size(), 1u);
       out += messages.empty() ? '.' : gst_structure_get_string(messages[0], "state")[0];
       for (GstStructure* s : messages) gst_structure_free(s);
@@ -152,6 +176,42 @@ TEST_F(ThermalAlarm, FramesWithoutAReadingDoNotClearARaisedAlarm) {
   start("thermalalarm threshold-c=1500 frames=2 region=4,3,6,6");
   const auto hot = frame(900, 1600), saturated = frame(900, 0), cool = frame(900, 1000);
   EXPECT_EQ(states({hot, hot, saturated, saturated, saturated, cool, cool}), ".r....c");
+}
+
+// A saturated core reads nothing, and the rim's readings are below the object: frames whose
+// meta puts saturated samples in the region (within the kernels' reach of 2 pixels) count as
+// above the threshold, unless saturated-raises is off; saturation elsewhere does not count.
+TEST_F(ThermalAlarm, SaturatedSamplesInTheRegionCountAsAboveTheThreshold) {
+  start("thermalalarm threshold-c=1500 frames=2 statistic=peak region=4,3,6,6");
+  gboolean raises = FALSE;
+  GstElement* e = find_element(h, "thermalalarm");
+  g_object_get(e, "saturated-raises", &raises, nullptr);
+  gst_object_unref(e);
+  EXPECT_TRUE(raises);
+  const auto rim = frame(900, 1400);  // the rim reads below the threshold
+  const cv::Rect core(6, 5, 2, 2), far(14, 0, 1, 1), near(11, 5, 1, 1);
+  EXPECT_EQ(states({rim, rim}, far), "..");
+  EXPECT_EQ(states({rim, rim}, core), ".r");
+  auto m = push(rim, core);  // no change, no message
+  EXPECT_TRUE(m.empty());
+  EXPECT_EQ(states({rim}), ".");  // one readable frame below does not clear
+  m = push(rim);
+  ASSERT_EQ(m.size(), 1u);
+  gboolean saturated = TRUE;
+  EXPECT_TRUE(gst_structure_get_boolean(m[0], "saturated", &saturated));
+  EXPECT_FALSE(saturated);
+  EXPECT_STREQ(gst_structure_get_string(m[0], "state"), "cleared");
+  for (GstStructure* st : m) gst_structure_free(st);
+  // Beside the region, within two pixels of it: the kernels reach in.
+  EXPECT_EQ(states({rim}, near), ".");
+  m = push(rim, near);
+  ASSERT_EQ(m.size(), 1u);
+  EXPECT_TRUE(gst_structure_get_boolean(m[0], "saturated", &saturated));
+  EXPECT_TRUE(saturated);
+  for (GstStructure* st : m) gst_structure_free(st);
+  set("saturated-raises", FALSE);
+  EXPECT_EQ(states({rim, rim, rim}), ".c.");  // by the readings: cleared after 2
+  EXPECT_EQ(states({rim, rim, rim}, core), "...");
 }
 
 TEST_F(ThermalAlarm, TurningTheThresholdOffClearsARaisedAlarm) {

@@ -58,6 +58,18 @@ TEST(ThermalFuse, EachPixelFromTheMostExposedOfTheLastFramesThatReadsIt) {
       fused_readings += want != 0;
     }
   }
+  // A pixel saturated at the shortest exposure held is saturated at every one: the fused
+  // frame carries that frame's saturation.
+  bool saturated_long = false;
+  for (std::size_t k = 0; k < 9; ++k) {
+    std::size_t least = k;
+    for (std::size_t j = k >= 2 ? k - 2 : 0; j <= k; ++j)
+      if (plain.frames[j].exposure_us < plain.frames[least].exposure_us) least = j;
+    ASSERT_GE(plain.frames[k].saturated, 0) << "frame " << k;
+    EXPECT_EQ(fused.frames[k].saturated, plain.frames[least].saturated) << "frame " << k;
+    saturated_long |= plain.frames[k].saturated > plain.frames[least].saturated;
+  }
+  EXPECT_TRUE(saturated_long);  // the long exposures saturate more of the pool
   // The bracket matters here: the fusion took readings from earlier frames and read more.
   EXPECT_GT(from_earlier, 0u);
   EXPECT_GT(fused_readings, plain_readings);

@@ -335,8 +335,11 @@ TEST(RecordingsLauncher, stats_csv_keeps_its_columns_without_readings_and_refuse
     return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
   };
   ASSERT_LT(col("region-peak-y"), header.size());
+  ASSERT_EQ(col("region-saturated"), header.size() - 1);  // columns only get appended
   for (std::size_t i = 1; i < rows.size(); ++i) {
     ASSERT_EQ(rows[i].size(), header.size()) << "row " << i;
+    EXPECT_NE(rows[i][col("saturated")], "");  // a count, 0 or more
+    EXPECT_EQ(rows[i][col("region-saturated")], "");
     EXPECT_EQ(rows[i][col("valid")], "0");
     EXPECT_EQ(rows[i][col("pixels")], "192");
     EXPECT_EQ(rows[i][col("min-c")], "");
@@ -390,7 +393,7 @@ TEST(RecordingsLauncher, alarm_csv_has_a_row_per_change_of_state) {
   EXPECT_EQ(rows[0], (std::vector<std::string>{"element", "state", "active", "statistic", "value-c",
                                                "threshold-c", "clear-c", "frames", "timestamp",
                                                "running-time", "region-x", "region-y",
-                                               "region-width", "region-height"}));
+                                               "region-width", "region-height", "saturated"}));
   const auto& r = rows[1];
   ASSERT_EQ(r.size(), rows[0].size());
   EXPECT_EQ(r[0], "thermalalarm0");

@@ -326,17 +326,28 @@ void draw_scale_bar(cv::Mat& image, Palette palette, double min_c, double max_c,
   }
 }
 
-void draw_peak_marker(cv::Mat& image, int x, int y, double peak_c, ChannelOrder order) {
+std::string peak_label(double peak_c, bool saturated) {
+  if (std::isnan(peak_c)) return saturated ? "saturated, no reading" : "";
+  char text[64];
+  std::snprintf(text, sizeof text, saturated ? "peak >= %.0f degC (saturated)" : "peak %.0f degC",
+                peak_c);
+  return text;
+}
+
+void draw_peak_marker(cv::Mat& image, int x, int y, double peak_c, ChannelOrder order,
+                      bool saturated) {
   if (image.type() != CV_8UC4) throw InputError("peak marker: image must be CV_8UC4");
-  if (x < 0 || y < 0 || std::isnan(peak_c)) return;
+  const bool found = x >= 0 && y >= 0 && !std::isnan(peak_c);
+  const std::string text = peak_label(found ? peak_c : NAN, saturated);
+  if (text.empty()) return;
   auto scalar = [order](std::uint8_t r, std::uint8_t g, std::uint8_t b) {
     return order == ChannelOrder::kRGBA ? cv::Scalar(r, g, b, 255) : cv::Scalar(b, g, r, 255);
   };
-  const int radius = std::max(4, std::min(image.cols, image.rows) / 30);
-  cv::circle(image, {x, y}, radius, scalar(0, 0, 0), 3, cv::LINE_AA);
-  cv::circle(image, {x, y}, radius, scalar(0, 255, 255), 1, cv::LINE_AA);
-  char text[48];
-  std::snprintf(text, sizeof text, "peak %.0f degC", peak_c);
+  if (found) {
+    const int radius = std::max(4, std::min(image.cols, image.rows) / 30);
+    cv::circle(image, {x, y}, radius, scalar(0, 0, 0), 3, cv::LINE_AA);
+    cv::circle(image, {x, y}, radius, scalar(0, 255, 255), 1, cv::LINE_AA);
+  }
   const int font = cv::FONT_HERSHEY_SIMPLEX;
   const double scale = 0.5;
   int baseline = 0;

@@ -245,6 +245,21 @@ TEST(PeakMarker, RingsThePeakAndLabelsItOrDrawsNothingWithoutOne) {
   EXPECT_THROW(draw_peak_marker(grey, 1, 1, 1000, ChannelOrder::kRGBA), InputError);
 }
 
+// Where light saturated the camera, the readout says the peak is a lower bound, and says so
+// without a peak too (nothing read).
+TEST(PeakMarker, SaysWhenThePeakIsALowerBound) {
+  EXPECT_EQ(peak_label(2213.4, false), "peak 2213 degC");
+  EXPECT_EQ(peak_label(2213.4, true), "peak >= 2213 degC (saturated)");
+  EXPECT_EQ(peak_label(NAN, true), "saturated, no reading");
+  EXPECT_EQ(peak_label(NAN, false), "");
+  cv::Mat image(120, 160, CV_8UC4, cv::Scalar(0, 0, 0, 0));
+  draw_peak_marker(image, -1, -1, NAN, ChannelOrder::kRGBA, true);
+  std::vector<cv::Mat> channels;
+  cv::split(image, channels);
+  EXPECT_GT(cv::countNonZero(channels[3](cv::Rect(0, 0, 160, 20))), 50);  // the label
+  EXPECT_EQ(cv::countNonZero(channels[3](cv::Rect(0, 30, 160, 90))), 0);  // no ring
+}
+
 // Opaque overlay pixels replace the image's colour, transparent ones leave it, partial ones mix
 // in proportion to alpha (rounded to nearest); a BGRx image gets the overlay's channels swapped,
 // and its fourth byte is kept.

@@ -26,7 +26,8 @@ class AlarmMonitor {
   void configure(const AlarmSettings& settings);
   // One frame's statistic (degC). A frame without a reading (NaN) neither counts nor breaks a
   // run: a core that saturates now and then must not keep an alarm from being raised, nor
-  // clear one. With the alarm off (NaN threshold) a raised alarm is cleared at once.
+  // clear one. A part too bright to read (saturated) is +INFINITY: above any threshold. With
+  // the alarm off (NaN threshold) a raised alarm is cleared at once.
   AlarmChange update(double value_c);
   bool active() const { return active_; }
   const AlarmSettings& settings() const { return settings_; }
