@@ -18,30 +18,40 @@ std::string size_text(const cv::Mat& m) {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
+// How many of n raw samples are at or above the saturation level, compared as integers (many
+// more to a vector register than floats).
+template <typename T>
+int count_saturated(const T* __restrict r, int n, float saturation) {
+  if (!(saturation <= static_cast<float>(std::numeric_limits<T>::max()))) return 0;
+  const T at_least = static_cast<T>(std::max(0.0f, std::ceil(saturation)));
+  T brightest = 0;  // most rows have none: a maximum is the cheapest way to tell
+  for (int x = 0; x < n; ++x) brightest = std::max(brightest, r[x]);
+  if (brightest < at_least) return 0;
+  int saturated = 0;
+  for (int x = 0; x < n; ++x) saturated += r[x] >= at_least;
+  return saturated;
+}
+
 // One row; __restrict lets the compiler vectorise the select. Returns the saturated samples.
 template <typename T>
 int subtract_row(const T* __restrict r, const float* __restrict d, float* __restrict o, int n,
                  float saturation) {
-  int saturated = 0;
   for (int x = 0; x < n; ++x) {
     const float v = static_cast<float>(r[x]);
     const float signal = v - d[x];  // unconditionally, or the loop does not vectorise
-    saturated += v >= saturation;
     o[x] = v >= saturation ? kInf : signal;
   }
-  return saturated;
+  return count_saturated(r, n, saturation);
 }
 
 template <typename T>
 int subtract_level_row(const T* __restrict r, float level, float* __restrict o, int n,
                        float saturation) {
-  int saturated = 0;
   for (int x = 0; x < n; ++x) {
     const float v = static_cast<float>(r[x]);
-    saturated += v >= saturation;
     o[x] = v >= saturation ? kInf : v - level;
   }
-  return saturated;
+  return count_saturated(r, n, saturation);
 }
 
 // Runs row(y) for every row, over two threads for large frames, and sums up the saturated

@@ -64,6 +64,11 @@ TEST(DarkSub, sixteen_bit_frames_and_caller_buffers) {
   cv::Mat dark = dark_from_image((cv::Mat_<std::uint16_t>(1, 3) << 60, 60, 60));
   float buffer[3] = {1, 2, 3};
   cv::Mat out(1, 3, CV_32F, buffer);
+  const SaturatedSamples saturated = subtract_dark(raw, dark, default_saturation_level(12), out);
+  EXPECT_EQ(saturated.count, 1u);
+  EXPECT_EQ(saturated.bounds, cv::Rect(1, 0, 1, 1));
+  EXPECT_EQ(subtract_dark_level(raw, 60, 3999.5, out).count, 1u);  // 4000 >= 3999.5
+  EXPECT_EQ(subtract_dark_level(raw, 60, 4000.5, out).count, 0u);
   subtract_dark(raw, dark, default_saturation_level(12), out);
   EXPECT_EQ(out.ptr<float>(), buffer);  // written in place
   EXPECT_EQ(buffer[0], 40.f);
