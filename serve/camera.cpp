@@ -47,12 +47,18 @@ std::string camera_description(const CameraConfig& c) {
     alarm = " ! thermalalarm name=alarm";
     for (const std::string& p : c.alarm) alarm += " " + p;
   }
+  // autoexposure measures raw levels above darksub's dark level, where --dark gives one.
+  std::string exposure;
+  if (c.exposure_control) {
+    exposure = " ! autoexposure";
+    if (c.dark.rfind("dark-level=", 0) == 0) exposure += " " + c.dark;
+  }
   // Queues that drop rather than wait: a slow consumer (encoder, JPEG) never holds the camera.
   const std::string leaky =
       "queue leaky=downstream max-size-buffers=2 max-size-time=0 "
       "max-size-bytes=0";
   const std::string sink = " sync=false max-buffers=2 drop=true";
-  return c.camera + " ! " + c.caps +
+  return c.camera + " ! " + c.caps + exposure +
          " ! watchdog name=camera-sent-no-frame timeout=" + std::to_string(c.watchdog_ms) +
          " ! tee name=camera " + "camera. ! queue ! darksub " + c.dark + " ! demosaic25 ! " +
          ratiotemp + alarm +

@@ -18,6 +18,7 @@ struct CameraConfig {
   std::string camera = "pyrocamsrc is-live=true scene=melt-pool";
   std::string caps = "video/x-bayer,width=320,height=240,framerate=30/1";
   std::string dark = "dark-level=50";
+  bool exposure_control = false;  // autoexposure after the camera
   std::string model;
   std::string profile;
   std::string region;

@@ -89,6 +89,11 @@ int main(int argc, char** argv) {
                  "Calibrated model (pyrocam-calib calibrate; scripts/main-job.sh writes "
                  "out/model-rgb.json)")
       ->capture_default_str();
+  app.add_flag("--exposure-control", o.camera.exposure_control,
+               "Put autoexposure after the camera: it sets the camera's exposure (pyrocamsrc, "
+               "aravissrc) so that the frame's brightest sample sits at 70 % of the usable range; "
+               "without it a melt pool's core saturates, has no reading, and the page's peak is "
+               "only a lower bound");
   app.add_option("--profile", o.camera.profile,
                  "Camera profile for ratiotemp (a 5x5 camera that does not say its band map)");
   app.add_option("--region", o.camera.region,

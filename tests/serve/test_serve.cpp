@@ -488,6 +488,17 @@ TEST(Serve, BadInputRegionTracking) {
   ASSERT_TRUE(printed_status.has_value());
   EXPECT_EQ(*printed_status, 0) << printed.log();
   EXPECT_NE(printed.log().find("region-tracks-peak=true"), std::string::npos) << printed.log();
+  // Exposure control: autoexposure right after the caps, with darksub's dark level.
+  Process controlled(
+      {serve_binary(), "--model", rgb_model(), "--exposure-control", "--print-pipeline"}, Env{},
+      (dir / "exposure.log").string());
+  const auto controlled_status = controlled.wait_for(milliseconds(20000));
+  ASSERT_TRUE(controlled_status.has_value());
+  EXPECT_EQ(*controlled_status, 0) << controlled.log();
+  EXPECT_NE(controlled.log().find("framerate=30/1 ! autoexposure dark-level=50 ! watchdog"),
+            std::string::npos)
+      << controlled.log();
+  EXPECT_EQ(printed.log().find("autoexposure"), std::string::npos) << printed.log();
 }
 
 TEST(Serve, BadInputModel) {
