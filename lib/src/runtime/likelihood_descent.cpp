@@ -38,29 +38,27 @@ LocusDescent::LocusDescent(const Eigen::MatrixXd& rates, const double* m, const 
     fast_count += slope[b] > median;
   }
   if (fast_count == 0 || fast_count == bands_) return;
-  std::vector<double> log_ratio(static_cast<std::size_t>(samples_));
+  std::vector<double> fraction(static_cast<std::size_t>(samples_));
+  Eigen::RowVectorXd row(bands_);
   for (Eigen::Index i = 0; i < samples_; ++i) {
-    const double fast = rates.row(i) * Eigen::Map<const Eigen::VectorXd>(fast_.data(), bands_);
-    const double r = portable::log(fast / (rates.row(i).sum() - fast));
-    if (!std::isfinite(r) || (i > 0 && !(r > log_ratio[static_cast<std::size_t>(i - 1)]))) return;
-    log_ratio[static_cast<std::size_t>(i)] = r;
+    row = rates.row(i);
+    const double f = fast_fraction(row.data(), fast_.data(), bands_);
+    if (!std::isfinite(f) || (i > 0 && !(f > fraction[static_cast<std::size_t>(i - 1)]))) return;
+    fraction[static_cast<std::size_t>(i)] = f;
   }
-  first_log_ = log_ratio.front();
-  per_log_ = (kGuesses - 1) / (log_ratio.back() - first_log_);
+  first_ = fraction.front();
+  per_ = (kGuesses - 1) / (fraction.back() - first_);
   guess_.resize(kGuesses);
   for (std::size_t j = 0; j < guess_.size(); ++j)
-    guess_[j] =
-        static_cast<std::int32_t>(std::lower_bound(log_ratio.begin(), log_ratio.end(),
-                                                   first_log_ + static_cast<double>(j) / per_log_) -
-                                  log_ratio.begin());
+    guess_[j] = static_cast<std::int32_t>(
+        std::lower_bound(fraction.begin(), fraction.end(), first_ + static_cast<double>(j) / per_) -
+        fraction.begin());
   usable_ = true;
 }
 
 bool LocusDescent::descend(const double* s, const double* w, const double* ws, double sss,
                            Eigen::Index& at, double* chi2) const {
-  double fast = 0, all = 0;
-  for (int b = 0; b < bands_; ++b) fast += fast_[static_cast<std::size_t>(b)] * s[b], all += s[b];
-  const double cell = (portable::log(fast / (all - fast)) - first_log_) * per_log_;
+  const double cell = (fast_fraction(s, fast_.data(), bands_) - first_) * per_;
   const double last = static_cast<double>(guess_.size() - 1);
   const auto j = cell > 0 ? static_cast<std::size_t>(std::min(cell, last)) : 0;  // NaN: 0
   at = std::clamp<Eigen::Index>(guess_[j], 1, samples_ - 2);

@@ -46,10 +46,11 @@ class LocusDescent {
   int bands_;
   Eigen::Index samples_;
   std::vector<double> fast_;  // per band: 1 where it brightens faster than the median band
-  // The first guess: the sample where the ratio of fast to other bands' sums reaches log ratio
-  // first_log_ + j / per_log_ (lower bound on the locus), j < kGuesses.
+  // The first guess: the sample where the fraction of the signal in the fast bands reaches
+  // first_ + j / per_ (lower bound on the locus), j < kGuesses. The fraction, not a log ratio:
+  // one division instead of a logarithm, and a third of a sample per cell all the same.
   std::vector<std::int32_t> guess_;  // int32: half the cache of an index
-  double first_log_ = 0, per_log_ = 0;
+  double first_ = 0, per_ = 0;
   bool usable_ = false;
 };
 

@@ -74,6 +74,19 @@ void profiled_chi2_three(const double* m, const double* m2, const double* ws, co
   }
 }
 
+PYROCAM_VECTOR_CLONES
+double fast_fraction(const double* s, const double* fast, int bands) {
+  Lanes f = {0, 0, 0, 0}, a = f;
+  int b = 0;
+  for (; b + 4 <= bands; b += 4) {
+    const Lanes x = lanes_at(s + b);
+    f += x * lanes_at(fast + b);
+    a += x;
+  }
+  for (; b < bands; ++b) f[0] += s[b] * fast[b], a[0] += s[b];
+  return lane_sum(f) / lane_sum(a);
+}
+
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
 // and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
 // Returns how many bands read. Selects, so that the divisions vectorise.

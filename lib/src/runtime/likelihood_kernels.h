@@ -56,6 +56,10 @@ double profiled_chi2(const double* m, const double* m2, const double* ws, const 
 void profiled_chi2_three(const double* m, const double* m2, const double* ws, const double* w,
                          int bands, double sss, double* chi2);
 
+// sum(fast s) / sum(s) over the bands (fast: 0 or 1 per band), in the fixed lane order of
+// profiled_chi2: the descent's first guess (NaN or infinite where sum(s) is 0).
+double fast_fraction(const double* s, const double* fast, int bands);
+
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
 // and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
 // Returns how many bands read.
