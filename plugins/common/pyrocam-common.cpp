@@ -293,10 +293,11 @@ bool parse_region(const std::string& text, Region* out) {
   return ok;
 }
 
-cv::Rect saturated_rect(const PyrocamSaturationMeta* meta, int width, int height, int reach) {
+cv::Rect saturated_rect(const PyrocamSaturationMeta* meta, int width, int height) {
   if (!meta || meta->samples == 0 || meta->width <= 0 || meta->height <= 0 ||
       meta->frame_width <= 0 || meta->frame_height <= 0)
     return {};
+  const int reach = width < meta->frame_width ? 1 : 2;
   const auto down = [](gint v, int to, gint from) {
     return static_cast<int>(static_cast<gint64>(v) * to / from);
   };
@@ -308,6 +309,13 @@ cv::Rect saturated_rect(const PyrocamSaturationMeta* meta, int width, int height
                    cv::Point(up(meta->x + meta->width, width, meta->frame_width) + reach,
                              up(meta->y + meta->height, height, meta->frame_height) + reach));
   return r & cv::Rect(0, 0, width, height);
+}
+
+bool saturation_hides_readings(const PyrocamSaturationMeta* meta, const cv::Mat& codes,
+                               const cv::Rect& within) {
+  const cv::Rect r = saturated_rect(meta, codes.cols, codes.rows) & within;
+  if (r.empty()) return false;
+  return cv::countNonZero(codes(r)) < r.area();
 }
 
 }  // namespace pyrocam::gst

@@ -137,12 +137,17 @@ GParamSpec* bracket_frames_param(guint default_frames);
  * PyrocamExposureMeta on unfused: once, when `warned` is false (it is then set). */
 void warn_frame_without_exposure(GstElement* element, bool& warned);
 
-/* The part of a width x height frame that holds the saturated samples `meta` names (scaled from
- * the meta's frame, widened by `reach` pixels and clipped); empty without a meta or samples. */
-cv::Rect saturated_rect(const PyrocamSaturationMeta* meta, int width, int height, int reach);
-/* What the temperature elements widen it by: the reach of demosaic25's kernels (matched Bayer:
- * 2 pixels; matched 5x5 cells: 1 macro-pixel). */
-constexpr int SATURATION_REACH = 2;
+/* The part of a width x height frame that holds the saturated samples `meta` names: scaled from
+ * the meta's frame, widened by the reach of demosaic25's kernels (2 pixels on a frame of the
+ * mosaic's size, matched Bayer; 1 macro-pixel on a smaller one, matched 5x5 cells) and
+ * clipped; empty without a meta or samples. */
+cv::Rect saturated_rect(const PyrocamSaturationMeta* meta, int width, int height);
+/* Whether saturation may hide a reading in `within` of a frame of temperature codes (CV_16U,
+ * 0 = no reading): a pixel without a reading where `meta` puts saturated samples. A saturated
+ * band does not always take the reading (the likelihood fit reads a 5x5 pixel from the bands
+ * that are left), and then nothing is hidden. */
+bool saturation_hides_readings(const PyrocamSaturationMeta* meta, const cv::Mat& codes,
+                               const cv::Rect& within);
 
 /* How a failure is reported on the bus (STYLE.md: errors carry a domain, a user message and a
  * debug message). */

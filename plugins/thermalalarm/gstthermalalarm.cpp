@@ -11,10 +11,11 @@
  * never clear a raised alarm.
  *
  * A part too bright for the exposure has no reading either, and the statistic of the rest (a
- * saturated melt pool's rim) reads below the object. Frames whose PyrocamSaturationMeta (from
- * darksub, carried through demosaic25 and ratiotemp) puts saturated samples in the region,
- * within the demosaicking kernels' reach, therefore count as above the threshold by default
- * (#GstThermalAlarm:saturated-raises): the alarm errs towards raising. With the property off
+ * saturated melt pool's rim) reads below the object. Frames whose region has pixels without a
+ * reading within the demosaicking kernels' reach of the saturated samples named by their
+ * PyrocamSaturationMeta (from darksub, carried through demosaic25 and ratiotemp) therefore
+ * count as above the threshold by default (#GstThermalAlarm:saturated-raises): the alarm errs
+ * towards raising. With the property off, and where saturation left every pixel a reading,
  * they count by their readings.
  *
  * The message's fields:
@@ -246,11 +247,11 @@ static GstFlowReturn gst_thermal_alarm_transform_frame_ip(GstVideoFilter* filter
   const cv::Mat codes(height, width, CV_16U, GST_VIDEO_FRAME_PLANE_DATA(frame, 0),
                       static_cast<std::size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(frame, 0)));
   double value_c = NAN;
+  // Saturated samples that took readings in the region: the part hidden is hotter than what
+  // reads there.
   const bool saturated = settings.saturated_raises &&
-                         !(pg::saturated_rect(pyrocam_buffer_get_saturation_meta(frame->buffer),
-                                              width, height, pg::SATURATION_REACH) &
-                           region)
-                              .empty();
+                         pg::saturation_hides_readings(
+                             pyrocam_buffer_get_saturation_meta(frame->buffer), codes, region);
   pyrocam::AlarmChange change = pyrocam::AlarmChange::kNone;
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kNumeric, "Could not compute the alarm statistic", [&] {
         const cv::Mat t = pyrocam::decode_decikelvin(codes(region));
@@ -417,9 +418,10 @@ static void gst_thermal_alarm_class_init(GstThermalAlarmClass* klass) {
   g_object_class_install_property(
       gobject_class, PROP_SATURATED_RAISES,
       g_param_spec_boolean("saturated-raises", "Saturated raises",
-                           "Count a frame with saturated samples in the region (too bright to "
-                           "read: hotter than its readings) as above the threshold; false: "
-                           "by its readings, which then miss the hottest part",
+                           "Count a frame whose region has pixels left without a reading by "
+                           "saturated samples (too bright to read: hotter than its readings) as "
+                           "above the threshold; false: by its readings, which then miss the "
+                           "hottest part",
                            DEFAULT_SATURATED_RAISES, playing));
 
   gst_element_class_set_static_metadata(

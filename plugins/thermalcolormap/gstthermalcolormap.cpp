@@ -14,10 +14,10 @@
  * #GstThermalColormap:scale-bar draws the palette with labelled ticks in degC at the right edge.
  * #GstThermalColormap:peak-marker rings the frame's peak (the largest median of
  * #GstThermalColormap:peak-window square windows, as ratiotemp's peak-c) and writes its
- * temperature at the top left: "peak 2213 degC", or "peak >= 2213 degC (saturated)" when the
- * frame's PyrocamSaturationMeta (darksub's, carried through demosaic25 and ratiotemp) says
- * that light saturated the camera somewhere in it: a part without a reading is then hotter
- * than the peak read ("saturated, no reading" when nothing reads).
+ * temperature at the top left: "peak 2213 degC", or "peak >= 2213 degC (saturated)" where
+ * pixels have no reading beside the saturated samples the frame's PyrocamSaturationMeta
+ * (darksub's, carried through demosaic25 and ratiotemp) names: that part is hotter than the
+ * peak read ("saturated, no reading" when nothing reads).
  *
  * In fixed mode a range narrower than one temperature code (max-temperature - min-temperature
  * below 0.1 degC, including min-temperature >= max-temperature) is refused with a warning on
@@ -298,10 +298,11 @@ static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter
       if (window <= width && window <= height) {
         const pyrocam::RegionPeak peak =
             pyrocam::region_peak(pyrocam::decode_decikelvin(in), window);
-        // Light saturated somewhere in the frame: a part without a reading is hotter.
-        const PyrocamSaturationMeta* sat = pyrocam_buffer_get_saturation_meta(in_frame->buffer);
-        pyrocam::draw_peak_marker(out, peak.x, peak.y, peak.c, cs.order,
-                                  sat != nullptr && sat->samples > 0);
+        // Light saturated the camera where pixels have no reading: they are hotter.
+        const bool saturated =
+            pg::saturation_hides_readings(pyrocam_buffer_get_saturation_meta(in_frame->buffer), in,
+                                          cv::Rect(0, 0, width, height));
+        pyrocam::draw_peak_marker(out, peak.x, peak.y, peak.c, cs.order, saturated);
       } else if (!st.warned_peak_window) {
         GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
                             ("peak-window %d is larger than the %dx%d frame: no peak marker",

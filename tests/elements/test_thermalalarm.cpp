@@ -1,5 +1,6 @@
 // thermalalarm: frames pass unchanged; the pyrocam-alarm message on raise and clear with its
 // fields; median against peak (a wild edge pixel raises nothing); region; bad settings.
+#include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
 
@@ -34,10 +35,10 @@ class ThermalAlarm : public HarnessTest {
   }
   // Pushes one frame with pts n/30 s, checks it comes out unchanged, and returns the alarm
   // messages it caused.
-  // `saturated`: a PyrocamSaturationMeta naming that rectangle of a frame twice this size (a
-  // colour mosaic of a 5x5-binned stream would be 5x; any other size is scaled alike).
+  // `saturated`: a PyrocamSaturationMeta naming that rectangle of a mosaic `scale` times this
+  // size (1: a colour camera; 5: a 5x5 one, one temperature per 5x5 macro-pixel).
   std::vector<GstStructure*> push(const std::vector<std::uint16_t>& codes,
-                                  const cv::Rect& saturated = {}) {
+                                  const cv::Rect& saturated = {}, int scale = 1) {
     const GstClockTime pts = gst_util_uint64_scale(n_++, GST_SECOND, 30);
     GstBuffer* in = with_pts(buffer_from(codes), pts);
     if (!saturated.empty()) {
@@ -49,12 +50,12 @@ class ThermalAlarm : public HarnessTest {
                : nullptr;
       if (m) {
         m->samples = static_cast<guint64>(saturated.area());
-        m->x = 2 * saturated.x;
-        m->y = 2 * saturated.y;
-        m->width = 2 * saturated.width;
-        m->height = 2 * saturated.height;
-        m->frame_width = 2 * kW;
-        m->frame_height = 2 * kH;
+        m->x = scale * saturated.x;
+        m->y = scale * saturated.y;
+        m->width = scale * saturated.width;
+        m->height = scale * saturated.height;
+        m->frame_width = scale * kW;
+        m->frame_height = scale * kH;
       }
     }
     EXPECT_EQ(push_pull<std::uint16_t>(h, in), codes);
@@ -71,10 +72,10 @@ class ThermalAlarm : public HarnessTest {
   }
   // The states ("raised"/"cleared", "" for none) of pushing each frame.
   std::string states(const std::vector<std::vector<std::uint16_t>>& frames,
-                     const cv::Rect& saturated = {}) {
+                     const cv::Rect& saturated = {}, int scale = 1) {
     std::string out;
     for (const auto& f : frames) {
-      auto messages = push(f, saturated);
+      auto messages = push(f, saturated, scale);
       EXPECT_LE(messages.size(), 1u);
       out += messages.empty() ? '.' : gst_structure_get_string(messages[0], "state")[0];
       for (GstStructure* s : messages) gst_structure_free(s);
@@ -178,10 +179,20 @@ TEST_F(ThermalAlarm, FramesWithoutAReadingDoNotClearARaisedAlarm) {
   EXPECT_EQ(states({hot, hot, saturated, saturated, saturated, cool, cool}), ".r....c");
 }
 
+// The frame with the pixels within r of (cx, cy) without a reading: what a saturated sample
+// leaves through the demosaicking kernels.
+std::vector<std::uint16_t> with_hole(std::vector<std::uint16_t> v, int cx, int cy, int r) {
+  for (int y = std::max(0, cy - r); y <= std::min(kH - 1, cy + r); ++y)
+    for (int x = std::max(0, cx - r); x <= std::min(kW - 1, cx + r); ++x) v[y * kW + x] = 0;
+  return v;
+}
+
 // A saturated core reads nothing, and the rim's readings are below the object: frames whose
-// meta puts saturated samples in the region (within the kernels' reach of 2 pixels) count as
-// above the threshold, unless saturated-raises is off; saturation elsewhere does not count.
-TEST_F(ThermalAlarm, SaturatedSamplesInTheRegionCountAsAboveTheThreshold) {
+// meta puts saturated samples where the region has pixels without a reading (within the
+// kernels' reach: 2 pixels, 1 macro-pixel of a 5x5 camera) count as above the threshold,
+// unless saturated-raises is off. Saturation elsewhere, or saturation that left every pixel a
+// reading (a 5x5 pixel read from its other bands), counts by the readings.
+TEST_F(ThermalAlarm, SaturatedSamplesThatTookReadingsInTheRegionCountAsAboveTheThreshold) {
   start("thermalalarm threshold-c=1500 frames=2 statistic=peak region=4,3,6,6");
   gboolean raises = FALSE;
   GstElement* e = find_element(h, "thermalalarm");
@@ -189,10 +200,13 @@ TEST_F(ThermalAlarm, SaturatedSamplesInTheRegionCountAsAboveTheThreshold) {
   gst_object_unref(e);
   EXPECT_TRUE(raises);
   const auto rim = frame(900, 1400);  // the rim reads below the threshold
-  const cv::Rect core(6, 5, 2, 2), far(14, 0, 1, 1), near(11, 5, 1, 1);
-  EXPECT_EQ(states({rim, rim}, far), "..");
-  EXPECT_EQ(states({rim, rim}, core), ".r");
-  auto m = push(rim, core);  // no change, no message
+  const auto cored = with_hole(rim, 6, 5, 2), far_hole = with_hole(rim, 14, 0, 2),
+             near_hole = with_hole(rim, 11, 5, 2);
+  const cv::Rect core(6, 5, 1, 1), far(14, 0, 1, 1), near(11, 5, 1, 1);
+  EXPECT_EQ(states({far_hole, far_hole}, far), "..");
+  EXPECT_EQ(states({rim, rim}, core), "..");  // nothing hidden
+  EXPECT_EQ(states({cored, cored}, core), ".r");
+  auto m = push(cored, core);  // no change, no message
   EXPECT_TRUE(m.empty());
   EXPECT_EQ(states({rim}), ".");  // one readable frame below does not clear
   m = push(rim);
@@ -202,16 +216,21 @@ TEST_F(ThermalAlarm, SaturatedSamplesInTheRegionCountAsAboveTheThreshold) {
   EXPECT_FALSE(saturated);
   EXPECT_STREQ(gst_structure_get_string(m[0], "state"), "cleared");
   for (GstStructure* st : m) gst_structure_free(st);
-  // Beside the region, within two pixels of it: the kernels reach in.
-  EXPECT_EQ(states({rim}, near), ".");
-  m = push(rim, near);
+  // A pixel beside the region: its hole reaches in.
+  EXPECT_EQ(states({near_hole}, near), ".");
+  m = push(near_hole, near);
   ASSERT_EQ(m.size(), 1u);
   EXPECT_TRUE(gst_structure_get_boolean(m[0], "saturated", &saturated));
   EXPECT_TRUE(saturated);
   for (GstStructure* st : m) gst_structure_free(st);
   set("saturated-raises", FALSE);
   EXPECT_EQ(states({rim, rim, rim}), ".c.");  // by the readings: cleared after 2
-  EXPECT_EQ(states({rim, rim, rim}, core), "...");
+  EXPECT_EQ(states({cored, cored, cored}, core), "...");
+  // A 5x5 camera: the meta in mosaic pixels, scaled to macro-pixels; one of reach, so the hole
+  // a macro-pixel beside the region stays outside.
+  set("saturated-raises", TRUE);
+  EXPECT_EQ(states({near_hole, near_hole}, near, 5), "..");
+  EXPECT_EQ(states({cored, cored}, core, 5), ".r");
 }
 
 TEST_F(ThermalAlarm, TurningTheThresholdOffClearsARaisedAlarm) {

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "element_support.h"
+#include "pyrocam-meta.h"
 #include "pyrocam/runtime/colormap.h"
 
 namespace pyrocam::test {
@@ -150,6 +151,51 @@ TEST_F(ThermalColormap, scale_bar_is_opaque_over_invalid_pixels) {
       if (out[4 * (y * 160 + x) + 3] == 255) ++opaque;
     }
   EXPECT_GT(opaque, 300);
+}
+
+// The peak readout says "peak >= N degC (saturated)" where the frame's saturation meta names
+// samples that left pixels without a reading, and not where every pixel still reads: the label
+// differs (the same width of text would be drawn the same), nothing else does.
+TEST_F(ThermalColormap, peak_readout_is_a_lower_bound_where_saturation_hid_readings) {
+  const int w = 160, h_ = 120;
+  start("thermalcolormap peak-marker=true range-mode=fixed", "RGBA", w, h_);
+  std::vector<std::uint16_t> spot(w * h_, 0), cored;
+  for (int y = 50; y < 70; ++y)
+    for (int x = 70; x < 90; ++x) spot[y * w + x] = code_of(1600);
+  cored = spot;
+  for (int y = 58; y < 62; ++y)
+    for (int x = 78; x < 82; ++x) cored[y * w + x] = 0;  // the saturated core
+  const auto push_with_meta = [&](const std::vector<std::uint16_t>& codes, bool meta) {
+    GstBuffer* in = buffer_from(codes);
+    if (meta) {  // by the registered name: the test does not link the plugin
+      const GstMetaInfo* info = gst_meta_get_info("PyrocamSaturationMeta");
+      EXPECT_NE(info, nullptr);
+      if (auto* m = info ? reinterpret_cast<PyrocamSaturationMeta*>(
+                               gst_buffer_add_meta(in, info, nullptr))
+                         : nullptr) {
+        m->samples = 4;
+        m->x = 79;
+        m->y = 59;
+        m->width = m->height = 2;
+        m->frame_width = w;
+        m->frame_height = h_;
+      }
+    }
+    return push_pull<std::uint8_t>(h, in);
+  };
+  const auto plain = push_with_meta(cored, false), flagged = push_with_meta(cored, true),
+             all_read = push_with_meta(spot, true), spot_plain = push_with_meta(spot, false);
+  ASSERT_EQ(plain.size(), static_cast<std::size_t>(4 * w * h_));
+  EXPECT_EQ(all_read, spot_plain);  // saturation that hid nothing changes nothing
+  std::size_t label = 0, elsewhere = 0;
+  for (int y = 0; y < h_; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 4; ++c) {
+        const std::size_t i = static_cast<std::size_t>(4 * (y * w + x) + c);
+        (y < 24 ? label : elsewhere) += plain[i] != flagged[i];
+      }
+  EXPECT_GT(label, 100u);  // "peak >= N degC (saturated)" against "peak N degC"
+  EXPECT_EQ(elsewhere, 0u);
 }
 
 TEST_F(ThermalColormap, empty_fixed_range_warns_and_keeps_working_n) {
