@@ -5,7 +5,7 @@
 #include <opencv2/core.hpp>
 
 #include "element_support.h"
-#include "pyrocam-meta.h"
+#include "saturation_meta_support.h"
 
 namespace pyrocam::test {
 namespace {
@@ -41,23 +41,11 @@ class ThermalAlarm : public HarnessTest {
                                   const cv::Rect& saturated = {}, int scale = 1) {
     const GstClockTime pts = gst_util_uint64_scale(n_++, GST_SECOND, 30);
     GstBuffer* in = with_pts(buffer_from(codes), pts);
-    if (!saturated.empty()) {
-      // By the meta's registered name: the test does not link the plugin.
-      const GstMetaInfo* info = gst_meta_get_info("PyrocamSaturationMeta");
-      EXPECT_NE(info, nullptr);
-      auto* m =
-          info ? reinterpret_cast<PyrocamSaturationMeta*>(gst_buffer_add_meta(in, info, nullptr))
-               : nullptr;
-      if (m) {
-        m->samples = static_cast<guint64>(saturated.area());
-        m->x = scale * saturated.x;
-        m->y = scale * saturated.y;
-        m->width = scale * saturated.width;
-        m->height = scale * saturated.height;
-        m->frame_width = scale * kW;
-        m->frame_height = scale * kH;
-      }
-    }
+    if (!saturated.empty())
+      add_saturation_meta(in, static_cast<guint64>(saturated.area()),
+                          cv::Rect(scale * saturated.x, scale * saturated.y,
+                                   scale * saturated.width, scale * saturated.height),
+                          scale * kW, scale * kH);
     EXPECT_EQ(push_pull<std::uint16_t>(h, in), codes);
     std::vector<GstStructure*> out;
     while (GstMessage* m = gst_bus_pop(bus)) {

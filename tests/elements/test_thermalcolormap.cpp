@@ -3,8 +3,8 @@
 #include <cmath>
 
 #include "element_support.h"
-#include "pyrocam-meta.h"
 #include "pyrocam/runtime/colormap.h"
+#include "saturation_meta_support.h"
 
 namespace pyrocam::test {
 namespace {
@@ -167,20 +167,7 @@ TEST_F(ThermalColormap, peak_readout_is_a_lower_bound_where_saturation_hid_readi
     for (int x = 78; x < 82; ++x) cored[y * w + x] = 0;  // the saturated core
   const auto push_with_meta = [&](const std::vector<std::uint16_t>& codes, bool meta) {
     GstBuffer* in = buffer_from(codes);
-    if (meta) {  // by the registered name: the test does not link the plugin
-      const GstMetaInfo* info = gst_meta_get_info("PyrocamSaturationMeta");
-      EXPECT_NE(info, nullptr);
-      if (auto* m = info ? reinterpret_cast<PyrocamSaturationMeta*>(
-                               gst_buffer_add_meta(in, info, nullptr))
-                         : nullptr) {
-        m->samples = 4;
-        m->x = 79;
-        m->y = 59;
-        m->width = m->height = 2;
-        m->frame_width = w;
-        m->frame_height = h_;
-      }
-    }
+    if (meta) add_saturation_meta(in, 4, cv::Rect(79, 59, 2, 2), w, h_);
     return push_pull<std::uint8_t>(h, in);
   };
   const auto plain = push_with_meta(cored, false), flagged = push_with_meta(cored, true),
