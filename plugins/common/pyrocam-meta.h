@@ -29,7 +29,8 @@ PyrocamExposureMeta* pyrocam_buffer_add_exposure_meta(GstBuffer* buffer, gdouble
  * (thermalcolormap's peak readout, thermalalarm) know that a part of the frame without a
  * reading was too bright to read rather than cold: its temperature is above what the rest of
  * the frame reads. The rectangle is in pixels of a frame_width x frame_height frame (darksub's
- * mosaic); an element whose frames have another size (5x5 band planes) scales it. */
+ * mosaic); an element whose frames have another size (5x5 band planes) scales it. Elements
+ * that crop or flip frames carry it unchanged: read it before them. */
 typedef struct {
   GstMeta meta;
   guint64 samples;                /* raw samples at or above the saturation level; 0: none */

@@ -150,7 +150,7 @@ static GstFlowReturn gst_mosaic_fuse_transform_ip(GstBaseTransform* trans, GstBu
                      static_cast<GstMapFlags>(GST_MAP_READ | GST_MAP_WRITE));
     const double reference = st.fusion->add(mosaic.image(), now.light, mosaic.image());
     // Saturated now only where no frame of the bracket read: say where, for the elements
-    // downstream (the frame's own meta from darksub says more).
+    // downstream, in place of darksub's count for this frame alone.
     const pyrocam::SaturatedSamples saturated = pyrocam::find_saturated(mosaic.image());
     const cv::Rect& box = saturated.bounds;
     pyrocam_buffer_set_saturation_meta(buffer, saturated.count, box.x, box.y, box.width, box.height,
