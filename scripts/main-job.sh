@@ -2,7 +2,8 @@
 # README command 1: install what is missing, build, calibrate the simulated colour camera once
 # (a furnace campaign, then pyrocam-calib calibrate), and record a simulated melt pool through
 # the full chain (pyrocamsrc -> darksub -> demosaic25 -> ratiotemp -> thermalcolormap): a
-# radiometric recording (FFV1/Matroska segments) and a colour-mapped snapshot PNG.
+# radiometric recording (FFV1/Matroska segments), its statistics every 0.1 s as CSV and a
+# colour-mapped snapshot PNG.
 #
 # Settings (environment variables, defaults in brackets):
 #   PYROCAM_OUT  folder for everything it writes                         [out]
@@ -30,6 +31,7 @@ recording=$out/melt-pool-$(date +%Y%m%d-%H%M%S)
 echo "main-job: recording $frames frames of the simulated melt pool into $recording"
 # Not live: the frames are computed as fast as the machine can, with the same timestamps.
 MODEL=$model OUT=$recording NUM_BUFFERS=$frames SEGMENT_SECONDS=2 SNAPSHOT_RATE=1 \
+  STATS_CSV=$recording/stats.csv STATS_INTERVAL_MS=100 \
   CAPS=video/x-bayer,width=320,height=240,framerate=30/1 \
   EXPOSURE_CONTROL=1 PEAK_MARKER=1 SOURCE="pyrocamsrc scene=melt-pool" pipelines/record.sh >"$out/record.log" 2>&1 || {
   cat "$out/record.log" >&2
@@ -49,6 +51,16 @@ if ((decoded != frames)); then
   exit 1
 fi
 
+# The statistics: rows, and the most pixels a row had without a reading because of saturation
+# (the core hotter than anything read; exposure control should keep it at 0).
+stats=$recording/stats.csv
+read -r rows most_saturated < <(awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == "saturated") c = i; next }
+  { ++n; if (c && $c + 0 > m) m = $c + 0 } END { print n + 0, m + 0 }' "$stats")
+if ((rows == 0)); then
+  echo "main-job: no statistics in $stats" >&2
+  exit 1
+fi
+
 report=${model%.json}-report.html
 echo
 echo "model:             $model"
@@ -56,5 +68,7 @@ echo "model:             $model"
 echo "thermal recording: $recording/ (${#segments[@]} segments, $decoded frames, all decoded back:"
 echo "                   320x240 GRAY16_LE in FFV1/Matroska, 0.1 K per step, 0 = no reading)"
 printf '                   %s\n' "${segments[@]}"
+echo "statistics:        $stats ($rows rows, every 0.1 s: median, peak, ...;"
+echo "                   at most $most_saturated pixels without a reading because of saturation)"
 echo "colour snapshot:   $recording/view.png"
 echo "play it back:      pipelines/playback.sh $recording"
