@@ -103,11 +103,14 @@
  * - with #GstRatioTemp:region set: region-x, region-y, region-width, region-height (int, the
  *   region clipped to the frame) and region-pixels, region-valid, region-valid-fraction,
  *   region-min-c, region-max-c, region-mean-c, region-median-c, region-saturated,
- *   region-peak-c, region-peak-x, region-peak-y, as above for the region (windows inside the
- * region; the position still in frame pixels; no peak for a region narrower than the window). A
- * message is posted for the first frame, then for the first frame whose timestamp is at least the
- * interval after the last posted one (after a flush or a new segment, the next frame). Frames
- * without a timestamp count by the framerate; without either, every frame posts.
+ *   region-peak-c, region-peak-x, region-peak-y, as above for the region (windows inside
+ *   the region; the position still in frame pixels; no peak for a region narrower than the
+ *   window).
+ *
+ * A message is posted for the first frame, then for the first frame whose timestamp is at
+ * least the interval after the last posted one (after a flush or a new segment, the next
+ * frame). Frames without a timestamp count by the framerate; without either, every frame
+ * posts.
  *
  * Recordings describe themselves: before the first frame, and again when the method, the
  * e-slope or upstream's tags change, the element pushes stream tags downstream: title (the

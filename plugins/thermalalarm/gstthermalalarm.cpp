@@ -23,7 +23,8 @@
  * - statistic (string): median or peak; value-c (double, degC): the statistic of the frame that
  *   changed the state (absent when the alarm was turned off with threshold-c);
  * - threshold-c, clear-c (double, degC): the levels that raise and clear; frames (guint);
- * - saturated (boolean): the frame that changed the state had saturated samples in the region;
+ * - saturated (boolean): the frame that changed the state counted as above the threshold
+ *   because saturation left pixels of the region without a reading;
  * - timestamp, running-time (guint64, ns; GST_CLOCK_TIME_NONE when unknown);
  * - region-x, region-y, region-width, region-height (int): the pixels watched (the region
  *   clipped to the frame).
