@@ -88,17 +88,19 @@ void cells(const float* __restrict fx, const float* __restrict fy, std::size_t m
   }
 }
 
-// Bilinear interpolation from each pixel's four cell corners (c0..c3, one array each; 0 where the
-// status is not kInTable), then `special` = 1 for the pixels the network answers: off the table,
-// or near or beyond a range end. Returns whether there are any.
+// Bilinear interpolation from each pixel's four cell corners (pairs: below[2k], below[2k + 1] the
+// cell's lower corners, above[...] its upper ones; 0 where the status is not kInTable), then
+// `special` = 1 for the pixels the network answers: off the table, or near or beyond a range
+// end. Returns whether there are any.
 PYROCAM_VECTOR_CLONES
-bool interpolate(const float* __restrict c0, const float* __restrict c1, const float* __restrict c2,
-                 const float* __restrict c3, const float* __restrict wx, const float* __restrict wy,
+bool interpolate(const float* __restrict lower, const float* __restrict upper,
+                 const float* __restrict wx, const float* __restrict wy,
                  const float* __restrict status, std::size_t m, MlpOutputTransform space,
                  float lowest, float highest, float* __restrict out, float* __restrict special) {
   for (std::size_t k = 0; k < m; ++k) {
-    const float below = c0[k] + wx[k] * (c1[k] - c0[k]);
-    const float above = c2[k] + wx[k] * (c3[k] - c2[k]);
+    const float c0 = lower[2 * k], c1 = lower[2 * k + 1], c2 = upper[2 * k], c3 = upper[2 * k + 1];
+    const float below = c0 + wx[k] * (c1 - c0);
+    const float above = c2 + wx[k] * (c3 - c2);
     const float v = below + wy[k] * (above - below);
     out[k] = status[k] == kInTable ? v : NAN;
   }
@@ -277,7 +279,7 @@ class LutEstimator : public TemperatureEstimator {
     constexpr std::size_t kChunk = 256;
     alignas(64) float status[kChunk], fx[kChunk], fy[kChunk], wx[kChunk], wy[kChunk];
     alignas(64) float special[kChunk], others_read[kChunk];
-    alignas(64) float c0[kChunk], c1[kChunk], c2[kChunk], c3[kChunk];  // the cells' corners
+    alignas(64) float lower[2 * kChunk], upper[2 * kChunk];  // the cells' corners, in pairs
     alignas(64) std::int32_t block[kChunk], cell[kChunk];
     const lut::Grid grid{dim_f(), inv_h_, offset_x_, offset_y_, cells_x_, cells_y_};
     const bool three_bands = bands_ == 3 && ref_.size() == 1;
@@ -312,8 +314,8 @@ class LutEstimator : public TemperatureEstimator {
         continue;
       }
       lut::cells(fx, fy, m, kBlockShift, blocks_x_, block, cell, wx, wy);
-      gather(status, block, cell, m, c0, c1, c2, c3);
-      if (!lut::interpolate(c0, c1, c2, c3, wx, wy, status, m, space_, lowest_, highest_, o,
+      gather(status, block, cell, m, lower, upper);
+      if (!lut::interpolate(lower, upper, wx, wy, status, m, space_, lowest_, highest_, o,
                             special))
         continue;
       for (std::size_t k = 0; k < m; ++k) {
@@ -429,12 +431,12 @@ class LutEstimator : public TemperatureEstimator {
  private:
   float dim_f() const { return static_cast<float>(dim_dn_); }
 
-  // Each pixel's four cell corners, one array each (0 where the status is not kInTable), from
-  // its block, filled first if it is not yet (a pixel whose block is over the memory budget goes
-  // to the network: status kOffTable).
+  // Each pixel's four cell corners as two pairs, side by side in a block's rows (one 8-byte copy
+  // each; 0 where the status is not kInTable), from its block, filled first if it is not yet (a
+  // pixel whose block is over the memory budget goes to the network: status kOffTable).
   void gather(float* __restrict status, const std::int32_t* __restrict block,
-              const std::int32_t* __restrict cell, std::size_t m, float* __restrict c0,
-              float* __restrict c1, float* __restrict c2, float* __restrict c3) const {
+              const std::int32_t* __restrict cell, std::size_t m, float* __restrict lower,
+              float* __restrict upper) const {
     static const float kNoCorners[kBlockNodes + 2] = {};
     for (std::size_t k = 0; k < m; ++k) {
       const float* c = kNoCorners;
@@ -448,12 +450,12 @@ class LutEstimator : public TemperatureEstimator {
         else
           status[k] = lut::kOffTable;
       }
-      c0[k] = c[0];
-      c1[k] = c[1];
-      c2[k] = c[kBlockNodes];
-      c3[k] = c[kBlockNodes + 1];
+      std::memcpy(lower + 2 * k, c, 2 * sizeof(float));
+      std::memcpy(upper + 2 * k, c + kBlockNodes, 2 * sizeof(float));
     }
   }
+
+
 
   // A block's storage from the arena: null once it is used up (the budget, plus room for blocks
   // two threads computed at once, of which one is kept) or where it could not be reserved.
