@@ -92,6 +92,8 @@ int main(int argc, char** argv) {
       ro.leak_test_level = value;
     else if (key == "fine_leak_spacing_nm")
       ro.fine_leak_spacing_nm = value;
+    else if (key == "prior_scale")  // one factor on the priors' widths: no choice
+      ro.prior_scales = {value};
     else if (key == "leverage") {
       if (value == 0) ro.use_temperatures_c.clear();
     } else {
@@ -165,7 +167,7 @@ int main(int argc, char** argv) {
               *std::max_element(data.temperatures_c.begin(), data.temperatures_c.end());
           const std::vector<double> u = qe_model_uncertainty(
               model, fit.posterior, temps,
-              prior_sensitivity_fits(profile, data, holding_leak_decision(options, fit)),
+              prior_sensitivity_fits(profile, data, holding_fit_choices(options, fit)),
               furnace_top);
           const std::vector<double> u_posterior =
               qe_model_uncertainty(model, fit.posterior, temps, {}, furnace_top);
@@ -187,9 +189,10 @@ int main(int argc, char** argv) {
           }
           std::printf("\n       ");
         }
-        std::printf("   %5.2f %8.2f %9.2f %8.2f   (fit %.1f s; leak terms %s)\n", rms(700, 1100),
-                    rms(1000, 1400), rms(1800, 2600), rms(800, 2600), fit.diagnostics.wall_time_s,
-                    leak_terms_summary(fit).c_str());
+        std::printf("   %5.2f %8.2f %9.2f %8.2f   (fit %.1f s; leak terms %s; prior widths %s)\n",
+                    rms(700, 1100), rms(1000, 1400), rms(1800, 2600), rms(800, 2600),
+                    fit.diagnostics.wall_time_s, leak_terms_summary(fit).c_str(),
+                    prior_widths_summary(fit).c_str());
       }
       std::printf("   mean");
       for (double v : sum) std::printf(" %6.1f", v / units);

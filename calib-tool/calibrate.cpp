@@ -2,6 +2,7 @@
 #include "pyrocam/calibration/calibrate.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -18,6 +19,7 @@ namespace {
 struct CalibrateArgs {
   std::string dataset, profile = "rgb-reference", out = "model.json", report;
   std::string leak_terms = "select";
+  std::string prior_widths = "select";
   std::string rate_offsets = "select";
   CalibrationOptions options;
   bool no_table = false;
@@ -79,6 +81,12 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
                 "every 10 nm (a leak next to a filter edge is narrow)")
       ->check(CLI::IsMember({"select", "keep", "drop"}))
       ->capture_default_str();
+  c->add_option("--prior-widths", a.prior_widths,
+                "The regularised QE fit's priors on the QE's shape (tilts, shifts, the filter's "
+                "edges, the common slope, leaks, shape changes): select (fitted at 0.5, 1 and 2 "
+                "times their nominal widths, the one the furnace data make likeliest kept), "
+                "nominal, or a factor on the nominal widths (0.1 to 10)")
+      ->capture_default_str();
   c->add_option(
        "--rate-offsets", a.rate_offsets,
        "Where each furnace temperature's line of net signal against exposure meets zero "
@@ -133,9 +141,20 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
       throw CLI::ValidationError("--min-temperature", "must be below --max-temperature");
     if (!std::isfinite(a.options.thermocouple_tolerance_c))  // CLI::Range lets NaN through
       throw CLI::ValidationError("--thermocouple-tolerance", "must be a number from 0 to 50");
-    a.options.leak_terms = a.leak_terms == "keep"   ? LeakTerms::kKeep
-                           : a.leak_terms == "drop" ? LeakTerms::kDrop
-                                                    : LeakTerms::kSelect;
+    a.options.fit_choices.leak_terms = a.leak_terms == "keep"   ? LeakTerms::kKeep
+                                       : a.leak_terms == "drop" ? LeakTerms::kDrop
+                                                                : LeakTerms::kSelect;
+    if (a.prior_widths == "nominal") {
+      a.options.fit_choices.prior_scales = {1};
+    } else if (a.prior_widths != "select") {
+      char* end = nullptr;
+      const double factor = std::strtod(a.prior_widths.c_str(), &end);
+      if (a.prior_widths.empty() || *end != '\0' || !(factor >= 0.1 && factor <= 10))
+        throw CLI::ValidationError(
+            "--prior-widths",
+            "must be select, nominal or a factor from 0.1 to 10, not '" + a.prior_widths + "'");
+      a.options.fit_choices.prior_scales = {factor};
+    }
     a.options.rate_offsets = a.rate_offsets == "common"     ? RateOffsets::kCommon
                              : a.rate_offsets == "per-step" ? RateOffsets::kPerStep
                                                             : RateOffsets::kSelect;

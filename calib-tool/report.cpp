@@ -100,17 +100,22 @@ void qe_section(const CalibrationOutcome& o, std::ostream& h) {
   const auto bands = plotted_bands(p.band_count());
   h << "<h2>QE optimisation</h2><table><tr><th>solver</th><th>calibration residual</th>"
        "<th>held-out residual</th><th>rms(Q − Q<sub>datasheet</sub>)</th><th>leak terms</th>"
-       "<th>time s</th></tr>";
+       "<th>prior widths</th><th>time s</th></tr>";
   for (const auto& s : o.solvers)
     h << "<tr><td style='text-align:left'>" << html_escape(s.solver) << "</td><td>"
       << num(100 * s.calibration_residual) << " %</td><td>" << num(100 * s.held_out_residual)
       << " %</td><td>" << num(s.qe_change_rms, 5) << "</td><td style='text-align:left'>"
-      << html_escape(s.leak_terms.empty() ? "—" : s.leak_terms) << "</td><td>" << num(s.seconds, 1)
-      << "</td></tr>";
+      << html_escape(s.leak_terms.empty() ? "—" : s.leak_terms)
+      << "</td><td style='text-align:left'>"
+      << html_escape(s.prior_widths.empty() ? "—" : s.prior_widths) << "</td><td>"
+      << num(s.seconds, 1) << "</td></tr>";
   h << "</table><p>Leak terms: the regularised fit's leaks outside the pass band stay only "
        "where the furnace data call for them (a chi2 test, one degree of freedom per leak "
        "amplitude; docs/method.md): fitted to noise they would read high above the furnace "
-       "range.</p>";
+       "range. Prior widths: the fit's priors on the QE's shape at half, once and twice their "
+       "nominal widths, the one the furnace data make likeliest kept (the largest evidence): a "
+       "camera that deviates from its datasheet more than the nominal priors expect gets wider "
+       "ones, and extrapolates less from the datasheet's shape.</p>";
   std::vector<Series> qe;
   for (std::size_t i = 0; i < bands.size(); ++i) {
     const int b = bands[i];

@@ -1,7 +1,8 @@
 // pyrocam-calib calibrate's choices of what the fit models, decided by a test on the data by
 // default or as asked: --leak-terms (the regularised QE fit's leaks outside the filter's pass
-// band) and --rate-offsets (where the furnace lines of net signal against exposure meet zero
-// exposure); the report names what was done.
+// band), --prior-widths (how wide its priors on the QE's shape are) and --rate-offsets (where
+// the furnace lines of net signal against exposure meet zero exposure); the report names what
+// was done.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -64,6 +65,25 @@ TEST_F(FitChoices, calibrate_selects_keeps_or_drops_the_leak_terms) {
   EXPECT_TRUE(selected.rfind("kept", 0) == 0 || selected.rfind("dropped", 0) == 0) << selected;
 }
 
+TEST_F(FitChoices, calibrate_selects_or_takes_the_prior_widths) {
+  const auto widths = [](const std::string& name, const std::string& how, std::string* html) {
+    const nlohmann::json report =
+        calibrate("widths-" + name, "--solver regularised --prior-widths " + how, html);
+    for (const auto& s : report["solvers"])
+      if (s["solver"] == "regularised") return s["prior_widths"].get<std::string>();
+    return std::string("(no regularised solver in the report)");
+  };
+  std::string html;
+  EXPECT_EQ(widths("nominal", "nominal", nullptr), "1 x nominal");
+  EXPECT_EQ(widths("factor", "3", nullptr), "3 x nominal");
+  // Selected: the factor kept, with the evidence of each factor tried, in the HTML too.
+  const std::string selected = widths("select", "select", &html);
+  EXPECT_NE(selected.find(" x nominal (log evidence "), std::string::npos) << selected;
+  EXPECT_NE(selected.find(" at 0.5 x, "), std::string::npos) << selected;
+  EXPECT_NE(selected.find(" at 2 x)"), std::string::npos) << selected;
+  EXPECT_NE(html.find(selected), std::string::npos) << selected;
+}
+
 TEST_F(FitChoices, calibrate_tests_or_takes_the_rate_offsets_asked_for) {
   const auto offsets = [](const std::string& how) {
     std::string html;
@@ -104,7 +124,9 @@ TEST_F(FitChoices, calibrate_keeps_one_offset_per_temperature_when_the_black_lev
 
 TEST(CliFitChoices, calibrate_rejects_other_values_n) {
   ScratchDir dir("cli");
-  for (const std::string option : {"--leak-terms sometimes", "--rate-offsets zero"}) {
+  for (const std::string option :
+       {"--leak-terms sometimes", "--rate-offsets zero", "--prior-widths wide", "--prior-widths 0",
+        "--prior-widths 11", "--prior-widths nan", "--prior-widths 2x"}) {
     EXPECT_EQ(calib("calibrate --dataset " + q(dir.path()) + " " + option + " --out " +
                     q(dir / "m.json")),
               2)

@@ -119,7 +119,7 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   // Reference sources beyond the furnace: scale-free constraints on the band ratios.
   const std::vector<ReferenceRates> references = out.rates.reference_rates();
   QeChoice qe = choose_system_qe(profile, datasheet, t_c, rates, opt.qe_solver, progress,
-                                 references, opt.leak_terms);
+                                 references, opt.fit_choices);
   out.solvers = std::move(qe.reports);
   out.qe_spread = std::move(qe.qe_spread);
   ThermalModel& m = out.model;
@@ -141,7 +141,7 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   out.table4 = evaluate_estimators(m, out.rates, locus, sheet_camera, opt.locus_step_c);
   report_stage(progress, "evaluating", 1, 1);
 
-  m.uncertainty = uncertainty_model(m, t_c, rates, opt, progress, references, qe.leak_terms);
+  m.uncertainty = uncertainty_model(m, t_c, rates, opt, progress, references, qe.fit_choices);
   m.uncertainty.u_qe_model_c =
       qe_model_uncertainty(m.camera, qe.posterior, m.uncertainty.temperature_c, qe.prior_fits,
                            *std::max_element(t_c.begin(), t_c.end()));

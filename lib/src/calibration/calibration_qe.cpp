@@ -47,7 +47,8 @@ double ranked_held_out_residual(const std::string& solver, double held_out_resid
 QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& datasheet,
                           const std::vector<double>& t_c, const Eigen::MatrixXd& rates,
                           const std::string& qe_solver, const StageProgress& progress,
-                          const std::vector<ReferenceRates>& references, LeakTerms leak_terms) {
+                          const std::vector<ReferenceRates>& references,
+                          const QeFitChoices& fit_choices) {
   // QE optimisation: every requested solver, chosen by held-out (cross-validation) residual
   // (ranked_held_out_residual).
   std::vector<std::string> solvers;
@@ -77,15 +78,16 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
     QeFitOptions qo;
     qo.solver = solvers[s] == "paper" ? QeSolver::kPaper : QeSolver::kRegularised;
     qo.regularised.posterior_samples = kPosteriorSamples;
-    qo.regularised.leak_terms = leak_terms;
+    qo = with_fit_choices(qo, fit_choices);
     const QeFitResult fit = fit_qe(profile, data, qo);
     const auto rms_of = [](const Eigen::VectorXd& v) {
       return std::sqrt(v.array().square().mean());
     };
     rep.calibration_residual = rms_of(fit.diagnostics.residual_after);
     rep.leak_terms = leak_terms_summary(fit);
+    rep.prior_widths = prior_widths_summary(fit);
     // The folds and the prior-sensitivity fits vary the model this fit chose.
-    qo = holding_leak_decision(qo, fit);
+    qo = holding_fit_choices(qo, fit);
     rep.qe_change_rms = rms_of(fit.diagnostics.qe_change_rms);
     report_stage(progress, "cross-validating QE (" + solvers[s] + ")", s, solvers.size());
     QeFitOptions folds = qo;
@@ -105,8 +107,7 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
       if (qo.solver == QeSolver::kRegularised)
         report_stage(progress, "prior sensitivity (" + solvers[s] + ")", s, solvers.size());
       best.prior_fits = prior_sensitivity_fits(profile, data, qo);  // none for the paper's
-      best.leak_terms =
-          qo.solver == QeSolver::kRegularised ? qo.regularised.leak_terms : LeakTerms::kSelect;
+      best.fit_choices = held_fit_choices(fit);
       best.reference_error_before_c = fit.diagnostics.reference_error_before_c;
       best.reference_error_after_c = fit.diagnostics.reference_error_after_c;
     }

@@ -74,6 +74,7 @@ nlohmann::json outcome_summary(const CalibrationOutcome& o) {
                        {"held_out_residual_rms", s.held_out_residual},
                        {"qe_change_rms", s.qe_change_rms},
                        {"leak_terms", s.leak_terms},
+                       {"prior_widths", s.prior_widths},
                        {"seconds", s.seconds}});
   j["solvers"] = solvers;
   j["rate_offsets"] = rate_offsets_summary(o.rates.offsets);

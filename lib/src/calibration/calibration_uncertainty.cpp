@@ -142,7 +142,7 @@ std::vector<double> thermocouple_uncertainty(const ThermalModel& m, const Uncert
                                              const Eigen::MatrixXd& rates, std::uint64_t seed,
                                              const StageProgress& progress,
                                              const std::vector<ReferenceRates>& references,
-                                             LeakTerms leak_terms) {
+                                             const QeFitChoices& fit_choices) {
   std::vector<std::vector<double>> refit_t(u.temperature_c.size());
   Random rng(seed ^ 0x7C0FFEEull);
   Random reference_rng(seed ^ 0x8EFE8E4CEull);
@@ -168,7 +168,7 @@ std::vector<double> thermocouple_uncertainty(const ThermalModel& m, const Uncert
       r.temperature_c += r.temperature_uncertainty_c * reference_error(reference_rng);
     QeFitOptions qo;
     qo.solver = m.qe_solver == "paper" ? QeSolver::kPaper : QeSolver::kRegularised;
-    qo.regularised.leak_terms = leak_terms;
+    qo = with_fit_choices(qo, fit_choices);
     const QeFitResult fit = fit_qe(
         m.profile(), CalibrationRates{t_perturbed, rates.transpose(), references_perturbed}, qo);
     const CameraModel cam{m.profile(), fit.system_qe, fit.gains};
@@ -198,7 +198,7 @@ UncertaintyModel uncertainty_model(const ThermalModel& m, const std::vector<doub
                                    const Eigen::MatrixXd& rates, const CalibrationOptions& opt,
                                    const StageProgress& progress,
                                    const std::vector<ReferenceRates>& references,
-                                   LeakTerms leak_terms) {
+                                   const QeFitChoices& fit_choices) {
   // Uncertainty model: emissivity slope and thermocouple tolerance as functions of T.
   UncertaintyModel u;
   u.thermocouple_tolerance_c = opt.thermocouple_tolerance_c;
@@ -207,7 +207,7 @@ UncertaintyModel uncertainty_model(const ThermalModel& m, const std::vector<doub
     u.temperature_c.push_back(t);
   u.u_emissivity_c = emissivity_uncertainty(m, u);
   u.u_calibration_c =
-      thermocouple_uncertainty(m, u, t_c, rates, opt.seed, progress, references, leak_terms);
+      thermocouple_uncertainty(m, u, t_c, rates, opt.seed, progress, references, fit_choices);
   return u;
 }
 

@@ -126,6 +126,14 @@ void finish(const CameraProfile& profile, const Problem& p, const CalibrationRat
   r.diagnostics.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
 }
 
+RegularisedOptions with_prior_widths(RegularisedOptions o, double factor) {
+  for (double* sigma :
+       {&o.tilt_sigma, &o.curvature_sigma, &o.shift_sigma_nm, &o.common_tilt_sigma,
+        &o.edge_shift_sigma_nm, &o.leak_sigma, &o.discrepancy_sigma, &o.discrepancy_leak})
+    *sigma *= factor;
+  return o;
+}
+
 }  // namespace qe_detail
 
 namespace {
@@ -244,11 +252,42 @@ QeFitResult fit_qe(const CameraProfile& profile, const CalibrationRates& data,
              : fit_qe_regularised(profile, data, options.regularised);
 }
 
-QeFitOptions holding_leak_decision(QeFitOptions options, const QeFitResult& fit) {
-  if (fit.solver == QeSolver::kRegularised)
-    options.regularised.leak_terms =
-        fit.diagnostics.leak_terms ? LeakTerms::kKeep : LeakTerms::kDrop;
+QeFitChoices held_fit_choices(const QeFitResult& fit) {
+  QeFitChoices c;
+  if (fit.solver == QeSolver::kRegularised) {
+    c.leak_terms = fit.diagnostics.leak_terms ? LeakTerms::kKeep : LeakTerms::kDrop;
+    c.prior_scales = {fit.diagnostics.prior_scale};
+  }
+  return c;
+}
+
+QeFitOptions with_fit_choices(QeFitOptions options, const QeFitChoices& choices) {
+  options.regularised.leak_terms = choices.leak_terms;
+  options.regularised.prior_scales = choices.prior_scales;
   return options;
+}
+
+QeFitOptions holding_fit_choices(QeFitOptions options, const QeFitResult& fit) {
+  return fit.solver == QeSolver::kRegularised ? with_fit_choices(options, held_fit_choices(fit))
+                                              : options;
+}
+
+std::string prior_widths_summary(const QeFitResult& fit) {
+  if (fit.solver != QeSolver::kRegularised) return "";
+  const QeFitDiagnostics& d = fit.diagnostics;
+  char text[64];
+  std::snprintf(text, sizeof text, "%g x nominal", d.prior_scale);
+  std::string out = text;
+  if (d.prior_scales_tried.size() > 1 && d.log_evidence.size() == d.prior_scales_tried.size()) {
+    out += " (log evidence";
+    for (std::size_t k = 0; k < d.log_evidence.size(); ++k) {
+      std::snprintf(text, sizeof text, "%s %.1f at %g x", k ? "," : "", d.log_evidence[k],
+                    d.prior_scales_tried[k]);
+      out += text;
+    }
+    out += ")";
+  }
+  return out;
 }
 
 std::string leak_terms_summary(const QeFitResult& fit) {
@@ -275,13 +314,13 @@ std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
                                              const QeFitOptions& options, double factor) {
   std::vector<QeSample> fits;
   if (options.solver != QeSolver::kRegularised) return fits;
+  // Around the widths a fit chose (holding_fit_choices), else the nominal ones.
+  const std::vector<double>& scales = options.regularised.prior_scales;
+  const double base = scales.size() == 1 ? scales.front() : 1.0;
   for (const double f : {factor, 1 / factor}) {
     RegularisedOptions o = options.regularised;
     o.posterior_samples = 0;
-    for (double* sigma :
-         {&o.tilt_sigma, &o.curvature_sigma, &o.shift_sigma_nm, &o.common_tilt_sigma,
-          &o.edge_shift_sigma_nm, &o.leak_sigma, &o.discrepancy_sigma, &o.discrepancy_leak})
-      *sigma *= f;
+    o.prior_scales = {base * f};
     const QeFitResult fit = fit_qe_regularised(profile, data, o);
     fits.push_back(QeSample{fit.system_qe, fit.gains});
   }

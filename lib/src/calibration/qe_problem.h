@@ -35,6 +35,10 @@ Eigen::VectorXd residuals_for(const Problem& p, const Eigen::MatrixXd& qe,
 Eigen::VectorXd least_squares_gains(const CameraProfile& profile, const Problem& p,
                                     const Eigen::MatrixXd& qe, const CalibrationRates& data);
 
+// `o` with every prior on the QE's shape `factor` times as wide (RegularisedOptions::
+// prior_scales, prior_sensitivity_fits); the furnace temperatures' prior is kept.
+RegularisedOptions with_prior_widths(RegularisedOptions o, double factor);
+
 // Fills the diagnostics (residuals, QE change, reference readings, time).
 void finish(const CameraProfile& profile, const Problem& p, const CalibrationRates& data,
             Clock::time_point start, QeFitResult& r);

@@ -14,6 +14,7 @@
 #include "detail/chi2.h"
 #include "detail/portable_math.h"
 #include "detail/random.h"
+#include "pyrocam/core/error.h"
 
 namespace pyrocam {
 namespace {
@@ -44,6 +45,34 @@ JointLinearisation linearise(const JointModel& joint, const Eigen::VectorXd& x) 
   l.llt.compute(h);
   l.ok = l.llt.info() == Eigen::Success;
   return l;
+}
+
+// log p(data | priors) by the Laplace approximation at the fit x, up to a constant: the data
+// rows' misfit and noise, and the Occam factor det(prior precision) / det(posterior precision)
+// over the free parameters with a proper prior (the gains' and scales' flat priors are the same
+// for every choice of widths).
+double log_evidence(const JointModel& joint, const Eigen::VectorXd& x, std::size_t data_rows,
+                    double relative_noise) {
+  const JointLinearisation l = linearise(joint, x);
+  if (!l.ok) return NAN;
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd jac;
+  joint.evaluate(x, residual, &jac);
+  const auto nd = static_cast<Eigen::Index>(data_rows);
+  const Eigen::MatrixXd prior = jac.bottomRows(jac.rows() - nd)(Eigen::all, l.free);
+  std::vector<Eigen::Index> proper;
+  for (Eigen::Index c = 0; c < prior.cols(); ++c)
+    if (prior.col(c).squaredNorm() > 0) proper.push_back(c);
+  const Eigen::MatrixXd pp = prior(Eigen::all, proper);
+  Eigen::LLT<Eigen::MatrixXd> prior_llt(pp.transpose() * pp);
+  if (prior_llt.info() != Eigen::Success) return NAN;
+  double log_det_posterior = 0, log_det_prior = 0;
+  for (Eigen::Index k = 0; k < l.llt.matrixLLT().rows(); ++k)
+    log_det_posterior += 2 * portable::log(l.llt.matrixLLT()(k, k));
+  for (Eigen::Index k = 0; k < prior_llt.matrixLLT().rows(); ++k)
+    log_det_prior += 2 * portable::log(prior_llt.matrixLLT()(k, k));
+  return -0.5 * residual.squaredNorm() - static_cast<double>(nd) * portable::log(relative_noise) +
+         0.5 * (log_det_prior - log_det_posterior);
 }
 
 // Draws theta ~ N(theta*, (J^T J)^-1) over the free parameters, jointly with the
@@ -155,12 +184,10 @@ ModelFit fit_model(const CameraProfile& profile, const CalibrationRates& data, c
   return f;
 }
 
-}  // namespace
-
-QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRates& data,
-                               const RegularisedOptions& options) {
-  const auto start = Clock::now();
-  const Problem p = prepare(profile, data);
+// The regularised fit with the priors `options` hold (one width): the leak terms' choice, the
+// fit, its evidence and its posterior.
+QeFitResult fit_at_widths(const CameraProfile& profile, const CalibrationRates& data,
+                          const Problem& p, const RegularisedOptions& options) {
   RegularisedOptions without = options, fine = options;
   without.leak_sigma = 0;
   without.discrepancy_leak = 0;
@@ -213,9 +240,52 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
     r.gains[b] = model.gain(b, f.th);
   }
   r.diagnostics.iterations = f.iterations;
+  {
+    const JointModel joint(model, f.shape);
+    Eigen::VectorXd x(joint.size());
+    x << f.th, f.delta;
+    r.diagnostics.log_evidence = {log_evidence(joint, x, f.data_n, f.weighted.relative_noise)};
+    model.set_shape_change(shape_change(f.shape, f.delta));
+  }
   r.posterior = posterior_samples(model, f.th, f.shape, f.delta, *chosen);
-  finish(profile, p, data, start, r);
   return r;
+}
+
+}  // namespace
+
+QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRates& data,
+                               const RegularisedOptions& options) {
+  const auto start = Clock::now();
+  const Problem p = prepare(profile, data);
+  std::vector<double> scales = options.prior_scales;
+  if (scales.empty()) scales = {1.0};
+  for (double s : scales)
+    if (!(s > 0) || !std::isfinite(s))
+      throw InputError("QE fit: a prior scale must be a positive number");
+  std::vector<QeFitResult> fits;
+  std::vector<double> evidence;
+  int iterations = 0;
+  for (double s : scales) {
+    fits.push_back(fit_at_widths(profile, data, p, with_prior_widths(options, s)));
+    iterations += fits.back().diagnostics.iterations;
+    evidence.push_back(fits.back().diagnostics.log_evidence.front());
+  }
+  // The largest evidence; where none could be computed, the widths nearest the nominal ones.
+  std::size_t kept = 0;
+  for (std::size_t k = 1; k < scales.size(); ++k) {
+    const bool larger =
+        evidence[k] > evidence[kept] || (std::isnan(evidence[kept]) && !std::isnan(evidence[k]));
+    const bool nearer = std::isnan(evidence[kept]) && std::isnan(evidence[k]) &&
+                        std::abs(portable::log(scales[k])) < std::abs(portable::log(scales[kept]));
+    if (larger || nearer) kept = k;
+  }
+  QeFitResult best = std::move(fits[kept]);
+  best.diagnostics.prior_scale = scales[kept];
+  best.diagnostics.iterations = iterations;
+  best.diagnostics.prior_scales_tried = scales;
+  best.diagnostics.log_evidence = evidence;
+  finish(profile, p, data, start, best);
+  return best;
 }
 
 }  // namespace pyrocam

@@ -141,6 +141,9 @@ TEST(QePosterior, spreads_where_the_furnace_does_not_reach) {
   const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse("typical", 3));
   QeFitOptions options;
   options.regularised.posterior_samples = 48;
+  // The mechanism at the nominal widths (this unit's data favour half of them: a narrower
+  // posterior, whose prior fits then spread less above the furnace).
+  options.regularised.prior_scales = {1};
   const QeFitResult fit = fit_qe(p, simulate_calibration_rates(p, truth, {}), options);
   ASSERT_EQ(fit.posterior.size(), 48u);
   const std::vector<double> t{900, 1500, 2500};
@@ -153,8 +156,8 @@ TEST(QePosterior, spreads_where_the_furnace_does_not_reach) {
 
   // The priors' own share: fits with them twice as wide and half as wide read the furnace
   // range alike and part above it, so the term grows there and hardly at all in range.
-  const std::vector<QeSample> prior_fits =
-      prior_sensitivity_fits(p, simulate_calibration_rates(p, truth, {}), options);
+  const std::vector<QeSample> prior_fits = prior_sensitivity_fits(
+      p, simulate_calibration_rates(p, truth, {}), holding_fit_choices(options, fit));
   ASSERT_EQ(prior_fits.size(), 2u);
   const std::vector<double> with_priors =
       qe_model_uncertainty(CameraModel{p, fit.system_qe, fit.gains}, fit.posterior, t, prior_fits);
@@ -188,7 +191,7 @@ TEST(QePosterior, the_prior_term_never_shrinks_away_from_the_furnace) {
   std::vector<double> t;
   for (double c = 2600; c >= 700; c -= 100) t.push_back(c);  // any order
   const std::vector<double> u = qe_model_uncertainty(
-      model, fit.posterior, t, prior_sensitivity_fits(p, data, holding_leak_decision(options, fit)),
+      model, fit.posterior, t, prior_sensitivity_fits(p, data, holding_fit_choices(options, fit)),
       *std::max_element(data.temperatures_c.begin(), data.temperatures_c.end()));
   ASSERT_EQ(u.size(), t.size());
   // From the furnace's top (1100 degC) up.

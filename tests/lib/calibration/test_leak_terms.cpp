@@ -28,9 +28,11 @@ Unit unit(const char* profile, const char* family, int seed) {
   return u;
 }
 
+// At the nominal prior widths: the leak test's own figures, whatever widths the data favour.
 QeFitResult fit(const Unit& u, LeakTerms leak_terms) {
   QeFitOptions options;
   options.regularised.leak_terms = leak_terms;
+  options.regularised.prior_scales = {1};
   return fit_qe(u.profile, u.data, options);
 }
 
@@ -124,15 +126,18 @@ TEST(LeakTerms, kept_leaks_are_fitted_with_narrow_bumps) {
 TEST(LeakTerms, a_decision_is_held_for_the_fits_that_vary_it) {
   const Unit u = unit("nir5x5-reference", "typical", 1);
   const QeFitResult selected = fit(u, LeakTerms::kSelect);
-  EXPECT_EQ(holding_leak_decision({}, selected).regularised.leak_terms, LeakTerms::kDrop);
+  EXPECT_EQ(holding_fit_choices({}, selected).regularised.leak_terms, LeakTerms::kDrop);
+  QeFitResult wider = selected;
+  wider.diagnostics.prior_scale = 2;
+  EXPECT_EQ(holding_fit_choices({}, wider).regularised.prior_scales, std::vector<double>{2});
   QeFitResult kept = selected;
   kept.diagnostics.leak_terms = true;
-  EXPECT_EQ(holding_leak_decision({}, kept).regularised.leak_terms, LeakTerms::kKeep);
+  EXPECT_EQ(holding_fit_choices({}, kept).regularised.leak_terms, LeakTerms::kKeep);
   QeFitOptions paper;
   paper.solver = QeSolver::kPaper;
   QeFitResult paper_fit;
   paper_fit.solver = QeSolver::kPaper;
-  EXPECT_EQ(holding_leak_decision(paper, paper_fit).regularised.leak_terms, LeakTerms::kSelect);
+  EXPECT_EQ(holding_fit_choices(paper, paper_fit).regularised.leak_terms, LeakTerms::kSelect);
   // And in words, as the report gives it.
   EXPECT_EQ(leak_terms_summary(selected).rfind("dropped (chi2 gain 3.5 <= 62.8, 46 amplitudes)", 0),
             0u)

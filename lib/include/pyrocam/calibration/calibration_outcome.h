@@ -15,9 +15,9 @@ namespace pyrocam {
 
 struct CalibrationOptions {
   std::string qe_solver = "auto";  // paper, regularised, auto (lower held-out error), datasheet
-  // The regularised fit's leak terms: chosen by the furnace data (RegularisedOptions::
-  // leak_terms), or always kept or dropped.
-  LeakTerms leak_terms = LeakTerms::kSelect;
+  // The regularised fit's leak terms and prior widths: chosen by the furnace data
+  // (RegularisedOptions::leak_terms, prior_scales), or as given.
+  QeFitChoices fit_choices;
   // The furnace lines' offsets (ExtractOptions::offsets): tested, or one per band or per
   // temperature as asked.
   RateOffsets rate_offsets = RateOffsets::kSelect;
@@ -50,6 +50,8 @@ struct QeSolverReport {
   // The regularised fit's leak terms: "kept" or "dropped", with the test's figures when it chose
   // (RegularisedOptions::leak_terms); empty for other solvers.
   std::string leak_terms;
+  // Its priors' widths (prior_widths_summary); empty for other solvers.
+  std::string prior_widths;
 };
 
 // A reference row (a source beyond the furnace) against the model: its reading by the scale-free

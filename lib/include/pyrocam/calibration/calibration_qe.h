@@ -19,9 +19,9 @@ struct QeChoice {
   Eigen::MatrixXd qe_spread;            // the chosen fit's cross-validation std (may be empty)
   std::vector<QeSample> posterior;      // plausible QE solutions (regularised fit only)
   std::vector<QeSample> prior_fits;     // prior_sensitivity_fits (regularised fit only)
-  // The chosen fit's leak terms (kKeep or kDrop; kSelect for the paper's fit or the datasheet):
-  // the Monte-Carlo refits of the uncertainty model fit the same model.
-  LeakTerms leak_terms = LeakTerms::kSelect;
+  // The chosen fit's leak terms and prior widths (held_fit_choices; the defaults for the paper's
+  // fit or the datasheet): the Monte-Carlo refits of the uncertainty model fit the same model.
+  QeFitChoices fit_choices;
   // Per reference row: its reading minus its temperature, datasheet QE and chosen QE.
   std::vector<double> reference_error_before_c, reference_error_after_c;
 };
@@ -44,7 +44,7 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
                           const std::vector<double>& t_c, const Eigen::MatrixXd& rates,
                           const std::string& qe_solver, const StageProgress& progress = {},
                           const std::vector<ReferenceRates>& references = {},
-                          LeakTerms leak_terms = LeakTerms::kSelect);
+                          const QeFitChoices& fit_choices = {});
 
 // k_b = measured / modelled rate at the hottest temperature the band has a slope for.
 Eigen::VectorXd band_scale(const CameraProfile& p, const Eigen::MatrixXd& q,

@@ -16,13 +16,13 @@ namespace pyrocam {
 // over the model's range. rates: temperatures x bands, DN/s, at the furnace temperatures t_c;
 // references: the dataset's reference sources, in every refit as in the model's fit.
 // Refits only for fitted QE (none for "datasheet"); without refits u_calibration is the
-// thermocouple's own standard uncertainty. leak_terms: those of the model's fit
-// (QeChoice::leak_terms), which the refits keep.
+// thermocouple's own standard uncertainty. fit_choices: those of the model's fit
+// (QeChoice::fit_choices), which the refits keep.
 UncertaintyModel uncertainty_model(const ThermalModel& model, const std::vector<double>& t_c,
                                    const Eigen::MatrixXd& rates, const CalibrationOptions& options,
                                    const StageProgress& progress = {},
                                    const std::vector<ReferenceRates>& references = {},
-                                   LeakTerms leak_terms = LeakTerms::kSelect);
+                                   const QeFitChoices& fit_choices = {});
 
 // Standard uncertainty at every temperature of what the QE leaves open: the spread (std) of the
 // readings that `fitted`'s likelihood fit gives for a well exposed pixel of each plausible
@@ -51,12 +51,12 @@ std::vector<double> emissivity_uncertainty(const ThermalModel& model, const Unce
 // reference's
 // temperature off by a normal draw of its temperature_uncertainty_c (a stream of its own, so
 // that the furnace draws do not depend on the references). The regularised refits have the
-// leak terms `leak_terms` says.
+// leak terms and prior widths `fit_choices` say.
 std::vector<double> thermocouple_uncertainty(const ThermalModel& model, const UncertaintyModel& u,
                                              const std::vector<double>& t_c,
                                              const Eigen::MatrixXd& rates, std::uint64_t seed,
                                              const StageProgress& progress = {},
                                              const std::vector<ReferenceRates>& references = {},
-                                             LeakTerms leak_terms = LeakTerms::kSelect);
+                                             const QeFitChoices& fit_choices = {});
 
 }  // namespace pyrocam

@@ -114,12 +114,26 @@ struct RegularisedOptions {
   // how clearly a real leak must show in the furnace data to be kept.
   LeakTerms leak_terms = LeakTerms::kSelect;
   double leak_test_level = 0.95;
+  // The widths above are what a camera of the datasheet's kind is expected to deviate by; a
+  // camera may deviate more or less. Every prior on the QE's shape (the list
+  // prior_sensitivity_fits scales) is multiplied by each of these factors in turn, and the fit
+  // kept is the one whose priors the furnace data make likeliest: the largest evidence (Laplace
+  // approximation: the data's fit and noise against the Occam factor of the priors' volume).
+  // One factor: no choice.
+  std::vector<double> prior_scales{0.5, 1, 2};
 };
 
 struct QeFitOptions {
   QeSolver solver = QeSolver::kRegularised;
   PaperSearchOptions paper;
   RegularisedOptions regularised;
+};
+
+// The regularised fit's choices of model (RegularisedOptions::leak_terms, prior_scales): made
+// by the data, or given; a fit's own (held_fit_choices) for the fits that vary it.
+struct QeFitChoices {
+  LeakTerms leak_terms = LeakTerms::kSelect;
+  std::vector<double> prior_scales = RegularisedOptions{}.prior_scales;
 };
 
 struct QeFitDiagnostics {
@@ -140,6 +154,12 @@ struct QeFitDiagnostics {
   double leak_chi2_gain = NAN, leak_chi2_threshold = NAN;
   int leak_amplitudes = 0;
   double leak_spacing_nm = NAN;  // the kept leak bumps' spacing; NaN without leak terms
+  // Regularised: the factor on the priors' widths the fit kept (RegularisedOptions::
+  // prior_scales) and the log of the data's evidence for each factor tried, in their order
+  // (Laplace approximation, up to a constant the same for every factor; NaN where the fit's
+  // curvature could not be factored).
+  double prior_scale = 1;
+  std::vector<double> prior_scales_tried, log_evidence;
   double wall_time_s = 0;
 };
 
@@ -170,10 +190,19 @@ QeFitResult fit_qe_paper(const CameraProfile& profile, const CalibrationRates& d
 QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRates& data,
                                const RegularisedOptions& options = {});
 
-// `options` with the leak terms as the regularised `fit` decided (kKeep or kDrop; unchanged for
-// the paper's solver), for fits that vary that one (prior sensitivity, cross-validation folds,
-// Monte-Carlo refits): they then spread the chosen model instead of also deciding again.
-QeFitOptions holding_leak_decision(QeFitOptions options, const QeFitResult& fit);
+// `options` with the choices the regularised `fit` made: its leak terms (kKeep or kDrop) and
+// its priors' widths (prior_scales: the one kept); unchanged for the paper's solver. For fits
+// that vary that one (prior sensitivity, cross-validation folds, Monte-Carlo refits): they then
+// spread the chosen model instead of also choosing again.
+QeFitOptions holding_fit_choices(QeFitOptions options, const QeFitResult& fit);
+// The same as choices: those `fit` made (the defaults for the paper's solver).
+QeFitChoices held_fit_choices(const QeFitResult& fit);
+// `options` with `choices` in its regularised options.
+QeFitOptions with_fit_choices(QeFitOptions options, const QeFitChoices& choices);
+
+// The regularised fit's prior widths in words: the factor kept and, where it chose, the
+// evidence of each factor tried; empty for the paper's solver.
+std::string prior_widths_summary(const QeFitResult& fit);
 
 // The regularised fit's leak terms in words: "kept" or "dropped", with the test's chi2 gain,
 // threshold and amplitudes where it chose; empty for the paper's solver.
@@ -202,7 +231,9 @@ Eigen::VectorXd prediction_residuals(const CameraProfile& profile, const QeFitRe
 // How much the regularised fit depends on its priors, which the furnace cannot decide above its
 // range: the same fit with every prior on the QE's shape (tilts, shifts, the common slope, the
 // filter's edges, leaks and the shape changes beyond the model) `factor` times wider, then
-// `factor` times narrower; the furnace temperatures' prior is kept. Each fits the data about as
+// `factor` times narrower, than `options` make them (its prior scale where it holds one, as
+// holding_fit_choices of the fit does; else the nominal widths); the furnace temperatures' prior
+// is kept. Each fits the data about as
 // well as the fit itself and extrapolates otherwise: qe_model_uncertainty takes the largest
 // reading change they make as a term of its own. Empty for the paper's solver.
 std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
