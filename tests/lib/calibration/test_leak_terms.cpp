@@ -7,26 +7,14 @@
 #include <cmath>
 #include <iostream>
 
-#include "pyrocam/calibration/extrapolation_study.h"
-#include "pyrocam/simulation/simulator.h"
+#include "seeded_unit_rates.h"
 
 namespace pyrocam {
 namespace {
 
-struct Unit {
-  CameraProfile profile;
-  Eigen::MatrixXd truth;
-  CalibrationRates data;
-};
-
-Unit unit(const char* profile, const char* family, int seed) {
-  Unit u{load_profile_by_name(profile), {}, {}};
-  u.truth = true_system_qe(u.profile, UnitPerturbation::parse(family, seed));
-  RateCampaign campaign;
-  campaign.seed = 100 + static_cast<std::uint64_t>(seed);
-  u.data = simulate_calibration_rates(u.profile, u.truth, campaign);
-  return u;
-}
+using test::error_at_2600;
+using test::seeded_unit;
+using Unit = test::SeededUnit;
 
 // At the nominal prior widths: the leak test's own figures, whatever widths the data favour.
 QeFitResult fit(const Unit& u, LeakTerms leak_terms) {
@@ -36,16 +24,11 @@ QeFitResult fit(const Unit& u, LeakTerms leak_terms) {
   return fit_qe(u.profile, u.data, options);
 }
 
-double error_at_2600(const Unit& u, const QeFitResult& f) {
-  return extrapolation_errors(u.profile, u.truth, CameraModel{u.profile, f.system_qe, f.gains},
-                              {2600})[0];
-}
-
 // A typical 5x5 unit has no leak the furnace can see: with the leak terms the fit read +32.5
 // degC at 2600 degC, without them -0.4 (over 20 typical units 9.4 against 3.3 degC rms at
 // 800-2600, bench_extrapolation).
 TEST(LeakTerms, are_dropped_where_the_data_do_not_call_for_them) {
-  const Unit u = unit("nir5x5-reference", "typical", 1);
+  const Unit u = seeded_unit("nir5x5-reference", "typical", 1);
   const QeFitResult selected = fit(u, LeakTerms::kSelect);
   const QeFitResult kept = fit(u, LeakTerms::kKeep);
   const QeFitResult dropped = fit(u, LeakTerms::kDrop);
@@ -73,7 +56,7 @@ TEST(LeakTerms, are_dropped_where_the_data_do_not_call_for_them) {
 // unit's leaks differ from the datasheet's in what the furnace measures, and the test keeps the
 // terms (without them the unit reads hundreds of degrees low at 2600 degC).
 TEST(LeakTerms, are_kept_where_the_data_call_for_them) {
-  const Unit colour = unit("rgb-reference", "typical", 1);
+  const Unit colour = seeded_unit("rgb-reference", "typical", 1);
   const QeFitResult c = fit(colour, LeakTerms::kSelect);
   std::cout << "typical colour unit 1: chi2 gain " << c.diagnostics.leak_chi2_gain << " against "
             << c.diagnostics.leak_chi2_threshold << "\n";
@@ -81,14 +64,14 @@ TEST(LeakTerms, are_kept_where_the_data_call_for_them) {
   EXPECT_EQ(c.system_qe, fit(colour, LeakTerms::kKeep).system_qe);
   EXPECT_GT(std::abs(error_at_2600(colour, fit(colour, LeakTerms::kDrop))), 200);
   // A hostile 5x5 unit whose leaks the furnace sees (chi2 gain 245 measured).
-  const Unit leaky = unit("nir5x5-reference", "hostile", 12);
+  const Unit leaky = seeded_unit("nir5x5-reference", "hostile", 12);
   const QeFitResult h = fit(leaky, LeakTerms::kSelect);
   std::cout << "hostile 5x5 unit 12: chi2 gain " << h.diagnostics.leak_chi2_gain << " against "
             << h.diagnostics.leak_chi2_threshold << "\n";
   EXPECT_TRUE(h.diagnostics.leak_terms);
   // Unit 4's leaks just below the short filter edge show less (chi2 gain 64.6 measured): kept at
   // the default 95 % level (62.8), dropped at 99 % (71.2): the level decides.
-  const Unit edge = unit("nir5x5-reference", "hostile", 4);
+  const Unit edge = seeded_unit("nir5x5-reference", "hostile", 4);
   EXPECT_TRUE(fit(edge, LeakTerms::kSelect).diagnostics.leak_terms);
   QeFitOptions strict;
   strict.regularised.leak_test_level = 0.99;
@@ -103,7 +86,7 @@ TEST(LeakTerms, are_kept_where_the_data_call_for_them) {
 // +9.3 (hostile 5x5 units 5 and 12: +20.6 -> +9.8, +32.9 -> +17.2; the 17 units whose leaks are
 // dropped do not change).
 TEST(LeakTerms, kept_leaks_are_fitted_with_narrow_bumps) {
-  const Unit edge = unit("nir5x5-reference", "hostile", 4);
+  const Unit edge = seeded_unit("nir5x5-reference", "hostile", 4);
   const QeFitResult fine = fit(edge, LeakTerms::kSelect);
   QeFitOptions broad_options;
   broad_options.regularised.fine_leak_spacing_nm = 0;
@@ -124,7 +107,7 @@ TEST(LeakTerms, kept_leaks_are_fitted_with_narrow_bumps) {
 
 // Options that hold a fit's decision, for the fits that vary it.
 TEST(LeakTerms, a_decision_is_held_for_the_fits_that_vary_it) {
-  const Unit u = unit("nir5x5-reference", "typical", 1);
+  const Unit u = seeded_unit("nir5x5-reference", "typical", 1);
   const QeFitResult selected = fit(u, LeakTerms::kSelect);
   EXPECT_EQ(holding_fit_choices({}, selected).regularised.leak_terms, LeakTerms::kDrop);
   QeFitResult wider = selected;

@@ -8,27 +8,15 @@
 #include <cmath>
 #include <iostream>
 
-#include "pyrocam/calibration/extrapolation_study.h"
 #include "pyrocam/core/error.h"
-#include "pyrocam/simulation/simulator.h"
+#include "seeded_unit_rates.h"
 
 namespace pyrocam {
 namespace {
 
-struct Unit {
-  CameraProfile profile;
-  Eigen::MatrixXd truth;
-  CalibrationRates data;
-};
-
-Unit unit(const char* profile, const char* family, int seed) {
-  Unit u{load_profile_by_name(profile), {}, {}};
-  u.truth = true_system_qe(u.profile, UnitPerturbation::parse(family, seed));
-  RateCampaign campaign;
-  campaign.seed = 100 + static_cast<std::uint64_t>(seed);
-  u.data = simulate_calibration_rates(u.profile, u.truth, campaign);
-  return u;
-}
+using test::error_at_2600;
+using test::seeded_unit;
+using Unit = test::SeededUnit;
 
 QeFitResult fit(const Unit& u, std::vector<double> scales) {
   QeFitOptions options;
@@ -36,17 +24,12 @@ QeFitResult fit(const Unit& u, std::vector<double> scales) {
   return fit_qe(u.profile, u.data, options);
 }
 
-double error_at_2600(const Unit& u, const QeFitResult& f) {
-  return extrapolation_errors(u.profile, u.truth, CameraModel{u.profile, f.system_qe, f.gains},
-                              {2600})[0];
-}
-
 // Hostile 5x5 unit 3 deviates from its datasheet more than the nominal priors expect: the
 // evidence is larger with them twice as wide (5371.6 against 5347.4 and 5209.1), and that fit
 // reads 2600 degC within 6 degC where the nominal one is 17 off. The choice is the fit at those
 // widths, bit for bit, with every factor's evidence reported.
 TEST(PriorWidths, are_widened_where_the_data_call_for_it) {
-  const Unit u = unit("nir5x5-reference", "hostile", 3);
+  const Unit u = seeded_unit("nir5x5-reference", "hostile", 3);
   const QeFitResult chosen = fit(u, {0.5, 1, 2});
   const QeFitResult nominal = fit(u, {1}), wide = fit(u, {2});
   const QeFitDiagnostics& d = chosen.diagnostics;
@@ -68,14 +51,14 @@ TEST(PriorWidths, are_widened_where_the_data_call_for_it) {
 
 // A typical colour unit is what the nominal widths describe: the evidence keeps them.
 TEST(PriorWidths, stay_nominal_for_a_unit_like_the_priors) {
-  const Unit u = unit("rgb-reference", "typical", 1);
+  const Unit u = seeded_unit("rgb-reference", "typical", 1);
   const QeFitResult chosen = fit(u, {0.5, 1, 2});
   EXPECT_EQ(chosen.diagnostics.prior_scale, 1);
   EXPECT_EQ(chosen.system_qe, fit(u, {1}).system_qe);
 }
 
 TEST(PriorWidths, a_scale_that_is_not_a_positive_number_is_refused) {
-  const Unit u = unit("rgb-reference", "typical", 1);
+  const Unit u = seeded_unit("rgb-reference", "typical", 1);
   for (double bad : {0.0, -1.0, double{NAN}, double{INFINITY}})
     EXPECT_THROW(fit(u, {1, bad}), InputError);
 }
