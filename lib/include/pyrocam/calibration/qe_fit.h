@@ -191,9 +191,9 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
                                const RegularisedOptions& options = {});
 
 // `options` with the choices the regularised `fit` made: its leak terms (kKeep or kDrop) and
-// its priors' widths (prior_scales: the one kept); unchanged for the paper's solver. For fits
-// that vary that one (prior sensitivity, cross-validation folds, Monte-Carlo refits): they then
-// spread the chosen model instead of also choosing again.
+// its priors' widths (prior_scales: the one kept); unchanged for the paper's solver. For the
+// fits that vary that fit (prior sensitivity, cross-validation folds, Monte-Carlo refits): they
+// then spread the chosen model instead of also choosing again.
 QeFitOptions holding_fit_choices(QeFitOptions options, const QeFitResult& fit);
 // The same as choices: those `fit` made (the defaults for the paper's solver).
 QeFitChoices held_fit_choices(const QeFitResult& fit);
@@ -233,9 +233,9 @@ Eigen::VectorXd prediction_residuals(const CameraProfile& profile, const QeFitRe
 // filter's edges, leaks and the shape changes beyond the model) `factor` times wider, then
 // `factor` times narrower, than `options` make them (its prior scale where it holds one, as
 // holding_fit_choices of the fit does; else the nominal widths); the furnace temperatures' prior
-// is kept. Each fits the data about as
-// well as the fit itself and extrapolates otherwise: qe_model_uncertainty takes the largest
-// reading change they make as a term of its own. Empty for the paper's solver.
+// is kept. Each fits the data about as well as the fit itself and extrapolates otherwise:
+// qe_model_uncertainty takes the largest reading change they make as a term of its own. Empty
+// for the paper's solver.
 std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
                                              const CalibrationRates& data,
                                              const QeFitOptions& options, double factor = 2);
