@@ -43,6 +43,10 @@ int main(int argc, char** argv) {
   app.add_flag("--coverage", coverage,
                "also the QE model uncertainty (posterior samples and the prior-sensitivity fits), "
                "and how often the k=2 interval covers the error at 1500-2600 degC");
+  double occam_odds = 20;
+  app.add_option("--occam-odds", occam_odds,
+                 "with --coverage: the prior-sensitivity fits kept are those whose evidence is "
+                 "within these odds of the best (inf: both)");
   CLI11_PARSE(app, argc, argv);
   QeFitOptions fit_options;
   RegularisedOptions& ro = fit_options.regularised;
@@ -167,8 +171,7 @@ int main(int argc, char** argv) {
               *std::max_element(data.temperatures_c.begin(), data.temperatures_c.end());
           const std::vector<double> u = qe_model_uncertainty(
               model, fit.posterior, temps,
-              prior_sensitivity_fits(profile, data, holding_fit_choices(options, fit)),
-              furnace_top);
+              prior_sensitivity_fits(profile, data, options, fit, 2, occam_odds), furnace_top);
           const std::vector<double> u_posterior =
               qe_model_uncertainty(model, fit.posterior, temps, {}, furnace_top);
           // The emissivity term ratiotemp adds by default (e-slope-uncertainty 1 %/100 nm): the

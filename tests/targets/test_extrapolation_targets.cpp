@@ -50,8 +50,7 @@ Figures evaluate(const std::string& profile_name, bool references, int units) {
     // Coverage is counted without reference rows only: no prior refits for the others.
     const std::vector<double> u = qe_model_uncertainty(
         model, fit.posterior, temps,
-        references ? std::vector<QeSample>{}
-                   : prior_sensitivity_fits(p, data, holding_fit_choices(options, fit)),
+        references ? std::vector<QeSample>{} : prior_sensitivity_fits(p, data, options, fit),
         *std::max_element(data.temperatures_c.begin(), data.temperatures_c.end()));
     // The default emissivity term: the reading of a grey-assuming model for rates with the
     // model's default slope uncertainty.
@@ -98,7 +97,8 @@ TEST(ExtrapolationTargets, colour) {
   // against regressions, not noise.
   EXPECT_LT(plain.range_1800_2600, 45);
   // Coverage target 95 +- 3 % for the interval a reading carries: with the default emissivity
-  // term 230 of 240 measured (95.8 %). The QE-model term alone covers 227 (94.6 %), a regression
+  // term 229 of 240 measured (95.4 %; 230 while every prior-sensitivity fit counted, whatever
+  // its evidence). The QE-model term alone covers 226 (94.2 %; 227), a regression
   // bound: it covered 230 while the fit stopped at its iteration limit, where a hundredth of a
   // degree's change of the furnace data moved the readings at 2600 degC by tens of degrees and
   // widened the prior-sensitivity fits' spread by chance. Over the first six units alone the
@@ -121,7 +121,10 @@ TEST(ExtrapolationTargets, multispectral) {
   // converged, 12.3 before the joint fit).
   EXPECT_LT(plain.range_800_2600, 10);
   // Coverage target 95 +- 3 %: 72 of 72 measured (62 before the joint fit), above the target's
-  // band: the interval is wider than these units need. Asserted as a lower bound only.
+  // band on these six units; over the first twenty 230 of 240 (95.8 %, bench_extrapolation
+  // --coverage; 240 while every prior-sensitivity fit counted, whatever its evidence: the
+  // window leaves out those the data reject). Six units are too few to tell (a unit's twelve
+  // temperatures are covered or missed together): asserted as a lower bound only.
   EXPECT_GE(plain.covered, 65);
 }
 

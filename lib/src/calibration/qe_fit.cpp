@@ -311,20 +311,44 @@ std::string leak_terms_summary(const QeFitResult& fit) {
 
 std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
                                              const CalibrationRates& data,
-                                             const QeFitOptions& options, double factor) {
-  std::vector<QeSample> fits;
-  if (options.solver != QeSolver::kRegularised) return fits;
-  // Around the widths a fit chose (holding_fit_choices), else the nominal ones.
-  const std::vector<double>& scales = options.regularised.prior_scales;
-  const double base = scales.size() == 1 ? scales.front() : 1.0;
+                                             const QeFitOptions& options, const QeFitResult& fit,
+                                             double factor, double occam_odds) {
+  if (!(occam_odds >= 1))
+    throw InputError("prior sensitivity: the Occam window's odds must be 1 or more");
+  if (options.solver != QeSolver::kRegularised) return {};
+  const RegularisedOptions held = holding_fit_choices(options, fit).regularised;
+  // Around the widths the fit chose, else the nominal ones.
+  const double base = held.prior_scales.size() == 1 ? held.prior_scales.front() : 1.0;
+  std::vector<PriorWidthFit> fits;
   for (const double f : {factor, 1 / factor}) {
-    RegularisedOptions o = options.regularised;
+    const double scale = base * f;
+    const auto made =
+        std::find_if(fit.other_widths.begin(), fit.other_widths.end(), [&](const PriorWidthFit& w) {
+          return std::abs(w.prior_scale / scale - 1) < 1e-12 &&
+                 w.leak_terms == fit.diagnostics.leak_terms;
+        });
+    if (made != fit.other_widths.end()) {
+      fits.push_back(*made);
+      continue;
+    }
+    RegularisedOptions o = held;
     o.posterior_samples = 0;
-    o.prior_scales = {base * f};
-    const QeFitResult fit = fit_qe_regularised(profile, data, o);
-    fits.push_back(QeSample{fit.system_qe, fit.gains});
+    o.prior_scales = {scale};
+    const QeFitResult refit = fit_qe_regularised(profile, data, o);
+    fits.push_back({scale, refit.diagnostics.log_evidence.front(), refit.diagnostics.leak_terms,
+                    QeSample{refit.system_qe, refit.gains}});
   }
-  return fits;
+  // The kept fit's evidence: that of its factor among those it tried.
+  const QeFitDiagnostics& d = fit.diagnostics;
+  double best = NAN;
+  for (std::size_t k = 0; k < d.prior_scales_tried.size() && k < d.log_evidence.size(); ++k)
+    if (d.prior_scales_tried[k] == d.prior_scale) best = d.log_evidence[k];
+  for (const PriorWidthFit& w : fits) best = std::fmax(best, w.log_evidence);
+  const double window = std::isinf(occam_odds) ? INFINITY : portable::log(occam_odds);
+  std::vector<QeSample> plausible;
+  for (const PriorWidthFit& w : fits)
+    if (!(w.log_evidence < best - window)) plausible.push_back(w.fit);
+  return plausible;
 }
 
 Eigen::VectorXd fitted_signal_rates(const CameraProfile& profile, const QeFitResult& fit,

@@ -29,17 +29,17 @@ using namespace qe_detail;
 struct JointLinearisation {
   std::vector<Eigen::Index> free;
   Eigen::LLT<Eigen::MatrixXd> llt;
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd jacobian;  // of every parameter, free or not
   bool ok = false;
 };
 
 JointLinearisation linearise(const JointModel& joint, const Eigen::VectorXd& x) {
   JointLinearisation l;
-  Eigen::VectorXd residual;
-  Eigen::MatrixXd jac;
-  joint.evaluate(x, residual, &jac);
+  joint.evaluate(x, l.residual, &l.jacobian);
   for (Eigen::Index k = 0; k < joint.size(); ++k)
     if (!joint.fixed(k) && !(joint.bounded(k) && x[k] <= 0)) l.free.push_back(k);
-  const Eigen::MatrixXd ja = jac(Eigen::all, l.free);
+  const Eigen::MatrixXd ja = l.jacobian(Eigen::all, l.free);
   Eigen::MatrixXd h = ja.transpose() * ja;
   h.diagonal().array() += 1e-9 * (h.diagonal().array() + 1e-12);
   l.llt.compute(h);
@@ -47,19 +47,14 @@ JointLinearisation linearise(const JointModel& joint, const Eigen::VectorXd& x) 
   return l;
 }
 
-// log p(data | priors) by the Laplace approximation at the fit x, up to a constant: the data
-// rows' misfit and noise, and the Occam factor det(prior precision) / det(posterior precision)
-// over the free parameters with a proper prior (the gains' and scales' flat priors are the same
-// for every choice of widths).
-double log_evidence(const JointModel& joint, const Eigen::VectorXd& x, std::size_t data_rows,
-                    double relative_noise) {
-  const JointLinearisation l = linearise(joint, x);
+// log p(data | priors) by the Laplace approximation at the fit l was linearised at, up to a
+// constant: the data rows' misfit and noise, and the Occam factor det(prior precision) /
+// det(posterior precision) over the free parameters with a proper prior (the gains' and
+// scales' flat priors are the same for every choice of widths).
+double log_evidence(const JointLinearisation& l, std::size_t data_rows, double relative_noise) {
   if (!l.ok) return NAN;
-  Eigen::VectorXd residual;
-  Eigen::MatrixXd jac;
-  joint.evaluate(x, residual, &jac);
   const auto nd = static_cast<Eigen::Index>(data_rows);
-  const Eigen::MatrixXd prior = jac.bottomRows(jac.rows() - nd)(Eigen::all, l.free);
+  const Eigen::MatrixXd prior = l.jacobian.bottomRows(l.jacobian.rows() - nd)(Eigen::all, l.free);
   std::vector<Eigen::Index> proper;
   for (Eigen::Index c = 0; c < prior.cols(); ++c)
     if (prior.col(c).squaredNorm() > 0) proper.push_back(c);
@@ -71,22 +66,19 @@ double log_evidence(const JointModel& joint, const Eigen::VectorXd& x, std::size
     log_det_posterior += 2 * portable::log(l.llt.matrixLLT()(k, k));
   for (Eigen::Index k = 0; k < prior_llt.matrixLLT().rows(); ++k)
     log_det_prior += 2 * portable::log(prior_llt.matrixLLT()(k, k));
-  return -0.5 * residual.squaredNorm() - static_cast<double>(nd) * portable::log(relative_noise) +
+  return -0.5 * l.residual.squaredNorm() - static_cast<double>(nd) * portable::log(relative_noise) +
          0.5 * (log_det_prior - log_det_posterior);
 }
 
 // Draws theta ~ N(theta*, (J^T J)^-1) over the free parameters, jointly with the
 // discrepancy's shape changes (around delta, already in the model's QE).
-std::vector<QeSample> posterior_samples(RegularisedModel& model, const Eigen::VectorXd& th,
-                                        const Discrepancy& shape, const Eigen::VectorXd& delta,
-                                        const RegularisedOptions& o) {
+// l: the joint problem linearised at (th, delta).
+std::vector<QeSample> posterior_samples(RegularisedModel& model, const JointLinearisation& l,
+                                        const Eigen::VectorXd& th, const Discrepancy& shape,
+                                        const Eigen::VectorXd& delta, const RegularisedOptions& o) {
   std::vector<QeSample> out;
-  if (o.posterior_samples <= 0) return out;
+  if (o.posterior_samples <= 0 || !l.ok) return out;
   const JointModel joint(model, shape);
-  Eigen::VectorXd x(joint.size());
-  x << th, delta;
-  const JointLinearisation l = linearise(joint, x);
-  if (!l.ok) return out;
   const int bands = model.band_count();
   Eigen::MatrixXd fitted(bands, model.wavelengths());
   for (int b = 0; b < bands; ++b) fitted.row(b) = model.qe(b, th).transpose();
@@ -184,10 +176,24 @@ ModelFit fit_model(const CameraProfile& profile, const CalibrationRates& data, c
   return f;
 }
 
+// The regularised fit at one choice of prior widths, before its posterior is drawn.
+struct WidthFit {
+  QeFitResult result;  // without posterior samples
+  ModelFit fit;
+  JointLinearisation linearisation;  // at the fit
+};
+
+RegularisedModel model_at(const CameraProfile& profile, const CalibrationRates& data,
+                          const Problem& p, const ModelFit& f) {
+  RegularisedModel model(profile, data, p, f.weighted);
+  if (f.delta.size() > 0) model.set_shape_change(shape_change(f.shape, f.delta));
+  return model;
+}
+
 // The regularised fit with the priors `options` hold (one width): the leak terms' choice, the
-// fit, its evidence and its posterior.
-QeFitResult fit_at_widths(const CameraProfile& profile, const CalibrationRates& data,
-                          const Problem& p, const RegularisedOptions& options) {
+// fit and its evidence.
+WidthFit fit_at_widths(const CameraProfile& profile, const CalibrationRates& data, const Problem& p,
+                       const RegularisedOptions& options) {
   RegularisedOptions without = options, fine = options;
   without.leak_sigma = 0;
   without.discrepancy_leak = 0;
@@ -195,8 +201,9 @@ QeFitResult fit_at_widths(const CameraProfile& profile, const CalibrationRates& 
     fine.leak_spacing_nm = options.fine_leak_spacing_nm;
   const bool refine = fine.leak_spacing_nm != options.leak_spacing_nm && options.leak_sigma > 0;
   const bool leaks = options.leak_sigma > 0 || options.discrepancy_leak > 0;
-  QeFitResult r;
-  ModelFit f;
+  WidthFit w;
+  QeFitResult& r = w.result;
+  ModelFit& f = w.fit;
   const RegularisedOptions* chosen = &fine;
   if (!leaks) {
     f = fit_model(profile, data, p, options);
@@ -230,8 +237,7 @@ QeFitResult fit_at_widths(const CameraProfile& profile, const CalibrationRates& 
   r.diagnostics.leak_terms = chosen != &without && leaks;
   if (r.diagnostics.leak_terms && chosen->leak_sigma > 0)
     r.diagnostics.leak_spacing_nm = chosen->leak_spacing_nm;
-  RegularisedModel model(profile, data, p, f.weighted);
-  if (f.delta.size() > 0) model.set_shape_change(shape_change(f.shape, f.delta));
+  RegularisedModel model = model_at(profile, data, p, f);
   r.solver = QeSolver::kRegularised;
   r.system_qe.resize(profile.band_count(), profile.grid.size());
   r.gains.resize(profile.band_count());
@@ -240,15 +246,12 @@ QeFitResult fit_at_widths(const CameraProfile& profile, const CalibrationRates& 
     r.gains[b] = model.gain(b, f.th);
   }
   r.diagnostics.iterations = f.iterations;
-  {
-    const JointModel joint(model, f.shape);
-    Eigen::VectorXd x(joint.size());
-    x << f.th, f.delta;
-    r.diagnostics.log_evidence = {log_evidence(joint, x, f.data_n, f.weighted.relative_noise)};
-    model.set_shape_change(shape_change(f.shape, f.delta));
-  }
-  r.posterior = posterior_samples(model, f.th, f.shape, f.delta, *chosen);
-  return r;
+  const JointModel joint(model, f.shape);
+  Eigen::VectorXd x(joint.size());
+  x << f.th, f.delta;
+  w.linearisation = linearise(joint, x);
+  r.diagnostics.log_evidence = {log_evidence(w.linearisation, f.data_n, f.weighted.relative_noise)};
+  return w;
 }
 
 }  // namespace
@@ -262,13 +265,13 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
   for (double s : scales)
     if (!(s > 0) || !std::isfinite(s))
       throw InputError("QE fit: a prior scale must be a positive number");
-  std::vector<QeFitResult> fits;
+  std::vector<WidthFit> fits;
   std::vector<double> evidence;
   int iterations = 0;
   for (double s : scales) {
     fits.push_back(fit_at_widths(profile, data, p, with_prior_widths(options, s)));
-    iterations += fits.back().diagnostics.iterations;
-    evidence.push_back(fits.back().diagnostics.log_evidence.front());
+    iterations += fits.back().result.diagnostics.iterations;
+    evidence.push_back(fits.back().result.diagnostics.log_evidence.front());
   }
   // The largest evidence; where none could be computed, the widths nearest the nominal ones.
   std::size_t kept = 0;
@@ -279,7 +282,16 @@ QeFitResult fit_qe_regularised(const CameraProfile& profile, const CalibrationRa
                         std::abs(portable::log(scales[k])) < std::abs(portable::log(scales[kept]));
     if (larger || nearer) kept = k;
   }
-  QeFitResult best = std::move(fits[kept]);
+  WidthFit& w = fits[kept];
+  // The posterior of the kept fit only: the model is rebuilt as it was fitted.
+  RegularisedModel model = model_at(profile, data, p, w.fit);
+  QeFitResult best = std::move(w.result);
+  best.posterior = posterior_samples(model, w.linearisation, w.fit.th, w.fit.shape, w.fit.delta,
+                                     with_prior_widths(options, scales[kept]));
+  for (std::size_t k = 0; k < scales.size(); ++k)
+    if (k != kept)
+      best.other_widths.push_back({scales[k], evidence[k], fits[k].result.diagnostics.leak_terms,
+                                   QeSample{fits[k].result.system_qe, fits[k].result.gains}});
   best.diagnostics.prior_scale = scales[kept];
   best.diagnostics.iterations = iterations;
   best.diagnostics.prior_scales_tried = scales;

@@ -157,7 +157,7 @@ TEST(QePosterior, spreads_where_the_furnace_does_not_reach) {
   // The priors' own share: fits with them twice as wide and half as wide read the furnace
   // range alike and part above it, so the term grows there and hardly at all in range.
   const std::vector<QeSample> prior_fits = prior_sensitivity_fits(
-      p, simulate_calibration_rates(p, truth, {}), holding_fit_choices(options, fit));
+      p, simulate_calibration_rates(p, truth, {}), options, fit, 2, INFINITY);
   ASSERT_EQ(prior_fits.size(), 2u);
   const std::vector<double> with_priors =
       qe_model_uncertainty(CameraModel{p, fit.system_qe, fit.gains}, fit.posterior, t, prior_fits);
@@ -169,7 +169,8 @@ TEST(QePosterior, spreads_where_the_furnace_does_not_reach) {
   // The paper's solver has no priors to vary.
   QeFitOptions paper = options;
   paper.solver = QeSolver::kPaper;
-  EXPECT_TRUE(prior_sensitivity_fits(p, simulate_calibration_rates(p, truth, {}), paper).empty());
+  EXPECT_TRUE(
+      prior_sensitivity_fits(p, simulate_calibration_rates(p, truth, {}), paper, fit).empty());
 }
 
 // A prior fit's reading crosses the model's somewhere above the furnace (hostile colour unit 1:
@@ -191,7 +192,7 @@ TEST(QePosterior, the_prior_term_never_shrinks_away_from_the_furnace) {
   std::vector<double> t;
   for (double c = 2600; c >= 700; c -= 100) t.push_back(c);  // any order
   const std::vector<double> u = qe_model_uncertainty(
-      model, fit.posterior, t, prior_sensitivity_fits(p, data, holding_fit_choices(options, fit)),
+      model, fit.posterior, t, prior_sensitivity_fits(p, data, options, fit),
       *std::max_element(data.temperatures_c.begin(), data.temperatures_c.end()));
   ASSERT_EQ(u.size(), t.size());
   // From the furnace's top (1100 degC) up.

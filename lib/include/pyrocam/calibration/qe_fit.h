@@ -170,6 +170,14 @@ struct QeSample {
   Eigen::VectorXd gains;
 };
 
+// A regularised fit at other prior widths than a fit kept (RegularisedOptions::prior_scales).
+struct PriorWidthFit {
+  double prior_scale = 1;     // the factor on the nominal widths
+  double log_evidence = NAN;  // as QeFitDiagnostics::log_evidence
+  bool leak_terms = false;    // whether it has the leak terms (QeFitDiagnostics::leak_terms)
+  QeSample fit;
+};
+
 struct QeFitResult {
   QeSolver solver = QeSolver::kRegularised;
   Eigen::MatrixXd system_qe;  // bands x wavelengths on profile.grid, within [0, 1]
@@ -179,6 +187,9 @@ struct QeFitResult {
   Eigen::VectorXd gains;
   QeFitDiagnostics diagnostics;
   std::vector<QeSample> posterior;  // regularised only, RegularisedOptions::posterior_samples
+  // Regularised, where it chose its prior widths: the fits at the factors it did not keep, for
+  // prior_sensitivity_fits.
+  std::vector<PriorWidthFit> other_widths;
 };
 
 // Fits the QE. Throws InputError when shapes disagree, or naming the band when a band has fewer
@@ -228,17 +239,22 @@ Eigen::VectorXd normalised_rate_residuals(const CameraProfile& profile,
 Eigen::VectorXd prediction_residuals(const CameraProfile& profile, const QeFitResult& fit,
                                      const CalibrationRates& data);
 
-// How much the regularised fit depends on its priors, which the furnace cannot decide above its
-// range: the same fit with every prior on the QE's shape (tilts, shifts, the common slope, the
-// filter's edges, leaks and the shape changes beyond the model) `factor` times wider, then
-// `factor` times narrower, than `options` make them (its prior scale where it holds one, as
-// holding_fit_choices of the fit does; else the nominal widths); the furnace temperatures' prior
-// is kept. Each fits the data about as well as the fit itself and extrapolates otherwise:
-// qe_model_uncertainty takes the largest reading change they make as a term of its own. Empty
-// for the paper's solver.
+// How much the regularised `fit` depends on its priors, which the furnace cannot decide above
+// its range: the same fit with every prior on the QE's shape (tilts, shifts, the common slope,
+// the filter's edges, leaks and the shape changes beyond the model) `factor` times wider, then
+// `factor` times narrower, than the widths `fit` kept, with the leak terms it chose
+// (holding_fit_choices; `options`: those `fit` was made with); the furnace temperatures' prior
+// is kept. Each fits the data about as well as the fit itself and may extrapolate otherwise:
+// qe_model_uncertainty takes the largest reading change they make as a term of its own. Only
+// the fits the data do not reject are returned (Occam's window, Madigan and Raftery 1994): those
+// whose evidence is at least 1 / occam_odds of the largest among `fit` and them (a fit whose
+// evidence could not be computed is kept); infinity keeps both. A fit `fit` made while choosing
+// its widths (QeFitResult::other_widths) is reused where it is the same fit: the same factor and
+// the same leak terms. Empty for the paper's solver.
 std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
                                              const CalibrationRates& data,
-                                             const QeFitOptions& options, double factor = 2);
+                                             const QeFitOptions& options, const QeFitResult& fit,
+                                             double factor = 2, double occam_odds = 20);
 
 // Paper section 3.1: refit leaving out one of `groups` interleaved temperature groups (sorted
 // temperatures, i-th goes to group i % groups).
