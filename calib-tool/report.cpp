@@ -107,15 +107,19 @@ void qe_section(const CalibrationOutcome& o, std::ostream& h) {
       << " %</td><td>" << num(s.qe_change_rms, 5) << "</td><td style='text-align:left'>"
       << html_escape(s.leak_terms.empty() ? "—" : s.leak_terms)
       << "</td><td style='text-align:left'>"
-      << html_escape(s.prior_widths.empty() ? "—" : s.prior_widths) << "</td><td>"
-      << num(s.seconds, 1) << "</td></tr>";
+      << html_escape(s.prior_widths.empty() ? "—" : s.prior_widths)
+      << (s.prior_sensitivity.empty() ? "" : "; uncertainty's prior fits: ")
+      << html_escape(s.prior_sensitivity) << "</td><td>" << num(s.seconds, 1) << "</td></tr>";
   h << "</table><p>Leak terms: the regularised fit's leaks outside the pass band stay only "
        "where the furnace data call for them (a chi2 test, one degree of freedom per leak "
        "amplitude; docs/method.md): fitted to noise they would read high above the furnace "
        "range. Prior widths: the fit's priors on the QE's shape at half, once and twice their "
        "nominal widths, the one the furnace data make likeliest kept (the largest evidence): a "
        "camera that deviates from its datasheet more than the nominal priors expect gets wider "
-       "ones, and extrapolates less from the datasheet's shape.</p>";
+       "ones, and extrapolates less from the datasheet's shape. The uncertainty's prior fits: "
+       "the chosen fit again with its priors twice and half as wide; the change of reading they "
+       "make is a term of the QE-model uncertainty, counted only for those whose evidence is at "
+       "least 1/20 of the best (Occam's window).</p>";
   std::vector<Series> qe;
   for (std::size_t i = 0; i < bands.size(); ++i) {
     const int b = bands[i];

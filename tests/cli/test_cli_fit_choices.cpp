@@ -66,18 +66,27 @@ TEST_F(FitChoices, calibrate_selects_keeps_or_drops_the_leak_terms) {
 }
 
 TEST_F(FitChoices, calibrate_selects_or_takes_the_prior_widths) {
-  const auto widths = [](const std::string& name, const std::string& how, std::string* html) {
+  // The regularised solver's row of the report.
+  const auto row = [](const std::string& name, const std::string& how, std::string* html) {
     const nlohmann::json report =
         calibrate("widths-" + name, "--solver regularised --prior-widths " + how, html);
     for (const auto& s : report["solvers"])
-      if (s["solver"] == "regularised") return s["prior_widths"].get<std::string>();
-    return std::string("(no regularised solver in the report)");
+      if (s["solver"] == "regularised") return s;
+    ADD_FAILURE() << "no regularised solver in the report";
+    return nlohmann::json{{"prior_widths", ""}, {"prior_sensitivity", ""}};
   };
   std::string html;
-  EXPECT_EQ(widths("nominal", "nominal", nullptr), "1 x nominal");
-  EXPECT_EQ(widths("factor", "3", nullptr), "3 x nominal");
+  EXPECT_EQ(row("nominal", "nominal", nullptr)["prior_widths"], "1 x nominal");
+  const nlohmann::json factor = row("factor", "3", &html);
+  EXPECT_EQ(factor["prior_widths"], "3 x nominal");
+  // The uncertainty's prior-sensitivity fits around the widths kept: twice and half as wide,
+  // each counted or left out by its evidence, in the JSON and the HTML.
+  const std::string sensitivity = factor["prior_sensitivity"];
+  EXPECT_EQ(sensitivity.rfind("6 x nominal ", 0), 0u) << sensitivity;
+  EXPECT_NE(sensitivity.find("; 1.5 x nominal "), std::string::npos) << sensitivity;
+  EXPECT_NE(html.find(sensitivity), std::string::npos) << sensitivity;
   // Selected: the factor kept, with the evidence of each factor tried, in the HTML too.
-  const std::string selected = widths("select", "select", &html);
+  const std::string selected = row("select", "select", &html)["prior_widths"];
   EXPECT_NE(selected.find(" x nominal (log evidence "), std::string::npos) << selected;
   EXPECT_NE(selected.find(" at 0.5 x, "), std::string::npos) << selected;
   EXPECT_NE(selected.find(" at 2 x)"), std::string::npos) << selected;

@@ -106,7 +106,9 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
       best.posterior = fit.posterior;
       if (qo.solver == QeSolver::kRegularised)
         report_stage(progress, "prior sensitivity (" + solvers[s] + ")", s, solvers.size());
-      best.prior_fits = prior_sensitivity_fits(profile, data, qo, fit);  // none for the paper's
+      const PriorSensitivity sensitivity = prior_sensitivity(profile, data, qo, fit);
+      best.prior_fits = sensitivity.counted_fits();  // none for the paper's
+      best.reports.back().prior_sensitivity = prior_sensitivity_summary(sensitivity);
       best.fit_choices = held_fit_choices(fit);
       best.reference_error_before_c = fit.diagnostics.reference_error_before_c;
       best.reference_error_after_c = fit.diagnostics.reference_error_after_c;

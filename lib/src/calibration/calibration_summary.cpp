@@ -75,6 +75,7 @@ nlohmann::json outcome_summary(const CalibrationOutcome& o) {
                        {"qe_change_rms", s.qe_change_rms},
                        {"leak_terms", s.leak_terms},
                        {"prior_widths", s.prior_widths},
+                       {"prior_sensitivity", s.prior_sensitivity},
                        {"seconds", s.seconds}});
   j["solvers"] = solvers;
   j["rate_offsets"] = rate_offsets_summary(o.rates.offsets);

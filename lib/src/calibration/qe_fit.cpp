@@ -309,17 +309,24 @@ std::string leak_terms_summary(const QeFitResult& fit) {
   return text;
 }
 
-std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
-                                             const CalibrationRates& data,
-                                             const QeFitOptions& options, const QeFitResult& fit,
-                                             double factor, double occam_odds) {
+std::vector<QeSample> PriorSensitivity::counted_fits() const {
+  std::vector<QeSample> out;
+  for (std::size_t k = 0; k < fits.size(); ++k)
+    if (counted[k]) out.push_back(fits[k].fit);
+  return out;
+}
+
+PriorSensitivity prior_sensitivity(const CameraProfile& profile, const CalibrationRates& data,
+                                   const QeFitOptions& options, const QeFitResult& fit,
+                                   double factor, double occam_odds) {
   if (!(occam_odds >= 1))
     throw InputError("prior sensitivity: the Occam window's odds must be 1 or more");
-  if (options.solver != QeSolver::kRegularised) return {};
+  PriorSensitivity out;
+  out.occam_odds = occam_odds;
+  if (options.solver != QeSolver::kRegularised) return out;
   const RegularisedOptions held = holding_fit_choices(options, fit).regularised;
   // Around the widths the fit chose, else the nominal ones.
   const double base = held.prior_scales.size() == 1 ? held.prior_scales.front() : 1.0;
-  std::vector<PriorWidthFit> fits;
   for (const double f : {factor, 1 / factor}) {
     const double scale = base * f;
     const auto made =
@@ -328,27 +335,50 @@ std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
                  w.leak_terms == fit.diagnostics.leak_terms;
         });
     if (made != fit.other_widths.end()) {
-      fits.push_back(*made);
+      out.fits.push_back(*made);
       continue;
     }
     RegularisedOptions o = held;
     o.posterior_samples = 0;
     o.prior_scales = {scale};
     const QeFitResult refit = fit_qe_regularised(profile, data, o);
-    fits.push_back({scale, refit.diagnostics.log_evidence.front(), refit.diagnostics.leak_terms,
-                    QeSample{refit.system_qe, refit.gains}});
+    out.fits.push_back({scale, refit.diagnostics.log_evidence.front(), refit.diagnostics.leak_terms,
+                        QeSample{refit.system_qe, refit.gains}});
   }
   // The kept fit's evidence: that of its factor among those it tried.
   const QeFitDiagnostics& d = fit.diagnostics;
-  double best = NAN;
   for (std::size_t k = 0; k < d.prior_scales_tried.size() && k < d.log_evidence.size(); ++k)
-    if (d.prior_scales_tried[k] == d.prior_scale) best = d.log_evidence[k];
-  for (const PriorWidthFit& w : fits) best = std::fmax(best, w.log_evidence);
+    if (d.prior_scales_tried[k] == d.prior_scale) out.best_log_evidence = d.log_evidence[k];
+  for (const PriorWidthFit& w : out.fits)
+    out.best_log_evidence = std::fmax(out.best_log_evidence, w.log_evidence);
   const double window = std::isinf(occam_odds) ? INFINITY : portable::log(occam_odds);
-  std::vector<QeSample> plausible;
-  for (const PriorWidthFit& w : fits)
-    if (!(w.log_evidence < best - window)) plausible.push_back(w.fit);
-  return plausible;
+  for (const PriorWidthFit& w : out.fits)
+    out.counted.push_back(!(w.log_evidence < out.best_log_evidence - window));
+  return out;
+}
+
+std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
+                                             const CalibrationRates& data,
+                                             const QeFitOptions& options, const QeFitResult& fit,
+                                             double factor, double occam_odds) {
+  return prior_sensitivity(profile, data, options, fit, factor, occam_odds).counted_fits();
+}
+
+std::string prior_sensitivity_summary(const PriorSensitivity& s) {
+  std::string out;
+  for (std::size_t k = 0; k < s.fits.size(); ++k) {
+    const PriorWidthFit& w = s.fits[k];
+    char text[160];
+    if (s.counted[k])
+      std::snprintf(text, sizeof text, "%s%g x nominal counted", k ? "; " : "", w.prior_scale);
+    else
+      std::snprintf(text, sizeof text,
+                    "%s%g x nominal left out (log evidence %.1f below the best, window %.1f)",
+                    k ? "; " : "", w.prior_scale, s.best_log_evidence - w.log_evidence,
+                    portable::log(s.occam_odds));
+    out += text;
+  }
+  return out;
 }
 
 Eigen::VectorXd fitted_signal_rates(const CameraProfile& profile, const QeFitResult& fit,

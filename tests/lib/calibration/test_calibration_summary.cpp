@@ -52,13 +52,15 @@ TEST(CalibrationVerdict, says_residuals_the_mlps_rms_skipped_points_and_warnings
 TEST(OutcomeSummary, holds_the_verdict_solver_residuals_and_table4) {
   CalibrationOutcome o = small_outcome();
   o.verdict = calibration_verdict(o);
-  o.solvers.push_back({"regularised", 0.01, 0.02, 0.03, 1.5, "dropped", "2 x nominal"});
+  o.solvers.push_back({"regularised", 0.01, 0.02, 0.03, 1.5, "dropped", "2 x nominal",
+                       "4 x nominal counted; 1 x nominal counted"});
   const nlohmann::json j = outcome_summary(o);
   EXPECT_EQ(j["verdict"], o.verdict);
   EXPECT_EQ(j["qe_solver"], "regularised");
   EXPECT_EQ(j["solvers"][0]["held_out_residual_rms"], 0.02);
   EXPECT_EQ(j["solvers"][0]["leak_terms"], "dropped");
   EXPECT_EQ(j["solvers"][0]["prior_widths"], "2 x nominal");
+  EXPECT_EQ(j["solvers"][0]["prior_sensitivity"], "4 x nominal counted; 1 x nominal counted");
   EXPECT_NEAR(j["rate_residual_rms"]["datasheet"].get<double>(), 0.05, 1e-15);
   EXPECT_EQ(j["table4"][0]["estimator"], "MLP");
   EXPECT_EQ(j["table4"][0]["n"], 2);

@@ -53,11 +53,13 @@ TEST(PriorWidths, are_widened_where_the_data_call_for_it) {
   // fit at half the kept widths is left out at the default odds of 20, and kept with no window.
   const std::vector<QeSample> all =
       prior_sensitivity_fits(u.profile, u.data, options, chosen, 2, INFINITY);
-  const std::vector<QeSample> plausible =
-      prior_sensitivity_fits(u.profile, u.data, options, chosen);
+  const PriorSensitivity sensitivity = prior_sensitivity(u.profile, u.data, options, chosen);
+  const std::vector<QeSample> plausible = sensitivity.counted_fits();
   ASSERT_EQ(all.size(), 2u);  // x2 (4 times the nominal widths), then x0.5 (the nominal ones)
   EXPECT_EQ(all[1].system_qe, nominal.system_qe);
-  std::cout << "sensitivity fits within the window: " << plausible.size() << " of 2\n";
+  const std::string words = prior_sensitivity_summary(sensitivity);
+  std::cout << "sensitivity fits: " << words << "\n";
+  EXPECT_NE(words.find("; 1 x nominal left out (log evidence 24."), std::string::npos) << words;
   EXPECT_LT(plausible.size(), 2u);
   for (const QeSample& s : plausible) EXPECT_NE(s.system_qe, nominal.system_qe);
   EXPECT_THROW(prior_sensitivity_fits(u.profile, u.data, options, chosen, 2, 0.5), InputError);

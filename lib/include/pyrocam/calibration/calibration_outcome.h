@@ -52,6 +52,9 @@ struct QeSolverReport {
   std::string leak_terms;
   // Its priors' widths (prior_widths_summary); empty for other solvers.
   std::string prior_widths;
+  // The chosen fit's prior-sensitivity fits and which of them the uncertainty counts
+  // (prior_sensitivity_summary); empty for other solvers and fits not chosen.
+  std::string prior_sensitivity;
 };
 
 // A reference row (a source beyond the furnace) against the model: its reading by the scale-free

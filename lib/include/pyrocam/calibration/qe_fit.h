@@ -246,15 +246,29 @@ Eigen::VectorXd prediction_residuals(const CameraProfile& profile, const QeFitRe
 // (holding_fit_choices; `options`: those `fit` was made with); the furnace temperatures' prior
 // is kept. Each fits the data about as well as the fit itself and may extrapolate otherwise:
 // qe_model_uncertainty takes the largest reading change they make as a term of its own. Only
-// the fits the data do not reject are returned (Occam's window, Madigan and Raftery 1994): those
-// whose evidence is at least 1 / occam_odds of the largest among `fit` and them (a fit whose
-// evidence could not be computed is kept); infinity keeps both. A fit `fit` made while choosing
-// its widths (QeFitResult::other_widths) is reused where it is the same fit: the same factor and
-// the same leak terms. Empty for the paper's solver.
+// the fits the data do not reject count (Occam's window, Madigan and Raftery 1994): those whose
+// evidence is at least 1 / occam_odds of the largest among `fit` and them (a fit whose evidence
+// could not be computed counts); infinity counts both. A fit `fit` made while choosing its
+// widths (QeFitResult::other_widths) is reused where it is the same fit: the same factor and
+// the same leak terms. No fits for the paper's solver.
+struct PriorSensitivity {
+  std::vector<PriorWidthFit> fits;  // factor times the kept widths, then 1 / factor times
+  std::vector<bool> counted;        // per fit: within the window
+  double best_log_evidence = NAN;   // the largest among `fit` and them
+  double occam_odds = 20;
+  std::vector<QeSample> counted_fits() const;
+};
+PriorSensitivity prior_sensitivity(const CameraProfile& profile, const CalibrationRates& data,
+                                   const QeFitOptions& options, const QeFitResult& fit,
+                                   double factor = 2, double occam_odds = 20);
+// The fits that count (prior_sensitivity's counted_fits).
 std::vector<QeSample> prior_sensitivity_fits(const CameraProfile& profile,
                                              const CalibrationRates& data,
                                              const QeFitOptions& options, const QeFitResult& fit,
                                              double factor = 2, double occam_odds = 20);
+// In words, e.g. "2 x nominal counted; 0.5 x nominal left out (log evidence 24.2 below the
+// best, window 3.0)"; empty without fits.
+std::string prior_sensitivity_summary(const PriorSensitivity& sensitivity);
 
 // Paper section 3.1: refit leaving out one of `groups` interleaved temperature groups (sorted
 // temperatures, i-th goes to group i % groups).
