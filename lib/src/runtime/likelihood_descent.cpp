@@ -19,8 +19,13 @@ constexpr Eigen::Index kConcaveStep = 20;
 constexpr std::size_t kGuesses = 8192;
 }  // namespace
 
-LocusDescent::LocusDescent(const Eigen::MatrixXd& rates, const double* m, const double* m2)
-    : m_(m), m2_(m2), bands_(static_cast<int>(rates.cols())), samples_(rates.rows()) {
+LocusDescent::LocusDescent(const Eigen::MatrixXd& rates, const double* m, const double* m2,
+                           int width)
+    : m_(m),
+      m2_(m2),
+      bands_(static_cast<int>(rates.cols())),
+      width_(width),
+      samples_(rates.rows()) {
   if (bands_ < 3 || samples_ < 3) return;
   // How fast each band brightens in the middle of the range; the faster half against the rest.
   const Eigen::Index mid = samples_ / 2;
@@ -62,9 +67,9 @@ bool LocusDescent::descend(const double* s, const double* w, const double* ws, d
   const double last = static_cast<double>(guess_.size() - 1);
   const auto j = cell > 0 ? static_cast<std::size_t>(std::min(cell, last)) : 0;  // NaN: 0
   at = std::clamp<Eigen::Index>(guess_[j], 1, samples_ - 2);
-  const auto row = [&](Eigen::Index i) { return static_cast<std::size_t>(i * bands_); };
+  const auto row = [&](Eigen::Index i) { return static_cast<std::size_t>(i * width_); };
   for (int step = 0; step < kMaxSteps; ++step) {
-    profiled_chi2_three(m_ + row(at - 1), m2_ + row(at - 1), ws, w, bands_, sss, chi2);
+    profiled_chi2_three(m_ + row(at - 1), m2_ + row(at - 1), ws, w, width_, sss, chi2);
     if (chi2[1] < chi2[0] && chi2[1] <= chi2[2]) return true;
     const double curvature = chi2[0] - 2 * chi2[1] + chi2[2];
     const Eigen::Index down = chi2[0] < chi2[2] ? -1 : 1;

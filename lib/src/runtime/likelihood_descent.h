@@ -20,8 +20,9 @@ namespace pyrocam {
 // scan where they differ.
 class LocusDescent {
  public:
-  // rates (samples x bands, DN/s) and the fit's tables of m and m^2, row after row.
-  LocusDescent(const Eigen::MatrixXd& rates, const double* m, const double* m2);
+  // rates (samples x bands, DN/s) and the fit's tables of m and m^2, row after row, `width`
+  // doubles a row (padded_bands).
+  LocusDescent(const Eigen::MatrixXd& rates, const double* m, const double* m2, int width);
 
   bool usable() const { return usable_; }
 
@@ -43,7 +44,7 @@ class LocusDescent {
  private:
   const double* m_;
   const double* m2_;
-  int bands_;
+  int bands_, width_;
   Eigen::Index samples_;
   std::vector<double> fast_;  // per band: 1 where it brightens faster than the median band
   // The first guess: the sample where the fraction of the signal in the fast bands reaches

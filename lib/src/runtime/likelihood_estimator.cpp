@@ -41,13 +41,14 @@ class LikelihoodFit : public TemperatureEstimator {
       : TemperatureEstimator(std::move(model)),
         locus_(
             make_locus(model_->camera, model_->min_temperature_c, model_->max_temperature_c, 1.0)),
-        rates_(static_cast<std::size_t>(locus_.size() * bands_)),
-        squares_(rates_.size()) {
+        width_(padded_bands(bands_)),
+        rates_(static_cast<std::size_t>(locus_.size() * width_)),
+        squares_(static_cast<std::size_t>(locus_.size() * width_)) {
     for (Eigen::Index i = 0; i < locus_.size(); ++i)
       for (int b = 0; b < bands_; ++b) {
         const double m = locus_.rates(i, b);
-        rates_[static_cast<std::size_t>(i * bands_ + b)] = m;
-        squares_[static_cast<std::size_t>(i * bands_ + b)] = m * m;
+        rates_[static_cast<std::size_t>(i * width_ + b)] = m;
+        squares_[static_cast<std::size_t>(i * width_ + b)] = m * m;
       }
     set_noise(1.0);
     // A ratio that turns over (rises, then falls) fits two temperatures: only pairs whose ratio
@@ -107,7 +108,8 @@ class LikelihoodFit : public TemperatureEstimator {
   // saturated, NaN or dim; the rest still fix the temperature), w*s (0 for a dropped band) and
   // sum w s^2; whether every band reads.
   struct Weighted {
-    double w[kMaxBands], ws[kMaxBands];
+    alignas(32) double w[kMaxBands];
+    alignas(32) double ws[kMaxBands];
     double sss;
     bool complete;
   };
@@ -155,9 +157,8 @@ class LikelihoodFit : public TemperatureEstimator {
 
   // chi2 at locus sample i.
   double chi2(Eigen::Index i, const Weighted& px) const {
-    return profiled_chi2(&rates_[static_cast<std::size_t>(i * bands_)],
-                         &squares_[static_cast<std::size_t>(i * bands_)], px.ws, px.w, bands_,
-                         px.sss);
+    const std::size_t row = static_cast<std::size_t>(i * width_);
+    return profiled_chi2(&rates_[row], &squares_[row], px.ws, px.w, width_, px.sss);
   }
 
   // The reading from the refined minima: the best one, unless another one far from it fits
@@ -189,7 +190,10 @@ class LikelihoodFit : public TemperatureEstimator {
   }
 
   Locus locus_;
-  std::vector<double> rates_, squares_;  // m and m^2: samples x bands, row after row
+  // m and m^2: samples x width_, row after row, each row on 32 bytes and zero past the bands
+  // (the kernels sum whole lanes of four; weigh_bands zeroes w and ws there too).
+  int width_;
+  AlignedDoubles rates_, squares_;
   double shot_gain_[kMaxBands] = {}, noise_floor_[kMaxBands] = {};
   std::vector<std::uint8_t> monotonic_;  // bands x bands: ratio monotonic over the locus
 };
@@ -253,7 +257,8 @@ class LikelihoodEstimator : public LikelihoodFit {
   static_assert(kMaxCoarse <= kMaxMinimumCandidates);
 
   explicit LikelihoodEstimator(std::shared_ptr<const ThermalModel> model)
-      : LikelihoodFit(std::move(model)), descent_(locus_.rates, rates_.data(), squares_.data()) {
+      : LikelihoodFit(std::move(model)),
+        descent_(locus_.rates, rates_.data(), squares_.data(), width_) {
     const ThermalModel& m = *model_;
     const Eigen::Index n = locus_.size();
     Eigen::MatrixXd unit(n, bands_), squares(n, bands_);
@@ -480,8 +485,8 @@ class LikelihoodEstimator : public LikelihoodFit {
       const Eigen::Index at = lo + (std::find(open, open + count, 1) - open);
       if (at == 0 || at == n - 1) return {at, chi2(at, px), NAN, NAN};
       double c[3];
-      const std::size_t row = static_cast<std::size_t>((at - 1) * bands_);
-      profiled_chi2_three(&rates_[row], &squares_[row], px.ws, px.w, bands_, px.sss, c);
+      const std::size_t row = static_cast<std::size_t>((at - 1) * width_);
+      profiled_chi2_three(&rates_[row], &squares_[row], px.ws, px.w, width_, px.sss, c);
       return {at, c[1], c[0], c[2]};
     }
     double exact[2 * kCoarse + 1];

@@ -18,6 +18,7 @@
 #include "pyrocam/simulation/simulator.h"
 #include "runtime/estimator_kinds.h"
 #include "runtime/estimator_test_support.h"
+#include "runtime/likelihood_kernels.h"
 
 namespace pyrocam::test {
 namespace {
@@ -467,6 +468,64 @@ TEST(LikelihoodEstimator, safe_partial_readings_must_be_precise) {
   // Both sides exercised (measured 638 kept, 771 refused of 2000 pixels).
   EXPECT_GT(kept, 100u);
   EXPECT_GT(refused, 100u);
+}
+
+// The kernels on rows padded to whole lanes of four: the weights are zero past the bands, sss
+// and chi2 are their sums (to rounding, against long double), and for 3 and 25 bands (the
+// shipped cameras) the padded sums are those over the bands alone, bit for bit.
+TEST(LikelihoodKernels, padded_rows_sum_the_bands_alone) {
+  std::uint64_t state = 7;
+  const auto uniform = [&] {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  for (const int bands : {3, 5, 7, 25}) {
+    const int width = padded_bands(bands);
+    alignas(32) double s[kMaxBands], gain[kMaxBands], floor[kMaxBands];
+    alignas(32) double w[kMaxBands], ws[kMaxBands];
+    std::vector<double> m(static_cast<std::size_t>(3 * width), 0.0), m2(m.size(), 0.0);
+    for (int b = 0; b < kMaxBands; ++b) w[b] = ws[b] = NAN;  // what padding must overwrite
+    for (int b = 0; b < bands; ++b) {
+      s[b] = b == 1 ? 2.0 : 20 + 500 * uniform();  // band 1 below the dim threshold of 5
+      gain[b] = 0.5 + uniform();
+      floor[b] = 10 + 5 * uniform();
+      for (int row = 0; row < 3; ++row) {
+        const double v = 0.1 + uniform();
+        m[static_cast<std::size_t>(row * width + b)] = v;
+        m2[static_cast<std::size_t>(row * width + b)] = v * v;
+      }
+    }
+    double sss = 0;
+    EXPECT_EQ(weigh_bands(s, bands, 5.0, gain, floor, w, ws, &sss), bands - 1);
+    long double want_sss = 0;
+    for (int b = 0; b < width; ++b) {
+      if (b >= bands || b == 1) {
+        EXPECT_EQ(w[b], 0.0) << bands << " bands, band " << b;
+        EXPECT_EQ(ws[b], 0.0) << bands << " bands, band " << b;
+      } else {
+        EXPECT_EQ(w[b], 1.0 / (gain[b] * s[b] + floor[b]));
+        want_sss += static_cast<long double>(ws[b]) * s[b];
+      }
+    }
+    EXPECT_NEAR(sss, static_cast<double>(want_sss), 1e-13 * sss) << bands << " bands";
+    double chi2[3];
+    profiled_chi2_three(m.data(), m2.data(), ws, w, width, sss, chi2);
+    for (int row = 0; row < 3; ++row) {
+      const double* r = &m[static_cast<std::size_t>(row * width)];
+      const double* r2 = &m2[static_cast<std::size_t>(row * width)];
+      long double ssm = 0, smm = 0;
+      for (int b = 0; b < bands; ++b)
+        ssm += static_cast<long double>(ws[b]) * r[b], smm += w[b] * r2[b];
+      const double want = static_cast<double>(sss - ssm * ssm / smm);
+      EXPECT_NEAR(chi2[row], want, 1e-11 * sss) << bands << " bands, row " << row;
+      EXPECT_EQ(chi2[row], profiled_chi2(r, r2, ws, w, width, sss));
+      if (bands == 3 || bands == 25) {
+        // Unpadded rows of the same values: the tail's terms land in the lanes padding gives.
+        std::vector<double> tight(r, r + bands), tight2(r2, r2 + bands);
+        EXPECT_EQ(chi2[row], profiled_chi2(tight.data(), tight2.data(), ws, w, bands, sss));
+      }
+    }
+  }
 }
 
 }  // namespace
