@@ -90,32 +90,43 @@ double fast_fraction(const double* s, const double* fast, int bands) {
 
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
 // and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
-// Returns how many bands read. Selects, so that the divisions vectorise.
+// Returns how many bands read. In explicit lanes of four bands (left to the compiler, the
+// divisions went through masked loads and sss through a chain of scalar additions).
 PYROCAM_VECTOR_CLONES
 int weigh_bands(const double* __restrict s, int bands, double dim, const double* __restrict gain,
                 const double* __restrict floor, double* __restrict w, double* __restrict ws,
                 double* sss) {
+  typedef std::int64_t Mask __attribute__((vector_size(32)));
   constexpr double kInf = std::numeric_limits<double>::infinity();
-  for (int b = 0; b < bands; ++b) {
-    const double v = s[b];
-    const bool reads = v >= dim && v < kInf;  // NaN fails both
-    const double weight = 1.0 / (gain[b] * std::max(v, 0.0) + floor[b]);
-    w[b] = reads ? weight : 0.0;
-    ws[b] = reads ? weight * v : 0.0;
+  const Lanes zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
+  const Lanes dims = {dim, dim, dim, dim}, inf = {kInf, kInf, kInf, kInf};
+  Lanes sum = zero;
+  Mask counted = {0, 0, 0, 0};  // -1 per band with a weight
+  for (int b = 0; b < bands; b += 4) {
+    // The last group's bands past `bands` read as 0 (no reading), from a copy: the caller's
+    // arrays hold `bands` values.
+    alignas(32) double tail[3][4];
+    const double *at = s + b, *g = gain + b, *f = floor + b;
+    if (b + 4 > bands) {
+      for (int k = 0; k < 4; ++k) {
+        const bool in = k < bands - b;
+        tail[0][k] = in ? at[k] : 0.0, tail[1][k] = in ? g[k] : 0.0, tail[2][k] = in ? f[k] : 0.0;
+      }
+      at = tail[0], g = tail[1], f = tail[2];
+    }
+    const Lanes v = lanes_at(at);
+    const Mask reads = (v >= dims) & (v < inf);  // NaN fails both
+    const Lanes positive = v > zero ? v : zero;  // std::max(v, 0.0) wherever it matters
+    const Lanes weight = one / (lanes_at(g) * positive + lanes_at(f));
+    const Lanes wl = reads ? weight : zero, wsl = reads ? weight * v : zero;
+    *reinterpret_cast<Lanes*>(w + b) = wl;
+    *reinterpret_cast<Lanes*>(ws + b) = wsl;
+    const Mask weighted = wl != zero;
+    counted += weighted;
+    sum += weighted ? wsl * v : zero;
   }
-  const int width = padded_bands(bands);
-  alignas(32) double terms[kMaxBands];
-  int valid = 0;
-  for (int b = 0; b < bands; ++b) {
-    valid += w[b] != 0.0;
-    terms[b] = w[b] != 0.0 ? ws[b] * s[b] : 0.0;
-  }
-  for (int b = bands; b < width; ++b) w[b] = ws[b] = terms[b] = 0.0;
-  // In four lanes, as the chi2 sums (one chain of additions a band long took most of the time).
-  Lanes sum = {0, 0, 0, 0};
-  for (int b = 0; b < width; b += 4) sum += lanes_at(terms + b);
   *sss = lane_sum(sum);
-  return valid;
+  return static_cast<int>(-(counted[0] + counted[1] + counted[2] + counted[3]));
 }
 
 // Per pixel, how many of its bands read as weigh_bands decides, in single precision (dim_f is
