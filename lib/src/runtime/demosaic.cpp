@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 
+#include "detail/vector_clones.h"
 #include "pyrocam/core/error.h"
 
 namespace pyrocam {
@@ -15,14 +17,37 @@ void prepare_planes(std::vector<cv::Mat>& planes, int bands, cv::Size size) {
 
 // One sensor row's samples into the band rows they belong to: out[cx][x] = row[x * pw + cx]
 // (one pass over the row, which stays in cache, instead of one strided pass per band).
+PYROCAM_VECTOR_CLONES
 void deinterleave_row(const float* __restrict row, int pw, int out_w, float* const* out) {
-  if (pw == 5) {  // the snapshot cameras: a fixed stride the compiler unrolls
+  if (pw == 5) {  // the snapshot cameras: four cells at a time, a 5 x 4 transpose in vectors
+    typedef float Four __attribute__((vector_size(16), aligned(4), may_alias));
+    typedef std::int32_t Pick __attribute__((vector_size(16)));
     float* __restrict o0 = out[0];
     float* __restrict o1 = out[1];
     float* __restrict o2 = out[2];
     float* __restrict o3 = out[3];
     float* __restrict o4 = out[4];
-    for (int x = 0; x < out_w; ++x) {
+    const auto load = [](const float* at) { return *reinterpret_cast<const Four*>(at); };
+    const auto store = [](float* at, Four v) { *reinterpret_cast<Four*>(at) = v; };
+    int x = 0;
+    for (; x + 4 <= out_w; x += 4) {
+      const float* in = row + 5 * x;
+      const Four v0 = load(in), v1 = load(in + 4), v2 = load(in + 8), v3 = load(in + 12),
+                 v4 = load(in + 16);
+      // Band k of cell c is sample 5c + k: vector (5c + k) / 4, lane (5c + k) % 4.
+      const Pick low = {0, 1, 4, 5};
+      store(o0 + x, __builtin_shuffle(__builtin_shuffle(v0, v1, Pick{0, 5, 0, 0}),
+                                      __builtin_shuffle(v2, v3, Pick{2, 7, 0, 0}), low));
+      store(o1 + x, __builtin_shuffle(__builtin_shuffle(v0, v1, Pick{1, 6, 0, 0}),
+                                      __builtin_shuffle(v2, v4, Pick{3, 4, 0, 0}), low));
+      store(o2 + x, __builtin_shuffle(__builtin_shuffle(v0, v1, Pick{2, 7, 0, 0}),
+                                      __builtin_shuffle(v3, v4, Pick{0, 5, 0, 0}), low));
+      store(o3 + x, __builtin_shuffle(__builtin_shuffle(v0, v2, Pick{3, 4, 0, 0}),
+                                      __builtin_shuffle(v3, v4, Pick{1, 6, 0, 0}), low));
+      store(o4 + x, __builtin_shuffle(__builtin_shuffle(v1, v2, Pick{0, 5, 0, 0}),
+                                      __builtin_shuffle(v3, v4, Pick{2, 7, 0, 0}), low));
+    }
+    for (; x < out_w; ++x) {
       const float* in = row + 5 * x;
       o0[x] = in[0], o1[x] = in[1], o2[x] = in[2], o3[x] = in[3], o4[x] = in[4];
     }
