@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "detail/vector_clones.h"
 #include "pyrocam/core/error.h"
 
 namespace pyrocam {
@@ -52,6 +53,29 @@ int subtract_level_row(const T* __restrict r, float level, float* __restrict o, 
     o[x] = v >= saturation ? kInf : v - level;
   }
   return count_saturated(r, n, saturation);
+}
+
+// The rows for each sample size, compiled for AVX2 too (the conversions to float take several
+// SSE2 instructions a vector).
+PYROCAM_VECTOR_CLONES
+int subtract_row_8(const std::uint8_t* __restrict r, const float* __restrict d, float* __restrict o,
+                   int n, float saturation) {
+  return subtract_row(r, d, o, n, saturation);
+}
+PYROCAM_VECTOR_CLONES
+int subtract_row_16(const std::uint16_t* __restrict r, const float* __restrict d,
+                    float* __restrict o, int n, float saturation) {
+  return subtract_row(r, d, o, n, saturation);
+}
+PYROCAM_VECTOR_CLONES
+int subtract_level_row_8(const std::uint8_t* __restrict r, float level, float* __restrict o, int n,
+                         float saturation) {
+  return subtract_level_row(r, level, o, n, saturation);
+}
+PYROCAM_VECTOR_CLONES
+int subtract_level_row_16(const std::uint16_t* __restrict r, float level, float* __restrict o,
+                          int n, float saturation) {
+  return subtract_level_row(r, level, o, n, saturation);
 }
 
 // Runs row(y) for every row, over two threads for large frames, and sums up the saturated
@@ -117,12 +141,12 @@ SaturatedSamples subtract_dark(const cv::Mat& raw, const cv::Mat& dark, double s
   const int n = raw.cols;
   if (raw.type() == CV_8U)
     return for_rows(raw, out, [&](int y) {
-      return subtract_row(raw.ptr<std::uint8_t>(y), dark.ptr<float>(y), out.ptr<float>(y), n,
-                          saturation);
+      return subtract_row_8(raw.ptr<std::uint8_t>(y), dark.ptr<float>(y), out.ptr<float>(y), n,
+                            saturation);
     });
   return for_rows(raw, out, [&](int y) {
-    return subtract_row(raw.ptr<std::uint16_t>(y), dark.ptr<float>(y), out.ptr<float>(y), n,
-                        saturation);
+    return subtract_row_16(raw.ptr<std::uint16_t>(y), dark.ptr<float>(y), out.ptr<float>(y), n,
+                           saturation);
   });
 }
 
@@ -135,10 +159,12 @@ SaturatedSamples subtract_dark_level(const cv::Mat& raw, double level_dn, double
   const int n = raw.cols;
   if (raw.type() == CV_8U)
     return for_rows(raw, out, [&](int y) {
-      return subtract_level_row(raw.ptr<std::uint8_t>(y), level, out.ptr<float>(y), n, saturation);
+      return subtract_level_row_8(raw.ptr<std::uint8_t>(y), level, out.ptr<float>(y), n,
+                                  saturation);
     });
   return for_rows(raw, out, [&](int y) {
-    return subtract_level_row(raw.ptr<std::uint16_t>(y), level, out.ptr<float>(y), n, saturation);
+    return subtract_level_row_16(raw.ptr<std::uint16_t>(y), level, out.ptr<float>(y), n,
+                                 saturation);
   });
 }
 
