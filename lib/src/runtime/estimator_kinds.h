@@ -32,7 +32,9 @@ std::unique_ptr<TemperatureEstimator> make_likelihood_estimator(
     std::shared_ptr<const ThermalModel> model);
 // Whether a fit of make_likelihood_estimator reads pixels whose bands all read by the descent
 // (likelihood_descent.h): its model's ratio rises steadily and the two paths agreed when it was
-// made.
-bool likelihood_fit_descends(const TemperatureEstimator& estimator);
+// made. with_dropped_bands: whether it also reads so the pixels with a few bands dropped (dim,
+// saturated or invalid; partial readings), where they agreed on such pixels too.
+bool likelihood_fit_descends(const TemperatureEstimator& estimator,
+                             bool with_dropped_bands = false);
 
 }  // namespace pyrocam

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "detail/portable_math.h"
+#include "runtime/estimator_kinds.h"
 #include "runtime/likelihood_kernels.h"
 
 namespace pyrocam {
@@ -61,9 +62,22 @@ LocusDescent::LocusDescent(const Eigen::MatrixXd& rates, const double* m, const 
   usable_ = true;
 }
 
-bool LocusDescent::descend(const double* s, const double* w, const double* ws, double sss,
-                           Eigen::Index& at, double* chi2) const {
-  const double cell = (fast_fraction(s, fast_.data(), bands_) - first_) * per_;
+bool LocusDescent::descend(const double* s, bool every_band_reads, const double* w,
+                           const double* ws, double sss, Eigen::Index& at, double* chi2) const {
+  // The guess from every band's signal as far as it is known: a dim band's is, a saturated
+  // band's (+INF) is at least that of the brightest band that reads, an invalid one's (NaN) is
+  // left out.
+  alignas(32) double known[kMaxBands];
+  const double* guess_from = s;
+  if (!every_band_reads) {
+    double brightest = 0;
+    for (int b = 0; b < bands_; ++b)
+      if (std::isfinite(s[b])) brightest = std::max(brightest, s[b]);
+    for (int b = 0; b < bands_; ++b)
+      known[b] = std::isfinite(s[b]) ? s[b] : s[b] > 0 ? brightest : 0.0;
+    guess_from = known;
+  }
+  const double cell = (fast_fraction(guess_from, fast_.data(), bands_) - first_) * per_;
   const double last = static_cast<double>(guess_.size() - 1);
   const auto j = cell > 0 ? static_cast<std::size_t>(std::min(cell, last)) : 0;  // NaN: 0
   at = std::clamp<Eigen::Index>(guess_[j], 1, samples_ - 2);

@@ -1,5 +1,6 @@
-// The likelihood fit's short path for pixels whose bands all read (likelihood_estimator.cpp): a
-// first guess from a ratio of two band sums, then a walk down chi2 along the locus.
+// The likelihood fit's short path for pixels whose bands all read, or all but a few
+// (likelihood_estimator.cpp): a first guess from a ratio of two band sums, then a walk down chi2
+// along the locus.
 #pragma once
 
 #include <Eigen/Core>
@@ -8,8 +9,9 @@
 
 namespace pyrocam {
 
-// chi2(T) of a pixel whose bands all read has one minimum near the locus when the camera's
-// spectra change shape steadily with temperature (the 5x5 camera's 25 bands). There the
+// chi2(T) of a pixel whose bands all read (or all but a few of many) has one minimum near the
+// locus when the camera's spectra change shape steadily with temperature (the 5x5 camera's 25
+// bands). There the
 // exhaustive scan's answer is the 1 degC sample whose chi2 is below both neighbours' that a walk
 // from a good guess reaches: the ratio of the sums of the bands that brighten fastest and of the
 // others, which rises steadily with temperature, read on the locus. The walk jumps to the vertex
@@ -27,10 +29,12 @@ class LocusDescent {
   bool usable() const { return usable_; }
 
   // The sample `at` below both neighbours (chi2 at at - 1, at, at + 1 into chi2), reached from
-  // the guess of signals s (every band read; ws = w s, sss = sum w s^2); false where the walk
-  // meets an end of the locus or does not settle (the caller scans instead).
-  bool descend(const double* s, const double* w, const double* ws, double sss, Eigen::Index& at,
-               double* chi2) const;
+  // the guess of signals s (ws = w s, sss = sum w s^2; where not every band reads, the guess
+  // takes a saturated band's +INF as the brightest finite signal and an invalid band's NaN as
+  // 0); false where the walk meets an end of the locus or does not settle (the caller scans
+  // instead).
+  bool descend(const double* s, bool every_band_reads, const double* w, const double* ws,
+               double sss, Eigen::Index& at, double* chi2) const;
 
   // Pixels that the estimator reads both ways when it is made: along the whole locus every
   // `every` samples, the brightest band at three levels from just above `dim` to `bright` DN,

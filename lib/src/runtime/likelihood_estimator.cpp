@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <numeric>
 #include <string>
 #include <utility>
 #include <vector>
@@ -243,8 +244,11 @@ class ExhaustiveLikelihoodEstimator : public LikelihoodFit {
 //    exactly.
 // So the answer and the no-reading decisions are those of the exhaustive scan by construction
 // (the unit tests compare both on noisy pixels, with saturated, dim and NaN bands). Pixels whose
-// bands all read take the descent instead where it is usable (likelihood_descent.h): the same
-// answers by comparison, when the fit is made and in the tests, not by construction.
+// bands all read take the descent instead where it is usable (likelihood_descent.h), and with
+// partial readings those with up to kMaxDescentDropped bands dropped where it also read such
+// pixels of the model's own as the scan: the same answers by comparison, when the fit is made
+// and in the tests, not by construction. (A pixel with two saturated bands took the scan at
+// about 3 times the walk's cost: at the exposure a camera's brightest band is set to, many do.)
 class LikelihoodEstimator : public LikelihoodFit {
  public:
   // Row error left by the factors (rows have unit length): coarse (single precision sums are
@@ -298,37 +302,69 @@ class LikelihoodEstimator : public LikelihoodFit {
       for (int r = 0; r < rank2_; ++r)
         at[pad_ + r] = along2_[static_cast<std::size_t>(r * stride_ + k * kCoarse)];
     }
-    // The descent where it gives the scan's answers on this model's own noisy pixels.
+    // The descent where it gives the scan's answers on this model's own noisy pixels; for
+    // pixels with bands dropped too where it gives them with the dimmest or brightest bands of
+    // every other one of those pixels dropped (below the dim threshold, saturated).
     descends_ = descent_.usable();
     const std::vector<double> check =
         LocusDescent::check_pixels(locus_.rates, shot_gain_, noise_floor_, dim_dn_,
                                    0.9 * m.profile().thresholds.inference_saturation_dn, 7);
-    for (std::size_t i = 0; descends_ && i < check.size(); i += static_cast<std::size_t>(bands_)) {
+    const auto agrees = [&](const double* s) {
       Weighted px;
-      if (!enough_bands(weigh(&check[i], px), px)) continue;
-      const double a = temperature_c(&check[i]), b = scan(px);
-      descends_ = a == b || (std::isnan(a) && std::isnan(b));
+      double a;
+      if (weigh(s, px) < 2 || !descended(s, px, a)) return true;  // no walk: the scan reads it
+      const double b = scan(px);
+      return a == b || (std::isnan(a) && std::isnan(b));
+    };
+    const auto pixel_bands = static_cast<std::size_t>(bands_);
+    for (std::size_t i = 0; descends_ && i < check.size(); i += pixel_bands)
+      descends_ = agrees(&check[i]);
+    partial_descends_ = descends_ && bands_ > kMaxDescentDropped + 2;
+    std::vector<double> dropped(pixel_bands);
+    std::vector<int> order(pixel_bands);
+    for (std::size_t i = 0; partial_descends_ && i < check.size(); i += 2 * pixel_bands) {
+      std::iota(order.begin(), order.end(), 0);
+      std::sort(order.begin(), order.end(),
+                [&](int x, int y) { return check[i + x] < check[i + y]; });
+      for (const int drop :
+           {2, 6, kMaxDescentDropped, -1, -3}) {  // negative: the brightest, saturated
+        std::copy(&check[i], &check[i] + pixel_bands, dropped.begin());
+        for (int k = 0; k < std::abs(drop); ++k)
+          dropped[order[drop > 0 ? k : bands_ - 1 - k]] =
+              drop > 0 ? 0.0 : std::numeric_limits<double>::infinity();
+        partial_descends_ = partial_descends_ && agrees(dropped.data());
+      }
     }
   }
 
   bool descends() const { return descends_; }
+  bool partial_descends() const { return partial_descends_; }
 
   double temperature_c(const double* s) const override {
     Weighted px;
     const int reading = weigh(s, px);
     if (!enough_bands(reading, px)) return NAN;
-    if (descends_ && px.complete) {
-      Eigen::Index at;
-      double c[3];
-      if (descent_.descend(s, px.w, px.ws, px.sss, at, c)) {
-        const Minimum best{at, c[1], c[0], c[2]};
-        return decide(&best, 1, px);
-      }
-    }
+    const bool walks =
+        px.complete ? descends_ : partial_descends_ && bands_ - reading <= kMaxDescentDropped;
+    double t;
+    if (walks && descended(s, px, t)) return t;
     return scan(px);
   }
 
  private:
+  // The most bands a pixel may have dropped and still take the descent (where the check allows).
+  static constexpr int kMaxDescentDropped = 10;
+
+  // The descent's reading of a pixel (t; false where the walk does not settle).
+  bool descended(const double* s, const Weighted& px, double& t) const {
+    Eigen::Index at;
+    double c[3];
+    if (!descent_.descend(s, px.complete, px.w, px.ws, px.sss, at, c)) return false;
+    const Minimum best{at, c[1], c[0], c[2]};
+    t = decide(&best, 1, px);
+    return true;
+  }
+
   // The scan of the whole locus, exhaustive by its bounds.
   double scan(const Weighted& px) const {
     // Projections of w*s and w on the factors.
@@ -574,7 +610,7 @@ class LikelihoodEstimator : public LikelihoodFit {
   std::vector<double> points_;  // per coarse sample: its factors, then its squares' (padded)
   Eigen::Index pad_ = 0, point_width_ = 0;
   LocusDescent descent_;
-  bool descends_ = false;
+  bool descends_ = false, partial_descends_ = false;
 };
 
 }  // namespace
@@ -584,9 +620,9 @@ std::unique_ptr<TemperatureEstimator> make_likelihood_estimator(
   return std::make_unique<LikelihoodEstimator>(std::move(model));
 }
 
-bool likelihood_fit_descends(const TemperatureEstimator& estimator) {
+bool likelihood_fit_descends(const TemperatureEstimator& estimator, bool with_dropped_bands) {
   const auto* fit = dynamic_cast<const LikelihoodEstimator*>(&estimator);
-  return fit && fit->descends();
+  return fit && (with_dropped_bands ? fit->partial_descends() : fit->descends());
 }
 
 std::unique_ptr<TemperatureEstimator> make_exhaustive_likelihood_estimator(

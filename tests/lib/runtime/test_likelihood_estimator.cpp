@@ -212,11 +212,12 @@ TEST(LikelihoodEstimator, fast_fit_is_the_exhaustive_fit_near_twin_minima_5x5) {
   expect_same_near_twin_minima(test_model("test-model-nir5x5.json"));
 }
 
-// The 5x5 fit reads pixels whose bands all read by a walk down chi2 from a guess
-// (likelihood_descent.h), which proves no global minimum: on frames of cameras unlike the model
-// (hostile units: moved edges, leaks, sloped ND glass), plates from dim to bright and melt pools
-// with their saturated cores and dim rims, it reads every pixel bit for bit as the exhaustive
-// scan. The colour camera's ratios turn over: its fit scans.
+// The 5x5 fit reads pixels whose bands all read, and with partial readings those with a few
+// bands dropped, by a walk down chi2 from a guess (likelihood_descent.h), which proves no global
+// minimum: on frames of cameras unlike the model (hostile units: moved edges, leaks, sloped ND
+// glass), plates from dim to saturated and melt pools with their saturated cores and dim rims,
+// it reads every pixel bit for bit as the exhaustive scan, with and without partial readings.
+// The colour camera's ratios turn over: its fit scans.
 TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_frames_as_the_exhaustive_fit) {
   EXPECT_FALSE(likelihood_fit_descends(
       *make_estimator(test_model("test-model-rgb.json"), Method::kLikelihood)));
@@ -225,12 +226,15 @@ TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_frames_as_the_exhaustive_fi
   const auto fast = make_estimator(model, Method::kLikelihood);
   const auto exhaustive = make_exhaustive_likelihood_estimator(model);
   ASSERT_TRUE(likelihood_fit_descends(*fast));
-  std::size_t read = 0, no_reading = 0;
+  ASSERT_TRUE(likelihood_fit_descends(*fast, true));
+  std::size_t read = 0, no_reading = 0, partial_read = 0;
   for (int unit = 1; unit <= 2; ++unit) {
     Simulator camera(p, UnitPerturbation::parse("hostile", unit), 11 + unit);
     std::vector<cv::Mat> frames;
+    // The brightest band's signal, DN: the dimmest bands below the dim threshold at 40, the
+    // brightest saturated (at 170) at 220.
     for (double t : {700.0, 1300.0, 2000.0, 2800.0})
-      for (double level : {100.0, 160.0})  // the brightest band's signal, DN (saturates at 170)
+      for (double level : {40.0, 100.0, 160.0, 220.0})
         frames.push_back(camera.render(plate_scene(255, 135, t), camera.exposure_for(t, level)));
     for (int i : {1, 4})
       frames.push_back(
@@ -244,29 +248,48 @@ TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_frames_as_the_exhaustive_fi
       for (const cv::Mat& plane : planes) rows.push_back(plane.ptr<float>());
       const std::size_t n = planes[0].total();
       std::vector<float> a(n), e(n);
-      fast->estimate(rows.data(), n, a.data());
-      exhaustive->estimate(rows.data(), n, e.data());
-      for (std::size_t k = 0; k < n; ++k) {
-        ASSERT_TRUE(a[k] == e[k] || (std::isnan(a[k]) && std::isnan(e[k])))
-            << "unit " << unit << ", pixel " << k << ": fast " << a[k] << ", exhaustive " << e[k];
-        ++(std::isnan(e[k]) ? no_reading : read);
+      for (const auto partial :
+           {TemperatureEstimator::PartialBands::kOff, TemperatureEstimator::PartialBands::kAny}) {
+        fast->set_partial_bands(partial);
+        exhaustive->set_partial_bands(partial);
+        fast->estimate(rows.data(), n, a.data());
+        exhaustive->estimate(rows.data(), n, e.data());
+        for (std::size_t k = 0; k < n; ++k) {
+          ASSERT_TRUE(a[k] == e[k] || (std::isnan(a[k]) && std::isnan(e[k])))
+              << "unit " << unit << ", pixel " << k << ": fast " << a[k] << ", exhaustive " << e[k];
+          ++(std::isnan(e[k]) ? no_reading : read);
+          if (partial == TemperatureEstimator::PartialBands::kAny && !std::isnan(e[k])) {
+            bool every_band = true;
+            for (const cv::Mat& plane : planes) {
+              const float v = plane.ptr<float>()[k];
+              every_band = every_band && std::isfinite(v) && v >= p.thresholds.inference_dim_dn;
+            }
+            partial_read += !every_band;
+          }
+        }
       }
     }
   }
   EXPECT_GT(read, 4000u);  // both decisions exercised
   EXPECT_GT(no_reading, 500u);
+  EXPECT_GT(partial_read, 5000u);  // pixels with bands dropped (10 689 measured)
 }
 
 // Pixels far off the locus, where chi2 could have two minima and the walk stop at the wrong
 // one: mixtures of two temperatures (edge pixels), every band off by up to +-100 % with spikes
-// (a camera unlike the model), and spectra spliced from two temperatures band by band. The
-// 5x5 fit reads each as the exhaustive scan, bit for bit, with the same no-reading decisions.
+// (a camera unlike the model), and spectra spliced from two temperatures band by band, each
+// also with 1 to 10 bands dropped and read partially. The 5x5 fit reads each as the exhaustive
+// scan, bit for bit, with the same no-reading decisions.
 TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_off_locus_pixels_as_the_exhaustive_fit) {
   const auto model = test_model("test-model-nir5x5.json");
   const ThermalModel& m = *model;
   const int bands = m.profile().band_count();
   const auto fast = make_estimator(model, Method::kLikelihood);
   const auto exhaustive = make_exhaustive_likelihood_estimator(model);
+  const auto partial_fast = make_estimator(model, Method::kLikelihood);
+  const auto partial_exhaustive = make_exhaustive_likelihood_estimator(model);
+  partial_fast->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
+  partial_exhaustive->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
   std::uint64_t state = 4242;
   auto uniform = [&] {  // a fixed, portable sequence in [0, 1)
     state = state * 6364136223846793005ULL + 1442695040888963407ULL;
@@ -274,7 +297,7 @@ TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_off_locus_pixels_as_the_exh
   };
   const double dim = m.profile().thresholds.inference_dim_dn;
   const double saturated = saturation_signal_dn(m);
-  std::size_t pixels = 0, read = 0, disagree = 0;
+  std::size_t pixels = 0, read = 0, partial_read = 0, disagree = 0;
   for (int i = 0; i < 30000; ++i) {
     const double t1 = 550 + 2900 * uniform(), t2 = 550 + 2900 * uniform();
     const Eigen::VectorXd a = m.camera.rates(t1) / m.camera.rates(t1).maxCoeff();
@@ -294,11 +317,26 @@ TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_off_locus_pixels_as_the_exh
     read += !std::isnan(e);
     if (!(x == e || (std::isnan(x) && std::isnan(e))) && ++disagree < 10)
       ADD_FAILURE() << "pixel " << i << ": fast " << x << ", exhaustive " << e;
+    // The same pixel with 1 to 10 bands dropped (dim, saturated or invalid), read partially.
+    const int drop = 1 + i % 10;
+    for (int k = 0; k < drop; ++k) {
+      const int band = static_cast<int>(uniform() * bands) % bands;
+      s[band] = k % 3 == 0   ? 0.5 * dim
+                : k % 3 == 1 ? std::numeric_limits<double>::infinity()
+                             : std::numeric_limits<double>::quiet_NaN();
+    }
+    const double xp = partial_fast->temperature_c(s.data());
+    const double ep = partial_exhaustive->temperature_c(s.data());
+    partial_read += !std::isnan(ep);
+    if (!(xp == ep || (std::isnan(xp) && std::isnan(ep))) && ++disagree < 10)
+      ADD_FAILURE() << "pixel " << i << " with " << drop << " bands dropped: fast " << xp
+                    << ", exhaustive " << ep;
   }
   EXPECT_EQ(disagree, 0u);
   EXPECT_GT(pixels, 5000u);
   EXPECT_GT(read, pixels / 2);
   EXPECT_LT(read, pixels);  // some are no reading (an end of the range)
+  EXPECT_GT(partial_read, pixels / 2);
 }
 
 TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {
