@@ -309,16 +309,19 @@ class LikelihoodEstimator : public LikelihoodFit {
     const std::vector<double> check =
         LocusDescent::check_pixels(locus_.rates, shot_gain_, noise_floor_, dim_dn_,
                                    0.9 * m.profile().thresholds.inference_saturation_dn, 7);
-    const auto agrees = [&](const double* s) {
+    // Whether the walk reads s as the scan (true where it does not settle: the scan reads it);
+    // with `complete`, only pixels whose bands all read are tested.
+    const auto agrees = [&](const double* s, bool complete) {
       Weighted px;
+      const int reading = weigh(s, px);
       double a;
-      if (weigh(s, px) < 2 || !descended(s, px, a)) return true;  // no walk: the scan reads it
+      if (reading < 2 || (complete && reading < bands_) || !descended(s, px, a)) return true;
       const double b = scan(px);
       return a == b || (std::isnan(a) && std::isnan(b));
     };
     const auto pixel_bands = static_cast<std::size_t>(bands_);
     for (std::size_t i = 0; descends_ && i < check.size(); i += pixel_bands)
-      descends_ = agrees(&check[i]);
+      descends_ = agrees(&check[i], true);
     partial_descends_ = descends_ && bands_ > kMaxDescentDropped + 2;
     std::vector<double> dropped(pixel_bands);
     std::vector<int> order(pixel_bands);
@@ -332,7 +335,7 @@ class LikelihoodEstimator : public LikelihoodFit {
         for (int k = 0; k < std::abs(drop); ++k)
           dropped[order[drop > 0 ? k : bands_ - 1 - k]] =
               drop > 0 ? 0.0 : std::numeric_limits<double>::infinity();
-        partial_descends_ = partial_descends_ && agrees(dropped.data());
+        partial_descends_ = partial_descends_ && agrees(dropped.data(), false);
       }
     }
   }
