@@ -24,7 +24,7 @@
 // and its growth from frame 1000 (a tenth of a shorter soak) to the last.
 //
 // Usage: bench_chain --rgb-model M.json --nir-model N.json [--frames N] [--mlp-frames N]
-//                    [--scene plate:T[:P]|filament:T|melt-pool | --scenes S1,S2,...] [--queues]
+//                    [--scene plate:T[:P]|filament:T|melt-pool[@F] | --scenes S1,S2,...] [--queues]
 //                    [--only colour|5x5] [--methods lut,likelihood,mlp]
 //        bench_chain --rgb-model M.json [--nir-model N.json] --soak N [--soak-size WxH]
 //                    [--only colour|5x5]
@@ -302,7 +302,7 @@ int main(int argc, char** argv) {
     std::fprintf(
         stderr,
         "usage: %s --rgb-model M.json --nir-model N.json [--frames N] [--mlp-frames N]\n"
-        "         [--scene plate:T[:P]|filament:T|melt-pool | --scenes S1,S2,...] [--queues]\n"
+        "         [--scene plate:T[:P]|filament:T|melt-pool[@F] | --scenes S1,S2,...] [--queues]\n"
         "         [--only colour|5x5] [--methods lut,likelihood,mlp] [--misfit-probability P]\n"
         "       %s --rgb-model M.json [--nir-model N.json] --soak FRAMES [--soak-size WxH]\n"
         "         [--only colour|5x5]\n",

@@ -8,7 +8,7 @@
 // Wall-clock and process CPU time: run on a quiet machine. Not a test.
 //
 // Usage: bench_estimators --rgb-model M.json --nir-model N.json [--frames N]
-//                         [--scene plate:T[:P]|filament:T|melt-pool] [--only colour|5x5]
+//                         [--scene plate:T[:P]|filament:T|melt-pool[@F]] [--only colour|5x5]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -138,7 +138,7 @@ int main(int argc, char** argv) {
   if (rgb_model.empty() || nir_model.empty()) {
     std::fprintf(stderr,
                  "usage: %s --rgb-model M.json --nir-model N.json [--frames N] "
-                 "[--scene plate:T[:P]|filament:T|melt-pool] [--only colour|5x5]\n",
+                 "[--scene plate:T[:P]|filament:T|melt-pool[@F]] [--only colour|5x5]\n",
                  argv[0]);
     return 2;
   }

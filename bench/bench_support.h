@@ -14,16 +14,27 @@
 namespace pyrocam::bench {
 
 // A scene by name: "plate:T[:P]", "filament:T" (T in degC) or "melt-pool"; P: the plate's share
-// of the frame's area in % (default 36: the central 60 % of each side).
+// of the frame's area in % (default 36: the central 60 % of each side). A suffix "@F" exposes
+// the frame F times longer than render's default (brightest pixels at 140 DN): "@1.3" saturates
+// the brightest bands of most hot pixels, "@0.3" drops the dimmest 5x5 bands below the dim
+// threshold.
 struct Scene {
   std::string name = "plate:1500";
   cv::Mat temperature_c;  // NaN: cold background
   double emissivity = 0.7;
+  double exposure_factor = 1;
 };
 
-inline Scene make_scene(const std::string& spec, int width, int height) {
+inline Scene make_scene(const std::string& name, int width, int height) {
   Scene s;
-  s.name = spec;
+  s.name = name;
+  const auto at = name.find('@');
+  const std::string spec = name.substr(0, at);
+  if (at != std::string::npos) {
+    s.exposure_factor = std::atof(name.c_str() + at + 1);
+    if (!(s.exposure_factor > 0 && s.exposure_factor <= 100))
+      throw std::invalid_argument("scene '" + name + "': the exposure factor lies in (0, 100]");
+  }
   const auto colon = spec.find(':');
   const std::string kind = spec.substr(0, colon);
   const double t = colon == std::string::npos ? 1500 : std::atof(spec.c_str() + colon + 1);
@@ -52,13 +63,15 @@ inline Scene make_scene(const std::string& spec, int width, int height) {
 }
 
 // A raw frame of the scene through the model's camera (a typical unit), exposed so that its
-// hottest pixels read 140 DN above the dark level (under the 220 DN raw saturation level).
+// hottest pixels read 140 DN above the dark level (under the 220 DN raw saturation level),
+// times the scene's exposure factor.
 inline cv::Mat render(const ThermalModel& m, const Scene& scene) {
   double peak = 0;
   cv::minMaxLoc(scene.temperature_c, nullptr, &peak, nullptr, nullptr,
                 scene.temperature_c == scene.temperature_c);
   Simulator camera(m.profile(), UnitPerturbation::parse("typical", 1));
-  return camera.render(scene.temperature_c, camera.exposure_for(peak, 140, scene.emissivity),
+  return camera.render(scene.temperature_c,
+                       scene.exposure_factor * camera.exposure_for(peak, 140, scene.emissivity),
                        scene.emissivity);
 }
 

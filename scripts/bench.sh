@@ -10,7 +10,9 @@
 #   RGB_MODEL, NIR_MODEL  model files to use instead
 #   SCENES       the per-scene table's scenes, comma-separated
 #                [plate:1500:36,plate:1500:90,melt-pool,filament:1800]: plate:T[:P] a plate at
-#                T degC covering P % of the frame (36 unless given), filament:T, melt-pool
+#                T degC covering P % of the frame (36 unless given), filament:T, melt-pool;
+#                a suffix @F exposes F times longer (e.g. plate:1500:36@1.3: the brightest
+#                bands of most hot pixels saturate)
 #   FRAMES       frames per timed chain run, warm-up included [600] (the 5x5 chain: half)
 #   SOAK_FRAMES  frames of each soak [10000]; 0: no soak. The soaks run the simulated camera
 #                (pyrocamsrc, melt pool, 320x240, every frame new) through the colour chain with

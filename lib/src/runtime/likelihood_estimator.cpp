@@ -245,10 +245,10 @@ class ExhaustiveLikelihoodEstimator : public LikelihoodFit {
 // So the answer and the no-reading decisions are those of the exhaustive scan by construction
 // (the unit tests compare both on noisy pixels, with saturated, dim and NaN bands). Pixels whose
 // bands all read take the descent instead where it is usable (likelihood_descent.h), and with
-// partial readings those with up to kMaxDescentDropped bands dropped where it also read such
-// pixels of the model's own as the scan: the same answers by comparison, when the fit is made
-// and in the tests, not by construction. (A pixel with two saturated bands took the scan at
-// about 3 times the walk's cost: at the exposure a camera's brightest band is set to, many do.)
+// partial readings those with a few bands dropped, as many as the descent read such pixels of
+// the model's own as the scan: the same answers by comparison, when the fit is made and in the
+// tests, not by construction. (A pixel with two saturated bands took the scan at about 3 times
+// the walk's cost: at the exposure a camera's brightest band is set to, many do.)
 class LikelihoodEstimator : public LikelihoodFit {
  public:
   // Row error left by the factors (rows have unit length): coarse (single precision sums are
@@ -322,41 +322,70 @@ class LikelihoodEstimator : public LikelihoodFit {
     const auto pixel_bands = static_cast<std::size_t>(bands_);
     for (std::size_t i = 0; descends_ && i < check.size(); i += pixel_bands)
       descends_ = agrees(&check[i], true);
-    partial_descends_ = descends_ && bands_ > kMaxDescentDropped + 2;
-    std::vector<double> dropped(pixel_bands);
-    std::vector<int> order(pixel_bands);
-    for (std::size_t i = 0; partial_descends_ && i < check.size(); i += 2 * pixel_bands) {
-      std::iota(order.begin(), order.end(), 0);
-      std::sort(order.begin(), order.end(),
-                [&](int x, int y) { return check[i + x] < check[i + y]; });
-      for (const int drop :
-           {2, 6, kMaxDescentDropped, -1, -3}) {  // negative: the brightest, saturated
-        std::copy(&check[i], &check[i] + pixel_bands, dropped.begin());
-        for (int k = 0; k < std::abs(drop); ++k)
-          dropped[order[drop > 0 ? k : bands_ - 1 - k]] =
-              drop > 0 ? 0.0 : std::numeric_limits<double>::infinity();
-        partial_descends_ = partial_descends_ && agrees(dropped.data(), false);
-      }
+    // Pixels with bands dropped: the dimmest ones (below the dim threshold) of every other check
+    // pixel, then the brightest ones (saturated), more at each level; each family walks up to
+    // the last level at which every such pixel agreed, and both together only if a mixture of
+    // the two agreed too.
+    if (!descends_ || bands_ < 8) return;
+    const std::size_t checked = check.size() / pixel_bands;
+    std::vector<int> order;  // per checked pixel, its bands from dimmest to brightest
+    for (std::size_t i = 0; i < checked; i += 2) {
+      const double* px = &check[i * pixel_bands];
+      const auto at = static_cast<std::ptrdiff_t>(order.size());
+      order.resize(order.size() + pixel_bands);
+      std::iota(order.begin() + at, order.end(), 0);
+      std::sort(order.begin() + at, order.end(), [&](int x, int y) { return px[x] < px[y]; });
     }
+    std::vector<double> dropped(pixel_bands);
+    const auto all_agree = [&](int dim, int saturated) {
+      for (std::size_t i = 0, k = 0; i < checked; i += 2, k += pixel_bands) {
+        std::copy(&check[i * pixel_bands], &check[(i + 1) * pixel_bands], dropped.begin());
+        for (int d = 0; d < dim; ++d) dropped[order[k + d]] = 0.0;
+        for (int d = 0; d < saturated; ++d)
+          dropped[order[k + pixel_bands - 1 - d]] = std::numeric_limits<double>::infinity();
+        if (!agrees(dropped.data(), false)) return false;
+      }
+      return true;
+    };
+    for (const int dim : {2, 6, 12, 20})
+      if (dim <= bands_ - 3 && all_agree(dim, 0))
+        max_dim_dropped_ = dim;
+      else
+        break;
+    for (const int saturated : {1, 3, 6, 9})
+      if (saturated <= bands_ - 3 && all_agree(0, saturated))
+        max_saturated_ = saturated;
+      else
+        break;
+    if (max_dim_dropped_ > 0 && max_saturated_ > 0 &&
+        !all_agree(std::min(6, max_dim_dropped_), std::min(3, max_saturated_)))
+      max_saturated_ = 0;
   }
 
   bool descends() const { return descends_; }
-  bool partial_descends() const { return partial_descends_; }
+  bool partial_descends() const { return max_dim_dropped_ > 0 || max_saturated_ > 0; }
 
   double temperature_c(const double* s) const override {
     Weighted px;
     const int reading = weigh(s, px);
     if (!enough_bands(reading, px)) return NAN;
-    const bool walks =
-        px.complete ? descends_ : partial_descends_ && bands_ - reading <= kMaxDescentDropped;
+    bool walks = descends_;
+    if (!px.complete) {
+      const int saturated = saturated_bands(s);
+      walks =
+          walks && bands_ - reading - saturated <= max_dim_dropped_ && saturated <= max_saturated_;
+    }
     double t;
     if (walks && descended(s, px, t)) return t;
     return scan(px);
   }
 
  private:
-  // The most bands a pixel may have dropped and still take the descent (where the check allows).
-  static constexpr int kMaxDescentDropped = 10;
+  int saturated_bands(const double* s) const {
+    int n = 0;
+    for (int b = 0; b < bands_; ++b) n += s[b] == std::numeric_limits<double>::infinity();
+    return n;
+  }
 
   // The descent's reading of a pixel (t; false where the walk does not settle).
   bool descended(const double* s, const Weighted& px, double& t) const {
@@ -613,7 +642,12 @@ class LikelihoodEstimator : public LikelihoodFit {
   std::vector<double> points_;  // per coarse sample: its factors, then its squares' (padded)
   Eigen::Index pad_ = 0, point_width_ = 0;
   LocusDescent descent_;
-  bool descends_ = false, partial_descends_ = false;
+  bool descends_ = false;
+  // With partial readings, a pixel walks with up to max_dim_dropped_ bands dropped that are not
+  // saturated (dim or invalid) and up to max_saturated_ saturated ones: the most the check
+  // allowed (with the 10 brightest of the 25 5x5 bands saturated, the walk and the scan
+  // disagreed on some of the test model's check pixels).
+  int max_dim_dropped_ = 0, max_saturated_ = 0;
 };
 
 }  // namespace
