@@ -357,9 +357,10 @@ class LikelihoodEstimator : public LikelihoodFit {
         max_saturated_ = saturated;
       else
         break;
-    if (max_dim_dropped_ > 0 && max_saturated_ > 0 &&
-        !all_agree(std::min(6, max_dim_dropped_), std::min(3, max_saturated_)))
-      max_saturated_ = 0;
+    mixed_dim_ = std::min(6, max_dim_dropped_);
+    mixed_saturated_ = std::min(3, max_saturated_);
+    if (mixed_dim_ == 0 || mixed_saturated_ == 0 || !all_agree(mixed_dim_, mixed_saturated_))
+      mixed_dim_ = mixed_saturated_ = 0;
   }
 
   bool descends() const { return descends_; }
@@ -371,9 +372,10 @@ class LikelihoodEstimator : public LikelihoodFit {
     if (!enough_bands(reading, px)) return NAN;
     bool walks = descends_;
     if (!px.complete) {
-      const int saturated = saturated_bands(s);
-      walks =
-          walks && bands_ - reading - saturated <= max_dim_dropped_ && saturated <= max_saturated_;
+      const int saturated = saturated_bands(s), other = bands_ - reading - saturated;
+      walks = walks && (saturated == 0 ? other <= max_dim_dropped_
+                        : other == 0   ? saturated <= max_saturated_
+                                       : other <= mixed_dim_ && saturated <= mixed_saturated_);
     }
     double t;
     if (walks && descended(s, px, t)) return t;
@@ -644,10 +646,10 @@ class LikelihoodEstimator : public LikelihoodFit {
   LocusDescent descent_;
   bool descends_ = false;
   // With partial readings, a pixel walks with up to max_dim_dropped_ bands dropped that are not
-  // saturated (dim or invalid) and up to max_saturated_ saturated ones: the most the check
-  // allowed (with the 10 brightest of the 25 5x5 bands saturated, the walk and the scan
-  // disagreed on some of the test model's check pixels).
-  int max_dim_dropped_ = 0, max_saturated_ = 0;
+  // saturated (dim or invalid), or up to max_saturated_ saturated ones, or with both kinds up to
+  // mixed_dim_ and mixed_saturated_: what the check allowed (with the 10 brightest of the 25 5x5
+  // bands saturated, the walk and the scan disagreed on some of the test model's check pixels).
+  int max_dim_dropped_ = 0, max_saturated_ = 0, mixed_dim_ = 0, mixed_saturated_ = 0;
 };
 
 }  // namespace
