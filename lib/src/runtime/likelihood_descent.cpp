@@ -11,8 +11,6 @@
 namespace pyrocam {
 
 namespace {
-// A walk that has not settled after this many steps is left to the scan (two on most pixels).
-constexpr int kMaxSteps = 12;
 // The farthest jump to a parabola's vertex, and the step where chi2 curves the other way.
 constexpr double kMaxJump = 200;
 constexpr Eigen::Index kConcaveStep = 20;
@@ -64,6 +62,16 @@ LocusDescent::LocusDescent(const Eigen::MatrixXd& rates, const double* m, const 
 
 bool LocusDescent::descend(const double* s, bool every_band_reads, const double* w,
                            const double* ws, double sss, Eigen::Index& at, double* chi2) const {
+  at = first_guess(s, every_band_reads);
+  for (int step = 0; step < kMaxSteps; ++step) {
+    evaluate(at, w, ws, sss, chi2);
+    const Step done = next(at, chi2);
+    if (done != Step::kMoved) return done == Step::kSettled;
+  }
+  return false;
+}
+
+Eigen::Index LocusDescent::first_guess(const double* s, bool every_band_reads) const {
   // The guess from every band's signal as far as it is known: a dim band's is, a saturated
   // band's (+INF) is at least that of the brightest band that reads, an invalid one's (NaN) is
   // left out.
@@ -80,24 +88,29 @@ bool LocusDescent::descend(const double* s, bool every_band_reads, const double*
   const double cell = (fast_fraction(guess_from, fast_.data(), bands_) - first_) * per_;
   const double last = static_cast<double>(guess_.size() - 1);
   const auto j = cell > 0 ? static_cast<std::size_t>(std::min(cell, last)) : 0;  // NaN: 0
-  at = std::clamp<Eigen::Index>(guess_[j], 1, samples_ - 2);
-  const auto row = [&](Eigen::Index i) { return static_cast<std::size_t>(i * width_); };
-  for (int step = 0; step < kMaxSteps; ++step) {
-    profiled_chi2_three(m_ + row(at - 1), m2_ + row(at - 1), ws, w, width_, sss, chi2);
-    if (chi2[1] < chi2[0] && chi2[1] <= chi2[2]) return true;
-    const double curvature = chi2[0] - 2 * chi2[1] + chi2[2];
-    const Eigen::Index down = chi2[0] < chi2[2] ? -1 : 1;
-    Eigen::Index jump = down * kConcaveStep;
-    if (curvature > 0) {
-      const double vertex = std::clamp(0.5 * (chi2[0] - chi2[2]) / curvature, -kMaxJump, kMaxJump);
-      jump = static_cast<Eigen::Index>(vertex + (vertex < 0 ? -0.5 : 0.5));  // nearest
-      if (jump == 0) jump = down;
-    }
-    const Eigen::Index next = std::clamp<Eigen::Index>(at + jump, 1, samples_ - 2);
-    if (next == at) return false;  // the minimum is at an end of the locus
-    at = next;
+  return std::clamp<Eigen::Index>(guess_[j], 1, samples_ - 2);
+}
+
+void LocusDescent::evaluate(Eigen::Index at, const double* w, const double* ws, double sss,
+                            double* chi2) const {
+  const auto row = static_cast<std::size_t>((at - 1) * width_);
+  profiled_chi2_three(m_ + row, m2_ + row, ws, w, width_, sss, chi2);
+}
+
+LocusDescent::Step LocusDescent::next(Eigen::Index& at, const double* chi2) const {
+  if (chi2[1] < chi2[0] && chi2[1] <= chi2[2]) return Step::kSettled;
+  const double curvature = chi2[0] - 2 * chi2[1] + chi2[2];
+  const Eigen::Index down = chi2[0] < chi2[2] ? -1 : 1;
+  Eigen::Index jump = down * kConcaveStep;
+  if (curvature > 0) {
+    const double vertex = std::clamp(0.5 * (chi2[0] - chi2[2]) / curvature, -kMaxJump, kMaxJump);
+    jump = static_cast<Eigen::Index>(vertex + (vertex < 0 ? -0.5 : 0.5));  // nearest
+    if (jump == 0) jump = down;
   }
-  return false;
+  const Eigen::Index to = std::clamp<Eigen::Index>(at + jump, 1, samples_ - 2);
+  if (to == at) return Step::kFailed;  // the minimum is at an end of the locus
+  at = to;
+  return Step::kMoved;
 }
 
 std::vector<double> LocusDescent::check_pixels(const Eigen::MatrixXd& rates,

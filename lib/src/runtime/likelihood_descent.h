@@ -36,6 +36,18 @@ class LocusDescent {
   bool descend(const double* s, bool every_band_reads, const double* w, const double* ws,
                double sss, Eigen::Index& at, double* chi2) const;
 
+  // The walk in its parts, so that a caller can walk many pixels side by side (their steps are
+  // independent, and the processor overlaps them): descend is first_guess, then evaluate and
+  // next until next settles or fails, at most kMaxSteps times.
+  static constexpr int kMaxSteps = 12;  // a walk not settled by then is left to the scan
+  enum class Step { kSettled, kMoved, kFailed };
+  Eigen::Index first_guess(const double* s, bool every_band_reads) const;
+  // chi2 at at - 1, at, at + 1 into chi2.
+  void evaluate(Eigen::Index at, const double* w, const double* ws, double sss, double* chi2) const;
+  // From chi2 at at - 1, at, at + 1: settled (at is below both neighbours), moved (at is the next
+  // sample to evaluate) or failed (the minimum is at an end of the locus).
+  Step next(Eigen::Index& at, const double* chi2) const;
+
   // Pixels that the estimator reads both ways when it is made: along the whole locus every
   // `every` samples, the brightest band at three levels from just above `dim` to `bright` DN,
   // with noise of the fit's model (shot gain and floor per band) drawn from a fixed sequence,

@@ -169,16 +169,93 @@ class LikelihoodEstimator : public LikelihoodFit {
     Weighted px;
     const int reading = weigh(s, px);
     if (!enough_bands(reading, px)) return NAN;
-    bool walks = descends_;
-    if (!px.complete) {
-      const int saturated = saturated_bands(s), other = bands_ - reading - saturated;
-      walks = walks && (saturated == 0 ? other <= max_dim_dropped_
-                        : other == 0   ? saturated <= max_saturated_
-                                       : other <= mixed_dim_ && saturated <= mixed_saturated_);
-    }
     double t;
-    if (walks && descended(s, px, t)) return t;
+    if (walks(s, px, reading) && descended(s, px, t)) return t;
     return scan(px);
+  }
+
+ private:
+  // Pixels that walk do so side by side, kWalkBatch at a time: each walk is a chain of
+  // dependent steps, and the processor overlaps the steps of different pixels (one by one, the
+  // fit spent most of its time waiting on each step's sums). The same steps, the same answers.
+  static constexpr std::size_t kWalkBatch = 16;
+  struct Walk {
+    Weighted px;
+    Eigen::Index at;
+    double chi2[3];
+    std::size_t k;  // the pixel's place in the chunk
+  };
+
+  void read_chunk(const float* const* planes, std::size_t start, std::size_t m,
+                  const std::int32_t* reading, int needed, float* out) const override {
+    Walk batch[kWalkBatch];
+    std::size_t count = 0;
+    alignas(32) double s[kMaxBands];
+    for (std::size_t k = 0; k < m; ++k) {
+      if (reading[k] < needed) {
+        out[k] = NAN;
+        continue;
+      }
+      for (int b = 0; b < bands_; ++b) s[b] = planes[b][start + k];
+      Walk& w = batch[count];
+      const int bands_read = weigh(s, w.px);
+      if (!enough_bands(bands_read, w.px)) {
+        out[k] = NAN;
+        continue;
+      }
+      if (!walks(s, w.px, bands_read)) {
+        out[k] = static_cast<float>(scan(w.px));
+        continue;
+      }
+      w.at = descent_.first_guess(s, w.px.complete);
+      w.k = k;
+      if (++count == kWalkBatch) {
+        walk(batch, count, out);
+        count = 0;
+      }
+    }
+    walk(batch, count, out);
+  }
+
+  // The walks of `count` pixels, step by step (LocusDescent::descend's loop); where a walk
+  // fails or does not settle, the scan reads the pixel.
+  void walk(Walk* walks, std::size_t count, float* out) const {
+    std::uint8_t active[kWalkBatch];
+    for (std::size_t i = 0; i < count; ++i) active[i] = static_cast<std::uint8_t>(i);
+    for (int step = 0; step < LocusDescent::kMaxSteps && count > 0; ++step) {
+      for (std::size_t i = 0; i < count; ++i) {
+        Walk& w = walks[active[i]];
+        descent_.evaluate(w.at, w.px.w, w.px.ws, w.px.sss, w.chi2);
+      }
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < count; ++i) {
+        Walk& w = walks[active[i]];
+        const LocusDescent::Step done = descent_.next(w.at, w.chi2);
+        if (done == LocusDescent::Step::kMoved && step + 1 < LocusDescent::kMaxSteps) {
+          active[kept++] = active[i];
+          continue;
+        }
+        out[w.k] = static_cast<float>(
+            done == LocusDescent::Step::kSettled ? settled(w.at, w.chi2, w.px) : scan(w.px));
+      }
+      count = kept;
+    }
+  }
+
+  // A pixel's reading once its walk settled at `at` (chi2 there and at its neighbours).
+  double settled(Eigen::Index at, const double* chi2, const Weighted& px) const {
+    const Minimum best{at, chi2[1], chi2[0], chi2[2]};
+    return decide(&best, 1, px);
+  }
+
+  // Whether a pixel that has enough bands (px, `reading` of them) walks: where the walk was
+  // checked for as many bands dropped as it has.
+  bool walks(const double* s, const Weighted& px, int reading) const {
+    if (!descends_ || px.complete) return descends_;
+    const int saturated = saturated_bands(s), other = bands_ - reading - saturated;
+    return saturated == 0 ? other <= max_dim_dropped_
+           : other == 0   ? saturated <= max_saturated_
+                          : other <= mixed_dim_ && saturated <= mixed_saturated_;
   }
 
  private:
@@ -193,8 +270,7 @@ class LikelihoodEstimator : public LikelihoodFit {
     Eigen::Index at;
     double c[3];
     if (!descent_.descend(s, px.complete, px.w, px.ws, px.sss, at, c)) return false;
-    const Minimum best{at, c[1], c[0], c[2]};
-    t = decide(&best, 1, px);
+    t = settled(at, c, px);
     return true;
   }
 

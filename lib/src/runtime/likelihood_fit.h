@@ -77,22 +77,29 @@ class LikelihoodFit : public TemperatureEstimator {
     if (static_cast<double>(dim_f) < dim_dn_)
       dim_f = std::nextafter(dim_f, std::numeric_limits<float>::infinity());
     const int needed = std::min(min_bands_, bands_);
-    double s[kMaxBands];
     for (std::size_t start = 0; start < n; start += kChunk) {
       const std::size_t m = std::min(kChunk, n - start);
       count_reading_bands(planes, bands_, start, m, dim_f, reading);
-      for (std::size_t k = 0; k < m; ++k) {
-        if (reading[k] < needed) {
-          out[start + k] = NAN;
-          continue;
-        }
-        for (int b = 0; b < bands_; ++b) s[b] = planes[b][start + k];
-        out[start + k] = static_cast<float>(temperature_c(s));
-      }
+      read_chunk(planes, start, m, reading, needed, out + start);
     }
   }
 
  protected:
+  // The pixels start .. start + m - 1 into out[0 .. m - 1]: no reading where fewer than `needed`
+  // bands read (`reading`: their counts), the others one by one.
+  virtual void read_chunk(const float* const* planes, std::size_t start, std::size_t m,
+                          const std::int32_t* reading, int needed, float* out) const {
+    double s[kMaxBands];
+    for (std::size_t k = 0; k < m; ++k) {
+      if (reading[k] < needed) {
+        out[k] = NAN;
+        continue;
+      }
+      for (int b = 0; b < bands_; ++b) s[b] = planes[b][start + k];
+      out[k] = static_cast<float>(temperature_c(s));
+    }
+  }
+
   struct Minimum {
     Eigen::Index index;
     double chi2;
