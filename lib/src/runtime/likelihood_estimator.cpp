@@ -189,32 +189,38 @@ class LikelihoodEstimator : public LikelihoodFit {
   void read_chunk(const float* const* planes, std::size_t start, std::size_t m,
                   const std::int32_t* reading, int needed, float* out) const override {
     Walk batch[kWalkBatch];
-    std::size_t count = 0;
-    alignas(32) double s[kMaxBands];
-    for (std::size_t k = 0; k < m; ++k) {
-      if (reading[k] < needed) {
-        out[k] = NAN;
-        continue;
+    // The signals of up to kWalkBatch pixels are copied before any is weighed: weighing reads
+    // them in lanes of four, which wait on the copy's single stores while those are recent.
+    alignas(32) double s[kWalkBatch][kMaxBands];
+    std::size_t place[kWalkBatch];
+    for (std::size_t k = 0; k < m;) {
+      std::size_t got = 0;
+      for (; k < m && got < kWalkBatch; ++k) {
+        if (reading[k] < needed) {
+          out[k] = NAN;
+          continue;
+        }
+        for (int b = 0; b < bands_; ++b) s[got][b] = planes[b][start + k];
+        place[got++] = k;
       }
-      for (int b = 0; b < bands_; ++b) s[b] = planes[b][start + k];
-      Walk& w = batch[count];
-      const int bands_read = weigh(s, w.px);
-      if (!enough_bands(bands_read, w.px)) {
-        out[k] = NAN;
-        continue;
+      std::size_t count = 0;
+      for (std::size_t i = 0; i < got; ++i) {
+        Walk& w = batch[count];
+        const int bands_read = weigh(s[i], w.px);
+        if (!enough_bands(bands_read, w.px)) {
+          out[place[i]] = NAN;
+          continue;
+        }
+        if (!walks(s[i], w.px, bands_read)) {
+          out[place[i]] = static_cast<float>(scan(w.px));
+          continue;
+        }
+        w.at = descent_.first_guess(s[i], w.px.complete);
+        w.k = place[i];
+        ++count;
       }
-      if (!walks(s, w.px, bands_read)) {
-        out[k] = static_cast<float>(scan(w.px));
-        continue;
-      }
-      w.at = descent_.first_guess(s, w.px.complete);
-      w.k = k;
-      if (++count == kWalkBatch) {
-        walk(batch, count, out);
-        count = 0;
-      }
+      walk(batch, count, out);
     }
-    walk(batch, count, out);
   }
 
   // The walks of `count` pixels, step by step (LocusDescent::descend's loop); where a walk
