@@ -264,7 +264,6 @@ class LikelihoodEstimator : public LikelihoodFit {
                           : other <= mixed_dim_ && saturated <= mixed_saturated_;
   }
 
- private:
   int saturated_bands(const double* s) const {
     int n = 0;
     for (int b = 0; b < bands_; ++b) n += s[b] == std::numeric_limits<double>::infinity();
