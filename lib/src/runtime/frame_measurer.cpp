@@ -10,6 +10,7 @@
 
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/noise_model.h"
+#include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/darksub.h"
 
 namespace pyrocam {
@@ -26,6 +27,19 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
   planes_estimator_.set_emissivity_slope(options.emissivity_slope, options.emissivity_slope_u);
   planes_estimator_.set_analogue_gain(analogue_gain_factor(options.gain_db));
   if (options.blur_correction) blur_correction_.emplace(*model_, options.demosaic);
+  const MosaicLayout& layout = model_->profile().mosaic;
+  const bool full_resolution_bayer =
+      layout.kind == MosaicLayout::Kind::kBayer &&
+      resolve_demosaic_method(options.demosaic, layout) != DemosaicMethod::kBinCells;
+  if (options.brightness_radius < 0 && full_resolution_bayer)
+    brightness_.emplace(*model_, ScaledBrightness::kDefaultWindowRadius);
+  if (options.brightness_radius > 0) {
+    if (!full_resolution_bayer)
+      throw InputError(
+          "brightness readings need a Bayer mosaic demosaicked at full resolution (not binned, "
+          "not a snapshot mosaic)");
+    brightness_.emplace(*model_, options.brightness_radius);
+  }
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model_->profile().thresholds.inference_saturation_dn;
 }
@@ -77,7 +91,12 @@ double FrameMeasurer::median_uncertainty_c(const cv::Mat& temperature_c,
     return *mid;
   };
   const double t_median = median(readings), u_noise = median(noise);
-  const double reach = demosaic_sample_reach(model_->profile().mosaic, options_.demosaic);
+  // A brightness reading's scale is a mean over its window of ratio readings, each of which
+  // reaches its footprint's samples: a sample's noise reaches the window widened by the
+  // footprint (5 x 5 pixels).
+  const double reach = brightness_
+                           ? std::pow(brightness_->window_pixels() + 4, 2)
+                           : demosaic_sample_reach(model_->profile().mosaic, options_.demosaic);
   const double n_eff = std::max(1.0, static_cast<double>(readings.size()) / reach);
   const double systematic = estimator.systematic_u_c(t_median);
   return k * std::sqrt(systematic * systematic + M_PI / 2 * u_noise * u_noise / n_eff);
@@ -124,6 +143,12 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
   }
   planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);
   if (blur_correction_) blur_correction_->apply(temperature_c);
+  if (brightness_) {
+    // On the codes, as ratiotemp reads them: a recording measured again gives its codes.
+    encode_decikelvin(temperature_c, codes_);
+    brightness_->apply_codes(signal, codes_);
+    decode_decikelvin(codes_).copyTo(temperature_c);
+  }
 }
 
 }  // namespace pyrocam

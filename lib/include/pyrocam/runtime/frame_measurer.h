@@ -14,6 +14,7 @@
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/mixed_pixels.h"
 #include "pyrocam/runtime/plane_estimator.h"
+#include "pyrocam/runtime/scaled_brightness.h"
 
 namespace pyrocam {
 
@@ -35,6 +36,12 @@ struct MeasureOptions {
   double gain_db = 0;
   // Subtract the matched kernel's bias on gradients (blur_bias.h); needs matched demosaicking.
   bool blur_correction = false;
+  // Ratio-scaled brightness readings (scaled_brightness.h) with this window radius, Bayer cells;
+  // 0: the ratio readings as they are; -1: ScaledBrightness::kDefaultWindowRadius for a Bayer
+  // mosaic demosaicked at full resolution, else 0. After the blur correction, which then acts
+  // on the scales only. Read on the 0.1 K codes (temperature_codes.h), as ratiotemp reads them,
+  // so a recording measured again gives its codes bit for bit.
+  int brightness_radius = -1;
 };
 
 // One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.
@@ -80,7 +87,8 @@ class FrameMeasurer {
   MeasureOptions options_;
   PlaneEstimator planes_estimator_;
   std::optional<BlurBiasCorrection> blur_correction_;
-  cv::Mat signal_;
+  std::optional<ScaledBrightness> brightness_;
+  cv::Mat signal_, codes_;
   std::vector<cv::Mat> planes_;
 };
 
