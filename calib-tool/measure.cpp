@@ -35,6 +35,7 @@ struct MeasureArgs {
   bool allow_partial = false;
   bool uncertainty = false;
   bool blur_correction = false;  // MeasureOptions::blur_correction
+  int brightness_radius = -1;    // MeasureOptions::brightness_radius
 };
 
 // Truth comparison at the output resolution: only output pixels whose whole input footprint
@@ -136,6 +137,7 @@ MeasureOptions measure_options(const MeasureArgs& a,
   options.misfit_probability = a.misfit_probability;
   options.footprint_spread = a.mixed_pixels;
   options.blur_correction = a.blur_correction;
+  options.brightness_radius = a.brightness_radius;
   options.allow_partial = a.allow_partial || a.partial_bands == "any";
   options.safe_partial = a.partial_bands == "safe";
   options.emissivity_slope = a.e_slope / 100;
@@ -352,6 +354,14 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
               "footprint's mean signal is that of a hotter surface than its mean temperature: "
               "+180 degC at 150 degC a pixel near 1400 degC), the gradient taken from the "
               "readings; off by default");
+  c->add_option("--brightness-radius", a.brightness_radius,
+                "Bayer, full-resolution demosaicking: read each pixel from its own sample, its "
+                "band's scale the mean of what the ratio readings imply over a window of "
+                "(4 r + 1) x (4 r + 1) pixels (r in 2 x 2 cells, 1 to 8; 0 = the ratio readings "
+                "as they are; -1 = 2 where it applies, as ratiotemp's brightness-radius). "
+                "Assumes one emissivity over the window")
+      ->check(CLI::Range(-1, 8))
+      ->capture_default_str();
   c->add_option("--saturation", a.saturation, "Raw saturation level, DN (-1: the model's)")
       ->capture_default_str();
   c->add_option("--misfit-probability", a.misfit_probability,

@@ -20,6 +20,7 @@
 #include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/model.h"
+#include "pyrocam/runtime/scaled_brightness.h"
 
 GST_DEBUG_CATEGORY_EXTERN(gst_ratio_temp_debug);
 
@@ -32,6 +33,8 @@ constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
 constexpr GstRatioTempPartial DEFAULT_PARTIAL_BANDS = GST_RATIO_TEMP_PARTIAL_SAFE;
 constexpr double DEFAULT_MISFIT_PROBABILITY = 0.0;
 constexpr gboolean DEFAULT_BLUR_CORRECTION = FALSE;
+constexpr guint DEFAULT_BRIGHTNESS_RADIUS = 2;  // pyrocam::ScaledBrightness::kDefaultWindowRadius
+constexpr guint MAX_BRIGHTNESS_RADIUS = 8;      // pyrocam::ScaledBrightness::kMaxWindowRadius
 constexpr double MAX_MISFIT_PROBABILITY = 0.5;
 constexpr guint DEFAULT_PEAK_WINDOW = 5;              // pyrocam::kDefaultPeakWindow
 constexpr guint MAX_PEAK_WINDOW = 255;                // pyrocam::kMaxPeakWindow
@@ -49,7 +52,9 @@ struct Settings {
   GstRatioTempPartial partial_bands = DEFAULT_PARTIAL_BANDS;
   double misfit_probability = DEFAULT_MISFIT_PROBABILITY;
   gboolean blur_correction = DEFAULT_BLUR_CORRECTION;
-  std::string region_text;   // as set; empty: no region
+  guint brightness_radius = DEFAULT_BRIGHTNESS_RADIUS;  // Bayer cells; 0 = ratio readings
+  bool brightness_radius_set = false;                   // set by the user: warn off the fused path
+  std::string region_text;                              // as set; empty: no region
   bool region_valid = true;  // region_text is empty or parsed into region
   Region region;
   guint region_serial = 0;                  // bumped by every change of region
@@ -87,8 +92,10 @@ struct State {
   bool fused = false;
   pyrocam::MosaicLayout mosaic_layout;
   float no_signal_dn = 0;
-  std::optional<pyrocam::BlurBiasCorrection> blur;  // on the fused path (matched demosaicking)
-  bool blur_warned = false;                         // blur-correction asked for off that path
+  std::optional<pyrocam::BlurBiasCorrection> blur;      // on the fused path (matched demosaicking)
+  bool blur_warned = false;                             // blur-correction asked for off that path
+  std::optional<pyrocam::ScaledBrightness> brightness;  // on the fused path (Bayer mosaics)
+  bool brightness_warned = false;  // the user's brightness-radius asked for off that path
   cv::Mat temperature_c, uncertainty_c;
   cv::Mat saturated_mask;          // on frames with statistics: where light saturated a band
   bool saturation_warned = false;  // since the last statistics without saturated pixels
@@ -102,6 +109,20 @@ struct State {
   std::unique_ptr<GstTagList, TagListUnref> upstream_tags;  // the last stream tags from upstream
   std::string pushed_comment;  // the recording comment last pushed downstream; empty: none yet
 };
+
+/* The steps after the per-pixel estimate that this frame takes (null: not taken). */
+struct Corrections {
+  const pyrocam::BlurBiasCorrection* blur = nullptr;
+  pyrocam::ScaledBrightness* brightness = nullptr;
+};
+/* The settings' steps that the stream allows: both need the fused path's mosaic. Each is built
+ * the first time it is asked for there (and the brightness step again when its radius changes);
+ * throws InputError (from the library) if it cannot be. Warns once where the settings ask for a
+ * step the stream cannot take (for the brightness step only when the user set its radius). */
+Corrections corrections_for_frame(GstRatioTemp* self, const Settings& settings, State& st);
+/* The blur correction, then the brightness readings, on codes or on degC (fused mosaic). */
+void correct_codes(const Corrections& c, const cv::Mat& mosaic, cv::Mat& codes);
+void correct_temperature(const Corrections& c, const cv::Mat& mosaic, cv::Mat& temperature_c);
 
 /* Where light saturated a band of the input frame (CV_8U, 1 there): from the band planes, or on
  * the fused path from the mosaic, each saturated sample taking the matched kernels' footprint. */

@@ -25,6 +25,7 @@ enum {
   PROP_TABLE_CACHE,
   PROP_REGION_TRACKS_PEAK,
   PROP_BLUR_CORRECTION,
+  PROP_BRIGHTNESS_RADIUS,
 };
 
 }  // namespace
@@ -136,6 +137,17 @@ void install_properties(GObjectClass* gobject_class) {
           "elsewhere a warning and no correction",
           DEFAULT_BLUR_CORRECTION, playing));
   g_object_class_install_property(
+      gobject_class, PROP_BRIGHTNESS_RADIUS,
+      g_param_spec_uint(
+          "brightness-radius", "Brightness window radius",
+          "Read each pixel from its own sample, its band's scale the mean of what the ratio "
+          "readings imply over a window of (4 r + 1) x (4 r + 1) pixels: r in 2 x 2 Bayer cells, "
+          "0 to 8 (default 2: 9 x 9 pixels); 0 = the ratio readings as they are. Assumes one "
+          "emissivity over the window. Only on the fused path (demosaic25 method matched or "
+          "auto on a Bayer mosaic, linked to this element); elsewhere the ratio readings (a "
+          "warning if set)",
+          0, MAX_BRIGHTNESS_RADIUS, DEFAULT_BRIGHTNESS_RADIUS, playing));
+  g_object_class_install_property(
       gobject_class, PROP_PEAK_WINDOW,
       g_param_spec_uint("peak-window", "Peak window",
                         "Side (output pixels, odd, 1 to 255) of the square window whose "
@@ -210,6 +222,10 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
     case PROP_BLUR_CORRECTION:
       s.blur_correction = g_value_get_boolean(value);
       break;
+    case PROP_BRIGHTNESS_RADIUS:
+      s.brightness_radius = g_value_get_uint(value);
+      s.brightness_radius_set = true;
+      break;
     case PROP_E_SLOPE:
     case PROP_E_SLOPE_UNCERTAINTY: {
       const double v = g_value_get_double(value);  // NaN passes the GParamSpec's range check
@@ -280,6 +296,9 @@ void get_property(GObject* object, guint prop_id, GValue* value, GParamSpec* psp
       break;
     case PROP_BLUR_CORRECTION:
       g_value_set_boolean(value, s.blur_correction);
+      break;
+    case PROP_BRIGHTNESS_RADIUS:
+      g_value_set_uint(value, s.brightness_radius);
       break;
     case PROP_PEAK_WINDOW:
       g_value_set_uint(value, s.peak_window);

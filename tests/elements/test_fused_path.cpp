@@ -1,8 +1,9 @@
 // The fused path between demosaic25 and ratiotemp: the two agree on the band planes as their
-// mosaic (video/x-pyrocam-bands(memory:PyrocamMosaic)) when linked, and the recording is then the
-// one the planes give, byte for byte; other elements get the planes; turning the mixed-pixel
-// check on while playing goes back to the planes; fused caps without what ratiotemp needs are
-// refused.
+// mosaic (video/x-pyrocam-bands(memory:PyrocamMosaic)) when linked, and the ratio readings are
+// then the ones the planes give, byte for byte; the brightness readings (on there by default) and
+// the blur correction are the library's on those; other elements get the planes; turning the
+// mixed-pixel check on while playing goes back to the planes; fused caps without what ratiotemp
+// needs are refused.
 #include <cstring>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include "pyrocam-caps.h"
 #include "pyrocam/runtime/blur_bias.h"
 #include "pyrocam/runtime/model.h"
+#include "pyrocam/runtime/scaled_brightness.h"
 
 namespace pyrocam::test {
 namespace {
@@ -54,7 +56,9 @@ Negotiated negotiated(const std::string& description, const char* element, const
 TEST(FusedPath, demosaic25_and_ratiotemp_agree_on_it_and_read_what_the_planes_read) {
   REQUIRE_ELEMENT("ratiotemp");
   REQUIRE_ELEMENT("pyrocamsrc");
-  const std::string ratiotemp = "ratiotemp name=r model=" + test_model_path("test-model-rgb.json");
+  // The ratio readings alone: the planes have no brightness readings.
+  const std::string ratiotemp =
+      "ratiotemp name=r brightness-radius=0 model=" + test_model_path("test-model-rgb.json");
   for (const char* settings : {"", " output=uncertainty", " method=likelihood partial-bands=any"}) {
     SCOPED_TRACE(settings);
     const std::string fused = colour_chain(8) + ratiotemp + settings + " ! fakesink name=sink";
@@ -83,7 +87,7 @@ TEST(FusedPath, blur_correction_corrects_the_fused_readings_only) {
   REQUIRE_ELEMENT("ratiotemp");
   REQUIRE_ELEMENT("pyrocamsrc");
   const std::string model = test_model_path("test-model-rgb.json");
-  const std::string ratiotemp = "ratiotemp model=" + model;
+  const std::string ratiotemp = "ratiotemp brightness-radius=0 model=" + model;
   const std::string tail = " ! fakesink name=sink";
   const auto plain = sink_frames(colour_chain(4) + ratiotemp + tail);
   const auto corrected = sink_frames(colour_chain(4) + ratiotemp + " blur-correction=true" + tail);
@@ -110,6 +114,52 @@ TEST(FusedPath, blur_correction_corrects_the_fused_readings_only) {
   }
   EXPECT_GT(read, 100u);
   EXPECT_GT(changed, 10u);  // the pools' sides
+}
+
+// Brightness readings (the default on the fused path): the library's on the ratio readings and
+// the dark-subtracted mosaic, the same pixels read and many changed, and the same output on
+// frames with statistics (read from the codes there too); on the planes none.
+TEST(FusedPath, brightness_readings_are_the_librarys_on_the_fused_path_only) {
+  REQUIRE_ELEMENT("ratiotemp");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const std::string model = test_model_path("test-model-rgb.json");
+  const std::string tail = " ! fakesink name=sink";
+  const std::string chain = colour_chain(4) + "ratiotemp model=" + model;
+  const auto ratio = sink_frames(chain + " brightness-radius=0 stats-interval=0" + tail);
+  const auto bright = sink_frames(chain + " stats-interval=0" + tail);
+  const auto with_stats = sink_frames(chain + " stats-interval=1" + tail);
+  const auto planes =
+      sink_frames(colour_chain(4) + "video/x-pyrocam-bands ! ratiotemp model=" + model +
+                  " stats-interval=0" + tail);
+  const auto mosaics = sink_frames(
+      "pyrocamsrc num-buffers=4 scene=melt-pool ! video/x-bayer,width=320,height=240 ! "
+      "darksub dark-level=50" +
+      tail);
+  ASSERT_EQ(ratio.size(), 4u);
+  ASSERT_EQ(bright.size(), 4u);
+  ASSERT_EQ(with_stats.size(), 4u);
+  ASSERT_EQ(planes.size(), 4u);
+  ASSERT_EQ(mosaics.size(), 4u);
+  pyrocam::ScaledBrightness sb(pyrocam::load_model(model), 2);
+  std::size_t read = 0, changed = 0;
+  for (std::size_t i = 0; i < ratio.size(); ++i) {
+    EXPECT_EQ(planes[i], ratio[i]) << "frame " << i;
+    EXPECT_EQ(with_stats[i], bright[i]) << "frame " << i;
+    cv::Mat codes(240, 320, CV_16U), mosaic(240, 320, CV_32F);
+    ASSERT_EQ(ratio[i].size(), codes.total() * 2);
+    ASSERT_EQ(mosaics[i].size(), mosaic.total() * 4);
+    std::memcpy(codes.data, ratio[i].data(), ratio[i].size());
+    std::memcpy(mosaic.data, mosaics[i].data(), mosaics[i].size());
+    const cv::Mat before = codes.clone();
+    sb.apply_codes(mosaic, codes);
+    ASSERT_EQ(bright[i].size(), ratio[i].size());
+    EXPECT_EQ(std::memcmp(codes.data, bright[i].data(), codes.total() * 2), 0) << "frame " << i;
+    read += static_cast<std::size_t>(cv::countNonZero(before));
+    changed += static_cast<std::size_t>(cv::countNonZero(before != codes));
+    EXPECT_EQ(cv::countNonZero(before), cv::countNonZero(codes));
+  }
+  EXPECT_GT(read, 100u);
+  EXPECT_GT(changed, read / 2);
 }
 
 TEST(FusedPath, a_queue_between_them_keeps_it) {
@@ -196,34 +246,40 @@ TEST_F(FusedHarness, the_mixed_pixel_check_turned_on_while_playing_goes_back_to_
   EXPECT_NE(src_caps_of_demosaic().find(PYROCAM_CAPS_FEATURE_MOSAIC), std::string::npos);
 }
 
-TEST_F(FusedHarness, blur_correction_on_plain_planes_warns_once_and_reads_n) {
-  start(
-      "darksub dark-level=50 ! demosaic25 method=bilinear ! ratiotemp blur-correction=true "
-      "model=" +
-          test_model_path("test-model-rgb.json"),
-      "video/x-bayer,format=rggb,width=16,height=12,framerate=30/1");
-  attach_bus();
-  for (int i = 0; i < 2; ++i) {
-    GstBuffer* out = push_pull_buffer(h, buffer_from(raw_frame()));
-    ASSERT_NE(out, nullptr);
-    gst_buffer_unref(out);
-  }
-  int warnings = 0;
-  while (GstMessage* m = gst_bus_pop_filtered(bus, GST_MESSAGE_WARNING)) {
-    GError* err = nullptr;
-    gchar* debug = nullptr;
-    gst_message_parse_warning(m, &err, &debug);
-    // The frame's saturated sample has its own warning (the statistics').
-    const std::string text = err->message;
-    if (text.find("saturated a band") == std::string::npos) {
-      EXPECT_NE(text.find("blur-correction"), std::string::npos) << text;
-      ++warnings;
+// Steps that need the fused path, asked for on plain planes: one warning naming the property,
+// and the frames read without it. The brightness readings' default asks for nothing there.
+TEST_F(FusedHarness, fused_only_steps_on_plain_planes_warn_once_and_read_n) {
+  for (const auto& [setting, named] : {std::pair{"blur-correction=true", "blur-correction"},
+                                       {"brightness-radius=3", "brightness-radius"},
+                                       {"", ""}}) {
+    SCOPED_TRACE(setting);
+    start(std::string("darksub dark-level=50 ! demosaic25 method=bilinear ! ratiotemp ") + setting +
+              " model=" + test_model_path("test-model-rgb.json"),
+          "video/x-bayer,format=rggb,width=16,height=12,framerate=30/1");
+    attach_bus();
+    for (int i = 0; i < 2; ++i) {
+      GstBuffer* out = push_pull_buffer(h, buffer_from(raw_frame()));
+      ASSERT_NE(out, nullptr);
+      gst_buffer_unref(out);
     }
-    g_error_free(err);
-    g_free(debug);
-    gst_message_unref(m);
+    int warnings = 0;
+    while (GstMessage* m = gst_bus_pop_filtered(bus, GST_MESSAGE_WARNING)) {
+      GError* err = nullptr;
+      gchar* debug = nullptr;
+      gst_message_parse_warning(m, &err, &debug);
+      // The frame's saturated sample has its own warning (the statistics').
+      const std::string text = err->message;
+      if (text.find("saturated a band") == std::string::npos) {
+        EXPECT_NE(text.find(named), std::string::npos) << text;
+        ++warnings;
+      }
+      g_error_free(err);
+      g_free(debug);
+      gst_message_unref(m);
+    }
+    EXPECT_EQ(warnings, *named ? 1 : 0);
+    TearDown();
   }
-  EXPECT_EQ(warnings, 1);
 }
 
 TEST_F(FusedHarness, fused_bands_without_a_no_signal_level_are_refused_n) {

@@ -1,0 +1,54 @@
+/* ratiotemp's steps after the per-pixel estimate: the blur correction and the ratio-scaled
+ * brightness readings, both from the mosaic of the fused path. */
+#include "pyrocam/core/temperature_codes.h"
+#include "ratiotemp-private.h"
+
+#define GST_CAT_DEFAULT gst_ratio_temp_debug
+
+namespace pyrocam::gst::ratiotemp {
+
+Corrections corrections_for_frame(GstRatioTemp* self, const Settings& settings, State& st) {
+  Corrections c;
+  if (settings.blur_correction && st.fused) {
+    // The correction's table is made the first time it is asked for on the fused path.
+    if (!st.blur) st.blur.emplace(*st.model, pyrocam::DemosaicMethod::kMatched);
+    c.blur = &*st.blur;
+  }
+  if (settings.blur_correction && !st.fused && !st.blur_warned) {
+    st.blur_warned = true;
+    GST_ELEMENT_WARNING(self, STREAM, FORMAT,
+                        ("blur-correction needs demosaic25 with method matched or auto on a Bayer "
+                         "mosaic linked to ratiotemp (the fused path); these planes are read "
+                         "without it"),
+                        ("the sink caps are not the fused bands"));
+  }
+  const int radius = static_cast<int>(settings.brightness_radius);
+  if (radius > 0 && st.fused) {
+    if (!st.brightness || st.brightness->window_radius() != radius)
+      st.brightness.emplace(*st.model, radius);
+    c.brightness = &*st.brightness;
+  }
+  // The default asks for it wherever it can be had; only a radius the user set is warned about.
+  if (radius > 0 && !st.fused && settings.brightness_radius_set && !st.brightness_warned) {
+    st.brightness_warned = true;
+    GST_ELEMENT_WARNING(self, STREAM, FORMAT,
+                        ("brightness-radius %d needs demosaic25 with method matched or auto on "
+                         "a Bayer mosaic linked to ratiotemp (the fused path); these planes are "
+                         "read by their ratios alone",
+                         radius),
+                        ("the sink caps are not the fused bands"));
+  }
+  return c;
+}
+
+void correct_codes(const Corrections& c, const cv::Mat& mosaic, cv::Mat& codes) {
+  if (c.blur) c.blur->apply_codes(codes);
+  if (c.brightness) c.brightness->apply_codes(mosaic, codes);
+}
+
+void correct_temperature(const Corrections& c, const cv::Mat& mosaic, cv::Mat& temperature_c) {
+  if (c.blur) c.blur->apply(temperature_c);
+  if (c.brightness) c.brightness->apply(mosaic, temperature_c);
+}
+
+}  // namespace pyrocam::gst::ratiotemp
