@@ -132,9 +132,10 @@ void bench_colour(const Options& o, const pyrocam::ThermalModel& m, const std::s
     row.colour_lut = run_chain(chain + " method=lut", caps, raw, o.frames, o.warmup);
     print_run("darksub ! demosaic25 ! ratiotemp method=lut", row.colour_lut, bayer);
     if (detailed) {
-      // What reading each pixel from its own sample costs (on by default).
-      print_run("the same, ratiotemp brightness-radius=0",
-                run_chain(chain + " method=lut brightness-radius=0", caps, raw, o.frames, o.warmup),
+      // What reading each pixel from its own sample costs (ratiotemp brightness-radius).
+      print_run("the same, ratiotemp brightness-radius=2",
+                run_chain(chain + " method=lut brightness-radius=2", caps, raw, o.frames,
+                          o.warmup),
                 bayer);
       // The same with bilinear demosaicking (the default is matched), without and with the
       // mixed-pixel check: what matched and the check cost.

@@ -35,7 +35,7 @@ struct MeasureArgs {
   bool allow_partial = false;
   bool uncertainty = false;
   bool blur_correction = false;  // MeasureOptions::blur_correction
-  int brightness_radius = -1;    // MeasureOptions::brightness_radius
+  int brightness_radius = 0;     // MeasureOptions::brightness_radius
 };
 
 // Truth comparison at the output resolution: only output pixels whose whole input footprint
@@ -357,10 +357,11 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
   c->add_option("--brightness-radius", a.brightness_radius,
                 "Bayer, full-resolution demosaicking: read each pixel from its own sample, its "
                 "band's scale the mean of what the ratio readings imply over a window of "
-                "(4 r + 1) x (4 r + 1) pixels (r in 2 x 2 cells, 1 to 8; 0 = the ratio readings "
-                "as they are; -1 = 2 where it applies, as ratiotemp's brightness-radius). "
-                "Assumes one emissivity over the window")
-      ->check(CLI::Range(-1, 8))
+                "(4 r + 1) x (4 r + 1) pixels (r in 2 x 2 cells, 1 to 8, e.g. 2; 0 = the ratio "
+                "readings as they are), as ratiotemp's brightness-radius. Assumes one emissivity "
+                "over the window: near an emissivity step it reads wrong where the ratio reads "
+                "right")
+      ->check(CLI::Range(0, 8))
       ->capture_default_str();
   c->add_option("--saturation", a.saturation, "Raw saturation level, DN (-1: the model's)")
       ->capture_default_str();

@@ -32,13 +32,12 @@
  * #GstRatioTemp:blur-correction (default off; the fused path only) subtracts matched
  * demosaicking's bias on steep gradients: +180 degC at 150 degC a pixel near 1400 degC.
  *
- * On the fused path each pixel then reads from its own sample (#GstRatioTemp:brightness-radius,
- * default 2, on): the band's scale (exposure, emissivity, calibration) is the mean over a
- * 9 x 9 pixel window of what the ratio readings imply, and the sample gives the temperature at
- * that pixel. The readings keep the ratio's mean and its mask, with the noise of one sample
- * (2.4-2.8 times less on simulated plates) and no kernel footprint, so a melt pool's peak is
- * not aliased by the Bayer pattern. It assumes one emissivity over the window: next to an
- * emissivity step the readings move by the step's share of the window. 0 turns it off.
+ * With #GstRatioTemp:brightness-radius r (default 0, off; the fused path only) each pixel reads
+ * from its own sample: its band's scale (exposure, emissivity, calibration) is the mean over a
+ * (4r + 1)-pixel square window of what the ratio readings imply, and the sample gives the
+ * temperature at that pixel: the ratio's mean and mask with the noise of one sample, and a melt
+ * pool's peak not aliased by the Bayer pattern. It assumes one emissivity over the window; near
+ * an emissivity step it reads wrong where the ratio reads right.
  *
  * With #GstRatioTemp:misfit-probability above 0 (e.g. 1e-6; default 0, off) every reading goes
  * through a band-consistency check: the band signals must be those of a graybody within 1 % of

@@ -28,8 +28,7 @@ Corrections corrections_for_frame(GstRatioTemp* self, const Settings& settings, 
       st.brightness.emplace(*st.model, radius);
     c.brightness = &*st.brightness;
   }
-  // The default asks for it wherever it can be had; only a radius the user set is warned about.
-  if (radius > 0 && !st.fused && settings.brightness_radius_set && !st.brightness_warned) {
+  if (radius > 0 && !st.fused && !st.brightness_warned) {
     st.brightness_warned = true;
     GST_ELEMENT_WARNING(self, STREAM, FORMAT,
                         ("brightness-radius %d needs demosaic25 with method matched or auto on "

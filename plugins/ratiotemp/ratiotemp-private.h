@@ -33,7 +33,7 @@ constexpr gboolean DEFAULT_ALLOW_PARTIAL = FALSE;
 constexpr GstRatioTempPartial DEFAULT_PARTIAL_BANDS = GST_RATIO_TEMP_PARTIAL_SAFE;
 constexpr double DEFAULT_MISFIT_PROBABILITY = 0.0;
 constexpr gboolean DEFAULT_BLUR_CORRECTION = FALSE;
-constexpr guint DEFAULT_BRIGHTNESS_RADIUS = 2;  // pyrocam::ScaledBrightness::kDefaultWindowRadius
+constexpr guint DEFAULT_BRIGHTNESS_RADIUS = 0;  // off: ratio readings
 constexpr guint MAX_BRIGHTNESS_RADIUS = 8;      // pyrocam::ScaledBrightness::kMaxWindowRadius
 constexpr double MAX_MISFIT_PROBABILITY = 0.5;
 constexpr guint DEFAULT_PEAK_WINDOW = 5;              // pyrocam::kDefaultPeakWindow
@@ -53,7 +53,6 @@ struct Settings {
   double misfit_probability = DEFAULT_MISFIT_PROBABILITY;
   gboolean blur_correction = DEFAULT_BLUR_CORRECTION;
   guint brightness_radius = DEFAULT_BRIGHTNESS_RADIUS;  // Bayer cells; 0 = ratio readings
-  bool brightness_radius_set = false;                   // set by the user: warn off the fused path
   std::string region_text;                              // as set; empty: no region
   bool region_valid = true;  // region_text is empty or parsed into region
   Region region;
@@ -95,7 +94,7 @@ struct State {
   std::optional<pyrocam::BlurBiasCorrection> blur;      // on the fused path (matched demosaicking)
   bool blur_warned = false;                             // blur-correction asked for off that path
   std::optional<pyrocam::ScaledBrightness> brightness;  // on the fused path (Bayer mosaics)
-  bool brightness_warned = false;  // the user's brightness-radius asked for off that path
+  bool brightness_warned = false;                       // brightness-radius asked for off that path
   cv::Mat temperature_c, uncertainty_c;
   cv::Mat saturated_mask;          // on frames with statistics: where light saturated a band
   bool saturation_warned = false;  // since the last statistics without saturated pixels
@@ -118,7 +117,7 @@ struct Corrections {
 /* The settings' steps that the stream allows: both need the fused path's mosaic. Each is built
  * the first time it is asked for there (and the brightness step again when its radius changes);
  * throws InputError (from the library) if it cannot be. Warns once where the settings ask for a
- * step the stream cannot take (for the brightness step only when the user set its radius). */
+ * step the stream cannot take. */
 Corrections corrections_for_frame(GstRatioTemp* self, const Settings& settings, State& st);
 /* The blur correction, then the brightness readings, on codes or on degC (fused mosaic). */
 void correct_codes(const Corrections& c, const cv::Mat& mosaic, cv::Mat& codes);

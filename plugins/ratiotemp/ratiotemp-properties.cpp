@@ -142,10 +142,11 @@ void install_properties(GObjectClass* gobject_class) {
           "brightness-radius", "Brightness window radius",
           "Read each pixel from its own sample, its band's scale the mean of what the ratio "
           "readings imply over a window of (4 r + 1) x (4 r + 1) pixels: r in 2 x 2 Bayer cells, "
-          "0 to 8 (default 2: 9 x 9 pixels); 0 = the ratio readings as they are. Assumes one "
-          "emissivity over the window. Only on the fused path (demosaic25 method matched or "
-          "auto on a Bayer mosaic, linked to this element); elsewhere the ratio readings (a "
-          "warning if set)",
+          "1 to 8 (2: 9 x 9 pixels); 0 (default) = the ratio readings as they are. Assumes one "
+          "emissivity over the window: within r Bayer cells of an emissivity step readings move "
+          "by up to the step's log ratio in temperature (about 100 degC at 2000 degC for a "
+          "factor 2). Only on the fused path (demosaic25 method matched or auto on a Bayer "
+          "mosaic, linked to this element); elsewhere a warning and the ratio readings",
           0, MAX_BRIGHTNESS_RADIUS, DEFAULT_BRIGHTNESS_RADIUS, playing));
   g_object_class_install_property(
       gobject_class, PROP_PEAK_WINDOW,
@@ -224,7 +225,6 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
       break;
     case PROP_BRIGHTNESS_RADIUS:
       s.brightness_radius = g_value_get_uint(value);
-      s.brightness_radius_set = true;
       break;
     case PROP_E_SLOPE:
     case PROP_E_SLOPE_UNCERTAINTY: {

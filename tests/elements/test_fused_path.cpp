@@ -1,6 +1,6 @@
 // The fused path between demosaic25 and ratiotemp: the two agree on the band planes as their
 // mosaic (video/x-pyrocam-bands(memory:PyrocamMosaic)) when linked, and the ratio readings are
-// then the ones the planes give, byte for byte; the brightness readings (on there by default) and
+// then the ones the planes give, byte for byte; the brightness readings and
 // the blur correction are the library's on those; other elements get the planes; turning the
 // mixed-pixel check on while playing goes back to the planes; fused caps without what ratiotemp
 // needs are refused.
@@ -116,7 +116,7 @@ TEST(FusedPath, blur_correction_corrects_the_fused_readings_only) {
   EXPECT_GT(changed, 10u);  // the pools' sides
 }
 
-// Brightness readings (the default on the fused path): the library's on the ratio readings and
+// Brightness readings on the fused path: the library's on the ratio readings and
 // the dark-subtracted mosaic, the same pixels read and many changed, and the same output on
 // frames with statistics (read from the codes there too); on the planes none.
 TEST(FusedPath, brightness_readings_are_the_librarys_on_the_fused_path_only) {
@@ -126,11 +126,11 @@ TEST(FusedPath, brightness_readings_are_the_librarys_on_the_fused_path_only) {
   const std::string tail = " ! fakesink name=sink";
   const std::string chain = colour_chain(4) + "ratiotemp model=" + model;
   const auto ratio = sink_frames(chain + " brightness-radius=0 stats-interval=0" + tail);
-  const auto bright = sink_frames(chain + " stats-interval=0" + tail);
-  const auto with_stats = sink_frames(chain + " stats-interval=1" + tail);
+  const auto bright = sink_frames(chain + " brightness-radius=2 stats-interval=0" + tail);
+  const auto with_stats = sink_frames(chain + " brightness-radius=2 stats-interval=1" + tail);
   const auto planes =
       sink_frames(colour_chain(4) + "video/x-pyrocam-bands ! ratiotemp model=" + model +
-                  " stats-interval=0" + tail);
+                  " brightness-radius=2 stats-interval=0" + tail);
   const auto mosaics = sink_frames(
       "pyrocamsrc num-buffers=4 scene=melt-pool ! video/x-bayer,width=320,height=240 ! "
       "darksub dark-level=50" +
@@ -247,7 +247,7 @@ TEST_F(FusedHarness, the_mixed_pixel_check_turned_on_while_playing_goes_back_to_
 }
 
 // Steps that need the fused path, asked for on plain planes: one warning naming the property,
-// and the frames read without it. The brightness readings' default asks for nothing there.
+// and the frames read without it; none without them.
 TEST_F(FusedHarness, fused_only_steps_on_plain_planes_warn_once_and_read_n) {
   for (const auto& [setting, named] : {std::pair{"blur-correction=true", "blur-correction"},
                                        {"brightness-radius=3", "brightness-radius"},

@@ -311,6 +311,34 @@ TEST_F(Record, temperatures_decode_bit_exact_in_segments_with_a_snapshot) {
   EXPECT_GT(c.opaque, 100);
 }
 
+// BRIGHTNESS_RADIUS: ratiotemp reads each pixel from its own sample; the recording holds the
+// frames of the same chain with brightness-radius, which differ from the ratio readings; bad
+// values are refused.
+TEST_F(Record, brightness_radius_records_the_brightness_readings) {
+  constexpr int kFrames = 4;
+  Env env = settings(kScene, kFrames);
+  env["BRIGHTNESS_RADIUS"] = "2";
+  const ScriptRun run = run_script("record.sh", {}, env, log("record-brightness"), kRunLimit);
+  ASSERT_EQ(run.status, 0) << run.log;
+  const auto files = segments();
+  ASSERT_EQ(files.size(), 1u);
+  const Video recorded = decode_segment(files[0]);
+  ASSERT_EQ(recorded.frames.size(), static_cast<std::size_t>(kFrames)) << recorded.error;
+  const Video bright = pull_frames(kScene + " num-buffers=" + std::to_string(kFrames) + " ! " +
+                                   temperature_chain() + " brightness-radius=2 ! appsink name=out");
+  ASSERT_EQ(bright.frames.size(), static_cast<std::size_t>(kFrames)) << bright.error;
+  EXPECT_TRUE(recorded.frames == bright.frames);
+  EXPECT_FALSE(bright.frames == reference_temperatures(kFrames).frames)
+      << "the same as the ratio readings: a weak test";
+  for (const char* bad : {"9", "-1", "two"}) {
+    env["BRIGHTNESS_RADIUS"] = bad;
+    const ScriptRun refused =
+        run_script("record.sh", {}, env, log("record-brightness-bad"), kRunLimit);
+    EXPECT_EQ(refused.status, 2) << bad << ": " << refused.log;
+    EXPECT_NE(refused.log.find("BRIGHTNESS_RADIUS"), std::string::npos) << refused.log;
+  }
+}
+
 // BRACKET: the simulated camera cycles through the exposures and the recording holds the fused
 // frames, bit for bit those of the same chain with thermalfuse; bad settings are refused.
 TEST_F(Record, bracket_records_the_fused_frames) {

@@ -27,14 +27,10 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
   planes_estimator_.set_emissivity_slope(options.emissivity_slope, options.emissivity_slope_u);
   planes_estimator_.set_analogue_gain(analogue_gain_factor(options.gain_db));
   if (options.blur_correction) blur_correction_.emplace(*model_, options.demosaic);
-  const MosaicLayout& layout = model_->profile().mosaic;
-  const bool full_resolution_bayer =
-      layout.kind == MosaicLayout::Kind::kBayer &&
-      resolve_demosaic_method(options.demosaic, layout) != DemosaicMethod::kBinCells;
-  if (options.brightness_radius < 0 && full_resolution_bayer)
-    brightness_.emplace(*model_, ScaledBrightness::kDefaultWindowRadius);
-  if (options.brightness_radius > 0) {
-    if (!full_resolution_bayer)
+  if (options.brightness_radius != 0) {
+    const MosaicLayout& layout = model_->profile().mosaic;
+    if (layout.kind != MosaicLayout::Kind::kBayer ||
+        resolve_demosaic_method(options.demosaic, layout) == DemosaicMethod::kBinCells)
       throw InputError(
           "brightness readings need a Bayer mosaic demosaicked at full resolution (not binned, "
           "not a snapshot mosaic)");

@@ -185,6 +185,52 @@ TEST(ScaledBrightness, ReadsTheMeltPoolCoreCloserThanTheRatio) {
   EXPECT_LT(bright_rms, 25);
 }
 
+// The assumption's limit: a plate whose emissivity steps from 0.3 to 0.6 half way across. The
+// ratio is wrong only where its footprints straddle the step; the brightness readings take the
+// step's share of their window's scale, so they move within the window's reach of the step and
+// nowhere else (why they are off by default). Prints the columns' mean errors for the docs.
+TEST(ScaledBrightness, AnEmissivityStepMovesReadingsWithinTheWindowOnly) {
+  const Colour c;
+  constexpr int kWindow = 2;  // Bayer cells: 4 pixels each side
+  for (float t_c : {1500.f, 2000.f}) {
+    const cv::Mat truth(kH, kW, CV_32F, cv::Scalar(t_c));
+    Simulator camera(c.profile, c.unit, 13);
+    const double exposure = camera.exposure_for(t_c, 150, 0.6);
+    const cv::Mat dull = camera.render(truth, exposure, 0.3),
+                  bright = camera.render(truth, exposure, 0.6);
+    cv::Mat raw = dull.clone();
+    bright(cv::Rect(kW / 2, 0, kW / 2, kH)).copyTo(raw(cv::Rect(kW / 2, 0, kW / 2, kH)));
+    const cv::Mat dark = camera.render_dark(kW, kH, exposure);
+    cv::Mat read[2];
+    for (int k = 0; k < 2; ++k) {
+      MeasureOptions options;
+      options.method = Method::kLikelihood;
+      options.brightness_radius = k ? kWindow : 0;
+      FrameMeasurer(c.model, options).measure(raw, dark, read[k]);
+    }
+    std::printf("%4.0f degC, emissivity 0.3 | 0.6 from column 0; mean error of rows 20-99 (degC)\n",
+                t_c);
+    for (int x = kW / 2 - 8; x < kW / 2 + 8; ++x) {
+      double error[2] = {0, 0};
+      for (int k = 0; k < 2; ++k) {
+        int n = 0;
+        for (int y = 20; y < 100; ++y)
+          if (std::isfinite(read[k].at<float>(y, x)))
+            error[k] += read[k].at<float>(y, x) - t_c, ++n;
+        ASSERT_GT(n, 70) << x;
+        error[k] /= n;
+      }
+      std::printf("  column %+3d: ratio %+7.1f, brightness-radius=%d %+7.1f\n", x - kW / 2,
+                  error[0], kWindow, error[1]);
+      // Beyond the window's reach plus the ratio's footprint (2 pixels) both read the plate.
+      if (std::abs(x + 0.5 - kW / 2) > 4 * kWindow + 2.5) {
+        EXPECT_LT(std::abs(error[0]), 10) << x;
+        EXPECT_LT(std::abs(error[1]), 10) << x;
+      }
+    }
+  }
+}
+
 // A uniform 1500 degC surface as noiseless samples, every ratio reading 1500 degC.
 struct Uniform {
   Colour c;
@@ -293,7 +339,7 @@ TEST(ScaledBrightness, RefusesWhatItCannotRead) {
   options.demosaic = DemosaicMethod::kBinCells;
   options.brightness_radius = 2;
   EXPECT_THROW(FrameMeasurer(c.model, options), InputError);
-  options.brightness_radius = -1;  // the default: off where it cannot be had
+  options.brightness_radius = 0;  // the default: off
   EXPECT_NO_THROW(FrameMeasurer(c.model, options));
 }
 

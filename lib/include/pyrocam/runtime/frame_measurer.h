@@ -37,11 +37,11 @@ struct MeasureOptions {
   // Subtract the matched kernel's bias on gradients (blur_bias.h); needs matched demosaicking.
   bool blur_correction = false;
   // Ratio-scaled brightness readings (scaled_brightness.h) with this window radius, Bayer cells;
-  // 0: the ratio readings as they are; -1: ScaledBrightness::kDefaultWindowRadius for a Bayer
-  // mosaic demosaicked at full resolution, else 0. After the blur correction, which then acts
-  // on the scales only. Read on the 0.1 K codes (temperature_codes.h), as ratiotemp reads them,
-  // so a recording measured again gives its codes bit for bit.
-  int brightness_radius = -1;
+  // 0: the ratio readings as they are. Needs a Bayer mosaic demosaicked at full resolution. After
+  // the blur correction, which then acts on the scales only. Read on the 0.1 K codes
+  // (temperature_codes.h), as ratiotemp reads them, so a recording measured again gives its
+  // codes bit for bit.
+  int brightness_radius = 0;
 };
 
 // One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.

@@ -21,17 +21,21 @@
 // window. On a uniform surface the readings' mean is the ratio's, and their noise is that of one
 // sample. Across an emissivity step inside the window (a liquid pool beside its solid track)
 // the pixels near the step read biased by the step's share of the mean, up to
-// (window fraction) x d ln(emissivity) x lambda T^2 / c2.
+// (window fraction) x d ln(emissivity) x lambda T^2 / c2, where the ratio itself reads right:
+// which is why it is not on by default.
 //
 // A pixel keeps the ratio's reading mask: it reads only where the ratio read. Where its own
 // sample is saturated, below the profile's dim threshold or outside the model's range, it takes
 // the mean of its four neighbours' brightness readings, or keeps its ratio reading without any.
 //
-// Measured (simulated colour camera, its true QE, likelihood fit; tests/lib and the targets
-// suite): on plates without temporal noise 2.4-2.7 times less rms error than the ratio's, the
-// same mean; with noise 2.4-2.8 times less spread; the simulator's melt-pool cores' median
-// 63 -> 22 degC rms over 25 frames exposed for the peak. The uncertainty the estimators give
-// for a reading is the ratio's, which covers these readings with room to spare.
+// Measured (simulated colour camera, its true QE, likelihood fit, radius 2; tests/lib and the
+// targets suite): on plates without temporal noise 2.4-2.7 times less rms error than the
+// ratio's, the same mean; with noise 2.4-2.8 times less spread; the simulator's melt-pool
+// cores' median 63 -> 22 degC rms over 25 frames exposed for the peak. On a plate whose
+// emissivity steps from 0.3 to 0.6 the ratio reads 3-4 columns at the step wrong (up to
+// -270 degC at 2000 degC); the brightness readings 9-11, up to -110 degC 3-6 pixels from the
+// step, where the ratio reads within 10 degC. The uncertainty the estimators give for a reading
+// is the ratio's, which covers these readings' noise with room to spare, not the step's bias.
 //
 // The pass streams each phase's rows once, its windows' sums kept as running column sums; a
 // 2048 x 2048 frame with readings over 90 % of it costs about 25 ms of one core here, a third
@@ -48,8 +52,7 @@ struct ThermalModel;
 
 class ScaledBrightness {
  public:
-  static constexpr int kMaxWindowRadius = 8;      // Bayer cells: a 33 x 33 pixel window
-  static constexpr int kDefaultWindowRadius = 2;  // a 9 x 9 pixel window
+  static constexpr int kMaxWindowRadius = 8;  // Bayer cells: a 33 x 33 pixel window
 
   // For the model's Bayer mosaic, window radius r in Bayer cells (1..kMaxWindowRadius). Throws
   // InputError for a snapshot mosaic or a radius out of range.
