@@ -1,6 +1,5 @@
 /* ratiotemp's steps after the per-pixel estimate: the blur correction and the ratio-scaled
  * brightness readings, both from the mosaic of the fused path. */
-#include "pyrocam/core/temperature_codes.h"
 #include "ratiotemp-private.h"
 
 #define GST_CAT_DEFAULT gst_ratio_temp_debug
