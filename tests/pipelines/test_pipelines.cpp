@@ -250,6 +250,18 @@ class Record : public PipelineTest {
   std::vector<std::string> segments() const {
     return files_in((dir / "rec").string(), "temperature-", ".mkv");
   }
+  // record.sh run with `env` into one segment of `frames` frames: that segment decoded (no
+  // frames, with a failure, where the run or the segment is not that).
+  Video record_one_segment(const Env& env, const std::string& name, int frames) {
+    const ScriptRun run = run_script("record.sh", {}, env, log(name), kRunLimit);
+    EXPECT_EQ(run.status, 0) << run.log;
+    const auto files = segments();
+    EXPECT_EQ(files.size(), 1u);
+    if (run.status != 0 || files.size() != 1) return {};
+    Video recorded = decode_segment(files[0]);
+    EXPECT_EQ(recorded.frames.size(), static_cast<std::size_t>(frames)) << recorded.error;
+    return recorded;
+  }
   static constexpr int kFramesPerSegment = kFps / 2;  // SEGMENT_SECONDS = 0.5
 };
 
@@ -318,12 +330,8 @@ TEST_F(Record, brightness_radius_records_the_brightness_readings) {
   constexpr int kFrames = 4;
   Env env = settings(kScene, kFrames);
   env["BRIGHTNESS_RADIUS"] = "2";
-  const ScriptRun run = run_script("record.sh", {}, env, log("record-brightness"), kRunLimit);
-  ASSERT_EQ(run.status, 0) << run.log;
-  const auto files = segments();
-  ASSERT_EQ(files.size(), 1u);
-  const Video recorded = decode_segment(files[0]);
-  ASSERT_EQ(recorded.frames.size(), static_cast<std::size_t>(kFrames)) << recorded.error;
+  const Video recorded = record_one_segment(env, "record-brightness", kFrames);
+  ASSERT_EQ(recorded.frames.size(), static_cast<std::size_t>(kFrames));
   const Video bright = pull_frames(kScene + " num-buffers=" + std::to_string(kFrames) + " ! " +
                                    temperature_chain() + " brightness-radius=2 ! appsink name=out");
   ASSERT_EQ(bright.frames.size(), static_cast<std::size_t>(kFrames)) << bright.error;
@@ -347,12 +355,8 @@ TEST_F(Record, bracket_records_the_fused_frames) {
   Env env = settings(kScene, kFrames);
   env["BRACKET"] = bracket;
   env["SEGMENT_SECONDS"] = "10";
-  const ScriptRun run = run_script("record.sh", {}, env, log("record-bracket"), kRunLimit);
-  ASSERT_EQ(run.status, 0) << run.log;
-  const auto files = segments();
-  ASSERT_EQ(files.size(), 1u);
-  const Video recorded = decode_segment(files[0]);
-  ASSERT_EQ(recorded.frames.size(), static_cast<std::size_t>(kFrames)) << recorded.error;
+  const Video recorded = record_one_segment(env, "record-bracket", kFrames);
+  ASSERT_EQ(recorded.frames.size(), static_cast<std::size_t>(kFrames));
   const std::string camera = kScene + " bracket=" + bracket +
                              " num-buffers=" + std::to_string(kFrames) + " ! " + kCaps + " ! " +
                              temperature_elements();
