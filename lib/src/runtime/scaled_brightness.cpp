@@ -22,13 +22,6 @@ namespace {
 // about 1.5e-3 nats, a fraction of a degree, with linear interpolation far below 0.01 degC.
 constexpr int kInverseSamples = 16384;
 
-float interpolate(const std::vector<float>& table, float at) {
-  const auto i = static_cast<std::size_t>(at);
-  if (i + 1 >= table.size()) return table.back();
-  const float f = at - static_cast<float>(i);
-  return table[i] + f * (table[i + 1] - table[i]);
-}
-
 // Natural log of a positive normal float to about 1e-6, with +, -, *, / and bit operations only:
 // the same bits on every machine, and a loop of it vectorises. x = 2^k m with m in [sqrt(1/2),
 // sqrt(2)) (the offset moves the exponent's boundary there, as musl's logf does); log m =
@@ -248,14 +241,15 @@ ScaledBrightness::ScaledBrightness(const ThermalModel& model, int window_radius)
 
 double ScaledBrightness::log_rate(int band, double t_c) const {
   if (!(t_c >= min_c_ && t_c <= max_c_)) return NAN;
-  return interpolate(bands_.at(static_cast<std::size_t>(band)).log_rate,
-                     static_cast<float>(t_c - min_c_));
+  const std::vector<float>& table = bands_.at(static_cast<std::size_t>(band)).log_rate;
+  return lookup(table.data(), static_cast<int>(table.size()) - 1, static_cast<float>(t_c - min_c_));
 }
 
 double ScaledBrightness::temperature_of_log_rate(int band, double log_rate) const {
   const BandTables& t = bands_.at(static_cast<std::size_t>(band));
   if (!(log_rate >= t.log_lo && log_rate <= t.log_hi)) return NAN;
-  return interpolate(t.temperature, static_cast<float>((log_rate - t.log_lo) * t.inv_log_step));
+  return lookup(t.temperature.data(), kInverseSamples - 1,
+                static_cast<float>((log_rate - t.log_lo) * t.inv_log_step));
 }
 
 void ScaledBrightness::check(const cv::Mat& signal, const cv::Mat& temperature_c, int type) const {
