@@ -42,8 +42,8 @@ void add_prebuild_command(CLI::App& app, const GlobalOptions& global, Command& s
   c->add_option("--out", out, "Table file to write (default: the model's path + .lut)");
   c->add_option("--max-blocks", max_blocks,
                 "Blocks of the table to prebuild, nearest the locus first (1156 bytes each in "
-                "the file; the table cache keeps 4096 blocks less these)")
-      ->check(CLI::Range(1, 4096))
+                "the file; the table cache keeps 8192 blocks less these)")
+      ->check(CLI::Range(1, 8192))
       ->capture_default_str();
   c->callback([&global, &selected] {
     selected = [&global] {

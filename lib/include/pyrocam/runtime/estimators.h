@@ -65,7 +65,7 @@ class TemperatureEstimator {
   // fit: kAny with more than two bands, kSafe with a monotonic pair in the model).
   virtual bool can_read_partial() const { return false; }
   // Bytes of the tables the estimator holds (the lookup table grows as pixels need its blocks,
-  // up to 8192 of 1.2 KB; past that, pixels in blocks not yet filled are read by the network
+  // up to 16384 of 1.2 KB; past that, pixels in blocks not yet filled are read by the network
   // itself, which differs from the table by at most about 0.5 degC: which pixels those are then
   // depends on the frames seen before).
   virtual std::size_t memory_bytes() const { return 0; }
@@ -97,7 +97,7 @@ class TemperatureEstimator {
   virtual TableGrid table_grid() const { return {}; }
   // Fills now, in this order, the lookup table's blocks with these indices (those of a prebuilt
   // table, prebuilt_tables.h) until the table holds as many blocks as its file keeps (half its
-  // budget: 4096); returns how many it holds (an empty list: how many it holds now). The values are
+  // budget: 8192); returns how many it holds (an empty list: how many it holds now). The values are
   // those a block filled when a pixel needs it gets. Throws InputError for an index outside the
   // grid. Other methods: 0.
   virtual std::size_t fill_tables(const std::vector<std::uint32_t>& blocks) const;

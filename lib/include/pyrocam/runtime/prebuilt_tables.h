@@ -21,10 +21,10 @@ std::string prebuilt_tables_file(const std::string& model_path);
 // How far from the locus, in standard deviations of a ratio's noise, the prebuilt table reaches.
 inline constexpr double kPrebuiltSigmas = 4;
 // Blocks a prebuilt table holds at most by default: three quarters of what the lookup table's
-// files may give it (4096, half its budget), so that the table cache can add 1024 of a run's own
-// blocks. About 3.5 MB. The band reaches further than that (tens of thousands of blocks at 4
+// files may give it (8192, half its budget), so that the table cache can add 2048 of a run's own
+// blocks. About 7 MB. The band reaches further than that (tens of thousands of blocks at 4
 // standard deviations): the blocks nearest the locus are those most pixels read.
-inline constexpr std::size_t kPrebuiltBlocks = 3072;
+inline constexpr std::size_t kPrebuiltBlocks = 6144;
 
 // The lookup table's blocks (of `grid`, TemperatureEstimator::table_grid) that single pixels of
 // the model's camera read near its locus, nearest first: those within `sigmas` standard
