@@ -3,8 +3,9 @@
 #
 # A watchdog ends the pipeline with an error, and this script with exit status 1, when no frame
 # comes for WATCHDOG_MS: a camera unplugged, switched off, or losing packets never leaves a
-# frozen picture that looks live. The diagnosis comes at once; Aravis then spends about 12 s on
-# control timeouts to the vanished camera before the process exits.
+# frozen picture that looks live; when Aravis notices the loss first, aravissrc's own error
+# does the same. The diagnosis comes at once; Aravis then spends about 12 s on control timeouts
+# to the vanished camera before the process exits.
 #
 # Settings (environment variables, defaults in brackets):
 #   MODEL        calibrated model of THIS camera (required)
@@ -71,9 +72,11 @@ camera=(aravissrc num-buffers="$NUM_BUFFERS")
 source "$here/lib/camera.sh"
 set -f # the fragments above split on spaces into the launcher's words
 set +e
-# The launcher's messages pass through a filter that adds a plain diagnosis to the watchdog's
-# error at once (Aravis may then take seconds to let go of the vanished camera). The filter
-# ignores Ctrl-C so that the launcher can still print while it stops.
+# The launcher's messages pass through a filter that adds a plain diagnosis at once to the
+# watchdog's error, or to aravissrc's own (when Aravis notices the camera's loss first, its
+# streaming stops with a bare "Internal data stream error"); Aravis may then take seconds to let
+# go of the vanished camera. The filter ignores Ctrl-C so that the launcher can still print while
+# it stops.
 "$launch" "${launch_options[@]}" \
   "${camera[@]}" ! $CAPS ! "${exposure_control[@]}" watchdog name=camera-sent-no-frame timeout="$WATCHDOG_MS" ! tee name=camera \
   "${thermal_chain[@]}" ! "${colormap_to_mix[@]}" \
@@ -83,9 +86,14 @@ set +e
   stopped=0
   while IFS= read -r line; do
     printf '%s\n' "$line"
-    if [[ $line == *GstWatchdog:camera-sent-no-frame:* && $stopped == 0 ]]; then
-      echo "genicam-live: camera ${CAMERA:-(first found)} sent no frame for $WATCHDOG_MS ms: unplugged, switched off, or losing packets" >&2
-      stopped=1
+    if ((stopped == 0)); then
+      if [[ $line == *GstWatchdog:camera-sent-no-frame:* ]]; then
+        echo "genicam-live: camera ${CAMERA:-(first found)} sent no frame for $WATCHDOG_MS ms: unplugged, switched off, or losing packets" >&2
+        stopped=1
+      elif [[ $line == "ERROR: from element "*/GstAravis:* ]]; then
+        echo "genicam-live: camera ${CAMERA:-(first found)} stopped streaming (aravissrc's error above): unplugged, switched off, or losing packets" >&2
+        stopped=1
+      fi
     fi
   done
   exit $((stopped ? 3 : 0)))
