@@ -145,7 +145,7 @@ void EmissivitySlopeEstimator::corrected_signals(const double* s, double t_c, do
   double f[kMaxBands];
   emissivity_.factors(t_c, f);
   for (int b = 0; b < bands_; ++b)
-    out[b] = std::isfinite(s[b]) && s[b] >= dim_dn_ ? s[b] / f[b] : s[b];
+    out[b] = std::isfinite(s[b]) && s[b] > 0 ? s[b] / f[b] : s[b];
 }
 
 double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* passes) const {

@@ -46,6 +46,11 @@ class LikelihoodFit : public TemperatureEstimator {
         squares_[static_cast<std::size_t>(i * width_ + b)] = m * m;
       }
     set_noise(1.0);
+    // Bands between the no-signal level and the dim threshold are weighed by their noise (see
+    // weigh_dim_dn_).
+    std::vector<SignalNoise> noise;
+    for (int b = 0; b < bands_; ++b) noise.push_back(signal_noise(model_->profile(), b));
+    weigh_dim_dn_ = std::min(dim_dn_, no_signal_level_dn(noise));
     // A ratio that turns over (rises, then falls) fits two temperatures: only pairs whose ratio
     // keeps one direction over the whole range read a pixel alone.
     monotonic_.assign(static_cast<std::size_t>(bands_ * bands_), 0);
@@ -73,8 +78,8 @@ class LikelihoodFit : public TemperatureEstimator {
   void estimate(const float* const* planes, std::size_t n, float* out) const override {
     constexpr std::size_t kChunk = 256;
     alignas(64) std::int32_t reading[kChunk];
-    auto dim_f = static_cast<float>(dim_dn_);
-    if (static_cast<double>(dim_f) < dim_dn_)
+    auto dim_f = static_cast<float>(weigh_dim_dn_);
+    if (static_cast<double>(dim_f) < weigh_dim_dn_)
       dim_f = std::nextafter(dim_f, std::numeric_limits<float>::infinity());
     const int needed = std::min(min_bands_, bands_);
     for (std::size_t start = 0; start < n; start += kChunk) {
@@ -107,13 +112,15 @@ class LikelihoodFit : public TemperatureEstimator {
   };
 
   // A pixel's signals as the fit uses them: inverse noise variances w (0 drops a band:
-  // saturated, NaN or dim; the rest still fix the temperature), w*s (0 for a dropped band) and
-  // sum w s^2; whether every band reads.
+  // saturated, NaN or below weigh_dim_dn_; the rest still fix the temperature), w*s (0 for a
+  // dropped band) and sum w s^2; whether every band reads at the dim threshold (complete).
   struct Weighted {
     alignas(32) double w[kMaxBands];
     alignas(32) double ws[kMaxBands];
     double sss;
     bool complete;
+    bool faint;   // a band below the dim threshold is weighed
+    int weighed;  // bands with a weight
   };
 
   void set_analogue_gain(double factor) override {
@@ -136,11 +143,12 @@ class LikelihoodFit : public TemperatureEstimator {
            std::any_of(monotonic_.begin(), monotonic_.end(), [](std::uint8_t m) { return m != 0; });
   }
 
-  // Whether the bands that read are enough: all of them, or (set_partial_bands) at least two,
-  // with kSafe among them a pair whose ratio is monotonic over the model's range.
+  // Whether the bands that read are enough: all of them at the dim threshold, or
+  // (set_partial_bands) at least two weighed ones, with kSafe among them a pair whose ratio is
+  // monotonic over the model's range.
   bool enough_bands(int reading, const Weighted& px) const {
-    if (reading == bands_) return true;
-    if (reading < min_bands_) return false;
+    if (px.complete) return true;
+    if (partial_ == PartialBands::kOff || reading < min_bands_) return false;
     if (partial_ != PartialBands::kSafe) return true;
     for (int i = 0; i < bands_; ++i) {
       if (px.w[i] == 0.0) continue;
@@ -150,10 +158,14 @@ class LikelihoodFit : public TemperatureEstimator {
     return false;
   }
 
+  // How many bands the fit weighs (at least weigh_dim_dn_).
   int weigh(const double* s, Weighted& px) const {
-    const int reading =
-        weigh_bands(s, bands_, dim_dn_, shot_gain_, noise_floor_, px.w, px.ws, &px.sss);
-    px.complete = reading == bands_;
+    int bright = 0;
+    const int reading = weigh_bands(s, bands_, weigh_dim_dn_, dim_dn_, shot_gain_, noise_floor_,
+                                    px.w, px.ws, &px.sss, &bright);
+    px.complete = bright == bands_;
+    px.faint = reading > bright;
+    px.weighed = reading;
     return reading;
   }
 
@@ -186,7 +198,8 @@ class LikelihoodFit : public TemperatureEstimator {
     // A safe partial reading must also be precise: chi2 rises by 1 at one standard deviation,
     // so with the curvature denom / step^2 the noise alone leaves sqrt(2 / curvature).
     if (partial_ == PartialBands::kSafe && !px.complete &&
-        !(denom > 0 && step * std::sqrt(2 / denom) <= kMaxPartialSigmaC))
+        !(denom > 0 &&
+          step * std::sqrt(2 / denom) <= max_partial_sigma_c(locus_.temperature_c[best])))
       return NAN;
     return in_range(locus_.temperature_c[best] + std::clamp(offset, -1.0, 1.0) * step);
   }
@@ -197,6 +210,16 @@ class LikelihoodFit : public TemperatureEstimator {
   int width_;
   AlignedDoubles rates_, squares_;
   double shot_gain_[kMaxBands] = {}, noise_floor_[kMaxBands] = {};
+  // The least signal the fit weighs, DN: the no-signal level (noise_model.h, where the
+  // demosaicking marks samples without light), or the dim threshold if that is lower. A pixel
+  // whose bands all reach the dim threshold is read as ever; below it a band still holds the
+  // temperature, less precisely, and its weight says how much. Dropping it at the dim threshold
+  // instead kept a band near the threshold only where its noise was positive: a censoring that
+  // biased partial readings of a uniform surface by tens of degrees and left most of its pixels
+  // without a reading (the 5x5 camera at 2000 degC, brightest band at a quarter of its range:
+  // 40 % read, 25 degC low). The dim threshold still decides which pixels are complete: the
+  // others read only with partial bands, where kSafe asks them to be precise.
+  double weigh_dim_dn_ = 0;
   std::vector<std::uint8_t> monotonic_;  // bands x bands: ratio monotonic over the locus
 };
 

@@ -89,19 +89,21 @@ double fast_fraction(const double* s, const double* fast, int bands) {
 }
 
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
-// and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
-// Returns how many bands read. In explicit lanes of four bands (left to the compiler, the
-// divisions went through masked loads and sss through a chain of scalar additions).
+// and at least `weigh_dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
+// Returns how many bands read, and in *bright how many are at least `dim` too. In explicit lanes of
+// four bands (left to the compiler, the divisions went through masked loads and sss through a
+// chain of scalar additions).
 PYROCAM_VECTOR_CLONES
-int weigh_bands(const double* __restrict s, int bands, double dim, const double* __restrict gain,
-                const double* __restrict floor, double* __restrict w, double* __restrict ws,
-                double* sss) {
+int weigh_bands(const double* __restrict s, int bands, double weigh_dim, double dim,
+                const double* __restrict gain, const double* __restrict floor, double* __restrict w,
+                double* __restrict ws, double* sss, int* bright) {
   typedef std::int64_t Mask __attribute__((vector_size(32)));
   constexpr double kInf = std::numeric_limits<double>::infinity();
   const Lanes zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
-  const Lanes dims = {dim, dim, dim, dim}, inf = {kInf, kInf, kInf, kInf};
+  const Lanes lows = {weigh_dim, weigh_dim, weigh_dim, weigh_dim}, dims = {dim, dim, dim, dim};
+  const Lanes inf = {kInf, kInf, kInf, kInf};
   Lanes sum = zero;
-  Mask counted = {0, 0, 0, 0};  // -1 per band with a weight
+  Mask counted = {0, 0, 0, 0}, bright_counted = counted;  // -1 per band with a weight, bright
   for (int b = 0; b < bands; b += 4) {
     // The last group's bands past `bands` read as 0 (no reading), from a copy: the caller's
     // arrays hold `bands` values.
@@ -115,7 +117,9 @@ int weigh_bands(const double* __restrict s, int bands, double dim, const double*
       at = tail[0], g = tail[1], f = tail[2];
     }
     const Lanes v = lanes_at(at);
-    const Mask reads = (v >= dims) & (v < inf);  // NaN fails both
+    const Mask below_inf = v < inf;
+    const Mask reads = (v >= lows) & below_inf;  // NaN fails both
+    bright_counted += (v >= dims) & below_inf;
     const Lanes positive = v > zero ? v : zero;  // std::max(v, 0.0) wherever it matters
     const Lanes weight = one / (lanes_at(g) * positive + lanes_at(f));
     const Lanes wl = reads ? weight : zero, wsl = reads ? weight * v : zero;
@@ -126,6 +130,8 @@ int weigh_bands(const double* __restrict s, int bands, double dim, const double*
     sum += weighted ? wsl * v : zero;
   }
   *sss = lane_sum(sum);
+  *bright = static_cast<int>(
+      -(bright_counted[0] + bright_counted[1] + bright_counted[2] + bright_counted[3]));
   return static_cast<int>(-(counted[0] + counted[1] + counted[2] + counted[3]));
 }
 

@@ -93,12 +93,12 @@ void profiled_chi2_three(const double* m, const double* m2, const double* ws, co
 double fast_fraction(const double* s, const double* fast, int bands);
 
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
-// and at least `dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
+// and at least `weigh_dim`), 0 for one without; ws = w s (0 without a reading); *sss = sum w s^2.
 // w and ws are filled to padded_bands(bands), with 0 past the bands. Returns how many bands
-// read.
-int weigh_bands(const double* __restrict s, int bands, double dim, const double* __restrict gain,
-                const double* __restrict floor, double* __restrict w, double* __restrict ws,
-                double* sss);
+// read; *bright: how many of them are at least `dim` too (dim >= weigh_dim).
+int weigh_bands(const double* __restrict s, int bands, double weigh_dim, double dim,
+                const double* __restrict gain, const double* __restrict floor, double* __restrict w,
+                double* __restrict ws, double* sss, int* bright);
 
 // reading[k] = how many of pixel from + k's bands read as weigh_bands decides (finite and at
 // least the threshold), for k < n: planes[b] is band b's row; dim_f is the least float whose

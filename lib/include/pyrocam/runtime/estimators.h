@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "pyrocam/core/physics.h"
 #include "pyrocam/runtime/model.h"
 
 namespace pyrocam {
@@ -47,13 +48,26 @@ class TemperatureEstimator {
   // the model's whole range (decided from the model's locus: the shipped 5x5 camera has many
   // such pairs, the shipped colour camera none, its three ratios turning over between 1000 and
   // 1500 degC, where a pair can pin the fit near its turning point, a reading that looks right
-  // and is not), and when the noise alone leaves that reading within
-  // kMaxPartialSigmaC (one standard deviation, from the fit's chi2 curvature: a few noisy bands
-  // at the dim end of a melt pool otherwise read hundreds of degrees off, within their own
-  // uncertainty); kAny with any two. The network and its table always need every band
-  // (PlaneEstimator::set_partial_bands reads such pixels by the fit).
+  // and is not), and when the noise alone leaves that reading within max_partial_sigma_c (one
+  // standard deviation, from the fit's chi2 curvature: a few noisy bands at the dim end of a
+  // melt pool otherwise read hundreds of degrees off, within their own uncertainty); kAny with
+  // any two. The network and its table always need every band (PlaneEstimator::
+  // set_partial_bands reads such pixels by the fit). A band below the dim threshold but above
+  // the no-signal level is weighed by its noise, not dropped (likelihood_fit.h).
   enum class PartialBands { kOff, kSafe, kAny };
+  // kSafe's limit on a reading at t_c: kMaxPartialSigmaC at kPartialSigmaReferenceC, growing
+  // as the square of the absolute temperature. Band ratios fix 1/T (Wien), so a pixel's
+  // standard deviation grows about so with the temperature it reads: a limit of one precision
+  // in 1/T keeps or refuses a pixel whatever its noise makes it read. A limit in degrees cut
+  // into the spread of a uniform surface instead, keeping only the pixels that the noise moved
+  // lower (the 5x5 camera at 2500 degC, brightest band at 40 % of its range: 16 % read, 41 degC
+  // low).
   static constexpr double kMaxPartialSigmaC = 50;
+  static constexpr double kPartialSigmaReferenceC = 1500;
+  static double max_partial_sigma_c(double t_c) {
+    const double ratio = (t_c + kZeroCelsius) / (kPartialSigmaReferenceC + kZeroCelsius);
+    return kMaxPartialSigmaC * ratio * ratio;
+  }
   void set_partial_bands(PartialBands p) {
     partial_ = p;
     min_bands_ = p == PartialBands::kOff ? bands_ : 2;
