@@ -397,8 +397,9 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
                 "partial-bands): off: no reading; safe: read by the likelihood fit from the rest "
                 "when they include two bands whose ratio is monotonic over the model's range "
                 "(decided from its locus; none for the shipped colour camera, most pairs for "
-                "the 5x5 one) and the noise alone leaves the reading within 50 degC (one "
-                "standard deviation); any: from any two")
+                "the 5x5 one) and the noise alone leaves the reading within 50 degC at 1500 "
+                "degC, growing as the square of the absolute temperature (one standard "
+                "deviation); any: from any two")
       ->check(CLI::IsMember({"off", "safe", "any"}))
       ->capture_default_str();
   c->add_flag("--allow-partial", a.allow_partial,

@@ -19,7 +19,8 @@
  * does not read it from the rest. With partial-bands=safe (the default) the likelihood fit reads
  * such a pixel from the bands left when two of them have a ratio monotonic over the model's
  * whole range (decided from the model's locus when the element starts) and the noise alone
- * leaves the reading within 50 degC (one standard deviation, from the fit's chi2 curvature): two
+ * leaves the reading within 50 degC at 1500 degC, a limit growing as the square of the absolute
+ * temperature (82 degC at 2000; one standard deviation, from the fit's chi2 curvature): two
  * bands whose ratio turns over pin such fits near the turning point, and a few bands near the
  * noise read hundreds of degrees off; readings that look right and are not. The
  * shipped 5x5 camera has 198 such pairs of 300, so a pixel with a few dim bands reads; the

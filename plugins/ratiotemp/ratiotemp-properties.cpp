@@ -116,7 +116,8 @@ void install_properties(GObjectClass* gobject_class) {
                         "rest when they include two bands whose ratio is monotonic over the "
                         "model's range (decided from its locus; none for the shipped colour "
                         "camera, most pairs for the 5x5 one) and the noise alone leaves the "
-                        "reading within 50 degC (one standard deviation); any: from any two",
+                        "reading within 50 degC at 1500 degC, growing as the square of the "
+                        "absolute temperature (one standard deviation); any: from any two",
                         GST_TYPE_RATIO_TEMP_PARTIAL, DEFAULT_PARTIAL_BANDS, playing));
   g_object_class_install_property(
       gobject_class, PROP_MISFIT_PROBABILITY,
