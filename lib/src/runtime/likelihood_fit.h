@@ -215,10 +215,9 @@ class LikelihoodFit : public TemperatureEstimator {
   // whose bands all reach the dim threshold is read as ever; below it a band still holds the
   // temperature, less precisely, and its weight says how much. Dropping it at the dim threshold
   // instead kept a band near the threshold only where its noise was positive: a censoring that
-  // biased partial readings of a uniform surface by tens of degrees and left most of its pixels
-  // without a reading (the 5x5 camera at 2000 degC, brightest band at a quarter of its range:
-  // 40 % read, 25 degC low). The dim threshold still decides which pixels are complete: the
-  // others read only with partial bands, where kSafe asks them to be precise.
+  // read uniform 5x5 plates 2-4 degC high (1300-2000 degC, brightest band at 16-35 % of its
+  // range) and dimmer ones not at all. The dim threshold still decides which pixels are
+  // complete: the others read only with partial bands, where kSafe asks them to be precise.
   double weigh_dim_dn_ = 0;
   std::vector<std::uint8_t> monotonic_;  // bands x bands: ratio monotonic over the locus
 };
