@@ -96,13 +96,13 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
       ->check(CLI::IsMember({"select", "common", "per-step"}))
       ->capture_default_str();
   c->add_option("--min-temperature", a.options.min_temperature_c, "Locus start, degC")
-      ->check(CLI::Range(kModelMinTemperatureC, kModelMaxTemperatureC))
+      ->check(finite_range(kModelMinTemperatureC, kModelMaxTemperatureC))
       ->capture_default_str();
   c->add_option("--max-temperature", a.options.max_temperature_c, "Locus end, degC")
-      ->check(CLI::Range(kModelMinTemperatureC, kModelMaxTemperatureC))
+      ->check(finite_range(kModelMinTemperatureC, kModelMaxTemperatureC))
       ->capture_default_str();
-  c->add_option("--locus-step", a.options.locus_step_c, "Locus step, degC")
-      ->check(CLI::PositiveNumber)
+  c->add_option("--locus-step", a.options.locus_step_c, "Locus step, degC (0.01 to 100)")
+      ->check(finite_range(0.01, 100.0))
       ->capture_default_str();
   c->add_option("--epochs", a.options.mlp.epochs, "MLP training: Adam epochs")
       ->check(CLI::Range(0, 100000))
@@ -126,7 +126,7 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
                 "1100 degC): the calibration term's refits move the furnace temperatures by a "
                 "deviation linear in temperature, within it at the coldest and the hottest step "
                 "(without refits its standard uncertainty, tolerance / sqrt(3), is the term)")
-      ->check(CLI::Range(0.0, 50.0))
+      ->check(finite_range(0.0, 50.0))
       ->capture_default_str();
   c->add_option("--seed", a.options.seed, "Seed (MLP training, Monte-Carlo)")
       ->capture_default_str();
@@ -139,8 +139,6 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
   c->callback([&global, &selected, profile_option] {
     if (!(a.options.min_temperature_c < a.options.max_temperature_c))
       throw CLI::ValidationError("--min-temperature", "must be below --max-temperature");
-    if (!std::isfinite(a.options.thermocouple_tolerance_c))  // CLI::Range lets NaN through
-      throw CLI::ValidationError("--thermocouple-tolerance", "must be a number from 0 to 50");
     a.options.fit_choices.leak_terms = a.leak_terms == "keep"   ? LeakTerms::kKeep
                                        : a.leak_terms == "drop" ? LeakTerms::kDrop
                                                                 : LeakTerms::kSelect;

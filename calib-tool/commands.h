@@ -3,8 +3,10 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <functional>
+#include <sstream>
 #include <string>
 
 namespace pyrocam::cli {
@@ -41,6 +43,25 @@ class ProgressPrinter {
 };
 
 using Command = std::function<int()>;
+
+// CLI::Range for a number that must be finite: CLI::Range lets "nan" through (every comparison
+// with it fails) and takes "inf" as a number.
+inline CLI::Validator finite_range(double min, double max) {
+  std::ostringstream name;
+  name << "FLOAT in [" << min << " - " << max << "]";
+  return CLI::Validator(
+      [min, max](std::string& value) {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(value, v)) return value + " is not a number";
+        if (!std::isfinite(v) || v < min || v > max) {
+          std::ostringstream m;
+          m << value << " is not a finite number from " << min << " to " << max;
+          return m.str();
+        }
+        return std::string();
+      },
+      name.str());
+}
 
 void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& selected);
 void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& selected);

@@ -304,7 +304,7 @@ void add_input_options(CLI::App* c, MeasureArgs& a) {
   c->add_option("--dark", a.dark, "Dark frame for --frame (or for --recording)");
   c->add_option("--dark-level", a.dark_level,
                 "--recording: dark level in DN instead of the recording's (darksub dark-level)")
-      ->check(CLI::Range(0.0, 65535.0))
+      ->check(finite_range(0.0, 65535.0))
       ->needs(rec);
   ds->excludes(fr);
   rec->excludes(ds);
@@ -347,7 +347,7 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
                 "Bayer: no reading where a band's samples under the pixel's footprint differ "
                 "by more than this share of the largest plus 5 noise standard deviations (a "
                 "sharp edge; demosaic25 mixed-pixels; 0 = no check, e.g. 0.5)")
-      ->check(CLI::Range(0.0, kMaxRelativeSpread))
+      ->check(finite_range(0.0, kMaxRelativeSpread))
       ->capture_default_str();
   c->add_flag("--blur-correction", a.blur_correction,
               "Matched demosaicking only: subtract the kernel's bias on steep gradients (a "
@@ -363,30 +363,32 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
                 "right")
       ->check(CLI::Range(0, 8))
       ->capture_default_str();
-  c->add_option("--saturation", a.saturation, "Raw saturation level, DN (-1: the model's)")
+  c->add_option("--saturation", a.saturation,
+                "Raw saturation level, DN (0 to 65535; -1: the model's)")
+      ->check(finite_range(-1.0, 65535.0))
       ->capture_default_str();
   c->add_option("--misfit-probability", a.misfit_probability,
                 "Band-consistency check: no reading where the bands fit no graybody near the "
                 "estimate; the chance that a true graybody pixel is dropped (0 = no check, "
                 "e.g. 1e-6)")
-      ->check(CLI::Range(0.0, 0.5))
+      ->check(finite_range(0.0, 0.5))
       ->capture_default_str();
   c->add_option("--e-slope", a.e_slope,
                 "Emissivity slope of the surface, %/100 nm (-50 to 50; ratiotemp's e-slope): "
                 "emissivity 1 + slope (wavelength - middle of the filter pass band), positive "
                 "rising with wavelength; readings are corrected for it (0 = grey)")
-      ->check(CLI::Range(-50.0, 50.0))
+      ->check(finite_range(-50.0, 50.0))
       ->capture_default_str();
   c->add_option("--e-slope-uncertainty", a.e_slope_uncertainty,
                 "Standard uncertainty of --e-slope, %/100 nm (0 to 100), for the emissivity "
                 "term of --uncertainty; negative: the model's (1 %/100 nm from calibrate)")
-      ->check(CLI::Range(-1.0, 100.0))
+      ->check(finite_range(-1.0, 100.0))
       ->capture_default_str();
   c->add_option("--gain-db", a.gain_db,
                 "Analogue gain the frames were taken with, dB (0 to 48; pyrocamsrc's gain): the "
                 "shot noise per DN grows with it, which the likelihood weights, the "
                 "band-consistency check and --uncertainty follow; readings by ratio do not")
-      ->check(CLI::Range(0.0, 48.0))
+      ->check(finite_range(0.0, 48.0))
       ->capture_default_str();
   c->add_option("--format", a.format, "Image type: png or tiff")
       ->check(CLI::IsMember({"png", "tiff"}))

@@ -92,10 +92,16 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
   add_camera_options(c, campaign_camera);
   c->add_option("--out", campaign_out, "Output folder (created)")->required();
   c->add_option("--temperatures", campaign.temperatures_c,
-                "Plate temperatures, degC (default 700..1100 step 10 colour, 800..1100 for 5x5)");
+                "Plate temperatures, degC (100 to 4000, space or comma separated; default "
+                "700..1100 step 10 colour, 800..1100 for 5x5)")
+      ->delimiter(',')
+      ->check(finite_range(100.0, 4000.0));
   c->add_option("--first-exposure", campaign.first_exposure_us,
-                "Shortest exposure, us (0: 100 colour, 10000 for 5x5)");
-  c->add_option("--exposure-factor", campaign.exposure_factor, "Exposure ratio between steps")
+                "Shortest exposure, us (up to 1e8; 0: 100 colour, 10000 for 5x5)")
+      ->check(finite_range(0.0, 1e8));
+  c->add_option("--exposure-factor", campaign.exposure_factor,
+                "Exposure ratio between steps (1.01 to 10)")
+      ->check(finite_range(1.01, 10.0))
       ->capture_default_str();
   c->add_option("--exposures", campaign.exposure_count, "Number of exposures")
       ->check(CLI::Range(1, 200))
@@ -106,7 +112,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
   c->add_option("--furnace-error", campaign.furnace_error_sigma_c,
                 "Standard deviation, degC, of the plate's true temperature about the nominal one "
                 "at each step (furnace and thermocouple; 0: exact; truth in furnace-truth.csv)")
-      ->check(CLI::Range(0.0, 50.0))
+      ->check(finite_range(0.0, 50.0))
       ->capture_default_str();
   c->add_option("--furnace-seed", campaign.furnace_seed,
                 "Seed of the plate's temperature errors (--furnace-error): campaigns that differ "
@@ -117,7 +123,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
                 "The furnace frames' black level moves since the darks were taken, linearly "
                 "from 0 at the first temperature to this at the last, DN (-50 to 50; a sensor "
                 "that warms up; 0: none)")
-      ->check(CLI::Range(-50.0, 50.0))
+      ->check(finite_range(-50.0, 50.0))
       ->capture_default_str();
   c->add_option("--reference", campaign.reference_temperatures_c,
                 "Reference sources beyond the furnace, nominal degC, comma separated (e.g. "
@@ -125,16 +131,17 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
                 "its own exposure sweep and darks, an unknown scale (aperture, distance) and a "
                 "true temperature off the nominal (truth in furnace-truth.csv)")
       ->delimiter(',')
-      ->check(CLI::Range(100.0, 4000.0));
+      ->check(finite_range(100.0, 4000.0));
   c->add_option("--reference-uncertainty", campaign.reference_uncertainty_c,
                 "Standard uncertainty of the reference temperatures, degC (k=1): the manifest's "
                 "temperature_uncertainty_c and the spread of their true values")
-      ->check(CLI::Range(0.001, 100.0))
+      ->check(finite_range(0.001, 100.0))
       ->capture_default_str();
   c->add_option("--size", campaign_size,
                 "Image size WIDTHxHEIGHT, whole mosaic periods (default 128x128 rounded to "
                 "whole periods: 130x130 for 5x5)");
   c->add_option("--roi-area", campaign.roi_area_px, "Elliptical ROI area, pixels")
+      ->check(finite_range(1.0, 1e9))
       ->capture_default_str();
   add_format_option(c, campaign.image_extension);
   c->callback([&global, &selected] {
@@ -169,14 +176,18 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
   s->add_option("--frames", scene.frames, "Frames (melt pool)")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  s->add_option("--temperatures", scene.temperatures_c, "Temperatures, degC (plate, filament)");
+  s->add_option("--temperatures", scene.temperatures_c,
+                "Temperatures, degC (plate, filament; 100 to 4000, space or comma separated)")
+      ->delimiter(',')
+      ->check(finite_range(100.0, 4000.0));
   s->add_option("--size", scene_size,
                 "Image size WIDTHxHEIGHT, whole mosaic periods (default 256x256 rounded to "
                 "whole periods: 255x255 for 5x5)");
-  s->add_option("--exposure", scene.exposure_us, "Exposure, us (0: automatic)")
+  s->add_option("--exposure", scene.exposure_us, "Exposure, us (up to 1e8; 0: automatic)")
+      ->check(finite_range(0.0, 1e8))
       ->capture_default_str();
   s->add_option("--emissivity", scene.emissivity, "Graybody emissivity (0: the scene's default)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(finite_range(0.0, 1.0));
   add_format_option(s, scene.image_extension);
   s->callback([&global, &selected] {
     if (!scene_size.empty()) parse_size(scene_size, scene.width, scene.height);

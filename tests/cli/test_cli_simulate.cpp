@@ -43,5 +43,44 @@ TEST(CliSimulate, campaign_rejects_a_negative_seed_n) {
   }
 }
 
+// CLI::Range lets "nan" through and takes "inf" for a number: a campaign at an infinite
+// temperature was written (its frames named T-9223372036854775808), a scene at an infinite
+// exposure, and measure read with no sample marked saturated.
+TEST(CliSimulate, numbers_that_are_not_finite_are_refused_n) {
+  ScratchDir dir("cli");
+  const std::string scene = "simulate scene --scene plate --size 16x16 --out " + q(dir / "s");
+  for (const char* bad : {"--temperatures inf", "--temperatures 1000,nan", "--exposure nan",
+                          "--exposure inf", "--emissivity nan"}) {
+    EXPECT_EQ(calib(scene + " " + bad), 2) << bad;
+    EXPECT_FALSE(std::filesystem::exists(dir / "s")) << bad;
+  }
+  const std::string campaign =
+      "simulate campaign --profile rgb-reference --exposures 2 "
+      "--frames 1 --size 16x16 --roi-area 50 --out " +
+      q(dir / "c");
+  for (const char* bad : {"--temperatures 1000 inf", "--first-exposure nan",
+                          "--exposure-factor nan", "--exposure-factor 0.5", "--roi-area nan"}) {
+    EXPECT_EQ(calib(campaign + " " + bad), 2) << bad;
+    EXPECT_FALSE(std::filesystem::exists(dir / "c")) << bad;
+  }
+  for (const char* bad : {"--saturation nan", "--saturation inf", "--mixed-pixels nan"}) {
+    EXPECT_EQ(calib("measure --model " + q(test::test_model("test-model-rgb.json")) +
+                    " --frame x.pgm --pattern rggb " + bad + " --out " + q(dir / "m")),
+              2)
+        << bad;
+    EXPECT_FALSE(std::filesystem::exists(dir / "m")) << bad;
+  }
+}
+
+// Temperatures as --reference takes them (comma separated) or space separated.
+TEST(CliSimulate, temperatures_may_be_comma_separated) {
+  ScratchDir dir("cli");
+  ASSERT_EQ(calib("simulate scene --scene plate --size 16x16 --temperatures 1000,1200 --out " +
+                  q(dir / "s")),
+            0);
+  EXPECT_TRUE(std::filesystem::exists(dir / "s" / "frames" / "0001.pgm"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "s" / "frames" / "0002.pgm"));
+}
+
 }  // namespace
 }  // namespace pyrocam

@@ -36,6 +36,12 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
           "not a snapshot mosaic)");
     brightness_.emplace(*model_, options.brightness_radius);
   }
+  // NaN would mark no sample saturated, and a saturated band would read.
+  if (!std::isfinite(options_.saturation_level_dn))
+    throw InputError(
+        "the saturation level must be a finite number of DN (negative: the "
+        "model's), not " +
+        std::to_string(options_.saturation_level_dn));
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model_->profile().thresholds.inference_saturation_dn;
 }
