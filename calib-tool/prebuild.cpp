@@ -16,7 +16,8 @@ int write_prebuilt_table(const std::string& model_path, const std::string& out,
   const auto model = std::make_shared<const ThermalModel>(load_model(model_path));
   const PrebuiltTables t = prebuild_tables(model, out, max_blocks);
   if (!t.problem.empty()) {
-    if (!global.quiet) std::cerr << "no prebuilt lookup table: " << t.problem << "\n";
+    // An error: printed with --quiet too.
+    std::cerr << "pyrocam-calib: error: no prebuilt lookup table: " << t.problem << "\n";
     return kExitFailed;
   }
   if (!global.quiet) std::cout << "table:  " << out << " (" << t.blocks << " blocks)\n";

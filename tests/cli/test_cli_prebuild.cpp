@@ -79,6 +79,9 @@ TEST(CliPrebuild, a_5x5_model_gets_no_table_and_the_reason_n) {
   EXPECT_NE(err.find("no prebuilt lookup table"), std::string::npos) << err;
   EXPECT_NE(err.find("needs two"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(dir / "nir.json.lut"));
+  // An error, so also with --quiet (which kept it back: exit 1 without a word).
+  EXPECT_EQ(calib("-q prebuild --model " + q(model), dir, err), 1);
+  EXPECT_NE(err.find("error: no prebuilt lookup table"), std::string::npos) << err;
   // Not a model, or an impossible block count: refused before anything is written.
   EXPECT_EQ(calib("prebuild --model " + q(dir / "missing.json"), dir, err), 2);
   EXPECT_EQ(calib("prebuild --model " + q(model) + " --max-blocks 0", dir, err), 2);
