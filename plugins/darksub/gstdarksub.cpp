@@ -268,9 +268,16 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
   }
   bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kNegotiation, "Unsupported mosaic", [&] {
     const pyrocam::MosaicLayout layout = pg::layout_for_pattern(st.pattern);
-    if (f.width % layout.period_width || f.height % layout.period_height)
-      throw pyrocam::InputError(std::to_string(f.width) + "x" + std::to_string(f.height) +
-                                " frames are not whole " + st.pattern + " periods");
+    const int right = f.width % layout.period_width, bottom = f.height % layout.period_height;
+    // Snapshot sensors carry a few columns and rows beyond the mosaic (2048x1088 around a
+    // 2045x1085 5x5 one): say how to crop them.
+    if (right || bottom)
+      throw pyrocam::InputError(
+          std::to_string(f.width) + "x" + std::to_string(f.height) + " frames are not whole " +
+          st.pattern + " periods: crop them to the mosaic's " + std::to_string(f.width - right) +
+          "x" + std::to_string(f.height - bottom) + " first, e.g. videocrop right=" +
+          std::to_string(right) + " bottom=" + std::to_string(bottom) +
+          " (or left/top where the mosaic starts later on the sensor)");
   });
   if (!ok) return FALSE;
   if (settings.saturation_level > pyrocam::full_scale_dn(st.bit_depth))

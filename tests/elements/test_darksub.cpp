@@ -285,6 +285,21 @@ TEST(DarkSubErrors, rejects_gray_input_that_says_no_pattern) {
   expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION, {"GRAY8", "pattern"});
 }
 
+// A snapshot sensor's frame is larger than its mosaic (2048x1088 around 2045x1085): the error
+// says how to crop it, and the crop it names runs.
+TEST(DarkSubErrors, a_frame_beyond_whole_periods_is_refused_with_the_crop_to_make_n) {
+  REQUIRE_ELEMENT("darksub");
+  const std::string source =
+      "videotestsrc num-buffers=2 ! video/x-raw,format=GRAY8,width=2048,height=1088 ! ";
+  const auto r = run_pipeline(source + "darksub dark-level=5 pattern=5x5 ! fakesink");
+  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION,
+               {"2048x1088", "2045x1085", "videocrop right=3 bottom=3"});
+  if (!have_element("videocrop")) GTEST_SKIP() << "videocrop (gst-plugins-good) missing";
+  expect_eos(run_pipeline(source + "videocrop right=3 bottom=3 ! darksub dark-level=5 "
+                                   "pattern=5x5 ! fakesink name=sink"),
+             2);
+}
+
 TEST(DarkSubErrors, rejects_a_pattern_that_differs_from_the_caps) {
   REQUIRE_ELEMENT("darksub");
   REQUIRE_ELEMENT("pyrocamsrc");
