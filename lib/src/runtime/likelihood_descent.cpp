@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "detail/portable_math.h"
 #include "runtime/estimator_kinds.h"
@@ -63,8 +64,12 @@ LocusDescent::LocusDescent(const Eigen::MatrixXd& rates, const double* m, const 
 bool LocusDescent::descend(const double* s, bool every_band_reads, const double* w,
                            const double* ws, double sss, Eigen::Index& at, double* chi2) const {
   at = first_guess(s, every_band_reads);
+  const bool saturated = !every_band_reads && std::any_of(s, s + bands_, [](double v) {
+    return v == std::numeric_limits<double>::infinity();
+  });
   for (int step = 0; step < kMaxSteps; ++step) {
     evaluate(at, w, ws, sss, chi2);
+    if (step == 0 && saturated) at = restart_saturated(at, w, ws, sss, chi2);
     const Step done = next(at, chi2);
     if (done != Step::kMoved) return done == Step::kSettled;
   }
@@ -89,6 +94,35 @@ Eigen::Index LocusDescent::first_guess(const double* s, bool every_band_reads) c
   const double last = static_cast<double>(guess_.size() - 1);
   const auto j = cell > 0 ? static_cast<std::size_t>(std::min(cell, last)) : 0;  // NaN: 0
   return std::clamp<Eigen::Index>(guess_[j], 1, samples_ - 2);
+}
+
+Eigen::Index LocusDescent::restart_saturated(Eigen::Index at, const double* w, const double* ws,
+                                             double sss, double* chi2) const {
+  // Where chi2 curves up, a parabola's vertex is a few steps away; where it does not, the guess
+  // is far off.
+  if (chi2[0] - 2 * chi2[1] + chi2[2] > 0) return at;
+  const double at_chi2 = chi2[1];
+  double c[kSpreadGuesses];
+  Eigen::Index spread[kSpreadGuesses];
+  int best = 0;
+  for (int k = 0; k < kSpreadGuesses; ++k) {
+    spread[k] = 1 + k * (samples_ - 3) / (kSpreadGuesses - 1);
+    const auto row = static_cast<std::size_t>(spread[k] * width_);
+    c[k] = profiled_chi2(m_ + row, m2_ + row, ws, w, width_, sss);
+    if (c[k] < c[best]) best = k;
+  }
+  if (!(c[best] < at_chi2)) return at;
+  Eigen::Index start = spread[best];
+  if (best > 0 && best < kSpreadGuesses - 1) {
+    const double curvature = c[best - 1] - 2 * c[best] + c[best + 1];
+    const double offset = curvature > 0 ? 0.5 * (c[best - 1] - c[best + 1]) / curvature : 0.0;
+    const auto spacing = static_cast<double>(spread[best + 1] - spread[best]);
+    start = std::clamp<Eigen::Index>(
+        start + static_cast<Eigen::Index>(std::round(std::clamp(offset, -1.0, 1.0) * spacing)), 1,
+        samples_ - 2);
+  }
+  evaluate(start, w, ws, sss, chi2);
+  return start;
 }
 
 void LocusDescent::evaluate(Eigen::Index at, const double* w, const double* ws, double sss,

@@ -31,8 +31,8 @@ class LocusDescent {
   // The sample `at` below both neighbours (chi2 at at - 1, at, at + 1 into chi2), reached from
   // the guess of signals s (ws = w s, sss = sum w s^2; where not every band reads, the guess
   // takes a saturated band's +INF as the brightest finite signal and an invalid band's NaN as
-  // 0); false where the walk meets an end of the locus or does not settle (the caller scans
-  // instead).
+  // 0; with a saturated band, restart_saturated); false where the walk meets an end of the locus
+  // or does not settle (the caller scans instead).
   bool descend(const double* s, bool every_band_reads, const double* w, const double* ws,
                double sss, Eigen::Index& at, double* chi2) const;
 
@@ -40,6 +40,15 @@ class LocusDescent {
   // independent, and the processor overlaps them): descend is first_guess, then evaluate and
   // next until next settles or fails, at most kMaxSteps times.
   static constexpr int kMaxSteps = 12;  // a walk not settled by then is left to the scan
+  // Where a band is saturated, the walk's first step from first_guess `at` (chi2 there and at
+  // its neighbours in chi2): with many saturated bands the guess can land far off (a 1500 degC
+  // 5x5 plate with 15 of 25 bands saturated: 3100 degC), where chi2 does not curve up, and the
+  // walk did not arrive in kMaxSteps. There the walk starts again from the sample of least chi2
+  // among kSpreadGuesses spread over the locus, moved to the vertex of the parabola through its
+  // neighbours among them, with chi2 there into chi2 (where that is lower than at `at`).
+  Eigen::Index restart_saturated(Eigen::Index at, const double* w, const double* ws, double sss,
+                                 double* chi2) const;
+  static constexpr int kSpreadGuesses = 8;
   enum class Step { kSettled, kMoved, kFailed };
   Eigen::Index first_guess(const double* s, bool every_band_reads) const;
   // chi2 at at - 1, at, at + 1 into chi2.

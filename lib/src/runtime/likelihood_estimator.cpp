@@ -114,7 +114,9 @@ class LikelihoodEstimator : public LikelihoodFit {
       Weighted px;
       const int reading = weigh(s, px);
       double a;
-      if (reading < 2 || (complete && reading < bands_) || !descended(s, px, a)) return true;
+      if (reading < 2 || (complete && reading < bands_) ||
+          (reading < kMinSaturatedWalkBands && saturated_bands(s) > 0) || !descended(s, px, a))
+        return true;
       const double b = scan(px);
       return a == b || (std::isnan(a) && std::isnan(b));
     };
@@ -151,7 +153,7 @@ class LikelihoodEstimator : public LikelihoodFit {
         max_dim_dropped_ = dim;
       else
         break;
-    for (const int saturated : {1, 3, 6, 9})
+    for (const int saturated : {1, 3, 6, 9, 12, 15, 18, 22})
       if (saturated <= bands_ - 3 && all_agree(0, saturated))
         max_saturated_ = saturated;
       else
@@ -170,7 +172,8 @@ class LikelihoodEstimator : public LikelihoodFit {
     const int reading = weigh(s, px);
     if (!enough_bands(reading, px)) return NAN;
     double t;
-    if (walks(s, px, reading) && descended(s, px, t)) return t;
+    if (walks(s, px, reading, px.complete ? 0 : saturated_bands(s)) && descended(s, px, t))
+      return t;
     return scan(px);
   }
 
@@ -179,8 +182,16 @@ class LikelihoodEstimator : public LikelihoodFit {
   // dependent steps, and the processor overlaps the steps of different pixels (one by one, the
   // fit spent most of its time waiting on each step's sums). The same steps, the same answers.
   static constexpr std::size_t kWalkBatch = 16;
+  // A pixel with saturated bands and fewer weighed ones than this is always scanned: with few
+  // bands chi2 can have two equal minima (with two, it is 0 wherever the locus has their ratio),
+  // and the walk finds one of them where the scan calls the pixel ambiguous. Such check pixels
+  // (2, 5 and 7 bands weighed) kept the walk from pixels with 12 or more saturated bands, which
+  // the scan then read at a sixth of the walk's rate (a 1500 degC 5x5 plate exposed twice as
+  // long as for 170 DN: 15 of 25 bands saturated).
+  static constexpr int kMinSaturatedWalkBands = 8;
   struct Walk {
     Weighted px;
+    bool saturated;  // a band is
     Eigen::Index at;
     double chi2[3];
     std::size_t k;  // the pixel's place in the chunk
@@ -211,11 +222,13 @@ class LikelihoodEstimator : public LikelihoodFit {
           out[place[i]] = NAN;
           continue;
         }
-        if (!walks(s[i], w.px, bands_read)) {
+        const int saturated = w.px.complete ? 0 : saturated_bands(s[i]);
+        if (!walks(s[i], w.px, bands_read, saturated)) {
           out[place[i]] = static_cast<float>(scan(w.px));
           continue;
         }
         w.at = descent_.first_guess(s[i], w.px.complete);
+        w.saturated = saturated > 0;
         w.k = place[i];
         ++count;
       }
@@ -232,6 +245,10 @@ class LikelihoodEstimator : public LikelihoodFit {
       for (std::size_t i = 0; i < count; ++i) {
         Walk& w = walks[active[i]];
         descent_.evaluate(w.at, w.px.w, w.px.ws, w.px.sss, w.chi2);
+      }
+      for (std::size_t i = 0; step == 0 && i < count; ++i) {  // as descend
+        Walk& w = walks[active[i]];
+        if (w.saturated) w.at = descent_.restart_saturated(w.at, w.px.w, w.px.ws, w.px.sss, w.chi2);
       }
       std::size_t kept = 0;
       for (std::size_t i = 0; i < count; ++i) {
@@ -256,11 +273,12 @@ class LikelihoodEstimator : public LikelihoodFit {
     return decide(&best, 1, px);
   }
 
-  // Whether a pixel that has enough bands (px, `reading` of them) walks: where the walk was
-  // checked for as many bands below the dim threshold (weighed or not) and saturated as it has.
-  bool walks(const double* s, const Weighted& px, int reading) const {
+  // Whether a pixel that has enough bands (px, `reading` of them; `saturated` of them saturated,
+  // 0 where px.complete) walks: where the walk was checked for as many bands below the dim
+  // threshold (weighed or not) and saturated as it has.
+  bool walks(const double* s, const Weighted& px, int reading, int saturated) const {
     if (!descends_ || px.complete) return descends_;
-    const int saturated = saturated_bands(s);
+    if (saturated > 0 && reading < kMinSaturatedWalkBands) return false;
     const int other = bands_ - (px.faint ? bright_bands(s) : reading) - saturated;
     return saturated == 0 ? other <= max_dim_dropped_
            : other == 0   ? saturated <= max_saturated_
