@@ -142,7 +142,6 @@ MeasureOptions measure_options(const MeasureArgs& a,
   options.safe_partial = a.partial_bands == "safe";
   options.emissivity_slope = a.e_slope / 100;
   options.emissivity_slope_u = a.e_slope_uncertainty / 100;
-  if (!std::isfinite(a.gain_db)) throw InputError("--gain-db must be a finite number of dB");
   options.gain_db = a.gain_db;
   return options;
 }
