@@ -365,16 +365,21 @@ class LutEstimator : public TemperatureEstimator {
               const std::int32_t* __restrict cell, std::size_t m, float* __restrict lower,
               float* __restrict upper) const {
     static const float kNoCorners[kBlockNodes + 2] = {};
+    // The slots and the arena in locals: the slots' acquire loads would otherwise make the
+    // compiler read both members again for every pixel.
+    const std::atomic<std::int32_t>* __restrict slots = blocks_.get();
+    const float* __restrict arena = arena_;
     for (std::size_t k = 0; k < m; ++k) {
       const float* c = kNoCorners;
       if (status[k] == lut::kInTable) {
-        const float* blk = block_values(static_cast<std::size_t>(block[k]));
-        if (__builtin_expect(!blk, 0))
-          blk = build_block(block[k] % blocks_x_, block[k] / blocks_x_);
-        if (blk)
+        const std::int32_t place = slots[block[k]].load(std::memory_order_acquire);
+        if (__builtin_expect(place != kNoBlock, 1)) {
+          c = arena + place + cell[k];
+        } else if (const float* blk = build_block(block[k] % blocks_x_, block[k] / blocks_x_)) {
           c = blk + cell[k];
-        else
+        } else {
           status[k] = lut::kOffTable;
+        }
       }
       std::memcpy(lower + 2 * k, c, 2 * sizeof(float));
       std::memcpy(upper + 2 * k, c + kBlockNodes, 2 * sizeof(float));
