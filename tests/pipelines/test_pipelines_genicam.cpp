@@ -136,6 +136,12 @@ TEST_F(GenICam, recording_from_a_camera_that_stops_keeps_its_closed_segments_n) 
                          milliseconds(20000)))
       << recording.log();
   ASSERT_TRUE(recording.running()) << recording.log();
+  // The segments closed before the camera stops: all but the one being written. (Not those
+  // left at the end: frames the camera sends after it resumes, while the pipeline goes down
+  // after the error, can start a segment past the one that was open, which is then not the
+  // last, nor closed.)
+  std::vector<std::string> closed = segments();
+  closed.pop_back();
 
   // The camera stops sending (frozen, not gone); once the error is out it resumes, so that
   // Aravis stops it without waiting for control-channel timeouts. The error is the watchdog's
@@ -155,20 +161,19 @@ TEST_F(GenICam, recording_from_a_camera_that_stops_keeps_its_closed_segments_n) 
   ASSERT_TRUE(status.has_value()) << recording.log();
   EXPECT_NE(*status, 0) << recording.log();
 
-  const auto files = segments();
-  ASSERT_GE(files.size(), 3u);
+  ASSERT_GE(closed.size(), 2u);
   std::size_t frames = 0;
-  for (std::size_t s = 0; s + 1 < files.size(); ++s) {
-    const Video seg = decode_segment(files[s]);
-    ASSERT_TRUE(seg.error.empty()) << files[s] << ": " << seg.error;
-    EXPECT_FALSE(seg.frames.empty()) << files[s];
+  for (const std::string& file : closed) {
+    const Video seg = decode_segment(file);
+    ASSERT_TRUE(seg.error.empty()) << file << ": " << seg.error;
+    EXPECT_FALSE(seg.frames.empty()) << file;
     EXPECT_EQ(seg.width, 128);
     EXPECT_EQ(seg.height, 128);
     for (const Bytes& f : seg.frames) EXPECT_EQ(f.size(), static_cast<std::size_t>(128 * 128 * 2));
     frames += seg.frames.size();
   }
-  std::cout << "[ info     ] " << files.size() - 1 << " closed segments kept, " << frames
-            << " frames\n";
+  std::cout << "[ info     ] " << closed.size() << " closed segments kept, " << frames
+            << " frames (" << segments().size() << " segment files in all)\n";
 }
 
 TEST_F(GenICam, rejects_a_missing_dark_n) {
