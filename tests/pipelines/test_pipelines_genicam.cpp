@@ -165,7 +165,9 @@ TEST_F(GenICam, recording_from_a_camera_that_stops_keeps_its_closed_segments_n) 
   std::size_t frames = 0;
   for (const std::string& file : closed) {
     const Video seg = decode_segment(file);
-    ASSERT_TRUE(seg.error.empty()) << file << ": " << seg.error;
+    ASSERT_TRUE(seg.error.empty())
+        << file << ": " << seg.error << " (" << closed.size()
+        << " segments closed before the camera stopped, " << segments().size() << " files in all)";
     EXPECT_FALSE(seg.frames.empty()) << file;
     EXPECT_EQ(seg.width, 128);
     EXPECT_EQ(seg.height, 128);
