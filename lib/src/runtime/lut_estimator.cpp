@@ -366,9 +366,9 @@ class LutEstimator : public TemperatureEstimator {
               float* __restrict upper) const {
     static const float kNoCorners[kBlockNodes + 2] = {};
     // The slots and the arena in locals: the slots' acquire loads would otherwise make the
-    // compiler read both members again for every pixel.
-    const std::atomic<std::int32_t>* __restrict slots = blocks_.get();
-    const float* __restrict arena = arena_;
+    // compiler read both members again for every pixel. (Not restrict: build_block writes both.)
+    const std::atomic<std::int32_t>* const slots = blocks_.get();
+    const float* const arena = arena_;
     for (std::size_t k = 0; k < m; ++k) {
       const float* c = kNoCorners;
       if (status[k] == lut::kInTable) {
