@@ -90,7 +90,11 @@ Eigen::Index LocusDescent::first_guess(const double* s, bool every_band_reads) c
       known[b] = std::isfinite(s[b]) ? s[b] : s[b] > 0 ? brightest : 0.0;
     guess_from = known;
   }
-  const double cell = (fast_fraction(guess_from, fast_.data(), bands_) - first_) * per_;
+  return guess(fast_fraction(guess_from, fast_.data(), bands_));
+}
+
+Eigen::Index LocusDescent::guess(double fraction) const {
+  const double cell = (fraction - first_) * per_;
   const double last = static_cast<double>(guess_.size() - 1);
   const auto j = cell > 0 ? static_cast<std::size_t>(std::min(cell, last)) : 0;  // NaN: 0
   return std::clamp<Eigen::Index>(guess_[j], 1, samples_ - 2);

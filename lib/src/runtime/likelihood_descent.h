@@ -51,6 +51,9 @@ class LocusDescent {
   static constexpr int kSpreadGuesses = 8;
   enum class Step { kSettled, kMoved, kFailed };
   Eigen::Index first_guess(const double* s, bool every_band_reads) const;
+  // The first guess of a pixel whose bands all read from its fast_fraction with fast_bands().
+  Eigen::Index guess(double fraction) const;
+  const double* fast_bands() const { return fast_.data(); }
   // chi2 at at - 1, at, at + 1 into chi2.
   void evaluate(Eigen::Index at, const double* w, const double* ws, double sss, double* chi2) const;
   // From chi2 at at - 1, at, at + 1: settled (at is below both neighbours), moved (at is the next

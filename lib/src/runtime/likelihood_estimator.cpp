@@ -20,6 +20,7 @@
 #include "runtime/estimator_kinds.h"
 #include "runtime/likelihood_bounds.h"
 #include "runtime/likelihood_descent.h"
+#include "runtime/likelihood_factors.h"
 #include "runtime/likelihood_fit.h"
 #include "runtime/likelihood_kernels.h"
 
@@ -85,10 +86,14 @@ class LikelihoodEstimator : public LikelihoodFit {
       throw InputError("method likelihood: the model's temperature range is too wide");
     stride_ = padded(n);
     coarse_stride_ = padded(coarse_count_);
-    factor(unit, across_, rank_, coarse_rank_, along_, coarse_along_, residual_);
-    factor(squares, across2_, rank2_, coarse_rank2_, along2_, coarse_along2_, residual2_);
-    window_factors(along_, rank_, window_rank_, window_basis_, window_along_, window_residual_);
-    window_factors(along2_, rank2_, window_rank2_, window_basis2_, window_along2_,
+    const FactorLayout layout{stride_,     coarse_count_,        coarse_stride_,      kCoarse,
+                              kWindowRoom, kCoarseRankTolerance, kWindowRankTolerance};
+    factor_locus(unit, layout, across_, rank_, coarse_rank_, along_, coarse_along_, residual_);
+    factor_locus(squares, layout, across2_, rank2_, coarse_rank2_, along2_, coarse_along2_,
+                 residual2_);
+    factor_windows(along_, rank_, n, layout, window_rank_, window_basis_, window_along_,
+                   window_residual_);
+    factor_windows(along2_, rank2_, n, layout, window_rank2_, window_basis2_, window_along2_,
                    window_residual2_);
     // All factors of each coarse sample side by side (read sample by sample).
     pad_ = (rank_ + 3) / 4 * 4;
@@ -200,47 +205,79 @@ class LikelihoodEstimator : public LikelihoodFit {
   void read_chunk(const float* const* planes, std::size_t start, std::size_t m,
                   const std::int32_t* reading, int needed, float* out) const override {
     Walk batch[kWalkBatch];
-    // The signals of up to kWalkBatch pixels are copied before any is weighed: weighing reads
-    // them in lanes of four, which wait on the copy's single stores while those are recent.
+    std::uint8_t walking[kWalkBatch];
+    // A pixel's signals as doubles, where its walk needs them (not every band reads).
     alignas(32) double s[kWalkBatch][kMaxBands];
-    std::size_t place[kWalkBatch];
     for (std::size_t k = 0; k < m;) {
-      std::size_t got = 0;
-      for (; k < m && got < kWalkBatch; ++k) {
+      std::size_t used = 0, count = 0;
+      // The batch's slot `slot`, weighed, is pixel k: no reading, the scan's, or a walk.
+      const auto take = [&](std::size_t slot, std::size_t k, int bands_read, double fraction) {
+        Walk& w = batch[slot];
+        if (!enough_bands(bands_read, w.px)) {
+          out[k] = NAN;
+          return;
+        }
+        const int saturated = w.px.complete ? 0 : saturated_bands(s[slot]);
+        if (!walks(s[slot], w.px, bands_read, saturated)) {
+          out[k] = static_cast<float>(scan(w.px));
+          return;
+        }
+        w.at = w.px.complete ? descent_.guess(fraction) : descent_.first_guess(s[slot], false);
+        w.saturated = saturated > 0;
+        w.k = k;
+        walking[count++] = static_cast<std::uint8_t>(slot);
+      };
+      while (k < m && used < kWalkBatch) {
         if (reading[k] < needed) {
           out[k] = NAN;
+          ++k;
           continue;
         }
-        for (int b = 0; b < bands_; ++b) s[got][b] = planes[b][start + k];
-        place[got++] = k;
+        if (descends_ && k + 4 <= m && used + 4 <= kWalkBatch && reading[k + 1] >= needed &&
+            reading[k + 2] >= needed && reading[k + 3] >= needed) {
+          // Four pixels side by side; their signals as doubles only where a band does not read
+          // (where one of them is below the dim threshold, walks copies them below).
+          double *w[4], *ws[4], *rows[4];
+          bool all_read = true;
+          for (std::size_t j = 0; j < 4; ++j) {
+            w[j] = batch[used + j].px.w, ws[j] = batch[used + j].px.ws, rows[j] = s[used + j];
+            all_read = all_read && reading[k + j] == bands_;
+          }
+          FourWeighed four;
+          weigh_four(planes, bands_, start + k, weigh_dim_dn_, dim_dn_, shot_gain_, noise_floor_,
+                     descent_.fast_bands(), w, ws, all_read ? nullptr : rows, four);
+          for (std::size_t j = 0; j < 4; ++j) {
+            Weighted& px = batch[used + j].px;
+            px.sss = four.sss[j];
+            px.complete = four.bright[j] == bands_;
+            px.faint = four.reading[j] > four.bright[j];
+            px.weighed = four.reading[j];
+            if (all_read && !px.complete) copy_signals(planes, start + k + j, s[used + j]);
+            take(used + j, k + j, four.reading[j], four.fraction[j]);
+          }
+          used += 4, k += 4;
+          continue;
+        }
+        copy_signals(planes, start + k, s[used]);
+        const int bands_read = weigh(s[used], batch[used].px);
+        take(used, k, bands_read, batch[used].px.complete ? fast_fraction_of(s[used]) : 0.0);
+        ++used, ++k;
       }
-      std::size_t count = 0;
-      for (std::size_t i = 0; i < got; ++i) {
-        Walk& w = batch[count];
-        const int bands_read = weigh(s[i], w.px);
-        if (!enough_bands(bands_read, w.px)) {
-          out[place[i]] = NAN;
-          continue;
-        }
-        const int saturated = w.px.complete ? 0 : saturated_bands(s[i]);
-        if (!walks(s[i], w.px, bands_read, saturated)) {
-          out[place[i]] = static_cast<float>(scan(w.px));
-          continue;
-        }
-        w.at = descent_.first_guess(s[i], w.px.complete);
-        w.saturated = saturated > 0;
-        w.k = place[i];
-        ++count;
-      }
-      walk(batch, count, out);
+      walk(batch, walking, count, out);
     }
   }
 
-  // The walks of `count` pixels, step by step (LocusDescent::descend's loop); where a walk
-  // fails or does not settle, the scan reads the pixel.
-  void walk(Walk* walks, std::size_t count, float* out) const {
-    std::uint8_t active[kWalkBatch];
-    for (std::size_t i = 0; i < count; ++i) active[i] = static_cast<std::uint8_t>(i);
+  void copy_signals(const float* const* planes, std::size_t at, double* s) const {
+    for (int b = 0; b < bands_; ++b) s[b] = planes[b][at];
+  }
+
+  double fast_fraction_of(const double* s) const {
+    return descends_ ? fast_fraction(s, descent_.fast_bands(), bands_) : 0.0;
+  }
+
+  // The walks of `count` pixels (batch[active[i]]), step by step (LocusDescent::descend's
+  // loop); where a walk fails or does not settle, the scan reads the pixel.
+  void walk(Walk* walks, std::uint8_t* active, std::size_t count, float* out) const {
     for (int step = 0; step < LocusDescent::kMaxSteps && count > 0; ++step) {
       for (std::size_t i = 0; i < count; ++i) {
         Walk& w = walks[active[i]];
@@ -399,53 +436,6 @@ class LikelihoodEstimator : public LikelihoodFit {
     return (n + kCoarseBlock - 1) / kCoarseBlock * kCoarseBlock + kCoarseBlock;
   }
 
-  // Low-rank factors of a samples x bands matrix A ~ (A V) V^T, V orthonormal: across (bands x
-  // kMaxRank, V zero padded), along (rank x stride_, A V rank after rank, zero padded) for the
-  // windows and coarse_along (coarse rank x coarse_stride_, every kCoarse-th sample, single
-  // precision) for the coarse scan. V is grown greedily from the row A leaves least explained
-  // (pivoted Gram-Schmidt), so its first columns are the coarse factors.
-  // residual: the largest row error left by the coarse factors and by all of them.
-  void factor(const Eigen::MatrixXd& a, std::vector<double>& across, int& rank, int& coarse_rank,
-              std::vector<double>& along, std::vector<float>& coarse_along,
-              double* residual) const {
-    Eigen::MatrixXd left = a;
-    Eigen::MatrixXd v(a.cols(), 0);
-    coarse_rank = 0;
-    for (int r = 0; r < std::min<int>(kMaxRank, static_cast<int>(a.cols())); ++r) {
-      Eigen::Index worst;
-      const double norm = left.rowwise().norm().maxCoeff(&worst);
-      if (norm <= kCoarseRankTolerance && coarse_rank == 0) coarse_rank = r;
-      if (norm <= kWindowRankTolerance) break;
-      Eigen::VectorXd dir = left.row(worst).transpose() / norm;
-      for (int pass = 0; pass < 2; ++pass) dir -= v * (v.transpose() * dir);  // stay orthogonal
-      dir.normalize();
-      left -= (left * dir) * dir.transpose();
-      v.conservativeResize(Eigen::NoChange, r + 1);
-      v.col(r) = dir;
-    }
-    rank = static_cast<int>(v.cols());
-    if (coarse_rank == 0) coarse_rank = rank;
-    const Eigen::MatrixXd av = a * v;
-    // From the stored factors, so that the bounds hold for what the fit computes.
-    for (int part = 0; part < 2; ++part) {
-      const int r = part == 0 ? coarse_rank : rank;
-      const Eigen::MatrixXd off = a - av.leftCols(r) * v.leftCols(r).transpose();
-      residual[part] = 2 * off.rowwise().norm().maxCoeff() + 1e-15;
-    }
-    across.assign(static_cast<std::size_t>(bands_ * kMaxRank), 0.0);
-    along.assign(static_cast<std::size_t>(rank * stride_), 0.0);
-    coarse_along.assign(static_cast<std::size_t>(coarse_rank * coarse_stride_), 0.f);
-    for (int r = 0; r < rank; ++r) {
-      for (int b = 0; b < bands_; ++b) across[static_cast<std::size_t>(b * kMaxRank + r)] = v(b, r);
-      for (Eigen::Index i = 0; i < a.rows(); ++i)
-        along[static_cast<std::size_t>(r * stride_ + i)] = av(i, r);
-      if (r >= coarse_rank) continue;
-      for (Eigen::Index j = 0; j < coarse_count_; ++j)
-        coarse_along[static_cast<std::size_t>(r * coarse_stride_ + j)] =
-            static_cast<float>(av(j * kCoarse, r));
-    }
-  }
-
   // The exhaustive scan's refinement around `around` with the window factors' provable bounds:
   // only samples whose lower bound is not above an upper bound of the window's least chi2 can be
   // the best one, and only they are evaluated exactly; ties go as in the exhaustive scan (`around`
@@ -489,66 +479,6 @@ class LikelihoodEstimator : public LikelihoodFit {
     if (best.index - 1 >= lo) best.below = exact[best.index - 1 - lo];
     if (best.index + 1 <= hi) best.above = exact[best.index + 1 - lo];
     return best;
-  }
-
-  // A refinement window's rows of the factors (`along`, rank wide, lo to hi around a coarse
-  // sample) change smoothly over its 41 degC: they span few directions (5 on the test model,
-  // where all factors take 11 or 12). Per window, an orthonormal basis of them grown as in factor
-  // (basis: kMaxRank x kMaxWindowRank, zero padded, as to_window_basis reads it) and the rows'
-  // coordinates in it (coordinates: window_rank x kWindowRoom), so that a window's sums cost
-  // window_rank multiply-adds per sample instead of rank. residual: the largest row error the
-  // bases leave (on top of the factors' own); with a projection p = V^T (w s), |p| <= |w s|, the
-  // sums are off by at most |w s| times it. A model that needed more than kMaxWindowRank
-  // directions would only get looser bounds.
-  void window_factors(const std::vector<double>& along, int rank, int& window_rank,
-                      std::vector<double>& basis, std::vector<double>& coordinates,
-                      double& residual) const {
-    const Eigen::Index n = locus_.size();
-    std::vector<Eigen::MatrixXd> rows(static_cast<std::size_t>(coarse_count_)), bases(rows.size());
-    window_rank = 1;
-    for (Eigen::Index k = 0; k < coarse_count_; ++k) {
-      const Eigen::Index lo = std::max<Eigen::Index>(0, k * kCoarse - kCoarse);
-      const Eigen::Index hi = std::min<Eigen::Index>(n - 1, k * kCoarse + kCoarse);
-      Eigen::MatrixXd& a = rows[static_cast<std::size_t>(k)];
-      a.resize(hi - lo + 1, rank);
-      for (Eigen::Index i = 0; i < a.rows(); ++i)
-        for (int r = 0; r < rank; ++r)
-          a(i, r) = along[static_cast<std::size_t>(r * stride_ + lo + i)];
-      Eigen::MatrixXd left = a, v(rank, 0);
-      for (int r = 0; r < std::min(rank, kMaxWindowRank); ++r) {
-        Eigen::Index worst;
-        const double norm = left.rowwise().norm().maxCoeff(&worst);
-        if (norm <= kWindowRankTolerance) break;
-        Eigen::VectorXd dir = left.row(worst).transpose() / norm;
-        for (int pass = 0; pass < 2; ++pass) dir -= v * (v.transpose() * dir);
-        dir.normalize();
-        left -= (left * dir) * dir.transpose();
-        v.conservativeResize(Eigen::NoChange, r + 1);
-        v.col(r) = dir;
-      }
-      window_rank = std::max(window_rank, static_cast<int>(v.cols()));
-      bases[static_cast<std::size_t>(k)] = v;
-    }
-    basis.assign(static_cast<std::size_t>(coarse_count_ * kMaxRank * kMaxWindowRank), 0.0);
-    coordinates.assign(static_cast<std::size_t>(coarse_count_ * window_rank * kWindowRoom), 0.0);
-    residual = 0;
-    for (std::size_t k = 0; k < rows.size(); ++k) {
-      Eigen::MatrixXd v = Eigen::MatrixXd::Zero(rank, window_rank);
-      v.leftCols(bases[k].cols()) = bases[k];
-      const Eigen::MatrixXd av = rows[k] * v;
-      // From the stored coordinates, so that the bounds hold for what the fit computes.
-      const Eigen::MatrixXd off = rows[k] - av * v.transpose();
-      residual = std::max(residual, 2 * off.rowwise().norm().maxCoeff() + 1e-15);
-      for (int j = 0; j < window_rank; ++j) {
-        for (int r = 0; r < rank; ++r)
-          basis[(k * kMaxRank + static_cast<std::size_t>(r)) * kMaxWindowRank +
-                static_cast<std::size_t>(j)] = v(r, j);
-        for (Eigen::Index i = 0; i < av.rows(); ++i)
-          coordinates[(k * static_cast<std::size_t>(window_rank) + static_cast<std::size_t>(j)) *
-                          kWindowRoom +
-                      static_cast<std::size_t>(i)] = av(i, j);
-      }
-    }
   }
 
   int rank_ = 0, rank2_ = 0, coarse_rank_ = 0, coarse_rank2_ = 0;

@@ -135,6 +135,78 @@ int weigh_bands(const double* __restrict s, int bands, double weigh_dim, double 
   return static_cast<int>(-(counted[0] + counted[1] + counted[2] + counted[3]));
 }
 
+namespace {
+
+// Four pixels' lanes of one group of four bands (v[j]: band g + j) as the rows of bands that
+// rows[k] (pixel k) holds, at g.
+inline void store_transposed(const Lanes (&v)[4], double* const* rows, int g) {
+  const Lanes t0 = __builtin_shufflevector(v[0], v[1], 0, 4, 2, 6);
+  const Lanes t1 = __builtin_shufflevector(v[0], v[1], 1, 5, 3, 7);
+  const Lanes t2 = __builtin_shufflevector(v[2], v[3], 0, 4, 2, 6);
+  const Lanes t3 = __builtin_shufflevector(v[2], v[3], 1, 5, 3, 7);
+  *reinterpret_cast<Lanes*>(rows[0] + g) = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
+  *reinterpret_cast<Lanes*>(rows[1] + g) = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+  *reinterpret_cast<Lanes*>(rows[2] + g) = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
+  *reinterpret_cast<Lanes*>(rows[3] + g) = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+}
+
+}  // namespace
+
+// weigh_bands and fast_fraction of four neighbouring pixels with a lane for each pixel: the
+// signals come as they lie in the band planes (no copy into rows of bands, whose single stores
+// the rows' loads of four then waited on), each lane takes weigh_bands' operations, and the
+// partial sums over bands b, b + 4, ... are added in weigh_bands' order: the same bits.
+PYROCAM_VECTOR_CLONES
+void weigh_four(const float* const* planes, int bands, std::size_t from, double weigh_dim,
+                double dim, const double* __restrict gain, const double* __restrict floor,
+                const double* __restrict fast, double* const* w, double* const* ws,
+                double* const* s, FourWeighed& out) {
+  typedef float Floats __attribute__((vector_size(16), aligned(4), may_alias));
+  typedef std::int64_t Mask __attribute__((vector_size(32)));
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const Lanes zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
+  const Lanes lows = {weigh_dim, weigh_dim, weigh_dim, weigh_dim}, dims = {dim, dim, dim, dim};
+  const Lanes inf = {kInf, kInf, kInf, kInf};
+  Lanes sum[4] = {zero, zero, zero, zero}, fast_sum[4] = {zero, zero, zero, zero};
+  Lanes all_sum[4] = {zero, zero, zero, zero};
+  Mask counted = {0, 0, 0, 0}, bright_counted = counted;
+  for (int g = 0; g < bands; g += 4) {
+    Lanes wl[4], wsl[4], v[4];
+    for (int j = 0; j < 4; ++j) {
+      const int b = g + j;
+      if (b >= bands) {
+        wl[j] = wsl[j] = v[j] = zero;
+        continue;
+      }
+      v[j] = __builtin_convertvector(*reinterpret_cast<const Floats*>(planes[b] + from), Lanes);
+      const Mask below_inf = v[j] < inf;
+      const Mask reads = (v[j] >= lows) & below_inf;
+      bright_counted += (v[j] >= dims) & below_inf;
+      const Lanes positive = v[j] > zero ? v[j] : zero;
+      const double gb = gain[b], fb = floor[b], fast_b = fast[b];
+      const Lanes weight = one / (Lanes{gb, gb, gb, gb} * positive + Lanes{fb, fb, fb, fb});
+      wl[j] = reads ? weight : zero, wsl[j] = reads ? weight * v[j] : zero;
+      const Mask weighted = wl[j] != zero;
+      counted += weighted;
+      sum[j] += weighted ? wsl[j] * v[j] : zero;
+      fast_sum[j] += v[j] * Lanes{fast_b, fast_b, fast_b, fast_b};
+      all_sum[j] += v[j];
+    }
+    store_transposed(wl, w, g);
+    store_transposed(wsl, ws, g);
+    if (s) store_transposed(v, s, g);
+  }
+  const Lanes sss = (sum[0] + sum[1]) + (sum[2] + sum[3]);
+  const Lanes fraction = ((fast_sum[0] + fast_sum[1]) + (fast_sum[2] + fast_sum[3])) /
+                         ((all_sum[0] + all_sum[1]) + (all_sum[2] + all_sum[3]));
+  for (int k = 0; k < 4; ++k) {
+    out.sss[k] = sss[k];
+    out.fraction[k] = fraction[k];
+    out.reading[k] = static_cast<int>(-counted[k]);
+    out.bright[k] = static_cast<int>(-bright_counted[k]);
+  }
+}
+
 // Per pixel, how many of its bands read as weigh_bands decides, in single precision (dim_f is
 // the least float whose double is at least the threshold, so the comparison is weigh_bands'
 // own). Eight pixels at a time over all bands, in vectors of four that SSE2 has too (a plain loop

@@ -100,6 +100,21 @@ int weigh_bands(const double* __restrict s, int bands, double weigh_dim, double 
                 const double* __restrict gain, const double* __restrict floor, double* __restrict w,
                 double* __restrict ws, double* sss, int* bright);
 
+// What weigh_four gives per pixel besides w and ws.
+struct FourWeighed {
+  double sss[4], fraction[4];
+  int reading[4], bright[4];
+};
+
+// weigh_bands and fast_fraction (fast: 0 or 1 per band) of the four pixels from .. from + 3 of
+// the band rows planes[b], the same bits: pixel k's w and ws into w[k] and ws[k] (to
+// padded_bands(bands), rows on 32 bytes), its signals as doubles into s[k] unless s is null
+// (whole lanes of four: zero past the bands), sum w s^2, the fraction and the counts into out.
+void weigh_four(const float* const* planes, int bands, std::size_t from, double weigh_dim,
+                double dim, const double* __restrict gain, const double* __restrict floor,
+                const double* __restrict fast, double* const* w, double* const* ws,
+                double* const* s, FourWeighed& out);
+
 // reading[k] = how many of pixel from + k's bands read as weigh_bands decides (finite and at
 // least the threshold), for k < n: planes[b] is band b's row; dim_f is the least float whose
 // double value is at least weigh_bands' threshold (so the two agree). Vectorises.
