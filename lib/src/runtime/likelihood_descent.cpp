@@ -12,9 +12,6 @@
 namespace pyrocam {
 
 namespace {
-// The farthest jump to a parabola's vertex, and the step where chi2 curves the other way.
-constexpr double kMaxJump = 200;
-constexpr Eigen::Index kConcaveStep = 20;
 // Cells of the first guess's table: about a third of a sample each on the 5x5 camera.
 constexpr std::size_t kGuesses = 8192;
 }  // namespace
@@ -133,22 +130,6 @@ void LocusDescent::evaluate(Eigen::Index at, const double* w, const double* ws, 
                             double* chi2) const {
   const auto row = static_cast<std::size_t>((at - 1) * width_);
   profiled_chi2_three(m_ + row, m2_ + row, ws, w, width_, sss, chi2);
-}
-
-LocusDescent::Step LocusDescent::next(Eigen::Index& at, const double* chi2) const {
-  if (chi2[1] < chi2[0] && chi2[1] <= chi2[2]) return Step::kSettled;
-  const double curvature = chi2[0] - 2 * chi2[1] + chi2[2];
-  const Eigen::Index down = chi2[0] < chi2[2] ? -1 : 1;
-  Eigen::Index jump = down * kConcaveStep;
-  if (curvature > 0) {
-    const double vertex = std::clamp(0.5 * (chi2[0] - chi2[2]) / curvature, -kMaxJump, kMaxJump);
-    jump = static_cast<Eigen::Index>(vertex + (vertex < 0 ? -0.5 : 0.5));  // nearest
-    if (jump == 0) jump = down;
-  }
-  const Eigen::Index to = std::clamp<Eigen::Index>(at + jump, 1, samples_ - 2);
-  if (to == at) return Step::kFailed;  // the minimum is at an end of the locus
-  at = to;
-  return Step::kMoved;
 }
 
 std::vector<double> LocusDescent::check_pixels(const Eigen::MatrixXd& rates,

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -49,16 +50,39 @@ class LocusDescent {
   Eigen::Index restart_saturated(Eigen::Index at, const double* w, const double* ws, double sss,
                                  double* chi2) const;
   static constexpr int kSpreadGuesses = 8;
+  // The farthest jump to a parabola's vertex, and the step where chi2 curves the other way.
+  static constexpr double kMaxJump = 200;
+  static constexpr Eigen::Index kConcaveStep = 20;
   enum class Step { kSettled, kMoved, kFailed };
   Eigen::Index first_guess(const double* s, bool every_band_reads) const;
   // The first guess of a pixel whose bands all read from its fast_fraction with fast_bands().
   Eigen::Index guess(double fraction) const;
   const double* fast_bands() const { return fast_.data(); }
+  // The rows of m and m^2 that evaluate reads (from at - 1).
+  void rows(Eigen::Index at, const double*& m, const double*& m2) const {
+    const auto row = static_cast<std::size_t>((at - 1) * width_);
+    m = m_ + row, m2 = m2_ + row;
+  }
   // chi2 at at - 1, at, at + 1 into chi2.
   void evaluate(Eigen::Index at, const double* w, const double* ws, double sss, double* chi2) const;
   // From chi2 at at - 1, at, at + 1: settled (at is below both neighbours), moved (at is the next
   // sample to evaluate) or failed (the minimum is at an end of the locus).
-  Step next(Eigen::Index& at, const double* chi2) const;
+  // Inline: the walks call it once per step and pixel.
+  Step next(Eigen::Index& at, const double* chi2) const {
+    if (chi2[1] < chi2[0] && chi2[1] <= chi2[2]) return Step::kSettled;
+    const double curvature = chi2[0] - 2 * chi2[1] + chi2[2];
+    const Eigen::Index down = chi2[0] < chi2[2] ? -1 : 1;
+    Eigen::Index jump = down * kConcaveStep;
+    if (curvature > 0) {
+      const double vertex = std::clamp(0.5 * (chi2[0] - chi2[2]) / curvature, -kMaxJump, kMaxJump);
+      jump = static_cast<Eigen::Index>(vertex + (vertex < 0 ? -0.5 : 0.5));  // nearest
+      if (jump == 0) jump = down;
+    }
+    const Eigen::Index to = std::clamp<Eigen::Index>(at + jump, 1, samples_ - 2);
+    if (to == at) return Step::kFailed;  // the minimum is at an end of the locus
+    at = to;
+    return Step::kMoved;
+  }
 
   // Pixels that the estimator reads both ways when it is made: along the whole locus every
   // `every` samples, the brightest band at three levels from just above `dim` to `bright` DN,

@@ -75,17 +75,57 @@ void profiled_chi2_three(const double* m, const double* m2, const double* ws, co
   }
 }
 
+namespace {
+
+// lane_sum of each of a, b, c and d, in one vector: pairs added side by side, then the halves.
+inline void lane_sums(const Lanes& a, const Lanes& b, const Lanes& c, const Lanes& d, Lanes& out) {
+  const Lanes ab =
+      __builtin_shufflevector(a, b, 0, 4, 2, 6) + __builtin_shufflevector(a, b, 1, 5, 3, 7);
+  const Lanes cd =
+      __builtin_shufflevector(c, d, 0, 4, 2, 6) + __builtin_shufflevector(c, d, 1, 5, 3, 7);
+  out = __builtin_shufflevector(ab, cd, 0, 1, 4, 5) + __builtin_shufflevector(ab, cd, 2, 3, 6, 7);
+}
+
+}  // namespace
+
+// profiled_chi2_three's sums pixel by pixel, then their lane sums and chi2 four at a time (one
+// division of four instead of four): the same operations on each value, the same bits.
 PYROCAM_VECTOR_CLONES
-double fast_fraction(const double* s, const double* fast, int bands) {
-  Lanes f = {0, 0, 0, 0}, a = f;
-  int b = 0;
-  for (; b + 4 <= bands; b += 4) {
-    const Lanes x = lanes_at(s + b);
-    f += x * lanes_at(fast + b);
-    a += x;
+void profiled_chi2_three_four(const double* const* m, const double* const* m2,
+                              const double* const* ws, const double* const* w, int width,
+                              const double* sss, double* const* chi2) {
+  Lanes a[3][4], c[3][4];  // [row][pixel]
+  for (int k = 0; k < 4; ++k) {
+    const double *m0 = m[k], *m1 = m0 + width, *m3 = m0 + 2 * width;
+    const double *q0 = m2[k], *q1 = q0 + width, *q3 = q0 + 2 * width;
+    const double *x = ws[k], *y = w[k];
+    Lanes a0 = {0, 0, 0, 0}, a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
+    for (int b = 0; b < width; b += 4) {
+      const Lanes xb = lanes_at(x + b), yb = lanes_at(y + b);
+      a0 += xb * lanes_at(m0 + b);
+      a1 += xb * lanes_at(m1 + b);
+      a2 += xb * lanes_at(m3 + b);
+      b0 += yb * lanes_at(q0 + b);
+      b1 += yb * lanes_at(q1 + b);
+      b2 += yb * lanes_at(q3 + b);
+    }
+    a[0][k] = a0, a[1][k] = a1, a[2][k] = a2, c[0][k] = b0, c[1][k] = b1, c[2][k] = b2;
   }
-  for (; b < bands; ++b) f[0] += s[b] * fast[b], a[0] += s[b];
-  return lane_sum(f) / lane_sum(a);
+  const Lanes s = lanes_at(sss);
+  for (int r = 0; r < 3; ++r) {
+    Lanes sm, mm;
+    lane_sums(a[r][0], a[r][1], a[r][2], a[r][3], sm);
+    lane_sums(c[r][0], c[r][1], c[r][2], c[r][3], mm);
+    const Lanes chi = s - sm * sm / mm;
+    for (int k = 0; k < 4; ++k) chi2[k][r] = chi[k];
+  }
+}
+
+// Band after band in one sum each (weigh_four adds four pixels' the same way, one per lane).
+double fast_fraction(const double* s, const double* fast, int bands) {
+  double f = 0, a = 0;
+  for (int b = 0; b < bands; ++b) f += s[b] * fast[b], a += s[b];
+  return f / a;
 }
 
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
@@ -154,8 +194,9 @@ inline void store_transposed(const Lanes (&v)[4], double* const* rows, int g) {
 
 // weigh_bands and fast_fraction of four neighbouring pixels with a lane for each pixel: the
 // signals come as they lie in the band planes (no copy into rows of bands, whose single stores
-// the rows' loads of four then waited on), each lane takes weigh_bands' operations, and the
-// partial sums over bands b, b + 4, ... are added in weigh_bands' order: the same bits.
+// the rows' loads of four then waited on), each lane takes weigh_bands' operations, the partial
+// sums over bands b, b + 4, ... are added in weigh_bands' order and the fraction's band after
+// band: the same bits.
 PYROCAM_VECTOR_CLONES
 void weigh_four(const float* const* planes, int bands, std::size_t from, double weigh_dim,
                 double dim, const double* __restrict gain, const double* __restrict floor,
@@ -167,8 +208,7 @@ void weigh_four(const float* const* planes, int bands, std::size_t from, double 
   const Lanes zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
   const Lanes lows = {weigh_dim, weigh_dim, weigh_dim, weigh_dim}, dims = {dim, dim, dim, dim};
   const Lanes inf = {kInf, kInf, kInf, kInf};
-  Lanes sum[4] = {zero, zero, zero, zero}, fast_sum[4] = {zero, zero, zero, zero};
-  Lanes all_sum[4] = {zero, zero, zero, zero};
+  Lanes sum[4] = {zero, zero, zero, zero}, fast_sum = zero, all_sum = zero;
   Mask counted = {0, 0, 0, 0}, bright_counted = counted;
   for (int g = 0; g < bands; g += 4) {
     Lanes wl[4], wsl[4], v[4];
@@ -189,16 +229,15 @@ void weigh_four(const float* const* planes, int bands, std::size_t from, double 
       const Mask weighted = wl[j] != zero;
       counted += weighted;
       sum[j] += weighted ? wsl[j] * v[j] : zero;
-      fast_sum[j] += v[j] * Lanes{fast_b, fast_b, fast_b, fast_b};
-      all_sum[j] += v[j];
+      fast_sum += v[j] * Lanes{fast_b, fast_b, fast_b, fast_b};
+      all_sum += v[j];
     }
     store_transposed(wl, w, g);
     store_transposed(wsl, ws, g);
     if (s) store_transposed(v, s, g);
   }
   const Lanes sss = (sum[0] + sum[1]) + (sum[2] + sum[3]);
-  const Lanes fraction = ((fast_sum[0] + fast_sum[1]) + (fast_sum[2] + fast_sum[3])) /
-                         ((all_sum[0] + all_sum[1]) + (all_sum[2] + all_sum[3]));
+  const Lanes fraction = fast_sum / all_sum;
   for (int k = 0; k < 4; ++k) {
     out.sss[k] = sss[k];
     out.fraction[k] = fraction[k];

@@ -88,8 +88,14 @@ double profiled_chi2(const double* m, const double* m2, const double* ws, const 
 void profiled_chi2_three(const double* m, const double* m2, const double* ws, const double* w,
                          int bands, double sss, double* chi2);
 
-// sum(fast s) / sum(s) over the bands (fast: 0 or 1 per band), in the fixed lane order of
-// profiled_chi2: the descent's first guess (NaN or infinite where sum(s) is 0).
+// profiled_chi2_three of four pixels, the same bits: pixel k's rows from m[k] and m2[k] (width a
+// multiple of four, padded_bands), its ws[k], w[k] and sss[k], into chi2[k][0 .. 3).
+void profiled_chi2_three_four(const double* const* m, const double* const* m2,
+                              const double* const* ws, const double* const* w, int width,
+                              const double* sss, double* const* chi2);
+
+// sum(fast s) / sum(s) over the bands (fast: 0 or 1 per band), each summed band after band: the
+// descent's first guess (NaN or infinite where sum(s) is 0).
 double fast_fraction(const double* s, const double* fast, int bands);
 
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
