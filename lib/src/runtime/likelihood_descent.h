@@ -24,16 +24,17 @@ namespace pyrocam {
 class LocusDescent {
  public:
   // rates (samples x bands, DN/s) and the fit's tables of m and m^2, row after row, `width`
-  // doubles a row (padded_bands).
-  LocusDescent(const Eigen::MatrixXd& rates, const double* m, const double* m2, int width);
+  // doubles a row (padded_bands); monotonic: bands x bands, whether the ratio of two bands is
+  // monotonic over the locus (kept, not copied).
+  LocusDescent(const Eigen::MatrixXd& rates, const double* m, const double* m2, int width,
+               const std::uint8_t* monotonic);
 
   bool usable() const { return usable_; }
 
   // The sample `at` below both neighbours (chi2 at at - 1, at, at + 1 into chi2), reached from
-  // the guess of signals s (ws = w s, sss = sum w s^2; where not every band reads, the guess
-  // takes a saturated band's +INF as the brightest finite signal and an invalid band's NaN as
-  // 0; with a saturated band, restart_saturated); false where the walk meets an end of the locus
-  // or does not settle (the caller scans instead).
+  // the guess of signals s (ws = w s, sss = sum w s^2; first_guess; with a saturated band,
+  // restart_saturated); false where the walk meets an end of the locus or does not settle (the
+  // caller scans instead).
   bool descend(const double* s, bool every_band_reads, const double* w, const double* ws,
                double sss, Eigen::Index& at, double* chi2) const;
 
@@ -42,9 +43,10 @@ class LocusDescent {
   // next until next settles or fails, at most kMaxSteps times.
   static constexpr int kMaxSteps = 12;  // a walk not settled by then is left to the scan
   // Where a band is saturated, the walk's first step from first_guess `at` (chi2 there and at
-  // its neighbours in chi2): with many saturated bands the guess can land far off (a 1500 degC
-  // 5x5 plate with 15 of 25 bands saturated: 3100 degC), where chi2 does not curve up, and the
-  // walk did not arrive in kMaxSteps. There the walk starts again from the sample of least chi2
+  // its neighbours in chi2): with many saturated bands the guess can land far off (from the
+  // fraction, a 1500 degC 5x5 plate with 15 of 25 bands saturated: 3100 degC; from a pair of
+  // bands still off-locus pixels), where chi2 does not curve up, and the walk did not arrive in
+  // kMaxSteps. There the walk starts again from the sample of least chi2
   // among kSpreadGuesses spread over the locus, moved to the vertex of the parabola through its
   // neighbours among them, with chi2 there into chi2 (where that is lower than at `at`).
   Eigen::Index restart_saturated(Eigen::Index at, const double* w, const double* ws, double sss,
@@ -54,6 +56,14 @@ class LocusDescent {
   static constexpr double kMaxJump = 200;
   static constexpr Eigen::Index kConcaveStep = 20;
   enum class Step { kSettled, kMoved, kFailed };
+  // The walk's start: where the fraction of the signal in the fast bands is that of s. Where a
+  // band is saturated, where the ratio of the fastest and the slowest of the bands that read at
+  // a tenth of the brightest or more is s's, if that ratio is monotonic over the locus (with 15
+  // of the 5x5 camera's 25 bands saturated, the fraction landed every pixel of a 1500 degC plate
+  // where chi2 does not curve up, so that every walk started again from samples spread over the
+  // locus; this pair lands them where it curves up). Else, or where not every band reads, from
+  // the fraction taking a saturated band's +INF as the brightest finite signal and an invalid
+  // band's NaN as 0.
   Eigen::Index first_guess(const double* s, bool every_band_reads) const;
   // The first guess of a pixel whose bands all read from its fast_fraction with fast_bands().
   Eigen::Index guess(double fraction) const;
@@ -94,7 +104,13 @@ class LocusDescent {
                                           Eigen::Index every);
 
  private:
+  // first_guess from a pair of bands (-1 where none is monotonic).
+  Eigen::Index pair_guess(const double* s, double brightest) const;
   const double* m_;
+  const std::uint8_t* monotonic_;
+  std::vector<int> by_slope_;
+  static constexpr Eigen::Index kPairStep = 64;
+  std::vector<double> pair_rows_;  // the rates every kPairStep samples and at the last
   const double* m2_;
   int bands_, width_;
   Eigen::Index samples_;

@@ -62,7 +62,7 @@ class LikelihoodEstimator : public LikelihoodFit {
 
   explicit LikelihoodEstimator(std::shared_ptr<const ThermalModel> model)
       : LikelihoodFit(std::move(model)),
-        descent_(locus_.rates, rates_.data(), squares_.data(), width_) {
+        descent_(locus_.rates, rates_.data(), squares_.data(), width_, monotonic_.data()) {
     const ThermalModel& m = *model_;
     const Eigen::Index n = locus_.size();
     Eigen::MatrixXd unit(n, bands_), squares(n, bands_);

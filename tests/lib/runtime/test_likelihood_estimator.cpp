@@ -233,8 +233,8 @@ TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_frames_as_the_exhaustive_fi
     Simulator camera(p, UnitPerturbation::parse("hostile", unit), 11 + unit);
     std::vector<cv::Mat> frames;
     // The brightest band's signal, DN: the dimmest bands below the dim threshold at 40, the
-    // brightest saturated (at 170) at 220, most of them at 400 (where the walk starts from
-    // samples spread over the locus: the signals' guess is far off).
+    // brightest saturated (at 170) at 220, most of them at 400 (where the walk starts from a
+    // pair of bands, and where that lands off, from samples spread over the locus).
     for (double t : {700.0, 1300.0, 2000.0, 2800.0})
       for (double level : {40.0, 100.0, 160.0, 220.0, 400.0})
         frames.push_back(camera.render(plate_scene(255, 135, t), camera.exposure_for(t, level)));
