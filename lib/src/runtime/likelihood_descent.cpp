@@ -86,27 +86,79 @@ bool LocusDescent::descend(const double* s, bool every_band_reads, const double*
 }
 
 Eigen::Index LocusDescent::first_guess(const double* s, bool every_band_reads) const {
-  if (every_band_reads) return guess(fast_fraction(s, fast_.data(), bands_));
-  double brightest = 0;
-  bool saturated = false;
-  for (int b = 0; b < bands_; ++b) {
-    if (std::isfinite(s[b])) brightest = std::max(brightest, s[b]);
-    saturated = saturated || s[b] == std::numeric_limits<double>::infinity();
-  }
-  if (saturated) {
-    const Eigen::Index at = pair_guess(s, brightest);
-    if (at >= 0) return at;
-  }
-  // The guess from every band's signal as far as it is known: a dim band's is, a saturated
-  // band's (+INF) is at least that of the brightest band that reads, an invalid one's (NaN) is
-  // left out.
-  alignas(32) double known[kMaxBands];
-  for (int b = 0; b < bands_; ++b)
-    known[b] = std::isfinite(s[b]) ? s[b] : s[b] > 0 ? brightest : 0.0;
-  return guess(fast_fraction(known, fast_.data(), bands_));
+  Eigen::Index at;
+  first_guesses(&s, 1, every_band_reads, &at);
+  return at;
 }
 
-Eigen::Index LocusDescent::pair_guess(const double* s, double brightest) const {
+void LocusDescent::first_guesses(const double* const* s, std::size_t n, bool every_band_reads,
+                                 Eigen::Index* at) const {
+  if (every_band_reads) {
+    for (std::size_t k = 0; k < n; ++k) at[k] = guess(fast_fraction(s[k], fast_.data(), bands_));
+    return;
+  }
+  if (n > kMaxGuesses) {
+    for (std::size_t from = 0; from < n; from += kMaxGuesses)
+      first_guesses(s + from, std::min(kMaxGuesses, n - from), false, at + from);
+    return;
+  }
+  PairSearch pairs[kMaxGuesses];
+  std::size_t searched[kMaxGuesses], count = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double* x = s[k];
+    double brightest = 0;
+    bool saturated = false;
+    for (int b = 0; b < bands_; ++b) {
+      if (std::isfinite(x[b])) brightest = std::max(brightest, x[b]);
+      saturated = saturated || x[b] == std::numeric_limits<double>::infinity();
+    }
+    if (saturated && pick_pair(x, brightest, pairs[count])) {
+      searched[count++] = k;
+      continue;
+    }
+    // The guess from every band's signal as far as it is known: a dim band's is, a saturated
+    // band's (+INF) is at least that of the brightest band that reads, an invalid one's (NaN)
+    // is left out.
+    alignas(32) double known[kMaxBands];
+    for (int b = 0; b < bands_; ++b)
+      known[b] = std::isfinite(x[b]) ? x[b] : x[b] > 0 ? brightest : 0.0;
+    at[k] = guess(fast_fraction(known, fast_.data(), bands_));
+  }
+  // Where m_i / m_j reaches s_i / s_j (m_i / m_j rises: i brightens faster): the first of the
+  // samples every kPairStep (a table in L1 cache) by halving without branches (the processor
+  // cannot predict the halves), the pixels' halvings side by side (each is a chain of
+  // dependent loads), then between that sample and the one before, the ratio taken as linear.
+  const auto rows = static_cast<Eigen::Index>(pair_rows_.size()) / bands_;
+  const auto row = [&](Eigen::Index r) {
+    return &pair_rows_[static_cast<std::size_t>(r) * bands_];
+  };
+  const auto below = [&](const PairSearch& p, Eigen::Index r) {
+    return row(r)[p.i] * p.sj < p.si * row(r)[p.j];
+  };
+  for (Eigen::Index left = rows; left > 1;) {
+    const Eigen::Index half = left / 2;
+    for (std::size_t c = 0; c < count; ++c)
+      pairs[c].base = below(pairs[c], pairs[c].base + half) ? pairs[c].base + half : pairs[c].base;
+    left -= half;
+  }
+  for (std::size_t c = 0; c < count; ++c) {
+    const PairSearch& p = pairs[c];
+    const Eigen::Index r = p.base + below(p, p.base);
+    Eigen::Index& to = at[searched[c]];
+    if (r == 0 || r == rows) {
+      to = r == 0 ? 1 : samples_ - 2;
+      continue;
+    }
+    const double r0 = row(r - 1)[p.i] / row(r - 1)[p.j], r1 = row(r)[p.i] / row(r)[p.j];
+    const double part = std::clamp((p.si / p.sj - r0) / (r1 - r0), 0.0, 1.0);
+    const Eigen::Index from = (r - 1) * kPairStep, end = std::min(r * kPairStep, samples_ - 1);
+    to = std::clamp<Eigen::Index>(
+        from + static_cast<Eigen::Index>(part * static_cast<double>(end - from) + 0.5), 1,
+        samples_ - 2);
+  }
+}
+
+bool LocusDescent::pick_pair(const double* s, double brightest, PairSearch& pair) const {
   const auto bright = [&](int b) { return std::isfinite(s[b]) && s[b] >= 0.1 * brightest; };
   int i = -1, j = -1;
   for (int b : by_slope_)
@@ -119,31 +171,10 @@ Eigen::Index LocusDescent::pair_guess(const double* s, double brightest) const {
       j = *b;
       break;
     }
-  if (i < 0 || j < 0 || i == j || !monotonic_[static_cast<std::size_t>(i * bands_ + j)]) return -1;
-  // Where m_i / m_j reaches s_i / s_j (m_i / m_j rises: i brightens faster): the first of the
-  // samples every kPairStep (a table in L1 cache) by halving without branches (the processor
-  // cannot predict the halves), then between it and the one before, the ratio taken as linear.
-  const double si = s[i], sj = s[j];
-  const auto row = [&](Eigen::Index k) {
-    return &pair_rows_[static_cast<std::size_t>(k) * bands_];
-  };
-  const auto below = [&](Eigen::Index k) { return row(k)[i] * sj < si * row(k)[j]; };
-  const auto rows = static_cast<Eigen::Index>(pair_rows_.size()) / bands_;
-  Eigen::Index base = 0, n = rows;
-  while (n > 1) {
-    const Eigen::Index half = n / 2;
-    base = below(base + half) ? base + half : base;
-    n -= half;
-  }
-  const Eigen::Index k = base + below(base);
-  if (k == 0) return 1;
-  if (k == rows) return samples_ - 2;
-  const double r0 = row(k - 1)[i] / row(k - 1)[j], r1 = row(k)[i] / row(k)[j];
-  const double part = std::clamp((si / sj - r0) / (r1 - r0), 0.0, 1.0);
-  const Eigen::Index from = (k - 1) * kPairStep, to = std::min(k * kPairStep, samples_ - 1);
-  return std::clamp<Eigen::Index>(
-      from + static_cast<Eigen::Index>(part * static_cast<double>(to - from) + 0.5), 1,
-      samples_ - 2);
+  if (i < 0 || j < 0 || i == j || !monotonic_[static_cast<std::size_t>(i * bands_ + j)])
+    return false;
+  pair = {i, j, s[i], s[j], 0};
+  return true;
 }
 
 Eigen::Index LocusDescent::guess(double fraction) const {

@@ -65,6 +65,10 @@ class LocusDescent {
   // the fraction taking a saturated band's +INF as the brightest finite signal and an invalid
   // band's NaN as 0.
   Eigen::Index first_guess(const double* s, bool every_band_reads) const;
+  // first_guess of n pixels (signals s[k]) into at[k], kMaxGuesses at a time side by side.
+  void first_guesses(const double* const* s, std::size_t n, bool every_band_reads,
+                     Eigen::Index* at) const;
+  static constexpr std::size_t kMaxGuesses = 16;
   // The first guess of a pixel whose bands all read from its fast_fraction with fast_bands().
   Eigen::Index guess(double fraction) const;
   const double* fast_bands() const { return fast_.data(); }
@@ -104,8 +108,14 @@ class LocusDescent {
                                           Eigen::Index every);
 
  private:
-  // first_guess from a pair of bands (-1 where none is monotonic).
-  Eigen::Index pair_guess(const double* s, double brightest) const;
+  // A pair of bands for first_guess, and where its search is.
+  struct PairSearch {
+    int i, j;  // the fastest and the slowest band
+    double si, sj;
+    Eigen::Index base;  // the halving's row of pair_rows_
+  };
+  // The pair of s's bands for first_guess (false where it is not monotonic).
+  bool pick_pair(const double* s, double brightest, PairSearch& pair) const;
   const double* m_;
   const std::uint8_t* monotonic_;
   std::vector<int> by_slope_;

@@ -222,7 +222,7 @@ class LikelihoodEstimator : public LikelihoodFit {
           out[k] = static_cast<float>(scan(w.px));
           return;
         }
-        w.at = w.px.complete ? descent_.guess(fraction) : descent_.first_guess(s[slot], false);
+        w.at = w.px.complete ? descent_.guess(fraction) : -1;  // the guesses below
         w.saturated = saturated > 0;
         w.k = k;
         walking[count++] = static_cast<std::uint8_t>(slot);
@@ -263,6 +263,15 @@ class LikelihoodEstimator : public LikelihoodFit {
         take(used, k, bands_read, batch[used].px.complete ? fast_fraction_of(s[used]) : 0.0);
         ++used, ++k;
       }
+      // The other guesses side by side.
+      const double* signals[kWalkBatch];
+      Eigen::Index guesses[kWalkBatch];
+      std::size_t guessed = 0;
+      for (std::size_t i = 0; i < count; ++i)
+        if (batch[walking[i]].at < 0) signals[guessed++] = s[walking[i]];
+      descent_.first_guesses(signals, guessed, false, guesses);
+      for (std::size_t i = 0, g = 0; i < count; ++i)
+        if (batch[walking[i]].at < 0) batch[walking[i]].at = guesses[g++];
       walk(batch, walking, count, out);
     }
   }
