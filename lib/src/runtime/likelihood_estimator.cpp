@@ -288,21 +288,19 @@ class LikelihoodEstimator : public LikelihoodFit {
   // loop); where a walk fails or does not settle, the scan reads the pixel.
   void walk(Walk* walks, std::uint8_t* active, std::size_t count, float* out) const {
     for (int step = 0; step < LocusDescent::kMaxSteps && count > 0; ++step) {
-      std::size_t i = 0;
-      for (; i + 4 <= count; i += 4) {
+      for (std::size_t i = 0; i < count; i += 4) {
+        // The last group's missing pixels repeat its last one, into a scratch.
         alignas(32) double sss[4];
+        double scratch[3];
         const double *m[4], *m2[4], *ws[4], *w[4];
         double* chi2[4];
         for (std::size_t j = 0; j < 4; ++j) {
-          Walk& at = walks[active[i + j]];
+          Walk& at = walks[active[std::min(i + j, count - 1)]];
           descent_.rows(at.at, m[j], m2[j]);
-          ws[j] = at.px.ws, w[j] = at.px.w, sss[j] = at.px.sss, chi2[j] = at.chi2;
+          ws[j] = at.px.ws, w[j] = at.px.w, sss[j] = at.px.sss;
+          chi2[j] = i + j < count ? at.chi2 : scratch;
         }
         profiled_chi2_three_four(m, m2, ws, w, width_, sss, chi2);
-      }
-      for (; i < count; ++i) {
-        Walk& w = walks[active[i]];
-        descent_.evaluate(w.at, w.px.w, w.px.ws, w.px.sss, w.chi2);
       }
       for (std::size_t i = 0; step == 0 && i < count; ++i) {  // as descend
         Walk& w = walks[active[i]];
