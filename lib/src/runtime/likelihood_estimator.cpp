@@ -177,8 +177,7 @@ class LikelihoodEstimator : public LikelihoodFit {
     const int reading = weigh(s, px);
     if (!enough_bands(reading, px)) return NAN;
     double t;
-    if (walks(s, px, reading, px.complete ? 0 : saturated_bands(s)) && descended(s, px, t))
-      return t;
+    if (walks(px, reading, px.complete ? 0 : saturated_bands(s)) && descended(s, px, t)) return t;
     return scan(px);
   }
 
@@ -211,14 +210,15 @@ class LikelihoodEstimator : public LikelihoodFit {
     for (std::size_t k = 0; k < m;) {
       std::size_t used = 0, count = 0;
       // The batch's slot `slot`, weighed, is pixel k: no reading, the scan's, or a walk.
-      const auto take = [&](std::size_t slot, std::size_t k, int bands_read, double fraction) {
+      const auto take = [&](std::size_t slot, std::size_t k, int bands_read, int saturated_count,
+                            double fraction) {
         Walk& w = batch[slot];
         if (!enough_bands(bands_read, w.px)) {
           out[k] = NAN;
           return;
         }
-        const int saturated = w.px.complete ? 0 : saturated_bands(s[slot]);
-        if (!walks(s[slot], w.px, bands_read, saturated)) {
+        const int saturated = w.px.complete ? 0 : saturated_count;
+        if (!walks(w.px, bands_read, saturated)) {
           out[k] = static_cast<float>(scan(w.px));
           return;
         }
@@ -235,8 +235,8 @@ class LikelihoodEstimator : public LikelihoodFit {
         }
         if (descends_ && k + 4 <= m && used + 4 <= kWalkBatch && reading[k + 1] >= needed &&
             reading[k + 2] >= needed && reading[k + 3] >= needed) {
-          // Four pixels side by side; their signals as doubles only where a band does not read
-          // (where one of them is below the dim threshold, walks copies them below).
+          // Four pixels side by side; their signals as doubles (for the first guess) only where a
+          // band does not read (where one is below the dim threshold, they are copied below).
           double *w[4], *ws[4], *rows[4];
           bool all_read = true;
           for (std::size_t j = 0; j < 4; ++j) {
@@ -252,15 +252,18 @@ class LikelihoodEstimator : public LikelihoodFit {
             px.complete = four.bright[j] == bands_;
             px.faint = four.reading[j] > four.bright[j];
             px.weighed = four.reading[j];
+            px.bright = four.bright[j];
             if (all_read && !px.complete) copy_signals(planes, start + k + j, s[used + j]);
-            take(used + j, k + j, four.reading[j], four.fraction[j]);
+            take(used + j, k + j, four.reading[j], four.saturated[j], four.fraction[j]);
           }
           used += 4, k += 4;
           continue;
         }
         copy_signals(planes, start + k, s[used]);
         const int bands_read = weigh(s[used], batch[used].px);
-        take(used, k, bands_read, batch[used].px.complete ? fast_fraction_of(s[used]) : 0.0);
+        const bool complete = batch[used].px.complete;
+        take(used, k, bands_read, complete ? 0 : saturated_bands(s[used]),
+             complete ? fast_fraction_of(s[used]) : 0.0);
         ++used, ++k;
       }
       // The other guesses side by side.
@@ -332,20 +335,13 @@ class LikelihoodEstimator : public LikelihoodFit {
   // Whether a pixel that has enough bands (px, `reading` of them; `saturated` of them saturated,
   // 0 where px.complete) walks: where the walk was checked for as many bands below the dim
   // threshold (weighed or not) and saturated as it has.
-  bool walks(const double* s, const Weighted& px, int reading, int saturated) const {
+  bool walks(const Weighted& px, int reading, int saturated) const {
     if (!descends_ || px.complete) return descends_;
     if (saturated > 0 && reading < kMinSaturatedWalkBands) return false;
-    const int other = bands_ - (px.faint ? bright_bands(s) : reading) - saturated;
+    const int other = bands_ - (px.faint ? px.bright : reading) - saturated;
     return saturated == 0 ? other <= max_dim_dropped_
            : other == 0   ? saturated <= max_saturated_
                           : other <= mixed_dim_ && saturated <= mixed_saturated_;
-  }
-
-  int bright_bands(const double* s) const {
-    int n = 0;
-    for (int b = 0; b < bands_; ++b)
-      n += s[b] >= dim_dn_ && s[b] < std::numeric_limits<double>::infinity();
-    return n;
   }
 
   // A walk that settled with a band below the dim threshold weighed is kept where it fits as the

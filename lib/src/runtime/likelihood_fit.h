@@ -121,6 +121,7 @@ class LikelihoodFit : public TemperatureEstimator {
     bool complete;
     bool faint;   // a band below the dim threshold is weighed
     int weighed;  // bands with a weight
+    int bright;   // bands at the dim threshold or above that read
   };
 
   void set_analogue_gain(double factor) override {
@@ -165,6 +166,7 @@ class LikelihoodFit : public TemperatureEstimator {
                                     px.w, px.ws, &px.sss, &bright);
     px.complete = bright == bands_;
     px.faint = reading > bright;
+    px.bright = bright;
     px.weighed = reading;
     return reading;
   }

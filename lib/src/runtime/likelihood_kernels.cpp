@@ -209,7 +209,7 @@ void weigh_four(const float* const* planes, int bands, std::size_t from, double 
   const Lanes lows = {weigh_dim, weigh_dim, weigh_dim, weigh_dim}, dims = {dim, dim, dim, dim};
   const Lanes inf = {kInf, kInf, kInf, kInf};
   Lanes sum[4] = {zero, zero, zero, zero}, fast_sum = zero, all_sum = zero;
-  Mask counted = {0, 0, 0, 0}, bright_counted = counted;
+  Mask counted = {0, 0, 0, 0}, bright_counted = counted, saturated = counted;
   for (int g = 0; g < bands; g += 4) {
     Lanes wl[4], wsl[4], v[4];
     for (int j = 0; j < 4; ++j) {
@@ -222,6 +222,7 @@ void weigh_four(const float* const* planes, int bands, std::size_t from, double 
       const Mask below_inf = v[j] < inf;
       const Mask reads = (v[j] >= lows) & below_inf;
       bright_counted += (v[j] >= dims) & below_inf;
+      saturated += v[j] == inf;
       const Lanes positive = v[j] > zero ? v[j] : zero;
       const double gb = gain[b], fb = floor[b], fast_b = fast[b];
       const Lanes weight = one / (Lanes{gb, gb, gb, gb} * positive + Lanes{fb, fb, fb, fb});
@@ -243,6 +244,7 @@ void weigh_four(const float* const* planes, int bands, std::size_t from, double 
     out.fraction[k] = fraction[k];
     out.reading[k] = static_cast<int>(-counted[k]);
     out.bright[k] = static_cast<int>(-bright_counted[k]);
+    out.saturated[k] = static_cast<int>(-saturated[k]);
   }
 }
 

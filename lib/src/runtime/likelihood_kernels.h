@@ -109,7 +109,7 @@ int weigh_bands(const double* __restrict s, int bands, double weigh_dim, double 
 // What weigh_four gives per pixel besides w and ws.
 struct FourWeighed {
   double sss[4], fraction[4];
-  int reading[4], bright[4];
+  int reading[4], bright[4], saturated[4];  // bands: weighed, at the dim threshold, +INF
 };
 
 // weigh_bands and fast_fraction (fast: 0 or 1 per band) of the four pixels from .. from + 3 of
