@@ -23,6 +23,29 @@ inline const Lanes& lanes_at(const double* at) { return *reinterpret_cast<const 
 
 inline double lane_sum(const Lanes& v) { return (v[0] + v[1]) + (v[2] + v[3]); }
 
+// The lanes of ws . m and w . m2 at three rows (m, m + bands, m + 2 bands) over the whole lanes
+// of bands, into a and c; returns the first band left (the caller adds the rest into lane 0).
+// Three rows interleaved: their additions are independent.
+[[gnu::always_inline]] inline int three_rows_lanes(const double* m, const double* m2,
+                                                   const double* ws, const double* w, int bands,
+                                                   Lanes (&a)[3], Lanes (&c)[3]) {
+  const double *m1 = m + bands, *m3 = m + 2 * bands;
+  const double *q1 = m2 + bands, *q3 = m2 + 2 * bands;
+  Lanes a0 = {0, 0, 0, 0}, a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
+  int b = 0;
+  for (; b + 4 <= bands; b += 4) {
+    const Lanes x = lanes_at(ws + b), y = lanes_at(w + b);
+    a0 += x * lanes_at(m + b);
+    a1 += x * lanes_at(m1 + b);
+    a2 += x * lanes_at(m3 + b);
+    b0 += y * lanes_at(m2 + b);
+    b1 += y * lanes_at(q1 + b);
+    b2 += y * lanes_at(q3 + b);
+  }
+  a[0] = a0, a[1] = a1, a[2] = a2, c[0] = b0, c[1] = b1, c[2] = b2;
+  return b;
+}
+
 }  // namespace
 
 // chi2 = sss - ssm^2 / smm of the likelihood fit at one locus sample: ssm = sum (w s) m and
@@ -51,24 +74,14 @@ double profiled_chi2(const double* m, const double* m2, const double* ws, const 
 PYROCAM_VECTOR_CLONES
 void profiled_chi2_three(const double* m, const double* m2, const double* ws, const double* w,
                          int bands, double sss, double* chi2) {
+  Lanes a[3], c[3];
+  const int b = three_rows_lanes(m, m2, ws, w, bands, a, c);
   const double *m1 = m + bands, *m3 = m + 2 * bands;
   const double *q1 = m2 + bands, *q3 = m2 + 2 * bands;
-  Lanes a0 = {0, 0, 0, 0}, a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
-  int b = 0;
-  for (; b + 4 <= bands; b += 4) {
-    const Lanes x = lanes_at(ws + b), y = lanes_at(w + b);
-    a0 += x * lanes_at(m + b);
-    a1 += x * lanes_at(m1 + b);
-    a2 += x * lanes_at(m3 + b);
-    b0 += y * lanes_at(m2 + b);
-    b1 += y * lanes_at(q1 + b);
-    b2 += y * lanes_at(q3 + b);
+  for (int k = b; k < bands; ++k) {
+    a[0][0] += ws[k] * m[k], a[1][0] += ws[k] * m1[k], a[2][0] += ws[k] * m3[k];
+    c[0][0] += w[k] * m2[k], c[1][0] += w[k] * q1[k], c[2][0] += w[k] * q3[k];
   }
-  for (; b < bands; ++b) {
-    a0[0] += ws[b] * m[b], a1[0] += ws[b] * m1[b], a2[0] += ws[b] * m3[b];
-    b0[0] += w[b] * m2[b], b1[0] += w[b] * q1[b], b2[0] += w[b] * q3[b];
-  }
-  const Lanes a[3] = {a0, a1, a2}, c[3] = {b0, b1, b2};
   for (int s = 0; s < 3; ++s) {
     const double sm = lane_sum(a[s]), mm = lane_sum(c[s]);
     chi2[s] = sss - sm * sm / mm;
@@ -96,20 +109,9 @@ void profiled_chi2_three_four(const double* const* m, const double* const* m2,
                               const double* sss, double* const* chi2) {
   Lanes a[3][4], c[3][4];  // [row][pixel]
   for (int k = 0; k < 4; ++k) {
-    const double *m0 = m[k], *m1 = m0 + width, *m3 = m0 + 2 * width;
-    const double *q0 = m2[k], *q1 = q0 + width, *q3 = q0 + 2 * width;
-    const double *x = ws[k], *y = w[k];
-    Lanes a0 = {0, 0, 0, 0}, a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
-    for (int b = 0; b < width; b += 4) {
-      const Lanes xb = lanes_at(x + b), yb = lanes_at(y + b);
-      a0 += xb * lanes_at(m0 + b);
-      a1 += xb * lanes_at(m1 + b);
-      a2 += xb * lanes_at(m3 + b);
-      b0 += yb * lanes_at(q0 + b);
-      b1 += yb * lanes_at(q1 + b);
-      b2 += yb * lanes_at(q3 + b);
-    }
-    a[0][k] = a0, a[1][k] = a1, a[2][k] = a2, c[0][k] = b0, c[1][k] = b1, c[2][k] = b2;
+    Lanes pa[3], pc[3];
+    three_rows_lanes(m[k], m2[k], ws[k], w[k], width, pa, pc);
+    for (int r = 0; r < 3; ++r) a[r][k] = pa[r], c[r][k] = pc[r];
   }
   const Lanes s = lanes_at(sss);
   for (int r = 0; r < 3; ++r) {
