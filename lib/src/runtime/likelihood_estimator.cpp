@@ -291,8 +291,10 @@ class LikelihoodEstimator : public LikelihoodFit {
   // loop); where a walk fails or does not settle, the scan reads the pixel.
   void walk(Walk* walks, std::uint8_t* active, std::size_t count, float* out) const {
     for (int step = 0; step < LocusDescent::kMaxSteps && count > 0; ++step) {
-      for (std::size_t i = 0; i < count; i += 4) {
-        // The last group's missing pixels repeat its last one, into a scratch.
+      // Four at a time; three left over as four, the last one repeated into a scratch (one
+      // pixel's sums wasted against three scalar divisions saved), one or two one by one.
+      std::size_t i = 0;
+      for (; i + 4 <= count || i + 3 == count; i += 4) {
         alignas(32) double sss[4];
         double scratch[3];
         const double *m[4], *m2[4], *ws[4], *w[4];
@@ -304,6 +306,10 @@ class LikelihoodEstimator : public LikelihoodFit {
           chi2[j] = i + j < count ? at.chi2 : scratch;
         }
         profiled_chi2_three_four(m, m2, ws, w, width_, sss, chi2);
+      }
+      for (; i < count; ++i) {
+        Walk& w = walks[active[i]];
+        descent_.evaluate(w.at, w.px.w, w.px.ws, w.px.sss, w.chi2);
       }
       for (std::size_t i = 0; step == 0 && i < count; ++i) {  // as descend
         Walk& w = walks[active[i]];
