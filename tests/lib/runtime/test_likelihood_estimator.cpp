@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <numeric>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -339,6 +340,59 @@ TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_off_locus_pixels_as_the_exh
   EXPECT_GT(read, pixels / 2);
   EXPECT_LT(read, pixels);  // some are no reading (an end of the range)
   EXPECT_GT(partial_read, pixels / 2);
+}
+
+// 5x5 pixels that 2 to 16 bands read, the others saturated (the brightest, as on an
+// over-exposed plate), dim or invalid: the pixels with few bands are scanned from those bands
+// alone (likelihood_direct.h), the others through the factors, and each reads as the exhaustive
+// scan, bit for bit; on the locus with noise and off it (a mixture of two temperatures), so
+// that chi2 has one minimum, two, or none inside the range.
+TEST(LikelihoodEstimator, pixels_that_few_bands_read_read_as_the_exhaustive_fit) {
+  const auto model = test_model("test-model-nir5x5.json");
+  const ThermalModel& m = *model;
+  const int bands = m.profile().band_count();
+  const auto fast = make_estimator(model, Method::kLikelihood);
+  const auto exhaustive = make_exhaustive_likelihood_estimator(model);
+  fast->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
+  exhaustive->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
+  std::uint64_t state = 977;
+  auto uniform = [&] {  // a fixed, portable sequence in [0, 1)
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  const double dim = m.profile().thresholds.inference_dim_dn;
+  const double saturated = saturation_signal_dn(m);
+  std::vector<std::size_t> read_with(static_cast<std::size_t>(bands) + 1, 0);
+  std::size_t pixels = 0, read = 0, disagree = 0;
+  for (int i = 0; i < 6000; ++i) {
+    const double t1 = 550 + 2900 * uniform(), t2 = 550 + 2900 * uniform();
+    Eigen::VectorXd s = m.camera.rates(t1);
+    if (i % 4 == 3)
+      s += (0.2 + uniform()) * s.maxCoeff() / m.camera.rates(t2).maxCoeff() *
+           m.camera.rates(t2);  // a mixture
+    // Noise of a few per cent, then the `kept` dimmest bands read and the others saturate.
+    for (int k = 0; k < bands; ++k) s[k] *= 1 + 0.03 * (2 * uniform() - 1);
+    const int kept = 2 + i % 15;
+    std::vector<int> order(static_cast<std::size_t>(bands));
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return s[a] < s[b]; });
+    s *= (dim + (0.9 * saturated - dim) * uniform()) / s[order[static_cast<std::size_t>(kept - 1)]];
+    for (std::size_t k = static_cast<std::size_t>(kept); k < order.size(); ++k)
+      s[order[k]] = std::numeric_limits<double>::infinity();
+    if (i % 5 == 1) s[order[0]] = std::numeric_limits<double>::quiet_NaN();
+    if (i % 5 == 2) s[order[0]] = 0.3 * dim;
+    ++pixels;
+    const double x = fast->temperature_c(s.data()), e = exhaustive->temperature_c(s.data());
+    if (!std::isnan(e)) ++read, ++read_with[static_cast<std::size_t>(kept)];
+    if (!(x == e || (std::isnan(x) && std::isnan(e))) && ++disagree < 10)
+      ADD_FAILURE() << "pixel " << i << " (" << kept << " bands kept): fast " << x
+                    << ", exhaustive " << e;
+  }
+  EXPECT_EQ(disagree, 0u);
+  // Both decisions, and readings from few bands and from many.
+  EXPECT_GT(read, pixels / 4);
+  EXPECT_LT(read, pixels);
+  for (const int kept : {3, 7, 12, 16}) EXPECT_GT(read_with[static_cast<std::size_t>(kept)], 20u);
 }
 
 TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {
