@@ -232,7 +232,8 @@ class LikelihoodEstimator : public LikelihoodFit {
           out[k] = static_cast<float>(scan(w.px));
           return;
         }
-        w.at = w.px.complete ? descent_.guess(fraction) : -1;  // the guesses below
+        // Where every band reads, first_guess is the fraction's guess (dim bands included).
+        w.at = bands_read == bands_ ? descent_.guess(fraction) : -1;
         w.saturated = saturated > 0;
         w.k = k;
         walking[count++] = static_cast<std::uint8_t>(slot);
@@ -246,7 +247,7 @@ class LikelihoodEstimator : public LikelihoodFit {
         if (descends_ && k + 4 <= m && used + 4 <= kWalkBatch && reading[k + 1] >= needed &&
             reading[k + 2] >= needed && reading[k + 3] >= needed) {
           // Four pixels side by side; their signals as doubles (for the first guess) only where a
-          // band does not read (where one is below the dim threshold, they are copied below).
+          // band does not read: where all do, the guess is the fraction's, dim bands included.
           double *w[4], *ws[4], *rows[4];
           bool all_read = true;
           for (std::size_t j = 0; j < 4; ++j) {
@@ -263,7 +264,6 @@ class LikelihoodEstimator : public LikelihoodFit {
             px.faint = four.reading[j] > four.bright[j];
             px.weighed = four.reading[j];
             px.bright = four.bright[j];
-            if (all_read && !px.complete) copy_signals(planes, start + k + j, s[used + j]);
             take(used + j, k + j, four.reading[j], four.saturated[j], four.fraction[j]);
           }
           used += 4, k += 4;
@@ -273,7 +273,7 @@ class LikelihoodEstimator : public LikelihoodFit {
         const int bands_read = weigh(s[used], batch[used].px);
         const bool complete = batch[used].px.complete;
         take(used, k, bands_read, complete ? 0 : saturated_bands(s[used]),
-             complete ? fast_fraction_of(s[used]) : 0.0);
+             bands_read == bands_ ? fast_fraction_of(s[used]) : 0.0);
         ++used, ++k;
       }
       // The other guesses side by side.
