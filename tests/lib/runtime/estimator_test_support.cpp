@@ -84,4 +84,20 @@ Agreement compare(const cv::Mat& reference, const cv::Mat& fast, double toleranc
   return a;
 }
 
+bool every_band_reads(const ThermalModel& m, const double* s) {
+  return std::all_of(s, s + m.profile().band_count(), [&](double v) {
+    return std::isfinite(v) && v >= m.profile().thresholds.inference_dim_dn;
+  });
+}
+
+BothFits both_fits(const std::shared_ptr<const ThermalModel>& model, bool partial) {
+  BothFits fits{make_estimator(model, Method::kLikelihood),
+                make_exhaustive_likelihood_estimator(model)};
+  if (partial) {
+    fits.fast->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
+    fits.exhaustive->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
+  }
+  return fits;
+}
+
 }  // namespace pyrocam::test

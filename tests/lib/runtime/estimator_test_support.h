@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/model.h"
 
 namespace pyrocam::test {
@@ -44,5 +45,25 @@ struct Agreement {
 Agreement compare(const cv::Mat& reference, const cv::Mat& fast, double tolerance_c);
 
 inline const std::vector<double> kSweepC = {650, 900, 1200, 1500, 1800, 2200, 2700, 3200, 3450};
+
+// Whether every band of pixel s reads (a number at or above the dim threshold).
+bool every_band_reads(const ThermalModel& m, const double* s);
+
+// A fixed, portable sequence of numbers in [0, 1) from `state` (a 64-bit linear congruential
+// generator's top 53 bits): the same pixels on every machine.
+struct Uniform {
+  std::uint64_t state;
+  double operator()() {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  }
+};
+
+// The fast and the exhaustive likelihood fit of a model, both reading partial pixels (any two
+// bands) where asked.
+struct BothFits {
+  std::unique_ptr<TemperatureEstimator> fast, exhaustive;
+};
+BothFits both_fits(const std::shared_ptr<const ThermalModel>& model, bool partial);
 
 }  // namespace pyrocam::test

@@ -25,13 +25,6 @@
 namespace pyrocam::test {
 namespace {
 
-// Whether every band of pixel s reads (a number at or above the dim threshold).
-bool every_band_reads(const ThermalModel& m, const double* s) {
-  return std::all_of(s, s + m.profile().band_count(), [&](double v) {
-    return std::isfinite(v) && v >= m.profile().thresholds.inference_dim_dn;
-  });
-}
-
 // With saturated, NaN and dim bands among them: the fit drops bands (partial readings allowed),
 // and with two left the locus may pass the same ratios twice (an ambiguous reading). Without
 // partial readings the pixels with such bands have none, and the others read as with them.
@@ -103,11 +96,7 @@ void expect_same_on_edge_pixels(const std::shared_ptr<const ThermalModel>& model
   for (int k = 1; k < 20; ++k) temperatures.push_back(lo + 1000 + k);  // each window offset
   const double saturation = saturation_signal_dn(m);
   std::size_t read = 0, no_reading = 0, disagree = 0;
-  std::uint64_t state = 12345;
-  auto uniform = [&] {  // a fixed, portable sequence
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return static_cast<double>(state >> 11) / 9007199254740992.0;
-  };
+  Uniform uniform{12345};
   for (double t : temperatures) {
     const Eigen::VectorXd rates = m.camera.rates(t);
     for (int variant = 0; variant < 6; ++variant) {
@@ -287,17 +276,8 @@ TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_off_locus_pixels_as_the_exh
   const auto model = test_model("test-model-nir5x5.json");
   const ThermalModel& m = *model;
   const int bands = m.profile().band_count();
-  const auto fast = make_estimator(model, Method::kLikelihood);
-  const auto exhaustive = make_exhaustive_likelihood_estimator(model);
-  const auto partial_fast = make_estimator(model, Method::kLikelihood);
-  const auto partial_exhaustive = make_exhaustive_likelihood_estimator(model);
-  partial_fast->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
-  partial_exhaustive->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
-  std::uint64_t state = 4242;
-  auto uniform = [&] {  // a fixed, portable sequence in [0, 1)
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return static_cast<double>(state >> 11) / 9007199254740992.0;
-  };
+  const BothFits whole = both_fits(model, false), partial = both_fits(model, true);
+  Uniform uniform{4242};
   const double dim = m.profile().thresholds.inference_dim_dn;
   const double saturated = saturation_signal_dn(m);
   std::size_t pixels = 0, read = 0, partial_read = 0, disagree = 0;
@@ -316,7 +296,8 @@ TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_off_locus_pixels_as_the_exh
     s *= (0.25 + 0.7 * uniform()) * saturated / s.maxCoeff();
     if (!(s.minCoeff() >= dim)) continue;  // every band reads: the walk's pixels
     ++pixels;
-    const double x = fast->temperature_c(s.data()), e = exhaustive->temperature_c(s.data());
+    const double x = whole.fast->temperature_c(s.data());
+    const double e = whole.exhaustive->temperature_c(s.data());
     read += !std::isnan(e);
     if (!(x == e || (std::isnan(x) && std::isnan(e))) && ++disagree < 10)
       ADD_FAILURE() << "pixel " << i << ": fast " << x << ", exhaustive " << e;
@@ -328,8 +309,8 @@ TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_off_locus_pixels_as_the_exh
                 : k % 3 == 1 ? std::numeric_limits<double>::infinity()
                              : std::numeric_limits<double>::quiet_NaN();
     }
-    const double xp = partial_fast->temperature_c(s.data());
-    const double ep = partial_exhaustive->temperature_c(s.data());
+    const double xp = partial.fast->temperature_c(s.data());
+    const double ep = partial.exhaustive->temperature_c(s.data());
     partial_read += !std::isnan(ep);
     if (!(xp == ep || (std::isnan(xp) && std::isnan(ep))) && ++disagree < 10)
       ADD_FAILURE() << "pixel " << i << " with " << drop << " bands dropped: fast " << xp
@@ -340,59 +321,6 @@ TEST(LikelihoodEstimator, the_5x5_fits_descent_reads_off_locus_pixels_as_the_exh
   EXPECT_GT(read, pixels / 2);
   EXPECT_LT(read, pixels);  // some are no reading (an end of the range)
   EXPECT_GT(partial_read, pixels / 2);
-}
-
-// 5x5 pixels that 2 to 16 bands read, the others saturated (the brightest, as on an
-// over-exposed plate), dim or invalid: the pixels with few bands are scanned from those bands
-// alone (likelihood_direct.h), the others through the factors, and each reads as the exhaustive
-// scan, bit for bit; on the locus with noise and off it (a mixture of two temperatures), so
-// that chi2 has one minimum, two, or none inside the range.
-TEST(LikelihoodEstimator, pixels_that_few_bands_read_read_as_the_exhaustive_fit) {
-  const auto model = test_model("test-model-nir5x5.json");
-  const ThermalModel& m = *model;
-  const int bands = m.profile().band_count();
-  const auto fast = make_estimator(model, Method::kLikelihood);
-  const auto exhaustive = make_exhaustive_likelihood_estimator(model);
-  fast->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
-  exhaustive->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
-  std::uint64_t state = 977;
-  auto uniform = [&] {  // a fixed, portable sequence in [0, 1)
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return static_cast<double>(state >> 11) / 9007199254740992.0;
-  };
-  const double dim = m.profile().thresholds.inference_dim_dn;
-  const double saturated = saturation_signal_dn(m);
-  std::vector<std::size_t> read_with(static_cast<std::size_t>(bands) + 1, 0);
-  std::size_t pixels = 0, read = 0, disagree = 0;
-  for (int i = 0; i < 6000; ++i) {
-    const double t1 = 550 + 2900 * uniform(), t2 = 550 + 2900 * uniform();
-    Eigen::VectorXd s = m.camera.rates(t1);
-    if (i % 4 == 3)
-      s += (0.2 + uniform()) * s.maxCoeff() / m.camera.rates(t2).maxCoeff() *
-           m.camera.rates(t2);  // a mixture
-    // Noise of a few per cent, then the `kept` dimmest bands read and the others saturate.
-    for (int k = 0; k < bands; ++k) s[k] *= 1 + 0.03 * (2 * uniform() - 1);
-    const int kept = 2 + i % 15;
-    std::vector<int> order(static_cast<std::size_t>(bands));
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return s[a] < s[b]; });
-    s *= (dim + (0.9 * saturated - dim) * uniform()) / s[order[static_cast<std::size_t>(kept - 1)]];
-    for (std::size_t k = static_cast<std::size_t>(kept); k < order.size(); ++k)
-      s[order[k]] = std::numeric_limits<double>::infinity();
-    if (i % 5 == 1) s[order[0]] = std::numeric_limits<double>::quiet_NaN();
-    if (i % 5 == 2) s[order[0]] = 0.3 * dim;
-    ++pixels;
-    const double x = fast->temperature_c(s.data()), e = exhaustive->temperature_c(s.data());
-    if (!std::isnan(e)) ++read, ++read_with[static_cast<std::size_t>(kept)];
-    if (!(x == e || (std::isnan(x) && std::isnan(e))) && ++disagree < 10)
-      ADD_FAILURE() << "pixel " << i << " (" << kept << " bands kept): fast " << x
-                    << ", exhaustive " << e;
-  }
-  EXPECT_EQ(disagree, 0u);
-  // Both decisions, and readings from few bands and from many.
-  EXPECT_GT(read, pixels / 4);
-  EXPECT_LT(read, pixels);
-  for (const int kept : {3, 7, 12, 16}) EXPECT_GT(read_with[static_cast<std::size_t>(kept)], 20u);
 }
 
 TEST(LikelihoodEstimator, one_valid_band_is_no_reading_n) {
@@ -469,165 +397,12 @@ TEST(LikelihoodEstimator, a_rows_readings_are_its_pixels_readings) {
   }
 }
 
-// Safe partial readings: a pixel with unusable bands reads from the rest only when two of them
-// have a ratio monotonic over the model's range. The shipped colour camera has no such pair
-// (each of its ratios turns over), the 5x5 one has many: its dim-band pixels read, and as
-// the fit with any bands reads them (the rule only decides whether).
-TEST(LikelihoodEstimator, safe_partial_readings_need_a_monotonic_pair) {
-  for (const char* name : {"test-model-rgb.json", "test-model-nir5x5.json"}) {
-    SCOPED_TRACE(name);
-    const auto model = test_model(name);
-    const ThermalModel& m = *model;
-    const NoisyPixels px = noisy_pixels(m, kSweepC, 100, 30, 200, saturation_signal_dn(m), 0.3, 17);
-    const auto safe = make_estimator(model, Method::kLikelihood);
-    const auto any = make_estimator(model, Method::kLikelihood);
-    safe->set_partial_bands(TemperatureEstimator::PartialBands::kSafe);
-    any->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
-    const bool colour = m.profile().band_count() == 3;
-    EXPECT_EQ(safe->can_read_partial(), !colour);
-    std::size_t partial = 0, safe_read = 0;
-    for (std::size_t i = 0; i < px.size(); ++i) {
-      const double* s = px.pixel(i);
-      const bool all_read = every_band_reads(m, s);
-      const double a = any->temperature_c(s), b = safe->temperature_c(s);
-      if (all_read || std::isnan(b)) {
-        if (all_read) {
-          EXPECT_EQ(std::isnan(a), std::isnan(b)) << i;
-        }
-        continue;
-      }
-      ++safe_read;
-      EXPECT_EQ(a, b) << i;  // the same fit: the rule only decides whether it reads
-    }
-    for (std::size_t i = 0; i < px.size(); ++i) {
-      const double* s = px.pixel(i);
-      partial += !every_band_reads(m, s);
-    }
-    ASSERT_GT(partial, 50u);
-    if (colour)
-      EXPECT_EQ(safe_read, 0u);
-    else
-      EXPECT_GT(safe_read, partial / 2);
-  }
-}
-
-// The standard deviation the noise alone leaves a reading at t_c, from the Fisher information of
-// the bands the fit weighs (above the no-signal level; the estimator's weights, the scale
-// profiled out); infinite without any.
-double fit_sigma_c(const ThermalModel& m, const double* s, double t_c) {
-  const CameraProfile& p = m.profile();
-  const Eigen::VectorXd rate = m.camera.rates(t_c);
-  const Eigen::VectorXd slope = m.camera.rates(t_c + 0.5) - m.camera.rates(t_c - 0.5);  // per degC
-  std::vector<SignalNoise> noise;
-  for (int b = 0; b < p.band_count(); ++b) noise.push_back(signal_noise(p, b));
-  const double weighed = std::min(p.thresholds.inference_dim_dn, no_signal_level_dn(noise));
-  double wss = 0, wmm = 0, wmd = 0, wdd = 0;
-  for (int b = 0; b < p.band_count(); ++b) {
-    if (!(std::isfinite(s[b]) && s[b] >= weighed)) continue;
-    const SignalNoise n = signal_noise(p, b);
-    const double w = 1 / (n.shot_gain * s[b] + n.floor_dn2);
-    wss += w * s[b] * rate[b], wmm += w * rate[b] * rate[b];
-    wmd += w * rate[b] * slope[b], wdd += w * slope[b] * slope[b];
-  }
-  const double scale = wss / wmm;
-  const double information = scale * scale * (wdd - wmd * wmd / wmm);
-  return information > 0 ? 1 / std::sqrt(information) : INFINITY;
-}
-
-// Safe partial readings must also be precise. At the dim end of a melt pool a few noisy bands
-// read hundreds of degrees off, within their own uncertainty: a pixel that the noise alone
-// leaves more uncertain than max_partial_sigma_c (one standard deviation) has no reading. The
-// estimator takes it from the fit's chi2 curvature; here it is recomputed from the model's rates,
-// so pixels near the limit (where the two differ a little) are not judged.
-TEST(LikelihoodEstimator, safe_partial_readings_must_be_precise) {
-  const auto model = test_model("test-model-nir5x5.json");
-  const ThermalModel& m = *model;
-  const NoisyPixels px = noisy_pixels(m, kSweepC, 200, 10, 60, saturation_signal_dn(m), 0.6, 29);
-  const auto safe = make_estimator(model, Method::kLikelihood);
-  const auto any = make_estimator(model, Method::kLikelihood);
-  safe->set_partial_bands(TemperatureEstimator::PartialBands::kSafe);
-  any->set_partial_bands(TemperatureEstimator::PartialBands::kAny);
-  std::size_t kept = 0, refused = 0;
-  for (std::size_t i = 0; i < px.size(); ++i) {
-    const double* s = px.pixel(i);
-    const bool all_read = every_band_reads(m, s);
-    const double a = any->temperature_c(s), b = safe->temperature_c(s);
-    if (all_read || std::isnan(a)) continue;
-    const double sigma = fit_sigma_c(m, s, a);
-    const double limit = TemperatureEstimator::max_partial_sigma_c(a);
-    if (sigma < 0.8 * limit) {
-      EXPECT_TRUE(std::isnan(b) || b == a) << i;  // NaN: no monotonic pair among the bands
-      kept += b == a;
-    } else if (sigma > 1.25 * limit) {
-      EXPECT_TRUE(std::isnan(b)) << i << ": " << b << " degC, sigma " << sigma;
-      ++refused;
-    }
-  }
-  std::printf("kept %zu, refused %zu\n", kept, refused);
-  // Both sides exercised (measured 857 kept, 278 refused).
-  EXPECT_GT(kept, 100u);
-  EXPECT_GT(refused, 100u);
-}
-
-// Partial readings of a uniform surface are the surface's, not a chosen few: the 5x5 camera
-// (its true QE, matched demosaicking, safe partial bands) on plates exposed so that the brightest
-// band sits at a fraction of its range where bands fall below the dim threshold. Two ways to get
-// this wrong, both measured before: dropping a band at the dim threshold keeps it only where its
-// noise is positive (1600 and 2000 degC at 0.22: +3.3 and +3.6 degC), and a precision limit in
-// degrees keeps only the pixels that the noise moved lower, where the spread grows with
-// temperature (2000 degC at 0.22: 8 % read, 50 degC low; 2500 degC at 0.4: 16 % read, 41 degC
-// low). Now every pixel reads and the mean is within 1 degC (measured +0.3, +0.8, +0.9). Bound
-// 2 degC: the standard error of a mean of about 42000 readings spread by 20-28 degC is 0.3 degC
-// when counted as a quarter as many (neighbours share samples through the demosaicking kernel),
-// so four of them above the largest measured.
-TEST(LikelihoodEstimator, partial_readings_of_a_plate_are_the_plates) {
-  const CameraProfile p = load_profile_by_name("nir5x5-reference");
-  const UnitPerturbation unit = UnitPerturbation::parse("typical", 3);
-  auto model = std::make_shared<ThermalModel>();
-  model->camera = CameraModel{p, true_system_qe(p, unit), Eigen::VectorXd::Ones(p.band_count())};
-  MeasureOptions options;
-  options.method = Method::kLikelihood;
-  options.demosaic = DemosaicMethod::kMatched;
-  options.safe_partial = true;
-  FrameMeasurer measurer(model, options);
-  constexpr int kW = 320, kH = 240;
-  for (const auto& [t_c, fill] : {std::pair{1600.0, 0.22}, {2000.0, 0.22}, {2500.0, 0.4}}) {
-    Simulator camera(p, unit, 7);
-    const cv::Mat truth(kH, kW, CV_32F, cv::Scalar(t_c));
-    const double exposure =
-        camera.exposure_for(t_c, fill * (p.thresholds.inference_saturation_dn - p.dark_offset_dn));
-    double sum = 0;
-    long pixels = 0, read = 0;
-    for (int frame = 0; frame < 4; ++frame) {
-      cv::Mat t;
-      measurer.measure(camera.render(truth, exposure), camera.render_dark(kW, kH, exposure), t);
-      for (int y = 2; y < t.rows - 2; ++y)  // away from the frame's edge
-        for (int x = 2; x < t.cols - 2; ++x) {
-          ++pixels;
-          const float r = t.at<float>(y, x);
-          if (!std::isfinite(r)) continue;
-          ++read;
-          sum += r - t_c;
-        }
-    }
-    const double mean = read ? sum / static_cast<double>(read) : NAN;
-    std::printf("%.0f degC, brightest band at %.2f of its range: %.1f %% read, mean error %+.2f\n",
-                t_c, fill, 100.0 * static_cast<double>(read) / static_cast<double>(pixels), mean);
-    EXPECT_GE(read, pixels * 95 / 100) << t_c << " degC";
-    EXPECT_LE(std::abs(mean), 2.0) << t_c << " degC";
-  }
-}
-
 // The kernels on rows padded to whole lanes of four: the weights are zero past the bands and
 // below the weighing threshold, sss and chi2 are their sums (to rounding, against long double),
 // and for 3 and 25 bands (the shipped cameras) the padded sums are those over the bands alone,
 // bit for bit.
 TEST(LikelihoodKernels, padded_rows_sum_the_bands_alone) {
-  std::uint64_t state = 7;
-  const auto uniform = [&] {
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return static_cast<double>(state >> 11) / 9007199254740992.0;
-  };
+  Uniform uniform{7};
   for (const int bands : {3, 5, 7, 25}) {
     const int width = padded_bands(bands);
     alignas(32) double s[kMaxBands], gain[kMaxBands], floor[kMaxBands];
