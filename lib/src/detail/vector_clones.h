@@ -9,3 +9,12 @@
 #else
 #define PYROCAM_VECTOR_CLONES
 #endif
+
+namespace pyrocam {
+
+// Four doubles that the compiler keeps in one AVX register (two SSE ones in the baseline
+// version), for kernels that spell out their lanes. Read from any double (aligned(8),
+// may_alias); passed by reference only (by value the baseline's ABI differs).
+typedef double Lanes __attribute__((vector_size(32), aligned(8), may_alias));
+
+}  // namespace pyrocam

@@ -22,7 +22,6 @@ constexpr std::size_t kGuesses = 8192;
 // each comparison (a saturated 5x5 pixel's guess spent most of its time there).
 PYROCAM_VECTOR_CLONES
 double brightest_finite(const double* __restrict x, int bands, bool* saturated) {
-  typedef double Lanes __attribute__((vector_size(32), aligned(8), may_alias));
   typedef std::int64_t Mask __attribute__((vector_size(32)));
   constexpr double kInf = std::numeric_limits<double>::infinity();
   const Lanes inf = {kInf, kInf, kInf, kInf}, minus_inf = -inf;

@@ -9,8 +9,6 @@ namespace pyrocam {
 
 namespace {
 
-typedef double Lanes __attribute__((vector_size(32), aligned(8), may_alias));
-
 // chi2 at `count` samples from `at` on (rounded up to eight: the tables hold the padding),
 // eight at a time: lane j of profiled_chi2 is band list j here, summed from 0 in the same order,
 // and the lanes are added as its lane_sum adds them.
@@ -59,8 +57,7 @@ LaneBands lane_bands(const double* w, int bands) {
 
 DirectChi2::DirectChi2(const double* m, const double* m2, int width, int bands,
                        Eigen::Index samples, Eigen::Index coarse)
-    : samples_(samples),
-      // Whole groups of eight from any sample of a window (up to seven past the last sample).
+    :  // Whole groups of eight from any sample of a window (up to seven past the last sample).
       stride_((samples + 7) / 8 * 8 + 8),
       coarse_count_((samples + coarse - 1) / coarse),
       coarse_stride_((coarse_count_ + 7) / 8 * 8),

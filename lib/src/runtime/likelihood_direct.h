@@ -29,7 +29,6 @@ LaneBands lane_bands(const double* w, int bands);
 // the same bits as profiled_chi2 over the row.
 class DirectChi2 {
  public:
-  DirectChi2() = default;
   // m and m2: samples x width (padded_bands), row after row; `bands` of each row are read.
   DirectChi2(const double* m, const double* m2, int width, int bands, Eigen::Index samples,
              Eigen::Index coarse);
@@ -46,7 +45,7 @@ class DirectChi2 {
                   Eigen::Index from, Eigen::Index count, double* chi2) const;
 
  private:
-  Eigen::Index samples_ = 0, stride_ = 0, coarse_count_ = 0, coarse_stride_ = 0;
+  Eigen::Index stride_ = 0, coarse_count_ = 0, coarse_stride_ = 0;
   std::vector<double> m_, m2_, coarse_m_, coarse_m2_;  // band after band, `stride` a band
 };
 

@@ -13,11 +13,8 @@ namespace pyrocam {
 
 namespace {
 
-// Four doubles that the compiler keeps in one AVX register (two SSE ones in the baseline
-// version): lane k sums bands b + k, as the four partial sums below are specified. Read from
-// any double (aligned(8), may_alias); passed by reference only (by value the baseline's ABI
-// differs).
-typedef double Lanes __attribute__((vector_size(32), aligned(8), may_alias));
+// Lanes (detail/vector_clones.h): lane k sums bands b + k, as the four partial sums below are
+// specified.
 
 inline const Lanes& lanes_at(const double* at) { return *reinterpret_cast<const Lanes*>(at); }
 
