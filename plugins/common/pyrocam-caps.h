@@ -59,6 +59,12 @@
  *             the model calls saturated would reach it unmarked.
  *   band-map  (string, 5x5 only) the band map demosaic25 ordered the planes by (the input's
  *             band-map field, its profile's, or row * 5 + column); plane b holds band b.
+ *   demosaic  (string, optional) how demosaic25 made the planes: matched, bilinear or bin2x2
+ *             (binned cells; 5x5 mosaics bin with any method but matched). ratiotemp's
+ *             uncertainty takes each band value's noise from it (a kernel's mean of several
+ *             samples is less noisy than one); without it, each value's noise is one sample's.
+ *   pattern   (string, optional, bayer only) the Bayer pattern the planes come from, as in
+ *             x-pyrocam-mosaic: which band each pixel's own sample is.
  *   Memory: plane after plane (band 0 first), each width * height floats, rows without padding;
  *   a buffer holds exactly bands * width * height * 4 bytes.
  *
@@ -100,6 +106,7 @@
 #define PYROCAM_FIELD_BIT_DEPTH "bit-depth"
 #define PYROCAM_FIELD_SATURATION_LEVEL "saturation-level"
 #define PYROCAM_FIELD_BAND_MAP "band-map"
+#define PYROCAM_FIELD_DEMOSAIC "demosaic"
 
 #define PYROCAM_SIZE_RANGE "width = (int) [ 1, max ], height = (int) [ 1, max ]"
 #define PYROCAM_FRAMERATE_RANGE "framerate = (fraction) [ 0/1, max ]"

@@ -80,7 +80,15 @@ GstCaps* transform_caps(GstBaseTransform* trans, GstPadDirection direction, GstC
           pg::set_list_field(out, "pattern", PYROCAM_BAYER_FORMATS);
         }
       }
-      if (forward) pg::copy_fields(s, out, {PYROCAM_FIELD_SATURATION_LEVEL});
+      if (forward) {
+        pg::copy_fields(s, out, {PYROCAM_FIELD_SATURATION_LEVEL});
+        // How the planes were made, for the noise of their values (ratiotemp's uncertainty).
+        gst_structure_set(out, PYROCAM_FIELD_DEMOSAIC, G_TYPE_STRING, method_name(settings.method),
+                          nullptr);
+        if (!snap)
+          if (const char* p = gst_structure_get_string(s, "pattern"))
+            gst_structure_set(out, "pattern", G_TYPE_STRING, p, nullptr);
+      }
       if (!forward && pg::is_fused_bands(caps, i)) pg::copy_fields(s, out, {"pattern"});
       scale_dimension(s, out, "width", divisor, forward);
       scale_dimension(s, out, "height", divisor, forward);

@@ -64,6 +64,18 @@ inline pyrocam::DemosaicMethod to_library(GstDemosaic25Method m) {
   }
 }
 
+/* The caps' name of the method (auto is matched): the library's (parse_demosaic_method). */
+inline const char* method_name(GstDemosaic25Method m) {
+  switch (m) {
+    case GST_DEMOSAIC25_METHOD_BILINEAR:
+      return "bilinear";
+    case GST_DEMOSAIC25_METHOD_BIN2X2:
+      return "bin2x2";
+    default:
+      return "matched";
+  }
+}
+
 inline bool is_snapshot(const char* pattern) {
   return pattern && g_str_equal(pattern, PYROCAM_SNAPSHOT_PATTERN_NAME);
 }

@@ -281,6 +281,8 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
         st.no_signal_dn = static_cast<float>(level);
       }))
     return FALSE;
+  st.demosaic_noise =
+      st.fused ? pyrocam::DemosaicNoise{} : rt::demosaic_noise_of(GST_ELEMENT(self), in, model);
   st.configured = true;
   GST_INFO_OBJECT(self, "%d bands of %dx%d (%s) -> GRAY16_LE%s", st.bands, st.width, st.height,
                   layout, st.fused ? " (fused: demosaicked here, a strip at a time)" : "");
@@ -489,6 +491,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(inbuf);
         chosen.set_analogue_gain(meta ? pyrocam::analogue_gain_factor(meta->gain_db) : 1.0);
         chosen.set_misfit_probability(settings.misfit_probability);
+        chosen.set_demosaic_noise(st.demosaic_noise);
         chosen.set_partial_bands(settings.allow_partial ||
                                          settings.partial_bands == GST_RATIO_TEMP_PARTIAL_ANY
                                      ? pyrocam::TemperatureEstimator::PartialBands::kAny

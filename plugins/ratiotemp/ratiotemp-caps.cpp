@@ -1,5 +1,6 @@
 /* ratiotemp's formats: the caps' transforms between band planes and temperatures, the layout
- * name a model expects, and the output buffer mapped as a GRAY16_LE frame. */
+ * name a model expects, the band values' noise the caps' demosaicking leaves, and the output buffer
+ * mapped as a GRAY16_LE frame. */
 #include <string>
 
 #include "pyrocam-caps.h"
@@ -16,6 +17,25 @@ const char* layout_name(const pyrocam::ThermalModel& model) {
   return model.profile().mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot
              ? PYROCAM_SNAPSHOT_PATTERN_NAME
              : "bayer";
+}
+
+pyrocam::DemosaicNoise demosaic_noise_of(GstElement* element, const GstStructure* caps,
+                                         const pyrocam::ThermalModel& model) {
+  const char* made = gst_structure_get_string(caps, PYROCAM_FIELD_DEMOSAIC);
+  if (!made) return {};
+  const char* pattern = gst_structure_get_string(caps, "pattern");
+  const pyrocam::MosaicLayout& layout = model.profile().mosaic;
+  try {
+    const pyrocam::DemosaicMethod method = pyrocam::parse_demosaic_method(made);
+    if (layout.kind == pyrocam::MosaicLayout::Kind::kSnapshot)
+      return pyrocam::demosaic_noise(layout, method);
+    if (pattern) return pyrocam::demosaic_noise(pg::layout_for_pattern(pattern), method);
+  } catch (const pyrocam::InputError& e) {
+    // Not a reason to refuse the planes: their uncertainty then takes one sample's noise.
+    GST_WARNING_OBJECT(element, "demosaic=%s, pattern=%s in the caps: %s", made,
+                       pattern ? pattern : "(none)", e.what());
+  }
+  return {};
 }
 
 MappedFrame::MappedFrame(GstBuffer* buffer, GstVideoInfo* info) {

@@ -91,6 +91,9 @@ struct State {
   bool fused = false;
   pyrocam::MosaicLayout mosaic_layout;
   float no_signal_dn = 0;
+  // Plain planes: what their demosaicking did to the band values' noise (the caps' demosaic
+  // and pattern fields; none without them), for the uncertainty.
+  pyrocam::DemosaicNoise demosaic_noise;
   std::optional<pyrocam::BlurBiasCorrection> blur;      // on the fused path (matched demosaicking)
   bool blur_warned = false;                             // blur-correction asked for off that path
   std::optional<pyrocam::ScaledBrightness> brightness;  // on the fused path (Bayer mosaics)
@@ -165,10 +168,15 @@ void push_recording_tags(GstRatioTemp* self, const RecordingInfo& info, const Gs
 pyrocam::MethodRequest to_library(GstRatioTempMethod method);
 
 /* Formats (ratiotemp-caps.cpp): the layout caps field a model expects ("bayer" or 5x5), the
+ * band values' noise the caps' demosaicking leaves, the
  * caps' transforms (any band count and layout: set_caps checks them against the model and names
  * both in its error), and an output buffer mapped as a GRAY16_LE frame (rows at the video
  * info's stride; throws InputError when it cannot be mapped; unmaps when it goes). */
 const char* layout_name(const pyrocam::ThermalModel& model);
+/* What the demosaicking the plain band caps name (demosaic, pattern) did to the band values'
+ * noise; none where they do not say (a warning where they say something unknown). */
+pyrocam::DemosaicNoise demosaic_noise_of(GstElement* element, const GstStructure* caps,
+                                         const pyrocam::ThermalModel& model);
 GstCaps* transform_caps(GstBaseTransform* trans, GstPadDirection direction, GstCaps* caps,
                         GstCaps* filter);
 gboolean transform_size(GstBaseTransform* trans, GstPadDirection direction, GstCaps* caps,

@@ -93,6 +93,28 @@ TEST_F(RatioTemp, uncertainty_output_gives_the_library_uncertainty) {
   free_all(s);
 }
 
+// Planes that say how demosaic25 made them (demosaic, pattern): each band value's noise is its
+// kernel's, as the library takes it from demosaic_noise, and smaller than one sample's.
+TEST_F(RatioTemp, the_uncertainty_follows_the_demosaicking_the_caps_name) {
+  start("ratiotemp output=uncertainty model=" + rgb_model_path(),
+        bands_caps(3, "bayer", 6, 4) + ",demosaic=matched,pattern=grbg");
+  const auto planes = graybody_planes(*rgb_model(), 6, 4, 900, 1500);
+  const auto out = run(planes, 6, 4);
+  PlaneEstimator est(rgb_model(), rgb_auto_method());
+  est.set_demosaic_noise(demosaic_noise(MosaicLayout::bayer("grbg"), DemosaicMethod::kMatched));
+  cv::Mat t, u;
+  est.estimate(plane_views(planes, 3, 6, 4), t, &u);
+  EXPECT_EQ(out, codes_of(encode_decikelvin_difference(u)));
+  const LibraryResult one_sample = library(rgb_model(), rgb_auto_method(), planes, 6, 4, true);
+  int read = 0;
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (out[i]) {
+      ++read;
+      EXPECT_LT(u.at<float>(static_cast<int>(i)), one_sample.u.at<float>(static_cast<int>(i))) << i;
+    }
+  EXPECT_GT(read, 12);
+}
+
 TEST_F(RatioTemp, saturated_nan_and_dim_bands_give_no_reading) {
   start("ratiotemp method=mlp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 2));
   auto planes = graybody_planes(*rgb_model(), 4, 2, 1200, 1200);

@@ -288,6 +288,51 @@ int demosaic_sample_reach(const MosaicLayout& layout, DemosaicMethod method) {
   return method == DemosaicMethod::kBilinear && bayer ? 9 : 1;  // snapshots bin otherwise
 }
 
+DemosaicNoise demosaic_noise(const MosaicLayout& layout, DemosaicMethod method) {
+  method = resolve_demosaic_method(method, layout);
+  const int bands = layout.band_count(), pw = layout.period_width, ph = layout.period_height;
+  DemosaicNoise noise;
+  noise.bands = bands;
+  std::vector<int> members(static_cast<std::size_t>(bands), 0);
+  for (int y = 0; y < ph; ++y)
+    for (int x = 0; x < pw; ++x) ++members[static_cast<std::size_t>(layout.band_at(x, y))];
+  if (layout.kind == MosaicLayout::Kind::kBayer && method != DemosaicMethod::kBinCells) {
+    // By how the band is obtained at the pixel (Op above; demosaic_matched.cpp's kernels): its
+    // own sample (R or B, or G, whose matched kernel also takes its diagonals), the two nearest
+    // along a row or a column, the four diagonals, G's four cross neighbours.
+    const bool matched = method == DemosaicMethod::kMatched;
+    const double self_rb = matched ? 0.5 * 0.5 + 4 * 0.125 * 0.125 : 1;
+    const double self_g =
+        matched ? (2. / 9) * (2. / 9) + 4 * (5. / 36) * (5. / 36) + 4 * (1. / 18) * (1. / 18) : 1;
+    const double axial = matched ? 2 * 0.375 * 0.375 + 4 * 0.0625 * 0.0625 : 2 * 0.5 * 0.5;
+    const double diagonal = 4 * 0.25 * 0.25;
+    const double cross = matched ? 4 * 0.1875 * 0.1875 + 8 * 0.03125 * 0.03125 : 4 * 0.25 * 0.25;
+    noise.period_width = pw, noise.period_height = ph;
+    for (int y = 0; y < ph; ++y)
+      for (int x = 0; x < pw; ++x) {
+        const int own = layout.band_at(x, y);
+        const bool own_green = members[static_cast<std::size_t>(own)] == 2;
+        for (int b = 0; b < bands; ++b) {
+          const bool green = members[static_cast<std::size_t>(b)] == 2;
+          noise.factor.push_back(b == own    ? (green ? self_g : self_rb)
+                                 : own_green ? axial
+                                 : green     ? cross
+                                             : diagonal);
+        }
+      }
+    return noise;
+  }
+  // Binned: the mean of the band's members in the cell; matched snapshot cells then interpolate.
+  const std::vector<double> registration = method == DemosaicMethod::kMatched
+                                               ? snapshot_registration_variance(layout)
+                                               : std::vector<double>(members.size(), 1.0);
+  for (int b = 0; b < bands; ++b) {
+    const auto i = static_cast<std::size_t>(b);
+    noise.factor.push_back(registration[i] / std::max(members[i], 1));
+  }
+  return noise;
+}
+
 void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod method,
               std::vector<cv::Mat>& planes, float no_signal_dn) {
   demosaic(mosaic, layout, method, planes, no_signal_dn, {});

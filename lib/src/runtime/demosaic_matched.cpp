@@ -434,22 +434,48 @@ void taps_column(const float* __restrict up, const float* __restrict mid,
 
 }  // namespace
 
+namespace {
+
+// Where a band's samples sit in the cell, in cells from its centre (x, y); false for a band
+// without samples.
+bool band_offset(const MosaicLayout& layout, int band, double& x, double& y) {
+  const int pw = layout.period_width, ph = layout.period_height;
+  double sx = 0, sy = 0;
+  int members = 0;
+  for (int j = 0; j < ph; ++j)
+    for (int i = 0; i < pw; ++i)
+      if (layout.band_at(i, j) == band) sx += i, sy += j, ++members;
+  if (members == 0) return false;
+  x = (sx / members - (pw - 1) / 2.0) / pw;
+  y = (sy / members - (ph - 1) / 2.0) / ph;
+  return true;
+}
+
+}  // namespace
+
+std::vector<double> snapshot_registration_variance(const MosaicLayout& layout) {
+  std::vector<double> variance(static_cast<std::size_t>(layout.band_count()), 1.0);
+  for (int b = 0; b < layout.band_count(); ++b) {
+    double fx, fy;
+    if (!band_offset(layout, b, fx, fy)) continue;
+    double sx = 0, sy = 0;
+    for (float w : registration_weights(fx)) sx += static_cast<double>(w) * w;
+    for (float w : registration_weights(fy)) sy += static_cast<double>(w) * w;
+    variance[static_cast<std::size_t>(b)] = sx * sy;
+  }
+  return variance;
+}
+
 void register_snapshot_bands(const MosaicLayout& layout, float no_signal_dn,
                              std::vector<cv::Mat>& planes) {
-  const int pw = layout.period_width, ph = layout.period_height;
   const int bands = static_cast<int>(planes.size());
   cv::parallel_for_(cv::Range(0, bands), [&](const cv::Range& range) {
     cv::Mat across;  // the rows through the horizontal taps
     for (int b = range.start; b < range.end; ++b) {
-      // Where the band's samples sit in the cell, in cells from its centre.
-      double sx = 0, sy = 0;
-      int members = 0;
-      for (int y = 0; y < ph; ++y)
-        for (int x = 0; x < pw; ++x)
-          if (layout.band_at(x, y) == b) sx += x, sy += y, ++members;
-      if (members == 0) continue;
-      const auto wx = registration_weights((sx / members - (pw - 1) / 2.0) / pw);
-      const auto wy = registration_weights((sy / members - (ph - 1) / 2.0) / ph);
+      double fx, fy;
+      if (!band_offset(layout, b, fx, fy)) continue;
+      const auto wx = registration_weights(fx);
+      const auto wy = registration_weights(fy);
       cv::Mat& plane = planes[static_cast<std::size_t>(b)];
       const int w = plane.cols, h = plane.rows;
       across.create(h, w, CV_32F);

@@ -26,6 +26,7 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
                              : TemperatureEstimator::PartialBands::kOff);
   planes_estimator_.set_emissivity_slope(options.emissivity_slope, options.emissivity_slope_u);
   planes_estimator_.set_analogue_gain(analogue_gain_factor(options.gain_db));
+  planes_estimator_.set_demosaic_noise(demosaic_noise(model_->profile().mosaic, options.demosaic));
   if (options.blur_correction) blur_correction_.emplace(*model_, options.demosaic);
   if (options.brightness_radius != 0) {
     const MosaicLayout& layout = model_->profile().mosaic;

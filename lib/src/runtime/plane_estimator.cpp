@@ -128,7 +128,7 @@ cv::Size PlaneEstimator::checked_size(const std::vector<cv::Mat>& planes) const 
 }
 
 void PlaneEstimator::uncertainty_row(const float* const* rows, std::size_t n, const float* t,
-                                     float* out) const {
+                                     float* out, int x0, int y, const DemosaicNoise& noise) const {
   double s[kMaxBands];
   const auto bands = static_cast<std::size_t>(model_->profile().band_count());
   for (std::size_t x = 0; x < n; ++x) {
@@ -137,7 +137,8 @@ void PlaneEstimator::uncertainty_row(const float* const* rows, std::size_t n, co
       continue;
     }
     for (std::size_t b = 0; b < bands; ++b) s[b] = rows[b][x];
-    out[x] = static_cast<float>(expanded_uncertainty_c(estimator(), s, t[x]));
+    out[x] = static_cast<float>(expanded_uncertainty_c(
+        estimator(), s, t[x], 1, noise.at(x0 + static_cast<int>(x), y)));
   }
 }
 
@@ -155,7 +156,7 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
       estimate_row(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
       if (u)
         uncertainty_row(row_ptrs.data(), static_cast<std::size_t>(size.width), out,
-                        u->ptr<float>(y));
+                        u->ptr<float>(y), 0, y, noise_);
     }
   });
 }
@@ -217,13 +218,15 @@ void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* 
   check_matched_mosaic(source);
   t.create(source.mosaic.size(), CV_32F);
   if (u) u->create(source.mosaic.size(), CV_32F);
+  const DemosaicNoise noise = u ? demosaic_noise(source.layout, DemosaicMethod::kMatched)
+                                : DemosaicNoise{};
   for_each_strip(
       source,
       [&](int y, int x0, int x1, const float* const* rows, float*) {
         const auto n = static_cast<std::size_t>(x1 - x0);
         float* out = t.ptr<float>(y) + x0;
         estimate_row(rows, n, out);
-        if (u) uncertainty_row(rows, n, out, u->ptr<float>(y) + x0);
+        if (u) uncertainty_row(rows, n, out, u->ptr<float>(y) + x0, x0, y, noise);
       },
       [&](int y, int x0, int x1) {
         std::fill(t.ptr<float>(y) + x0, t.ptr<float>(y) + x1, NAN);

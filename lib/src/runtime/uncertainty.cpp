@@ -8,7 +8,7 @@
 namespace pyrocam {
 
 double expanded_uncertainty_c(const TemperatureEstimator& est, const double* signals, double t_c,
-                              int frames) {
+                              int frames, const double* variance_factor) {
   if (!std::isfinite(t_c)) return NAN;
   const ThermalModel& m = est.model();
   const int bands = m.profile().band_count();
@@ -32,7 +32,8 @@ double expanded_uncertainty_c(const TemperatureEstimator& est, const double* sig
       dt_ds = t_c - tm;
     else
       continue;
-    var += dt_ds * dt_ds * signal_variance_dn2(m.profile(), b, keep, frames, est.analogue_gain());
+    var += dt_ds * dt_ds * signal_variance_dn2(m.profile(), b, keep, frames, est.analogue_gain()) *
+           (variance_factor ? variance_factor[b] : 1.0);
   }
   const double sys = est.systematic_u_c(t_c);
   return m.uncertainty.coverage_factor * std::sqrt(var + sys * sys);

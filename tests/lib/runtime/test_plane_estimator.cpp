@@ -132,6 +132,8 @@ TEST(PlaneEstimator, the_fused_path_reads_what_the_planes_read) {
     estimator.set_partial_bands(s.partial);
     estimator.set_emissivity_slope(s.slope, s.slope != 0 ? 0.01 : -1);
     estimator.set_analogue_gain(s.gain);
+    // The planes' noise as matched demosaicking leaves it (the fused path's own).
+    estimator.set_demosaic_noise(demosaic_noise(p.mosaic, DemosaicMethod::kMatched));
     for (const cv::Mat& mosaic : mosaics) {
       const PlaneEstimator::MatchedMosaic fused{mosaic, p.mosaic, no_signal};
       std::vector<cv::Mat> planes;

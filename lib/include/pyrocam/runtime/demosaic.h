@@ -56,6 +56,25 @@ cv::Size demosaic_output_size(const MosaicLayout& layout, DemosaicMethod method,
 // snapshot cells (3x3 cells), 1 for binning (and snapshots with any other method, which bin).
 int demosaic_sample_reach(const MosaicLayout& layout, DemosaicMethod method);
 
+// What demosaicking does to the noise of each band value: the variance of the value relative
+// to that of one sample at the same signal (the sum of its kernel's squared weights, over the
+// band's members in a cell where it bins them), by where the output pixel sits in the mosaic's
+// period. A reading's uncertainty (uncertainty.h) scales each band's sample variance by it:
+// matched Bayer demosaicking averages every band over several samples (0.14-0.31), bilinear the
+// bands it interpolates (0.25-0.5), matched snapshot cells over 3x3 cells.
+struct DemosaicNoise {
+  int period_width = 1, period_height = 1, bands = 0;
+  std::vector<double> factor;  // per phase (y * period_width + x), the bands' factors; empty: 1
+  // The factors of the output pixel (x, y), or nullptr where every band's is 1.
+  const double* at(int x, int y) const {
+    if (factor.empty()) return nullptr;
+    const auto phase =
+        static_cast<std::size_t>((y % period_height) * period_width + x % period_width);
+    return &factor[phase * static_cast<std::size_t>(bands)];
+  }
+};
+DemosaicNoise demosaic_noise(const MosaicLayout& layout, DemosaicMethod method);
+
 // Fills one CV_32F plane per band (plane index = the layout's band index: R, G, B for Bayer).
 // `planes` may wrap a caller's buffer: planes of the right size and type are written in place,
 // others are (re)allocated. Snapshot layouts are always binned. Throws InputError if the mosaic
@@ -84,6 +103,9 @@ std::vector<cv::Point> matched_footprint(const MosaicLayout& layout, int band, i
 // cell^2 along each axis) whatever the band's place in the cell (no checks: see demosaic).
 void register_snapshot_bands(const MosaicLayout& layout, float no_signal_dn,
                              std::vector<cv::Mat>& planes);
+// The sum of the squared weights register_snapshot_bands gives each band (what it does to the
+// noise of a band value).
+std::vector<double> snapshot_registration_variance(const MosaicLayout& layout);
 
 // kMatched for a Bayer layout, into planes of the mosaic's size (no checks: see demosaic).
 void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, float dim_dn,

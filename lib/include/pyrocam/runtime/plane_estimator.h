@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pyrocam/core/mosaic.h"
+#include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/emissivity.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/misfit.h"
@@ -80,6 +81,11 @@ class PlaneEstimator {
   // positive.
   void set_analogue_gain(double factor);
   double analogue_gain() const { return analogue_gain_; }
+  // What demosaicking did to the band values' noise (demosaic_noise of the layout and method
+  // that made the planes), for the uncertainty; by default none (each value one sample's, an
+  // overestimate after averaging kernels). The fused path always uses kMatched's. Not while an
+  // estimate runs; cheap where it does not change (called per frame by ratiotemp).
+  void set_demosaic_noise(const DemosaicNoise& noise) { noise_ = noise; }
 
  private:
   // The planes' common size; throws InputError unless they are the model's bands, CV_32F, of
@@ -87,8 +93,10 @@ class PlaneEstimator {
   cv::Size checked_size(const std::vector<cv::Mat>& planes) const;
   // Both estimates: the rows' temperatures into `out` (and the misfit check).
   void estimate_row(const float* const* rows, std::size_t n, float* out) const;
-  // Uncertainties of the n readings `t` of the rows into `out` (NaN where no reading).
-  void uncertainty_row(const float* const* rows, std::size_t n, const float* t, float* out) const;
+  // Uncertainties of the n readings `t` of the rows into `out` (NaN where no reading): output
+  // pixels x0 .. x0 + n - 1 of row y, with `noise`.
+  void uncertainty_row(const float* const* rows, std::size_t n, const float* t, float* out, int x0,
+                       int y, const DemosaicNoise& noise) const;
   // Throws InputError for a source the fused path cannot read with this model.
   void check_matched_mosaic(const MatchedMosaic& source) const;
   // The fused path's strips: for each row of each strip, `lit_run(y, x0, x1, rows, scratch)` for
@@ -110,6 +118,7 @@ class PlaneEstimator {
   TemperatureEstimator::PartialBands partial_ = TemperatureEstimator::PartialBands::kOff;
   bool partial_set_ = false;
   double analogue_gain_ = 1.0;
+  DemosaicNoise noise_;
 };
 
 }  // namespace pyrocam
