@@ -333,6 +333,32 @@ DemosaicNoise demosaic_noise(const MosaicLayout& layout, DemosaicMethod method) 
   return noise;
 }
 
+double demosaic_noise_area(const MosaicLayout& layout, DemosaicMethod method) {
+  const DemosaicNoise noise = demosaic_noise(layout, method);
+  const int phases = noise.period_width * noise.period_height;
+  // Output pixels per mosaic period: every pixel of it, or one for a cell.
+  const bool per_pixel = layout.kind == MosaicLayout::Kind::kBayer &&
+                         resolve_demosaic_method(method, layout) != DemosaicMethod::kBinCells;
+  const double outputs = per_pixel ? layout.period_width * layout.period_height : 1;
+  std::vector<int> members(static_cast<std::size_t>(noise.bands), 0);
+  for (int y = 0; y < layout.period_height; ++y)
+    for (int x = 0; x < layout.period_width; ++x)
+      ++members[static_cast<std::size_t>(layout.band_at(x, y))];
+  double spread = 0, factors = 0;
+  for (int b = 0; b < noise.bands; ++b) {
+    const auto i = static_cast<std::size_t>(b);
+    if (members[i] == 0) continue;
+    spread += outputs / members[i];
+    double mean_factor = 0;
+    for (int phase = 0; phase < phases; ++phase)
+      mean_factor += noise.factor.empty()
+                         ? 1
+                         : noise.factor[static_cast<std::size_t>(phase * noise.bands + b)];
+    factors += mean_factor / phases;
+  }
+  return factors > 0 ? std::max(1.0, spread / factors) : 1.0;
+}
+
 void demosaic(const cv::Mat& mosaic, const MosaicLayout& layout, DemosaicMethod method,
               std::vector<cv::Mat>& planes, float no_signal_dn) {
   demosaic(mosaic, layout, method, planes, no_signal_dn, {});

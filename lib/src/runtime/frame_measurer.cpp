@@ -12,6 +12,7 @@
 #include "pyrocam/core/noise_model.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/darksub.h"
+#include "pyrocam/runtime/region_stats.h"
 
 namespace pyrocam {
 
@@ -78,6 +79,7 @@ double FrameMeasurer::median_uncertainty_c(const cv::Mat& temperature_c,
   const TemperatureEstimator& estimator = planes_estimator_.estimator();
   const double k = model_->uncertainty.coverage_factor;
   std::vector<double> readings, noise;
+  cv::Mat used = cv::Mat::zeros(temperature_c.size(), CV_8U);
   for (int y = 0; y < temperature_c.rows; ++y)
     for (int x = 0; x < temperature_c.cols; ++x) {
       const double t = temperature_c.at<float>(y, x), u = uncertainty_c.at<float>(y, x);
@@ -86,6 +88,7 @@ double FrameMeasurer::median_uncertainty_c(const cv::Mat& temperature_c,
       const double systematic = estimator.systematic_u_c(t);
       readings.push_back(t);
       noise.push_back(std::sqrt(std::max(0.0, (u / k) * (u / k) - systematic * systematic)));
+      used.at<std::uint8_t>(y, x) = 1;
     }
   if (readings.empty()) return NAN;
   const auto median = [](std::vector<double>& v) {
@@ -93,16 +96,21 @@ double FrameMeasurer::median_uncertainty_c(const cv::Mat& temperature_c,
     std::nth_element(v.begin(), mid, v.end());
     return *mid;
   };
+  const auto n = static_cast<double>(readings.size());
   const double t_median = median(readings), u_noise = median(noise);
-  // A brightness reading's scale is a mean over its window of ratio readings, each of which
-  // reaches its footprint's samples: a sample's noise reaches the window widened by the
-  // footprint (5 x 5 pixels).
-  const double reach = brightness_
-                           ? std::pow(brightness_->window_pixels() + 4, 2)
-                           : demosaic_sample_reach(model_->profile().mosaic, options_.demosaic);
-  const double n_eff = std::max(1.0, static_cast<double>(readings.size()) / reach);
+  // Neighbouring readings share their demosaicking footprints' samples, so n readings are worth
+  // fewer independent ones. A brightness reading's scale is a mean over its window of ratio
+  // readings, each reaching its footprint's samples: counted as one per window widened by the
+  // footprint (5 x 5 pixels), an upper bound on the sharing.
+  const double n_eff =
+      brightness_ ? std::max(1.0, n / std::pow(brightness_->window_pixels() + 4, 2))
+                  : effective_readings(
+                        used, demosaic_noise_area(model_->profile().mosaic, options_.demosaic));
+  // A median of many readings scatters sqrt(pi / 2) times as far as their mean; of one or two,
+  // as far (region_stats takes the mean of the middle two).
+  const double median_factor = n > 2 ? M_PI / 2 : 1.0;
   const double systematic = estimator.systematic_u_c(t_median);
-  return k * std::sqrt(systematic * systematic + M_PI / 2 * u_noise * u_noise / n_eff);
+  return k * std::sqrt(systematic * systematic + median_factor * u_noise * u_noise / n_eff);
 }
 
 void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& temperature_c,

@@ -195,6 +195,53 @@ cv::Mat saturated_sample_mask(const cv::Mat& mosaic, int radius) {
   return mask;
 }
 
+namespace {
+
+// The normalised samples of a Gaussian whose squares sum to `squared_sum` (in 0..1]: a
+// footprint of that noise share along one axis.
+std::vector<double> gaussian_footprint(double squared_sum) {
+  if (squared_sum >= 1) return {1.0};
+  std::vector<double> w;
+  double low = 0.05, high = 64;  // standard deviations, pixels
+  for (int i = 0; i < 60; ++i) {
+    const double sigma = 0.5 * (low + high);
+    const int radius = static_cast<int>(std::ceil(4 * sigma));
+    w.assign(static_cast<std::size_t>(2 * radius + 1), 0.0);
+    double sum = 0, squares = 0;
+    for (int x = -radius; x <= radius; ++x)
+      sum += w[static_cast<std::size_t>(x + radius)] = std::exp(-0.5 * x * x / (sigma * sigma));
+    for (double& v : w) v /= sum, squares += v * v;
+    (squares > squared_sum ? low : high) = sigma;
+  }
+  return w;
+}
+
+}  // namespace
+
+double effective_readings(const cv::Mat& used, double noise_area) {
+  if (used.type() != CV_8U) throw InputError("effective readings: the mask must be CV_8U");
+  if (!(noise_area >= 1)) throw InputError("effective readings: a noise area below one pixel");
+  const int n = cv::countNonZero(used);
+  if (n <= 1 || noise_area == 1) return n;
+  const std::vector<double> w = gaussian_footprint(1 / std::sqrt(noise_area));
+  double single = 0;  // one reading's squared weights (1 / noise_area, as sampled)
+  for (double v : w) single += v * v;
+  single *= single;
+  // Each noise source's weight in the readings' mean: the footprint spread over the mask (the
+  // footprint is symmetric, so filtering gives the transposed weights), on the mask's bounds
+  // widened by the footprint only.
+  const int radius = static_cast<int>(w.size() / 2);
+  const cv::Rect bounds = cv::boundingRect(used);
+  const cv::Rect padded(bounds.x - radius, bounds.y - radius, bounds.width + 2 * radius,
+                        bounds.height + 2 * radius);
+  cv::Mat share = cv::Mat::zeros(padded.size(), CV_64F);
+  used(bounds).convertTo(share(cv::Rect(radius, radius, bounds.width, bounds.height)), CV_64F);
+  cv::threshold(share, share, 0, 1.0 / n, cv::THRESH_BINARY);
+  const cv::Mat kernel(w, false);
+  cv::sepFilter2D(share, share, CV_64F, kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+  return std::clamp(single / share.dot(share), 1.0, static_cast<double>(n));
+}
+
 std::size_t count_without_reading(const cv::Mat& temperature_c, const cv::Mat& mask) {
   if (temperature_c.type() != CV_32F || mask.type() != CV_8U || mask.size() != temperature_c.size())
     throw InputError("saturation count: a CV_32F image and a CV_8U mask of its size are needed");

@@ -171,6 +171,23 @@ TEST(Demosaic, sample_reach_follows_the_footprints) {
   EXPECT_EQ(demosaic_sample_reach(snapshot, DemosaicMethod::kBinCells), 1);
 }
 
+TEST(Demosaic, noise_areas_follow_the_kernels) {
+  const MosaicLayout bayer = MosaicLayout::bayer("RGGB");
+  std::vector<int> map(25);
+  std::iota(map.begin(), map.end(), 0);
+  const MosaicLayout snapshot = MosaicLayout::snapshot(5, 5, map);
+  // Binning shares nothing between cells.
+  EXPECT_DOUBLE_EQ(demosaic_noise_area(bayer, DemosaicMethod::kBinCells), 1);
+  EXPECT_DOUBLE_EQ(demosaic_noise_area(snapshot, DemosaicMethod::kBilinear), 1);
+  // Matched Bayer kernels: each band's 1 / (density x mean squared weights), 13.85 for both R
+  // (1/4 of the samples, 0.289) and G (1/2, 0.144); bilinear shares less, matched cells more
+  // than none.
+  EXPECT_NEAR(demosaic_noise_area(bayer, DemosaicMethod::kMatched), 13.85, 0.01);
+  EXPECT_NEAR(demosaic_noise_area(bayer, DemosaicMethod::kBilinear), 10 / 1.75, 1e-9);
+  EXPECT_GT(demosaic_noise_area(snapshot, DemosaicMethod::kMatched), 2);
+  EXPECT_LT(demosaic_noise_area(snapshot, DemosaicMethod::kMatched), 9);
+}
+
 TEST(Demosaic, writes_into_caller_planes) {
   const MosaicLayout m = MosaicLayout::bayer("RGGB");
   std::vector<float> buffer(3 * 2 * 2, -1.f);

@@ -221,5 +221,24 @@ TEST(RegionPeak, DISABLED_timing_2048x2048) {
       p.c);
 }
 
+TEST(RegionStats, effective_readings_count_what_the_readings_share) {
+  cv::Mat used = cv::Mat::zeros(200, 200, CV_8U);
+  EXPECT_EQ(effective_readings(used, 13.9), 0);
+  used.at<std::uint8_t>(50, 50) = 1;
+  EXPECT_DOUBLE_EQ(effective_readings(used, 13.9), 1);
+  // Far apart: independent.
+  used.at<std::uint8_t>(50, 150) = used.at<std::uint8_t>(150, 50) = 1;
+  EXPECT_NEAR(effective_readings(used, 13.9), 3, 1e-6);
+  // Much larger than the footprint: n / area within its rim's share.
+  used.setTo(0);
+  used(cv::Rect(20, 20, 160, 160)) = 1;
+  EXPECT_NEAR(effective_readings(used, 13.9), 160 * 160 / 13.9, 0.06 * 160 * 160 / 13.9);
+  EXPECT_GT(effective_readings(used, 13.9), 160 * 160 / 13.9);
+  // Unshared noise: every reading counts.
+  EXPECT_DOUBLE_EQ(effective_readings(used, 1), 160 * 160);
+  EXPECT_THROW(effective_readings(used, 0.5), InputError);
+  EXPECT_THROW(effective_readings(cv::Mat::zeros(4, 4, CV_32F), 2), InputError);
+}
+
 }  // namespace
 }  // namespace pyrocam

@@ -75,6 +75,15 @@ struct DemosaicNoise {
 };
 DemosaicNoise demosaic_noise(const MosaicLayout& layout, DemosaicMethod method);
 
+// The area (in output pixels) that one reading's noise is spread over, for the noise of a
+// region's statistics. A band value weighs its samples with weights whose squares sum to its
+// factor above, and the readings a sample feeds weigh it 1 / (its band's density) in all, so a
+// region much larger than the kernels is worth that many times fewer independent readings than
+// it has pixels: per band 1 / (density x mean factor); the bands combined as if each added
+// equally to a reading's noise, sum(1 / density) / sum(mean factor). 1 for binning, 13.9 for
+// matched Bayer, 5.7 for bilinear Bayer, 3.3 for matched snapshot cells (nir5x5-reference).
+double demosaic_noise_area(const MosaicLayout& layout, DemosaicMethod method);
+
 // Fills one CV_32F plane per band (plane index = the layout's band index: R, G, B for Bayer).
 // `planes` may wrap a caller's buffer: planes of the right size and type are written in place,
 // others are (re)allocated. Snapshot layouts are always binned. Throws InputError if the mosaic

@@ -66,12 +66,13 @@ class FrameMeasurer {
   // The expanded uncertainty (the model's coverage factor k) of the median of the readings under
   // `mask` (as in unread), from the frame's temperatures and per-pixel expanded uncertainties
   // (measure's uncertainty_c): the systematic terms at the median (calibration, emissivity:
-  // common to every pixel, so the median keeps them whole) and the readings' noise, which a
-  // median of n readings reduces by sqrt(pi/2 / n_eff). Neighbouring readings share their
-  // demosaicking footprints' samples, so their noise is not independent: n_eff is n divided by
-  // the number of readings one sample reaches (demosaic_sample_reach). The noise term is the
-  // median of the readings' own. NaN
-  // without a reading.
+  // common to every pixel, so the median keeps them whole) and the readings' noise (the median
+  // of the readings' own), which a median of n readings reduces by sqrt(pi/2 / n_eff).
+  // Neighbouring readings share their demosaicking footprints' samples, so their noise is not
+  // independent: n_eff is effective_readings over the readings with demosaic_noise_area (a
+  // region much larger than the footprints: n / 13.9 for matched Bayer demosaicking, n / 3.3
+  // for matched 5x5 cells); with brightness readings, n over the window widened by the
+  // footprint. NaN without a reading.
   double median_uncertainty_c(const cv::Mat& temperature_c, const cv::Mat& uncertainty_c,
                               const cv::Mat& mask) const;
   // Adds a table file's blocks (the model's prebuilt lookup table, prebuilt_tables.h) to the

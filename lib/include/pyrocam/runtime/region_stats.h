@@ -52,4 +52,13 @@ cv::Mat saturated_sample_mask(const cv::Mat& mosaic, int radius);
 // same size) is non-zero.
 std::size_t count_without_reading(const cv::Mat& temperature_c, const cv::Mat& mask);
 
+// How many independent readings the readings under `used` (CV_8U, non-zero: a reading) are worth
+// to their mean or median when each one's noise is shared with its neighbours over `noise_area`
+// pixels (demosaic_noise_area): the variance of one reading over that of their mean, each
+// reading taken as a Gaussian-weighted mean of independent noise whose squared weights sum to
+// 1 / noise_area. Readings far apart count one each, a region much larger than the footprint
+// its pixels / noise_area, a single reading one. Within [1, n] for n readings; 0 for none.
+// Throws InputError for a mask of another type or a noise_area below 1.
+double effective_readings(const cv::Mat& used, double noise_area);
+
 }  // namespace pyrocam
