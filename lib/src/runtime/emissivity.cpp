@@ -144,8 +144,7 @@ EmissivitySlopeEstimator::EmissivitySlopeEstimator(
 void EmissivitySlopeEstimator::corrected_signals(const double* s, double t_c, double* out) const {
   double f[kMaxBands];
   emissivity_.factors(t_c, f);
-  for (int b = 0; b < bands_; ++b)
-    out[b] = std::isfinite(s[b]) && s[b] > 0 ? s[b] / f[b] : s[b];
+  for (int b = 0; b < bands_; ++b) out[b] = std::isfinite(s[b]) && s[b] > 0 ? s[b] / f[b] : s[b];
 }
 
 double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* passes) const {

@@ -137,8 +137,8 @@ void PlaneEstimator::uncertainty_row(const float* const* rows, std::size_t n, co
       continue;
     }
     for (std::size_t b = 0; b < bands; ++b) s[b] = rows[b][x];
-    out[x] = static_cast<float>(expanded_uncertainty_c(
-        estimator(), s, t[x], 1, noise.at(x0 + static_cast<int>(x), y)));
+    out[x] = static_cast<float>(
+        expanded_uncertainty_c(estimator(), s, t[x], 1, noise.at(x0 + static_cast<int>(x), y)));
   }
 }
 
@@ -218,8 +218,8 @@ void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* 
   check_matched_mosaic(source);
   t.create(source.mosaic.size(), CV_32F);
   if (u) u->create(source.mosaic.size(), CV_32F);
-  const DemosaicNoise noise = u ? demosaic_noise(source.layout, DemosaicMethod::kMatched)
-                                : DemosaicNoise{};
+  const DemosaicNoise noise =
+      u ? demosaic_noise(source.layout, DemosaicMethod::kMatched) : DemosaicNoise{};
   for_each_strip(
       source,
       [&](int y, int x0, int x1, const float* const* rows, float*) {

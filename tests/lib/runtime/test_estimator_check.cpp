@@ -48,7 +48,7 @@ TEST(EstimatorCheck, finds_the_size_and_place_of_a_disagreement) {
   const FaultyEstimator faulty(test_model());
   const LocusAgreement r = compare_on_locus(*test_model(), *mlp, faulty, 5);
   EXPECT_NEAR(r.max_difference_c, 10, 1e-3);  // float temperatures: 1.2e-4 apart at 2000 degC
-  EXPECT_GE(r.worst_temperature_c, 1950);  // the network's own error may place 2000 a step off
+  EXPECT_GE(r.worst_temperature_c, 1950);     // the network's own error may place 2000 a step off
   // The blind part: the locus samples below about 600 degC that the network reads.
   EXPECT_GE(r.validity_differs, 18u);
   EXPECT_LE(r.validity_differs, 22u);
