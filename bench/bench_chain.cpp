@@ -134,8 +134,7 @@ void bench_colour(const Options& o, const pyrocam::ThermalModel& m, const std::s
     if (detailed) {
       // What reading each pixel from its own sample costs (ratiotemp brightness-radius).
       print_run("the same, ratiotemp brightness-radius=2",
-                run_chain(chain + " method=lut brightness-radius=2", caps, raw, o.frames,
-                          o.warmup),
+                run_chain(chain + " method=lut brightness-radius=2", caps, raw, o.frames, o.warmup),
                 bayer);
       // The same with bilinear demosaicking (the default is matched), without and with the
       // mixed-pixel check: what matched and the check cost.

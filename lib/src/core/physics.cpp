@@ -69,7 +69,8 @@ constexpr double kExpMainLow = 0.5, kExpMainHigh = 709.782712893383973096;
 
 // portable::expm1 on four x within [kExpMainLow, kExpMainHigh]: its exp's main path operation
 // for operation (the same constants and order, so the same bits; the library is built without
-// fused multiply-adds). Results by reference: a vector returned by value changes the baseline's ABI.
+// fused multiply-adds). Results by reference: a vector returned by value changes the baseline's
+// ABI.
 inline void expm1_main_path(const Quad& x, Quad& out) {
   constexpr double kLn2Hi = 6.93147180369123816490e-01;
   constexpr double kLn2Lo = 1.90821492927058770002e-10;
