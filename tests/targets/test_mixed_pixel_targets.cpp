@@ -174,7 +174,17 @@ struct CoreFigures {
   std::vector<double> errors;  // core median read - true, degC, per frame with a reading
 };
 
-CoreFigures core_study(bool safe_partial, bool exposed_for_the_peak, int brightness_radius = 0) {
+// The simulator's pool (every third of 60 frames) and five parabolic pools.
+std::vector<cv::Mat> pool_frames() {
+  std::vector<cv::Mat> frames;
+  for (int i = 0; i < 60; i += 3) frames.push_back(melt_pool_scene(kW, kH, i, 60));
+  for (double peak : {1500.0, 1750.0, 2000.0, 2250.0, 2500.0})
+    frames.push_back(parabolic_pool(peak, 150.3, 121.7, 40.5, 17.2));
+  return frames;
+}
+
+CoreFigures core_study(bool safe_partial, bool exposed_for_the_peak, int brightness_radius = 0,
+                       const std::vector<cv::Mat>& scenes = pool_frames()) {
   const CameraProfile p = load_profile_by_name("rgb-reference");
   const UnitPerturbation unit = UnitPerturbation::parse("typical", 3);
   auto model = std::make_shared<ThermalModel>();
@@ -220,11 +230,15 @@ CoreFigures core_study(bool safe_partial, bool exposed_for_the_peak, int brightn
     f.within_10 += std::abs(error) <= 10;
     f.errors.push_back(error);
   };
-  for (int i = 0; i < 60; i += 3) frame(melt_pool_scene(kW, kH, i, 60));
-  for (double peak : {1500.0, 1750.0, 2000.0, 2250.0, 2500.0})
-    frame(parabolic_pool(peak, 150.3, 121.7, 40.5, 17.2));
+  for (const cv::Mat& truth : scenes) frame(truth);
   f.read_fraction = static_cast<double>(core_read) / std::max(core_pixels, 1L);
   return f;
+}
+
+double rms(const CoreFigures& f) {
+  double s = 0;
+  for (double e : f.errors) s += e * e;
+  return std::sqrt(s / static_cast<double>(std::max<std::size_t>(f.errors.size(), 1)));
 }
 
 TEST(MeltPoolCoreTargets, TheCoreReadsWhenExposedForThePeak) {
@@ -237,11 +251,6 @@ TEST(MeltPoolCoreTargets, TheCoreReadsWhenExposedForThePeak) {
         "%-20s %d frames: core median within 10 degC in %d, no core reading in %d; "
         "%.1f %% of core pixels read\n",
         name, f.frames, f.within_10, f.without_reading, 100 * f.read_fraction);
-  const auto rms = [](const CoreFigures& f) {
-    double s = 0;
-    for (double e : f.errors) s += e * e;
-    return std::sqrt(s / std::max<std::size_t>(f.errors.size(), 1));
-  };
   for (const auto& [name, f] :
        {std::pair{"exposed for the peak", ratio}, {"brightness-radius 2", exposed}}) {
     std::printf("core median errors, %s (degC, %.1f rms):", name, rms(f));
@@ -260,6 +269,44 @@ TEST(MeltPoolCoreTargets, TheCoreReadsWhenExposedForThePeak) {
   EXPECT_GE(ratio.read_fraction, 0.95);
   EXPECT_EQ(ratio.read_fraction, exposed.read_fraction);  // the same pixels read
   EXPECT_LT(rms(exposed), 0.6 * rms(ratio));
+}
+
+// Smooth pools, as the independent scenes: parabolic from the peak (1500-2500 degC in
+// steps of 125) to 1300 degC at the rim, 40.5 x 17.2 and 20.3 x 8.6 pixels in semi-axes, at two
+// sub-pixel places, exposed for the peak (cores of 21-546 pixels). Target: the core median
+// within 10 degC in 95 % of frames, NOT MET: 23 of 36 measured (13.8 degC rms); 15 of the 18
+// larger pools (cores of 89-546 pixels, where the median's own noise is 3-9 degC), 8 of the 18
+// smaller ones. There every core reading is 15-30 degC low: a reading is the field seen through
+// the matched kernels' blur, which lowers a peak by half its Laplacian times the kernels'
+// variance (1 px^2 a side): -17 degC predicted for the smaller 2375 degC pool, -18 measured over
+// four noise draws. Brightness readings: 31 of 36 (9.1 degC rms). Regression bounds, five and
+// six frames below the counts measured.
+std::vector<cv::Mat> smooth_pool_frames() {
+  std::vector<cv::Mat> frames;
+  for (double size : {1.0, 0.5})
+    for (double peak = 1500; peak <= 2500; peak += 125)
+      for (double offset : {0.0, 0.5})
+        frames.push_back(
+            parabolic_pool(peak, 150.3 + offset, 121.7 + offset, 40.5 * size, 17.2 * size));
+  return frames;
+}
+
+TEST(MeltPoolCoreTargets, SmoothPoolsCoreMedian) {
+  const std::vector<cv::Mat> scenes = smooth_pool_frames();
+  const CoreFigures ratio = core_study(true, true, 0, scenes),
+                    brightness = core_study(true, true, 2, scenes);
+  for (const auto& [name, f] :
+       {std::pair{"ratio readings", ratio}, std::pair{"brightness-radius 2", brightness}}) {
+    std::printf("smooth pools, %s: core median within 10 degC in %d of %d frames, %.1f rms:", name,
+                f.within_10, f.frames, rms(f));
+    for (double e : f.errors) std::printf(" %.0f", e);
+    std::printf("\n");
+  }
+  EXPECT_EQ(ratio.without_reading, 0);
+  EXPECT_GE(ratio.read_fraction, 0.99);
+  EXPECT_GE(ratio.within_10, 18);
+  EXPECT_LT(rms(ratio), 18);
+  EXPECT_GE(brightness.within_10, 25);
 }
 
 // The 5x5 camera on parabolic pools (peaks 1500-2500 degC, 160x70 and 80x35 pixels, two noise
