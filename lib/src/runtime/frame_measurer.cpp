@@ -101,16 +101,14 @@ double FrameMeasurer::median_uncertainty_c(const cv::Mat& temperature_c,
   // Neighbouring readings share their demosaicking footprints' samples, so n readings are worth
   // fewer independent ones. A brightness reading's scale is a mean over its window of ratio
   // readings, each reaching its footprint's samples: counted as one per window widened by the
-  // footprint (5 x 5 pixels), an upper bound on the sharing.
-  const double n_eff =
-      brightness_ ? std::max(1.0, n / std::pow(brightness_->window_pixels() + 4, 2))
-                  : effective_readings(
+  // footprint (5 x 5 pixels), an upper bound on the sharing, with a median's sqrt(pi/2).
+  const double share =
+      brightness_ ? (n > 2 ? M_PI / 2 : 1.0) /
+                        std::max(1.0, n / std::pow(brightness_->window_pixels() + 4, 2))
+                  : median_noise_share(
                         used, demosaic_noise_area(model_->profile().mosaic, options_.demosaic));
-  // A median of many readings scatters sqrt(pi / 2) times as far as their mean; of one or two,
-  // as far (region_stats takes the mean of the middle two).
-  const double median_factor = n > 2 ? M_PI / 2 : 1.0;
   const double systematic = estimator.systematic_u_c(t_median);
-  return k * std::sqrt(systematic * systematic + median_factor * u_noise * u_noise / n_eff);
+  return k * std::sqrt(systematic * systematic + share * u_noise * u_noise);
 }
 
 void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& temperature_c,

@@ -218,28 +218,47 @@ std::vector<double> gaussian_footprint(double squared_sum) {
 
 }  // namespace
 
-double effective_readings(const cv::Mat& used, double noise_area) {
-  if (used.type() != CV_8U) throw InputError("effective readings: the mask must be CV_8U");
-  if (!(noise_area >= 1)) throw InputError("effective readings: a noise area below one pixel");
+double median_noise_share(const cv::Mat& used, double noise_area) {
+  if (used.type() != CV_8U) throw InputError("median noise: the mask must be CV_8U");
+  if (!(noise_area >= 1)) throw InputError("median noise: a noise area below one pixel");
   const int n = cv::countNonZero(used);
-  if (n <= 1 || noise_area == 1) return n;
+  if (n == 0) return NAN;
+  const bool median = n > 2;  // of one or two readings the median is their mean
+  // Two readings d apart along an axis share the part rho1(d) of their noise.
   const std::vector<double> w = gaussian_footprint(1 / std::sqrt(noise_area));
-  double single = 0;  // one reading's squared weights (1 / noise_area, as sampled)
+  const int width = static_cast<int>(w.size());
+  std::vector<double> rho1;
+  double single = 0;
   for (double v : w) single += v * v;
-  single *= single;
-  // Each noise source's weight in the readings' mean: the footprint spread over the mask (the
-  // footprint is symmetric, so filtering gives the transposed weights), on the mask's bounds
-  // widened by the footprint only.
-  const int radius = static_cast<int>(w.size() / 2);
+  for (int d = 0; d < width; ++d) {
+    double shared = 0;
+    for (int k = 0; k + d < width; ++k)
+      shared += w[static_cast<std::size_t>(k)] * w[static_cast<std::size_t>(k + d)];
+    if (d > 0 && shared / single < 1e-7) break;
+    rho1.push_back(shared / single);
+  }
+  // Sum over the pairs of readings of the part of their noise the mean shares (rho) or, for a
+  // median, the part their signs share: arcsin(rho) for jointly normal noise (Sheppard), so
+  // that var(median) = sigma^2 / n^2 * sum arcsin(rho): pi/2 sigma^2 / n for independent
+  // readings, sigma^2 for readings that share all of it.
+  const int radius = static_cast<int>(rho1.size()) - 1;
+  cv::Mat kernel(2 * radius + 1, 2 * radius + 1, CV_64F);
+  for (int dy = -radius; dy <= radius; ++dy)
+    for (int dx = -radius; dx <= radius; ++dx) {
+      const double rho = rho1[static_cast<std::size_t>(std::abs(dx))] *
+                         rho1[static_cast<std::size_t>(std::abs(dy))];
+      kernel.at<double>(dy + radius, dx + radius) = median ? std::asin(std::min(rho, 1.0)) : rho;
+    }
   const cv::Rect bounds = cv::boundingRect(used);
-  const cv::Rect padded(bounds.x - radius, bounds.y - radius, bounds.width + 2 * radius,
-                        bounds.height + 2 * radius);
-  cv::Mat share = cv::Mat::zeros(padded.size(), CV_64F);
-  used(bounds).convertTo(share(cv::Rect(radius, radius, bounds.width, bounds.height)), CV_64F);
-  cv::threshold(share, share, 0, 1.0 / n, cv::THRESH_BINARY);
-  const cv::Mat kernel(w, false);
-  cv::sepFilter2D(share, share, CV_64F, kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
-  return std::clamp(single / share.dot(share), 1.0, static_cast<double>(n));
+  cv::Mat in = cv::Mat::zeros(bounds.height + 2 * radius, bounds.width + 2 * radius, CV_64F);
+  used(bounds).convertTo(in(cv::Rect(radius, radius, bounds.width, bounds.height)), CV_64F);
+  cv::threshold(in, in, 0, 1, cv::THRESH_BINARY);
+  cv::Mat pairs;
+  cv::filter2D(in, pairs, CV_64F, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+  const double share = in.dot(pairs) / (static_cast<double>(n) * n);
+  // Between independent readings and one reading.
+  const double one = median ? M_PI / 2 : 1.0;
+  return std::clamp(share, one / n, one);
 }
 
 std::size_t count_without_reading(const cv::Mat& temperature_c, const cv::Mat& mask) {

@@ -221,23 +221,38 @@ TEST(RegionPeak, DISABLED_timing_2048x2048) {
       p.c);
 }
 
-TEST(RegionStats, effective_readings_count_what_the_readings_share) {
+// The median's noise: independent readings as the median of independent normal values, one
+// reading as itself, readings that share their noise in between, and a region's share falling
+// as one over its readings once it is much larger than the footprint.
+TEST(RegionStats, median_noise_share_counts_what_the_readings_share) {
   cv::Mat used = cv::Mat::zeros(200, 200, CV_8U);
-  EXPECT_EQ(effective_readings(used, 13.9), 0);
+  EXPECT_TRUE(std::isnan(median_noise_share(used, 13.9)));
   used.at<std::uint8_t>(50, 50) = 1;
-  EXPECT_DOUBLE_EQ(effective_readings(used, 13.9), 1);
+  EXPECT_DOUBLE_EQ(median_noise_share(used, 13.9), 1);
+  // Two neighbours: their mean, of noise they partly share.
+  used.at<std::uint8_t>(50, 51) = 1;
+  const double pair = median_noise_share(used, 13.9);
+  EXPECT_GT(pair, 0.5);
+  EXPECT_LT(pair, 1);
   // Far apart: independent.
+  used.at<std::uint8_t>(50, 51) = 0;
   used.at<std::uint8_t>(50, 150) = used.at<std::uint8_t>(150, 50) = 1;
-  EXPECT_NEAR(effective_readings(used, 13.9), 3, 1e-6);
-  // Much larger than the footprint: n / area within its rim's share.
+  EXPECT_NEAR(median_noise_share(used, 13.9), M_PI / 2 / 3, 1e-6);
+  // Unshared noise: the median of independent readings.
   used.setTo(0);
   used(cv::Rect(20, 20, 160, 160)) = 1;
-  EXPECT_NEAR(effective_readings(used, 13.9), 160 * 160 / 13.9, 0.06 * 160 * 160 / 13.9);
-  EXPECT_GT(effective_readings(used, 13.9), 160 * 160 / 13.9);
-  // Unshared noise: every reading counts.
-  EXPECT_DOUBLE_EQ(effective_readings(used, 1), 160 * 160);
-  EXPECT_THROW(effective_readings(used, 0.5), InputError);
-  EXPECT_THROW(effective_readings(cv::Mat::zeros(4, 4, CV_32F), 2), InputError);
+  EXPECT_NEAR(median_noise_share(used, 1), M_PI / 2 / (160 * 160), 1e-12);
+  // Shared: more than independent readings, less than a footprint's area of them as one.
+  const double large = median_noise_share(used, 13.9);
+  EXPECT_GT(large, M_PI / 2 / (160 * 160));
+  EXPECT_LT(large, M_PI / 2 * 13.9 / (160 * 160));
+  // Much larger than the footprint: the share per reading hardly depends on the size.
+  cv::Mat smaller = cv::Mat::zeros(200, 200, CV_8U);
+  smaller(cv::Rect(40, 40, 120, 120)) = 1;
+  EXPECT_NEAR(median_noise_share(smaller, 13.9) * 120 * 120, large * 160 * 160,
+              0.05 * large * 160 * 160);
+  EXPECT_THROW(median_noise_share(used, 0.5), InputError);
+  EXPECT_THROW(median_noise_share(cv::Mat::zeros(4, 4, CV_32F), 2), InputError);
 }
 
 }  // namespace

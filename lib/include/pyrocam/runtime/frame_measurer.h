@@ -67,12 +67,12 @@ class FrameMeasurer {
   // `mask` (as in unread), from the frame's temperatures and per-pixel expanded uncertainties
   // (measure's uncertainty_c): the systematic terms at the median (calibration, emissivity:
   // common to every pixel, so the median keeps them whole) and the readings' noise (the median
-  // of the readings' own), which a median of n readings reduces by sqrt(pi/2 / n_eff).
-  // Neighbouring readings share their demosaicking footprints' samples, so their noise is not
-  // independent: n_eff is effective_readings over the readings with demosaic_noise_area (a
-  // region much larger than the footprints: n / 13.9 for matched Bayer demosaicking, n / 3.3
-  // for matched 5x5 cells); with brightness readings, n over the window widened by the
-  // footprint. NaN without a reading.
+  // of the readings' own) times the square root of median_noise_share: neighbouring readings
+  // share their demosaicking footprints' samples (demosaic_noise_area), so their median
+  // scatters more than that of independent readings (a region much larger than the footprints
+  // is worth about n / 13.9 readings with matched Bayer demosaicking, n / 3.3 with matched 5x5
+  // cells). With brightness readings, pi/2 over n over the window widened by the footprint.
+  // NaN without a reading.
   double median_uncertainty_c(const cv::Mat& temperature_c, const cv::Mat& uncertainty_c,
                               const cv::Mat& mask) const;
   // Adds a table file's blocks (the model's prebuilt lookup table, prebuilt_tables.h) to the

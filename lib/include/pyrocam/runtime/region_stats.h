@@ -52,13 +52,15 @@ cv::Mat saturated_sample_mask(const cv::Mat& mosaic, int radius);
 // same size) is non-zero.
 std::size_t count_without_reading(const cv::Mat& temperature_c, const cv::Mat& mask);
 
-// How many independent readings the readings under `used` (CV_8U, non-zero: a reading) are worth
-// to their mean or median when each one's noise is shared with its neighbours over `noise_area`
-// pixels (demosaic_noise_area): the variance of one reading over that of their mean, each
-// reading taken as a Gaussian-weighted mean of independent noise whose squared weights sum to
-// 1 / noise_area. Readings far apart count one each, a region much larger than the footprint
-// its pixels / noise_area, a single reading one. Within [1, n] for n readings; 0 for none.
-// Throws InputError for a mask of another type or a noise_area below 1.
-double effective_readings(const cv::Mat& used, double noise_area);
+// The variance of the median of the readings under `used` (CV_8U, non-zero: a reading), as a
+// share of one reading's, when each one's noise is shared with its neighbours over `noise_area`
+// pixels (demosaic_noise_area): each reading taken as a Gaussian-weighted mean of independent
+// noise whose squared weights sum to 1 / noise_area, the noise jointly normal. n readings far
+// apart give pi/2 / n (the median of independent readings), a single reading 1, and a region
+// much larger than the footprint about pi/2 / n times the footprint's area, less where the
+// readings share much of their noise (their median loses less to their mean). Of one or two
+// readings the median is their mean, and so is the share. NaN for none. Throws InputError for a
+// mask of another type or a noise_area below 1.
+double median_noise_share(const cv::Mat& used, double noise_area);
 
 }  // namespace pyrocam
