@@ -10,6 +10,13 @@
 namespace pyrocam {
 namespace {
 
+// How many samples of each band one mosaic period holds.
+std::vector<int> band_members(const MosaicLayout& layout) {
+  std::vector<int> members(static_cast<std::size_t>(layout.band_count()), 0);
+  for (int b : layout.band_map) ++members[static_cast<std::size_t>(b)];
+  return members;
+}
+
 void prepare_planes(std::vector<cv::Mat>& planes, int bands, cv::Size size) {
   planes.resize(static_cast<std::size_t>(bands));
   for (cv::Mat& p : planes) p.create(size, CV_32F);  // no-op when it already fits
@@ -61,8 +68,7 @@ void deinterleave_row(const float* __restrict row, int pw, int out_w, float* con
 void bin_cells(const cv::Mat& in, const MosaicLayout& layout, std::vector<cv::Mat>& planes) {
   const int pw = layout.period_width, ph = layout.period_height;
   const int bands = layout.band_count();
-  std::vector<int> members(static_cast<std::size_t>(bands), 0);
-  for (int b : layout.band_map) ++members[static_cast<std::size_t>(b)];
+  const std::vector<int> members = band_members(layout);
   const bool one_each = std::all_of(members.begin(), members.end(), [](int m) { return m == 1; });
   const int out_w = planes[0].cols, out_h = planes[0].rows;
   auto rows = [&](const cv::Range& range) {
@@ -293,9 +299,7 @@ DemosaicNoise demosaic_noise(const MosaicLayout& layout, DemosaicMethod method) 
   const int bands = layout.band_count(), pw = layout.period_width, ph = layout.period_height;
   DemosaicNoise noise;
   noise.bands = bands;
-  std::vector<int> members(static_cast<std::size_t>(bands), 0);
-  for (int y = 0; y < ph; ++y)
-    for (int x = 0; x < pw; ++x) ++members[static_cast<std::size_t>(layout.band_at(x, y))];
+  const std::vector<int> members = band_members(layout);
   if (layout.kind == MosaicLayout::Kind::kBayer && method != DemosaicMethod::kBinCells) {
     // By how the band is obtained at the pixel (Op above; demosaic_matched.cpp's kernels): its
     // own sample (R or B, or G, whose matched kernel also takes its diagonals), the two nearest
@@ -340,10 +344,7 @@ double demosaic_noise_area(const MosaicLayout& layout, DemosaicMethod method) {
   const bool per_pixel = layout.kind == MosaicLayout::Kind::kBayer &&
                          resolve_demosaic_method(method, layout) != DemosaicMethod::kBinCells;
   const double outputs = per_pixel ? layout.period_width * layout.period_height : 1;
-  std::vector<int> members(static_cast<std::size_t>(noise.bands), 0);
-  for (int y = 0; y < layout.period_height; ++y)
-    for (int x = 0; x < layout.period_width; ++x)
-      ++members[static_cast<std::size_t>(layout.band_at(x, y))];
+  const std::vector<int> members = band_members(layout);
   double spread = 0, factors = 0;
   for (int b = 0; b < noise.bands; ++b) {
     const auto i = static_cast<std::size_t>(b);
