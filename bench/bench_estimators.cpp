@@ -182,7 +182,11 @@ int main(int argc, char** argv) {
         "object, model %s\n",
         planes[0].cols, planes[0].rows, 100 * pyrocam::bench::hot_fraction(scene),
         nir_model.c_str());
-    const pyrocam::PlaneEstimator likelihood(model, Method::kLikelihood);
+    // Pixels with saturated or dim bands read from the rest where that is safe, as ratiotemp's
+    // default partial-bands=safe reads them (an over-exposed plate reads at all).
+    constexpr auto kSafe = pyrocam::TemperatureEstimator::PartialBands::kSafe;
+    pyrocam::PlaneEstimator likelihood(model, Method::kLikelihood);
+    likelihood.set_partial_bands(kSafe);
     cv::Mat t_fast, t_exhaustive, t_mlp;
     print_timing("likelihood estimate (fast)",
                  time_frames(frames, [&] { likelihood.estimate(planes, t_fast); }));
@@ -190,6 +194,7 @@ int main(int argc, char** argv) {
                  time_frames(frames, [&] { likelihood.estimate_codes(planes, codes); }));
     // The exhaustive scan as a per-pixel estimator, on the same rows.
     const auto exhaustive = pyrocam::make_exhaustive_likelihood_estimator(model);
+    exhaustive->set_partial_bands(kSafe);
     print_timing("likelihood, exhaustive scan (reference)", time_frames(0, [&] {
                    t_exhaustive.create(planes[0].size(), CV_32F);
                    cv::parallel_for_(cv::Range(0, planes[0].rows), [&](const cv::Range& r) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "runtime/estimator_kinds.h"
@@ -30,8 +31,9 @@ LaneBands lane_bands(const double* w, int bands);
 class DirectChi2 {
  public:
   // m and m2: samples x width (padded_bands), row after row; `bands` of each row are read.
+  // monotonic: bands x bands, whether a pair's ratio keeps one direction over the samples.
   DirectChi2(const double* m, const double* m2, int width, int bands, Eigen::Index samples,
-             Eigen::Index coarse);
+             Eigen::Index coarse, const std::uint8_t* monotonic);
 
   Eigen::Index coarse_count() const { return coarse_count_; }
 
@@ -39,14 +41,33 @@ class DirectChi2 {
   // for coarse_count() rounded up to eight).
   void at_coarse(const LaneBands& lanes, const double* ws, const double* w, double sss,
                  double* chi2) const;
+  // The same at the coarse samples from .. from + count - 1 only, into chi2[0 .. count) (room
+  // for count rounded up to eight): the same bits as at_coarse gives them.
+  void at_coarse(const LaneBands& lanes, const double* ws, const double* w, double sss,
+                 Eigen::Index from, Eigen::Index count, double* chi2) const;
+
+  // The coarse samples [first, last] whose refinement windows (a coarse step each side) can hold
+  // a sample where chi2 is less than `margin` above its least value; false where it cannot tell
+  // (no weighed pair of bands has a monotonic ratio): then every coarse sample can. chi2 with
+  // all weighed bands is at least that of any two of them alone, each fit with its own scale,
+  // and for a pair whose ratio is monotonic along the locus that is a bowl around the sample
+  // where the ratio is the pixel's, rising on both sides. *upper (an upper bound of the least
+  // chi2: chi2 at the coarse sample where the ratios cross) plus `margin` sets its rim; samples
+  // past the first coarse sample outside it on each side cannot come within `margin`.
+  bool coarse_span(const LaneBands& lanes, const double* ws, const double* w, double sss,
+                   double margin, Eigen::Index& first, Eigen::Index& last, double& upper) const;
   // chi2 at the samples from .. from + count - 1 into chi2[0 .. count) (room for count rounded
   // up to eight).
   void at_samples(const LaneBands& lanes, const double* ws, const double* w, double sss,
                   Eigen::Index from, Eigen::Index count, double* chi2) const;
 
  private:
+  int bands_ = 0;
   Eigen::Index stride_ = 0, coarse_count_ = 0, coarse_stride_ = 0;
   std::vector<double> m_, m2_, coarse_m_, coarse_m2_;  // band after band, `stride` a band
+  // bands x bands: how far a monotonic pair's log ratio moves along the locus, first to last
+  // sample (positive: it rises; 0: not monotonic).
+  std::vector<double> reach_;
 };
 
 }  // namespace pyrocam

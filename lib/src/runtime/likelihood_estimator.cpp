@@ -65,7 +65,8 @@ class LikelihoodEstimator : public LikelihoodFit {
   explicit LikelihoodEstimator(std::shared_ptr<const ThermalModel> model)
       : LikelihoodFit(std::move(model)),
         descent_(locus_.rates, rates_.data(), squares_.data(), width_, monotonic_.data()),
-        direct_(rates_.data(), squares_.data(), width_, bands_, locus_.size(), kCoarse) {
+        direct_(rates_.data(), squares_.data(), width_, bands_, locus_.size(), kCoarse,
+                monotonic_.data()) {
     const ThermalModel& m = *model_;
     const Eigen::Index n = locus_.size();
     Eigen::MatrixXd unit(n, bands_), squares(n, bands_);
@@ -437,15 +438,26 @@ class LikelihoodEstimator : public LikelihoodFit {
   }
 
   // The scan of the exhaustive fit itself, each chi2 computed exactly from the weighed bands
-  // alone (DirectChi2): every coarse sample, then the window of each coarse local minimum.
-  double direct_scan(const Weighted& px) const {
+  // alone (DirectChi2): every coarse sample, then the window of each coarse local minimum. Only
+  // the coarse samples whose windows can come within kAmbiguityChi2 of the least chi2
+  // (DirectChi2::coarse_span): the minima outside neither read nor make a reading ambiguous.
+  double direct_scan(const Weighted& px, bool whole = false) const {
     const LaneBands lanes = lane_bands(px.w, bands_);
     const Eigen::Index n = locus_.size(), nc = direct_.coarse_count();
+    Eigen::Index first = 0, last = nc - 1;
+    double upper = 0;
+    const bool spanned = !whole && direct_.coarse_span(lanes, px.ws, px.w, px.sss, kAmbiguityChi2,
+                                                       first, last, upper);
+    if (!spanned) first = 0, last = nc - 1;
+    // Their neighbours too, for the local minima's test.
+    const Eigen::Index from = std::max<Eigen::Index>(first - 1, 0),
+                       to = std::min<Eigen::Index>(last + 1, nc - 1);
     alignas(32) double c[kMaxCoarse + 8];
-    direct_.at_coarse(lanes, px.ws, px.w, px.sss, c);
+    direct_.at_coarse(lanes, px.ws, px.w, px.sss, from, to - from + 1, c + from);
     Minimum refined[kMaxCoarse];
     std::size_t count = 0;
-    for (Eigen::Index k = 0; k < nc; ++k) {
+    double least = std::numeric_limits<double>::infinity();
+    for (Eigen::Index k = first; k <= last; ++k) {
       if (!((k == 0 || c[k] <= c[k - 1]) && (k + 1 == nc || c[k] <= c[k + 1]))) continue;
       const Eigen::Index around = k * kCoarse;
       const Eigen::Index lo = std::max<Eigen::Index>(0, around - kCoarse);
@@ -459,7 +471,10 @@ class LikelihoodEstimator : public LikelihoodFit {
       if (best.index > lo) best.below = v[best.index - 1 - lo];
       if (best.index < hi) best.above = v[best.index + 1 - lo];
       refined[count++] = best;
+      least = std::min(least, best.chi2);
     }
+    // The span holds a sample at `upper`, so a minimum at most that: else (not seen) scan all.
+    if (spanned && !(least <= upper)) return direct_scan(px, true);
     return decide(refined, count, px);
   }
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <numeric>
@@ -23,6 +24,8 @@
 #include "pyrocam/simulation/simulator.h"
 #include "runtime/estimator_kinds.h"
 #include "runtime/estimator_test_support.h"
+#include "runtime/likelihood_direct.h"
+#include "runtime/likelihood_kernels.h"
 
 namespace pyrocam::test {
 namespace {
@@ -80,6 +83,105 @@ TEST(LikelihoodEstimator, pixels_that_few_bands_read_read_as_the_exhaustive_fit)
   EXPECT_GT(read, pixels / 4);
   EXPECT_LT(read, pixels);
   for (const int kept : {3, 7, 12, 16}) EXPECT_GT(read_with[static_cast<std::size_t>(kept)], 20u);
+}
+
+// DirectChi2::coarse_span, which the scan of pixels that few bands read trusts to leave out
+// most of the locus: on 5x5 pixels with 3 to 12 bands weighed (the others saturated; a quarter
+// of them mixtures of two temperatures), chi2 at every sample outside the refinement windows of
+// the span is at least 9 (the margin asked) above the least chi2 of the whole locus, and
+// `upper` is not below that least; every pixel with a monotonic pair among its weighed bands
+// gets a span, and the spans leave out most of the locus.
+TEST(LikelihoodDirect, the_coarse_span_holds_every_sample_that_can_matter) {
+  const auto model = test_model("test-model-nir5x5.json");
+  const ThermalModel& m = *model;
+  const int bands = m.profile().band_count(), width = padded_bands(bands);
+  const Locus locus = make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 1.0);
+  const Eigen::Index n = locus.size();
+  std::vector<double> rates(static_cast<std::size_t>(n * width), 0.0), squares(rates.size(), 0.0);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (int b = 0; b < bands; ++b) {
+      rates[static_cast<std::size_t>(i * width + b)] = locus.rates(i, b);
+      squares[static_cast<std::size_t>(i * width + b)] = locus.rates(i, b) * locus.rates(i, b);
+    }
+  // Monotonic pairs as the fit finds them (likelihood_fit.h).
+  std::vector<std::uint8_t> monotonic(static_cast<std::size_t>(bands * bands), 0);
+  for (int i = 0; i < bands; ++i)
+    for (int j = 0; j < bands; ++j) {
+      if (i == j) continue;
+      const Eigen::ArrayXd r = locus.rates.col(i).array() / locus.rates.col(j).array();
+      const Eigen::Index k = n - 1;
+      const bool rising = (r.tail(k) >= r.head(k)).all(), falling = (r.tail(k) <= r.head(k)).all();
+      monotonic[static_cast<std::size_t>(i * bands + j)] = (locus.rates.col(i).array() > 0).all() &&
+                                                           (locus.rates.col(j).array() > 0).all() &&
+                                                           (rising || falling);
+    }
+  constexpr Eigen::Index kCoarse = 20;
+  constexpr double kMargin = 9;
+  const DirectChi2 direct(rates.data(), squares.data(), width, bands, n, kCoarse, monotonic.data());
+  alignas(32) double gain[kMaxBands] = {}, floor[kMaxBands] = {};
+  for (int b = 0; b < bands; ++b) {
+    const SignalNoise noise = signal_noise(m.profile(), b);
+    gain[b] = noise.shot_gain, floor[b] = noise.floor_dn2;
+  }
+  const double dim = m.profile().thresholds.inference_dim_dn;
+  const double saturated = saturation_signal_dn(m);
+  Uniform uniform{331};
+  long pixels = 0, unbounded = 0, refused = 0, outside = 0, beneath = 0;
+  double span_share = 0;
+  for (int p = 0; p < 1500; ++p) {
+    Eigen::VectorXd s = m.camera.rates(550 + 2900 * uniform());
+    if (p % 4 == 3)  // a mixture
+      s += (0.2 + uniform()) * s.maxCoeff() * m.camera.rates(550 + 2900 * uniform()).normalized();
+    for (int b = 0; b < bands; ++b) s[b] *= 1 + 0.03 * (2 * uniform() - 1);
+    const int kept = 3 + p % 10;
+    std::vector<int> order(static_cast<std::size_t>(bands));
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return s[a] < s[b]; });
+    s *= (dim + (0.9 * saturated - dim) * uniform()) / s[order[static_cast<std::size_t>(kept - 1)]];
+    for (std::size_t k = static_cast<std::size_t>(kept); k < order.size(); ++k)
+      s[order[k]] = std::numeric_limits<double>::infinity();
+    alignas(32) double w[kMaxBands], ws[kMaxBands], sss = 0;
+    int bright = 0;
+    weigh_bands(s.data(), bands, dim, dim, gain, floor, w, ws, &sss, &bright);
+    const LaneBands lanes = lane_bands(w, bands);
+    if (lanes.start[4] < 2) continue;
+    ++pixels;
+    Eigen::Index first = -1, last = -1;
+    double upper = NAN;
+    if (!direct.coarse_span(lanes, ws, w, sss, kMargin, first, last, upper)) {
+      ++unbounded;
+      bool pair = false;
+      for (int a = 0; a < lanes.start[4]; ++a)
+        for (int b = 0; b < lanes.start[4]; ++b)
+          pair = pair || monotonic[static_cast<std::size_t>(lanes.band[a] * bands + lanes.band[b])];
+      refused += pair;
+      continue;
+    }
+    std::vector<double> chi2(static_cast<std::size_t>(n));
+    for (Eigen::Index i = 0; i < n; ++i)
+      chi2[static_cast<std::size_t>(i)] =
+          profiled_chi2(&rates[static_cast<std::size_t>(i * width)],
+                        &squares[static_cast<std::size_t>(i * width)], ws, w, width, sss);
+    const double least = *std::min_element(chi2.begin(), chi2.end());
+    beneath += upper < least;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if ((i < kCoarse * (first - 1) || i > kCoarse * (last + 1)) &&
+          chi2[static_cast<std::size_t>(i)] < least + kMargin)
+        ++outside;
+    span_share +=
+        static_cast<double>(last - first + 1) / static_cast<double>(direct.coarse_count());
+  }
+  span_share /= static_cast<double>(std::max(pixels - unbounded, 1L));
+  std::printf(
+      "%ld pixels, %ld without a span (%ld of them with a monotonic pair); spans %.1f %% of the "
+      "coarse samples on average\n",
+      pixels, unbounded, refused, 100 * span_share);
+  EXPECT_EQ(outside, 0);
+  EXPECT_EQ(beneath, 0);
+  EXPECT_GT(pixels, 1000);
+  EXPECT_EQ(refused, 0);             // a span wherever a weighed pair is monotonic
+  EXPECT_LT(unbounded, pixels / 4);  // measured 252 of 1475 (3 to 5 bands, none monotonic)
+  EXPECT_LT(span_share, 0.4);        // measured 26 %
 }
 
 // Safe partial readings: a pixel with unusable bands reads from the rest only when two of them
