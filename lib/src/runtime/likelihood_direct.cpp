@@ -94,12 +94,6 @@ DirectChi2::DirectChi2(const double* m, const double* m2, int width, int bands,
 }
 
 void DirectChi2::at_coarse(const LaneBands& lanes, const double* ws, const double* w, double sss,
-                           double* chi2) const {
-  chi2_run(coarse_m_.data(), coarse_m2_.data(), coarse_stride_, lanes, ws, w, sss, 0, coarse_count_,
-           chi2);
-}
-
-void DirectChi2::at_coarse(const LaneBands& lanes, const double* ws, const double* w, double sss,
                            Eigen::Index from, Eigen::Index count, double* chi2) const {
   chi2_run(coarse_m_.data(), coarse_m2_.data(), coarse_stride_, lanes, ws, w, sss, from, count,
            chi2);

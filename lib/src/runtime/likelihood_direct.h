@@ -37,12 +37,9 @@ class DirectChi2 {
 
   Eigen::Index coarse_count() const { return coarse_count_; }
 
-  // chi2 at the coarse samples 0, coarse, 2 coarse, ... into chi2[0 .. coarse_count()) (room
-  // for coarse_count() rounded up to eight).
-  void at_coarse(const LaneBands& lanes, const double* ws, const double* w, double sss,
-                 double* chi2) const;
-  // The same at the coarse samples from .. from + count - 1 only, into chi2[0 .. count) (room
-  // for count rounded up to eight): the same bits as at_coarse gives them.
+  // chi2 at the coarse samples from, from + 1, ... from + count - 1 (samples from * coarse, ...)
+  // into chi2[0 .. count) (room for count rounded up to eight); each sample's bits are the same
+  // whatever the run it is in.
   void at_coarse(const LaneBands& lanes, const double* ws, const double* w, double sss,
                  Eigen::Index from, Eigen::Index count, double* chi2) const;
 
