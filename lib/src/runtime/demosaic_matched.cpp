@@ -273,14 +273,15 @@ class MatchedBayer {
       float* even = ring(yy);
       float* odd = even + half;
       split_row(src, width_, no_signal_dn_, even + kReach / 2, odd + kReach / 2);
-      auto edge = [&](int p, int x) {
+      auto edge = [&](float* half_row, int x) {
         const float value = src[cv::borderInterpolate(x, width_, cv::BORDER_REFLECT_101)];
-        (p & 1 ? odd : even)[p / 2] =
-            value < no_signal_dn_ ? -std::numeric_limits<float>::infinity() : value;
+        *half_row = value < no_signal_dn_ ? -std::numeric_limits<float>::infinity() : value;
       };
+      // Padded column p is at (p odd ? odd : even)[p / 2].
+      const auto at = [&](int p) { return (p & 1 ? odd : even) + p / 2; };
       for (int k = 1; k <= kReach; ++k) {
-        edge(kReach - k, -k);
-        edge(kReach + width_ - 1 + k, width_ - 1 + k);
+        edge(at(kReach - k), -k);
+        edge(at(kReach + width_ - 1 + k), width_ - 1 + k);
       }
       if (!mark_no_signal_) return;
       std::uint8_t* row_lit = lit.data() + slot(yy) * blocks_;
