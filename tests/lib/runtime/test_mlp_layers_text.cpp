@@ -20,8 +20,10 @@ namespace {
 using nlohmann::json;
 
 bool same_bits(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  // memcmp of empty matrices would pass it their null data pointers (undefined behaviour).
   return a.rows() == b.rows() && a.cols() == b.cols() &&
-         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0;
+         (a.size() == 0 || std::memcmp(a.data(), b.data(),
+                                       sizeof(double) * static_cast<std::size_t>(a.size())) == 0);
 }
 
 // What the JSON parser makes of the same layers text.
