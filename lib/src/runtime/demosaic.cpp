@@ -28,7 +28,6 @@ PYROCAM_VECTOR_CLONES
 void deinterleave_row(const float* __restrict row, int pw, int out_w, float* const* out) {
   if (pw == 5) {  // the snapshot cameras: four cells at a time, a 5 x 4 transpose in vectors
     typedef float Four __attribute__((vector_size(16), aligned(4), may_alias));
-    typedef std::int32_t Pick __attribute__((vector_size(16)));
     float* __restrict o0 = out[0];
     float* __restrict o1 = out[1];
     float* __restrict o2 = out[2];
@@ -42,17 +41,21 @@ void deinterleave_row(const float* __restrict row, int pw, int out_w, float* con
       const Four v0 = load(in), v1 = load(in + 4), v2 = load(in + 8), v3 = load(in + 12),
                  v4 = load(in + 16);
       // Band k of cell c is sample 5c + k: vector (5c + k) / 4, lane (5c + k) % 4.
-      const Pick low = {0, 1, 4, 5};
-      store(o0 + x, __builtin_shuffle(__builtin_shuffle(v0, v1, Pick{0, 5, 0, 0}),
-                                      __builtin_shuffle(v2, v3, Pick{2, 7, 0, 0}), low));
-      store(o1 + x, __builtin_shuffle(__builtin_shuffle(v0, v1, Pick{1, 6, 0, 0}),
-                                      __builtin_shuffle(v2, v4, Pick{3, 4, 0, 0}), low));
-      store(o2 + x, __builtin_shuffle(__builtin_shuffle(v0, v1, Pick{2, 7, 0, 0}),
-                                      __builtin_shuffle(v3, v4, Pick{0, 5, 0, 0}), low));
-      store(o3 + x, __builtin_shuffle(__builtin_shuffle(v0, v2, Pick{3, 4, 0, 0}),
-                                      __builtin_shuffle(v3, v4, Pick{1, 6, 0, 0}), low));
-      store(o4 + x, __builtin_shuffle(__builtin_shuffle(v1, v2, Pick{0, 5, 0, 0}),
-                                      __builtin_shuffle(v3, v4, Pick{2, 7, 0, 0}), low));
+      store(o0 + x,
+            __builtin_shufflevector(__builtin_shufflevector(v0, v1, 0, 5, 0, 0),
+                                    __builtin_shufflevector(v2, v3, 2, 7, 0, 0), 0, 1, 4, 5));
+      store(o1 + x,
+            __builtin_shufflevector(__builtin_shufflevector(v0, v1, 1, 6, 0, 0),
+                                    __builtin_shufflevector(v2, v4, 3, 4, 0, 0), 0, 1, 4, 5));
+      store(o2 + x,
+            __builtin_shufflevector(__builtin_shufflevector(v0, v1, 2, 7, 0, 0),
+                                    __builtin_shufflevector(v3, v4, 0, 5, 0, 0), 0, 1, 4, 5));
+      store(o3 + x,
+            __builtin_shufflevector(__builtin_shufflevector(v0, v2, 3, 4, 0, 0),
+                                    __builtin_shufflevector(v3, v4, 1, 6, 0, 0), 0, 1, 4, 5));
+      store(o4 + x,
+            __builtin_shufflevector(__builtin_shufflevector(v1, v2, 0, 5, 0, 0),
+                                    __builtin_shufflevector(v3, v4, 2, 7, 0, 0), 0, 1, 4, 5));
     }
     for (; x < out_w; ++x) {
       const float* in = row + 5 * x;
