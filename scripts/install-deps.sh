@@ -10,7 +10,7 @@ packages=(
   gstreamer1.0-plugins-bad gstreamer1.0-plugins-ugly gstreamer1.0-libav
   gstreamer1.0-x
   libaravis-dev aravis-tools aravis-tools-cli libusb-1.0-0-dev
-  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
+  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libtiff-dev
   libeigen3-dev libgtest-dev nlohmann-json3-dev libcli11-dev libpugixml-dev
   libsoup-3.0-dev libjs-chart.js
 )

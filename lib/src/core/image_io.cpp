@@ -1,10 +1,19 @@
 #include "pyrocam/core/image_io.h"
 
+#include <tiffio.h>
+
+#include <algorithm>
 #include <array>
 #include <cctype>
+#include <cstdarg>
 #include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <memory>
+#include <string>
 #include <opencv2/imgcodecs.hpp>
+#include <vector>
 
 #include "pyrocam/core/error.h"
 
@@ -138,9 +147,100 @@ DeclaredSize read_declared_size(const std::filesystem::path& path) {
   throw InputError(path.string() + ": not a PGM, PNG or TIFF image");
 }
 
-}  // namespace
+// libtiff's first error on one file, through the file's own handler (libtiff 4.5): OpenCV's
+// TIFF decoder returned an image whose LZW strips had failed to decode (the rows then hold
+// whatever the buffer held), so TIFFs are decoded here and any decoding error refuses the file.
+struct TiffErrors {
+  std::string first;
+};
 
-cv::Size read_image_size(const std::filesystem::path& path) {
+// (The module libtiff names is mostly the file's name, which the message already has.)
+int note_tiff_error(TIFF*, void* user, const char*, const char* format, va_list args) {
+  auto* errors = static_cast<TiffErrors*>(user);
+  if (errors->first.empty()) {
+    char text[512];
+    std::vsnprintf(text, sizeof text, format, args);
+    errors->first = text;
+  }
+  return 1;  // handled: not printed
+}
+
+int ignore_tiff_warning(TIFF*, void*, const char*, const char*, va_list) {
+  return 1;  // unknown tags and the like: the samples decode all the same
+}
+
+cv::Mat read_tiff(const std::filesystem::path& path) {
+  TiffErrors errors;
+  TIFFOpenOptions* options = TIFFOpenOptionsAlloc();
+  if (!options) throw InputError(path.string() + ": cannot decode TIFF (out of memory)");
+  TIFFOpenOptionsSetErrorHandlerExtR(options, note_tiff_error, &errors);
+  TIFFOpenOptionsSetWarningHandlerExtR(options, ignore_tiff_warning, nullptr);
+  const std::unique_ptr<TIFF, void (*)(TIFF*)> tiff(TIFFOpenExt(path.c_str(), "r", options),
+                                                    TIFFClose);
+  TIFFOpenOptionsFree(options);
+  const auto refuse = [&](const std::string& why) {
+    return InputError(path.string() + ": " + why);
+  };
+  const auto corrupt = [&]() {
+    return refuse("corrupt or truncated TIFF (" +
+                  (errors.first.empty() ? std::string("a strip or tile is short") : errors.first) +
+                  ")");
+  };
+  if (!tiff) throw corrupt();
+  TIFF* t = tiff.get();
+  std::uint32_t width = 0, height = 0;
+  std::uint16_t bits = 0, samples = 0, format = 0, photometric = PHOTOMETRIC_MINISBLACK;
+  if (!TIFFGetField(t, TIFFTAG_IMAGEWIDTH, &width) || !TIFFGetField(t, TIFFTAG_IMAGELENGTH, &height))
+    throw corrupt();
+  TIFFGetFieldDefaulted(t, TIFFTAG_BITSPERSAMPLE, &bits);
+  TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLESPERPIXEL, &samples);
+  TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLEFORMAT, &format);
+  TIFFGetField(t, TIFFTAG_PHOTOMETRIC, &photometric);
+  if (samples != 1)
+    throw refuse(std::to_string(samples) +
+                 " channels; raw mosaic images must be single-channel");
+  if ((bits != 8 && bits != 16) || format != SAMPLEFORMAT_UINT)
+    throw refuse("samples must be 8- or 16-bit unsigned integers");
+  if (photometric != PHOTOMETRIC_MINISBLACK)
+    throw refuse("TIFF photometric interpretation " + std::to_string(photometric) +
+                 "; raw mosaic images are grey, 0 = black");
+  cv::Mat image(static_cast<int>(height), static_cast<int>(width), bits == 8 ? CV_8U : CV_16U);
+  const std::size_t pixel_bytes = bits / 8;
+  if (TIFFIsTiled(t)) {
+    std::uint32_t tile_width = 0, tile_height = 0;
+    TIFFGetField(t, TIFFTAG_TILEWIDTH, &tile_width);
+    TIFFGetField(t, TIFFTAG_TILELENGTH, &tile_height);
+    const tmsize_t tile_bytes = TIFFTileSize(t);
+    if (tile_width == 0 || tile_height == 0 || tile_bytes <= 0) throw corrupt();
+    std::vector<unsigned char> tile(static_cast<std::size_t>(tile_bytes));
+    for (std::uint32_t y = 0; y < height; y += tile_height)
+      for (std::uint32_t x = 0; x < width; x += tile_width) {
+        if (TIFFReadTile(t, tile.data(), x, y, 0, 0) != tile_bytes) throw corrupt();
+        const std::uint32_t rows = std::min(tile_height, height - y);
+        const std::size_t row_bytes = std::min(tile_width, width - x) * pixel_bytes;
+        for (std::uint32_t r = 0; r < rows; ++r)
+          std::memcpy(image.ptr(static_cast<int>(y + r)) + x * pixel_bytes,
+                      &tile[r * tile_width * pixel_bytes], row_bytes);
+      }
+  } else {
+    std::uint32_t rows_per_strip = 0;
+    TIFFGetFieldDefaulted(t, TIFFTAG_ROWSPERSTRIP, &rows_per_strip);
+    rows_per_strip = std::clamp<std::uint32_t>(rows_per_strip, 1, height);
+    for (std::uint32_t y = 0, strip = 0; y < height; y += rows_per_strip, ++strip) {
+      const std::uint32_t rows = std::min(rows_per_strip, height - y);
+      const tmsize_t bytes = TIFFVStripSize(t, rows);
+      if (bytes != static_cast<tmsize_t>(rows * width * pixel_bytes) ||
+          TIFFReadEncodedStrip(t, strip, image.ptr(static_cast<int>(y)), bytes) != bytes)
+        throw corrupt();
+    }
+  }
+  if (!errors.first.empty()) throw corrupt();
+  return image;
+}
+
+// The declared size of an image, checked against the limits; for a binary PGM, its payload
+// length too.
+DeclaredSize checked_declared_size(const std::filesystem::path& path) {
   require_regular_file(path, "image");
   const DeclaredSize d = read_declared_size(path);
   const std::string declared = std::string(d.format) + " header declares " +
@@ -161,14 +261,23 @@ cv::Size read_image_size(const std::filesystem::path& path) {
       throw InputError(path.string() + ": truncated PGM (" + std::to_string(have) + " of " +
                        std::to_string(needed) + " bytes of pixel data)");
   }
+  return d;
+}
+
+}  // namespace
+
+cv::Size read_image_size(const std::filesystem::path& path) {
+  const DeclaredSize d = checked_declared_size(path);
   return {static_cast<int>(d.width), static_cast<int>(d.height)};
 }
 
 cv::Mat read_raw_image(const std::filesystem::path& path) {
-  const cv::Size declared = read_image_size(path);
+  const DeclaredSize d = checked_declared_size(path);
+  const cv::Size declared(static_cast<int>(d.width), static_cast<int>(d.height));
   cv::Mat image;
   try {
-    image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+    image = std::string(d.format) == "TIFF" ? read_tiff(path)
+                                            : cv::imread(path.string(), cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& e) {
     throw InputError(path.string() + ": cannot decode image (" + e.what() + ")");
   }

@@ -2,8 +2,14 @@
 // absurd size is refused by name instead of overflowing arithmetic or allocating gigabytes.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+// libtiff 4.5 marks its own int64 deprecated, which OpenCV declares again.
+#define TIFF_DISABLE_DEPRECATED
+#include <tiffio.h>
 
+#include <algorithm>
 #include <fstream>
+#include <iterator>
+#include <vector>
 #include <opencv2/imgcodecs.hpp>
 
 #include "pyrocam/core/error.h"
@@ -145,6 +151,60 @@ TEST(ImageHeader, rejects_truncated_tiff_n) {
   write_cut_in_half(dir / "a.tif");
   EXPECT_NE(rejection(dir / "a.tif").find(dir.path().string() + "/a.tif"), std::string::npos)
       << rejection(dir / "a.tif");
+}
+
+// OpenCV's decoder returned such a TIFF whole, the rows of its failed strips holding what the
+// buffer held: a dark frame that read as valid and moved a plate's readings by tens of degC.
+TEST(ImageHeader, rejects_a_tiff_whose_compressed_strips_fail_to_decode_n) {
+  ScratchDir dir("image-io");
+  cv::Mat image(240, 320, CV_8U);
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x) image.at<std::uint8_t>(y, x) = (x / 7 + y / 5) % 60 + 40;
+  write_raw_image(dir / "a.tif", image);  // LZW-compressed strips
+  ASSERT_EQ(cv::norm(read_raw_image(dir / "a.tif"), image, cv::NORM_INF), 0);
+  std::string bytes;
+  {
+    std::ifstream in(dir / "a.tif", std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  for (std::size_t i = bytes.size() / 3; i < bytes.size() / 3 + 40; ++i) bytes[i] ^= 0x5a;
+  write_bytes(dir / "a.tif", bytes);
+  expect_rejected(dir / "a.tif", "corrupt or truncated TIFF");
+}
+
+TEST(ImageHeader, tiled_and_uncompressed_tiffs_read_n) {
+  ScratchDir dir("image-io");
+  cv::Mat image(37, 53, CV_16U);
+  cv::randu(image, 0, 65535);
+  ASSERT_TRUE(cv::imwrite((dir / "plain.tif").string(), image,
+                          {cv::IMWRITE_TIFF_COMPRESSION, 1 /* none */}));
+  EXPECT_EQ(cv::norm(read_raw_image(dir / "plain.tif"), image, cv::NORM_INF), 0);
+  {  // 16x16 tiles, the last ones partial, big-endian, deflate
+    TIFF* t = TIFFOpen((dir / "tiled.tif").c_str(), "wb");
+    ASSERT_NE(t, nullptr);
+    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, image.cols);
+    TIFFSetField(t, TIFFTAG_IMAGELENGTH, image.rows);
+    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, 16);
+    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
+    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+    TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE);
+    TIFFSetField(t, TIFFTAG_TILEWIDTH, 16);
+    TIFFSetField(t, TIFFTAG_TILELENGTH, 16);
+    std::vector<std::uint16_t> tile(16 * 16);
+    for (int y = 0; y < image.rows; y += 16)
+      for (int x = 0; x < image.cols; x += 16) {
+        std::fill(tile.begin(), tile.end(), 0);
+        for (int r = 0; r < 16 && y + r < image.rows; ++r)
+          for (int c = 0; c < 16 && x + c < image.cols; ++c)
+            tile[r * 16 + c] = image.at<std::uint16_t>(y + r, x + c);
+        ASSERT_GE(TIFFWriteTile(t, tile.data(), x, y, 0, 0), 0);
+      }
+    TIFFClose(t);
+  }
+  EXPECT_EQ(cv::norm(read_raw_image(dir / "tiled.tif"), image, cv::NORM_INF), 0);
+  cv::Mat colour(8, 8, CV_8UC3, cv::Scalar(1, 2, 3));
+  ASSERT_TRUE(cv::imwrite((dir / "colour.tif").string(), colour));
+  expect_rejected(dir / "colour.tif", "3 channels; raw mosaic images must be single-channel");
 }
 
 TEST(ImageHeader, rejects_other_formats_n) {
