@@ -81,6 +81,9 @@ struct pyrocam::gst::darksub::State {
   bool capturing = false;
   int capture_target = 0;
   guint capture_requests_seen = 0;
+  // Bayer mosaics: the cells' sums that tell where the greens are, until a verdict.
+  pyrocam::BayerCellSums phase_sums;
+  bool phase_warned = false;  // since start
 };
 using ds::State;
 
@@ -341,6 +344,33 @@ static gboolean gst_dark_sub_sink_event(GstBaseTransform* trans, GstEvent* event
   return GST_BASE_TRANSFORM_CLASS(gst_dark_sub_parent_class)->sink_event(trans, event);
 }
 
+/* A Bayer mosaic whose greens are not where its pattern says was shifted by a row or a column
+ * (a crop at the top or left by an odd number) and reads temperatures that look right and are
+ * wrong: warns once since start. Every 4th row of cells, until enough lit ones. */
+static void check_bayer_phase(GstDarkSub* self, State& st, const cv::Mat& signal) {
+  constexpr int kCellRowStep = 4;
+  constexpr std::size_t kCells = 256;
+  if (st.phase_warned || st.pattern == "5x5") return;
+  const float lit_dn = std::max(4.0f, 0.02f * static_cast<float>(pyrocam::full_scale_dn(st.bit_depth)));
+  pyrocam::add_bayer_cell_sums(signal, lit_dn, kCellRowStep, st.phase_sums);
+  if (st.phase_sums.cells < kCells) return;
+  if (pyrocam::bayer_greens_elsewhere(st.phase_sums, st.pattern)) {
+    const double* s = &st.phase_sums.at[0][0];
+    GST_ELEMENT_WARNING(
+        self, STREAM, FORMAT,
+        ("%s: the stream says %s, but its green samples are on the other diagonal of the 2x2 "
+         "cell: the mosaic is shifted by one row or column (a crop at the top or left by an odd "
+         "number of pixels before darksub?), and its temperatures would look right and be "
+         "wrong. Crop by even numbers, or give the pattern the crop leaves",
+         GST_OBJECT_NAME(self), st.pattern.c_str()),
+        ("mean DN per cell place (row-major) %.1f %.1f %.1f %.1f over %zu lit cells",
+         s[0] / st.phase_sums.cells, s[1] / st.phase_sums.cells, s[2] / st.phase_sums.cells,
+         s[3] / st.phase_sums.cells, st.phase_sums.cells));
+    st.phase_warned = true;
+  }
+  st.phase_sums = {};
+}
+
 static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* inbuf,
                                             GstBuffer* outbuf) {
   GstDarkSub* self = GST_DARK_SUB(trans);
@@ -399,6 +429,7 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
     const cv::Rect& box = saturated.bounds;
     pyrocam_buffer_set_saturation_meta(outbuf, saturated.count, box.x, box.y, box.width, box.height,
                                        st.format.width, st.format.height);
+    check_bayer_phase(self, st, out.image());
   });
   return ok ? ret : GST_FLOW_ERROR;
 }

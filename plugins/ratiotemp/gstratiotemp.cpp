@@ -343,6 +343,7 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
                         ("lookup table refused in start"));
   st.method_request = settings.method;
   st.region_serial_seen = settings.region_serial;
+  st.estimators->estimator(st.method).take_fit_audit();  // its check's tables, on their thread
   GST_INFO_OBJECT(self, "model %s (%s, %d bands, %g..%g degC), method %s", settings.model.c_str(),
                   st.model->profile().name.c_str(), st.model->profile().band_count(),
                   st.model->min_temperature_c, st.model->max_temperature_c,
@@ -531,6 +532,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         }
       });
   if (!ok) return GST_FLOW_ERROR;
+  rt::warn_when_readings_misfit(self, st, st.estimators->estimator(st.method));
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not describe the stream in tags",
                        [&] { push_recording_tags(self, settings); }))
     return GST_FLOW_ERROR;

@@ -105,6 +105,9 @@ struct State {
   guint64 frames = 0;  // since start or the last flush
   guint region_serial_seen = 0;
   std::string peak_warned;  // the last peak-window/frame misfit warned about
+  // The readings' fit audit (warn_when_readings_misfit), accumulated until a verdict.
+  std::size_t fit_checked = 0, fit_misfit = 0;
+  bool fit_warned = false;  // since start
   struct TagListUnref {
     void operator()(GstTagList* t) const { gst_tag_list_unref(t); }
   };
@@ -141,6 +144,17 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& satur
  * user's peak-window does not fit (st.peak_warned: the last misfit warned about), and once when
  * saturated pixels appear (again after statistics without any). */
 void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstClockTime pts);
+
+/* Readings checked against the model's band spectra before a verdict (PlaneEstimator::
+ * take_fit_audit: one or a few in every fourth row; a 5x5 frame of 2045x1085 filled by the body
+ * gives about 55). With a few percent of a scene's readings misfit (edges, reflections), more
+ * than half of 32 is a chance below 1e-12 (binomial). */
+inline constexpr std::size_t kFitAuditReadings = 32;
+/* Adds the frame's fit audit; once enough readings were checked, warns (once since start) when
+ * most of them do not fit the model's band spectra: a mosaic read with the wrong phase or
+ * layout, or a model of another camera, whose readings look right and are not. */
+void warn_when_readings_misfit(GstRatioTemp* self, State& st,
+                               const pyrocam::PlaneEstimator& estimator);
 
 /* What a recording of the output says about itself (ratiotemp-tags.cpp): pushed downstream as
  * the stream's title and comment before the first frame and again when it changes. */

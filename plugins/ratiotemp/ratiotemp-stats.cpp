@@ -145,4 +145,30 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
   st.saturation_warned = saturated > 0;
 }
 
+void warn_when_readings_misfit(GstRatioTemp* self, State& st,
+                                const pyrocam::PlaneEstimator& estimator) {
+  const pyrocam::PlaneEstimator::FitAudit audit = estimator.take_fit_audit();
+  st.fit_checked += audit.checked;
+  st.fit_misfit += audit.misfit;
+  if (st.fit_checked < kFitAuditReadings) return;
+  // More than half: a true graybody pixel fails at kFitAuditProbability; edges, reflections and
+  // a calibration a few percent off make a few percent at most.
+  if (2 * st.fit_misfit > st.fit_checked && !st.fit_warned) {
+    GST_ELEMENT_WARNING(
+        self, STREAM, FORMAT,
+        ("%s: %zu of %zu readings checked do not fit the model's band spectra: the "
+         "temperatures are likely wrong. Is the mosaic's phase right (a crop by an odd number of "
+         "rows or columns at the top or left, or a flip, before darksub shifts it; crop with "
+         "right= and bottom= only, by whole periods)? Is the model (%s) for this camera?",
+         GST_OBJECT_NAME(self), st.fit_misfit, st.fit_checked,
+         st.model->profile().name.c_str()),
+        ("band-consistency check of a sample of readings at false-rejection probability %g, "
+         "model error %g",
+         pyrocam::PlaneEstimator::kFitAuditProbability,
+         pyrocam::PlaneEstimator::kFitAuditModelError));
+    st.fit_warned = true;
+  }
+  st.fit_checked = st.fit_misfit = 0;
+}
+
 }  // namespace pyrocam::gst::ratiotemp

@@ -37,8 +37,21 @@ BusResult run_pipeline(const std::string& description, GstClockTime timeout) {
   }
   GstBus* bus = gst_element_get_bus(pipeline);
   gst_element_set_state(pipeline, GST_STATE_PLAYING);
-  GstMessage* msg = gst_bus_timed_pop_filtered(
-      bus, timeout, static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
+  // Warnings are collected on the way to the end.
+  const GstClockTime deadline = gst_util_get_timestamp() + timeout;
+  GstMessage* msg = nullptr;
+  for (;;) {
+    const GstClockTime now = gst_util_get_timestamp();
+    msg = gst_bus_timed_pop_filtered(
+        bus, now < deadline ? deadline - now : 0,
+        static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR | GST_MESSAGE_WARNING));
+    if (!msg || GST_MESSAGE_TYPE(msg) != GST_MESSAGE_WARNING) break;
+    GError* warning = nullptr;
+    gst_message_parse_warning(msg, &warning, nullptr);
+    r.warnings.push_back(warning->message);
+    g_error_free(warning);
+    gst_message_unref(msg);
+  }
   if (!msg) {
     r.timed_out = true;
   } else if (GST_MESSAGE_TYPE(msg) == GST_MESSAGE_EOS) {

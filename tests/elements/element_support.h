@@ -40,6 +40,7 @@ struct BusResult {
   int code = 0;
   std::string message, debug, source;
   int buffers = 0;  // buffers that reached the sink named "sink", if any
+  std::vector<std::string> warnings;  // the warning messages posted before the end
 };
 // Runs a gst-launch description to EOS or the first error, at most `timeout`.
 BusResult run_pipeline(const std::string& description, GstClockTime timeout = 20 * GST_SECOND);

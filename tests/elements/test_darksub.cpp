@@ -334,5 +334,28 @@ TEST(DarkSubErrors, rejects_running_without_a_dark) {
   expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS, {"dark-level"});
 }
 
+// A Bayer mosaic labelled as shifted by one column (grbg, as a crop of the left column leaves
+// rggb) or one row (gbrg) reads temperatures that look right and are not: darksub warns. The
+// labels that are true, and a shift by both (bggr: red and blue traded, not seen), say nothing.
+TEST(DarkSubPipeline, warns_when_the_greens_are_not_where_the_pattern_says) {
+  REQUIRE_ELEMENT("darksub");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  if (!have_element("capssetter")) GTEST_SKIP() << "capssetter (gst-plugins-good) missing";
+  for (const char* label : {"rggb", "grbg", "gbrg", "bggr"}) {
+    SCOPED_TRACE(label);
+    const auto r = run_pipeline(
+        "pyrocamsrc num-buffers=2 scene=plate temperature=1500 ! "
+        "video/x-bayer,format=rggb,width=160,height=120 ! capssetter caps=video/x-bayer,format=" +
+        std::string(label) + " ! darksub dark-level=50 ! fakesink name=sink");
+    expect_eos(r, 2);
+    const bool shifted = std::string(label) == "grbg" || std::string(label) == "gbrg";
+    ASSERT_EQ(r.warnings.size(), shifted ? 1u : 0u);
+    if (shifted) {
+      for (const char* part : {label, "other diagonal", "crop"})
+        EXPECT_NE(r.warnings[0].find(part), std::string::npos) << r.warnings[0];
+    }
+  }
+}
+
 }  // namespace
 }  // namespace pyrocam::test

@@ -221,5 +221,30 @@ TEST(RatioTempErrors, rejects_an_invalid_region_n) {
   expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS, {"10,10,0,5"});
 }
 
+// A 5x5 mosaic cropped by a row at the top reads every pixel, 860 degC low on a 1500 degC
+// plate and as tight as a right one: ratiotemp warns that the bands do not fit the model. The
+// crop by whole periods at the right and bottom says nothing. (Live, at 30 frames/s: the check's
+// tables are made on their own thread while the first frames pass unchecked.)
+TEST(RatioTempErrors, warns_when_the_readings_do_not_fit_the_model_s_spectra) {
+  REQUIRE_ELEMENT("ratiotemp");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  if (!have_element("videocrop")) GTEST_SKIP() << "videocrop (gst-plugins-good) missing";
+  for (const char* crop : {"right=5 bottom=5", "top=1 bottom=4"}) {
+    SCOPED_TRACE(crop);
+    const auto r = run_pipeline(
+        "pyrocamsrc is-live=true num-buffers=40 profile=nir5x5-reference scene=plate "
+        "temperature=1500 ! video/x-raw,width=400,height=300,framerate=30/1 ! videocrop " +
+        std::string(crop) + " ! darksub dark-level=50 ! demosaic25 ! ratiotemp model=" +
+        nir_model_path() + " ! fakesink name=sink");
+    expect_eos(r, 40);
+    const bool shifted = std::string(crop) == "top=1 bottom=4";
+    ASSERT_EQ(r.warnings.size(), shifted ? 1u : 0u);
+    if (shifted) {
+      for (const char* part : {"do not fit the model's band spectra", "phase", "nir5x5"})
+        EXPECT_NE(r.warnings[0].find(part), std::string::npos) << r.warnings[0];
+    }
+  }
+}
+
 }  // namespace
 }  // namespace pyrocam::test

@@ -211,4 +211,38 @@ cv::Mat DarkAccumulator::mean() const {
   return dark;
 }
 
+void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, int cell_row_step,
+                         BayerCellSums& sums) {
+  if (signal.type() != CV_32F) throw InputError("Bayer cell sums: the mosaic must be CV_32F");
+  if (cell_row_step < 1) throw InputError("Bayer cell sums: the row step must be at least 1");
+  for (int y = 0; y + 1 < signal.rows; y += 2 * cell_row_step) {
+    const float* top = signal.ptr<float>(y);
+    const float* bottom = signal.ptr<float>(y + 1);
+    for (int x = 0; x + 1 < signal.cols; x += 2) {
+      const float a = top[x], b = top[x + 1], c = bottom[x], d = bottom[x + 1];
+      const float sum = a + b + c + d;  // NaN or +INF where a sample does not read
+      if (!(sum >= 4 * lit_dn) || !std::isfinite(sum)) continue;
+      sums.at[0][0] += a, sums.at[0][1] += b, sums.at[1][0] += c, sums.at[1][1] += d;
+      ++sums.cells;
+    }
+  }
+}
+
+bool bayer_greens_elsewhere(const BayerCellSums& sums, const std::string& pattern) {
+  // The pattern's greens: on the anti-diagonal for rggb and bggr, on the diagonal for grbg and
+  // gbrg.
+  bool anti;
+  if (pattern == "rggb" || pattern == "bggr")
+    anti = true;
+  else if (pattern == "grbg" || pattern == "gbrg")
+    anti = false;
+  else
+    return false;
+  const double g1 = anti ? sums.at[0][1] : sums.at[0][0], g2 = anti ? sums.at[1][0] : sums.at[1][1];
+  const double o1 = anti ? sums.at[0][0] : sums.at[0][1], o2 = anti ? sums.at[1][1] : sums.at[1][0];
+  if (!(g1 > 0 && g2 > 0 && o1 > 0 && o2 > 0)) return false;
+  const auto apart = [](double p, double q) { return std::max(p, q) / std::min(p, q); };
+  return apart(g1, g2) > 1.10 && apart(o1, o2) < 1.03;
+}
+
 }  // namespace pyrocam

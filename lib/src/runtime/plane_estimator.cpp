@@ -1,8 +1,11 @@
 #include "pyrocam/runtime/plane_estimator.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <exception>
+#include <future>
 #include <string>
 #include <utility>
 
@@ -62,6 +65,7 @@ void PlaneEstimator::set_analogue_gain(double factor) {
   if (sloped_) sloped_->set_analogue_gain(factor);
   if (partial_fit_) partial_fit_->set_analogue_gain(factor);
   if (misfit_) misfit_->set_analogue_gain(factor);
+  if (audit_) audit_->set_analogue_gain(factor);
   analogue_gain_ = factor;
 }
 
@@ -76,6 +80,57 @@ void PlaneEstimator::set_emissivity_slope(double alpha, double alpha_u) {
     sloped_ = std::move(sloped);
   }
   alpha_u_ = alpha_u;
+}
+
+PlaneEstimator::FitAudit PlaneEstimator::take_fit_audit() const {
+  if (!audit_) {
+    // Its tables (a 5x5 locus: tens of ms) on a thread of their own, not in a frame's time.
+    if (!audit_build_.valid())
+      audit_build_ = std::async(std::launch::async, [model = model_] {
+        return std::make_unique<MisfitCheck>(model, kFitAuditProbability, kFitAuditModelError);
+      });
+    if (audit_build_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return {};
+    try {
+      audit_ = audit_build_.get();
+      audit_->set_analogue_gain(analogue_gain_);
+    } catch (const std::exception&) {
+      audit_build_ = {};  // a model the check cannot take: asked again, it tries again
+    }
+    return {};
+  }
+  return {audit_counts_->checked.exchange(0), audit_counts_->misfit.exchange(0)};
+}
+
+void PlaneEstimator::audit_row(const float* const* rows, std::size_t n, const float* out) const {
+  if (!audit_) return;
+  // Every kFitAuditRows-th row (or run) that the threads estimate: a pass over its readings.
+  if (audit_counts_->rows.fetch_add(1, std::memory_order_relaxed) % kFitAuditRows != 0) return;
+  const auto bands = static_cast<std::size_t>(model_->profile().band_count());
+  std::size_t checked = 0, misfit = 0;
+  double s[kMaxBands], c[kMaxBands];
+  // Readings, not pixels, so that a small hot body has its share: the middle one of the row's
+  // readings (away from a body's edges) where there are few, else every kFitAuditStride-th.
+  std::size_t readings = 0;
+  for (std::size_t i = 0; i < n; ++i) readings += std::isfinite(out[i]) ? 1 : 0;
+  std::size_t next = readings < kFitAuditStride ? readings / 2 : kFitAuditStride / 2;
+  for (std::size_t i = 0, k = 0; i < n && k <= next && readings > 0; ++i) {
+    if (!std::isfinite(out[i]) || k++ != next) continue;
+    next += kFitAuditStride;
+    for (std::size_t b = 0; b < bands; ++b) s[b] = rows[b][i];
+    const double* signals = s;
+    if (sloped_) {  // the grey surface's signals that the reading corrected them to
+      sloped_->corrected_signals(s, out[i], c);
+      signals = c;
+    }
+    int counted = 0;
+    const double chi2 = audit_->chi2(signals, out[i], &counted);
+    if (!std::isfinite(chi2) || counted < 3) continue;  // nothing to check
+    ++checked;
+    misfit += chi2 > audit_->threshold(counted);
+  }
+  if (checked == 0) return;
+  audit_counts_->checked.fetch_add(checked, std::memory_order_relaxed);
+  audit_counts_->misfit.fetch_add(misfit, std::memory_order_relaxed);
 }
 
 void PlaneEstimator::estimate_row(const float* const* rows, std::size_t n, float* out) const {
@@ -96,10 +151,12 @@ void PlaneEstimator::estimate_row(const float* const* rows, std::size_t n, float
         if (some_unusable) out[i] = static_cast<float>(partial_fit_->temperature_c(s));
       }
     }
+    audit_row(rows, n, out);
     if (misfit_) misfit_->apply(rows, n, out);
     return;
   }
   sloped_->estimate(rows, n, out);
+  audit_row(rows, n, out);
   if (!misfit_) return;
   // The check sees the signals of the grey surface that the reading corrected them to.
   const auto bands = static_cast<std::size_t>(model_->profile().band_count());

@@ -4,7 +4,10 @@
 #include <cmath>
 
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/profile.h"
 #include "pyrocam/runtime/darksub.h"
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
 
 namespace pyrocam {
 namespace {
@@ -116,6 +119,57 @@ TEST(DarkSub, accumulator_averages_frames) {
   EXPECT_THROW(acc.add(cv::Mat(2, 4, CV_8U, cv::Scalar(1))), InputError);
   acc.reset();
   EXPECT_EQ(acc.count(), 0);
+}
+
+// The simulated colour camera's plates, as exposed and at half the exposure: read as the rggb
+// they are, the greens are where rggb puts them; shifted by one column or one row (a crop at the
+// left or top) they are on the other diagonal; shifted by both (red and blue traded) they are in
+// place again, which this check cannot see. Twice as long, the red samples saturate: a cell
+// with a saturated sample does not count, and nothing is said whatever the labelling.
+TEST(DarkSub, a_bayer_mosaic_shifted_by_a_row_or_a_column_has_its_greens_elsewhere) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  for (const char* unit : {"typical", "hostile"}) {
+    Simulator camera(p, UnitPerturbation::parse(unit, 2), 5);
+    for (double t : {700.0, 1500.0, 2500.0}) {
+      for (double longer : {0.5, 1.0, 2.0}) {
+        SCOPED_TRACE(std::string(unit) + " " + std::to_string(t) + " degC x" +
+                     std::to_string(longer));
+        const double exposure = longer * camera.exposure_for(t, 140);
+        const cv::Mat raw = camera.render(plate_scene(96, 72, t, 0.5), exposure);
+        cv::Mat signal;
+        subtract_dark(raw, dark_from_image(camera.render_dark(96, 72, exposure)), 220, signal);
+        const auto sums_of = [&](int dx, int dy) {
+          BayerCellSums sums;
+          add_bayer_cell_sums(signal(cv::Rect(dx, dy, 94, 70)), 4, 1, sums);
+          return sums;
+        };
+        const bool saturated = longer > 1;
+        if (!saturated) {
+          ASSERT_GT(sums_of(0, 0).cells, 500u);
+        }
+        EXPECT_FALSE(bayer_greens_elsewhere(sums_of(0, 0), "rggb"));
+        EXPECT_EQ(bayer_greens_elsewhere(sums_of(1, 0), "rggb"), !saturated);
+        EXPECT_EQ(bayer_greens_elsewhere(sums_of(0, 1), "rggb"), !saturated);
+        EXPECT_FALSE(bayer_greens_elsewhere(sums_of(1, 1), "rggb"));
+        // Labelled as what the shift leaves, each reads as it is.
+        EXPECT_FALSE(bayer_greens_elsewhere(sums_of(1, 0), "grbg"));
+        EXPECT_FALSE(bayer_greens_elsewhere(sums_of(0, 1), "gbrg"));
+        EXPECT_FALSE(bayer_greens_elsewhere(sums_of(1, 1), "bggr"));
+      }
+    }
+  }
+}
+
+TEST(DarkSub, bayer_cell_sums_tell_nothing_without_light_or_for_5x5) {
+  BayerCellSums sums;
+  add_bayer_cell_sums(cv::Mat(8, 8, CV_32F, cv::Scalar(2.0f)), 4, 1, sums);
+  EXPECT_EQ(sums.cells, 0u);
+  EXPECT_FALSE(bayer_greens_elsewhere(sums, "rggb"));
+  sums.at[0][0] = 100, sums.at[0][1] = 200, sums.at[1][0] = 100, sums.at[1][1] = 100;
+  sums.cells = 1000;
+  EXPECT_TRUE(bayer_greens_elsewhere(sums, "rggb"));
+  EXPECT_FALSE(bayer_greens_elsewhere(sums, "5x5"));
+  EXPECT_THROW(add_bayer_cell_sums(cv::Mat(8, 8, CV_8U), 4, 1, sums), InputError);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace pyrocam {
 
@@ -35,6 +36,25 @@ SaturatedSamples subtract_dark_level(const cv::Mat& raw, double level_dn, double
 // The saturated (+INF) samples of a CV_32F dark-subtracted mosaic, e.g. after fusing a bracket.
 // Throws InputError for another type.
 SaturatedSamples find_saturated(const cv::Mat& signal);
+
+// Evidence on the phase of a Bayer mosaic: the sums of each place of the 2x2 cell over lit cells
+// (no sample saturated or NaN, the cell's mean at least `lit_dn`) of every `cell_row_step`-th
+// row of cells, in a CV_32F dark-subtracted mosaic whose cells start at (0, 0). Adds to `sums`.
+struct BayerCellSums {
+  double at[2][2] = {};  // [row][column] in the cell
+  std::size_t cells = 0;
+};
+void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, int cell_row_step,
+                         BayerCellSums& sums);
+// Whether the sums say that the greens sit on the other diagonal of the cell than `pattern`
+// (rggb, bggr, grbg or gbrg) puts them: the pattern's two green places differ by more than 10 %
+// while the other two agree within 3 %. Samples behind one filter agree (a sensor's green
+// imbalance is a percent or two); a red and a blue one do not on a glowing body (the colour
+// camera's blue, mostly its near-infrared leak there, reads 24 % above its red at 800 degC). So the mosaic was shifted by one row or one column (a crop at the
+// top or left by an odd number of pixels), and read as it is its temperatures look right and
+// are wrong. (A shift by both, or a flip, which trades red for blue, keeps the greens in place
+// and is not seen.) False for another pattern or sums that tell nothing.
+bool bayer_greens_elsewhere(const BayerCellSums& sums, const std::string& pattern);
 
 // Converts a dark image read from a file (CV_8U/CV_16U) to the CV_32F dark subtract_dark takes.
 cv::Mat dark_from_image(const cv::Mat& image);

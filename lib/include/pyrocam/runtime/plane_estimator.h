@@ -2,6 +2,9 @@
 // `pyrocam-calib measure` (through FrameMeasurer).
 #pragma once
 
+#include <atomic>
+#include <cstddef>
+#include <future>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -87,6 +90,24 @@ class PlaneEstimator {
   // estimate runs; cheap where it does not change (called per frame by ratiotemp).
   void set_demosaic_noise(const DemosaicNoise& noise) { noise_ = noise; }
 
+  // How well the readings fit the model's band spectra, whatever the misfit setting: a few
+  // readings of every kFitAuditRows-th row (run on the fused path) go through the band-consistency
+  // check at kFitAuditProbability with kFitAuditModelError, and are counted. Most of them
+  // failing means the bands are not what the model expects: a mosaic read with the wrong phase
+  // or layout (a crop by an odd number of rows or columns at the top or left, or a flip, before
+  // darksub), or a model of another camera. The readings then look right and are not, which
+  // only such a check can tell (ratiotemp warns). The counts since the last take_fit_audit;
+  // the first call starts making the check's tables on a thread of its own, and nothing is
+  // counted until a later call finds them made (an estimator never asked costs nothing). Not
+  // while an estimate runs.
+  static constexpr double kFitAuditProbability = 1e-9, kFitAuditModelError = 0.05;
+  static constexpr std::size_t kFitAuditStride = 256;  // readings between checked ones in a row
+  static constexpr std::size_t kFitAuditRows = 4;      // of the rows, those checked
+  struct FitAudit {
+    std::size_t checked = 0, misfit = 0;
+  };
+  FitAudit take_fit_audit() const;
+
  private:
   // The planes' common size; throws InputError unless they are the model's bands, CV_32F, of
   // one size.
@@ -119,6 +140,16 @@ class PlaneEstimator {
   bool partial_set_ = false;
   double analogue_gain_ = 1.0;
   DemosaicNoise noise_;
+  // The audit's check (its own tables; made by the first take_fit_audit) and counts, shared by
+  // the rows' threads.
+  mutable std::unique_ptr<MisfitCheck> audit_;
+  mutable std::future<std::unique_ptr<MisfitCheck>> audit_build_;
+  struct AuditCounts {
+    std::atomic<std::size_t> checked{0}, misfit{0}, rows{0};
+  };
+  std::unique_ptr<AuditCounts> audit_counts_ = std::make_unique<AuditCounts>();
+  // Checks a few of the n readings `out` of the rows (signals as the reading saw them).
+  void audit_row(const float* const* rows, std::size_t n, const float* out) const;
 };
 
 }  // namespace pyrocam
