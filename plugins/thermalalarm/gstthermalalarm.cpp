@@ -35,7 +35,9 @@
  * ratiotemp's peak-c), so that single wild pixels at a sharp edge raise nothing. A region that
  * lies outside the frame, or a peak window larger than the region, stops the pipeline with an
  * error (RESOURCE SETTINGS) rather than watch nothing; a region partly outside is clipped, with
- * a warning. Every property can change while playing; new settings keep the alarm's state.
+ * a warning. A malformed region or an even peak window is refused, with an error at the start
+ * (set in a launch line) and a warning while playing. Every property can change while playing;
+ * new settings keep the alarm's state.
  *
  * ## Example launch line
  * |[
@@ -93,6 +95,9 @@ struct Settings {
   guint peak_window = DEFAULT_PEAK_WINDOW;  // odd
   gboolean saturated_raises = DEFAULT_SATURATED_RAISES;
   guint serial = 0;  // bumped by every change of the alarm rule
+  // Values refused since the last valid one of their property: set before the element is in a
+  // pipeline (gst-launch), a refusal's warning reaches no bus, so start() stops on them.
+  std::string refused_region, refused_window;
 };
 
 struct State {
@@ -148,6 +153,11 @@ static gboolean gst_thermal_alarm_start(GstBaseTransform* trans) {
   const Settings settings = pg::locked_copy(self, *self->settings);
   *self->state = State();
   self->state->serial = settings.serial;
+  for (const std::string* refused : {&settings.refused_region, &settings.refused_window})
+    if (!refused->empty()) {
+      PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings, *refused, "property value refused");
+      return FALSE;
+    }
   return PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "Bad alarm settings",
                          [&] { self->state->monitor.configure(to_library(settings)); });
 }
@@ -294,21 +304,26 @@ static void gst_thermal_alarm_set_property(GObject* object, guint prop_id, const
         if (text.empty() || pg::parse_region(text, &r)) {
           s.region_text = text;
           s.region = r;
+          s.refused_region.clear();
         } else {
           refused = "region '" + text +
                     "' is not x,y,width,height (non-negative integers, width and height at "
                     "least 1); keeping '" +
                     s.region_text + "'";
+          s.refused_region = refused;
         }
         break;
       }
       case PROP_PEAK_WINDOW: {
         const guint w = g_value_get_uint(value);
-        if (w % 2 == 1)
+        if (w % 2 == 1) {
           s.peak_window = w;
-        else
+          s.refused_window.clear();
+        } else {
           refused = "peak-window " + std::to_string(w) + " is not odd; keeping " +
                     std::to_string(s.peak_window);
+          s.refused_window = refused;
+        }
         break;
       }
       case PROP_SATURATED_RAISES:

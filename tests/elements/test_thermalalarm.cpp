@@ -271,5 +271,21 @@ TEST_F(ThermalAlarm, MalformedSettingsAreRefusedWithAWarningAndTheOldOnesStay) {
   gst_object_unref(e);
 }
 
+// Set in a launch line the element is not in a pipeline yet and a warning reaches no bus: the
+// alarm watched the whole frame instead of a region it never parsed. Now it does not start.
+TEST(ThermalAlarmLaunch, a_malformed_setting_in_a_launch_line_stops_the_pipeline_n) {
+  REQUIRE_ELEMENT("thermalalarm");
+  for (const char* setting : {"region=100,80,120", "peak-window=4"}) {
+    SCOPED_TRACE(setting);
+    const auto r = run_pipeline(
+        "videotestsrc num-buffers=2 ! video/x-raw,format=GRAY16_LE,width=32,height=24 ! "
+        "thermalalarm threshold-c=1000 " +
+        std::string(setting) + " ! fakesink");
+    expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS,
+                 {std::string(setting).substr(0, std::string(setting).find('=')),
+                  "keeping"});
+  }
+}
+
 }  // namespace
 }  // namespace pyrocam::test
