@@ -105,6 +105,7 @@ struct State {
   guint64 frames = 0;  // since start or the last flush
   guint region_serial_seen = 0;
   std::string peak_warned;  // the last peak-window/frame misfit warned about
+  std::string region_warned;  // the last region/frame size seen (warned if outside)
   // The readings' fit audit (warn_when_readings_misfit), accumulated until a verdict.
   std::size_t fit_checked = 0, fit_misfit = 0;
   bool fit_warned = false;  // since start

@@ -127,6 +127,20 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
                           ("the window must fit in the frame"));
     peak_warned = misfit;
   }
+  if (!settings.region_text.empty() && settings.region_valid && !settings.region_tracks_peak) {
+    // Once per region and frame size: a 5x5 camera's frames are the sensor's fifth.
+    const cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,
+                          settings.region.height);
+    const std::string outside = settings.region_text + "/" + std::to_string(w) + "x" +
+                                std::to_string(h);
+    if ((wanted & cv::Rect(0, 0, w, h)).empty() && outside != st.region_warned)
+      GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                          ("%s: region %s lies outside the %dx%d frame; its statistics are "
+                           "empty",
+                           GST_OBJECT_NAME(self), settings.region_text.c_str(), w, h),
+                          ("the region is in output pixels (a 5x5 camera's are macro-pixels)"));
+    st.region_warned = outside;
+  }
   GstStructure* s = stats_structure(temperature_c, st.saturated_mask, settings,
                                     &GST_BASE_TRANSFORM(self)->segment, pts, st.method);
   guint64 saturated = 0;

@@ -246,5 +246,27 @@ TEST(RatioTempErrors, warns_when_the_readings_do_not_fit_the_model_s_spectra) {
   }
 }
 
+// A region in the sensor's pixels on a 5x5 camera, whose frames are macro-pixels (64x48 here):
+// its statistics are empty, and a warning says why; one inside says nothing.
+TEST(RatioTempErrors, warns_of_a_region_outside_the_frame_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  for (const char* region : {"200,150,40,40", "20,15,10,10"}) {
+    SCOPED_TRACE(region);
+    const auto r = run_pipeline(
+        "pyrocamsrc num-buffers=2 profile=nir5x5-reference scene=plate ! "
+        "video/x-raw,width=320,height=240 ! darksub dark-level=50 ! demosaic25 ! ratiotemp model=" +
+        nir_model_path() + " region=" + region + " ! fakesink name=sink");
+    expect_eos(r, 2);
+    const bool outside = std::string(region) == "200,150,40,40";
+    ASSERT_EQ(r.warnings.size(), outside ? 1u : 0u);
+    if (outside) {
+      EXPECT_NE(r.warnings[0].find("region 200,150,40,40 lies outside the 64x48 frame"),
+                std::string::npos)
+          << r.warnings[0];
+    }
+  }
+}
+
 }  // namespace
 }  // namespace pyrocam::test
