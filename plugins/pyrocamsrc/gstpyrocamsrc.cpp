@@ -15,7 +15,10 @@
  * threshold) in the caps, as pyrocam-caps.h describes, so that darksub reads it right. Width and
  * height must be multiples of the mosaic period (2 or 5); the default 320x240 at 30/1 suits both.
  * Frames are timestamped from 0 at the negotiated frame rate; with #GstPyrocamSrc:is-live they
- * are pushed in real time.
+ * are pushed in real time. The simulated sensor clamps its black level: the dark level is the
+ * profile's offset (50 DN for the shipped profiles, darksub dark-level=50) at every exposure,
+ * the dark current adding its noise only (a camera without a clamp needs a dark frame of the
+ * exposure: darksub location or capture-dark).
  *
  * The melt pool crosses the frame every 100 frames, its peak swinging between 1500 and
  * 2500 degC; the plate and the filament glow at #GstPyrocamSrc:temperature. Emissivities are
@@ -266,6 +269,10 @@ static gboolean gst_pyrocam_src_start(GstBaseSrc* src) {
         const pyrocam::CameraProfile profile = pyrocam::load_profile_by_name(settings.profile);
         const auto unit = pyrocam::UnitPerturbation::parse(unit_name(settings.unit), settings.seed);
         camera = std::make_unique<pyrocam::Simulator>(profile, unit, settings.seed + 6);
+        // Its dark level is the profile's offset at any exposure, what darksub dark-level
+        // says: the automatic exposure of a cold scene runs to seconds (33 s for the 5x5 camera
+        // at 550 degC), whose dark current read it 270 degC high with dark-level=50.
+        camera->set_black_level_clamp(true);
       });
   if (!ok) return FALSE;
   GST_INFO_OBJECT(self, "camera profile %s, %s unit", camera->profile().name.c_str(),

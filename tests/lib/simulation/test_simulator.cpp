@@ -80,6 +80,23 @@ TEST_F(SimulatedRgb, dark_frames_sit_at_the_offset_plus_dark_current) {
   EXPECT_NEAR(cv::mean(camera.render(cold, exposure))[0], cv::mean(dark)[0], 0.3);
 }
 
+// A clamped black level (pyrocamsrc's sensor): at a long exposure the dark current adds its
+// noise and not its mean. 10 s of the profile's dark current is tens of DN unclamped.
+TEST_F(SimulatedRgb, a_clamped_black_level_stays_at_the_offset_at_any_exposure) {
+  Simulator camera(profile, UnitPerturbation{"datasheet", 1}, 4);
+  const double exposure = 10e6;
+  const double unclamped = cv::mean(camera.render_dark(100, 100, exposure))[0];
+  camera.set_black_level_clamp(true);
+  const cv::Mat dark = camera.render_dark(100, 100, exposure);
+  EXPECT_GT(unclamped, profile.dark_offset_dn + 10);
+  EXPECT_NEAR(cv::mean(dark)[0], profile.dark_offset_dn, 0.3);
+  // The dark current's shot noise stays: a spread well beyond the read noise's.
+  cv::Mat mean, spread;
+  cv::meanStdDev(dark, mean, spread);
+  const double read_dn = profile.dn_per_electron()[1] * profile.noise.read_noise_e;
+  EXPECT_GT(spread.at<double>(0), 2 * read_dn);
+}
+
 TEST_F(SimulatedRgb, a_black_level_shift_moves_every_frame_after_it) {
   Simulator camera(profile, UnitPerturbation{"datasheet", 1}, 3);
   Simulator shifted(profile, UnitPerturbation{"datasheet", 1}, 3);

@@ -46,6 +46,11 @@ class Simulator {
   // quantisation): a black level that moved since the dark frames were taken (the sensor warmed
   // up, say).
   void set_black_level_shift(double dn) { black_level_shift_dn_ = dn; }
+  // A sensor that clamps its black level (to its optically black pixels, as many industrial
+  // cameras do): the mean of the dark current leaves every frame, its shot noise stays, and the
+  // dark level is the profile's offset at any exposure. Off by default (the dark current's
+  // mean is in the frames, and dark frames of the same exposure take it out).
+  void set_black_level_clamp(bool on) { black_level_clamp_ = on; }
 
   // Raw mosaic (CV_8U for bit depth 8, else CV_16U) of a temperature map (CV_32F, degC; NaN or
   // below 100 degC emits nothing). Deterministic for a given noise seed and call sequence.
@@ -73,6 +78,7 @@ class Simulator {
   std::uint64_t frame_counter_ = 0;
   bool noise_ = true;
   double black_level_shift_dn_ = 0;
+  bool black_level_clamp_ = false;
   cv::Mat dark_fpn_, prnu_;  // per pixel, fixed for the unit
 };
 
