@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "pyrocam/core/error.h"
 #include "pyrocam/runtime/prebuilt_tables.h"
 #include "report.h"
 
@@ -157,6 +158,13 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
                              : a.rate_offsets == "per-step" ? RateOffsets::kPerStep
                                                             : RateOffsets::kSelect;
     selected = [&global, profile_option] {
+      // Before minutes of calibration: the folders the model and the report go to must be there.
+      for (const std::string& file : {a.out, a.report}) {
+        const std::filesystem::path folder = std::filesystem::path(file).parent_path();
+        std::error_code ec;
+        if (!file.empty() && !folder.empty() && !std::filesystem::is_directory(folder, ec))
+          throw InputError(file + ": the folder " + folder.string() + " does not exist");
+      }
       const Dataset dataset = Dataset::open(a.dataset);
       // Without --profile, a 5x5 dataset is the shipped 5x5 camera's, not the colour default.
       std::string profile_name = a.profile;

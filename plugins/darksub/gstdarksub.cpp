@@ -41,6 +41,7 @@
 #include "gstdarksub.h"
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <string>
@@ -271,6 +272,11 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
   }
   bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kNegotiation, "Unsupported mosaic", [&] {
     const pyrocam::MosaicLayout layout = pg::layout_for_pattern(st.pattern);
+    if (f.width < layout.period_width || f.height < layout.period_height)
+      throw pyrocam::InputError(std::to_string(f.width) + "x" + std::to_string(f.height) +
+                                " frames are smaller than one " + st.pattern + " period (" +
+                                std::to_string(layout.period_width) + "x" +
+                                std::to_string(layout.period_height) + ")");
     const int right = f.width % layout.period_width, bottom = f.height % layout.period_height;
     // Snapshot sensors carry a few columns and rows beyond the mosaic (2048x1088 around a
     // 2045x1085 5x5 one): say how to crop them.
@@ -283,6 +289,18 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
           " (or left/top where the mosaic starts later on the sensor)");
   });
   if (!ok) return FALSE;
+  if (settings.dark_level >= pyrocam::full_scale_dn(st.bit_depth)) {
+    // Every sample at or below it: no reading anywhere, and nothing would say why.
+    char level[32];
+    std::snprintf(level, sizeof level, "%g", settings.dark_level);
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
+                       "dark-level " + std::string(level) +
+                           " is at or above the " + std::to_string(st.bit_depth) +
+                           "-bit full scale (" +
+                           std::to_string(pyrocam::full_scale_dn(st.bit_depth)) + " DN)",
+                       "dark-level out of the stream's range");
+    return FALSE;
+  }
   if (settings.saturation_level > pyrocam::full_scale_dn(st.bit_depth))
     GST_WARNING_OBJECT(self,
                        "saturation-level %g is above the %d-bit full scale: nothing "

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "cli_support.h"
 #include "test_support.h"
@@ -141,6 +142,26 @@ TEST(CliFitChoices, calibrate_rejects_other_values_n) {
               2)
         << option;
     EXPECT_FALSE(std::filesystem::exists(dir / "m.json")) << option;
+  }
+}
+
+// A model or report path in a folder that is not there is refused before the calibration's
+// minutes, not after them.
+TEST(CliFitChoices, calibrate_refuses_an_output_folder_that_is_not_there_first_n) {
+  ScratchDir dir("cli");
+  const std::vector<std::string> options = {"--out " + q(dir / "none" / "m.json"),
+                                            "--report " + q(dir / "none" / "r")};
+  for (const std::string& option : options) {
+    const auto err = dir / "stderr.txt";
+    const std::string command = "timeout 120 '" + std::string(PYROCAM_CALIB_TOOL) +
+                                "' calibrate --dataset " + q(dir / "no-dataset") + " " + option +
+                                " < /dev/null > /dev/null 2> " + q(err);
+    const int status = std::system(command.c_str());
+    EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 1) << option;
+    const std::string message = read_text(err);
+    EXPECT_NE(message.find("the folder " + (dir / "none").string() + " does not exist"),
+              std::string::npos)
+        << message;
   }
 }
 

@@ -300,6 +300,23 @@ TEST(DarkSubErrors, a_frame_beyond_whole_periods_is_refused_with_the_crop_to_mak
              2);
 }
 
+TEST(DarkSubErrors, a_frame_smaller_than_one_period_is_refused_as_such_n) {
+  REQUIRE_ELEMENT("darksub");
+  const auto r = run_pipeline(
+      "videotestsrc num-buffers=2 ! video/x-raw,format=GRAY8,width=1,height=1 ! "
+      "darksub dark-level=5 pattern=rggb ! fakesink");
+  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION,
+               {"1x1 frames are smaller than one rggb period (2x2)"});
+}
+
+// A constant dark at or above the full scale leaves no signal anywhere: refused, not run dark.
+TEST(DarkSubErrors, rejects_a_dark_level_at_or_above_the_full_scale_n) {
+  REQUIRE_ELEMENT("darksub");
+  const auto r = run_on_gray8("darksub dark-level=300 pattern=rggb");
+  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS,
+               {"dark-level 300", "8-bit full scale (255 DN)"});
+}
+
 TEST(DarkSubErrors, rejects_a_pattern_that_differs_from_the_caps) {
   REQUIRE_ELEMENT("darksub");
   REQUIRE_ELEMENT("pyrocamsrc");
