@@ -254,6 +254,17 @@ static gboolean on_signal(gpointer data) {
   return G_SOURCE_CONTINUE;
 }
 
+static void print_usage(FILE* to) {
+  fprintf(to,
+          "usage: pyrocam-launch [-e] [-m] [--stop-timeout=SECONDS] [--stats-csv=FILE]\n"
+          "                      [--alarm-csv=FILE] ELEMENT [! ELEMENT ...]\n"
+          "Runs a gst-launch-1.0 pipeline: exit 0 at end of stream, 1 after an error, 2 for\n"
+          "a description or option it cannot take. -e: SIGINT and SIGTERM send end of\n"
+          "stream (files are finalised); -m: print element messages; --stats-csv,\n"
+          "--alarm-csv: ratiotemp's statistics and thermalalarm's messages as CSV rows;\n"
+          "--stop-timeout: how long to wait for the pipeline to stop (default 10 s).\n");
+}
+
 int main(int argc, char** argv) {
   Launch* launch = &launch_state;
   launch->stop_timeout_s = 10;
@@ -280,16 +291,25 @@ int main(int argc, char** argv) {
     } else if (g_str_has_prefix(argv[first], "--alarm-csv=")) {
       if (!open_csv(&launch->alarm_csv, "--alarm-csv", argv[first] + strlen("--alarm-csv=")))
         return 2;
+    } else if (g_str_equal(argv[first], "-h") || g_str_equal(argv[first], "--help")) {
+      print_usage(stdout);
+      return 0;
+    } else if (g_str_has_prefix(argv[first], "-")) {
+      /* A pipeline description never starts with '-': an option misspelt, or its value
+       * given after a space. */
+      fprintf(stderr,
+              "pyrocam-launch: unknown option '%s' (values follow an '=', as in "
+              "--stats-csv=FILE)\n",
+              argv[first]);
+      print_usage(stderr);
+      return 2;
     } else {
       break;
     }
   }
   gst_init(NULL, NULL);
   if (argc <= first) {
-    fprintf(stderr,
-            "usage: pyrocam-launch [-e] [-m] [--stop-timeout=SECONDS] [--stats-csv=FILE]\n"
-            "                      [--alarm-csv=FILE] ELEMENT [! ELEMENT ...]\n"
-            "Runs a gst-launch-1.0 pipeline: exit 0 at end of stream, 1 after an error.\n");
+    print_usage(stderr);
     return 2;
   }
 

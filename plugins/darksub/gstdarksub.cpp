@@ -289,13 +289,13 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
           " (or left/top where the mosaic starts later on the sensor)");
   });
   if (!ok) return FALSE;
-  if (settings.dark_level >= pyrocam::full_scale_dn(st.bit_depth)) {
-    // Every sample at or below it: no reading anywhere, and nothing would say why.
+  if (settings.dark_level > pyrocam::full_scale_dn(st.bit_depth)) {
+    // Every sample below it: no reading anywhere, and nothing would say why.
     char level[32];
     std::snprintf(level, sizeof level, "%g", settings.dark_level);
     PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
                        "dark-level " + std::string(level) +
-                           " is at or above the " + std::to_string(st.bit_depth) +
+                           " is above the " + std::to_string(st.bit_depth) +
                            "-bit full scale (" +
                            std::to_string(pyrocam::full_scale_dn(st.bit_depth)) + " DN)",
                        "dark-level out of the stream's range");

@@ -227,42 +227,9 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
     return FALSE;
   }
   const pyrocam::ThermalModel& model = *st.model;
-  const int model_bands = model.profile().band_count();
-  const std::string model_layout = rt::layout_name(model);
-  if (st.bands != model_bands || model_layout != layout) {
-    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation,
-                       "Model " + st.model_path + " (" + model.profile().name + ") is for " +
-                           std::to_string(model_bands) + " bands of a " + model_layout +
-                           " mosaic, the stream has " + std::to_string(st.bands) + " bands of a " +
-                           layout + " mosaic",
-                       "band count or layout of the sink caps differs from the model's");
-    return FALSE;
-  }
-  /* Pixels the model's camera calls saturated must come marked: darksub's level must not be
-   * above the model profile's inference saturation threshold. */
-  const int level = pg::structure_int(in, PYROCAM_FIELD_SATURATION_LEVEL, -1);
-  const double model_level = model.profile().thresholds.inference_saturation_dn;
-  if (level > std::ceil(model_level)) {
-    PYROCAM_POST_ERROR(
-        self, pg::ErrorKind::kNegotiation,
-        "darksub marks pixels saturated from " + std::to_string(level) + " DN, above the " +
-            std::to_string(std::lround(model_level)) + " DN of model " + st.model_path + " (" +
-            model.profile().name +
-            "): set darksub saturation-level=" + std::to_string(std::lround(model_level)),
-        "saturation-level of the sink caps above the model profile's threshold");
-    return FALSE;
-  }
-  /* 5x5: the planes must be in the model's band order. */
-  const char* band_map = gst_structure_get_string(in, PYROCAM_FIELD_BAND_MAP);
-  if (band_map && model.profile().mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot &&
-      pg::band_map_text(model.profile().mosaic) != band_map) {
-    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation,
-                       "Model " + st.model_path + " (" + model.profile().name +
-                           ") expects the 5x5 bands in the order " +
-                           pg::band_map_text(model.profile().mosaic) +
-                           ", the stream's planes are in the order " + band_map +
-                           ": give demosaic25 the camera's profile",
-                       "band-map of the sink caps differs from the model profile's");
+  const rt::Mismatch mismatch = rt::model_mismatch(in, model, st.model_path);
+  if (!mismatch.message.empty()) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation, mismatch.message, mismatch.debug);
     return FALSE;
   }
   st.planes.assign(static_cast<std::size_t>(st.bands), cv::Mat());

@@ -1,6 +1,7 @@
 /* ratiotemp's formats: the caps' transforms between band planes and temperatures, the layout
  * name a model expects, the band values' noise the caps' demosaicking leaves, and the output buffer
  * mapped as a GRAY16_LE frame. */
+#include <cmath>
 #include <string>
 
 #include "pyrocam-caps.h"
@@ -17,6 +18,56 @@ const char* layout_name(const pyrocam::ThermalModel& model) {
   return model.profile().mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot
              ? PYROCAM_SNAPSHOT_PATTERN_NAME
              : "bayer";
+}
+
+Mismatch model_mismatch(const GstStructure* in, const pyrocam::ThermalModel& model,
+                        const std::string& model_path) {
+  const pyrocam::CameraProfile& profile = model.profile();
+  const std::string which = "model " + model_path + " (" + profile.name + ")";
+  const int bands = pg::structure_int(in, "bands", 0);
+  const char* layout = gst_structure_get_string(in, "layout");
+  const std::string model_layout = layout_name(model);
+  if (bands != profile.band_count() || !layout || model_layout != layout)
+    return {"Model " + model_path + " (" + profile.name + ") is for " +
+                std::to_string(profile.band_count()) + " bands of a " + model_layout +
+                " mosaic, the stream has " + std::to_string(bands) + " bands of a " +
+                (layout ? layout : "(no layout)") + " mosaic",
+            "band count or layout of the sink caps differs from the model's"};
+  // DN of another bit depth than the model's camera's: its thresholds and noise are off by the
+  // factor between them (the saturation check below would name only the symptom).
+  const int depth = pg::structure_int(in, "bit-depth", -1);
+  if (depth > 0 && depth != profile.bit_depth)
+    return {"The stream is " + std::to_string(depth) + "-bit, the camera of " + which + " " +
+                std::to_string(profile.bit_depth) +
+                "-bit: calibrate a model at the depth the camera streams, or set the camera (or "
+                "darksub bit-depth) to the model's",
+            "bit-depth of the sink caps differs from the model profile's"};
+  // Pixels the model's camera calls saturated must come marked: darksub's level must not be
+  // above the model profile's inference saturation threshold.
+  const int level = pg::structure_int(in, PYROCAM_FIELD_SATURATION_LEVEL, -1);
+  const double model_level = profile.thresholds.inference_saturation_dn;
+  const int model_full_scale = (1 << profile.bit_depth) - 1;
+  if (level > model_full_scale)  // the band planes do not say their depth; this does
+    return {"darksub marks pixels saturated from " + std::to_string(level) + " DN, beyond the " +
+                std::to_string(model_full_scale) + " DN full scale of the " +
+                std::to_string(profile.bit_depth) + "-bit camera of " + which +
+                ": the stream is deeper than the model's camera; calibrate a model at the depth "
+                "the camera streams, or set the camera to the model's",
+            "saturation-level of the sink caps beyond the model profile's full scale"};
+  if (level > std::ceil(model_level))
+    return {"darksub marks pixels saturated from " + std::to_string(level) + " DN, above the " +
+                std::to_string(std::lround(model_level)) + " DN of " + which +
+                ": set darksub saturation-level=" + std::to_string(std::lround(model_level)),
+            "saturation-level of the sink caps above the model profile's threshold"};
+  // 5x5: the planes must be in the model's band order.
+  const char* band_map = gst_structure_get_string(in, PYROCAM_FIELD_BAND_MAP);
+  if (band_map && profile.mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot &&
+      pg::band_map_text(profile.mosaic) != band_map)
+    return {"Model " + model_path + " (" + profile.name + ") expects the 5x5 bands in the order " +
+                pg::band_map_text(profile.mosaic) + ", the stream's planes are in the order " +
+                band_map + ": give demosaic25 the camera's profile",
+            "band-map of the sink caps differs from the model profile's"};
+  return {};
 }
 
 pyrocam::DemosaicNoise demosaic_noise_of(GstElement* element, const GstStructure* caps,

@@ -188,6 +188,13 @@ pyrocam::MethodRequest to_library(GstRatioTempMethod method);
  * both in its error), and an output buffer mapped as a GRAY16_LE frame (rows at the video
  * info's stride; throws InputError when it cannot be mapped; unmaps when it goes). */
 const char* layout_name(const pyrocam::ThermalModel& model);
+/* What in the sink caps does not fit the model (band count and layout, bit depth, saturation
+ * level, 5x5 band order): a user message and a debug line, empty when all fit. */
+struct Mismatch {
+  std::string message, debug;
+};
+Mismatch model_mismatch(const GstStructure* in, const pyrocam::ThermalModel& model,
+                        const std::string& model_path);
 /* What the demosaicking the plain band caps name (demosaic, pattern) did to the band values'
  * noise; none where they do not say (a warning where they say something unknown). */
 pyrocam::DemosaicNoise demosaic_noise_of(GstElement* element, const GstStructure* caps,

@@ -309,8 +309,8 @@ TEST(DarkSubErrors, a_frame_smaller_than_one_period_is_refused_as_such_n) {
                {"1x1 frames are smaller than one rggb period (2x2)"});
 }
 
-// A constant dark at or above the full scale leaves no signal anywhere: refused, not run dark.
-TEST(DarkSubErrors, rejects_a_dark_level_at_or_above_the_full_scale_n) {
+// A constant dark above the full scale leaves no signal anywhere: refused, not run dark.
+TEST(DarkSubErrors, rejects_a_dark_level_above_the_full_scale_n) {
   REQUIRE_ELEMENT("darksub");
   const auto r = run_on_gray8("darksub dark-level=300 pattern=rggb");
   expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS,

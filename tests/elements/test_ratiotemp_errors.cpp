@@ -163,6 +163,18 @@ TEST(RatioTempErrors, rejects_a_saturation_level_above_the_models_n) {
   expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION, {"from 240 DN", "220 DN"});
 }
 
+// A 12-bit stream on a model of an 8-bit camera: named as that, not as a saturation level to
+// lower (which then ran, with every DN sixteen times the model's).
+TEST(RatioTempErrors, names_a_stream_deeper_than_the_models_camera_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_pipeline(
+      "videotestsrc num-buffers=1 ! video/x-raw,format=GRAY16_LE,width=20,height=10 ! "
+      "darksub dark-level=50 pattern=rggb bit-depth=12 ! demosaic25 ! ratiotemp model=" +
+      rgb_model_path() + " ! fakesink");
+  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION,
+               {"255 DN full scale of the 8-bit camera", "deeper than the model's camera"});
+}
+
 TEST(RatioTempErrors, rejects_running_without_a_model_n) {
   REQUIRE_ELEMENT("ratiotemp");
   const auto r = run_chain(kColourChain, "ratiotemp");

@@ -353,6 +353,18 @@ TEST(RecordingsLauncher, stats_csv_keeps_its_columns_without_readings_and_refuse
   ASSERT_EQ(bad.wait_for(milliseconds(20000)), 2) << bad.log();
   EXPECT_NE(bad.log().find("--stats-csv: cannot create"), std::string::npos) << bad.log();
   EXPECT_NE(bad.log().find("no-such-folder"), std::string::npos) << bad.log();
+
+  // An option without its '=' (the value after a space) is no pipeline: the usage, exit 2;
+  // --help is the usage on standard output, exit 0.
+  Process spaced({launch, "--stats-csv", csv.string(), "videotestsrc", "num-buffers=1", "!",
+                  "fakesink"},
+                 {}, (dir / "spaced.log").string());
+  ASSERT_EQ(spaced.wait_for(milliseconds(20000)), 2) << spaced.log();
+  EXPECT_NE(spaced.log().find("unknown option '--stats-csv'"), std::string::npos) << spaced.log();
+  EXPECT_NE(spaced.log().find("usage: pyrocam-launch"), std::string::npos) << spaced.log();
+  Process help({launch, "--help"}, {}, (dir / "help.log").string());
+  ASSERT_EQ(help.wait_for(milliseconds(20000)), 0) << help.log();
+  EXPECT_NE(help.log().find("usage: pyrocam-launch"), std::string::npos) << help.log();
 }
 
 // --alarm-csv: thermalalarm's change of state as a row with the alarm's columns.

@@ -34,9 +34,12 @@ class PeakSearch {
                   cv::BORDER_CONSTANT);
   }
 
-  // Window centred on pixel index i: the best so far unless its median is larger.
+  // Window centred on pixel index i: the best so far unless its median is larger. Only windows
+  // wholly inside the image: one cut by its edge holds fewer readings, whose median scatters
+  // further, and the largest of the medians then sat on the edge, reading high.
   void evaluate(int i) {
     const int cx = i % t_.cols, cy = i / t_.cols;
+    if (!inside(cx, cy)) return;
     values_.clear();
     for (int y = std::max(0, cy - half_); y <= std::min(t_.rows - 1, cy + half_); ++y) {
       const float* row = t_.ptr<float>(y);
@@ -64,10 +67,10 @@ class PeakSearch {
     cv::boxFilter(above, counts, CV_16U, cv::Size(2 * half_ + 1, 2 * half_ + 1), cv::Point(-1, -1),
                   false, cv::BORDER_CONSTANT);
     std::vector<int> out;
-    for (int y = 0; y < t_.rows; ++y) {
+    for (int y = half_; y < t_.rows - half_; ++y) {
       const std::uint16_t* k = valid_counts_.ptr<std::uint16_t>(y);
       const std::uint16_t* c = counts.ptr<std::uint16_t>(y);
-      for (int x = 0; x < t_.cols; ++x)
+      for (int x = half_; x < t_.cols - half_; ++x)
         if (2 * k[x] >= area_ && c[x] > 0 && c[x] >= k[x] - k[x] / 2)
           out.push_back(y * t_.cols + x);
     }
@@ -77,6 +80,9 @@ class PeakSearch {
   const RegionPeak& best() const { return best_; }
 
  private:
+  bool inside(int x, int y) const {
+    return x >= half_ && x < t_.cols - half_ && y >= half_ && y < t_.rows - half_;
+  }
   const cv::Mat& t_;
   const cv::Mat& valid_;
   const int half_, area_;

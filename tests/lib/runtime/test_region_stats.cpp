@@ -52,10 +52,11 @@ double naive_window_median(const cv::Mat& t, int w, const cv::Mat& mask, int cx,
   return n % 2 ? v[n / 2] : 0.5 * (static_cast<double>(v[n / 2 - 1]) + v[n / 2]);
 }
 
+// The definition: windows wholly inside the image.
 RegionPeak naive_peak(const cv::Mat& t, int w, const cv::Mat& mask = cv::Mat()) {
   RegionPeak best;
-  for (int cy = 0; cy < t.rows; ++cy)
-    for (int cx = 0; cx < t.cols; ++cx) {
+  for (int cy = w / 2; cy < t.rows - w / 2; ++cy)
+    for (int cx = w / 2; cx < t.cols - w / 2; ++cx) {
       const double m = naive_window_median(t, w, mask, cx, cy);
       if (!std::isnan(m) && (!best.found() || m > best.c)) best = {m, cx, cy};
     }
@@ -104,6 +105,20 @@ TEST(RegionPeak, finds_a_hot_spot_where_it_is) {
   EXPECT_EQ(one.x, 100);
   EXPECT_EQ(one.y, 5);
   EXPECT_DOUBLE_EQ(one.c, 3000);
+}
+
+// Windows cut by the image's edge hold fewer readings: with two hot columns at the edge, a
+// window centred on the edge (15 pixels, 10 hot) had a hot median where no window inside the
+// image has (10 hot of 25). The peak comes from windows wholly inside.
+TEST(RegionPeak, windows_cut_by_the_edge_do_not_count) {
+  cv::Mat t(20, 20, CV_32F, cv::Scalar(1000));
+  t(cv::Rect(0, 0, 2, 20)) = 1100;
+  const RegionPeak p = region_peak(t, 5);
+  ASSERT_TRUE(p.found());
+  EXPECT_DOUBLE_EQ(p.c, 1000);
+  EXPECT_GE(p.x, 2);
+  EXPECT_GE(p.y, 2);
+  EXPECT_LE(p.y, 17);
 }
 
 TEST(RegionPeak, windows_with_under_half_their_pixels_valid_do_not_count) {
