@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 
 #include "pyrocam/core/error.h"
@@ -90,6 +91,10 @@ TableFile read_table_file(const std::string& path, const std::string& fields,
                           std::size_t block_bytes, std::size_t max_blocks, std::size_t slots) {
   TableFile f;
   f.block_bytes = block_bytes;
+  // A directory opens as a stream on Linux, whose size then read as an absurd one.
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw InputError("the lookup-table file " + path + " is not a regular file");
   std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) throw InputError("cannot read the lookup-table file " + path);
   // No larger than the most blocks it may hold with a generous header: refused before it is read.

@@ -233,6 +233,14 @@ TEST_F(PrebuiltTable, a_corrupt_or_foreign_file_is_refused_and_the_readings_stay
       EXPECT_EQ(differing(reference, out), 0) << c.name;
     }
   }
+  // A directory in its place: named as such (its size read as an absurd one before).
+  std::filesystem::create_directory(dir / "folder.lut");
+  EstimatorSelector folder(model);
+  folder.set_prebuilt_tables((dir / "folder.lut").string());
+  ASSERT_EQ(folder.select(MethodRequest::kLut).problem, "");
+  EXPECT_EQ(folder.prebuilt_blocks_read(), 0u);
+  EXPECT_NE(folder.prebuilt_problem().find("is not a regular file"), std::string::npos)
+      << folder.prebuilt_problem();
   // Not there: no problem, nothing read.
   EstimatorSelector missing(model);
   missing.set_prebuilt_tables((dir / "missing.lut").string());
