@@ -71,6 +71,7 @@ typedef struct {
   guint stop_timeout_s;   /* bound on stopping the pipeline */
   gboolean messages;      /* -m */
   gboolean eos_on_signal; /* -e */
+  gboolean finalising;    /* -e: an EOS sent after an error, awaited */
   CsvLog stats_csv;       /* --stats-csv */
   CsvLog alarm_csv;       /* --alarm-csv */
 } Launch;
@@ -196,6 +197,40 @@ static gboolean open_csv(CsvLog* log, const char* option, const char* path) {
   return TRUE;
 }
 
+/* An end of stream into what each source feeds, past the source itself: after an error the
+ * source's own thread may be stuck on, or failing with, a camera that is gone, and an EOS event
+ * sent to the pipeline goes to that thread (aravissrc then stops with an error instead). */
+static void end_streams_after_sources(GstElement* pipeline) {
+  GstIterator* sources = gst_bin_iterate_sources(GST_BIN(pipeline));
+  GValue item = G_VALUE_INIT;
+  while (gst_iterator_next(sources, &item) == GST_ITERATOR_OK) {
+    GstElement* source = g_value_get_object(&item);
+    GstIterator* pads = gst_element_iterate_src_pads(source);
+    GValue pad_item = G_VALUE_INIT;
+    while (gst_iterator_next(pads, &pad_item) == GST_ITERATOR_OK) {
+      GstPad* peer = gst_pad_get_peer(g_value_get_object(&pad_item));
+      if (peer) {
+        gst_pad_send_event(peer, gst_event_new_eos());
+        gst_object_unref(peer);
+      }
+      g_value_reset(&pad_item);
+    }
+    g_value_unset(&pad_item);
+    gst_iterator_free(pads);
+    g_value_reset(&item);
+  }
+  g_value_unset(&item);
+  gst_iterator_free(sources);
+}
+
+/* How long an end of stream sent after an error may take to come through (-e). */
+enum { kFinaliseAfterErrorMs = 3000 };
+
+static gboolean quit_loop(gpointer loop) {
+  g_main_loop_quit(loop);
+  return G_SOURCE_REMOVE;
+}
+
 static gboolean on_bus(GstBus* bus, GstMessage* msg, gpointer data) {
   (void)bus;
   Launch* launch = data;
@@ -203,6 +238,20 @@ static gboolean on_bus(GstBus* bus, GstMessage* msg, gpointer data) {
     case GST_MESSAGE_ERROR:
       print_error(msg);
       g_atomic_int_set(&launch->status, 1);
+      if (launch->finalising) break; /* the source's own error after the first: still waiting */
+      if (launch->eos_on_signal && !g_atomic_int_get(&eos_seen) &&
+          GST_STATE(launch->pipeline) == GST_STATE_PLAYING) { /* else no file was begun */
+        /* With -e the files are finalised after an error too, as far as the pipeline lets an
+         * end of stream through (a camera that vanished mid-segment: the segment being
+         * written keeps its frames and its index); bounded by the stop guard. */
+        launch->finalising = TRUE;
+        fprintf(stderr, "pyrocam-launch: error: sending EOS so that the files are finalised\n");
+        fflush(stderr);
+        end_streams_after_sources(launch->pipeline);
+        /* A pipeline whose stream stopped at the error passes no end of stream: not long. */
+        g_timeout_add(kFinaliseAfterErrorMs, quit_loop, launch->loop);
+        break;
+      }
       g_main_loop_quit(launch->loop);
       break;
     case GST_MESSAGE_WARNING:

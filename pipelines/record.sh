@@ -12,7 +12,8 @@
 # covers `pyrocam-calib export` (TIFF, .npy, CSV) and STATS_CSV.
 # The colour-mapped view (overlay over the camera's colour image) is written
 # to OUT/view.png, refreshed SNAPSHOT_RATE times a second. A camera that sends nothing for
-# WATCHDOG_MS ends the recording with an error: the segments already closed stay intact.
+# WATCHDOG_MS ends the recording with an error: the segments already closed stay intact, and
+# the one being written is finalised with its frames (an end of stream sent past the camera).
 #
 # Settings (environment variables, defaults in brackets):
 #   PROFILE          camera: rgb-reference (colour) or nir5x5-reference (5x5 mosaic) [rgb-reference]

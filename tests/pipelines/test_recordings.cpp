@@ -367,6 +367,34 @@ TEST(RecordingsLauncher, stats_csv_keeps_its_columns_without_readings_and_refuse
   EXPECT_NE(help.log().find("usage: pyrocam-launch"), std::string::npos) << help.log();
 }
 
+// -e after an error mid-stream (a camera that vanished: the watchdog's error, then the
+// source's): the end of stream goes in past the source, whose thread is stuck on or failing
+// with the camera, so the file being written is finalised (its index, Matroska's Cues, at the
+// end) with every frame before the error. Sent to the pipeline, aravissrc stopped with an error
+// instead, and the launcher's stop guard exited before the file was closed.
+TEST(RecordingsLauncher, an_error_mid_stream_with_e_still_finalises_the_file_n) {
+  for (const char* e : {"avenc_ffv1", "matroskamux", "identity"}) REQUIRE_ELEMENT(e);
+  const char* env = std::getenv("PYROCAM_LAUNCH");
+  const std::string launch = env && *env ? env : "pyrocam-launch";
+  ScratchDir dir("launcher-error");
+  const fs::path file = dir / "rec.mkv";
+  Process p({launch, "-e", "videotestsrc", "is-live=true", "num-buffers=100", "!",
+             "video/x-raw,format=GRAY16_LE,width=32,height=24,framerate=30/1", "!", "identity",
+             "error-after=10", "!", "avenc_ffv1", "!", "matroskamux", "!", "filesink",
+             "location=" + file.string()},
+            {}, (dir / "run.log").string());
+  ASSERT_EQ(p.wait_for(milliseconds(30000)), 1) << p.log();
+  EXPECT_NE(p.log().find("sending EOS so that the files are finalised"), std::string::npos)
+      << p.log();
+  const std::string bytes = read_text(file);
+  const std::string cues = "\x1C\x53\xBB\x6B";  // also in the header's seek table
+  EXPECT_NE(bytes.rfind(cues), bytes.find(cues)) << "no index at the end: not finalised";
+  const Video v = pull_frames("filesrc location=" + file.string() +
+                              " ! matroskademux ! avdec_ffv1 ! appsink name=out");
+  ASSERT_TRUE(v.error.empty()) << v.error;
+  EXPECT_EQ(v.frames.size(), 9u);  // identity fails the tenth
+}
+
 // --alarm-csv: thermalalarm's change of state as a row with the alarm's columns.
 TEST(RecordingsLauncher, alarm_csv_has_a_row_per_change_of_state) {
   for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp", "thermalalarm"})
