@@ -294,9 +294,8 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
     char level[32];
     std::snprintf(level, sizeof level, "%g", settings.dark_level);
     PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
-                       "dark-level " + std::string(level) +
-                           " is above the " + std::to_string(st.bit_depth) +
-                           "-bit full scale (" +
+                       "dark-level " + std::string(level) + " is above the " +
+                           std::to_string(st.bit_depth) + "-bit full scale (" +
                            std::to_string(pyrocam::full_scale_dn(st.bit_depth)) + " DN)",
                        "dark-level out of the stream's range");
     return FALSE;
@@ -369,7 +368,8 @@ static void check_bayer_phase(GstDarkSub* self, State& st, const cv::Mat& signal
   constexpr int kCellRowStep = 4;
   constexpr std::size_t kCells = 256;
   if (st.phase_warned || st.pattern == "5x5") return;
-  const float lit_dn = std::max(4.0f, 0.02f * static_cast<float>(pyrocam::full_scale_dn(st.bit_depth)));
+  const float lit_dn =
+      std::max(4.0f, 0.02f * static_cast<float>(pyrocam::full_scale_dn(st.bit_depth)));
   pyrocam::add_bayer_cell_sums(signal, lit_dn, kCellRowStep, st.phase_sums);
   if (st.phase_sums.cells < kCells) return;
   if (pyrocam::bayer_greens_elsewhere(st.phase_sums, st.pattern)) {

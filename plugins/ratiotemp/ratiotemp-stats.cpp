@@ -131,8 +131,8 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
     // Once per region and frame size: a 5x5 camera's frames are the sensor's fifth.
     const cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,
                           settings.region.height);
-    const std::string outside = settings.region_text + "/" + std::to_string(w) + "x" +
-                                std::to_string(h);
+    const std::string outside =
+        settings.region_text + "/" + std::to_string(w) + "x" + std::to_string(h);
     if ((wanted & cv::Rect(0, 0, w, h)).empty() && outside != st.region_warned)
       GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
                           ("%s: region %s lies outside the %dx%d frame; its statistics are "
@@ -160,7 +160,7 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
 }
 
 void warn_when_readings_misfit(GstRatioTemp* self, State& st,
-                                const pyrocam::PlaneEstimator& estimator) {
+                               const pyrocam::PlaneEstimator& estimator) {
   const pyrocam::PlaneEstimator::FitAudit audit = estimator.take_fit_audit();
   st.fit_checked += audit.checked;
   st.fit_misfit += audit.misfit;
@@ -174,8 +174,7 @@ void warn_when_readings_misfit(GstRatioTemp* self, State& st,
          "temperatures are likely wrong. Is the mosaic's phase right (a crop by an odd number of "
          "rows or columns at the top or left, or a flip, before darksub shifts it; crop with "
          "right= and bottom= only, by whole periods)? Is the model (%s) for this camera?",
-         GST_OBJECT_NAME(self), st.fit_misfit, st.fit_checked,
-         st.model->profile().name.c_str()),
+         GST_OBJECT_NAME(self), st.fit_misfit, st.fit_checked, st.model->profile().name.c_str()),
         ("band-consistency check of a sample of readings at false-rejection probability %g, "
          "model error %g",
          pyrocam::PlaneEstimator::kFitAuditProbability,

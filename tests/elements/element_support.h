@@ -39,7 +39,7 @@ struct BusResult {
   GQuark domain = 0;
   int code = 0;
   std::string message, debug, source;
-  int buffers = 0;  // buffers that reached the sink named "sink", if any
+  int buffers = 0;                    // buffers that reached the sink named "sink", if any
   std::vector<std::string> warnings;  // the warning messages posted before the end
 };
 // Runs a gst-launch description to EOS or the first error, at most `timeout`.

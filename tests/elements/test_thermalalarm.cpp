@@ -282,8 +282,7 @@ TEST(ThermalAlarmLaunch, a_malformed_setting_in_a_launch_line_stops_the_pipeline
         "thermalalarm threshold-c=1000 " +
         std::string(setting) + " ! fakesink");
     expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS,
-                 {std::string(setting).substr(0, std::string(setting).find('=')),
-                  "keeping"});
+                 {std::string(setting).substr(0, std::string(setting).find('=')), "keeping"});
   }
 }
 

@@ -356,9 +356,9 @@ TEST(RecordingsLauncher, stats_csv_keeps_its_columns_without_readings_and_refuse
 
   // An option without its '=' (the value after a space) is no pipeline: the usage, exit 2;
   // --help is the usage on standard output, exit 0.
-  Process spaced({launch, "--stats-csv", csv.string(), "videotestsrc", "num-buffers=1", "!",
-                  "fakesink"},
-                 {}, (dir / "spaced.log").string());
+  Process spaced(
+      {launch, "--stats-csv", csv.string(), "videotestsrc", "num-buffers=1", "!", "fakesink"}, {},
+      (dir / "spaced.log").string());
   ASSERT_EQ(spaced.wait_for(milliseconds(20000)), 2) << spaced.log();
   EXPECT_NE(spaced.log().find("unknown option '--stats-csv'"), std::string::npos) << spaced.log();
   EXPECT_NE(spaced.log().find("usage: pyrocam-launch"), std::string::npos) << spaced.log();

@@ -11,8 +11,8 @@
 #include <cstring>
 #include <fstream>
 #include <memory>
-#include <string>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 #include <vector>
 
 #include "pyrocam/core/error.h"
@@ -190,15 +190,15 @@ cv::Mat read_tiff(const std::filesystem::path& path) {
   TIFF* t = tiff.get();
   std::uint32_t width = 0, height = 0;
   std::uint16_t bits = 0, samples = 0, format = 0, photometric = PHOTOMETRIC_MINISBLACK;
-  if (!TIFFGetField(t, TIFFTAG_IMAGEWIDTH, &width) || !TIFFGetField(t, TIFFTAG_IMAGELENGTH, &height))
+  if (!TIFFGetField(t, TIFFTAG_IMAGEWIDTH, &width) ||
+      !TIFFGetField(t, TIFFTAG_IMAGELENGTH, &height))
     throw corrupt();
   TIFFGetFieldDefaulted(t, TIFFTAG_BITSPERSAMPLE, &bits);
   TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLESPERPIXEL, &samples);
   TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLEFORMAT, &format);
   TIFFGetField(t, TIFFTAG_PHOTOMETRIC, &photometric);
   if (samples != 1)
-    throw refuse(std::to_string(samples) +
-                 " channels; raw mosaic images must be single-channel");
+    throw refuse(std::to_string(samples) + " channels; raw mosaic images must be single-channel");
   if ((bits != 8 && bits != 16) || format != SAMPLEFORMAT_UINT)
     throw refuse("samples must be 8- or 16-bit unsigned integers");
   if (photometric != PHOTOMETRIC_MINISBLACK)

@@ -126,10 +126,9 @@ cv::Mat Simulator::render(const cv::Mat& temperature_c, double exposure_us, doub
           // A clamped black level takes the dark current's mean out (its noise stays).
           const double clamped_dn =
               black_level_clamp_ ? k[band] * gain * nm.dark_current_e_per_s * t_s : 0.0;
-          const double dn =
-              std::clamp(std::round(k[band] * e + profile_.dark_offset_dn + black_level_shift_dn_ +
-                                    fpn_row[x] - clamped_dn),
-                         0.0, max_dn);
+          const double dn = std::clamp(std::round(k[band] * e + profile_.dark_offset_dn +
+                                                  black_level_shift_dn_ + fpn_row[x] - clamped_dn),
+                                       0.0, max_dn);
           if (type == CV_8U)
             out.ptr<std::uint8_t>(y)[x] = static_cast<std::uint8_t>(dn);
           else

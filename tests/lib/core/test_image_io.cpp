@@ -9,8 +9,8 @@
 #include <algorithm>
 #include <fstream>
 #include <iterator>
-#include <vector>
 #include <opencv2/imgcodecs.hpp>
+#include <vector>
 
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/image_io.h"

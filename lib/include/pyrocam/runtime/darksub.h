@@ -50,10 +50,11 @@ void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, int cell_row_step,
 // (rggb, bggr, grbg or gbrg) puts them: the pattern's two green places differ by more than 10 %
 // while the other two agree within 3 %. Samples behind one filter agree (a sensor's green
 // imbalance is a percent or two); a red and a blue one do not on a glowing body (the colour
-// camera's blue, mostly its near-infrared leak there, reads 24 % above its red at 800 degC). So the mosaic was shifted by one row or one column (a crop at the
-// top or left by an odd number of pixels), and read as it is its temperatures look right and
-// are wrong. (A shift by both, or a flip, which trades red for blue, keeps the greens in place
-// and is not seen.) False for another pattern or sums that tell nothing.
+// camera's blue, mostly its near-infrared leak there, reads 24 % above its red at 800 degC). So the
+// mosaic was shifted by one row or one column (a crop at the top or left by an odd number of
+// pixels), and read as it is its temperatures look right and are wrong. (A shift by both, or a
+// flip, which trades red for blue, keeps the greens in place and is not seen.) False for another
+// pattern or sums that tell nothing.
 bool bayer_greens_elsewhere(const BayerCellSums& sums, const std::string& pattern);
 
 // Converts a dark image read from a file (CV_8U/CV_16U) to the CV_32F dark subtract_dark takes.

@@ -19,8 +19,9 @@ RegionStats region_stats(const cv::Mat& temperature_c, const cv::Mat& mask = cv:
 
 // The hottest place of a region, robust to single wild pixels (mixed pixels at sharp edges):
 // the largest median over the square windows of `window` x `window` pixels wholly inside the
-// image (one cut by the edge holds fewer readings, whose median scatters further). One outlier cannot move the median of 25 values beyond its neighbours, so a plate
-// with wild edge pixels peaks at the plate's temperature.
+// image (one cut by the edge holds fewer readings, whose median scatters further). One outlier
+// cannot move the median of 25 values beyond its neighbours, so a plate with wild edge pixels peaks
+// at the plate's temperature.
 struct RegionPeak {
   double c = NAN;      // the largest window median (degC); NaN when no window qualifies
   int x = -1, y = -1;  // the centre of that window (pixels of temperature_c); -1 when none
