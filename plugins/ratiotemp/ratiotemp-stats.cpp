@@ -171,9 +171,9 @@ void warn_when_readings_misfit(GstRatioTemp* self, State& st,
     GST_ELEMENT_WARNING(
         self, STREAM, FORMAT,
         ("%s: %zu of %zu readings checked do not fit the model's band spectra: the "
-         "temperatures are likely wrong. Is the mosaic's phase right (a crop by an odd number of "
-         "rows or columns at the top or left, or a flip, before darksub shifts it; crop with "
-         "right= and bottom= only, by whole periods)? Is the model (%s) for this camera?",
+         "temperatures are likely wrong. Is the mosaic's phase right (a crop at the top or left "
+         "by other than whole mosaic periods, or a flip, before darksub shifts it: crop at the "
+         "right and bottom)? Is the model (%s) for this camera?",
          GST_OBJECT_NAME(self), st.fit_misfit, st.fit_checked, st.model->profile().name.c_str()),
         ("band-consistency check of a sample of readings at false-rejection probability %g, "
          "model error %g",

@@ -84,6 +84,7 @@ void PlaneEstimator::set_emissivity_slope(double alpha, double alpha_u) {
 
 PlaneEstimator::FitAudit PlaneEstimator::take_fit_audit() const {
   if (!audit_) {
+    if (audit_refused_) return {};
     // Its tables (a 5x5 locus: tens of ms) on a thread of their own, not in a frame's time.
     if (!audit_build_.valid())
       audit_build_ = std::async(std::launch::async, [model = model_] {
@@ -94,7 +95,7 @@ PlaneEstimator::FitAudit PlaneEstimator::take_fit_audit() const {
       audit_ = audit_build_.get();
       audit_->set_analogue_gain(analogue_gain_);
     } catch (const std::exception&) {
-      audit_build_ = {};  // a model the check cannot take: asked again, it tries again
+      audit_refused_ = true;  // a model the check cannot take: no audit
     }
     return {};
   }

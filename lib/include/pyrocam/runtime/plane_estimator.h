@@ -144,6 +144,7 @@ class PlaneEstimator {
   // the rows' threads.
   mutable std::unique_ptr<MisfitCheck> audit_;
   mutable std::future<std::unique_ptr<MisfitCheck>> audit_build_;
+  mutable bool audit_refused_ = false;
   struct AuditCounts {
     std::atomic<std::size_t> checked{0}, misfit{0}, rows{0};
   };
