@@ -33,15 +33,6 @@ Mismatch model_mismatch(const GstStructure* in, const pyrocam::ThermalModel& mod
                 " mosaic, the stream has " + std::to_string(bands) + " bands of a " +
                 (layout ? layout : "(no layout)") + " mosaic",
             "band count or layout of the sink caps differs from the model's"};
-  // DN of another bit depth than the model's camera's: its thresholds and noise are off by the
-  // factor between them (the saturation check below would name only the symptom).
-  const int depth = pg::structure_int(in, "bit-depth", -1);
-  if (depth > 0 && depth != profile.bit_depth)
-    return {"The stream is " + std::to_string(depth) + "-bit, the camera of " + which + " " +
-                std::to_string(profile.bit_depth) +
-                "-bit: calibrate a model at the depth the camera streams, or set the camera (or "
-                "darksub bit-depth) to the model's",
-            "bit-depth of the sink caps differs from the model profile's"};
   // Pixels the model's camera calls saturated must come marked: darksub's level must not be
   // above the model profile's inference saturation threshold.
   const int level = pg::structure_int(in, PYROCAM_FIELD_SATURATION_LEVEL, -1);

@@ -188,8 +188,9 @@ pyrocam::MethodRequest to_library(GstRatioTempMethod method);
  * both in its error), and an output buffer mapped as a GRAY16_LE frame (rows at the video
  * info's stride; throws InputError when it cannot be mapped; unmaps when it goes). */
 const char* layout_name(const pyrocam::ThermalModel& model);
-/* What in the sink caps does not fit the model (band count and layout, bit depth, saturation
- * level, 5x5 band order): a user message and a debug line, empty when all fit. */
+/* What in the sink caps does not fit the model (band count and layout, saturation level, which
+ * also tells a stream deeper than the model's camera, 5x5 band order): a user message and a
+ * debug line, empty when all fit. */
 struct Mismatch {
   std::string message, debug;
 };
