@@ -82,7 +82,7 @@ void PlaneEstimator::set_emissivity_slope(double alpha, double alpha_u) {
   alpha_u_ = alpha_u;
 }
 
-PlaneEstimator::FitAudit PlaneEstimator::take_fit_audit() const {
+PlaneEstimator::FitAudit PlaneEstimator::take_fit_audit(bool wait) const {
   if (!audit_) {
     if (audit_refused_) return {};
     // Its tables (a 5x5 locus: tens of ms) on a thread of their own, not in a frame's time.
@@ -90,6 +90,7 @@ PlaneEstimator::FitAudit PlaneEstimator::take_fit_audit() const {
       audit_build_ = std::async(std::launch::async, [model = model_] {
         return std::make_unique<MisfitCheck>(model, kFitAuditProbability, kFitAuditModelError);
       });
+    if (wait) audit_build_.wait();
     if (audit_build_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return {};
     try {
       audit_ = audit_build_.get();
@@ -104,19 +105,19 @@ PlaneEstimator::FitAudit PlaneEstimator::take_fit_audit() const {
 
 void PlaneEstimator::audit_row(const float* const* rows, std::size_t n, const float* out) const {
   if (!audit_) return;
-  // Every kFitAuditRows-th row (or run) that the threads estimate: a pass over its readings.
-  if (audit_counts_->rows.fetch_add(1, std::memory_order_relaxed) % kFitAuditRows != 0) return;
+  // Every audit_rows_-th row (or run) that the threads estimate: a pass over its readings.
+  if (audit_counts_->rows.fetch_add(1, std::memory_order_relaxed) % audit_rows_ != 0) return;
   const auto bands = static_cast<std::size_t>(model_->profile().band_count());
   std::size_t checked = 0, misfit = 0;
   double s[kMaxBands], c[kMaxBands];
   // Readings, not pixels, so that a small hot body has its share: the middle one of the row's
-  // readings (away from a body's edges) where there are few, else every kFitAuditStride-th.
+  // readings (away from a body's edges) where there are few, else every audit_stride_-th.
   std::size_t readings = 0;
   for (std::size_t i = 0; i < n; ++i) readings += std::isfinite(out[i]) ? 1 : 0;
-  std::size_t next = readings < kFitAuditStride ? readings / 2 : kFitAuditStride / 2;
+  std::size_t next = readings < audit_stride_ ? readings / 2 : audit_stride_ / 2;
   for (std::size_t i = 0, k = 0; i < n && k <= next && readings > 0; ++i) {
     if (!std::isfinite(out[i]) || k++ != next) continue;
-    next += kFitAuditStride;
+    next += audit_stride_;
     for (std::size_t b = 0; b < bands; ++b) s[b] = rows[b][i];
     const double* signals = s;
     if (sloped_) {  // the grey surface's signals that the reading corrected them to
