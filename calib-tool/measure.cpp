@@ -177,9 +177,9 @@ void add_dataset_jobs(const MeasureArgs& a, MeasureInputs& in) {
   }
 }
 
-// The frames to measure (the dataset's or the one --frame), checked against the model's mosaic
-// layout, and the ROI the statistics are taken over.
-MeasureInputs measure_inputs(const MeasureArgs& a, const ThermalModel& model) {
+// The frames to measure (the dataset's or the one --frame), their layout, and the ROI the
+// statistics are taken over.
+MeasureInputs measure_inputs(const MeasureArgs& a) {
   MeasureInputs in;
   if (!a.pattern.empty()) in.pattern = parse_mosaic_pattern(a.pattern, "--pattern");
   if (!a.dataset.empty()) {
@@ -187,13 +187,6 @@ MeasureInputs measure_inputs(const MeasureArgs& a, const ThermalModel& model) {
   } else {
     in.jobs.push_back({a.frame, a.dark, {}, NAN, NAN});
   }
-  std::string model_pattern = model.profile().mosaic.pattern;
-  std::transform(model_pattern.begin(), model_pattern.end(), model_pattern.begin(),
-                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-  if (model_pattern != in.pattern)
-    throw InputError(a.model + ": the model was calibrated for a " + model_pattern +
-                     " mosaic (profile " + model.profile().name + "), the frames are " +
-                     in.pattern + " (" + in.pattern_source + ")");
   const cv::Size frame_size = read_image_size(in.jobs.front().frame);
   if (!a.roi.empty()) in.roi = read_raw_image(a.roi, frame_size, "the frame") != 0;
   return in;
@@ -208,28 +201,34 @@ std::ofstream open_stats_csv(const std::string& out) {
   return csv;
 }
 
-// <stem>_temperature and, when asked for, <stem>_uncertainty, in 0.1 K (0 = no reading).
+// <stem>_temperature and, when asked for, <stem>_uncertainty, in 0.1 K (0 = no reading); their
+// paths added to `written`.
 void write_frame_images(const MeasureArgs& a, const std::string& stem, const cv::Mat& t,
-                        const cv::Mat& u) {
+                        const cv::Mat& u, std::vector<std::filesystem::path>& written) {
   const std::string ext = a.format == "png" ? ".png" : ".tif";
-  write_raw_image(std::filesystem::path(a.out) / (stem + "_temperature" + ext),
-                  encode_decikelvin(t));
+  written.push_back(std::filesystem::path(a.out) / (stem + "_temperature" + ext));
+  write_raw_image(written.back(), encode_decikelvin(t));
   if (a.uncertainty) {
     // Uncertainty as a temperature difference in 0.1 K, 0 = no reading.
-    write_raw_image(std::filesystem::path(a.out) / (stem + "_uncertainty" + ext),
-                    encode_decikelvin_difference(u));
+    written.push_back(std::filesystem::path(a.out) / (stem + "_uncertainty" + ext));
+    write_raw_image(written.back(), encode_decikelvin_difference(u));
   }
 }
 
 // One frame measured: its images written and its row of stats.csv.
 void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
                    const ThermalModel& model, const MeasureOptions& options,
-                   FrameMeasurer& measurer, std::ostream& csv, bool quiet) {
+                   FrameMeasurer& measurer, std::ostream& csv, bool quiet,
+                   std::vector<std::filesystem::path>& written) {
   const cv::Mat raw = read_raw_image(j.frame);
   const cv::Mat dark = read_raw_image(j.dark, raw.size(), "the frame " + j.frame.string());
   cv::Mat t, u;
-  measurer.measure(raw, dark, t, a.uncertainty ? &u : nullptr);
-  write_frame_images(a, j.frame.stem().string(), t, u);
+  try {
+    measurer.measure(raw, dark, t, a.uncertainty ? &u : nullptr);
+  } catch (const InputError& e) {
+    throw InputError(j.frame.string() + " (dark " + j.dark.string() + "): " + e.what());
+  }
+  write_frame_images(a, j.frame.stem().string(), t, u, written);
   cv::Mat mask;
   if (!in.roi.empty()) cv::resize(in.roi, mask, t.size(), 0, 0, cv::INTER_NEAREST);
   const RegionStats s = region_stats(t, mask);
@@ -275,16 +274,33 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
     m.quiet = global.quiet;
     return measure_recording(m);
   }
-  FrameMeasurer measurer(shared_model, options);
-  load_prebuilt_table(measurer, options, a.model, global.quiet);
-  const MeasureInputs in = measure_inputs(a, model);
+  const MeasureInputs in = measure_inputs(a);
+  MeasureOptions frame_options = options;
+  frame_options.bayer_pattern =
+      frames_bayer_pattern(model, a.model, in.pattern, in.pattern_source, global.quiet);
+  frame_options.check_layout = true;
+  FrameMeasurer measurer(shared_model, frame_options);
+  load_prebuilt_table(measurer, frame_options, a.model, global.quiet);
   std::ofstream csv = open_stats_csv(a.out);
-  ProgressPrinter progress(global, "measuring");
-  for (std::size_t i = 0; i < in.jobs.size(); ++i) {
-    measure_frame(in.jobs[i], a, in, model, options, measurer, csv, global.quiet);
-    progress(i + 1, in.jobs.size());
+  // A run that fails part-way leaves no results that look complete: what it wrote goes.
+  std::vector<std::filesystem::path> written{std::filesystem::path(a.out) / "stats.csv"};
+  try {
+    ProgressPrinter progress(global, "measuring");
+    for (std::size_t i = 0; i < in.jobs.size(); ++i) {
+      measure_frame(in.jobs[i], a, in, model, frame_options, measurer, csv, global.quiet, written);
+      progress(i + 1, in.jobs.size());
+    }
+    csv.flush();
+    if (!csv) throw InputError(a.out + "/stats.csv: write failed");
+  } catch (...) {
+    csv.close();
+    std::error_code ec;
+    for (const auto& path : written) std::filesystem::remove(path, ec);
+    throw;
   }
-  if (!csv) throw InputError(a.out + "/stats.csv: write failed");
+  // Said even when quiet: the temperatures written are likely wrong.
+  for (const std::string& problem : measurer.layout_problems())
+    std::cerr << "warning: " << problem << "\n";
   if (!global.quiet)
     std::cout << in.jobs.size() << " frame(s) measured; images and stats.csv in " << a.out << "\n";
   return kExitOk;
@@ -308,10 +324,12 @@ void add_input_options(CLI::App* c, MeasureArgs& a) {
   ds->excludes(fr);
   rec->excludes(ds);
   rec->excludes(fr);
-  c->add_option("--pattern", a.pattern,
-                "Mosaic layout of the raw frames: rggb, bggr, grbg, gbrg (Bayer, by the top-left "
-                "cell) or the snapshot period, e.g. 5x5; must be the model's. Needed with --frame "
-                "and with a dataset that has no mosaic.txt; must agree with mosaic.txt otherwise")
+  c->add_option(
+       "--pattern", a.pattern,
+       "Mosaic layout of the raw frames: rggb, bggr, grbg, gbrg (Bayer, by the top-left "
+       "cell) or the snapshot period, e.g. 5x5: the model's, or for a Bayer model any of the "
+       "four (a readout window that starts on another cell). Needed with --frame "
+       "and with a dataset that has no mosaic.txt; must agree with mosaic.txt otherwise")
       ->check([](const std::string& v) {
         try {
           parse_mosaic_pattern(v, "--pattern");

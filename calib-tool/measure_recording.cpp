@@ -5,6 +5,7 @@
 
 #include <cctype>
 #include <iostream>
+#include <optional>
 
 #include "commands.h"
 #include "export.h"
@@ -60,13 +61,29 @@ void load_prebuilt_table(const FrameMeasurer& measurer, const MeasureOptions& op
   }
 }
 
+std::string frames_bayer_pattern(const ThermalModel& model, const std::string& model_path,
+                                 const std::string& frames, const std::string& source, bool quiet) {
+  const std::string model_pattern = lower(model.profile().mosaic.pattern);
+  if (frames.empty() || frames == model_pattern) return {};
+  const bool both_bayer =
+      model.profile().mosaic.kind == MosaicLayout::Kind::kBayer &&
+      (frames == "rggb" || frames == "bggr" || frames == "grbg" || frames == "gbrg");
+  if (!both_bayer)
+    throw InputError(model_path + ": the model was calibrated for a " + model_pattern +
+                     " mosaic (profile " + model.profile().name + "), the frames are " + frames +
+                     " (" + source + ")");
+  if (!quiet)
+    std::cerr << "note: the frames are " << frames << " (" << source << "), the model's camera "
+              << model_pattern << ": read as " << frames
+              << " (the same filters, a readout window that starts on another cell)\n";
+  return frames;
+}
+
 int measure_recording(const RecordingMeasure& m) {
   const auto segments = recording_segments(m.recording, "raw-");
-  const std::string model_pattern = lower(m.model->profile().mosaic.pattern);
   const std::filesystem::path out(m.out);
   std::filesystem::create_directories(out);
-  FrameMeasurer measurer(m.model, m.options);
-  load_prebuilt_table(measurer, m.options, m.model_path, m.quiet);
+  std::optional<FrameMeasurer> measurer;  // once the tags have said the frames' layout
   ExportWriter writer(
       {"", (out / "temperature.npy").string(), (out / "temperature.csv").string(), m.peak_window});
   cv::Mat dark;  // CV_32F or a raw image of the frames' size, from the first frame on
@@ -80,10 +97,12 @@ int measure_recording(const RecordingMeasure& m) {
       std::string pattern = lower(m.pattern);
       const auto tagged = fields.find("pattern");
       if (pattern.empty() && tagged != fields.end()) pattern = lower(tagged->second);
-      if (!pattern.empty() && pattern != model_pattern)
-        throw InputError(m.model_path + ": the model was calibrated for a " + model_pattern +
-                         " mosaic (profile " + m.model->profile().name +
-                         "), the recording's frames are " + pattern);
+      MeasureOptions options = m.options;
+      options.bayer_pattern =
+          frames_bayer_pattern(*m.model, m.model_path, pattern,
+                               m.pattern.empty() ? "the recording's tags" : "--pattern", m.quiet);
+      measurer.emplace(m.model, options);
+      load_prebuilt_table(*measurer, options, m.model_path, m.quiet);
       double level = m.dark_level;
       std::string file = m.dark;
       if (file.empty() && level < 0) dark_from_tags(fields, m.recording, &level, &file);
@@ -91,7 +110,7 @@ int measure_recording(const RecordingMeasure& m) {
                           : read_raw_image(file, f.codes.size(), "the recording's frames");
     }
     cv::Mat t;
-    measurer.measure(f.codes, dark, t);
+    measurer->measure(f.codes, dark, t);
     writer.add(f.index, f.timestamp_s, encode_decikelvin(t));
   });
   writer.finish();

@@ -30,4 +30,11 @@ int measure_recording(const RecordingMeasure& m);
 void load_prebuilt_table(const FrameMeasurer& measurer, const MeasureOptions& options,
                          const std::string& model_path, bool quiet);
 
+// The frames' layout against the model's (both lower case; `frames` from `source`, for messages):
+// empty where they are the same; the frames' pattern where both are Bayer patterns (the same
+// filters, a readout window that starts on another cell: MeasureOptions::bayer_pattern), said
+// on stderr unless quiet; throws InputError for another kind of mosaic.
+std::string frames_bayer_pattern(const ThermalModel& model, const std::string& model_path,
+                                 const std::string& frames, const std::string& source, bool quiet);
+
 }  // namespace pyrocam::cli

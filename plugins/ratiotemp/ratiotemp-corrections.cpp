@@ -24,7 +24,7 @@ Corrections corrections_for_frame(GstRatioTemp* self, const Settings& settings, 
   const int radius = static_cast<int>(settings.brightness_radius);
   if (radius > 0 && st.fused) {
     if (!st.brightness || st.brightness->window_radius() != radius)
-      st.brightness.emplace(*st.model, radius);
+      st.brightness.emplace(*st.model, radius, st.mosaic_layout);  // the stream's phase
     c.brightness = &*st.brightness;
   }
   if (radius > 0 && !st.fused && !st.brightness_warned) {

@@ -215,14 +215,33 @@ void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, int cell_row_step,
                          BayerCellSums& sums) {
   if (signal.type() != CV_32F) throw InputError("Bayer cell sums: the mosaic must be CV_32F");
   if (cell_row_step < 1) throw InputError("Bayer cell sums: the row step must be at least 1");
-  for (int y = 0; y + 1 < signal.rows; y += 2 * cell_row_step) {
+  // Only cells inside a body: the cells left, right and below within 20 % of this one. A cell on
+  // an edge has its columns (or rows) lit unequally, which on a small body outweighs the colours.
+  const auto like = [](float neighbour, float sum) {
+    return neighbour >= 0.8f * sum && neighbour <= 1.25f * sum;
+  };
+  // Cell sums of a row of cells, NaN or +INF where a sample does not read.
+  const int cells = signal.cols / 2;
+  std::vector<float> row(static_cast<std::size_t>(cells)), below(row.size());
+  const auto cell_sums = [&](int y, std::vector<float>& out) {
     const float* top = signal.ptr<float>(y);
     const float* bottom = signal.ptr<float>(y + 1);
-    for (int x = 0; x + 1 < signal.cols; x += 2) {
-      const float a = top[x], b = top[x + 1], c = bottom[x], d = bottom[x + 1];
-      const float sum = a + b + c + d;  // NaN or +INF where a sample does not read
+    for (int i = 0; i < cells; ++i)
+      out[static_cast<std::size_t>(i)] =
+          top[2 * i] + top[2 * i + 1] + bottom[2 * i] + bottom[2 * i + 1];
+  };
+  for (int y = 0; y + 3 < signal.rows; y += 2 * cell_row_step) {
+    cell_sums(y, row);
+    cell_sums(y + 2, below);
+    const float* top = signal.ptr<float>(y);
+    const float* bottom = signal.ptr<float>(y + 1);
+    for (std::size_t i = 1; i + 1 < row.size(); ++i) {
+      const float sum = row[i];
       if (!(sum >= 4 * lit_dn) || !std::isfinite(sum)) continue;
-      sums.at[0][0] += a, sums.at[0][1] += b, sums.at[1][0] += c, sums.at[1][1] += d;
+      if (!like(row[i - 1], sum) || !like(row[i + 1], sum) || !like(below[i], sum)) continue;
+      const std::size_t x = 2 * i;
+      sums.at[0][0] += top[x], sums.at[0][1] += top[x + 1];
+      sums.at[1][0] += bottom[x], sums.at[1][1] += bottom[x + 1];
       ++sums.cells;
     }
   }

@@ -1,6 +1,7 @@
 #include "pyrocam/runtime/frame_measurer.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -9,34 +10,51 @@
 #include <vector>
 
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/image_io.h"
 #include "pyrocam/core/noise_model.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/region_stats.h"
 
 namespace pyrocam {
+namespace {
+
+// As darksub's phase check: lit cells of every 4th cell row, a verdict from 256 of them. The fit
+// audit samples every row, every 64th reading of it (frames are few here, time is not short),
+// and decides from 16 readings: with a few percent of a scene's readings misfit (edges,
+// reflections), more than half of 16 is a chance of about 1e-8 (binomial, p = 0.05).
+constexpr int kPhaseCellRowStep = 4;
+constexpr std::size_t kPhaseCells = 256, kAuditReadings = 16, kAuditStride = 64;
+
+}  // namespace
 
 FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
                              const MeasureOptions& options)
     : model_(std::move(model)),
       options_(options),
+      layout_(model_ ? model_->profile().mosaic : MosaicLayout{}),
       planes_estimator_(model_, options.method, options.misfit_probability) {
+  if (!options.bayer_pattern.empty()) {
+    if (layout_.kind != MosaicLayout::Kind::kBayer)
+      throw InputError("a Bayer pattern (" + options.bayer_pattern + ") for a model of " +
+                       model_->profile().name + ", whose camera has a snapshot mosaic");
+    layout_ = MosaicLayout::bayer(options.bayer_pattern);
+  }
   planes_estimator_.set_partial_bands(
       options.allow_partial  ? TemperatureEstimator::PartialBands::kAny
       : options.safe_partial ? TemperatureEstimator::PartialBands::kSafe
                              : TemperatureEstimator::PartialBands::kOff);
   planes_estimator_.set_emissivity_slope(options.emissivity_slope, options.emissivity_slope_u);
   planes_estimator_.set_analogue_gain(analogue_gain_factor(options.gain_db));
-  planes_estimator_.set_demosaic_noise(demosaic_noise(model_->profile().mosaic, options.demosaic));
+  planes_estimator_.set_demosaic_noise(demosaic_noise(layout_, options.demosaic));
   if (options.blur_correction) blur_correction_.emplace(*model_, options.demosaic);
   if (options.brightness_radius != 0) {
-    const MosaicLayout& layout = model_->profile().mosaic;
-    if (layout.kind != MosaicLayout::Kind::kBayer ||
-        resolve_demosaic_method(options.demosaic, layout) == DemosaicMethod::kBinCells)
+    if (layout_.kind != MosaicLayout::Kind::kBayer ||
+        resolve_demosaic_method(options.demosaic, layout_) == DemosaicMethod::kBinCells)
       throw InputError(
           "brightness readings need a Bayer mosaic demosaicked at full resolution (not binned, "
           "not a snapshot mosaic)");
-    brightness_.emplace(*model_, options.brightness_radius);
+    brightness_.emplace(*model_, options.brightness_radius, layout_);
   }
   // NaN would mark no sample saturated, and a saturated band would read.
   if (!std::isfinite(options_.saturation_level_dn))
@@ -46,10 +64,14 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
         std::to_string(options_.saturation_level_dn));
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model_->profile().thresholds.inference_saturation_dn;
+  if (options.check_layout) {
+    planes_estimator_.set_fit_audit_sampling(1, kAuditStride);
+    planes_estimator_.take_fit_audit(true);  // its tables, now
+  }
 }
 
 cv::Size FrameMeasurer::output_size(cv::Size raw) const {
-  return demosaic_output_size(model_->profile().mosaic, options_.demosaic, raw);
+  return demosaic_output_size(layout_, options_.demosaic, raw);
 }
 
 FrameMeasurer::Unread FrameMeasurer::unread(const cv::Mat& temperature_c,
@@ -105,8 +127,7 @@ double FrameMeasurer::median_uncertainty_c(const cv::Mat& temperature_c,
   const double share =
       brightness_ ? (n > 2 ? M_PI / 2 : 1.0) /
                         std::max(1.0, n / std::pow(brightness_->window_pixels() + 4, 2))
-                  : median_noise_share(
-                        used, demosaic_noise_area(model_->profile().mosaic, options_.demosaic));
+                  : median_noise_share(used, demosaic_noise_area(layout_, options_.demosaic));
   const double systematic = estimator.systematic_u_c(t_median);
   return k * std::sqrt(systematic * systematic + share * u_noise * u_noise);
 }
@@ -116,8 +137,7 @@ void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& te
   // A frame of another camera would still give numbers, and plausible ones: refuse what can be
   // told from the frame alone.
   const CameraProfile& profile = model_->profile();
-  profile.mosaic.check_whole_periods(raw.cols, raw.rows,
-                                     "raw frame for a model of " + profile.name);
+  layout_.check_whole_periods(raw.cols, raw.rows, "raw frame for a model of " + profile.name);
   const int depth = profile.bit_depth <= 8 ? CV_8U : CV_16U;
   if (raw.channels() != 1 || raw.depth() != depth)
     throw InputError("raw frame: " +
@@ -127,6 +147,9 @@ void FrameMeasurer::measure(const cv::Mat& raw, const cv::Mat& dark, cv::Mat& te
                      " " + std::to_string(raw.channels()) +
                      "-channel image, but the model's camera (" + profile.name + ") gives " +
                      std::to_string(profile.bit_depth) + "-bit single-channel frames");
+  check_within_bit_depth(raw, profile.bit_depth, "raw frame for " + profile.name);
+  if (dark.type() != CV_32F)
+    check_within_bit_depth(dark, profile.bit_depth, "dark frame for " + profile.name);
   const cv::Mat dark_f = dark.type() == CV_32F ? dark : dark_from_image(dark);
   subtract_dark(raw, dark_f, options_.saturation_level_dn, signal_);
   measure_signal(signal_, temperature_c, uncertainty_c);
@@ -137,8 +160,7 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
   const CameraProfile& profile = model_->profile();
   if (signal.type() != CV_32F)
     throw InputError("dark-subtracted mosaic: must be float32, one value per sensor pixel");
-  profile.mosaic.check_whole_periods(signal.cols, signal.rows,
-                                     "mosaic for a model of " + profile.name);
+  layout_.check_whole_periods(signal.cols, signal.rows, "mosaic for a model of " + profile.name);
   std::vector<SignalNoise> noise;
   for (int b = 0; b < profile.band_count(); ++b) noise.push_back(signal_noise(profile, b));
   const auto no_signal_dn = static_cast<float>(no_signal_level_dn(noise));
@@ -146,11 +168,19 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
     FootprintCheck check;
     check.relative_spread = options_.footprint_spread;
     check.noise = noise;
-    demosaic_marking_mixed(signal, profile.mosaic, options_.demosaic, check, planes_, no_signal_dn);
+    demosaic_marking_mixed(signal, layout_, options_.demosaic, check, planes_, no_signal_dn);
   } else {
-    demosaic(signal, profile.mosaic, options_.demosaic, planes_, no_signal_dn);
+    demosaic(signal, layout_, options_.demosaic, planes_, no_signal_dn);
   }
   planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);
+  if (options_.check_layout) {
+    if (layout_.kind == MosaicLayout::Kind::kBayer)
+      add_bayer_cell_sums(signal, std::max(4.0f, 0.02f * static_cast<float>(profile.max_dn())),
+                          kPhaseCellRowStep, phase_sums_);
+    const PlaneEstimator::FitAudit audit = planes_estimator_.take_fit_audit();
+    audit_checked_ += audit.checked;
+    audit_misfit_ += audit.misfit;
+  }
   if (blur_correction_) blur_correction_->apply(temperature_c);
   if (brightness_) {
     // On the codes, as ratiotemp reads them: a recording measured again gives its codes.
@@ -158,6 +188,28 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
     brightness_->apply_codes(signal, codes_);
     decode_decikelvin(codes_).copyTo(temperature_c);
   }
+}
+
+std::vector<std::string> FrameMeasurer::layout_problems() const {
+  std::vector<std::string> problems;
+  std::string pattern = layout_.pattern;  // upper case in layouts, lower in the check
+  std::transform(pattern.begin(), pattern.end(), pattern.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (phase_sums_.cells >= kPhaseCells && bayer_greens_elsewhere(phase_sums_, pattern)) {
+    problems.push_back(
+        "the frames' green samples sit on the other diagonal of the 2x2 cell than " + pattern +
+        " puts them: the mosaic starts one row or one column further on (a readout window or "
+        "crop at an odd row or column); its temperatures would look right and be wrong. Give "
+        "the pattern the frames have (--pattern)");
+  }
+  if (audit_checked_ >= kAuditReadings && 2 * audit_misfit_ > audit_checked_)
+    problems.push_back(std::to_string(audit_misfit_) + " of " + std::to_string(audit_checked_) +
+                       " readings checked do not fit the model's band spectra (at a false-"
+                       "rejection probability of 1e-9): the temperatures are likely wrong. Is "
+                       "the mosaic's phase right (a readout window or crop that starts other than "
+                       "on a whole mosaic period)? Is the model (" +
+                       model_->profile().name + ") for this camera?");
+  return problems;
 }
 
 }  // namespace pyrocam

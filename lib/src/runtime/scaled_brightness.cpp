@@ -195,11 +195,16 @@ int merge_row(const std::uint16_t* __restrict brightness, int first, int last,
 }  // namespace
 
 ScaledBrightness::ScaledBrightness(const ThermalModel& model, int window_radius)
+    : ScaledBrightness(model, window_radius, model.profile().mosaic) {}
+
+ScaledBrightness::ScaledBrightness(const ThermalModel& model, int window_radius,
+                                   const MosaicLayout& layout)
     : radius_(window_radius) {
-  const MosaicLayout& layout = model.profile().mosaic;
-  if (layout.kind != MosaicLayout::Kind::kBayer)
+  if (model.profile().mosaic.kind != MosaicLayout::Kind::kBayer)
     throw InputError("brightness readings need a Bayer mosaic; the model's camera (" +
                      model.profile().name + ") has a snapshot mosaic");
+  if (layout.kind != MosaicLayout::Kind::kBayer)
+    throw InputError("brightness readings need a Bayer mosaic, not a snapshot one");
   if (window_radius < 1 || window_radius > kMaxWindowRadius)
     throw InputError("brightness window radius " + std::to_string(window_radius) +
                      " Bayer cells: must be 1 to " + std::to_string(kMaxWindowRadius));

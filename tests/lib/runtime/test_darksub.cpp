@@ -160,6 +160,29 @@ TEST(DarkSub, a_bayer_mosaic_shifted_by_a_row_or_a_column_has_its_greens_elsewhe
   }
 }
 
+// On a small plate the cells on its edges, lit in one column and dark in the other, outweighed
+// the colours (the greens read 10 % apart unshifted, and a shift went unseen at 1000 degC): only
+// cells inside the body count.
+TEST(DarkSub, a_small_bodys_edges_neither_hide_nor_fake_a_shift) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  Simulator camera(p, UnitPerturbation::parse("typical", 1), 7);
+  for (double t : {700.0, 1000.0, 1500.0, 2500.0}) {
+    SCOPED_TRACE(t);
+    const double exposure = camera.exposure_for(t, 140, 0.7);
+    const cv::Mat raw = camera.render(plate_scene(128, 128, t), exposure, 0.7);
+    const cv::Mat dark = camera.render_dark(128, 128, exposure);
+    for (int dx : {0, 1}) {
+      cv::Mat signal;
+      subtract_dark(raw.colRange(dx, 126 + dx).clone(),
+                    dark_from_image(dark.colRange(dx, 126 + dx).clone()), 220, signal);
+      BayerCellSums sums;
+      add_bayer_cell_sums(signal, 5, 4, sums);
+      EXPECT_GT(sums.cells, 256u);
+      EXPECT_EQ(bayer_greens_elsewhere(sums, "rggb"), dx == 1) << dx;
+    }
+  }
+}
+
 TEST(DarkSub, bayer_cell_sums_tell_nothing_without_light_or_for_5x5) {
   BayerCellSums sums;
   add_bayer_cell_sums(cv::Mat(8, 8, CV_32F, cv::Scalar(2.0f)), 4, 1, sums);

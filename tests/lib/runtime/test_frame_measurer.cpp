@@ -42,7 +42,7 @@ void expect_refusal(FrameMeasurer& measurer, const cv::Mat& raw, const cv::Mat& 
 
 TEST(FrameMeasurer, rejects_frames_the_models_camera_cannot_give_n) {
   const auto nir = model_of("nir5x5-reference");
-  FrameMeasurer nir_measurer(nir, MeasureOptions{Method::kMlp});
+  FrameMeasurer nir_measurer(nir, MeasureOptions());
   // A colour camera's 256x256 frame is no whole number of 5x5 macro-pixels.
   const cv::Mat colour_frame(256, 256, CV_8U, cv::Scalar(60));
   expect_refusal(nir_measurer, colour_frame, colour_frame, "5x5 mosaic periods");
@@ -53,8 +53,18 @@ TEST(FrameMeasurer, rejects_frames_the_models_camera_cannot_give_n) {
   const cv::Mat floats(250, 250, CV_32F, cv::Scalar(60));
   expect_refusal(nir_measurer, floats, floats, "32F");
 
+  // A Bayer pattern for a camera with a snapshot mosaic.
+  MeasureOptions bayer;
+  bayer.bayer_pattern = "grbg";
+  try {
+    FrameMeasurer(nir, bayer);
+    ADD_FAILURE() << "took a Bayer pattern for a 5x5 camera";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("snapshot mosaic"), std::string::npos) << e.what();
+  }
+
   const auto rgb = model_of("rgb-reference");
-  FrameMeasurer rgb_measurer(rgb, MeasureOptions{Method::kMlp});
+  FrameMeasurer rgb_measurer(rgb, MeasureOptions());
   const cv::Mat odd(255, 256, CV_8U, cv::Scalar(60));
   expect_refusal(rgb_measurer, odd, odd, "RGGB mosaic periods");
   const cv::Mat colour_image(256, 256, CV_8UC3, cv::Scalar(60, 60, 60));

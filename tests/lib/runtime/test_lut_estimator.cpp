@@ -77,8 +77,11 @@ TEST(LutEstimator, agrees_to_a_tenth_of_a_degree_on_hot_plates) {
   const auto model = test_model("test-model-rgb.json");
   Simulator camera(model->profile(), UnitPerturbation::parse("typical", 1), 3);
   const int size = 512;  // the plate: about 90 000 pixels
-  FrameMeasurer lut(model, MeasureOptions{Method::kLut});
-  FrameMeasurer mlp(model, MeasureOptions{Method::kMlp});
+  MeasureOptions lut_options, mlp_options;
+  lut_options.method = Method::kLut;
+  mlp_options.method = Method::kMlp;
+  FrameMeasurer lut(model, lut_options);
+  FrameMeasurer mlp(model, mlp_options);
   for (const double plate_c : {2000.0, 2500.0}) {
     const double exposure = camera.exposure_for(plate_c, 140, 0.7);
     const cv::Mat raw = camera.render(plate_scene(size, size, plate_c), exposure, 0.7);

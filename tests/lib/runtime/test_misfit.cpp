@@ -281,12 +281,13 @@ TEST(MisfitCheck, simulated_plate_keeps_its_inside_and_loses_edge_readings) {
   };
   for (Method method : {Method::kLut, Method::kLikelihood}) {
     SCOPED_TRACE(method_name(method));
-    MeasureOptions without_check{method}, with_check{method};
+    MeasureOptions without_check, with_check, by_default;
+    without_check.method = with_check.method = by_default.method = method;
     // Bilinear: the default (matched) leaves the edge without readings for the check to drop.
     without_check.demosaic = with_check.demosaic = DemosaicMethod::kBilinear;
     with_check.misfit_probability = 1e-6;
     cv::Mat t_without, t_with, t_default;
-    FrameMeasurer(model, MeasureOptions{method}).measure(raw, dark, t_default);
+    FrameMeasurer(model, by_default).measure(raw, dark, t_default);
     EXPECT_EQ(far_off(t_default), 0);
     FrameMeasurer(model, without_check).measure(raw, dark, t_without);
     FrameMeasurer(model, with_check).measure(raw, dark, t_with);

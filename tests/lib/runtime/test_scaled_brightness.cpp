@@ -287,6 +287,24 @@ TEST(ScaledBrightness, ASampleReadsThroughItsOwnBand) {
   EXPECT_LT(t.at<float>(y, x + 2), 1500);  // red, its window's mean raised by the bright one
 }
 
+// A readout window that starts one column further on makes the model's rggb mosaic a grbg one.
+// Read with that layout, a red sample twice as bright reads through the red band, as in the
+// model's own phase (ASampleReadsThroughItsOwnBand); read as the model's rggb, through green's.
+TEST(ScaledBrightness, ReadsTheStreamsBayerPhase) {
+  Uniform u;
+  const int y = 6, x = 6;
+  ASSERT_EQ(u.c.profile.mosaic.band_at(x, y), 0);  // red
+  u.signal.at<float>(y, x) *= 2;
+  const cv::Mat shifted = u.signal.colRange(1, 15).clone();  // grbg, 14 x 16
+  cv::Mat as_grbg = u.ratio.colRange(1, 15).clone(), as_rggb = as_grbg.clone();
+  ScaledBrightness(*u.c.model, 1, MosaicLayout::bayer("GRBG")).apply(shifted, as_grbg);
+  u.sb.apply(shifted, as_rggb);
+  const double expected =
+      u.sb.temperature_of_log_rate(0, u.sb.log_rate(0, 1500) + std::log(2.0) * (1 - 1.0 / 9));
+  EXPECT_NEAR(as_grbg.at<float>(y, x - 1), expected, 0.05);
+  EXPECT_GT(std::abs(as_rggb.at<float>(y, x - 1) - expected), 5) << as_rggb.at<float>(y, x - 1);
+}
+
 TEST(ScaledBrightness, CodesReadAsDegrees) {
   const Colour c;
   const cv::Mat truth = plate_scene(kW, kH, 1700);

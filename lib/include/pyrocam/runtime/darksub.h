@@ -38,8 +38,10 @@ SaturatedSamples subtract_dark_level(const cv::Mat& raw, double level_dn, double
 SaturatedSamples find_saturated(const cv::Mat& signal);
 
 // Evidence on the phase of a Bayer mosaic: the sums of each place of the 2x2 cell over lit cells
-// (no sample saturated or NaN, the cell's mean at least `lit_dn`) of every `cell_row_step`-th
-// row of cells, in a CV_32F dark-subtracted mosaic whose cells start at (0, 0). Adds to `sums`.
+// (no sample saturated or NaN, the cell's mean at least `lit_dn`) inside a body (the cells left,
+// right and below within 20 % of the cell's sum: an edge lights a cell's columns or rows
+// unequally) of every `cell_row_step`-th row of cells, in a CV_32F dark-subtracted mosaic whose
+// cells start at (0, 0). Adds to `sums`.
 struct BayerCellSums {
   double at[2][2] = {};  // [row][column] in the cell
   std::size_t cells = 0;

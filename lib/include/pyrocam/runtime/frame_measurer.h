@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "pyrocam/runtime/blur_bias.h"
+#include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/mixed_pixels.h"
@@ -42,6 +43,11 @@ struct MeasureOptions {
   // (temperature_codes.h), as ratiotemp reads them, so a recording measured again gives its
   // codes bit for bit.
   int brightness_radius = 0;
+  // The frames' Bayer pattern (rggb, bggr, grbg or gbrg) where it is not the model's: the same
+  // filters, a readout window that starts on another cell. Empty: the model's layout.
+  std::string bayer_pattern;
+  // Check the frames' layout as darksub and ratiotemp do (layout_check).
+  bool check_layout = false;
 };
 
 // One raw frame (CV_8U/CV_16U mosaic) and its dark (CV_32F, or a raw image) to temperature.
@@ -75,6 +81,16 @@ class FrameMeasurer {
   // NaN without a reading.
   double median_uncertainty_c(const cv::Mat& temperature_c, const cv::Mat& uncertainty_c,
                               const cv::Mat& mask) const;
+  // With MeasureOptions::check_layout, what the frames measured so far say about their mosaic's
+  // phase: a Bayer mosaic whose greens sit on the other diagonal (bayer_greens_elsewhere over
+  // every frame's lit cells of every 4th cell row; decided from 256 such cells), and the fit
+  // audit (PlaneEstimator::take_fit_audit, one reading in 64 of every row: of those checked
+  // against the model's band spectra, how many misfit; most of 16 or more misfitting: bands in
+  // the wrong places or another camera). A message for each that fails, none when they pass or
+  // cannot tell yet.
+  std::vector<std::string> layout_problems() const;
+  const MosaicLayout& layout() const { return layout_; }
+
   // Adds a table file's blocks (the model's prebuilt lookup table, prebuilt_tables.h) to the
   // estimator's table: the same readings, without filling those blocks on the first frames.
   // Returns how many it added (0 for a method without a table); throws InputError as
@@ -86,11 +102,14 @@ class FrameMeasurer {
  private:
   std::shared_ptr<const ThermalModel> model_;
   MeasureOptions options_;
+  MosaicLayout layout_;
   PlaneEstimator planes_estimator_;
   std::optional<BlurBiasCorrection> blur_correction_;
   std::optional<ScaledBrightness> brightness_;
   cv::Mat signal_, codes_;
   std::vector<cv::Mat> planes_;
+  BayerCellSums phase_sums_;
+  std::size_t audit_checked_ = 0, audit_misfit_ = 0;
 };
 
 }  // namespace pyrocam

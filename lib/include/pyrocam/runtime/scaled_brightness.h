@@ -49,6 +49,7 @@
 namespace pyrocam {
 
 struct ThermalModel;
+struct MosaicLayout;
 
 class ScaledBrightness {
  public:
@@ -57,6 +58,9 @@ class ScaledBrightness {
   // For the model's Bayer mosaic, window radius r in Bayer cells (1..kMaxWindowRadius). Throws
   // InputError for a snapshot mosaic or a radius out of range.
   ScaledBrightness(const ThermalModel& model, int window_radius);
+  // The same for mosaics of `layout`, a Bayer pattern of the model's bands that may start on
+  // another cell than the model's (a camera's readout window at an odd row or column).
+  ScaledBrightness(const ThermalModel& model, int window_radius, const MosaicLayout& layout);
 
   int window_radius() const { return radius_; }
   int window_pixels() const { return 4 * radius_ + 1; }  // side of the window, pixels
