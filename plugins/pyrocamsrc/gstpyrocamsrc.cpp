@@ -23,15 +23,15 @@
  * The melt pool crosses the frame every 100 frames, its peak swinging between 1500 and
  * 2500 degC; the plate and the filament glow at #GstPyrocamSrc:temperature. Emissivities are
  * those of the calibration tool's scenes (plate 0.7, filament 0.4, melt pool 0.35). With
- * #GstPyrocamSrc:exposure 0 the exposure puts the brightest band 140 DN above the dark level at
- * the scene's nominal temperature (plate, filament) or at 2000 degC (melt pool, as the
- * calibration tool's scene sequences: the hottest frames saturate, the coolest are dim).
- * #GstPyrocamSrc:bracket cycles frame by frame through exposure factors (e.g. "1,0.1": the
- * exposure, then a tenth of it) for thermalfuse, which reads each pixel from the most exposed
- * frame where it reads. #GstPyrocamSrc:gain (dB) multiplies the signal of the collected charge,
- * shot noise included, by 10^(gain/20); the read noise stays as it is in DN (simpler than a real
- * sensor, whose read noise at the output grows partly with gain). Every frame carries the exposure
- * and gain it was taken with (PyrocamExposureMeta).
+ * #GstPyrocamSrc:exposure 0 the exposure puts the brightest band 140 DN above the dark level (an
+ * 8-bit camera's; a deeper one's the same share of its range) at the scene's nominal temperature
+ * (plate, filament) or at 2000 degC (melt pool, as the calibration tool's scene sequences: the
+ * hottest frames saturate, the coolest are dim). #GstPyrocamSrc:bracket cycles frame by frame
+ * through exposure factors (e.g. "1,0.1": the exposure, then a tenth of it) for thermalfuse, which
+ * reads each pixel from the most exposed frame where it reads. #GstPyrocamSrc:gain (dB) multiplies
+ * the signal of the collected charge, shot noise included, by 10^(gain/20); the read noise stays as
+ * it is in DN (simpler than a real sensor, whose read noise at the output grows partly with gain).
+ * Every frame carries the exposure and gain it was taken with (PyrocamExposureMeta).
  *
  * ## Example launch line
  * |[
@@ -339,9 +339,12 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
     const double factor =
         settings.bracket.empty() ? 1.0 : settings.bracket[st.frame % settings.bracket.size()];
     const double exposure =
-        factor * (settings.exposure_us > 0
-                      ? settings.exposure_us
-                      : st.camera->exposure_for(nominal_c, kScene.target_dn, emissivity));
+        factor *
+        (settings.exposure_us > 0
+             ? settings.exposure_us
+             : st.camera->exposure_for(
+                   nominal_c, pyrocam::scaled_target_dn(kScene.target_dn, st.camera->profile()),
+                   emissivity));
     const cv::Mat raw = st.camera->render(*map, exposure, emissivity, settings.gain_db);
     pyrocam_buffer_add_exposure_meta(buffer, exposure, settings.gain_db);
     GstMapInfo info;
@@ -514,8 +517,9 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
       gobject_class, PROP_EXPOSURE,
       g_param_spec_double("exposure", "Exposure",
                           "Exposure time in microseconds (0..10000000); 0: automatic, the "
-                          "brightest band 140 DN above dark at the scene's nominal temperature "
-                          "(melt pool: 2000 degC)",
+                          "brightest band 140 DN above dark (8-bit; deeper cameras: the same share "
+                          "of their range) at the scene's nominal temperature (melt pool: 2000 "
+                          "degC)",
                           0.0, 1e7, DEFAULT_EXPOSURE, playing));
   g_object_class_install_property(
       gobject_class, PROP_GAIN,

@@ -140,6 +140,7 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   report_stage(progress, "evaluating", 0, 1);
   out.table4 = evaluate_estimators(m, out.rates, locus, sheet_camera, opt.locus_step_c);
   report_stage(progress, "evaluating", 1, 1);
+  for (std::string& w : calibration_quality_warnings(out)) out.warnings.push_back(std::move(w));
 
   m.uncertainty = uncertainty_model(m, t_c, rates, opt, progress, references, qe.fit_choices);
   m.uncertainty.u_qe_model_c =

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "pyrocam/core/error.h"
+
 namespace pyrocam {
 namespace {
 
@@ -42,6 +44,36 @@ nlohmann::json model_provenance(const Dataset& dataset, const CameraProfile& pro
           {"dataset_path", std::filesystem::absolute(dataset.folder()).string()},
           {"dataset_manifest_fnv1a64", dataset_fingerprint(dataset)},
           {"seed", seed}};
+}
+
+std::vector<std::string> calibration_quality_warnings(const CalibrationOutcome& out) {
+  if (out.table4.empty() || out.table4[0].true_c.empty())
+    throw InputError(
+        "the calibrated model reads none of the furnace settings back (each has a band "
+        "saturated or dim at every exposure, or values the profile's camera cannot give): it "
+        "cannot be validated, and no model is written. Check the exposures, the profile's bit "
+        "depth and thresholds, and that the images hold what the manifest says");
+  std::vector<std::string> w;
+  std::ostringstream m;
+  m.precision(1);
+  m << std::fixed;
+  const double residual = rms_finite(out.rate_residual_optimised);
+  if (residual > kResidualWarn) {
+    m << "the fitted QE leaves " << 100 * residual
+      << " % rms of the furnace signal rates unexplained (a sound campaign: about 1 %): are the "
+         "temperatures in degC (not K), the exposures in microseconds, and every file at its "
+         "setting?";
+    w.push_back(m.str());
+    m.str("");
+  }
+  const EstimatorScore& network = out.table4[0];
+  if (network.rms > kSettingsWarnC) {
+    m << "the model reads its own furnace settings " << network.rms << " degC rms off ("
+      << network.name << ", " << network.true_c.size()
+      << " settings; a sound campaign: about 1 degC): its temperatures cannot be trusted";
+    w.push_back(m.str());
+  }
+  return w;
 }
 
 std::string calibration_verdict(const CalibrationOutcome& out) {

@@ -9,6 +9,7 @@
 
 #include "detail/chi2.h"
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/image_io.h"
 
 namespace pyrocam {
 namespace {
@@ -87,6 +88,7 @@ GroupMeans group_means(const Dataset& d, const FrameGroup& g, const RoiAccumulat
       throw InputError(f.string() + ": " + std::to_string(depth) + "-bit image, the profile " +
                        profile.name + " describes a " + std::to_string(profile.bit_depth) +
                        "-bit camera");
+    check_within_bit_depth(img, profile.bit_depth, f.string() + " (profile " + profile.name + ")");
     const BandSums s = depth == 8 ? acc.sums<std::uint8_t>(img, profile.max_dn())
                                   : acc.sums<std::uint16_t>(img, profile.max_dn());
     for (int b = 0; b < bands; ++b) {

@@ -88,6 +88,26 @@ std::vector<std::string> split_fields(const std::string& line, bool keep_empty_l
   return f;
 }
 
+// An image is taken at one setting: listed again it must be at the same one (a dark may serve
+// several furnace temperatures, not several exposures). A copy-paste slip would otherwise
+// average one image into two settings. `seen`: each file's first row, by normalised name.
+void check_one_setting_per_file(const ManifestRow& row, const std::vector<ManifestRow>& rows,
+                                std::map<std::string, std::size_t>& seen,
+                                const std::string& where) {
+  const std::string name = std::filesystem::path(row.file).lexically_normal().string();
+  const auto [it, first] = seen.emplace(name, rows.size());
+  if (first) return;
+  const ManifestRow& e = rows[it->second];
+  const bool same = e.kind == row.kind && e.exposure_us == row.exposure_us &&
+                    (row.kind == FrameKind::kDark || e.temperature_c == row.temperature_c);
+  if (same) return;
+  std::ostringstream m;
+  m << where << ": " << row.file << " is also listed at line " << e.line << " as "
+    << kind_name(e.kind) << " at " << e.temperature_c << " degC, " << e.exposure_us
+    << " us: one image is one setting";
+  throw InputError(m.str());
+}
+
 }  // namespace
 
 bool same_exposure(double a_us, double b_us) {
@@ -100,12 +120,15 @@ std::vector<ManifestRow> read_manifest(const std::filesystem::path& path) {
   if (!in) throw InputError(path.string() + ": manifest unreadable");
   std::string line;
   if (!std::getline(in, line)) line.clear();
+  // A byte-order mark, as spreadsheet programs write UTF-8: not part of the header.
+  if (line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
   const std::string header = trim(line);
   const bool with_uncertainty = header == kManifestHeaderWithUncertainty;
   if (header != kManifestHeader && !with_uncertainty)
     throw InputError(path.string() + ": first line must be '" + kManifestHeader + "' or '" +
                      kManifestHeaderWithUncertainty + "'");
   std::vector<ManifestRow> rows;
+  std::map<std::string, std::size_t> seen;
   int line_no = 1;
   while (std::getline(in, line)) {
     ++line_no;
@@ -131,6 +154,7 @@ std::vector<ManifestRow> read_manifest(const std::filesystem::path& path) {
                          "uncertainty in degC), not " +
                          f[4]);
     }
+    check_one_setting_per_file(row, rows, seen, where);
     rows.push_back(std::move(row));
   }
   if (rows.empty()) throw InputError(path.string() + ": no rows");

@@ -318,4 +318,16 @@ void write_raw_image(const std::filesystem::path& path, const cv::Mat& image) {
   if (!ok) throw InputError(path.string() + ": cannot write image");
 }
 
+void check_within_bit_depth(const cv::Mat& image, int bit_depth, const std::string& what) {
+  if (image.depth() != CV_16U || bit_depth <= 8 || bit_depth >= 16) return;
+  double highest = 0;
+  cv::minMaxLoc(image, nullptr, &highest);
+  const long full_scale = (1L << bit_depth) - 1;
+  if (highest > static_cast<double>(full_scale))
+    throw InputError(what + ": values up to " + std::to_string(static_cast<long>(highest)) +
+                     " DN, above the " + std::to_string(full_scale) + " DN full scale of a " +
+                     std::to_string(bit_depth) + "-bit camera. Data left-justified in 16 bits? " +
+                     "Shift it right by " + std::to_string(16 - bit_depth) + " bits");
+}
+
 }  // namespace pyrocam

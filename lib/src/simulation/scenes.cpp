@@ -133,18 +133,18 @@ void write_scene_sequence(const std::filesystem::path& folder, Simulator& camera
     nominal.push_back(s.kind == SceneKind::kMeltPool ? melt_pool_peak_c(i, count)
                                                      : s.temperatures_c[i]);
   }
+  const double target_dn = scaled_target_dn(s.target_dn, camera.profile());
   // A melt pool is filmed at one exposure; plates and filaments are each exposed for themselves.
   double fixed_exposure = s.exposure_us;
   if (s.kind == SceneKind::kMeltPool && fixed_exposure <= 0)
     fixed_exposure =
-        camera.exposure_for(kSceneDefaults.melt_pool_exposure_c, s.target_dn, s.emissivity);
+        camera.exposure_for(kSceneDefaults.melt_pool_exposure_c, target_dn, s.emissivity);
 
   std::vector<ManifestRow> rows;
   std::vector<double> dark_exposures;
   for (int i = 0; i < count; ++i) {
-    double exposure = fixed_exposure > 0
-                          ? fixed_exposure
-                          : camera.exposure_for(nominal[i], s.target_dn, s.emissivity);
+    double exposure = fixed_exposure > 0 ? fixed_exposure
+                                         : camera.exposure_for(nominal[i], target_dn, s.emissivity);
     exposure = std::round(exposure * 1000) / 1000;
     std::ostringstream stem;
     stem << std::setw(4) << std::setfill('0') << i;

@@ -6,6 +6,7 @@
 
 #include "pyrocam/calibration/calibrate.h"
 #include "pyrocam/calibration/calibration_summary.h"
+#include "pyrocam/core/error.h"
 #include "pyrocam/simulation/simulator.h"
 #include "test_support.h"
 
@@ -47,6 +48,34 @@ TEST(CalibrationVerdict, says_residuals_the_mlps_rms_skipped_points_and_warnings
   EXPECT_EQ(calibration_verdict(no_readings),
             "calibration residual 1.00 % rms (datasheet QE: 5.00 %); 3 band points skipped as "
             "saturated, 1 as dim");
+}
+
+// A sound outcome says nothing; furnace rates the QE does not explain (a dataset in kelvin) or
+// settings the network misreads are said; no setting read back at all is refused.
+TEST(CalibrationQuality, warns_on_data_the_model_does_not_explain_n) {
+  EXPECT_TRUE(calibration_quality_warnings(small_outcome()).empty());
+  CalibrationOutcome kelvin = small_outcome();
+  kelvin.rate_residual_optimised(0, 1) = 0.3;  // rms 12.3 %
+  kelvin.table4[0].rms = 291;
+  const auto w = calibration_quality_warnings(kelvin);
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_NE(w[0].find("the fitted QE leaves 12.3 % rms of the furnace signal rates unexplained"),
+            std::string::npos)
+      << w[0];
+  EXPECT_NE(w[1].find("reads its own furnace settings 291.0 degC rms off (MLP, 2 settings"),
+            std::string::npos)
+      << w[1];
+  CalibrationOutcome unread = small_outcome();
+  unread.table4[0].true_c.clear();
+  unread.table4[0].rms = NAN;
+  try {
+    calibration_quality_warnings(unread);
+    ADD_FAILURE() << "accepted a model that read no furnace setting back";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("reads none of the furnace settings back"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(OutcomeSummary, holds_the_verdict_solver_residuals_and_table4) {

@@ -7,11 +7,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
 #include "pyrocam/calibration/calibrate.h"
 #include "pyrocam/calibration/rate_extraction.h"
+#include "pyrocam/core/image_io.h"
 #include "pyrocam/core/spectrum.h"
 #include "pyrocam/simulation/simulator.h"
 #include "test_support.h"
@@ -109,6 +111,44 @@ TEST_F(Campaign, rejects_a_profile_of_another_bit_depth_n) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("describes a 12-bit camera"), std::string::npos)
         << e.what();
+  }
+}
+
+// A 10-bit camera's frames saved left-justified in 16 bits (a common export setting) would read
+// as saturated or 64 times too bright: refused, naming the file.
+TEST(CalibrationData, rejects_frames_above_the_cameras_full_scale_n) {
+  ScratchDir dir("leftjustified");
+  CameraProfile p10 = load_profile_by_name("rgb-reference");
+  p10.bit_depth = 10;
+  Simulator camera(p10, UnitPerturbation{"datasheet", 1});
+  CampaignSettings s;
+  s.temperatures_c = {900, 1000};
+  s.exposure_count = 3;
+  s.frames_per_setting = 1;
+  s.width = s.height = 32;
+  s.roi_area_px = 300;
+  write_furnace_campaign(dir.path(), camera, s);
+  const Dataset d = Dataset::open(dir.path());
+  // The brightest frame, whose shifted samples leave the 10-bit range.
+  std::filesystem::path frame;
+  double brightest = 0;
+  for (const auto& g : d.frames())
+    for (const auto& f : g.files) {
+      double hi = 0;
+      cv::minMaxLoc(read_raw_image(f), nullptr, &hi);
+      if (hi > brightest) brightest = hi, frame = f;
+    }
+  ASSERT_LE(brightest, 1023);
+  ASSERT_GT(brightest * 64, 1023);
+  write_raw_image(frame, read_raw_image(frame) * 64);
+  try {
+    extract_rates(Dataset::open(dir.path()), p10);
+    ADD_FAILURE() << "read left-justified frames";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(frame.string()), std::string::npos) << what;
+    EXPECT_NE(what.find("above the 1023 DN full scale of a 10-bit camera"), std::string::npos)
+        << what;
   }
 }
 

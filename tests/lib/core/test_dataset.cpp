@@ -287,6 +287,44 @@ TEST(Manifest, rejects_an_uncertainty_that_is_not_a_number_above_zero_n) {
   }
 }
 
+// A spreadsheet's UTF-8 byte-order mark before the header is not part of it.
+TEST(Manifest, reads_a_header_after_a_byte_order_mark) {
+  ScratchDir dir("manifest-bom");
+  write_text(dir / "manifest.csv",
+             "\xEF\xBB\xBF"
+             "file,kind,temperature_c,exposure_us\na.pgm,frame,1000,100\n");
+  const auto rows = read_manifest(dir / "manifest.csv");
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].file, "a.pgm");
+}
+
+// One image is one setting: listed again at another temperature, exposure or kind it is
+// refused, naming both lines; a dark may serve several furnace temperatures, and a row may be
+// repeated as it is.
+TEST(Manifest, refuses_one_image_listed_at_two_settings_n) {
+  ScratchDir dir("manifest-twice");
+  const std::string header = "file,kind,temperature_c,exposure_us\n";
+  write_text(dir / "manifest.csv", header +
+                                       "d.pgm,dark,100,100\nd.pgm,dark,700,100\n"
+                                       "a.pgm,frame,700,100\na.pgm,frame,700,100\n");
+  EXPECT_EQ(read_manifest(dir / "manifest.csv").size(), 4u);
+  const std::vector<std::string> second = {"frames/../a.pgm,frame,800,100", "a.pgm,frame,700,126",
+                                           "a.pgm,dark,700,100", "d.pgm,dark,100,126"};
+  for (const std::string& row : second) {
+    write_text(dir / "manifest.csv",
+               header + "d.pgm,dark,100,100\na.pgm,frame,700,100\n" + row + "\n");
+    try {
+      read_manifest(dir / "manifest.csv");
+      ADD_FAILURE() << "accepted " << row;
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("manifest.csv:4: "), std::string::npos) << what;
+      EXPECT_NE(what.find("is also listed at line"), std::string::npos) << what;
+      EXPECT_NE(what.find("one image is one setting"), std::string::npos) << what;
+    }
+  }
+}
+
 // The same tiny campaign with one reference source, a Pt-C cell at 1738 degC.
 class ReferenceDatasetFiles : public DatasetFiles {
  protected:

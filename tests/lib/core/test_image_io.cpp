@@ -7,6 +7,7 @@
 #include <tiffio.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <fstream>
 #include <iterator>
 #include <opencv2/imgcodecs.hpp>
@@ -241,6 +242,29 @@ TEST(ImageHeader, expected_size_is_checked_before_decoding_n) {
     EXPECT_NE(std::string(e.what()).find("a.png: image is 10000x10000, the frame is 40x32"),
               std::string::npos)
         << e.what();
+  }
+}
+
+// 12-bit data left-justified in 16 bits (every sample a multiple of 16, up to 65520) is not what
+// a 12-bit camera gives: refused, with the shift that would make it so. Right-justified data, 8-bit
+// images and 16-bit cameras pass.
+TEST(ImageBitDepth, refuses_samples_above_the_cameras_full_scale_n) {
+  cv::Mat right(4, 4, CV_16U, cv::Scalar(4095));
+  EXPECT_NO_THROW(check_within_bit_depth(right, 12, "frame"));
+  EXPECT_NO_THROW(check_within_bit_depth(right * 16, 16, "frame"));
+  EXPECT_NO_THROW(check_within_bit_depth(cv::Mat(4, 4, CV_8U, cv::Scalar(255)), 8, "frame"));
+  cv::Mat left = right.clone();
+  left.at<std::uint16_t>(3, 2) = 4096;
+  try {
+    check_within_bit_depth(left, 12, "frame f.tif");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("frame f.tif: values up to 4096 DN, above the 4095 DN full scale of a "
+                        "12-bit camera"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("Shift it right by 4 bits"), std::string::npos) << what;
   }
 }
 

@@ -27,6 +27,11 @@ cv::Mat read_raw_image(const std::filesystem::path& path);
 cv::Mat read_raw_image(const std::filesystem::path& path, cv::Size expected,
                        const std::string& expected_what);
 
+// Throws InputError ("<what>: values up to N DN, above the M DN full scale of a B-bit camera
+// ...") when a 16-bit image holds samples above 2^bit_depth - 1 (bit_depth 9 to 15): data
+// left-justified in 16 bits, which read as it is would be saturated or too bright.
+void check_within_bit_depth(const cv::Mat& image, int bit_depth, const std::string& what);
+
 // Writes an 8- or 16-bit single-channel image; the format follows the extension (.pgm, .png,
 // .tif/.tiff). Throws InputError on failure.
 void write_raw_image(const std::filesystem::path& path, const cv::Mat& image);

@@ -46,13 +46,21 @@ struct SceneDefaults {
 };
 inline constexpr SceneDefaults kSceneDefaults{};
 
+// A target in DN above the dark level (such as SceneDefaults::target_dn) is for the shipped 8-bit
+// profiles' usable range, 170 DN from their 50 DN dark offset to their 220 DN inference
+// saturation threshold; another camera's target is the same share of its own range (a 12-bit
+// camera's frames would otherwise sit below its dim threshold).
+inline double scaled_target_dn(double target_dn, const CameraProfile& profile) {
+  return target_dn * (profile.thresholds.inference_saturation_dn - profile.dark_offset_dn) / 170;
+}
+
 struct SceneSequenceSettings {
   SceneKind kind = SceneKind::kMeltPool;
   int frames = 20;                     // melt pool only; plate/filament: one per temperature
   std::vector<double> temperatures_c;  // plate/filament (default: a sweep suited to the kind)
   int width = 256, height = 256;
   double exposure_us = 0;  // 0: each frame exposed so its hottest band reaches target_dn
-  double target_dn = kSceneDefaults.target_dn;  // brightest band above the dark level
+  double target_dn = kSceneDefaults.target_dn;  // brightest band above the dark (scaled_target_dn)
   double emissivity = 0;                        // 0: kSceneDefaults.emissivity(kind)
   std::string image_extension = ".pgm";
 };
