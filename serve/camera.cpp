@@ -58,14 +58,22 @@ std::string camera_description(const CameraConfig& c) {
       "queue leaky=downstream max-size-buffers=2 max-size-time=0 "
       "max-size-bytes=0";
   const std::string sink = " sync=false max-buffers=2 drop=true";
+  // A 5x5 camera's temperatures, one per macro-pixel, drawn as 5x5 blocks over its frame.
+  const std::string to_sensor_size =
+      bayer || c.sensor_width <= 0 || c.sensor_height <= 0
+          ? std::string()
+          : "videoscale method=nearest-neighbour ! video/x-raw,width=" +
+                std::to_string(c.sensor_width) + ",height=" + std::to_string(c.sensor_height) +
+                " ! ";
   return c.camera + " ! " + c.caps + exposure +
          " ! watchdog name=camera-sent-no-frame timeout=" + std::to_string(c.watchdog_ms) +
          " ! tee name=camera " + "camera. ! queue ! darksub " + c.dark + " ! demosaic25 ! " +
          ratiotemp + alarm +
          " ! tee name=temperature "
          "temperature. ! " +
-         leaky + " ! appsink name=temperature-sink" + sink +
-         " temperature. ! queue ! thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! "
+         leaky + " ! appsink name=temperature-sink" + sink + " temperature. ! queue ! " +
+         to_sensor_size +
+         "thermalcolormap scale-bar=true ! video/x-raw,format=RGBA ! "
          "mix.overlay_sink "
          "camera. ! queue ! " +
          (bayer ? "bayer2rgb" : "videoconvert") +

@@ -30,6 +30,10 @@ struct CameraConfig {
   int jpeg_fps = 5;
   // thermalalarm's properties, "name=value" each; empty: no alarm element.
   std::vector<std::string> alarm;
+  // A snapshot (5x5) camera's frame size from its caps: the temperatures (one per macro-pixel)
+  // are scaled up to it by nearest neighbour under the overlay. 0: not known (a Bayer camera's
+  // temperatures have the frame's size).
+  int sensor_width = 0, sensor_height = 0;
 };
 
 // The gst-launch description of the camera pipeline (also printed with --print-pipeline).

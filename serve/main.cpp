@@ -47,13 +47,19 @@ gboolean on_signal(gpointer loop) {
   return G_SOURCE_CONTINUE;
 }
 
-int fps_of(const std::string& caps_text, double& fps) {
+// The caps' frame rate and size, where they give them (fixed values); -1 for caps that do not
+// parse.
+int caps_fields(const std::string& caps_text, double& fps, int& width, int& height) {
   GstCaps* caps = gst_caps_from_string(caps_text.c_str());
   if (caps == nullptr) return -1;
   int n = 0, d = 1;
-  if (gst_caps_get_size(caps) > 0 &&
-      gst_structure_get_fraction(gst_caps_get_structure(caps, 0), "framerate", &n, &d) && d > 0)
-    fps = static_cast<double>(n) / d;
+  if (gst_caps_get_size(caps) > 0) {
+    const GstStructure* s = gst_caps_get_structure(caps, 0);
+    if (gst_structure_get_fraction(s, "framerate", &n, &d) && d > 0)
+      fps = static_cast<double>(n) / d;
+    if (!gst_structure_get_int(s, "width", &width)) width = 0;
+    if (!gst_structure_get_int(s, "height", &height)) height = 0;
+  }
   gst_caps_unref(caps);
   return 0;
 }
@@ -154,9 +160,21 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   double fps = 30;
-  if (fps_of(o.camera.caps, fps) != 0) {
+  int width = 0, height = 0;
+  if (caps_fields(o.camera.caps, fps, width, height) != 0) {
     std::cerr << kName << ": --caps '" << o.camera.caps << "' are not valid caps\n";
     return 2;
+  }
+  if (o.camera.caps.rfind("video/x-bayer", 0) != 0) {
+    // A snapshot camera: its temperatures are scaled up to the frame under the overlay.
+    if (width <= 0 || height <= 0 || width % 5 != 0 || height % 5 != 0) {
+      std::cerr << kName << ": a 5x5 camera needs --caps with a width and height that are "
+                << "multiples of 5 (its temperatures, one per 5x5 macro-pixel, are drawn over "
+                << "the frame), not '" << o.camera.caps << "'\n";
+      return 2;
+    }
+    o.camera.sensor_width = width;
+    o.camera.sensor_height = height;
   }
   o.rtsp.key_frames = std::max(1, static_cast<int>(o.key_seconds * fps + 0.5));
   o.web.address = o.rtsp.address;

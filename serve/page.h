@@ -38,15 +38,18 @@ const fmt = (v, d = 1) => (typeof v === "number" ? v.toFixed(d) : "–");
 const query = new URLSearchParams(location.search);
 const maxPoints = 300;
 
+// host:port (a name, an IPv4 address or a bracketed IPv6 one); anything else is left out.
+const isHostPort = (s) => /^([A-Za-z0-9.-]+|\[[0-9A-Fa-f:.]+\])(:[0-9]{1,5})?$/.test(s);
+
 function makePanel(index, server) {
   const base = server ? "http://" + server : "";
   const el = document.createElement("section");
   el.className = "panel";
   el.innerHTML = `
-    <h2><span>${server || location.host}</span>
+    <h2><span id="name-${index}"></span>
       <span><span class="badge lost" id="camera-${index}">connecting</span>
       <span class="badge off" id="alarm-${index}">no alarm set</span></span></h2>
-    <img id="frame-${index}" alt="live image" src="${base}/stream.mjpg">
+    <img id="frame-${index}" alt="live image">
     <table>
       <tr><td id="median-label-${index}">median</td><td class="v" id="median-${index}">–</td>
           <td>peak</td><td class="v" id="peak-${index}">–</td></tr>
@@ -61,6 +64,9 @@ function makePanel(index, server) {
     <div class="log" id="log-${index}"></div>`;
   document.getElementById("panels").appendChild(el);
   const $ = (id) => document.getElementById(id + "-" + index);
+  // The name as text and the address as a property: a link's ?servers= never becomes markup.
+  $("name").textContent = server || location.host;
+  $("frame").src = base + "/stream.mjpg";
   let chart = null;
   if (window.Chart) {
     chart = new Chart($("chart").getContext("2d"), {
@@ -133,7 +139,7 @@ function makePanel(index, server) {
     (s["alarm-log"] || []).forEach((a) => log(`alarm ${a.state}: ${a.statistic} ${fmt(a["value-c"])} °C`));
     if (s.alarm) showAlarm(s.alarm, true);
     if (index === 0 && !query.has("servers"))
-      (s.servers || []).forEach((other, i) => makePanel(i + 1, other));
+      (s.servers || []).filter(isHostPort).forEach((other, i) => makePanel(i + 1, other));
   });
   events.addEventListener("stats", (e) => showStats(JSON.parse(e.data)));
   events.addEventListener("alarm", (e) => showAlarm(JSON.parse(e.data), false));
@@ -141,7 +147,7 @@ function makePanel(index, server) {
   events.onerror = () => { $("camera").className = "badge lost"; $("camera").textContent = "server unreachable"; };
 }
 
-const servers = query.has("servers") ? query.get("servers").split(",").filter((s) => s) : [""];
+const servers = query.has("servers") ? query.get("servers").split(",").filter(isHostPort) : [""];
 servers.forEach((s, i) => makePanel(i, s));
 document.getElementById("summary").textContent = servers.length > 1 ? servers.length + " servers" : "";
 </script>
