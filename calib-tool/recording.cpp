@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cstring>
+#include <fstream>
+#include <iostream>
 
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/temperature_codes.h"
@@ -90,6 +92,15 @@ cv::Mat codes_of(GstSample* sample, const fs::path& file) {
   return out;
 }
 
+// An empty file, or one that starts as Matroska does (the EBML magic): what a recording's last
+// segment is when the recording was cut off while writing it.
+bool empty_or_matroska(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  char magic[4] = {};
+  in.read(magic, sizeof magic);
+  return in.gcount() == 0 || (in.gcount() == 4 && std::memcmp(magic, "\x1A\x45\xDF\xA3", 4) == 0);
+}
+
 }  // namespace
 
 std::vector<fs::path> recording_segments(const fs::path& where, const std::string& prefix) {
@@ -133,6 +144,7 @@ RecordingDescription read_recording(const std::vector<fs::path>& segments,
   double end_s = 0;  // the end of the last frame so far, in the recording's time
   int width = 0, height = 0;
   for (const fs::path& file : segments) {
+    const bool last = &file == &segments.back();
     std::error_code ec;
     if (!fs::is_regular_file(file, ec))
       throw InputError(file.string() + ": segment missing or not a file");
@@ -214,11 +226,20 @@ RecordingDescription read_recording(const std::vector<fs::path>& segments,
     }
     gst_element_set_state(pipeline.get(), GST_STATE_NULL);
     gst_object_unref(bus);
-    if (!failure.empty())
-      throw InputError(file.string() + ": not a readable temperature recording segment (" +
-                       failure + ")");
-    if (frames_here == 0)
-      throw InputError(file.string() + ": no frames (an empty or truncated segment)");
+    const std::string problem =
+        !failure.empty()   ? "not a readable temperature recording segment (" + failure + ")"
+        : frames_here == 0 ? "no frames (an empty or truncated segment)"
+                           : std::string();
+    if (problem.empty()) continue;
+    // A recording killed (or its machine cut off) as a segment began, or while it was written,
+    // leaves its last segment empty or a Matroska file cut short: the segments before it, and
+    // the frames of it that decoded, are the recording. Anything else that fails is an error.
+    if (last && index > 0 && empty_or_matroska(file)) {
+      std::cerr << "warning: " << file.string() << ": " << problem << "; the recording's last "
+                << "segment, cut short when it stopped: " << frames_here << " of its frames read\n";
+      break;
+    }
+    throw InputError(file.string() + ": " + problem);
   }
   description.width = width;
   description.height = height;

@@ -10,7 +10,8 @@ returns an array of shape (frames, height, width), float32 degC, NaN where there
 
 Needs python3-gi, gir1.2-gstreamer-1.0, gir1.2-gst-plugins-base-1.0 and python3-numpy (Debian 12
 packages; run it with /usr/bin/python3). Exit status 1 with a message for a folder that is not a
-recording or a segment that does not decode.
+recording or a segment that does not decode; a last segment that is empty or cut short (a
+recording killed as it began) is left out with a warning.
 """
 import argparse
 import glob
@@ -44,14 +45,15 @@ def read_segment(path):
     sink.get_static_pad("sink").add_probe(Gst.PadProbeType.EVENT_DOWNSTREAM, keep_comment)
     bus = pipeline.get_bus()
     pipeline.set_state(Gst.State.PLAYING)
-    frames = []
+    frames, problem = [], None
     try:
         while True:
             sample = sink.emit("try-pull-sample", 100 * Gst.MSECOND)
             if sample is None:
                 msg = bus.pop_filtered(Gst.MessageType.ERROR)
                 if msg is not None:
-                    raise RuntimeError(f"{path}: {msg.parse_error()[0].message}")
+                    problem = f"{path}: {msg.parse_error()[0].message}"
+                    break
                 if sink.get_property("eos"):
                     break
                 continue
@@ -69,9 +71,9 @@ def read_segment(path):
                 buf.unmap(info)
     finally:
         pipeline.set_state(Gst.State.NULL)
-    if not frames:
-        raise RuntimeError(f"{path}: no frames")
-    return frames, (comment[-1] if comment else "")
+    if problem is None and not frames:
+        problem = f"{path}: no frames"
+    return frames, (comment[-1] if comment else ""), problem
 
 
 def read_recording(folder):
@@ -81,9 +83,19 @@ def read_recording(folder):
     if not segments:
         raise RuntimeError(f"{folder}: not a recording (no temperature-NNNNN.mkv segments)")
     codes, comment = [], ""
-    for path in segments:
-        frames, comment = read_segment(path)
+    for k, path in enumerate(segments):
+        frames, tag, problem = read_segment(path)
+        comment = tag or comment
         codes.extend(frames)
+        if problem is None:
+            continue
+        # A recording killed as a segment began, or while it was written, leaves its last
+        # segment empty or cut short: the segments before it, and what of it decoded, remain.
+        if k == len(segments) - 1 and codes:
+            print(f"warning: {problem}; the recording's last segment, cut short when it "
+                  f"stopped: {len(frames)} of its frames read", file=sys.stderr)
+            break
+        raise RuntimeError(problem)
     if "quantity=" in comment and "quantity=temperature" not in comment:
         raise RuntimeError(f"{folder}: not temperatures ({comment})")
     codes = np.stack(codes)

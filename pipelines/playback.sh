@@ -38,6 +38,20 @@ if [[ -d $RECORDING ]]; then
   compgen -G "$RECORDING/temperature-*.mkv" >/dev/null ||
     { echo "playback: no temperature-*.mkv segments in $RECORDING" >&2; exit 1; }
   files="$RECORDING/temperature-*.mkv"
+  # A recording killed as a segment began leaves that segment empty, which splitmuxsrc cannot
+  # open: the others are played, through links in a folder of their own.
+  empty=$(find "$RECORDING" -maxdepth 1 -name 'temperature-*.mkv' -empty | sort)
+  if [[ -n $empty ]]; then
+    echo "playback: leaving out empty segments (a recording cut off as they began): $(tr '\n' ' ' <<<"$empty")" >&2
+    kept=$(mktemp -d)
+    trap 'rm -rf "$kept"' EXIT
+    for f in "$RECORDING"/temperature-*.mkv; do
+      if [[ -s $f ]]; then ln -s "$(cd "$(dirname "$f")" && pwd)/$(basename "$f")" "$kept/"; fi
+    done
+    compgen -G "$kept/temperature-*.mkv" >/dev/null ||
+      { echo "playback: every segment of $RECORDING is empty" >&2; exit 1; }
+    files="$kept/temperature-*.mkv"
+  fi
 elif [[ -f $RECORDING ]]; then
   files=$RECORDING
 else
@@ -53,6 +67,8 @@ scale=()
 
 # splitmuxsrc plays the segments (a glob, in name order) as one stream with continuous times.
 set -f
-exec "$launch" \
-  splitmuxsrc "location=$files" ! avdec_ffv1 ! video/x-raw,format=GRAY16_LE ! "${scale[@]}" \
-  thermalcolormap $COLORMAP ! videoconvert ! $SINK
+pipeline=("$launch"
+  splitmuxsrc "location=$files" ! avdec_ffv1 ! video/x-raw,format=GRAY16_LE ! "${scale[@]}"
+  thermalcolormap $COLORMAP ! videoconvert ! $SINK)
+[[ -n ${kept:-} ]] || exec "${pipeline[@]}"
+"${pipeline[@]}"  # not exec: the links' folder goes when it ends

@@ -181,15 +181,25 @@ TEST_F(CliExport, rejects_a_segment_that_is_not_matroska_n) {
   EXPECT_FALSE(fs::exists(dir / "t.npy.partial"));
 }
 
+// Cut short before its first frame: a segment inside the recording is refused; the last one is
+// what a recording killed as it began that segment leaves, and the rest is read, with a warning.
 TEST_F(CliExport, rejects_a_segment_truncated_before_its_first_frame_n) {
-  const fs::path seg = rec / "temperature-00001.mkv";
-  const std::string bytes = read_all(seg);
-  ASSERT_GT(bytes.size(), 200u);
-  std::ofstream(seg, std::ios::binary | std::ios::trunc) << bytes.substr(0, 120);
-  const ToolResult r = run_export("--recording " + q(rec) + " --npy " + q(dir / "t.npy"), dir);
+  const fs::path first = rec / "temperature-00000.mkv", last = rec / "temperature-00001.mkv";
+  const std::string first_bytes = read_all(first), last_bytes = read_all(last);
+  ASSERT_GT(first_bytes.size(), 200u);
+  ASSERT_GT(last_bytes.size(), 200u);
+  std::ofstream(first, std::ios::binary | std::ios::trunc) << first_bytes.substr(0, 120);
+  ToolResult r = run_export("--recording " + q(rec) + " --npy " + q(dir / "t.npy"), dir);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.err.find("temperature-00001.mkv"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("temperature-00000.mkv"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "t.npy"));
+  std::ofstream(first, std::ios::binary | std::ios::trunc) << first_bytes;
+  std::ofstream(last, std::ios::binary | std::ios::trunc) << last_bytes.substr(0, 120);
+  r = run_export("--recording " + q(rec) + " --npy " + q(dir / "t.npy"), dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("temperature-00001.mkv: not a readable"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("last segment, cut short"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("3 frames of 7x5 from 2 segment(s)"), std::string::npos) << r.err;
 }
 
 TEST_F(CliExport, needs_an_output_and_a_tiff_name_n) {

@@ -313,6 +313,43 @@ TEST_F(Recordings, python_example_reads_the_recording_in_celsius) {
   EXPECT_GT(readings, static_cast<std::size_t>(kFrames) * 10);
 }
 
+// A recording killed as a segment began leaves that segment empty: export, the Python example
+// and playback.sh read the segments before it, saying what they left out. An empty segment
+// inside a recording stays an error.
+TEST_F(Recordings, a_last_segment_cut_off_as_it_began_leaves_the_rest_readable) {
+  const fs::path cut = *dir / "cut";
+  fs::create_directories(cut);
+  for (const std::string& s : segments()) fs::copy_file(s, cut / fs::path(s).filename());
+  write_text(cut / "temperature-00099.mkv", "");
+  const std::string tool = "'" + std::string(PYROCAM_CALIB_TOOL) + "' ";
+  const fs::path csv = *dir / "cut.csv", log = *dir / "cut.log";
+  ASSERT_EQ(
+      run_command(tool + "export --recording '" + cut.string() + "' --csv '" + csv.string() + "'",
+                  log),
+      0)
+      << read_text(log);
+  EXPECT_NE(read_text(log).find("temperature-00099.mkv: not a readable"), std::string::npos)
+      << read_text(log);
+  EXPECT_EQ(read_csv(csv).size(), static_cast<std::size_t>(kFrames + 1));
+  ASSERT_EQ(run_command("/usr/bin/python3 '" + std::string(PYROCAM_EXAMPLES_DIR) +
+                            "/read_recording.py' '" + cut.string() + "'",
+                        log),
+            0)
+      << read_text(log);
+  EXPECT_NE(read_text(log).find("# 30 frames of 320x240"), std::string::npos) << read_text(log);
+  const ScriptRun played = run_script("playback.sh", {cut.string()}, {{"SINK", "fakesink"}},
+                                      (*dir / "cut-playback.log").string(), milliseconds(60000));
+  EXPECT_EQ(played.status, 0) << played.log;
+  EXPECT_NE(played.log.find("leaving out empty segments"), std::string::npos) << played.log;
+  // Emptied inside the recording, a segment is an error.
+  write_text(cut / "temperature-00000.mkv", "");
+  EXPECT_EQ(
+      run_command(tool + "export --recording '" + cut.string() + "' --csv '" + csv.string() + "'",
+                  log),
+      1);
+  EXPECT_NE(read_text(log).find("temperature-00000.mkv"), std::string::npos) << read_text(log);
+}
+
 // pyrocam-launch --stats-csv on its own: frames without a reading keep every column (empty
 // temperature cells), and a file that cannot be created is a usage error before anything runs.
 TEST(RecordingsLauncher, stats_csv_keeps_its_columns_without_readings_and_refuses_a_bad_path_n) {
