@@ -10,7 +10,8 @@
  * The dark frame comes from, in this order of precedence:
  * 1. a capture from the stream: the #GstDarkSub::capture-dark action signal averages the next
  *    #GstDarkSub:capture-frames frames (lens cap on). While capturing, the element outputs
- *    frames of NaN (no reading): the lens is covered, nothing downstream should be measured.
+ *    frames of NaN (no reading), flagged GAP: the lens is covered, nothing downstream should be
+ *    measured (ratiotemp posts no statistics for them).
  *    The captured dark lasts until the element stops (READY) or another capture replaces it.
  *    Emitting the signal before PLAYING starts the stream with a capture. A flush restarts a
  *    capture in progress.
@@ -156,9 +157,18 @@ static gboolean check_dark(GstDarkSub* self) {
   State& st = *self->state;
   if (!st.captured_dark.empty() &&
       (st.captured_dark.cols != st.format.width || st.captured_dark.rows != st.format.height)) {
-    GST_WARNING_OBJECT(self, "dropping the captured %dx%d dark: the stream is now %dx%d",
-                       st.captured_dark.cols, st.captured_dark.rows, st.format.width,
-                       st.format.height);
+    // Said on the bus: the readings change to what the fallback gives.
+    const Settings settings = copy_settings(self);
+    const std::string instead = !st.file_dark_path.empty() ? "the dark frame " + st.file_dark_path
+                                : settings.dark_level >= 0
+                                    ? "dark-level " + std::to_string(settings.dark_level) + " DN"
+                                    : std::string("no dark at all");
+    GST_ELEMENT_WARNING(self, STREAM, FORMAT,
+                        ("%s: the captured %dx%d dark does not fit the stream, now %dx%d: dropped; "
+                         "%s is subtracted until a new capture (emit capture-dark)",
+                         GST_OBJECT_NAME(self), st.captured_dark.cols, st.captured_dark.rows,
+                         st.format.width, st.format.height, instead.c_str()),
+                        ("caps changed after a dark capture"));
     st.captured_dark.release();
   }
   if (!st.file_dark_path.empty() &&
@@ -414,6 +424,8 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
     if (st.capturing) {
       st.accumulator.add(raw.image());
       out.image().setTo(std::numeric_limits<float>::quiet_NaN());
+      // No image: downstream gives it no reading and counts nothing (not saturation).
+      GST_BUFFER_FLAG_SET(outbuf, GST_BUFFER_FLAG_GAP);
       if (st.accumulator.count() >= st.capture_target) {
         st.captured_dark = st.accumulator.mean();
         st.capturing = false;

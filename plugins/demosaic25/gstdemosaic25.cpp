@@ -302,6 +302,9 @@ static GstFlowReturn gst_demosaic25_transform(GstBaseTransform* trans, GstBuffer
                        "transform called before set_caps");
     return GST_FLOW_NOT_NEGOTIATED;
   }
+  // A frame without an image (darksub capturing a dark) stays one.
+  if (GST_BUFFER_FLAG_IS_SET(inbuf, GST_BUFFER_FLAG_GAP))
+    GST_BUFFER_FLAG_SET(outbuf, GST_BUFFER_FLAG_GAP);
   const bool ok = PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not demosaic", [&] {
     pg::MappedImage in, out;
     in.map_float(inbuf, st.in_width, st.in_height, 1, GST_MAP_READ);

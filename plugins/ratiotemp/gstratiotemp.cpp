@@ -435,8 +435,11 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
   // Statistics need the float temperatures; without them (and without uncertainties) the codes
   // come straight from the planes.
   const GstClockTime position = frame_position(st, inbuf);
+  // A frame without an image (darksub's frames while it captures a dark: GAP) gives no reading
+  // and no statistics: counted, its unread samples would be saturation.
+  const bool gap = GST_BUFFER_FLAG_IS_SET(inbuf, GST_BUFFER_FLAG_GAP);
   const bool stats_due =
-      settings.stats_interval > 0 &&
+      !gap && settings.stats_interval > 0 &&
       (!GST_CLOCK_TIME_IS_VALID(position) || !GST_CLOCK_TIME_IS_VALID(st.last_stats) ||
        position < st.last_stats || position - st.last_stats >= settings.stats_interval);
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "e-slope refused", [&] {

@@ -189,6 +189,36 @@ TEST_F(DarkSub, capture_dark_averages_frames_and_outputs_nan_meanwhile) {
   gst_object_unref(e);
 }
 
+// A captured dark that no longer fits the stream (its size changed) is dropped, and said on the
+// bus with what is subtracted instead (it was only a debug line).
+TEST_F(DarkSub, a_captured_dark_dropped_on_a_size_change_is_said) {
+  start("darksub capture-frames=1 dark-level=10",
+        "video/x-raw,format=GRAY8,width=4,height=2,framerate=30/1,pattern=rggb");
+  attach_bus();
+  GstElement* e = find_element(h, "darksub");
+  g_signal_emit_by_name(e, "capture-dark");
+  gst_object_unref(e);
+  ASSERT_EQ(gst_harness_push(h, buffer_from(std::vector<std::uint8_t>(8, 40))), GST_FLOW_OK);
+  gst_buffer_unref(gst_harness_pull(h));
+  EXPECT_EQ(push_pull<float>(h, buffer_from(std::vector<std::uint8_t>(8, 100))),
+            std::vector<float>(8, 60.f));
+  gst_harness_set_src_caps_str(
+      h, "video/x-raw,format=GRAY8,width=4,height=4,framerate=30/1,pattern=rggb");
+  EXPECT_EQ(push_pull<float>(h, buffer_from(std::vector<std::uint8_t>(16, 100))),
+            std::vector<float>(16, 90.f));
+  std::string warning;
+  while (GstMessage* m = gst_bus_pop_filtered(bus, GST_MESSAGE_WARNING)) {
+    GError* err = nullptr;
+    gst_message_parse_warning(m, &err, nullptr);
+    warning += err->message;
+    g_error_free(err);
+    gst_message_unref(m);
+  }
+  EXPECT_NE(warning.find("captured 4x2 dark does not fit the stream, now 4x4"), std::string::npos)
+      << warning;
+  EXPECT_NE(warning.find("dark-level 10"), std::string::npos) << warning;
+}
+
 TEST_F(DarkSub, survives_flush_and_eos) {
   start("darksub dark-level=50", kRggb6x4);
   const auto raw = frame6x4();

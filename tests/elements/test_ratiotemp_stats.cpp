@@ -1,5 +1,7 @@
 // ratiotemp's statistics: the message against region_stats of the frame, the peak (the hot
 // spot, not a wild pixel), the region that tracks it and a peak window larger than the frame.
+#include <algorithm>
+
 #include "pyrocam/runtime/region_stats.h"
 #include "ratiotemp_support.h"
 
@@ -128,6 +130,40 @@ class SaturatedStats : public RatioTemp {
 
 TEST_F(SaturatedStats, bilinear_planes) { check("demosaic25 method=bilinear", 1); }
 TEST_F(SaturatedStats, matched_on_the_fused_path) { check("demosaic25", 2); }
+
+// While darksub captures a dark its frames have no image (NaN, flagged GAP): ratiotemp gives them
+// no reading and no statistics, and does not call them saturated (it did: every pixel, with
+// advice to shorten the exposure). The frames after the capture are measured as usual.
+class DarkCaptureStats : public RatioTemp {
+ protected:
+  void check(const std::string& demosaic) {
+    for (const char* e : {"darksub", "demosaic25"}) REQUIRE_ELEMENT(e);
+    start_on_raw_frames("ratiotemp stats-interval=1 model=" + rgb_model_path(), demosaic);
+    GstElement* darksub = find_element(h, "darksub");
+    g_object_set(darksub, "capture-frames", 2, nullptr);
+    g_signal_emit_by_name(darksub, "capture-dark");
+    gst_object_unref(darksub);
+    const std::vector<std::uint8_t> capped(64, 50);
+    for (int k = 0; k < 2; ++k) {
+      const auto out = run(capped, 8, 8, k * GST_SECOND);
+      ASSERT_EQ(out.size(), 64u);
+      EXPECT_EQ(std::count(out.begin(), out.end(), 0), 64) << "a capture frame read";
+    }
+    auto s = stats();
+    EXPECT_TRUE(s.empty()) << "statistics of a capture frame";
+    free_all(s);
+    EXPECT_TRUE(warnings.empty()) << warnings.front();
+    run(raw_bayer_frame(*rgb_model(), 1300), 8, 8, 2 * GST_SECOND);
+    s = stats();
+    ASSERT_EQ(s.size(), 1u);
+    EXPECT_EQ(field_uint64(s[0], "saturated"), 0u);
+    EXPECT_GT(field_uint64(s[0], "valid"), 0u);
+    free_all(s);
+  }
+};
+
+TEST_F(DarkCaptureStats, bilinear_planes) { check("demosaic25 method=bilinear"); }
+TEST_F(DarkCaptureStats, matched_on_the_fused_path) { check("demosaic25"); }
 
 TEST_F(RatioTemp, survives_flush_and_eos) {
   start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 4));
