@@ -86,6 +86,7 @@ constexpr guint64 DEFAULT_SEED = 1;
 constexpr gboolean DEFAULT_IS_LIVE = FALSE;
 constexpr int DEFAULT_WIDTH = 320, DEFAULT_HEIGHT = 240, DEFAULT_FPS = 30;
 constexpr int kMeltPoolFrames = 100;
+constexpr double kMaxExposureUs = 1e7;  // the exposure property's range, automatic included
 // Exposure and emissivities as pyrocam-calib's scene sequences (pyrocam::kSceneDefaults); the
 // exposure property's description and the documentation above give these numbers.
 constexpr pyrocam::SceneDefaults kScene = pyrocam::kSceneDefaults;
@@ -338,13 +339,16 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
     }
     const double factor =
         settings.bracket.empty() ? 1.0 : settings.bracket[st.frame % settings.bracket.size()];
+    // The automatic exposure of a cold scene runs to hours (a 300 degC plate: 7500 s): held to
+    // the property's range, as a camera holds it to its own.
     const double exposure =
-        factor *
-        (settings.exposure_us > 0
-             ? settings.exposure_us
-             : st.camera->exposure_for(
-                   nominal_c, pyrocam::scaled_target_dn(kScene.target_dn, st.camera->profile()),
-                   emissivity));
+        factor * (settings.exposure_us > 0
+                      ? settings.exposure_us
+                      : std::min(kMaxExposureUs, st.camera->exposure_for(
+                                                     nominal_c,
+                                                     pyrocam::scaled_target_dn(
+                                                         kScene.target_dn, st.camera->profile()),
+                                                     emissivity)));
     const cv::Mat raw = st.camera->render(*map, exposure, emissivity, settings.gain_db);
     pyrocam_buffer_add_exposure_meta(buffer, exposure, settings.gain_db);
     GstMapInfo info;
@@ -520,7 +524,7 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
                           "brightest band 140 DN above dark (8-bit; deeper cameras: the same share "
                           "of their range) at the scene's nominal temperature (melt pool: 2000 "
                           "degC)",
-                          0.0, 1e7, DEFAULT_EXPOSURE, playing));
+                          0.0, kMaxExposureUs, DEFAULT_EXPOSURE, playing));
   g_object_class_install_property(
       gobject_class, PROP_GAIN,
       g_param_spec_double("gain", "Gain",

@@ -199,6 +199,25 @@ TEST_F(PyrocamSrc, gain_multiplies_the_signal_and_its_shot_noise) {
   EXPECT_LT(gained.variance / plain.variance, 4.8);
 }
 
+// A cold plate's automatic exposure (7500 s at 300 degC) is held to the property's 10 s: frames
+// at the black level with noise, not all zero, and meta saying 10 s.
+TEST_F(PyrocamSrc, automatic_exposure_of_a_cold_scene_stays_in_range) {
+  h = gst_harness_new_parse("pyrocamsrc scene=plate temperature=300");
+  gst_harness_set_sink_caps_str(h, "video/x-bayer,width=40,height=20");
+  gst_harness_play(h);
+  GstBuffer* b = gst_harness_pull(h);
+  ASSERT_NE(b, nullptr);
+  const GType api = g_type_from_name("PyrocamExposureMetaAPI");  // the plugin's, loaded
+  const auto* meta =
+      api ? reinterpret_cast<const PyrocamExposureMeta*>(gst_buffer_get_meta(b, api)) : nullptr;
+  ASSERT_NE(meta, nullptr);
+  EXPECT_EQ(meta->exposure_us, 1e7);
+  const double mean = centre_mean(values_of<std::uint8_t>(b));
+  EXPECT_GT(mean, 45);  // the profiles' 50 DN black level, a plate barely glowing on it
+  EXPECT_LT(mean, 60);
+  gst_buffer_unref(b);
+}
+
 TEST(PyrocamSrcPipeline, smoke_runs_through_darksub_and_demosaic25_to_eos) {
   REQUIRE_ELEMENT("pyrocamsrc");
   REQUIRE_ELEMENT("darksub");
