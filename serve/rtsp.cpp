@@ -71,8 +71,10 @@ std::string mount_launch(const RtspConfig& c, bool temperature) {
     // Quantiser 0 with 4:4:4 input is x264's lossless mode (High 4:4:4 Predictive). One
     // thread, so one slice per frame: with zerolatency's sliced threads (a slice per thread)
     // ffmpeg, and avdec_h264 reading a stored copy, decoded codes the camera never sent.
-    launch +=
-        "x264enc tune=zerolatency speed-preset=ultrafast pass=quant quantizer=0 threads=1" + key;
+    // The profile said, not left to negotiation: x264 otherwise tries baseline first and logs
+    // "baseline profile doesn't support lossless" for every client.
+    launch += "x264enc tune=zerolatency speed-preset=ultrafast pass=quant quantizer=0 threads=1" +
+              key + " ! video/x-h264,profile=high-4:4:4";
   else
     launch +=
         "videoconvert ! video/x-raw,format=I420 ! x264enc tune=zerolatency "

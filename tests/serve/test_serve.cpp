@@ -241,6 +241,8 @@ TEST(Serve, TemperatureStreamIsLossless) {
   client.pull(20, milliseconds(30000));
   ASSERT_EQ(client.error(), "");
   ASSERT_GE(client.frames.size(), 20u);
+  // The encoder is asked for its lossless profile: no error line per client on the console.
+  EXPECT_EQ(server.log().find("x264 [error]"), std::string::npos) << server.log();
   struct Path {
     std::string name;
     std::vector<std::vector<std::uint16_t>> frames;
