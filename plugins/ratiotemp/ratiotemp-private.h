@@ -147,8 +147,8 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& satur
 void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstClockTime pts);
 
 /* Readings checked against the model's band spectra before a verdict (PlaneEstimator::
- * take_fit_audit: one in every fourth row; a 5x5 frame of 2045x1085 filled by the body
- * gives about 54). With a few percent of a scene's readings misfit (edges, reflections), more
+ * take_fit_audit: one in every 16th row; a 5x5 frame of 2045x1085 filled by the body
+ * gives about 14, a small body's frames add up). With a few percent of a scene's readings misfit (edges, reflections), more
  * than half of 32 is a chance below 1e-12 (binomial). */
 inline constexpr std::size_t kFitAuditReadings = 32;
 /* Adds the frame's fit audit; once enough readings were checked, warns (once since start) when
