@@ -6,10 +6,13 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <map>
+#include <sstream>
 #include <string>
 
 #include "pyrocam/simulation/scenes.h"
 #include "pyrocam/simulation/simulator.h"
+#include "test_support.h"
 
 namespace pyrocam::test {
 
@@ -42,6 +45,21 @@ inline void write_plate(const std::filesystem::path& folder, const std::string& 
   s.height = size;
   s.target_dn = exposure_scale * kSceneDefaults.target_dn;
   write_scene_sequence(folder, camera, s);
+}
+
+// The first frame's row of stats.csv, by column name.
+inline std::map<std::string, std::string> first_stats_row(const std::filesystem::path& folder) {
+  std::istringstream in(read_text(folder / "stats.csv"));
+  std::string header, row;
+  std::getline(in, header);
+  std::getline(in, row);
+  std::map<std::string, std::string> fields;
+  std::istringstream h(header), r(row);
+  for (std::string name, value; std::getline(h, name, ',');) {
+    std::getline(r, value, ',');
+    fields[name] = value;
+  }
+  return fields;
 }
 
 }  // namespace pyrocam::test

@@ -31,17 +31,8 @@ std::pair<int, std::string> run(const std::string& args, const fs::path& log) {
 }
 
 double median_of_first_frame(const fs::path& out) {
-  std::istringstream in(read_text(out / "stats.csv"));
-  std::string header, row;
-  std::getline(in, header);
-  std::getline(in, row);
-  std::map<std::string, std::string> fields;
-  std::istringstream h(header), r(row);
-  for (std::string name, value; std::getline(h, name, ',');) {
-    std::getline(r, value, ',');
-    fields[name] = value;
-  }
-  return fields.at("median_c").empty() ? NAN : std::stod(fields.at("median_c"));
+  const std::string median = first_stats_row(out).at("median_c");
+  return median.empty() ? NAN : std::stod(median);
 }
 
 // The plate's first frame and its dark, with `left` columns cut at the left and `right` at the

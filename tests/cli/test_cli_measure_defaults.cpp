@@ -33,21 +33,6 @@ std::string calib_stderr(const std::string& args, const fs::path& log) {
   return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? test::read_text(log) : std::string();
 }
 
-// The first frame's row of stats.csv, by column name.
-std::map<std::string, std::string> first_stats_row(const fs::path& folder) {
-  std::istringstream in(test::read_text(folder / "stats.csv"));
-  std::string header, row;
-  std::getline(in, header);
-  std::getline(in, row);
-  std::map<std::string, std::string> fields;
-  std::istringstream h(header), r(row);
-  for (std::string name, value; std::getline(h, name, ',');) {
-    std::getline(r, value, ',');
-    fields[name] = value;
-  }
-  return fields;
-}
-
 TEST(CliMeasureDefaults, a_dim_5x5_plate_reads_from_its_good_bands_by_default) {
   const fs::path model = test_model("test-model-nir5x5.json");
   if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
