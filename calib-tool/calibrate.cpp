@@ -212,9 +212,13 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
       if (!global.quiet) {
         for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
         std::cout << o.verdict << "\n";
-        for (const auto& s : o.table4)
-          std::printf("  %-22s rms %7.2f degC  mean %7.2f  std %7.2f  (%zu settings)\n",
-                      s.name.c_str(), s.rms, s.mean, s.std, s.true_c.size());
+        for (const auto& s : o.table4) {
+          if (s.true_c.empty())
+            std::printf("  %-22s no reading on any calibration setting\n", s.name.c_str());
+          else
+            std::printf("  %-22s rms %7.2f degC  mean %7.2f  std %7.2f  (%zu settings)\n",
+                        s.name.c_str(), s.rms, s.mean, s.std, s.true_c.size());
+        }
         std::cout << "model:  " << a.out << "\nreport: " << prefix << ".html, " << prefix
                   << ".json\n";
         for (const auto& line : table_lines) std::cout << line << "\n";
