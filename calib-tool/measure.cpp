@@ -238,13 +238,8 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
     std::cerr << "warning: " << j.frame.filename().string() << ": " << s.valid << " of " << s.pixels
               << " pixels of the ROI read; " << why.saturated
               << " have a saturated band (shorten the exposure), " << why.dim
-              << " a band below the dim threshold (" << model.profile().thresholds.inference_dim_dn
-              << " DN; lengthen it)"
-              << (why.dim > 0 ? ": the pixels that read beside those are the ones whose noise "
-                                "lifted that band, and their readings lean one way (tens of "
-                                "degrees on a colour camera)"
-                              : "")
-              << "\n";
+              << " a band below or near the dim threshold ("
+              << model.profile().thresholds.inference_dim_dn << " DN; lengthen it)\n";
   }
   TruthScore ts;
   if (!j.truth.empty()) {

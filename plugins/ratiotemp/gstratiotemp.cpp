@@ -28,7 +28,12 @@
  * so its pixels still need all three bands. partial-bands=any (or the older
  * #GstRatioTemp:allow-partial) reads from any two; the fit gives no reading when they fit two
  * temperatures about equally well. With the lut or mlp method the pixels they cannot read go to
- * the likelihood fit under the same rule.
+ * the likelihood fit under the same rule. Where every band must read (the colour camera, or
+ * partial-bands=off), a band within 6 standard deviations of its noise above the dim threshold
+ * reads only where a ring of its samples around the pixel, outside its demosaicking footprint,
+ * has a half whose mean is 2 of them above it: the pixel's own noise does not decide, so a
+ * surface at the threshold reads on none of its pixels rather than on those its noise lifted
+ * (which read tens of degrees off).
  *
  * #GstRatioTemp:blur-correction (default off; the fused path only) subtracts matched
  * demosaicking's bias on steep gradients: +180 degC at 150 degC a pixel near 1400 degC.

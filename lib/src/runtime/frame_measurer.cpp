@@ -14,6 +14,7 @@
 #include "pyrocam/core/noise_model.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/darksub.h"
+#include "pyrocam/runtime/dim_edge.h"
 #include "pyrocam/runtime/region_stats.h"
 
 namespace pyrocam {
@@ -77,17 +78,20 @@ cv::Size FrameMeasurer::output_size(cv::Size raw) const {
 FrameMeasurer::Unread FrameMeasurer::unread(const cv::Mat& temperature_c,
                                             const cv::Mat& mask) const {
   Unread u;
-  const auto dim = static_cast<float>(model_->profile().thresholds.inference_dim_dn);
+  // Dim: below the threshold, or near it where the dim-edge check refuses what reaches it.
+  const DimEdgeCheck near(model_->profile(), analogue_gain_factor(options_.gain_db),
+                          demosaic_noise(layout_, options_.demosaic));
   for (int y = 0; y < temperature_c.rows; ++y)
     for (int x = 0; x < temperature_c.cols; ++x) {
       if (std::isfinite(temperature_c.at<float>(y, x))) continue;
       if (!mask.empty() && mask.at<std::uint8_t>(y, x) == 0) continue;
       bool saturated = false, dim_band = false;
-      for (const cv::Mat& plane : planes_) {
+      for (std::size_t b = 0; b < planes_.size(); ++b) {
+        const cv::Mat& plane = planes_[b];
         if (plane.size() != temperature_c.size()) continue;
         const float v = plane.at<float>(y, x);
         saturated |= std::isinf(v) && v > 0;
-        dim_band |= v < dim;
+        dim_band |= v < near.checked_dn(static_cast<int>(b));
       }
       u.saturated += saturated;
       u.dim += !saturated && dim_band;
@@ -172,6 +176,16 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
   } else {
     demosaic(signal, layout_, options_.demosaic, planes_, no_signal_dn);
   }
+  // Where ratiotemp would take the fused path, the dim-edge check reads the mosaic as it does.
+  const bool fused =
+      options_.footprint_spread <= 0 && layout_.kind == MosaicLayout::Kind::kBayer &&
+      resolve_demosaic_method(options_.demosaic, layout_) == DemosaicMethod::kMatched;
+  const PlaneEstimator::MatchedMosaic source{signal, layout_, no_signal_dn};
+  struct Unset {  // the mosaic is this call's
+    PlaneEstimator& estimator;
+    ~Unset() { estimator.set_dim_edge_mosaic(nullptr); }
+  } unset{planes_estimator_};
+  planes_estimator_.set_dim_edge_mosaic(fused ? &source : nullptr);
   planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);
   if (options_.check_layout) {
     if (layout_.kind == MosaicLayout::Kind::kBayer)

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <exception>
+#include <functional>
 #include <future>
 #include <string>
 #include <utility>
@@ -12,6 +13,7 @@
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/demosaic.h"
+#include "pyrocam/runtime/dim_edge.h"
 #include "pyrocam/runtime/uncertainty.h"
 #include "runtime/estimator_kinds.h"
 
@@ -201,11 +203,39 @@ void PlaneEstimator::uncertainty_row(const float* const* rows, std::size_t n, co
   }
 }
 
+std::unique_ptr<const DimEdgeCheck> PlaneEstimator::dim_edge_check(
+    const DemosaicNoise& noise) const {
+  // Where a band below the threshold leaves the pixel to the likelihood fit, which weighs it
+  // by its noise, the threshold does not decide whether a pixel reads.
+  const bool partial = !sloped_ && (method_ == Method::kLikelihood ? estimator_->can_read_partial()
+                                                                   : partial_fit_ != nullptr);
+  if (partial) return nullptr;
+  return std::make_unique<const DimEdgeCheck>(model_->profile(), analogue_gain_, noise);
+}
+
+std::function<double(int, int, int)> PlaneEstimator::planes_ring_mean_of(
+    const std::vector<cv::Mat>& planes) const {
+  if (dim_edge_mosaic_) return mosaic_window_mean_of(*dim_edge_mosaic_);
+  const DimEdgeCheck::Ring ring = DimEdgeCheck::plane_ring(model_->profile().mosaic);
+  return [&planes, ring](int b, int x, int y) {
+    return plane_ring_mean(planes[static_cast<std::size_t>(b)], x, y, ring);
+  };
+}
+
+std::function<double(int, int, int)> PlaneEstimator::mosaic_window_mean_of(
+    const MatchedMosaic& source) {
+  return [&source](int b, int x, int y) {
+    return mosaic_ring_mean(source.mosaic, source.layout, b, x, y, DimEdgeCheck::kMosaicRing);
+  };
+}
+
 void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv::Mat* u) const {
   const int bands = model_->profile().band_count();
   const cv::Size size = checked_size(planes);
   t.create(size, CV_32F);
   if (u) u->create(size, CV_32F);
+  const std::unique_ptr<const DimEdgeCheck> dim_edge = dim_edge_check(noise_);
+  const auto window_mean = planes_ring_mean_of(planes);
   // Rows in parallel: each estimator call is const and thread-safe.
   cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
     std::vector<const float*> row_ptrs(static_cast<std::size_t>(bands));
@@ -213,6 +243,9 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
       float* out = t.ptr<float>(y);
       estimate_row(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
+      if (dim_edge)
+        dim_edge->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), out, 0, y,
+                        window_mean);
       if (u)
         uncertainty_row(row_ptrs.data(), static_cast<std::size_t>(size.width), out,
                         u->ptr<float>(y), 0, y, noise_);
@@ -224,6 +257,8 @@ void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat&
   const int bands = model_->profile().band_count();
   const cv::Size size = checked_size(planes);
   codes.create(size, CV_16U);
+  const std::unique_ptr<const DimEdgeCheck> dim_edge = dim_edge_check(noise_);
+  const auto window_mean = planes_ring_mean_of(planes);
   // Row by row: a row's temperatures are encoded while they are in cache.
   cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
     std::vector<const float*> row_ptrs(static_cast<std::size_t>(bands));
@@ -231,6 +266,9 @@ void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat&
     for (int y = rows.start; y < rows.end; ++y) {
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
       estimate_row(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
+      if (dim_edge)
+        dim_edge->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data(), 0, y,
+                        window_mean);
       encode_temperature_row(t.data(), codes.ptr<std::uint16_t>(y), size.width);
     }
   });
@@ -277,14 +315,16 @@ void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* 
   check_matched_mosaic(source);
   t.create(source.mosaic.size(), CV_32F);
   if (u) u->create(source.mosaic.size(), CV_32F);
-  const DemosaicNoise noise =
-      u ? demosaic_noise(source.layout, DemosaicMethod::kMatched) : DemosaicNoise{};
+  const DemosaicNoise noise = demosaic_noise(source.layout, DemosaicMethod::kMatched);
+  const std::unique_ptr<const DimEdgeCheck> dim_edge = dim_edge_check(noise);
+  const auto window_mean = mosaic_window_mean_of(source);
   for_each_strip(
       source,
       [&](int y, int x0, int x1, const float* const* rows, float*) {
         const auto n = static_cast<std::size_t>(x1 - x0);
         float* out = t.ptr<float>(y) + x0;
         estimate_row(rows, n, out);
+        if (dim_edge) dim_edge->apply(rows, n, out, x0, y, window_mean);
         if (u) uncertainty_row(rows, n, out, u->ptr<float>(y) + x0, x0, y, noise);
       },
       [&](int y, int x0, int x1) {
@@ -296,11 +336,16 @@ void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* 
 void PlaneEstimator::estimate_codes(const MatchedMosaic& source, cv::Mat& codes) const {
   check_matched_mosaic(source);
   codes.create(source.mosaic.size(), CV_16U);
+  const std::unique_ptr<const DimEdgeCheck> dim_edge =
+      dim_edge_check(demosaic_noise(source.layout, DemosaicMethod::kMatched));
+  const auto window_mean = mosaic_window_mean_of(source);
   for_each_strip(
       source,
       [&](int y, int x0, int x1, const float* const* rows, float* t) {
         // The run's temperatures, encoded while they are in cache.
         estimate_row(rows, static_cast<std::size_t>(x1 - x0), t);
+        if (dim_edge)
+          dim_edge->apply(rows, static_cast<std::size_t>(x1 - x0), t, x0, y, window_mean);
         encode_temperature_row(t, codes.ptr<std::uint16_t>(y) + x0, x1 - x0);
       },
       [&](int y, int x0, int x1) {

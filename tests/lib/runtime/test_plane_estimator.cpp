@@ -143,8 +143,10 @@ TEST(PlaneEstimator, the_fused_path_reads_what_the_planes_read) {
       std::vector<cv::Mat> planes;
       demosaic(mosaic, p.mosaic, DemosaicMethod::kMatched, planes, no_signal);
       cv::Mat t, u, codes, t_fused, u_fused, codes_fused;
+      estimator.set_dim_edge_mosaic(&fused);  // the dim-edge check's ring from the mosaic
       estimator.estimate(planes, t, &u);
       estimator.estimate_codes(planes, codes);
+      estimator.set_dim_edge_mosaic(nullptr);
       estimator.estimate(fused, t_fused, &u_fused);
       estimator.estimate_codes(fused, codes_fused);
       EXPECT_EQ(differing(t, t_fused), 0);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <functional>
 #include <future>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -12,6 +13,7 @@
 
 #include "pyrocam/core/mosaic.h"
 #include "pyrocam/runtime/demosaic.h"
+#include "pyrocam/runtime/dim_edge.h"
 #include "pyrocam/runtime/emissivity.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/misfit.h"
@@ -90,6 +92,11 @@ class PlaneEstimator {
   // overestimate after averaging kernels). The fused path always uses kMatched's. Not while an
   // estimate runs; cheap where it does not change (called per frame by ratiotemp).
   void set_demosaic_noise(const DemosaicNoise& noise) { noise_ = noise; }
+  // The mosaic the planes were demosaicked from, where it is a fused path's (a Bayer mosaic,
+  // kMatched, no mixed-pixel marks), for the dim-edge check (dim_edge.h): the planes path then
+  // takes its ring from the mosaic, as the fused path does, and reads what it reads bit for bit;
+  // null (the default): from the planes. Held until set again; not while an estimate runs.
+  void set_dim_edge_mosaic(const MatchedMosaic* source) { dim_edge_mosaic_ = source; }
 
   // How well the readings fit the model's band spectra, whatever the misfit setting: a few
   // readings of every kFitAuditRows-th row (run on the fused path) go through the band-consistency
@@ -128,6 +135,13 @@ class PlaneEstimator {
   // pixels x0 .. x0 + n - 1 of row y, with `noise`.
   void uncertainty_row(const float* const* rows, std::size_t n, const float* t, float* out, int x0,
                        int y, const DemosaicNoise& noise) const;
+  // The dim-edge check (dim_edge.h) for planes of that noise, or null where pixels with a band
+  // below the dim threshold go to the likelihood fit (partial bands).
+  std::unique_ptr<const DimEdgeCheck> dim_edge_check(const DemosaicNoise& noise) const;
+  // The ring means the check reads: of the mosaic, or of the planes (set_dim_edge_mosaic).
+  static std::function<double(int, int, int)> mosaic_window_mean_of(const MatchedMosaic& source);
+  std::function<double(int, int, int)> planes_ring_mean_of(
+      const std::vector<cv::Mat>& planes) const;
   // Throws InputError for a source the fused path cannot read with this model.
   void check_matched_mosaic(const MatchedMosaic& source) const;
   // The fused path's strips: for each row of each strip, `lit_run(y, x0, x1, rows, scratch)` for
@@ -150,6 +164,7 @@ class PlaneEstimator {
   bool partial_set_ = false;
   double analogue_gain_ = 1.0;
   DemosaicNoise noise_;
+  const MatchedMosaic* dim_edge_mosaic_ = nullptr;
   // The audit's check (its own tables; made by the first take_fit_audit) and counts, shared by
   // the rows' threads.
   mutable std::unique_ptr<MisfitCheck> audit_;

@@ -1,0 +1,104 @@
+// The dim threshold as an edge that a reading's own noise does not decide.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "pyrocam/core/mosaic.h"
+#include "pyrocam/core/profile.h"
+#include "pyrocam/runtime/demosaic.h"
+
+namespace pyrocam {
+
+// A pixel that needs every band reads only where each reaches the dim threshold. On a surface
+// whose band sits at the threshold, the pixels that reach it are those whose noise lifted that
+// band, and their readings lean one way (a 1200 degC colour plate exposed so: 1 % of the pixels
+// read, 98 degC low; 22 %, 48 degC low). The check decides from the band's values around the
+// pixel, in a ring outside its demosaicking footprint, whose noise is not the pixel's: a reading
+// with a band near the threshold stays only where the mean of one of the ring's halves (above,
+// below, left, right: at a body's edge, the half inside it) lies kNoiseMargin of the band's own
+// noise above the threshold. The pixel's own noise then no longer selects it; a uniform
+// surface reads on all its pixels or on none, a body's edge keeps what its inside has.
+class DimEdgeCheck {
+ public:
+  // Standard deviations of a band value's noise at the threshold: where the surface lies this
+  // far above it, the threshold cuts off 2.3 % of a normal noise and leaves its mean 0.055 of
+  // them high.
+  static constexpr double kNoiseMargin = 2.0;
+  // A band further above the threshold than this is not checked (its noise reaches below the
+  // threshold once in 10^9).
+  static constexpr double kCheckedMargin = 6.0;
+  // The window: a ring of pixels at Chebyshev distances inner .. outer from the pixel, outside
+  // its own demosaicking footprint so that its noise is not the pixel's. Band planes of a Bayer
+  // mosaic: values whose kernels (5 x 5) do not reach the pixel's, 5 .. 6 (88 values over 21
+  // samples of R or B); a Bayer mosaic's samples: 3 .. 6, outside the 5 x 5 footprint (36 of R
+  // or B; 3 .. 4, 14 of them, left a 1200 degC plate's transition 2 % of the pixels wide
+  // reading 12 degC low); snapshot cells: 3, outside the 3 x 3 cells matched registration
+  // draws on (24 cells).
+  struct Ring {
+    int inner, outer;
+  };
+  static Ring plane_ring(const MosaicLayout& layout) {
+    return layout.kind == MosaicLayout::Kind::kBayer ? Ring{5, 6} : Ring{3, 3};
+  }
+  static constexpr Ring kMosaicRing{3, 6};
+
+  // Thresholds per band from the profile's noise model at its dim threshold, with the analogue
+  // gain (a factor) and what demosaicking did to the noise (its largest factor per band).
+  DimEdgeCheck(const CameraProfile& profile, double gain, const DemosaicNoise& noise);
+  int bands() const { return static_cast<int>(accept_dn_.size()); }
+  float accept_dn(int band) const { return accept_dn_[static_cast<std::size_t>(band)]; }
+  float checked_dn(int band) const { return checked_dn_[static_cast<std::size_t>(band)]; }
+
+  // Refuses the readings out[0 .. n) (NaN) of output pixels x0 .. x0 + n - 1 of row y whose
+  // band values rows[b][i] lie below checked_dn and whose ring's largest half mean
+  // `window_mean(b, x, y)` lies below accept_dn. The scan is branch-free until a run of pixels
+  // holds one to check.
+  template <class WindowMean>
+  void apply(const float* const* rows, std::size_t n, float* out, int x0, int y,
+             const WindowMean& window_mean) const {
+    constexpr std::size_t kRun = 64;
+    const std::size_t nb = accept_dn_.size();
+    for (std::size_t start = 0; start < n; start += kRun) {
+      const std::size_t m = std::min(kRun, n - start);
+      bool any = false;
+      for (std::size_t i = start; i < start + m; ++i) {
+        float lowest = rows[0][i] - checked_dn_[0];
+        for (std::size_t b = 1; b < nb; ++b) lowest = std::min(lowest, rows[b][i] - checked_dn_[b]);
+        any |= (lowest < 0.f) & (out[i] == out[i]);
+      }
+      if (!any) continue;
+      for (std::size_t i = start; i < start + m; ++i) {
+        if (!std::isfinite(out[i])) continue;
+        const int x = x0 + static_cast<int>(i);
+        for (std::size_t b = 0; b < nb; ++b)
+          if (rows[b][i] < checked_dn_[b] && refuses(b, window_mean(static_cast<int>(b), x, y))) {
+            out[i] = NAN;
+            break;
+          }
+      }
+    }
+  }
+
+  // Whether a band value below checked_dn, with `ring_mean` (the largest half's) around it, is
+  // refused.
+  bool refuses(std::size_t band, double ring_mean) const {
+    return !(ring_mean >= accept_dn_[band]);
+  }
+
+ private:
+  std::vector<float> accept_dn_, checked_dn_;
+};
+
+// The largest of the means of the four halves (above, below, left, right) of the ring around
+// (x, y) of `plane` (CV_32F), clipped to the image; a NaN value (no reading) counts as 0, a
+// +INF (saturated) one makes its half's mean +INF.
+double plane_ring_mean(const cv::Mat& plane, int x, int y, DimEdgeCheck::Ring ring);
+// The same over the samples of band `band` of a mosaic (CV_32F, the layout's pattern at its
+// top-left pixel).
+double mosaic_ring_mean(const cv::Mat& mosaic, const MosaicLayout& layout, int band, int x, int y,
+                        DimEdgeCheck::Ring ring);
+
+}  // namespace pyrocam
