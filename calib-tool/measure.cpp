@@ -8,6 +8,7 @@
 #include <iostream>
 #include <memory>
 #include <opencv2/imgproc.hpp>
+#include <set>
 
 #include "commands.h"
 #include "measure_recording.h"
@@ -36,6 +37,7 @@ struct MeasureArgs {
   bool uncertainty = false;
   bool blur_correction = false;  // MeasureOptions::blur_correction
   int brightness_radius = 0;     // MeasureOptions::brightness_radius
+  std::set<std::string> given;   // the options on the command line, by name
 };
 
 // Truth comparison at the output resolution: only output pixels whose whole input footprint
@@ -272,6 +274,7 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
     m.dark_level = a.dark_level;
     m.pattern = a.pattern;
     m.quiet = global.quiet;
+    m.given = a.given;
     return measure_recording(m);
   }
   const MeasureInputs in = measure_inputs(a);
@@ -446,14 +449,16 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       "--pattern rggb --out t --uncertainty\n"
       "  pyrocam-calib measure --model other.json --recording out/run1 --method lut --out t2\n"
       "With --recording (a raw recording, record.sh RAW=1) the output is OUT/temperature.npy\n"
-      "and OUT/temperature.csv as `pyrocam-calib export` writes them; with the recording's\n"
-      "method (the default, auto, as ratiotemp's; its temperature tags say which) the codes\n"
-      "are the recorded ones.");
+      "and OUT/temperature.csv as `pyrocam-calib export` writes them. The ratiotemp settings\n"
+      "that change readings (method, e-slope, partial-bands, misfit-probability,\n"
+      "blur-correction, brightness-radius) come from the recording's temperature tags unless\n"
+      "given here; with the recording's model the codes are then the recorded ones.");
   add_input_options(c, a);
   add_output_options(c, a);
   c->callback([&global, &selected, c] {
     check_measure_args(a);
-    (void)c;
+    for (const CLI::Option* o : c->get_options())
+      if (o->count() > 0) a.given.insert(o->get_name());
     selected = [&global] { return run_measure(a, global); };
   });
 }

@@ -4,8 +4,14 @@
 #include "measure_recording.h"
 
 #include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
 #include <iostream>
+#include <map>
 #include <optional>
+#include <set>
 
 #include "commands.h"
 #include "export.h"
@@ -42,6 +48,88 @@ void dark_from_tags(const std::map<std::string, std::string>& fields, const std:
   }
   throw InputError(where + ": the recording's dark '" + v +
                    "' is neither dark-level=N nor location=FILE; give --dark or --dark-level");
+}
+
+// What ratiotemp's tags on the recording's temperature segments say it read them with (the
+// comment's fields), or nothing where there are none: the first segment's first frame.
+std::map<std::string, std::string> recorded_settings(const std::string& recording, bool quiet) {
+  struct FirstFrame {};
+  std::map<std::string, std::string> fields;
+  try {
+    const auto segments = recording_segments(recording, "temperature-");
+    read_recording({segments.front()}, [&](const RecordingFrame& f) {
+      if (f.tags->comment.rfind("pyrocam-recording", 0) == 0) fields = f.tags->fields;
+      throw FirstFrame{};
+    });
+  } catch (const FirstFrame&) {
+  } catch (const InputError& e) {
+    if (!quiet)
+      std::cerr << "note: the recording's temperatures cannot say what they were read with ("
+                << e.what() << "): measure's settings read it\n";
+  }
+  return fields;
+}
+
+std::string shown(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+double tagged_number(const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || !std::isfinite(v))
+    throw InputError("the recording's tags: '" + text + "' is not a number");
+  return v;
+}
+
+// The settings ratiotemp read the recording's temperatures with, for those the command line
+// does not give, so that the same model gives the recorded codes; one that it gives otherwise
+// is said (the codes then differ from the recorded ones, as asked).
+void adopt_recorded_settings(const std::map<std::string, std::string>& fields,
+                             const std::set<std::string>& given, MeasureOptions& options,
+                             bool quiet) {
+  // `ours`: the setting's value as the tags write it.
+  const auto take = [&](const char* field, const std::string& option, const std::string& ours,
+                        const std::function<void(const std::string&)>& set) {
+    const auto it = fields.find(field);
+    if (it == fields.end() || it->second == ours) return;
+    if (given.count(option) == 0) {
+      set(it->second);
+      if (!quiet)
+        std::cerr << "note: " << field << " " << it->second << ", as the recording's "
+                  << "temperatures were read (their tags)\n";
+    } else {
+      std::cerr << "warning: the recording's temperatures were read with " << field << " "
+                << it->second << ", " << option << " gives " << ours
+                << ": the codes will differ from the recorded ones\n";
+    }
+  };
+  take("method", "--method", method_name(options.method),
+       [&](const std::string& v) { options.method = parse_method(v); });
+  const auto slope = fields.find("e-slope");
+  if (slope != fields.end() && tagged_number(slope->second) != options.emissivity_slope * 100)
+    take("e-slope", "--e-slope", shown(options.emissivity_slope * 100) + " %/100 nm",
+         [&](const std::string& v) { options.emissivity_slope = tagged_number(v) / 100; });
+  const std::string partial = options.allow_partial ? "any" : options.safe_partial ? "safe" : "off";
+  take("partial-bands", given.count("--allow-partial") ? "--allow-partial" : "--partial-bands",
+       partial, [&](const std::string& v) {
+         if (v != "off" && v != "safe" && v != "any")
+           throw InputError("the recording's tags: partial-bands '" + v + "'");
+         options.allow_partial = v == "any";
+         options.safe_partial = v == "safe";
+       });
+  const auto misfit = fields.find("misfit-probability");
+  if (misfit != fields.end() && tagged_number(misfit->second) != options.misfit_probability)
+    take("misfit-probability", "--misfit-probability", shown(options.misfit_probability),
+         [&](const std::string& v) { options.misfit_probability = tagged_number(v); });
+  take("blur-correction", "--blur-correction", options.blur_correction ? "on" : "off",
+       [&](const std::string& v) { options.blur_correction = v == "on"; });
+  take("brightness-radius", "--brightness-radius", std::to_string(options.brightness_radius),
+       [&](const std::string& v) {
+         options.brightness_radius = static_cast<int>(tagged_number(v));
+       });
 }
 
 }  // namespace
@@ -98,6 +186,7 @@ int measure_recording(const RecordingMeasure& m) {
       const auto tagged = fields.find("pattern");
       if (pattern.empty() && tagged != fields.end()) pattern = lower(tagged->second);
       MeasureOptions options = m.options;
+      adopt_recorded_settings(recorded_settings(m.recording, m.quiet), m.given, options, m.quiet);
       options.bayer_pattern =
           frames_bayer_pattern(*m.model, m.model_path, pattern,
                                m.pattern.empty() ? "the recording's tags" : "--pattern", m.quiet);

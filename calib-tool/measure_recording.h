@@ -2,6 +2,7 @@
 #pragma once
 
 #include <memory>
+#include <set>
 #include <string>
 
 #include "pyrocam/runtime/frame_measurer.h"
@@ -20,6 +21,9 @@ struct RecordingMeasure {
   std::string pattern;     // --pattern; empty: the recording's tags, else the model's
   int peak_window = 5;
   bool quiet = false;
+  // The options given on the command line ("--e-slope", ...): the others that ratiotemp's tags
+  // on the recording's temperature segments name are taken from them.
+  std::set<std::string> given;
 };
 
 int measure_recording(const RecordingMeasure& m);

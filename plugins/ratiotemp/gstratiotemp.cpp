@@ -125,11 +125,13 @@
  * frame). Frames without a timestamp count by the framerate; without either, every frame
  * posts.
  *
- * Recordings describe themselves: before the first frame, and again when the method, the
- * e-slope or upstream's tags change, the element pushes stream tags downstream: title (the
+ * Recordings describe themselves: before the first frame, and again when a setting that changes
+ * the readings or upstream's tags change, the element pushes stream tags downstream: title (the
  * encoding in words) and comment "pyrocam-recording; quantity=temperature; unit=0.1 K;
- * no-reading=0; model=FILE; model-fingerprint=HEX; profile=NAME; method=lut; e-slope=0 %/100 nm"
- * (quantity=expanded-uncertainty with output=uncertainty; "; exposure=N us" added when upstream
+ * no-reading=0; model=FILE; model-fingerprint=HEX; profile=NAME; method=lut; e-slope=0 %/100 nm;
+ * partial-bands=safe; misfit-probability=0; blur-correction=off; brightness-radius=0"
+ * (`pyrocam-calib measure --recording` measures a raw recording again with them;
+ * quantity=expanded-uncertainty with output=uncertainty; "; exposure=N us" added when upstream
  * tags carry capturing-shutter-speed). The fingerprint is the model file's checksum_fnv1a64.
  * Matroska keeps the title and comment (it drops most other tags), in every splitmuxsink segment.
  *
@@ -408,6 +410,13 @@ static void push_recording_tags(GstRatioTemp* self, const Settings& settings) {
   info.method = pyrocam::method_name(st.method);
   info.uncertainty = settings.output == GST_RATIO_TEMP_OUTPUT_UNCERTAINTY;
   info.e_slope = settings.e_slope;
+  info.partial_bands = settings.allow_partial                                  ? "any"
+                       : settings.partial_bands == GST_RATIO_TEMP_PARTIAL_ANY  ? "any"
+                       : settings.partial_bands == GST_RATIO_TEMP_PARTIAL_SAFE ? "safe"
+                                                                               : "off";
+  info.misfit_probability = settings.misfit_probability;
+  info.blur_correction = settings.blur_correction;
+  info.brightness_radius = settings.brightness_radius;
   info.exposure_us = rt::exposure_us_of(st.upstream_tags.get());
   rt::push_recording_tags(self, info, st.upstream_tags.get(), st.pushed_comment);
 }

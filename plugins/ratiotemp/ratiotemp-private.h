@@ -148,8 +148,8 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
 
 /* Readings checked against the model's band spectra before a verdict (PlaneEstimator::
  * take_fit_audit: one in every 16th row; a 5x5 frame of 2045x1085 filled by the body
- * gives about 14, a small body's frames add up). With a few percent of a scene's readings misfit (edges, reflections), more
- * than half of 32 is a chance below 1e-12 (binomial). */
+ * gives about 14, a small body's frames add up). With a few percent of a scene's readings misfit
+ * (edges, reflections), more than half of 32 is a chance below 1e-12 (binomial). */
 inline constexpr std::size_t kFitAuditReadings = 32;
 /* Adds the frame's fit audit; once enough readings were checked, warns (once since start) when
  * most of them do not fit the model's band spectra: a mosaic read with the wrong phase or
@@ -163,7 +163,14 @@ struct RecordingInfo {
   std::string model_file, fingerprint, profile, method;
   bool uncertainty = false;  // output=uncertainty
   double e_slope = 0;        // %/100 nm
-  double exposure_us = -1;   // from an upstream capturing-shutter-speed tag; negative: unknown
+  // The other settings that change the readings, so that a raw recording is measured again
+  // with them (pyrocam-calib measure --recording): partial-bands (off, safe, any; allow-partial
+  // as any), misfit-probability, blur-correction, brightness-radius.
+  std::string partial_bands = "safe";
+  double misfit_probability = 0;
+  bool blur_correction = false;
+  unsigned brightness_radius = 0;
+  double exposure_us = -1;  // from an upstream capturing-shutter-speed tag; negative: unknown
 };
 /* The comment starts with this word; its fields follow as "; key=value". */
 constexpr const char* RECORDING_COMMENT_MARK = "pyrocam-recording";

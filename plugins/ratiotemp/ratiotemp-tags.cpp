@@ -48,6 +48,10 @@ std::string recording_comment(const RecordingInfo& info) {
   c += "; profile=" + clean(info.profile);
   c += "; method=" + clean(info.method);
   c += "; e-slope=" + number(info.e_slope) + " %/100 nm";
+  c += "; partial-bands=" + clean(info.partial_bands);
+  c += "; misfit-probability=" + number(info.misfit_probability);
+  c += std::string("; blur-correction=") + (info.blur_correction ? "on" : "off");
+  c += "; brightness-radius=" + std::to_string(info.brightness_radius);
   if (info.exposure_us > 0) c += "; exposure=" + number(info.exposure_us) + " us";
   return c;
 }

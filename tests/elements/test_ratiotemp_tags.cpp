@@ -79,7 +79,9 @@ TEST_F(RatioTempTags, describe_the_recording_and_follow_changes) {
             "pyrocam-recording; quantity=temperature; unit=0.1 K; no-reading=0; "
             "model=test-model-rgb.json; model-fingerprint=" +
                 model.fingerprint + "; profile=" + model.profile().name +
-                "; method=likelihood; e-slope=0 %/100 nm; exposure=2000 us");
+                "; method=likelihood; e-slope=0 %/100 nm; partial-bands=safe; "
+                "misfit-probability=0; blur-correction=off; brightness-radius=0; "
+                "exposure=2000 us");
   EXPECT_NE(text(tags[0], GST_TAG_TITLE).find("0.1 K per code"), std::string::npos);
   EXPECT_EQ(text(tags[0], GST_TAG_ARTIST), "camera 7");  // upstream's other tags stay
   unref_all(tags);
@@ -87,7 +89,8 @@ TEST_F(RatioTempTags, describe_the_recording_and_follow_changes) {
   // Nothing changed: no new tags. A new method and e-slope: new tags before the next frame.
   EXPECT_TRUE(push_frame().empty());
   GstElement* ratiotemp = find_element(h, "ratiotemp");
-  g_object_set(ratiotemp, "e-slope", -12.5, nullptr);
+  g_object_set(ratiotemp, "e-slope", -12.5, "brightness-radius", 2u, "misfit-probability", 1e-6,
+               nullptr);
   gst_util_set_object_arg(G_OBJECT(ratiotemp), "method", "mlp");
   gst_object_unref(ratiotemp);
   tags = push_frame();
@@ -95,6 +98,8 @@ TEST_F(RatioTempTags, describe_the_recording_and_follow_changes) {
   const std::string changed = text(tags[0], GST_TAG_COMMENT);
   EXPECT_NE(changed.find("; method=mlp;"), std::string::npos) << changed;
   EXPECT_NE(changed.find("; e-slope=-12.5 %/100 nm"), std::string::npos) << changed;
+  EXPECT_NE(changed.find("; misfit-probability=1e-06;"), std::string::npos) << changed;
+  EXPECT_NE(changed.find("; brightness-radius=2;"), std::string::npos) << changed;
   unref_all(tags);
 }
 

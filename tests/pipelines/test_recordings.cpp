@@ -486,7 +486,8 @@ TEST(RecordingsLauncher, alarm_csv_has_a_row_per_change_of_state) {
 }
 
 // RAW=1: the camera's mosaic recorded beside the temperatures, frame for frame; measured again
-// with the same model it gives the recorded codes bit for bit, with another model others.
+// with the same model it gives the recorded codes bit for bit (with the settings the temperature
+// segments' tags say they were read with: here brightness-radius=2), with another model others.
 TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_another_model_not) {
   for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
   ScratchDir dir("recordings-raw");
@@ -497,6 +498,7 @@ TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_anoth
                    {"CAPS", "video/x-bayer,format=rggb,width=320,height=240,framerate=30/1"},
                    {"NUM_BUFFERS", std::to_string(kFrames)},
                    {"SEGMENT_SECONDS", "0.5"},
+                   {"BRIGHTNESS_RADIUS", "2"},
                    {"RAW", "1"}};
   const ScriptRun run =
       run_script("record.sh", {}, env, (dir / "record.log").string(), milliseconds(60000));
