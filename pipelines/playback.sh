@@ -62,8 +62,21 @@ fi
 # A 5x5 recording has one temperature per macro-pixel (64x48 from a 320x240 sensor): too small
 # for a scale bar, so it is scaled up before the colour map, keeping every code.
 scale=()
-((VIEW_HEIGHT > 0)) &&
+if ((VIEW_HEIGHT > 0)); then
   scale=(videoscale method=nearest-neighbour ! "video/x-raw,height=$VIEW_HEIGHT,pixel-aspect-ratio=1/1" !)
+  # The peak marker's windows (peak-window, 5 pixels) would then cover a fraction of a recorded
+  # pixel, and the marker show the hottest single one (a wild edge pixel): they are scaled too.
+  if [[ " $COLORMAP " == *" peak-marker=true "* && $COLORMAP != *peak-window=* ]]; then
+    first=$(compgen -G "$files" | head -1)
+    rows=$(timeout 20 gst-launch-1.0 -v filesrc "location=$first" ! matroskademux ! fakesink num-buffers=1 2>/dev/null |
+      sed -n 's/.*height=(int)\([0-9]*\).*/\1/p' | head -1) || true
+    if [[ -n $rows && $rows -gt 0 ]]; then
+      factor=$(((VIEW_HEIGHT + rows / 2) / rows))
+      COLORMAP="$COLORMAP peak-window=$((5 * (factor > 0 ? factor : 1) | 1))"
+      echo "playback: the peak marker over windows of 5 x 5 recorded pixels (${COLORMAP##* })" >&2
+    fi
+  fi
+fi
 
 # splitmuxsrc plays the segments (a glob, in name order) as one stream with continuous times.
 set -f

@@ -142,6 +142,9 @@ overlay_mix=(camera. ! queue ! "${camera_view[@]}" ! video/x-raw,format=RGBA ! m
   thermaloverlay name=mix latency="$((LATENCY_MS * 1000000))" ! video/x-raw,format=RGBA ! queue)
 peak_marker=()
 [[ $PEAK_MARKER == 1 ]] && peak_marker=(peak-marker=true)
+# The 5x5 camera's temperatures are scaled up 5 times first: the peak's windows of 5 x 5
+# macro-pixels (not of 5 x 5 copies of one, which would mark the hottest single pixel).
+[[ $PEAK_MARKER == 1 && $PROFILE == nir5x5-reference ]] && peak_marker+=(peak-window=25)
 colormap_to_mix=("${colormap_scale[@]}" thermalcolormap scale-bar=true "${peak_marker[@]}" !
   video/x-raw,format=RGBA ! mix.overlay_sink)
 set +f

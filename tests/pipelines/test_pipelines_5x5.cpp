@@ -169,6 +169,18 @@ TEST_F(Pipelines5x5, record_then_playback) {
   const auto frames = frames_in_files(dir.path().string(), "play-");
   ASSERT_EQ(frames.size(), static_cast<std::size_t>(kFrames));
   for (const Bytes& f : frames) EXPECT_EQ(f.size(), static_cast<std::size_t>(320 * 240 * 4));
+
+  // With the peak marker, its windows are scaled with the view: 5 x 5 recorded pixels, not one
+  // (24 rows shown in 240: 10 view pixels a recorded one, 50 made odd).
+  const ScriptRun marked = run_script("playback.sh", {(dir / "rec").string()},
+                                      {{"PROFILE", kProfile},
+                                       {"COLORMAP", "scale-bar=true peak-marker=true"},
+                                       {"SINK", raw_sink(dir, "peak-")}},
+                                      log("playback-peak"), kRunLimit);
+  ASSERT_EQ(marked.status, 0) << marked.log;
+  EXPECT_NE(marked.log.find("peak-window=51"), std::string::npos) << marked.log;
+  EXPECT_EQ(frames_in_files(dir.path().string(), "peak-").size(),
+            static_cast<std::size_t>(kFrames));
 }
 
 TEST_F(Pipelines5x5, stream_received_by_watch_stream) {
