@@ -59,7 +59,7 @@ EXPOSURE_LATENCY=${EXPOSURE_LATENCY:-}
 bracket_frames=0
 bracket_by_autoexposure=0
 if [[ -n $BRACKET ]]; then
-  [[ $BRACKET =~ ^[0-9.]+(,[0-9.]+)*$ ]] || { echo "$name: BRACKET must be exposure factors separated by commas (e.g. 1,0.333,0.111,0.037,0.012,0.004), not '$BRACKET'" >&2; exit 2; }
+  [[ $BRACKET =~ ^[0-9.]+(,[0-9.]+)*$ ]] || { echo "$name: BRACKET must be exposure factors separated by commas (e.g. 9,3,1,0.333,0.111,0.037), not '$BRACKET'" >&2; exit 2; }
   if [[ $SOURCE == pyrocamsrc* && $name != genicam-live ]]; then
     [[ $EXPOSURE_CONTROL == 0 ]] || { echo "$name: BRACKET and EXPOSURE_CONTROL=1 do not go together with the simulated camera: the exposure control would chase its bracket's levels" >&2; exit 2; }
     SOURCE="$SOURCE bracket=$BRACKET"

@@ -20,7 +20,7 @@
  *
  * ## Example launch line
  * |[
- * gst-launch-1.0 pyrocamsrc scene=melt-pool bracket=1,0.333,0.111,0.037,0.012,0.004 ! \
+ * gst-launch-1.0 pyrocamsrc scene=melt-pool bracket=9,3,1,0.333,0.111,0.037 ! \
  *     darksub dark-level=50 ! demosaic25 ! ratiotemp model=model.json ! thermalfuse frames=6 ! \
  *     thermalcolormap ! videoconvert ! autovideosink
  * ]|
