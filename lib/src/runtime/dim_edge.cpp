@@ -23,49 +23,80 @@ DimEdgeCheck::DimEdgeCheck(const CameraProfile& profile, double gain, const Demo
 
 namespace {
 
-// The largest of the means of the ring's four halves (above, below, left of, right of the
-// pixel) over their values for which `take(u, v)`; NaN where no half has any. A value without a
+// Sums of the ring's four halves (above, below, left of, right of the pixel). A value without a
 // reading (NaN: an invalid sample, or a mixed-pixel mark) counts as no light, so that such marks
 // only ever refuse more; a saturated one (+INF) makes its half's mean +INF.
-template <class Take>
-double ring_mean(const cv::Mat& image, int x, int y, DimEdgeCheck::Ring ring, const Take& take) {
+struct RingHalves {
+  // The first of from, from + 1, ... that lies on phase + k step.
+  static int first(int from, int phase, int step) {
+    return from + ((phase - from) % step + step) % step;
+  }
   double sum[4] = {0, 0, 0, 0};
   int count[4] = {0, 0, 0, 0};
-  const int y0 = std::max(0, y - ring.outer), y1 = std::min(image.rows - 1, y + ring.outer);
-  const int x0 = std::max(0, x - ring.outer), x1 = std::min(image.cols - 1, x + ring.outer);
-  for (int v = y0; v <= y1; ++v) {
-    const float* row = image.ptr<float>(v);
-    const bool inner_row = std::abs(v - y) < ring.inner;
-    for (int u = x0; u <= x1; ++u) {
-      if (inner_row && std::abs(u - x) < ring.inner) {
-        u = x + ring.inner - 1;  // across the hole
-        continue;
+
+  // The values at columns phase_x + k step_x and rows phase_y + k step_y of the ring.
+  void add(const cv::Mat& image, int x, int y, DimEdgeCheck::Ring ring, int step_x, int step_y,
+           int phase_x, int phase_y) {
+    const int y0 = first(std::max(0, y - ring.outer), phase_y, step_y);
+    const int x0 = first(std::max(0, x - ring.outer), phase_x, step_x);
+    const int y1 = std::min(image.rows - 1, y + ring.outer);
+    const int x1 = std::min(image.cols - 1, x + ring.outer);
+    // Per row: the values left and right of the pixel's column (and on it), across the hole in
+    // the ring's inner rows; the row's whole share also goes to the half above or below.
+    for (int v = y0; v <= y1; v += step_y) {
+      const float* row = image.ptr<float>(v);
+      const bool inner_row = std::abs(v - y) < ring.inner;
+      const int left_end = inner_row ? x - ring.inner + 1 : x;  // exclusive
+      const int right_begin = first(inner_row ? x + ring.inner : x, phase_x, step_x);
+      Span left, right;
+      for (int u = x0; u < left_end && u <= x1; u += step_x) left.add(row[u]);
+      for (int u = right_begin; u <= x1; u += step_x) right.add(row[u]);
+      const int vertical = v < y ? 0 : v > y ? 1 : -1;
+      if (vertical >= 0) {
+        sum[vertical] += left.sum + right.sum;
+        count[vertical] += left.n + right.n;
       }
-      if (!take(u, v)) continue;
-      const int vertical = v < y ? 0 : v > y ? 1 : -1, horizontal = u < x ? 2 : u > x ? 3 : -1;
-      for (const int half : {vertical, horizontal}) {
-        if (half < 0) continue;
-        sum[half] += std::isnan(row[u]) ? 0.f : row[u];
-        ++count[half];
+      // The pixel's column (right_begin == x) is in neither the left nor the right half.
+      if (right_begin == x) {
+        right.sum -= value(row[x]);
+        --right.n;
       }
+      sum[2] += left.sum, count[2] += left.n;
+      sum[3] += right.sum, count[3] += right.n;
     }
   }
-  double largest = NAN;
-  for (int k = 0; k < 4; ++k)
-    if (count[k] > 0 && !(sum[k] / count[k] <= largest)) largest = sum[k] / count[k];
-  return largest;
-}
+  struct Span {
+    double sum = 0;
+    int n = 0;
+    void add(float v) { sum += value(v), ++n; }
+  };
+  static double value(float v) { return std::isnan(v) ? 0.0 : v; }
+  // The largest half's mean; NaN where no half has a value.
+  double largest() const {
+    double best = NAN;
+    for (int k = 0; k < 4; ++k)
+      if (count[k] > 0 && !(sum[k] / count[k] <= best)) best = sum[k] / count[k];
+    return best;
+  }
+};
 
 }  // namespace
 
 double plane_ring_mean(const cv::Mat& plane, int x, int y, DimEdgeCheck::Ring ring) {
-  return ring_mean(plane, x, y, ring, [](int, int) { return true; });
+  RingHalves halves;
+  halves.add(plane, x, y, ring, 1, 1, 0, 0);
+  return halves.largest();
 }
 
 double mosaic_ring_mean(const cv::Mat& mosaic, const MosaicLayout& layout, int band, int x, int y,
                         DimEdgeCheck::Ring ring) {
-  return ring_mean(mosaic, x, y, ring,
-                   [&layout, band](int u, int v) { return layout.band_at(u, v) == band; });
+  // The band's samples only: a stride of the period from each of its places in the period.
+  RingHalves halves;
+  for (int py = 0; py < layout.period_height; ++py)
+    for (int px = 0; px < layout.period_width; ++px)
+      if (layout.band_at(px, py) == band)
+        halves.add(mosaic, x, y, ring, layout.period_width, layout.period_height, px, py);
+  return halves.largest();
 }
 
 }  // namespace pyrocam
