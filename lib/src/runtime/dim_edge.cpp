@@ -3,12 +3,16 @@
 #include <algorithm>
 #include <cstdlib>
 
+#include "pyrocam/core/error.h"
 #include "pyrocam/core/noise_model.h"
 
 namespace pyrocam {
 
 DimEdgeCheck::DimEdgeCheck(const CameraProfile& profile, double gain, const DemosaicNoise& noise) {
   const int bands = profile.band_count();
+  if (bands > static_cast<int>(kMaxBands))
+    throw InputError("dim-edge check: " + std::to_string(bands) + " bands, at most " +
+                     std::to_string(kMaxBands));
   const double dim = profile.thresholds.inference_dim_dn;
   const int phases = noise.period_width * noise.period_height;
   for (int b = 0; b < bands; ++b) {
@@ -34,32 +38,32 @@ struct RingHalves {
   double sum[4] = {0, 0, 0, 0};
   int count[4] = {0, 0, 0, 0};
 
-  // The values at columns phase_x + k step_x and rows phase_y + k step_y of the ring.
-  void add(const cv::Mat& image, int x, int y, DimEdgeCheck::Ring ring, int step_x, int step_y,
-           int phase_x, int phase_y) {
+  // The values at columns phase_x + k step_x and rows phase_y + k step_y of the ring around
+  // columns first .. last of row y.
+  void add(const cv::Mat& image, int first_x, int last_x, int y, DimEdgeCheck::Ring ring,
+           int step_x, int step_y, int phase_x, int phase_y) {
+    last_x = std::min(last_x, image.cols - 1);
     const int y0 = first(std::max(0, y - ring.outer), phase_y, step_y);
-    const int x0 = first(std::max(0, x - ring.outer), phase_x, step_x);
+    const int x0 = first(std::max(0, first_x - ring.outer), phase_x, step_x);
     const int y1 = std::min(image.rows - 1, y + ring.outer);
-    const int x1 = std::min(image.cols - 1, x + ring.outer);
-    // Per row: the values left and right of the pixel's column (and on it), across the hole in
-    // the ring's inner rows; the row's whole share also goes to the half above or below.
+    const int x1 = std::min(image.cols - 1, last_x + ring.outer);
+    // Per row: the values left of the span, on its columns and right of it, across the hole in
+    // the ring's inner rows; the row's whole share goes to the half above or below.
     for (int v = y0; v <= y1; v += step_y) {
       const float* row = image.ptr<float>(v);
       const bool inner_row = std::abs(v - y) < ring.inner;
-      const int left_end = inner_row ? x - ring.inner + 1 : x;  // exclusive
-      const int right_begin = first(inner_row ? x + ring.inner : x, phase_x, step_x);
-      Span left, right;
-      for (int u = x0; u < left_end && u <= x1; u += step_x) left.add(row[u]);
-      for (int u = right_begin; u <= x1; u += step_x) right.add(row[u]);
+      const int left_end = inner_row ? first_x - ring.inner + 1 : first_x;  // exclusive
+      const int right_begin = first(inner_row ? last_x + ring.inner : last_x + 1, phase_x, step_x);
+      Span left, middle, right;
+      int u = x0;
+      for (; u < left_end && u <= x1; u += step_x) left.add(row[u]);
+      if (!inner_row)
+        for (; u < right_begin && u <= x1; u += step_x) middle.add(row[u]);
+      for (u = right_begin; u <= x1; u += step_x) right.add(row[u]);
       const int vertical = v < y ? 0 : v > y ? 1 : -1;
       if (vertical >= 0) {
-        sum[vertical] += left.sum + right.sum;
-        count[vertical] += left.n + right.n;
-      }
-      // The pixel's column (right_begin == x) is in neither the left nor the right half.
-      if (right_begin == x) {
-        right.sum -= value(row[x]);
-        --right.n;
+        sum[vertical] += left.sum + middle.sum + right.sum;
+        count[vertical] += left.n + middle.n + right.n;
       }
       sum[2] += left.sum, count[2] += left.n;
       sum[3] += right.sum, count[3] += right.n;
@@ -82,20 +86,20 @@ struct RingHalves {
 
 }  // namespace
 
-double plane_ring_mean(const cv::Mat& plane, int x, int y, DimEdgeCheck::Ring ring) {
+double plane_ring_mean(const cv::Mat& plane, int first, int last, int y, DimEdgeCheck::Ring ring) {
   RingHalves halves;
-  halves.add(plane, x, y, ring, 1, 1, 0, 0);
+  halves.add(plane, first, last, y, ring, 1, 1, 0, 0);
   return halves.largest();
 }
 
-double mosaic_ring_mean(const cv::Mat& mosaic, const MosaicLayout& layout, int band, int x, int y,
-                        DimEdgeCheck::Ring ring) {
+double mosaic_ring_mean(const cv::Mat& mosaic, const MosaicLayout& layout, int band, int first,
+                        int last, int y, DimEdgeCheck::Ring ring) {
   // The band's samples only: a stride of the period from each of its places in the period.
   RingHalves halves;
   for (int py = 0; py < layout.period_height; ++py)
     for (int px = 0; px < layout.period_width; ++px)
       if (layout.band_at(px, py) == band)
-        halves.add(mosaic, x, y, ring, layout.period_width, layout.period_height, px, py);
+        halves.add(mosaic, first, last, y, ring, layout.period_width, layout.period_height, px, py);
   return halves.largest();
 }
 

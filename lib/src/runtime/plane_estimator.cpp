@@ -213,19 +213,20 @@ std::unique_ptr<const DimEdgeCheck> PlaneEstimator::dim_edge_check(
   return std::make_unique<const DimEdgeCheck>(model_->profile(), analogue_gain_, noise);
 }
 
-std::function<double(int, int, int)> PlaneEstimator::planes_ring_mean_of(
+std::function<double(int, int, int, int)> PlaneEstimator::planes_ring_mean_of(
     const std::vector<cv::Mat>& planes) const {
   if (dim_edge_mosaic_) return mosaic_window_mean_of(*dim_edge_mosaic_);
   const DimEdgeCheck::Ring ring = DimEdgeCheck::plane_ring(model_->profile().mosaic);
-  return [&planes, ring](int b, int x, int y) {
-    return plane_ring_mean(planes[static_cast<std::size_t>(b)], x, y, ring);
+  return [&planes, ring](int b, int first, int last, int y) {
+    return plane_ring_mean(planes[static_cast<std::size_t>(b)], first, last, y, ring);
   };
 }
 
-std::function<double(int, int, int)> PlaneEstimator::mosaic_window_mean_of(
+std::function<double(int, int, int, int)> PlaneEstimator::mosaic_window_mean_of(
     const MatchedMosaic& source) {
-  return [&source](int b, int x, int y) {
-    return mosaic_ring_mean(source.mosaic, source.layout, b, x, y, DimEdgeCheck::kMosaicRing);
+  return [&source](int b, int first, int last, int y) {
+    return mosaic_ring_mean(source.mosaic, source.layout, b, first, last, y,
+                            DimEdgeCheck::kMosaicRing);
   };
 }
 

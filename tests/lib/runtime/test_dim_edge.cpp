@@ -99,29 +99,36 @@ TEST(DimEdge, thresholds_follow_the_noise_model) {
   }
 }
 
-// The ring's halves: at an edge, the half inside the body decides; its own pixel never counts.
+// The ring's halves: at an edge, the half inside the body decides; the pixels of the span it
+// goes around never count.
 TEST(DimEdge, the_rings_largest_half_sees_inside_a_body) {
   const DimEdgeCheck::Ring ring{5, 6};
   cv::Mat alone(31, 31, CV_32F, cv::Scalar(0));
   alone.at<float>(15, 15) = 1000;  // the pixel's own value is not in its ring
-  EXPECT_FLOAT_EQ(plane_ring_mean(alone, 15, 15, ring), 0);
+  EXPECT_FLOAT_EQ(plane_ring_mean(alone, 15, 15, 15, ring), 0);
   cv::Mat plane(31, 31, CV_32F, cv::Scalar(0));
-  plane(cv::Rect(15, 0, 16, 31)).setTo(30);                   // lit from column 15 on
-  EXPECT_FLOAT_EQ(plane_ring_mean(plane, 16, 15, ring), 30);  // inside, by the edge: its right
-  EXPECT_FLOAT_EQ(plane_ring_mean(plane, 5, 15, ring), 0);    // its ring ends before the edge
+  plane(cv::Rect(15, 0, 16, 31)).setTo(30);                       // lit from column 15 on
+  EXPECT_FLOAT_EQ(plane_ring_mean(plane, 16, 16, 15, ring), 30);  // inside, by the edge: its right
+  EXPECT_FLOAT_EQ(plane_ring_mean(plane, 5, 5, 15, ring), 0);     // its ring ends before the edge
   // A value without a reading counts as no light; a saturated one is brighter than any.
   cv::Mat even(31, 31, CV_32F, cv::Scalar(30));
   even(cv::Rect(0, 0, 31, 31)).setTo(NAN);
-  EXPECT_FLOAT_EQ(plane_ring_mean(even, 16, 15, ring), 0);
+  EXPECT_FLOAT_EQ(plane_ring_mean(even, 16, 16, 15, ring), 0);
   even.at<float>(15, 21) = INFINITY;  // in the right half
-  EXPECT_EQ(plane_ring_mean(even, 16, 15, ring), INFINITY);
+  EXPECT_EQ(plane_ring_mean(even, 16, 16, 15, ring), INFINITY);
+  // A span's ring goes around all its pixels: none of their values is in it.
+  cv::Mat span(31, 31, CV_32F, cv::Scalar(0));
+  span(cv::Rect(12, 15, 8, 1)).setTo(1000);  // columns 12 .. 19 of row 15
+  EXPECT_FLOAT_EQ(plane_ring_mean(span, 12, 19, 15, ring), 0);
+  EXPECT_GT(plane_ring_mean(span, 12, 14, 15, ring), 0);  // columns 19, 20: 5 and 6 away
   cv::Mat mosaic(31, 31, CV_32F, cv::Scalar(0));
   const MosaicLayout rggb = MosaicLayout::bayer("RGGB");
   for (int y = 0; y < 31; ++y)
     for (int x = 0; x < 31; ++x) mosaic.at<float>(y, x) = static_cast<float>(rggb.band_at(x, y));
   // Each band's ring mean is that band's own samples only.
   for (int b = 0; b < 3; ++b)
-    EXPECT_FLOAT_EQ(mosaic_ring_mean(mosaic, rggb, b, 15, 15, {3, 6}), static_cast<float>(b)) << b;
+    EXPECT_FLOAT_EQ(mosaic_ring_mean(mosaic, rggb, b, 15, 15, 15, {3, 6}), static_cast<float>(b))
+        << b;
 }
 
 }  // namespace

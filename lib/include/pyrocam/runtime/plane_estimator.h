@@ -139,8 +139,9 @@ class PlaneEstimator {
   // below the dim threshold go to the likelihood fit (partial bands).
   std::unique_ptr<const DimEdgeCheck> dim_edge_check(const DemosaicNoise& noise) const;
   // The ring means the check reads: of the mosaic, or of the planes (set_dim_edge_mosaic).
-  static std::function<double(int, int, int)> mosaic_window_mean_of(const MatchedMosaic& source);
-  std::function<double(int, int, int)> planes_ring_mean_of(
+  static std::function<double(int, int, int, int)> mosaic_window_mean_of(
+      const MatchedMosaic& source);
+  std::function<double(int, int, int, int)> planes_ring_mean_of(
       const std::vector<cv::Mat>& planes) const;
   // Throws InputError for a source the fused path cannot read with this model.
   void check_matched_mosaic(const MatchedMosaic& source) const;
