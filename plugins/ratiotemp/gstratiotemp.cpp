@@ -10,7 +10,8 @@
  * matroskamux) and read back by any tool. Linked to demosaic25 demosaicking a Bayer mosaic with
  * method matched, it asks for the bands as their mosaic (video/x-pyrocam-bands with the
  * memory:PyrocamMosaic feature, the fused path) and demosaics it here, 16 rows at a time, each
- * strip read while it is in the cache: the same readings without the float planes crossing
+ * strip read while it is in the cache: the same readings (but for the dim-edge check below,
+ * whose ring it reads from the mosaic) without the float planes crossing
  * memory, and blocks of columns without light skipped.
  *
  * A pixel has no reading (0) when the estimate falls outside the model's temperature range, or

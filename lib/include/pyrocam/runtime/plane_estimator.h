@@ -45,9 +45,9 @@ class PlaneEstimator {
   // mosaic (CV_32F, DN, the darksub marks) demosaicked with kMatched and `no_signal_dn` a strip
   // of rows at a time, each strip read while it is in the cache, so that the planes never cross
   // memory: the results of demosaic(mosaic, layout, kMatched, planes, no_signal_dn) followed by
-  // estimate() or estimate_codes(), bit for bit. Blocks of columns without light (every band 0,
-  // dim) get no reading without being read. Throws InputError unless the layout is Bayer with
-  // the model's band count and the mosaic CV_32F.
+  // estimate() or estimate_codes() with set_dim_edge_mosaic(&source), bit for bit. Blocks of
+  // columns without light (every band 0, dim) get no reading without being read. Throws InputError
+  // unless the layout is Bayer with the model's band count and the mosaic CV_32F.
   struct MatchedMosaic {
     cv::Mat mosaic;
     MosaicLayout layout;
