@@ -4,9 +4,6 @@
 #include "measure_recording.h"
 
 #include <cctype>
-#include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -17,6 +14,7 @@
 #include "export.h"
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/core/recording_comment.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/prebuilt_tables.h"
 #include "recording.h"
@@ -50,38 +48,52 @@ void dark_from_tags(const std::map<std::string, std::string>& fields, const std:
                    "' is neither dark-level=N nor location=FILE; give --dark or --dark-level");
 }
 
+// The settings ratiotemp's tags name (what adopt_recorded_settings takes).
+constexpr const char* kRecordedSettings[] = {"method",          "e-slope",
+                                             "partial-bands",   "misfit-probability",
+                                             "blur-correction", "brightness-radius"};
+
 // What ratiotemp's tags on the recording's temperature segments say it read them with (the
-// comment's fields), or nothing where there are none: the first segment's first frame.
+// comment's fields), or nothing where there are none: the first segment's first frame. A later
+// segment read with other settings is said: measure reads every frame with the first's.
 std::map<std::string, std::string> recorded_settings(const std::string& recording, bool quiet) {
   struct FirstFrame {};
-  std::map<std::string, std::string> fields;
+  std::map<std::string, std::string> first;
   try {
     const auto segments = recording_segments(recording, "temperature-");
-    read_recording({segments.front()}, [&](const RecordingFrame& f) {
-      if (f.tags->comment.rfind("pyrocam-recording", 0) == 0) fields = f.tags->fields;
-      throw FirstFrame{};
-    });
-  } catch (const FirstFrame&) {
+    for (std::size_t i = 0; i < segments.size(); ++i) {
+      std::map<std::string, std::string> fields;
+      try {
+        read_recording({segments[i]}, [&](const RecordingFrame& f) {
+          if (f.tags->comment.rfind(kTemperatureRecordingMark, 0) == 0) fields = f.tags->fields;
+          throw FirstFrame{};
+        });
+      } catch (const FirstFrame&) {
+      }
+      if (i == 0) {
+        first = fields;
+        continue;
+      }
+      for (const char* key : kRecordedSettings) {
+        const auto a = first.find(key), b = fields.find(key);
+        const bool same = (a == first.end()) == (b == fields.end()) &&
+                          (a == first.end() || a->second == b->second);
+        if (same) continue;
+        std::cerr << "warning: " << segments[i].filename().string() << " was read with " << key
+                  << " " << (b == fields.end() ? "(not said)" : b->second) << ", "
+                  << segments[0].filename().string() << " with "
+                  << (a == first.end() ? "(not said)" : a->second)
+                  << ": measure reads the whole recording with the first segment's settings, "
+                     "so the codes from there on may differ from the recorded ones\n";
+        return first;
+      }
+    }
   } catch (const InputError& e) {
     if (!quiet)
       std::cerr << "note: the recording's temperatures cannot say what they were read with ("
                 << e.what() << "): measure's settings read it\n";
   }
-  return fields;
-}
-
-std::string shown(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
-double tagged_number(const std::string& text) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (end == text.c_str() || !std::isfinite(v))
-    throw InputError("the recording's tags: '" + text + "' is not a number");
-  return v;
+  return first;
 }
 
 // The settings ratiotemp read the recording's temperatures with, for those the command line
@@ -109,9 +121,13 @@ void adopt_recorded_settings(const std::map<std::string, std::string>& fields,
   take("method", "--method", method_name(options.method),
        [&](const std::string& v) { options.method = parse_method(v); });
   const auto slope = fields.find("e-slope");
-  if (slope != fields.end() && tagged_number(slope->second) != options.emissivity_slope * 100)
-    take("e-slope", "--e-slope", shown(options.emissivity_slope * 100) + " %/100 nm",
-         [&](const std::string& v) { options.emissivity_slope = tagged_number(v) / 100; });
+  if (slope != fields.end() &&
+      recording_comment_field_number(slope->second) != options.emissivity_slope * 100)
+    take("e-slope", "--e-slope",
+         recording_comment_number(options.emissivity_slope * 100) + " %/100 nm",
+         [&](const std::string& v) {
+           options.emissivity_slope = recording_comment_field_number(v) / 100;
+         });
   const std::string partial = options.allow_partial ? "any" : options.safe_partial ? "safe" : "off";
   take("partial-bands", given.count("--allow-partial") ? "--allow-partial" : "--partial-bands",
        partial, [&](const std::string& v) {
@@ -121,14 +137,17 @@ void adopt_recorded_settings(const std::map<std::string, std::string>& fields,
          options.safe_partial = v == "safe";
        });
   const auto misfit = fields.find("misfit-probability");
-  if (misfit != fields.end() && tagged_number(misfit->second) != options.misfit_probability)
-    take("misfit-probability", "--misfit-probability", shown(options.misfit_probability),
-         [&](const std::string& v) { options.misfit_probability = tagged_number(v); });
+  if (misfit != fields.end() &&
+      recording_comment_field_number(misfit->second) != options.misfit_probability)
+    take("misfit-probability", "--misfit-probability",
+         recording_comment_number(options.misfit_probability), [&](const std::string& v) {
+           options.misfit_probability = recording_comment_field_number(v);
+         });
   take("blur-correction", "--blur-correction", options.blur_correction ? "on" : "off",
        [&](const std::string& v) { options.blur_correction = v == "on"; });
   take("brightness-radius", "--brightness-radius", std::to_string(options.brightness_radius),
        [&](const std::string& v) {
-         options.brightness_radius = static_cast<int>(tagged_number(v));
+         options.brightness_radius = static_cast<int>(recording_comment_field_number(v));
        });
 }
 
@@ -179,7 +198,7 @@ int measure_recording(const RecordingMeasure& m) {
     if (dark.empty()) {
       // The tags have come with the first frame: the layout and the dark.
       const auto& fields = f.tags->fields;
-      if (fields.empty() || f.tags->comment.rfind("pyrocam-raw", 0) != 0)
+      if (fields.empty() || f.tags->comment.rfind(kRawRecordingMark, 0) != 0)
         std::cerr << "warning: " << m.recording
                   << " has no pyrocam-raw tags (not recorded by record.sh RAW=1?)\n";
       std::string pattern = lower(m.pattern);

@@ -12,6 +12,7 @@
 #include <iostream>
 
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/recording_comment.h"
 #include "pyrocam/core/temperature_codes.h"
 
 namespace pyrocam::cli {
@@ -118,22 +119,6 @@ std::vector<fs::path> recording_segments(const fs::path& where, const std::strin
     throw InputError(where.string() + ": not a recording (no " + prefix + "NNNNN.mkv segments)");
   std::sort(out.begin(), out.end());
   return out;
-}
-
-std::map<std::string, std::string> parse_recording_comment(const std::string& comment) {
-  std::map<std::string, std::string> fields;
-  if (comment.rfind("pyrocam-recording", 0) != 0 && comment.rfind("pyrocam-raw", 0) != 0)
-    return fields;
-  std::size_t start = 0;
-  while (start < comment.size()) {
-    std::size_t end = comment.find("; ", start);
-    if (end == std::string::npos) end = comment.size();
-    const std::string part = comment.substr(start, end - start);
-    const std::size_t eq = part.find('=');
-    if (eq != std::string::npos) fields[part.substr(0, eq)] = part.substr(eq + 1);
-    start = end + 2;
-  }
-  return fields;
 }
 
 RecordingDescription read_recording(const std::vector<fs::path>& segments,

@@ -32,9 +32,6 @@ struct RecordingDescription {
   std::map<std::string, std::string> fields;
   int width = 0, height = 0;  // of the frames
 };
-// The fields of a comment written by ratiotemp ("pyrocam-recording; key=value; ...") or by
-// record.sh for a raw recording ("pyrocam-raw; key=value; ...").
-std::map<std::string, std::string> parse_recording_comment(const std::string& comment);
 
 // Decodes every frame of the segments in order and hands it to `on_frame`. Throws InputError
 // naming the file for one that is missing, not a Matroska FFV1 GRAY16/GRAY8 stream, corrupt or

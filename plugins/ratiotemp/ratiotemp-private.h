@@ -172,8 +172,7 @@ struct RecordingInfo {
   unsigned brightness_radius = 0;
   double exposure_us = -1;  // from an upstream capturing-shutter-speed tag; negative: unknown
 };
-/* The comment starts with this word; its fields follow as "; key=value". */
-constexpr const char* RECORDING_COMMENT_MARK = "pyrocam-recording";
+/* The comment: pyrocam::kTemperatureRecordingMark, then its fields as "; key=value". */
 std::string recording_title(bool uncertainty);
 std::string recording_comment(const RecordingInfo& info);
 /* Upstream's stream tags (may be null) with our title and comment in place of theirs. */

@@ -3,11 +3,10 @@
  * facts go into the comment as "key=value" fields. */
 #include <gst/gst.h>
 
-#include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <utility>
 
+#include "pyrocam/core/recording_comment.h"
 #include "ratiotemp-private.h"
 
 #define GST_CAT_DEFAULT gst_ratio_temp_debug
@@ -15,21 +14,11 @@
 namespace pyrocam::gst::ratiotemp {
 namespace {
 
-// A field's value without the separator.
-std::string clean(std::string value) {
-  for (char& c : value)
-    if (c == ';' || c == '\n' || c == '\r') c = ',';
-  return value;
-}
-
 // GST_TAG_CAPTURING_SHUTTER_SPEED (libgsttag, which the plugin does not link): a fraction, s.
 constexpr const char* CAPTURING_SHUTTER_SPEED = "capturing-shutter-speed";
 
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
+std::string clean(std::string value) { return recording_comment_value(std::move(value)); }
+std::string number(double v) { return recording_comment_number(v); }
 
 }  // namespace
 
@@ -40,7 +29,7 @@ std::string recording_title(bool uncertainty) {
 }
 
 std::string recording_comment(const RecordingInfo& info) {
-  std::string c = std::string(RECORDING_COMMENT_MARK) +
+  std::string c = std::string(kTemperatureRecordingMark) +
                   "; quantity=" + (info.uncertainty ? "expanded-uncertainty" : "temperature") +
                   "; unit=0.1 K; no-reading=0";
   c += "; model=" + clean(std::filesystem::path(info.model_file).filename().string());

@@ -531,6 +531,28 @@ TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_anoth
   EXPECT_TRUE(same.data == codes.data) << "re-measured codes differ from the recorded ones";
   EXPECT_EQ(read_csv(dir / "same" / "temperature.csv").size(), kFrames + 1u);
 
+  // A later segment read with other settings is said, naming it.
+  Env plain = env;
+  plain["OUT"] = (dir / "plain").string();
+  plain["BRIGHTNESS_RADIUS"] = "0";
+  plain["NUM_BUFFERS"] = "5";
+  ASSERT_EQ(
+      run_script("record.sh", {}, plain, (dir / "plain.log").string(), milliseconds(60000)).status,
+      0);
+  fs::copy(rec, dir / "mixed");
+  fs::copy_file(dir / "plain" / "temperature-00000.mkv", dir / "mixed" / "temperature-00001.mkv",
+                fs::copy_options::overwrite_existing);
+  ASSERT_EQ(run_command("'" + std::string(PYROCAM_CALIB_TOOL) + "' measure --recording '" +
+                            (dir / "mixed").string() + "' --model '" + rgb_model() + "' --out '" +
+                            (dir / "mixed-out").string() + "'",
+                        dir / "mixed.log"),
+            0);
+  EXPECT_NE(read_text(dir / "mixed.log")
+                .find("temperature-00001.mkv was read with brightness-radius 0, "
+                      "temperature-00000.mkv with 2"),
+            std::string::npos)
+      << read_text(dir / "mixed.log");
+
   // Another model: a hostile unit of the same camera type, calibrated as the test model is.
   const fs::path other = dir / "other.json", campaign = dir / "campaign";
   ASSERT_EQ(run_command(tool + "simulate campaign --profile rgb-reference --unit hostile " +
