@@ -81,6 +81,8 @@ FrameMeasurer::Unread FrameMeasurer::unread(const cv::Mat& temperature_c,
   // Dim: below the threshold, or near it where the dim-edge check refuses what reaches it.
   const DimEdgeCheck near(model_->profile(), analogue_gain_factor(options_.gain_db),
                           demosaic_noise(layout_, options_.demosaic));
+  const bool checked = planes_estimator_.checks_dim_edges();
+  const float dim_dn = static_cast<float>(model_->profile().thresholds.inference_dim_dn);
   for (int y = 0; y < temperature_c.rows; ++y)
     for (int x = 0; x < temperature_c.cols; ++x) {
       if (std::isfinite(temperature_c.at<float>(y, x))) continue;
@@ -91,7 +93,7 @@ FrameMeasurer::Unread FrameMeasurer::unread(const cv::Mat& temperature_c,
         if (plane.size() != temperature_c.size()) continue;
         const float v = plane.at<float>(y, x);
         saturated |= std::isinf(v) && v > 0;
-        dim_band |= v < near.checked_dn(static_cast<int>(b));
+        dim_band |= v < (checked ? near.checked_dn(static_cast<int>(b)) : dim_dn);
       }
       u.saturated += saturated;
       u.dim += !saturated && dim_band;

@@ -203,13 +203,16 @@ void PlaneEstimator::uncertainty_row(const float* const* rows, std::size_t n, co
   }
 }
 
+bool PlaneEstimator::reads_partial() const {
+  return !sloped_ && (method_ == Method::kLikelihood ? estimator_->can_read_partial()
+                                                     : partial_fit_ != nullptr);
+}
+
 std::unique_ptr<const DimEdgeCheck> PlaneEstimator::dim_edge_check(
     const DemosaicNoise& noise) const {
   // Where a band below the threshold leaves the pixel to the likelihood fit, which weighs it
   // by its noise, the threshold does not decide whether a pixel reads.
-  const bool partial = !sloped_ && (method_ == Method::kLikelihood ? estimator_->can_read_partial()
-                                                                   : partial_fit_ != nullptr);
-  if (partial) return nullptr;
+  if (reads_partial()) return nullptr;
   return std::make_unique<const DimEdgeCheck>(model_->profile(), analogue_gain_, noise);
 }
 

@@ -1,6 +1,7 @@
 // The dim threshold as an edge that a reading's own noise does not decide.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <opencv2/core.hpp>

@@ -97,6 +97,8 @@ class PlaneEstimator {
   // takes its ring from the mosaic, as the fused path does, and reads what it reads bit for bit;
   // null (the default): from the planes. Held until set again; not while an estimate runs.
   void set_dim_edge_mosaic(const MatchedMosaic* source) { dim_edge_mosaic_ = source; }
+  // Whether the dim-edge check applies: where every band must read (no partial fit).
+  bool checks_dim_edges() const { return !reads_partial(); }
 
   // How well the readings fit the model's band spectra, whatever the misfit setting: a few
   // readings of every kFitAuditRows-th row (run on the fused path) go through the band-consistency
@@ -138,6 +140,7 @@ class PlaneEstimator {
   // The dim-edge check (dim_edge.h) for planes of that noise, or null where pixels with a band
   // below the dim threshold go to the likelihood fit (partial bands).
   std::unique_ptr<const DimEdgeCheck> dim_edge_check(const DemosaicNoise& noise) const;
+  bool reads_partial() const;
   // The ring means the check reads: of the mosaic, or of the planes (set_dim_edge_mosaic).
   static std::function<double(int, int, int, int)> mosaic_window_mean_of(
       const MatchedMosaic& source);
