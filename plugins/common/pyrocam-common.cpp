@@ -248,6 +248,25 @@ void warn_frame_without_exposure(GstElement* element, bool& warned) {
                       ("no PyrocamExposureMeta on the buffer"));
 }
 
+bool frame_out_of_time_order(GstElement* element, GstBuffer* buffer, GstClockTime& last_pts,
+                             bool& warned) {
+  const GstClockTime pts = GST_BUFFER_PTS(buffer);
+  if (!GST_CLOCK_TIME_IS_VALID(pts)) return false;
+  const bool backwards = GST_CLOCK_TIME_IS_VALID(last_pts) && pts < last_pts;
+  if (backwards && !warned) {
+    warned = true;
+    GST_ELEMENT_WARNING(
+        element, STREAM, FORMAT,
+        ("Frames out of time order: a frame at %" GST_TIME_FORMAT " after one at %" GST_TIME_FORMAT
+         "; the bracket fusion starts anew from it (it fuses only frames in the "
+         "order they were taken)",
+         GST_TIME_ARGS(pts), GST_TIME_ARGS(last_pts)),
+        ("buffer PTS went backwards"));
+  }
+  last_pts = pts;
+  return backwards;
+}
+
 void post_error(GstElement* element, ErrorKind kind, const std::string& user,
                 const std::string& debug, const char* function, int line) {
   GQuark domain = GST_RESOURCE_ERROR;

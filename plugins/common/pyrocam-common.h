@@ -136,6 +136,12 @@ GParamSpec* bracket_frames_param(guint default_frames);
 /* The STREAM FORMAT warning of a bracket fusion that passed a frame without
  * PyrocamExposureMeta on unfused: once, when `warned` is false (it is then set). */
 void warn_frame_without_exposure(GstElement* element, bool& warned);
+/* Whether a bracket fusion's frame came earlier than the one before it (its PTS is before
+ * `last_pts`, which is then set to it): frames out of time order would be fused as if the
+ * earlier were the later, so the fusion starts anew with this frame, with one STREAM FORMAT
+ * warning (when `warned` is false; it is then set). Frames without a PTS are in order. */
+bool frame_out_of_time_order(GstElement* element, GstBuffer* buffer, GstClockTime& last_pts,
+                             bool& warned);
 
 /* The part of a width x height frame that holds the saturated samples `meta` names: scaled from
  * the meta's frame, widened by the reach of demosaic25's kernels (2 pixels on a frame of the

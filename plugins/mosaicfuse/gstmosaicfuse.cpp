@@ -22,7 +22,8 @@
  * of a bracket, the bands of a pixel near the boundary are from different moments.
  *
  * A frame without exposure metadata passes unchanged and starts the fusion anew, with one
- * warning on the bus (STREAM FORMAT). New caps or a flush start anew too.
+ * warning on the bus (STREAM FORMAT). A frame whose time is before the frame's before it
+ * (frames out of order) starts anew too, with one warning. New caps or a flush start anew.
  *
  * ## Example launch line
  * (pyrocamsrc's melt pool moves, about 1.6 pixels a frame at 320x240: its boundaries read wild
@@ -73,6 +74,8 @@ struct State {
   std::deque<Exposure> exposures;                        // as the fusion's frames, latest last
   int width = 0, height = 0;
   bool warned_no_exposure = false;
+  GstClockTime last_pts = GST_CLOCK_TIME_NONE;  // of the frame before
+  bool warned_out_of_order = false;
   void reset() {
     if (fusion) fusion->reset();
     exposures.clear();
@@ -118,11 +121,16 @@ static gboolean gst_mosaic_fuse_set_caps(GstBaseTransform* trans, GstCaps* incap
   st.width = width;
   st.height = height;
   st.reset();
+  st.last_pts = GST_CLOCK_TIME_NONE;
   return TRUE;
 }
 
 static gboolean gst_mosaic_fuse_sink_event(GstBaseTransform* trans, GstEvent* event) {
-  if (GST_EVENT_TYPE(event) == GST_EVENT_FLUSH_STOP) GST_MOSAIC_FUSE(trans)->state->reset();
+  if (GST_EVENT_TYPE(event) == GST_EVENT_FLUSH_STOP) {
+    State& st = *GST_MOSAIC_FUSE(trans)->state;
+    st.reset();
+    st.last_pts = GST_CLOCK_TIME_NONE;
+  }
   return GST_BASE_TRANSFORM_CLASS(gst_mosaic_fuse_parent_class)->sink_event(trans, event);
 }
 
@@ -139,6 +147,8 @@ static GstFlowReturn gst_mosaic_fuse_transform_ip(GstBaseTransform* trans, GstBu
     st.fusion = std::make_unique<pyrocam::MosaicBracketFusion>(frames);
     st.exposures.clear();
   }
+  if (pg::frame_out_of_time_order(GST_ELEMENT(self), buffer, st.last_pts, st.warned_out_of_order))
+    st.reset();
   PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(buffer);
   if (meta == nullptr || !(meta->exposure_us > 0)) {
     st.reset();

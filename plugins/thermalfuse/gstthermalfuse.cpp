@@ -16,7 +16,8 @@
  * A frame without exposure metadata (a source that does not attach it) passes unchanged and
  * starts the fusion anew, with one warning on the bus (STREAM FORMAT): frames of unknown
  * exposure cannot be ranked, and fusing them blindly could put a dim exposure's noisier reading
- * over a good one. New caps or a flush start anew too.
+ * over a good one. A frame whose time is before the frame's before it (frames out of order)
+ * starts anew too, with one warning. New caps or a flush start anew.
  *
  * ## Example launch line
  * |[
@@ -64,6 +65,8 @@ struct State {
   std::unique_ptr<pyrocam::BracketFusion> fusion;  // of settings' frames; rebuilt on a change
   std::deque<HeldSaturation> held;                 // the frames the fusion holds, oldest first
   bool warned_no_exposure = false;
+  GstClockTime last_pts = GST_CLOCK_TIME_NONE;  // of the frame before
+  bool warned_out_of_order = false;
 };
 
 /* A pixel saturated in the frame with the least light is saturated in every frame (each band
@@ -112,6 +115,7 @@ static gboolean gst_thermal_fuse_set_info(GstVideoFilter* filter, GstCaps*, GstV
   State& st = *GST_THERMAL_FUSE(filter)->state;
   if (st.fusion) st.fusion->reset();
   st.held.clear();
+  st.last_pts = GST_CLOCK_TIME_NONE;
   return TRUE;
 }
 
@@ -120,6 +124,7 @@ static gboolean gst_thermal_fuse_sink_event(GstBaseTransform* trans, GstEvent* e
     State& st = *GST_THERMAL_FUSE(trans)->state;
     if (st.fusion) st.fusion->reset();
     st.held.clear();
+    st.last_pts = GST_CLOCK_TIME_NONE;
   }
   return GST_BASE_TRANSFORM_CLASS(gst_thermal_fuse_parent_class)->sink_event(trans, event);
 }
@@ -131,6 +136,11 @@ static GstFlowReturn gst_thermal_fuse_transform_frame_ip(GstVideoFilter* filter,
   const int frames = static_cast<int>(pg::locked_copy(self, self->settings->frames));
   if (!st.fusion || st.fusion->frames() != frames) {
     st.fusion = std::make_unique<pyrocam::BracketFusion>(frames);
+    st.held.clear();
+  }
+  if (pg::frame_out_of_time_order(GST_ELEMENT(self), frame->buffer, st.last_pts,
+                                  st.warned_out_of_order)) {
+    st.fusion->reset();
     st.held.clear();
   }
   const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(frame->buffer);

@@ -3,6 +3,7 @@
 // on the bus: for the bracket fusions' tests (thermalfuse, mosaicfuse).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -41,11 +42,37 @@ void on_bracket_frame(GstElement*, GstBuffer* buffer, GstPad*, gpointer data) {
        saturation ? static_cast<long long>(saturation->samples) : -1});
 }
 
+// Gives the nth buffer (from 1) into an element a time two frames before its own: frames out
+// of time order.
+struct FrameBackInTime {
+  int nth;
+  int seen = 0;
+  void probe(GstElement* pipeline, const char* element) {
+    GstElement* e = gst_bin_get_by_name(GST_BIN(pipeline), element);
+    GstPad* pad = gst_element_get_static_pad(e, "sink");
+    gst_pad_add_probe(pad, GST_PAD_PROBE_TYPE_BUFFER, on_buffer, this, nullptr);
+    gst_object_unref(pad);
+    gst_object_unref(e);
+  }
+  static GstPadProbeReturn on_buffer(GstPad*, GstPadProbeInfo* info, gpointer data) {
+    auto* self = static_cast<FrameBackInTime*>(data);
+    if (++self->seen == self->nth) {
+      GstBuffer* b = gst_buffer_make_writable(GST_PAD_PROBE_INFO_BUFFER(info));
+      GST_BUFFER_PTS(b) -= 2 * GST_BUFFER_DURATION(b);
+      GST_PAD_PROBE_INFO_DATA(info) = b;
+    }
+    return GST_PAD_PROBE_OK;
+  }
+};
+
+// `prepare`, where given, sees the pipeline before it plays (to add probes).
 template <typename T>
-BracketRun<T> run_bracket(const std::string& launch) {
+BracketRun<T> run_bracket(const std::string& launch,
+                          const std::function<void(GstElement*)>& prepare = {}) {
   BracketRun<T> r;
   GstElement* pipeline = gst_parse_launch(launch.c_str(), nullptr);
   if (pipeline == nullptr) return r;
+  if (prepare) prepare(pipeline);
   GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
   g_object_set(sink, "signal-handoffs", TRUE, nullptr);
   g_signal_connect(sink, "handoff", G_CALLBACK(on_bracket_frame<T>), &r.frames);

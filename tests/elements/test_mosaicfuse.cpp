@@ -4,6 +4,8 @@
 // warning.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -14,7 +16,9 @@ namespace pyrocam::test {
 namespace {
 
 using FuseRun = BracketRun<float>;
-const auto run = run_bracket<float>;
+FuseRun run(const std::string& launch, const std::function<void(GstElement*)>& prepare = {}) {
+  return run_bracket<float>(launch, prepare);
+}
 
 std::string chain(const std::string& fuse) {
   return "pyrocamsrc scene=melt-pool bracket=1,0.333,0.111 num-buffers=9 ! "
@@ -72,6 +76,26 @@ TEST(MosaicFuse, EachSampleFromTheMostExposedOfTheLastFramesScaledToIt) {
   EXPECT_GT(from_earlier, 0u);
   EXPECT_GT(fused_numbers, plain_numbers);
   EXPECT_TRUE(plain.warnings.empty() && fused.warnings.empty());
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+TEST(MosaicFuse, AFrameOutOfTimeOrderStartsTheFusionAnewWithOneWarning) {
+  REQUIRE_ELEMENT("mosaicfuse");
+  FrameBackInTime sixth{6};
+  const FuseRun plain = run(chain("mosaicfuse frames=1")),
+                fused = run(chain("mosaicfuse name=fuse frames=3"),
+                            [&](GstElement*pipeline) { sixth.probe(pipeline, "fuse"); });
+  ASSERT_TRUE(plain.eos && fused.eos);
+  ASSERT_EQ(fused.frames.size(), 9u);
+  ASSERT_EQ(fused.warnings.size(), 1u);
+  EXPECT_NE(fused.warnings[0].find("out of time order"), std::string::npos) << fused.warnings[0];
+  // The 6th mosaic is fused with nothing before it; the 5th still was.
+  EXPECT_TRUE(same_bits(fused.frames[5].values, plain.frames[5].values));
+  EXPECT_EQ(fused.frames[5].exposure_us, plain.frames[5].exposure_us);
+  EXPECT_FALSE(same_bits(fused.frames[4].values, plain.frames[4].values));
 }
 
 TEST(MosaicFuse, FramesWithoutAnExposurePassUnchangedWithOneWarning) {

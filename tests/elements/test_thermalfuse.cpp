@@ -1,7 +1,9 @@
 // thermalfuse and pyrocamsrc's bracket: the frames cycle through the bracket's exposures, each
 // carrying its own; each fused frame is, pixel by pixel, the reading of the most exposed of the
 // last `frames` frames that has one; frames without an exposure pass unchanged with a warning.
+#include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -11,15 +13,34 @@ namespace pyrocam::test {
 namespace {
 
 using FuseRun = BracketRun<std::uint16_t>;
-const auto run = run_bracket<std::uint16_t>;
+FuseRun run(const std::string& launch, const std::function<void(GstElement*)>& prepare = {}) {
+  return run_bracket<std::uint16_t>(launch, prepare);
+}
 
 std::string chain(const std::string& fuse) {
   const char* dir = g_getenv("PYROCAM_TEST_MODEL_DIR");
   return std::string(
              "pyrocamsrc scene=melt-pool bracket=1,0.333,0.111 num-buffers=9 ! "
-             "video/x-bayer,width=64,height=48 ! darksub dark-level=50 ! demosaic25 ! "
+             "video/x-bayer,width=160,height=120 ! darksub dark-level=50 ! demosaic25 ! "
              "ratiotemp method=likelihood model=") +
          (dir ? dir : ".") + "/test-model-rgb.json ! " + fuse + " ! fakesink name=sink";
+}
+
+// The expected fused frame k: pixel by pixel, the reading of the most exposed of frames
+// first..k of `plain` that reads it, the latest on ties.
+std::vector<std::uint16_t> expected_fusion(const FuseRun& plain, std::size_t first, std::size_t k) {
+  std::vector<std::uint16_t> want(plain.frames[k].values.size(), 0);
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    double best = 0;
+    for (std::size_t j = first; j <= k; ++j) {
+      const std::uint16_t c = plain.frames[j].values[i];
+      if (c != 0 && plain.frames[j].exposure_us >= best) {
+        want[i] = c;
+        best = plain.frames[j].exposure_us;
+      }
+    }
+  }
+  return want;
 }
 
 TEST(ThermalFuse, EachPixelFromTheMostExposedOfTheLastFramesThatReadsIt) {
@@ -41,17 +62,9 @@ TEST(ThermalFuse, EachPixelFromTheMostExposedOfTheLastFramesThatReadsIt) {
   for (std::size_t k = 0; k < 9; ++k) {
     const std::size_t n = plain.frames[k].values.size();
     ASSERT_EQ(fused.frames[k].values.size(), n);
+    const std::vector<std::uint16_t> expected = expected_fusion(plain, k >= 2 ? k - 2 : 0, k);
     for (std::size_t i = 0; i < n; ++i) {
-      // The expected pixel: the most exposed frame of k-2..k that reads it, the latest on ties.
-      std::uint16_t want = 0;
-      double best = 0;
-      for (std::size_t j = k >= 2 ? k - 2 : 0; j <= k; ++j) {
-        const std::uint16_t c = plain.frames[j].values[i];
-        if (c != 0 && plain.frames[j].exposure_us >= best) {
-          want = c;
-          best = plain.frames[j].exposure_us;
-        }
-      }
+      const std::uint16_t want = expected[i];
       ASSERT_EQ(fused.frames[k].values[i], want) << "frame " << k << " pixel " << i;
       from_earlier += want != plain.frames[k].values[i];
       plain_readings += plain.frames[k].values[i] != 0;
@@ -90,6 +103,26 @@ TEST(ThermalFuse, FramesWithoutAnExposurePassUnchangedWithOneWarning) {
   for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(r.frames[k].values, same.frames[k].values);
   ASSERT_EQ(r.warnings.size(), 1u);
   EXPECT_NE(r.warnings[0].find("without its exposure"), std::string::npos) << r.warnings[0];
+}
+
+TEST(ThermalFuse, AFrameOutOfTimeOrderStartsTheFusionAnewWithOneWarning) {
+  REQUIRE_ELEMENT("thermalfuse");
+  FrameBackInTime sixth{6};
+  const FuseRun plain = run(chain("thermalfuse frames=1")),
+                fused = run(chain("thermalfuse name=fuse frames=3"),
+                            [&](GstElement*pipeline) { sixth.probe(pipeline, "fuse"); });
+  ASSERT_TRUE(plain.eos && fused.eos);
+  ASSERT_EQ(fused.frames.size(), 9u);
+  ASSERT_EQ(fused.warnings.size(), 1u);
+  EXPECT_NE(fused.warnings[0].find("out of time order"), std::string::npos) << fused.warnings[0];
+  // The 6th frame is fused with nothing before it, the next ones with no frame before it; those
+  // before as ever.
+  for (std::size_t k = 0; k < 9; ++k) {
+    const std::size_t first = k < 5 ? (k >= 2 ? k - 2 : 0) : std::max<std::size_t>(5, k - 2);
+    EXPECT_EQ(fused.frames[k].values, expected_fusion(plain, first, k)) << "frame " << k;
+  }
+  // And that is not what fusing across it gives.
+  EXPECT_NE(fused.frames[5].values, expected_fusion(plain, 3, 5));
 }
 
 TEST(ThermalFuse, ABadBracketStopsTheCameraWithAClearError) {
