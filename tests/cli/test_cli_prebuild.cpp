@@ -68,6 +68,13 @@ TEST(CliPrebuild, writes_the_table_beside_an_existing_model_that_ratiotemp_then_
       << err;
   EXPECT_TRUE(fs::exists(other));
   EXPECT_EQ(read_all(table), text);
+
+  // --out the model itself: refused, the model as it was.
+  const std::string json = read_all(model);
+  EXPECT_EQ(calib("prebuild --model " + q(model) + " --max-blocks 8 --out " + q(model), dir, err),
+            1);
+  EXPECT_NE(err.find("is not a lookup table"), std::string::npos) << err;
+  EXPECT_EQ(read_all(model), json);
 }
 
 TEST(CliPrebuild, a_5x5_model_gets_no_table_and_the_reason_n) {
@@ -79,6 +86,10 @@ TEST(CliPrebuild, a_5x5_model_gets_no_table_and_the_reason_n) {
   EXPECT_NE(err.find("no prebuilt lookup table"), std::string::npos) << err;
   EXPECT_NE(err.find("needs two"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(dir / "nir.json.lut"));
+  // --out the model itself: the model stays (a stale table there would be removed).
+  const std::string json = read_all(model);
+  EXPECT_EQ(calib("prebuild --model " + q(model) + " --out " + q(model), dir, err), 1);
+  EXPECT_EQ(read_all(model), json);
   // An error, so also with --quiet (which kept it back: exit 1 without a word).
   EXPECT_EQ(calib("-q prebuild --model " + q(model), dir, err), 1);
   EXPECT_NE(err.find("error: no prebuilt lookup table"), std::string::npos) << err;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <utility>
 
@@ -85,15 +86,35 @@ std::vector<std::uint32_t> locus_band(const ThermalModel& model,
   return blocks;
 }
 
+namespace {
+
+// Whether `file` holds a lookup table of any version (a file that ratiotemp's cache or prebuild
+// wrote), so that prebuild never removes nor overwrites another file given as its table.
+bool holds_a_table(const std::string& file) {
+  static constexpr char kAnyVersion[] = "pyrocam lookup-table cache ";
+  std::ifstream in(file, std::ios::binary);
+  char head[sizeof kAnyVersion - 1] = {};
+  return in.read(head, sizeof head) && std::string(head, sizeof head) == kAnyVersion;
+}
+
+}  // namespace
+
 PrebuiltTables prebuild_tables(std::shared_ptr<const ThermalModel> model, const std::string& file,
                                std::size_t max_blocks) {
   const ThermalModel& m = require_model(model, "prebuilt lookup table");
   if (m.fingerprint.empty())
     throw InputError("a prebuilt lookup table needs a model loaded from its file (fingerprint)");
   PrebuiltTables r;
+  std::error_code ec;
+  if (std::filesystem::exists(file, ec) &&
+      !(std::filesystem::is_regular_file(file, ec) && std::filesystem::file_size(file, ec) == 0) &&
+      !holds_a_table(file)) {
+    r.problem = file + " exists and is not a lookup table (the model itself?): left as it is";
+    return r;
+  }
   const auto drop_stale = [&] {
-    std::error_code ec;
-    std::filesystem::remove(file, ec);  // a table of an earlier model there: never read again
+    std::error_code ignored;
+    std::filesystem::remove(file, ignored);  // a table of an earlier model: never read again
   };
   if (m.profile().normalisation.numerators.size() != 2) {
     r.problem = "the model has " + std::to_string(m.profile().normalisation.numerators.size()) +

@@ -45,7 +45,9 @@ struct PrebuiltTables {
 // blocks, nearest first), checks it against the network as ratiotemp would (lut_check_verdict: the
 // verdict goes into the file, so that ratiotemp need not check it again) and writes it to `file`
 // atomically. Writes nothing, and removes a `file` left from an earlier model, when the model
-// has no lookup table (not two ratios) or its table fails the check: `problem` says why. Throws
+// has no lookup table (not two ratios) or its table fails the check: `problem` says why. A
+// `file` there that is not a table (the model itself, given as the table's path) is neither
+// removed nor overwritten: `problem` names it. Throws
 // InputError when the file cannot be written or the model has no fingerprint (not loaded from
 // a file).
 PrebuiltTables prebuild_tables(std::shared_ptr<const ThermalModel> model, const std::string& file,
