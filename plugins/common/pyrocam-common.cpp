@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "pyrocam/runtime/bracket_fusion.h"
+#include "pyrocam/runtime/darksub.h"
 
 namespace pyrocam::gst {
 
@@ -312,29 +313,48 @@ bool parse_region(const std::string& text, Region* out) {
   return ok;
 }
 
-cv::Rect saturated_rect(const PyrocamSaturationMeta* meta, int width, int height) {
-  if (!meta || meta->samples == 0 || meta->width <= 0 || meta->height <= 0 ||
-      meta->frame_width <= 0 || meta->frame_height <= 0)
-    return {};
-  const int reach = width < meta->frame_width ? 1 : 2;
+namespace {
+
+// Sample rectangle `r` of the meta's frame in pixels of a width x height frame, grown by the
+// demosaicking kernels' reach, within the frame.
+cv::Rect scaled_reach(const PyrocamSaturationMeta& meta, const cv::Rect& r, int width, int height) {
+  const int reach = width < meta.frame_width ? 1 : 2;
   const auto down = [](gint v, int to, gint from) {
     return static_cast<int>(static_cast<gint64>(v) * to / from);
   };
   const auto up = [](gint v, int to, gint from) {
     return static_cast<int>((static_cast<gint64>(v) * to + from - 1) / from);
   };
-  const cv::Rect r(cv::Point(down(meta->x, width, meta->frame_width) - reach,
-                             down(meta->y, height, meta->frame_height) - reach),
-                   cv::Point(up(meta->x + meta->width, width, meta->frame_width) + reach,
-                             up(meta->y + meta->height, height, meta->frame_height) + reach));
-  return r & cv::Rect(0, 0, width, height);
+  const cv::Rect s(cv::Point(down(r.x, width, meta.frame_width) - reach,
+                             down(r.y, height, meta.frame_height) - reach),
+                   cv::Point(up(r.x + r.width, width, meta.frame_width) + reach,
+                             up(r.y + r.height, height, meta.frame_height) + reach));
+  return s & cv::Rect(0, 0, width, height);
 }
+
+bool meta_known(const PyrocamSaturationMeta* meta) {
+  return meta && meta->samples > 0 && meta->width > 0 && meta->height > 0 &&
+         meta->frame_width > 0 && meta->frame_height > 0;
+}
+
+}  // namespace
 
 bool saturation_hides_readings(const PyrocamSaturationMeta* meta, const cv::Mat& codes,
                                const cv::Rect& within) {
-  const cv::Rect r = saturated_rect(meta, codes.cols, codes.rows) & within;
-  if (r.empty()) return false;
-  return cv::countNonZero(codes(r)) < r.area();
+  if (!meta_known(meta)) return false;
+  const cv::Rect bounds(meta->x, meta->y, meta->width, meta->height);
+  // Tile by tile: far-apart saturated spots do not hide the readings between them.
+  for (int i = 0; i < pyrocam::kSaturationTiles; ++i) {
+    for (int j = 0; j < pyrocam::kSaturationTiles; ++j) {
+      if (!(meta->tiles[i] >> j & 1u)) continue;
+      const cv::Rect tile =
+          pyrocam::saturation_tile_rect(i, j, meta->frame_width, meta->frame_height) & bounds;
+      if (tile.empty()) continue;
+      const cv::Rect r = scaled_reach(*meta, tile, codes.cols, codes.rows) & within;
+      if (!r.empty() && cv::countNonZero(codes(r)) < r.area()) return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace pyrocam::gst

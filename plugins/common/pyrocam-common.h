@@ -143,13 +143,11 @@ void warn_frame_without_exposure(GstElement* element, bool& warned);
 bool frame_out_of_time_order(GstElement* element, GstBuffer* buffer, GstClockTime& last_pts,
                              bool& warned);
 
-/* The part of a width x height frame that holds the saturated samples `meta` names: scaled from
- * the meta's frame, widened by the reach of demosaic25's kernels (2 pixels on a frame of the
- * mosaic's size, matched Bayer; 1 macro-pixel on a smaller one, matched 5x5 cells) and
- * clipped; empty without a meta or samples. */
-cv::Rect saturated_rect(const PyrocamSaturationMeta* meta, int width, int height);
 /* Whether saturation may hide a reading in `within` of a frame of temperature codes (CV_16U,
- * 0 = no reading): a pixel without a reading where `meta` puts saturated samples. A saturated
+ * 0 = no reading): a pixel without a reading where `meta` puts saturated samples (its tiles
+ * that hold any, within its rectangle, scaled from the meta's frame and widened by the reach of
+ * demosaic25's kernels: 2 pixels on a frame of the mosaic's size, matched Bayer; 1 macro-pixel
+ * on a smaller one, matched 5x5 cells). A saturated
  * band does not always take the reading (the likelihood fit reads a 5x5 pixel from the bands
  * that are left), and then nothing is hidden. */
 bool saturation_hides_readings(const PyrocamSaturationMeta* meta, const cv::Mat& codes,

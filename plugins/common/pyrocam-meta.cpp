@@ -60,6 +60,7 @@ static gboolean saturation_meta_init(GstMeta* meta, gpointer /*params*/, GstBuff
   m->samples = 0;
   m->x = m->y = m->width = m->height = 0;
   m->frame_width = m->frame_height = 0;
+  for (guint64& t : m->tiles) t = ~guint64{0};
   return TRUE;
 }
 
@@ -67,7 +68,7 @@ static gboolean saturation_meta_transform(GstBuffer* dest, GstMeta* meta, GstBuf
                                           GQuark /*type*/, gpointer /*data*/) {
   auto* m = reinterpret_cast<PyrocamSaturationMeta*>(meta);
   return pyrocam_buffer_set_saturation_meta(dest, m->samples, m->x, m->y, m->width, m->height,
-                                            m->frame_width, m->frame_height) != nullptr;
+                                            m->frame_width, m->frame_height, m->tiles) != nullptr;
 }
 
 const GstMetaInfo* pyrocam_saturation_meta_get_info(void) {
@@ -83,7 +84,8 @@ const GstMetaInfo* pyrocam_saturation_meta_get_info(void) {
 
 PyrocamSaturationMeta* pyrocam_buffer_set_saturation_meta(GstBuffer* buffer, guint64 samples,
                                                           gint x, gint y, gint width, gint height,
-                                                          gint frame_width, gint frame_height) {
+                                                          gint frame_width, gint frame_height,
+                                                          const guint64* tiles) {
   auto* m = pyrocam_buffer_get_saturation_meta(buffer);
   if (!m)
     m = reinterpret_cast<PyrocamSaturationMeta*>(
@@ -96,6 +98,7 @@ PyrocamSaturationMeta* pyrocam_buffer_set_saturation_meta(GstBuffer* buffer, gui
     m->height = height;
     m->frame_width = frame_width;
     m->frame_height = frame_height;
+    for (int i = 0; i < 64; ++i) m->tiles[i] = tiles ? tiles[i] : ~guint64{0};
   }
   return m;
 }

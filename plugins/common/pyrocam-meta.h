@@ -36,16 +36,22 @@ typedef struct {
   guint64 samples;                /* raw samples at or above the saturation level; 0: none */
   gint x, y, width, height;       /* the smallest rectangle holding them; 0 x 0 when none */
   gint frame_width, frame_height; /* the frame those pixels are of */
+  /* Which tiles of a 64 x 64 grid over the frame hold any (tile column j of row i: bit j of
+   * tiles[i]; tile j spans the columns x with x * 64 / frame_width == j, rounded down, rows
+   * alike); all bits set where not known (the rectangle alone then). */
+  guint64 tiles[64];
 } PyrocamSaturationMeta;
 
 GType pyrocam_saturation_meta_api_get_type(void);
 #define PYROCAM_SATURATION_META_API_TYPE (pyrocam_saturation_meta_api_get_type())
 const GstMetaInfo* pyrocam_saturation_meta_get_info(void);
 
-/* Adds the meta, or overwrites the buffer's own (one per buffer). */
+/* Adds the meta, or overwrites the buffer's own (one per buffer). `tiles`: 64 words as the
+ * field's, or NULL where not known. */
 PyrocamSaturationMeta* pyrocam_buffer_set_saturation_meta(GstBuffer* buffer, guint64 samples,
                                                           gint x, gint y, gint width, gint height,
-                                                          gint frame_width, gint frame_height);
+                                                          gint frame_width, gint frame_height,
+                                                          const guint64* tiles);
 #define pyrocam_buffer_get_saturation_meta(b) \
   ((PyrocamSaturationMeta*)gst_buffer_get_meta((b), PYROCAM_SATURATION_META_API_TYPE))
 

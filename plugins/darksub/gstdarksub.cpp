@@ -459,7 +459,7 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
     }
     const cv::Rect& box = saturated.bounds;
     pyrocam_buffer_set_saturation_meta(outbuf, saturated.count, box.x, box.y, box.width, box.height,
-                                       st.format.width, st.format.height);
+                                       st.format.width, st.format.height, saturated.tiles.data());
     check_bayer_phase(self, st, out.image());
   });
   return ok ? ret : GST_FLOW_ERROR;

@@ -167,7 +167,7 @@ static GstFlowReturn gst_mosaic_fuse_transform_ip(GstBaseTransform* trans, GstBu
     const pyrocam::SaturatedSamples saturated = pyrocam::find_saturated(mosaic.image());
     const cv::Rect& box = saturated.bounds;
     pyrocam_buffer_set_saturation_meta(buffer, saturated.count, box.x, box.y, box.width, box.height,
-                                       st.width, st.height);
+                                       st.width, st.height, saturated.tiles.data());
     st.exposures.push_back(now);
     while (static_cast<int>(st.exposures.size()) > frames) st.exposures.pop_front();
     // The values are in the DN of the frame with the most light: say its exposure.

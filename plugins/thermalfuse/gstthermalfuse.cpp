@@ -81,7 +81,7 @@ void set_fused_saturation(GstBuffer* buffer, const std::deque<HeldSaturation>& f
   if (!least || least->saturation.frame_width <= 0) return;  // not known
   const PyrocamSaturationMeta& m = least->saturation;
   pyrocam_buffer_set_saturation_meta(buffer, m.samples, m.x, m.y, m.width, m.height, m.frame_width,
-                                     m.frame_height);
+                                     m.frame_height, m.tiles);
 }
 
 }  // namespace

@@ -7,14 +7,17 @@
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "pyrocam-meta.h"
 
 namespace pyrocam::test {
 
-// `samples` saturated samples in `box` of a frame_width x frame_height mosaic.
+// `samples` saturated samples in `box` of a frame_width x frame_height mosaic; where `spots`
+// are given, the meta's tiles hold those samples only (else: not known, the whole box).
 inline void add_saturation_meta(GstBuffer* buffer, guint64 samples, const cv::Rect& box,
-                                int frame_width, int frame_height) {
+                                int frame_width, int frame_height,
+                                const std::vector<cv::Point>& spots = {}) {
   const GstMetaInfo* info = gst_meta_get_info("PyrocamSaturationMeta");
   ASSERT_NE(info, nullptr) << "the pyrocam plugin did not register PyrocamSaturationMeta";
   auto* m = reinterpret_cast<PyrocamSaturationMeta*>(gst_buffer_add_meta(buffer, info, nullptr));
@@ -26,6 +29,10 @@ inline void add_saturation_meta(GstBuffer* buffer, guint64 samples, const cv::Re
   m->height = box.height;
   m->frame_width = frame_width;
   m->frame_height = frame_height;
+  if (spots.empty()) return;
+  for (guint64& t : m->tiles) t = 0;
+  for (const cv::Point& p : spots)
+    m->tiles[p.y * 64 / frame_height] |= guint64{1} << (p.x * 64 / frame_width);
 }
 
 }  // namespace pyrocam::test

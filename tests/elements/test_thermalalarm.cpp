@@ -38,14 +38,15 @@ class ThermalAlarm : public HarnessTest {
   // `saturated`: a PyrocamSaturationMeta naming that rectangle of a mosaic `scale` times this
   // size (1: a colour camera; 5: a 5x5 one, one temperature per 5x5 macro-pixel).
   std::vector<GstStructure*> push(const std::vector<std::uint16_t>& codes,
-                                  const cv::Rect& saturated = {}, int scale = 1) {
+                                  const cv::Rect& saturated = {}, int scale = 1,
+                                  const std::vector<cv::Point>& spots = {}) {
     const GstClockTime pts = gst_util_uint64_scale(n_++, GST_SECOND, 30);
     GstBuffer* in = with_pts(buffer_from(codes), pts);
     if (!saturated.empty())
       add_saturation_meta(in, static_cast<guint64>(saturated.area()),
                           cv::Rect(scale * saturated.x, scale * saturated.y,
                                    scale * saturated.width, scale * saturated.height),
-                          scale * kW, scale * kH);
+                          scale * kW, scale * kH, spots);
     EXPECT_EQ(push_pull<std::uint16_t>(h, in), codes);
     std::vector<GstStructure*> out;
     while (GstMessage* m = gst_bus_pop(bus)) {
@@ -60,10 +61,11 @@ class ThermalAlarm : public HarnessTest {
   }
   // The states ("raised"/"cleared", "" for none) of pushing each frame.
   std::string states(const std::vector<std::vector<std::uint16_t>>& frames,
-                     const cv::Rect& saturated = {}, int scale = 1) {
+                     const cv::Rect& saturated = {}, int scale = 1,
+                     const std::vector<cv::Point>& spots = {}) {
     std::string out;
     for (const auto& f : frames) {
-      auto messages = push(f, saturated, scale);
+      auto messages = push(f, saturated, scale, spots);
       EXPECT_LE(messages.size(), 1u);
       out += messages.empty() ? '.' : gst_structure_get_string(messages[0], "state")[0];
       for (GstStructure* s : messages) gst_structure_free(s);
@@ -219,6 +221,22 @@ TEST_F(ThermalAlarm, SaturatedSamplesThatTookReadingsInTheRegionCountAsAboveTheT
   set("saturated-raises", TRUE);
   EXPECT_EQ(states({near_hole, near_hole}, near, 5), "..");
   EXPECT_EQ(states({cored, cored}, core, 5), ".r");
+}
+
+// Two saturated spots in opposite corners: their rectangle spans the frame, but the meta's
+// tiles say where they are, and the region's pixel without a reading between them is cold.
+TEST_F(ThermalAlarm, SaturatedSpotsElsewhereDoNotRaiseThoughTheirRectangleSpansTheRegion) {
+  start("thermalalarm threshold-c=1500 frames=2 statistic=peak region=4,3,6,6");
+  const auto rim = frame(900, 1400);
+  const auto cored = with_hole(rim, 6, 5, 2);
+  const cv::Rect both(0, 0, kW, kH);
+  const std::vector<cv::Point> corners = {{0, 0}, {kW - 1, kH - 1}};
+  EXPECT_EQ(states({cored, cored}, both, 1, corners), "..");
+  EXPECT_EQ(states({cored, cored}, both, 5, {{0, 0}, {5 * kW - 1, 5 * kH - 1}}), "..");
+  // A spot at the hole: raised; where the tiles are not known, the rectangle decides.
+  EXPECT_EQ(states({cored, cored}, both, 1, {{0, 0}, {6, 5}}), ".r");
+  EXPECT_EQ(states({rim, rim}), ".c");
+  EXPECT_EQ(states({cored, cored}, both), ".r");
 }
 
 TEST_F(ThermalAlarm, TurningTheThresholdOffClearsARaisedAlarm) {

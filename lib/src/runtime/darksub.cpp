@@ -106,6 +106,14 @@ SaturatedSamples for_rows(const cv::Mat& m, const cv::Mat& out, Row row) {
     while (o[last] != kInf) --last;
     x0 = std::min(x0, first);
     x1 = std::max(x1, last);
+    // The row's tiles with any: from the first to the last, a tile's search ending at its first.
+    std::uint64_t& tiles = s.tiles[static_cast<std::size_t>(saturation_tile_of(y, m.rows))];
+    for (int t = saturation_tile_of(first, m.cols); t <= saturation_tile_of(last, m.cols); ++t) {
+      if (tiles >> t & 1u) continue;
+      const cv::Rect r = saturation_tile_rect(0, t, m.cols, 1);
+      const int from = std::max(r.x, first), to = std::min(r.x + r.width, last + 1);
+      if (std::find(o + from, o + to, kInf) != o + to) tiles |= std::uint64_t{1} << t;
+    }
   }
   if (s.count > 0) s.bounds = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
   return s;

@@ -1,6 +1,7 @@
 // Dark subtraction: values, saturation marks, dark capture.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 #include "pyrocam/core/error.h"
@@ -54,10 +55,20 @@ TEST(DarkSub, counts_and_bounds_the_saturated_samples) {
   for (const SaturatedSamples& s : {with_dark, with_level, find_saturated(a), find_saturated(b)}) {
     EXPECT_EQ(s.count, 3u);
     EXPECT_EQ(s.bounds, cv::Rect(cv::Point(20, 10), cv::Point(601, 501)));
+    // The tiles that hold them, and no other: (600, 10) is in tile column 600 * 64 / 700 = 54
+    // of tile row 10 * 64 / 600 = 1.
+    std::array<std::uint64_t, kSaturationTiles> want{};
+    want[1] |= std::uint64_t{1} << 54;
+    want[53] |= std::uint64_t{1} << 1;
+    want[32] |= std::uint64_t{1} << 27;
+    EXPECT_EQ(s.tiles, want);
+    EXPECT_TRUE(saturation_tile_rect(1, 54, 700, 600).contains(cv::Point(600, 10)));
+    EXPECT_TRUE(saturation_tile_rect(53, 1, 700, 600).contains(cv::Point(20, 500)));
   }
   const SaturatedSamples none = subtract_dark_level(raw, 50, 256, b);
   EXPECT_EQ(none.count, 0u);
   EXPECT_TRUE(none.bounds.empty());
+  EXPECT_EQ(none.tiles, (std::array<std::uint64_t, kSaturationTiles>{}));
   EXPECT_EQ(find_saturated(b).count, 0u);
   EXPECT_THROW(find_saturated(raw), InputError);
 }

@@ -3,7 +3,9 @@
 // the saturation level (before subtraction) is +INFINITY, a pixel without a reading NaN.
 #pragma once
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <opencv2/core.hpp>
 #include <string>
 
@@ -15,12 +17,28 @@ int full_scale_dn(int bit_depth);
 // rounded. Throws InputError for a bit depth outside 1..16.
 double default_saturation_level(int bit_depth);
 
-// The samples a subtraction marked saturated: how many, and the smallest rectangle holding them
-// (empty when none).
+// The samples a subtraction marked saturated: how many, the smallest rectangle holding them
+// (empty when none), and which tiles of a kSaturationTiles x kSaturationTiles grid over the
+// frame hold any (two far-apart spots span a rectangle between them that holds none).
+inline constexpr int kSaturationTiles = 64;
 struct SaturatedSamples {
   std::size_t count = 0;
   cv::Rect bounds;
+  std::array<std::uint64_t, kSaturationTiles> tiles{};  // [tile row]: bit = tile column
 };
+// The tile column (row) of sample column x (row y) of a frame `size` samples wide (high).
+inline int saturation_tile_of(int x, int size) {
+  return static_cast<int>(static_cast<std::int64_t>(x) * kSaturationTiles / size);
+}
+// The samples of tile (row, column) of a width x height frame.
+inline cv::Rect saturation_tile_rect(int row, int column, int width, int height) {
+  const auto first = [](int tile, int size) {
+    return static_cast<int>((static_cast<std::int64_t>(tile) * size + kSaturationTiles - 1) /
+                            kSaturationTiles);
+  };
+  return cv::Rect(cv::Point(first(column, width), first(row, height)),
+                  cv::Point(first(column + 1, width), first(row + 1, height)));
+}
 
 // out = raw - dark per pixel as CV_32F, with +INF where raw >= saturation_level. raw is CV_8U or
 // CV_16U (any stride), dark CV_32F of the same size (a NaN in the dark gives NaN). out is
