@@ -37,6 +37,16 @@ void report_table_files(GstRatioTemp* self, const pyrocam::EstimatorSelector& es
   if (!estimators.cache_problem().empty())
     GST_WARNING_OBJECT(self, "table cache not used: %s", estimators.cache_problem().c_str());
   GST_INFO_OBJECT(self, "%zu table blocks from the cache", estimators.cache_blocks_read());
+  if (lut_used && estimators.prebuilt_blocks_read() == 0) {
+    const std::string unwritable = estimators.table_cache_unwritable();
+    if (!unwritable.empty())
+      GST_ELEMENT_WARNING(self, RESOURCE, OPEN_WRITE,
+                          ("The lookup table's cache cannot be kept (%s): every start fills the "
+                           "table anew (seconds); give table-cache a folder that can be written, "
+                           "or pyrocam-calib prebuild --model %s writes a table beside the model",
+                           unwritable.c_str(), model_path.c_str()),
+                          ("table cache not writable"));
+  }
   std::error_code ec;
   if (lut_used && estimators.prebuilt_blocks_read() == 0 && estimators.cache_blocks_read() == 0 &&
       estimators.prebuilt_problem().empty() && !std::filesystem::exists(prebuilt, ec))

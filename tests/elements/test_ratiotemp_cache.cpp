@@ -79,7 +79,8 @@ PlateRun run_plate(const std::string& model, const std::string& table_cache,
 
 // table-cache: the first run keeps the lookup table's blocks in the folder (a file named by the
 // model's fingerprint), the next starts with them and writes the same temperatures; an altered
-// cache is not used and changes nothing; nor does running without a cache.
+// cache is not used and changes nothing; nor does running without a cache, or with one that
+// cannot be written (a warning says so).
 TEST(RatioTempTableCache, a_second_run_reads_the_cache_and_gives_the_same_codes) {
   REQUIRE_ELEMENT("ratiotemp");
   ScratchDir dir("ratiotemp-cache");
@@ -104,6 +105,12 @@ TEST(RatioTempTableCache, a_second_run_reads_the_cache_and_gives_the_same_codes)
   }
   EXPECT_EQ(run(cache, (dir / "third.raw").string()), first);
   EXPECT_EQ(run("", (dir / "fourth.raw").string()), first);
+  // A cache that cannot be kept (its folder under a file): the same codes, and a warning why.
+  const PlateRun unkept =
+      run_plate(model, (dir / "first.raw").string() + "/cache", (dir / "fifth.raw").string());
+  EXPECT_TRUE(unkept.ok);
+  EXPECT_EQ(unkept.codes, first);
+  EXPECT_TRUE(unkept.warned("The lookup table's cache cannot be kept")) << unkept.warnings.size();
 }
 
 // The prebuilt table beside the model: read at start (no warning), the same codes as without

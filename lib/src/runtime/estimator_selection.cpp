@@ -1,5 +1,7 @@
 #include "pyrocam/runtime/estimator_selection.h"
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -159,6 +161,16 @@ PlaneEstimator& EstimatorSelector::estimator(Method m) {
   const auto& slot = estimators_[static_cast<std::size_t>(m)];
   if (!slot) throw std::logic_error("estimator " + method_name(m) + " was not selected");
   return *slot;
+}
+
+std::string EstimatorSelector::table_cache_unwritable() const {
+  if (cache_file_.empty()) return "";
+  const std::filesystem::path folder = std::filesystem::path(cache_file_).parent_path();
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  if (ec) return "cannot make its folder " + folder.string() + ": " + ec.message();
+  if (::access(folder.c_str(), W_OK) != 0) return "its folder " + folder.string() + " is read-only";
+  return "";
 }
 
 std::size_t EstimatorSelector::save_table_cache() const {

@@ -70,6 +70,9 @@ class EstimatorSelector {
   // Whether the lookup table's check was not run again because the cache or the prebuilt table
   // recorded that this model's table passed it.
   bool lut_check_skipped() const { return lut_check_skipped_; }
+  // Why the cache file cannot be written at stop (its folder cannot be made, or is read-only);
+  // "" where it can, or there is none. Makes the folder.
+  std::string table_cache_unwritable() const;
   // Writes the table's blocks to the cache file when it holds blocks the file did not give it
   // (creating the folder); returns how many it wrote. Throws InputError when it cannot.
   std::size_t save_table_cache() const;
