@@ -249,12 +249,17 @@ TEST_F(PrebuiltTable, a_corrupt_or_foreign_file_is_refused_and_the_readings_stay
   EXPECT_EQ(missing.prebuilt_problem(), "");
 }
 
-// A 5x5 model has no lookup table: none is written, and a file left there by an earlier model of
-// that name is removed.
+// A 5x5 model has no lookup table: none is written, and a table left there by an earlier model
+// of that name (of any version) is removed; a file there that is not a table is left as it is.
 TEST(PrebuiltTables, a_5x5_model_gets_none_and_a_stale_file_goes_n) {
   ScratchDir dir("prebuilt-5x5");
   const std::string file = (dir / "model.json.lut").string();
-  write_bytes(file, "left from an earlier colour model\n");
+  write_bytes(file, "{\"not\": \"a table\"}\n");
+  const PrebuiltTables kept = prebuild_tables(test_model("test-model-nir5x5.json"), file);
+  EXPECT_EQ(kept.blocks, 0u);
+  EXPECT_NE(kept.problem.find("is not a lookup table"), std::string::npos) << kept.problem;
+  EXPECT_TRUE(std::filesystem::exists(file));
+  write_bytes(file, "pyrocam lookup-table cache 3\nleft from an earlier colour model\n");
   const PrebuiltTables t = prebuild_tables(test_model("test-model-nir5x5.json"), file);
   EXPECT_EQ(t.blocks, 0u);
   EXPECT_NE(t.problem.find("needs two"), std::string::npos) << t.problem;
