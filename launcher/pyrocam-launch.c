@@ -5,7 +5,8 @@
  *
  * The words are parsed as gst-launch-1.0 parses them (gst_parse_launchv). Exit status: 0 at
  * end of stream, 1 after an error (the error, its element and its debug text on stderr), 2 for
- * a description that does not parse or bad arguments. SIGINT and SIGTERM stop the pipeline
+ * a description that does not parse, a property value out of its range (which gst-launch-1.0
+ * only warns about, keeping the default) or bad arguments. SIGINT and SIGTERM stop the pipeline
  * (status 0); with -e they send EOS instead, so that muxers finalise their files (as
  * gst-launch-1.0 -e), and the program exits when the EOS has gone through (status 0) or an
  * error comes; a second signal stops at once (status 130).
@@ -308,10 +309,19 @@ static void print_usage(FILE* to) {
           "usage: pyrocam-launch [-e] [-m] [--stop-timeout=SECONDS] [--stats-csv=FILE]\n"
           "                      [--alarm-csv=FILE] ELEMENT [! ELEMENT ...]\n"
           "Runs a gst-launch-1.0 pipeline: exit 0 at end of stream, 1 after an error, 2 for\n"
-          "a description or option it cannot take. -e: SIGINT and SIGTERM send end of\n"
+          "a description, property value or option it cannot take. -e: SIGINT and SIGTERM send end of\n"
           "stream (files are finalised); -m: print element messages; --stats-csv,\n"
           "--alarm-csv: ratiotemp's statistics and thermalalarm's messages as CSV rows;\n"
           "--stop-timeout: how long to wait for the pipeline to stop (default 10 s).\n");
+}
+
+/* Keeps the first GObject warning of the parse (a property value refused) in `data`. */
+static void note_refused_value(const gchar* domain, GLogLevelFlags level, const gchar* message,
+                               gpointer data) {
+  (void)domain;
+  (void)level;
+  GString* refused = data;
+  if (refused->len == 0) g_string_append(refused, message);
 }
 
 int main(int argc, char** argv) {
@@ -363,15 +373,24 @@ int main(int argc, char** argv) {
   }
 
   GError* error = NULL;
+  /* A property value out of its range is only a GObject warning, and the element keeps its
+   * default: a setting silently not taken (threshold-c=nan leaves an alarm off). Refused here. */
+  GString* refused = g_string_new(NULL);
+  const guint handler =
+      g_log_set_handler("GLib-GObject", G_LOG_LEVEL_WARNING | G_LOG_LEVEL_CRITICAL,
+                        note_refused_value, refused);
   GstElement* pipeline = gst_parse_launchv_full((const gchar**)&argv[first], NULL,
                                                 GST_PARSE_FLAG_FATAL_ERRORS, &error);
-  if (!pipeline || error) {
+  g_log_remove_handler("GLib-GObject", handler);
+  if (!pipeline || error || refused->len > 0) {
     fprintf(stderr, "pyrocam-launch: could not build the pipeline: %s\n",
-            error ? error->message : "unknown error");
+            error ? error->message : refused->len > 0 ? refused->str : "unknown error");
     g_clear_error(&error);
+    g_string_free(refused, TRUE);
     if (pipeline) gst_object_unref(pipeline);
     return 2;
   }
+  g_string_free(refused, TRUE);
   if (!GST_IS_PIPELINE(pipeline)) {
     GstElement* wrapped = gst_pipeline_new(NULL);
     gst_bin_add(GST_BIN(wrapped), pipeline);

@@ -1,8 +1,7 @@
 // The scripts in pipelines/, each run as users run it (a child process with settings in its
-// environment) with a bounded number of frames and a time limit, and what came out checked
-// against the same frames computed directly by a reference pipeline in this process:
-// recorded temperatures bit-exact, frame counts, caps, the overlay pixel by pixel, a stream
-// received on loopback, a networked GigE Vision camera, and a camera that vanishes.
+// environment, bounded frames, a time limit), what came out checked against the same frames
+// computed by a reference pipeline in this process: recorded temperatures bit-exact, frame
+// counts, caps, the overlay pixel by pixel, a stream received on loopback.
 #include <gst/pbutils/pbutils.h>
 #include <signal.h>
 
@@ -165,7 +164,7 @@ TEST(Launcher, ends_a_missing_file_error_that_hangs_gst_launch_n) {
   }
 }
 
-TEST(Launcher, ends_at_eos_with_exit_0_and_refuses_a_bad_description_n) {
+TEST(Launcher, ends_at_eos_with_exit_0_and_refuses_a_bad_description_or_value_n) {
   ScratchDir dir("launcher-eos");
   Process ok({launcher(), "videotestsrc", "num-buffers=3", "!", "fakesink"}, {},
              (dir / "eos.log").string());
@@ -173,6 +172,11 @@ TEST(Launcher, ends_at_eos_with_exit_0_and_refuses_a_bad_description_n) {
   Process bad({launcher(), "no-such-element", "!", "fakesink"}, {}, (dir / "bad.log").string());
   ASSERT_EQ(bad.wait_for(milliseconds(20000)), 2) << bad.log();
   EXPECT_NE(bad.log().find("no-such-element"), std::string::npos) << bad.log();
+  // A value out of its range: refused (gst-launch-1.0 warns and keeps the default).
+  Process range({launcher(), "fakesrc", "num-buffers=1", "!", "identity", "drop-probability=2"}, {},
+                (dir / "range.log").string());
+  ASSERT_EQ(range.wait_for(milliseconds(20000)), 2) << range.log();
+  EXPECT_NE(range.log().find("drop-probability"), std::string::npos) << range.log();
 }
 
 TEST(Launcher, sigint_sends_eos_and_ends_with_exit_0) {
