@@ -278,9 +278,16 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
   }
   std::error_code ec;
   if (!std::filesystem::is_regular_file(settings.model, ec)) {
+    const bool folder = std::filesystem::is_directory(settings.model, ec);
     PYROCAM_POST_ERROR(self, pg::ErrorKind::kNotFound,
-                       "Thermal model file " + settings.model + " not found",
+                       "Thermal model file " + settings.model +
+                           (folder ? " is a folder, not a model file" : " not found"),
                        "model does not name a regular file");
+    return FALSE;
+  }
+  if (!settings.refused.empty()) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings, settings.refused,
+                       "a property value was refused");
     return FALSE;
   }
   if (!settings.region_valid) {

@@ -45,6 +45,7 @@ constexpr double DEFAULT_E_SLOPE_UNCERTAINTY = -1.0;  // the model's
 /* Property values; read and written under GST_OBJECT_LOCK, copied once per buffer. */
 struct Settings {
   std::string model;
+  std::string refused;  // a property value refused (even peak-window, NaN e-slope): start fails
   GstRatioTempMethod method = DEFAULT_METHOD;
   GstRatioTempOutput output = DEFAULT_OUTPUT;
   guint64 stats_interval = DEFAULT_STATS_INTERVAL;

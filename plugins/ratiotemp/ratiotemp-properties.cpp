@@ -231,19 +231,27 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
     case PROP_E_SLOPE_UNCERTAINTY: {
       const double v = g_value_get_double(value);  // NaN passes the GParamSpec's range check
       double& to = prop_id == PROP_E_SLOPE ? s.e_slope : s.e_slope_uncertainty;
-      if (std::isnan(v))
-        GST_WARNING_OBJECT(self, "%s NaN refused; keeping %g", pspec->name, to);
-      else
+      if (std::isnan(v)) {
+        s.refused = std::string(pspec->name) + " NaN refused; keeping " + std::to_string(to);
+        GST_WARNING_OBJECT(self, "%s", s.refused.c_str());
+      } else {
         to = v;
+        if (s.refused.rfind(std::string(pspec->name) + " ", 0) == 0) s.refused.clear();
+      }
       break;
     }
     case PROP_PEAK_WINDOW: {
       const guint v = g_value_get_uint(value);
       if (v % 2 == 0 && v != 0) {
-        GST_WARNING_OBJECT(self, "peak-window %u is even; keeping %u", v, s.peak_window);
+        s.refused = "peak-window " + std::to_string(v) +
+                    " is even (a window needs a centre "
+                    "pixel); keeping " +
+                    std::to_string(s.peak_window);
+        GST_WARNING_OBJECT(self, "%s", s.refused.c_str());
       } else {
         s.peak_window = v;
         s.peak_window_set = true;
+        if (s.refused.rfind("peak-window ", 0) == 0) s.refused.clear();
       }
       break;
     }

@@ -187,6 +187,24 @@ TEST(RatioTempErrors, rejects_a_missing_model_n) {
   expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_NOT_FOUND, {"/nonexistent/cam.json"});
 }
 
+TEST(RatioTempErrors, names_a_folder_given_as_the_model_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  const auto r = run_chain(kColourChain, "ratiotemp model=/tmp");
+  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_NOT_FOUND, {"/tmp is a folder"});
+}
+
+// A value the property refuses (an even window) fails the start, naming it: the element would
+// otherwise run with another setting than the one given. (Values out of a property's range GLib
+// refuses itself, with a warning: pyrocam-launch refuses such a line.)
+TEST(RatioTempErrors, a_refused_property_value_fails_the_start_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  const std::string model = " model=" + rgb_model_path();
+  expect_error(run_chain(kColourChain, "ratiotemp peak-window=4" + model), GST_RESOURCE_ERROR,
+               GST_RESOURCE_ERROR_SETTINGS, {"peak-window 4 is even"});
+  const auto fine = run_chain(kColourChain, "ratiotemp peak-window=4 peak-window=7" + model);
+  EXPECT_TRUE(fine.eos) << fine.message;
+}
+
 TEST(RatioTempErrors, rejects_a_truncated_model_n) {
   REQUIRE_ELEMENT("ratiotemp");
   ScratchDir dir("ratiotemp-truncated");
