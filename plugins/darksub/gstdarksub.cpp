@@ -457,6 +457,26 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
       ret = GST_FLOW_ERROR;
       return;
     }
+    // Samples above the stated bit depth's full scale: the stream is not what its caps say
+    // (scaled to 16 bits by videoconvert, MSB-aligned), and read as it is every pixel would be
+    // "saturated". Looked for only in frames with saturated samples.
+    if (saturated.count > 0 && st.bit_depth < 8 * st.format.bytes_per_sample) {
+      double max_dn = 0;
+      cv::minMaxLoc(raw.image(), nullptr, &max_dn);
+      const int full_scale = pyrocam::full_scale_dn(st.bit_depth);
+      if (max_dn > full_scale) {
+        PYROCAM_POST_ERROR(self, pg::ErrorKind::kFormat,
+                           "Samples up to " + std::to_string(static_cast<long>(max_dn)) +
+                               " DN in a stream whose caps say bit-depth " +
+                               std::to_string(st.bit_depth) + " (full scale " +
+                               std::to_string(full_scale) +
+                               " DN): the samples are not what the caps say (scaled by "
+                               "videoconvert? MSB-aligned?); give the true bit-depth",
+                           "sample above the bit depth's full scale");
+        ret = GST_FLOW_ERROR;
+        return;
+      }
+    }
     const cv::Rect& box = saturated.bounds;
     pyrocam_buffer_set_saturation_meta(outbuf, saturated.count, box.x, box.y, box.width, box.height,
                                        st.format.width, st.format.height, saturated.tiles.data());

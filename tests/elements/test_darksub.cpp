@@ -347,6 +347,20 @@ TEST(DarkSubErrors, rejects_a_dark_level_above_the_full_scale_n) {
                {"dark-level 300", "8-bit full scale (255 DN)"});
 }
 
+// 8-bit samples scaled to 16 bits (videoconvert) with bit-depth 8 still in the caps: every
+// pixel would read as saturated; an error names the samples and the bit depth. 16 bits: fine.
+TEST(DarkSubErrors, rejects_samples_above_the_stated_bit_depth_n) {
+  REQUIRE_ELEMENT("darksub");
+  const std::string source =
+      "videotestsrc pattern=white num-buffers=1 ! "
+      "video/x-raw,format=GRAY16_LE,width=8,height=4 ! ";
+  expect_error(run_pipeline(source + "darksub pattern=rggb bit-depth=8 dark-level=0 ! fakesink"),
+               GST_STREAM_ERROR, GST_STREAM_ERROR_FORMAT,
+               {"in a stream whose caps say bit-depth 8"});
+  EXPECT_TRUE(
+      run_pipeline(source + "darksub pattern=rggb bit-depth=16 dark-level=0 ! fakesink").eos);
+}
+
 TEST(DarkSubErrors, rejects_a_pattern_that_differs_from_the_caps) {
   REQUIRE_ELEMENT("darksub");
   REQUIRE_ELEMENT("pyrocamsrc");
