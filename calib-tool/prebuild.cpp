@@ -43,7 +43,9 @@ void add_prebuild_command(CLI::App& app, const GlobalOptions& global, Command& s
   c->add_option("--out", out, "Table file to write (default: the model's path + .lut)");
   c->add_option("--max-blocks", max_blocks,
                 "Blocks of the table to prebuild, nearest the locus first (1156 bytes each in "
-                "the file; the table cache keeps 8192 blocks less these)")
+                "the file; the table cache keeps 8192 blocks less these). The table's check "
+                "against the network fills the blocks along the locus too (some hundreds), so "
+                "the file holds at least those")
       ->check(CLI::Range(1, 8192))
       ->capture_default_str();
   c->callback([&global, &selected] {
