@@ -309,8 +309,8 @@ static void print_usage(FILE* to) {
           "usage: pyrocam-launch [-e] [-m] [--stop-timeout=SECONDS] [--stats-csv=FILE]\n"
           "                      [--alarm-csv=FILE] ELEMENT [! ELEMENT ...]\n"
           "Runs a gst-launch-1.0 pipeline: exit 0 at end of stream, 1 after an error, 2 for\n"
-          "a description, property value or option it cannot take. -e: SIGINT and SIGTERM send end of\n"
-          "stream (files are finalised); -m: print element messages; --stats-csv,\n"
+          "a description, property value or option it cannot take. -e: SIGINT and SIGTERM\n"
+          "send end of stream (files are finalised); -m: print element messages; --stats-csv,\n"
           "--alarm-csv: ratiotemp's statistics and thermalalarm's messages as CSV rows;\n"
           "--stop-timeout: how long to wait for the pipeline to stop (default 10 s).\n");
 }
@@ -376,15 +376,16 @@ int main(int argc, char** argv) {
   /* A property value out of its range is only a GObject warning, and the element keeps its
    * default: a setting silently not taken (threshold-c=nan leaves an alarm off). Refused here. */
   GString* refused = g_string_new(NULL);
-  const guint handler =
-      g_log_set_handler("GLib-GObject", G_LOG_LEVEL_WARNING | G_LOG_LEVEL_CRITICAL,
-                        note_refused_value, refused);
+  const guint handler = g_log_set_handler(
+      "GLib-GObject", G_LOG_LEVEL_WARNING | G_LOG_LEVEL_CRITICAL, note_refused_value, refused);
   GstElement* pipeline = gst_parse_launchv_full((const gchar**)&argv[first], NULL,
                                                 GST_PARSE_FLAG_FATAL_ERRORS, &error);
   g_log_remove_handler("GLib-GObject", handler);
   if (!pipeline || error || refused->len > 0) {
     fprintf(stderr, "pyrocam-launch: could not build the pipeline: %s\n",
-            error ? error->message : refused->len > 0 ? refused->str : "unknown error");
+            error              ? error->message
+            : refused->len > 0 ? refused->str
+                               : "unknown error");
     g_clear_error(&error);
     g_string_free(refused, TRUE);
     if (pipeline) gst_object_unref(pipeline);
