@@ -56,7 +56,7 @@ static const char* const stats_columns[] = {
     "region-height", "region-pixels",  "region-valid",  "region-valid-fraction",
     "region-min-c",  "region-max-c",   "region-mean-c", "region-median-c",
     "region-peak-c", "region-peak-x",  "region-peak-y", "saturated",
-    "region-saturated", NULL};
+    "region-saturated", "region-tracks-peak", NULL};
 /* clang-format on */
 static const char* const alarm_columns[] = {
     "element",      "state",         "active",    "statistic",
