@@ -188,7 +188,9 @@ static GstCaps* profile_caps(const pyrocam::CameraProfile& profile) {
       caps += ", " PYROCAM_FIELD_BAND_MAP " = (string) \"" +
               pyrocam::gst::band_map_text(profile.mosaic) + "\"";
   }
-  caps += ", " PYROCAM_SIZE_RANGE ", framerate = (fraction) [ 1/1, max ]";
+  // 0/1 too, so that caps asking for it reach set_caps and its error names it (else only
+  // "not-negotiated").
+  caps += ", " PYROCAM_SIZE_RANGE ", " PYROCAM_FRAMERATE_RANGE;
   return gst_caps_from_string(caps.c_str());
 }
 
@@ -225,9 +227,16 @@ static gboolean gst_pyrocam_src_set_caps(GstBaseSrc* src, GstCaps* caps) {
   pg::RawFormat f;
   const GstStructure* s = gst_caps_get_structure(caps, 0);
   if (!pg::parse_raw_caps(caps, &f) ||
-      !gst_structure_get_fraction(s, "framerate", &st.fps_n, &st.fps_d) || st.fps_n <= 0) {
+      !gst_structure_get_fraction(s, "framerate", &st.fps_n, &st.fps_d)) {
     PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation, "Unsupported output format",
-                       "caps without size or positive frame rate");
+                       "caps without size or frame rate");
+    return FALSE;
+  }
+  if (st.fps_n <= 0) {
+    PYROCAM_POST_ERROR(self, pg::ErrorKind::kNegotiation,
+                       "framerate " + std::to_string(st.fps_n) + "/" + std::to_string(st.fps_d) +
+                           ": the simulated camera runs at a fixed frame rate; give one above 0",
+                       "variable frame rate asked for");
     return FALSE;
   }
   if (f.width % mosaic.period_width || f.height % mosaic.period_height) {

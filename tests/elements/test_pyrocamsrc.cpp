@@ -260,5 +260,11 @@ TEST(PyrocamSrcErrors, rejects_a_size_that_is_not_whole_macro_pixels) {
   EXPECT_NE(r.message.find("64x48"), std::string::npos) << r.message;
 }
 
+TEST(PyrocamSrcErrors, names_a_variable_frame_rate_n) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline("pyrocamsrc num-buffers=1 ! video/x-bayer,framerate=0/1 ! fakesink");
+  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION, {"framerate 0/1"});
+}
+
 }  // namespace
 }  // namespace pyrocam::test
