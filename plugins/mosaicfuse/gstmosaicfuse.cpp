@@ -11,7 +11,7 @@
  * So each band of a demosaicking footprint has a value even where the footprint spans more
  * brightness than one exposure holds (a melt pool's steep side), where thermalfuse, fusing whole
  * readings after ratiotemp, has none: on simulated melt pools (targets suite, six exposures a
- * factor 3 apart) 88 % of the pixels hotter than 1300 degC read against 64 %, 0.4 % of the
+ * factor 3 apart) 87 % of the pixels hotter than 1300 degC read against 63 %, 0.4 % of the
  * readings more than max(150 degC, 10 %) off. The output buffer's PyrocamExposureMeta is that of
  * the frame with the most light, whose DN the values are in; values above the saturation level
  * are readings from a shorter exposure. One frame out per frame in, with the latest frame's time.

@@ -34,7 +34,11 @@
  * reads only where a ring of its samples around the pixel, outside its demosaicking footprint,
  * has a half whose mean is 2 of them above it: the pixel's own noise does not decide, so a
  * surface at the threshold reads on none of its pixels rather than on those its noise lifted
- * (which read tens of degrees off).
+ * (which read tens of degrees off). A band value near the saturation level is judged the same
+ * way, on every path: it counts as saturated where such a ring's half lies within 2 standard
+ * deviations of the level (saturated samples counted at it), so that the pixels that keep the
+ * band are not those whose noise pulled it down (the sink caps' saturation-level; frames whose
+ * PyrocamSaturationMeta counts no saturated sample are not checked).
  *
  * #GstRatioTemp:blur-correction (default off; the fused path only) subtracts matched
  * demosaicking's bias on steep gradients: +180 degC at 150 degC a pixel near 1400 degC.
@@ -258,6 +262,7 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
     return FALSE;
   st.demosaic_noise =
       st.fused ? pyrocam::DemosaicNoise{} : rt::demosaic_noise_of(GST_ELEMENT(self), in, model);
+  st.saturation_level_dn = pg::structure_int(in, PYROCAM_FIELD_SATURATION_LEVEL, -1);
   st.configured = true;
   GST_INFO_OBJECT(self, "%d bands of %dx%d (%s) -> GRAY16_LE%s", st.bands, st.width, st.height,
                   layout, st.fused ? " (fused: demosaicked here, a strip at a time)" : "");
@@ -485,6 +490,10 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         chosen.set_analogue_gain(meta ? pyrocam::analogue_gain_factor(meta->gain_db) : 1.0);
         chosen.set_misfit_probability(settings.misfit_probability);
         chosen.set_demosaic_noise(st.demosaic_noise);
+        // A frame without a saturated sample dropped nothing: the saturation-edge check is off.
+        const PyrocamSaturationMeta* saturation = pyrocam_buffer_get_saturation_meta(inbuf);
+        chosen.set_saturation_level(
+            saturation && saturation->samples == 0 ? INFINITY : st.saturation_level_dn);
         chosen.set_partial_bands(settings.allow_partial ||
                                          settings.partial_bands == GST_RATIO_TEMP_PARTIAL_ANY
                                      ? pyrocam::TemperatureEstimator::PartialBands::kAny

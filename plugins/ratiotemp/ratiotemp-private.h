@@ -95,6 +95,7 @@ struct State {
   // Plain planes: what their demosaicking did to the band values' noise (the caps' demosaic
   // and pattern fields; none without them), for the uncertainty.
   pyrocam::DemosaicNoise demosaic_noise;
+  double saturation_level_dn = -1;                      // darksub's, from the caps; -1: the model's
   std::optional<pyrocam::BlurBiasCorrection> blur;      // on the fused path (matched demosaicking)
   bool blur_warned = false;                             // blur-correction asked for off that path
   std::optional<pyrocam::ScaledBrightness> brightness;  // on the fused path (Bayer mosaics)

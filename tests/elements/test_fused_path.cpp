@@ -1,6 +1,6 @@
 // The fused path between demosaic25 and ratiotemp: the two agree on the band planes as their
 // mosaic (video/x-pyrocam-bands(memory:PyrocamMosaic)) when linked, and the ratio readings are
-// then the ones the planes give (but for the dim-edge check's ring, read from the mosaic); the
+// then the ones the planes give (but for the edge checks' rings, read from the mosaic); the
 // brightness readings and the blur correction are the library's on those; other elements get the
 // planes; turning the mixed-pixel check on while playing goes back to the planes; fused caps
 // without what ratiotemp needs are refused.
@@ -55,9 +55,10 @@ Negotiated negotiated(const std::string& description, const char* element, const
   return n;
 }
 
-// The fused path reads the dim-edge check's ring (dim_edge.h) from the mosaic, the planes path
-// from the band planes: they may differ on whether a pixel with a band just above the dim
-// threshold reads, never on a reading both give. Checks that, and that such pixels are few (at
+// The fused path reads the dim-edge and saturation-edge checks' rings (dim_edge.h,
+// saturation_edge.h) from the mosaic, the planes path from the band planes: they may differ on
+// whether a pixel with a band just above the dim threshold or just below the saturation level
+// reads, never on a reading both give. Checks that, and that such pixels are few (at
 // most 1 % of the readings, and 5).
 void expect_same_readings(const std::vector<std::uint8_t>& fused,
                           const std::vector<std::uint8_t>& planes, std::size_t frame) {

@@ -301,6 +301,30 @@ TEST_F(RatioTemp, saturated_area_has_no_reading_with_the_default_method) {
   EXPECT_NEAR(out[7 * 8 + 0] / 10.0 - 273.15, 1300, 60);
 }
 
+// The saturation-edge check (saturation_edge.h) judges a band near darksub's saturation level,
+// the one the caps name: on a plate exposed so that red sits 140 DN above the dark level, with
+// samples marked saturated from 192 DN raw (red about a standard deviation of its noise below
+// that), the pixels whose red samples all stayed below it would read, and low; the plate reads
+// on almost none instead. With the model's 220 DN the same frames read.
+TEST(RatioTempSaturationEdge, a_band_near_the_caps_saturation_level_reads_on_none) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
+  const auto readings = [](int level) {
+    const auto frames = sink_frames(
+        "pyrocamsrc num-buffers=2 scene=plate temperature=1300 ! "
+        "video/x-bayer,width=160,height=120 ! darksub dark-level=50 saturation-level=" +
+        std::to_string(level) + " ! demosaic25 ! ratiotemp model=" +
+        test_model_path("test-model-rgb.json") + " ! fakesink name=sink");
+    EXPECT_EQ(frames.size(), 2u);
+    std::size_t read = 0;
+    for (const auto& f : frames)
+      for (std::size_t k = 0; k + 1 < f.size(); k += 2) read += f[k] || f[k + 1];
+    return read;
+  };
+  const std::size_t at_model_level = readings(220), near_level = readings(192);
+  EXPECT_GT(at_model_level, 2 * 160 * 120 / 5u);  // the plate: a third of the frame
+  EXPECT_LT(near_level, at_model_level / 50) << "read where red's noise kept it below the level";
+}
+
 TEST_F(RatioTemp, method_and_region_change_while_playing) {
   start("ratiotemp method=likelihood stats-interval=0 model=" + rgb_model_path(),
         bands_caps(3, "bayer", 6, 4));

@@ -29,8 +29,13 @@ namespace {
 
 // Sums of the ring's four halves (above, below, left of, right of the pixel). A value without a
 // reading (NaN: an invalid sample, or a mixed-pixel mark) counts as no light, so that such marks
-// only ever refuse more; a saturated one (+INF) makes its half's mean +INF.
+// only ever refuse more; a saturated one (+INF) counts as `saturated`; a number above
+// `foreign_above` makes the ring's mean NaN.
 struct RingHalves {
+  RingHalves(double saturated, double foreign_above)
+      : saturated(saturated), foreign_above(foreign_above) {}
+  double saturated, foreign_above;
+  mutable bool foreign = false;
   // The first of from, from + 1, ... that lies on phase + k step.
   static int first(int from, int phase, int step) {
     return from + ((phase - from) % step + step) % step;
@@ -54,7 +59,7 @@ struct RingHalves {
       const bool inner_row = std::abs(v - y) < ring.inner;
       const int left_end = inner_row ? first_x - ring.inner + 1 : first_x;  // exclusive
       const int right_begin = first(inner_row ? last_x + ring.inner : last_x + 1, phase_x, step_x);
-      Span left, middle, right;
+      Span left{*this}, middle{*this}, right{*this};
       int u = x0;
       for (; u < left_end && u <= x1; u += step_x) left.add(row[u]);
       if (!inner_row)
@@ -70,14 +75,21 @@ struct RingHalves {
     }
   }
   struct Span {
+    const RingHalves& halves;
     double sum = 0;
     int n = 0;
-    void add(float v) { sum += value(v), ++n; }
+    void add(float v) { sum += halves.value(v), ++n; }
   };
-  static double value(float v) { return std::isnan(v) ? 0.0 : v; }
-  // The largest half's mean; NaN where no half has a value.
+  double value(float v) const {
+    if (std::isnan(v)) return 0.0;
+    if (std::isinf(v)) return saturated;
+    foreign |= v > foreign_above;
+    return v;
+  }
+  // The largest half's mean; NaN where no half has a value, or one is foreign.
   double largest() const {
     double best = NAN;
+    if (foreign) return best;
     for (int k = 0; k < 4; ++k)
       if (count[k] > 0 && !(sum[k] / count[k] <= best)) best = sum[k] / count[k];
     return best;
@@ -86,16 +98,18 @@ struct RingHalves {
 
 }  // namespace
 
-double plane_ring_mean(const cv::Mat& plane, int first, int last, int y, DimEdgeCheck::Ring ring) {
-  RingHalves halves;
+double plane_ring_mean(const cv::Mat& plane, int first, int last, int y, DimEdgeCheck::Ring ring,
+                       double saturated, double foreign_above) {
+  RingHalves halves(saturated, foreign_above);
   halves.add(plane, first, last, y, ring, 1, 1, 0, 0);
   return halves.largest();
 }
 
 double mosaic_ring_mean(const cv::Mat& mosaic, const MosaicLayout& layout, int band, int first,
-                        int last, int y, DimEdgeCheck::Ring ring) {
+                        int last, int y, DimEdgeCheck::Ring ring, double saturated,
+                        double foreign_above) {
   // The band's samples only: a stride of the period from each of its places in the period.
-  RingHalves halves;
+  RingHalves halves(saturated, foreign_above);
   for (int py = 0; py < layout.period_height; ++py)
     for (int px = 0; px < layout.period_width; ++px)
       if (layout.band_at(px, py) == band)

@@ -65,6 +65,7 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
         std::to_string(options_.saturation_level_dn));
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model_->profile().thresholds.inference_saturation_dn;
+  planes_estimator_.set_saturation_level(options_.saturation_level_dn);
   if (options.check_layout) {
     planes_estimator_.set_fit_audit_sampling(1, kAuditStride);
     planes_estimator_.take_fit_audit(true);  // its tables, now
@@ -82,6 +83,9 @@ FrameMeasurer::Unread FrameMeasurer::unread(const cv::Mat& temperature_c,
   const DimEdgeCheck near(model_->profile(), analogue_gain_factor(options_.gain_db),
                           demosaic_noise(layout_, options_.demosaic));
   const bool checked = planes_estimator_.checks_dim_edges();
+  // Saturated: marked so, or near the level, where the saturation-edge check may mark it.
+  const SaturationEdgeCheck near_level(model_->profile(), analogue_gain_factor(options_.gain_db),
+                                       options_.saturation_level_dn);
   const float dim_dn = static_cast<float>(model_->profile().thresholds.inference_dim_dn);
   for (int y = 0; y < temperature_c.rows; ++y)
     for (int x = 0; x < temperature_c.cols; ++x) {
@@ -92,7 +96,7 @@ FrameMeasurer::Unread FrameMeasurer::unread(const cv::Mat& temperature_c,
         const cv::Mat& plane = planes_[b];
         if (plane.size() != temperature_c.size()) continue;
         const float v = plane.at<float>(y, x);
-        saturated |= std::isinf(v) && v > 0;
+        saturated |= v >= near_level.checked_dn(static_cast<int>(b));
         dim_band |= v < (checked ? near.checked_dn(static_cast<int>(b)) : dim_dn);
       }
       u.saturated += saturated;

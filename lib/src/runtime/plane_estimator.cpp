@@ -216,20 +216,28 @@ std::unique_ptr<const DimEdgeCheck> PlaneEstimator::dim_edge_check(
   return std::make_unique<const DimEdgeCheck>(model_->profile(), analogue_gain_, noise);
 }
 
+SaturationEdgeCheck PlaneEstimator::saturation_edge_check() const {
+  const double level = saturation_level_dn_ > 0
+                           ? saturation_level_dn_
+                           : model_->profile().thresholds.inference_saturation_dn;
+  return SaturationEdgeCheck(model_->profile(), analogue_gain_, level);
+}
+
 std::function<double(int, int, int, int)> PlaneEstimator::planes_ring_mean_of(
-    const std::vector<cv::Mat>& planes) const {
-  if (dim_edge_mosaic_) return mosaic_window_mean_of(*dim_edge_mosaic_);
+    const std::vector<cv::Mat>& planes, double saturated, double foreign_above) const {
+  if (dim_edge_mosaic_) return mosaic_window_mean_of(*dim_edge_mosaic_, saturated, foreign_above);
   const DimEdgeCheck::Ring ring = DimEdgeCheck::plane_ring(model_->profile().mosaic);
-  return [&planes, ring](int b, int first, int last, int y) {
-    return plane_ring_mean(planes[static_cast<std::size_t>(b)], first, last, y, ring);
+  return [&planes, ring, saturated, foreign_above](int b, int first, int last, int y) {
+    return plane_ring_mean(planes[static_cast<std::size_t>(b)], first, last, y, ring, saturated,
+                           foreign_above);
   };
 }
 
 std::function<double(int, int, int, int)> PlaneEstimator::mosaic_window_mean_of(
-    const MatchedMosaic& source) {
-  return [&source](int b, int first, int last, int y) {
+    const MatchedMosaic& source, double saturated, double foreign_above) {
+  return [&source, saturated, foreign_above](int b, int first, int last, int y) {
     return mosaic_ring_mean(source.mosaic, source.layout, b, first, last, y,
-                            DimEdgeCheck::kMosaicRing);
+                            DimEdgeCheck::kMosaicRing, saturated, foreign_above);
   };
 }
 
@@ -239,12 +247,18 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
   t.create(size, CV_32F);
   if (u) u->create(size, CV_32F);
   const std::unique_ptr<const DimEdgeCheck> dim_edge = dim_edge_check(noise_);
+  const SaturationEdgeCheck saturation_edge = saturation_edge_check();
   const auto window_mean = planes_ring_mean_of(planes);
+  const auto saturation_window =
+      planes_ring_mean_of(planes, saturation_edge.level_dn(), saturation_edge.foreign_above_dn());
   // Rows in parallel: each estimator call is const and thread-safe.
   cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
     std::vector<const float*> row_ptrs(static_cast<std::size_t>(bands));
+    std::vector<std::vector<float>> band_scratch;
     for (int y = rows.start; y < rows.end; ++y) {
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
+      saturation_edge.apply(row_ptrs.data(), static_cast<std::size_t>(size.width), 0, y,
+                            saturation_window, band_scratch, DimEdgeCheck::kSpan, !reads_partial());
       float* out = t.ptr<float>(y);
       estimate_row(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
       if (dim_edge)
@@ -262,13 +276,19 @@ void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat&
   const cv::Size size = checked_size(planes);
   codes.create(size, CV_16U);
   const std::unique_ptr<const DimEdgeCheck> dim_edge = dim_edge_check(noise_);
+  const SaturationEdgeCheck saturation_edge = saturation_edge_check();
   const auto window_mean = planes_ring_mean_of(planes);
+  const auto saturation_window =
+      planes_ring_mean_of(planes, saturation_edge.level_dn(), saturation_edge.foreign_above_dn());
   // Row by row: a row's temperatures are encoded while they are in cache.
   cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
     std::vector<const float*> row_ptrs(static_cast<std::size_t>(bands));
+    std::vector<std::vector<float>> band_scratch;
     std::vector<float> t(static_cast<std::size_t>(size.width));
     for (int y = rows.start; y < rows.end; ++y) {
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
+      saturation_edge.apply(row_ptrs.data(), static_cast<std::size_t>(size.width), 0, y,
+                            saturation_window, band_scratch, DimEdgeCheck::kSpan, !reads_partial());
       estimate_row(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
       if (dim_edge)
         dim_edge->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data(), 0, y,
@@ -291,6 +311,7 @@ void PlaneEstimator::for_each_strip(const MatchedMosaic& source, const LitRun& l
     std::vector<cv::Mat> strip;
     std::vector<std::uint8_t> lit;
     std::vector<float> scratch(static_cast<std::size_t>(width));
+    std::vector<std::vector<float>> band_scratch;
     for (int k = range.start; k < range.end; ++k) {
       const int y0 = k * kStripRows, y1 = std::min(height, y0 + kStripRows);
       demosaic_matched_bayer_rows(mosaic, source.layout, source.no_signal_dn, y0, y1, strip, lit);
@@ -304,7 +325,7 @@ void PlaneEstimator::for_each_strip(const MatchedMosaic& source, const LitRun& l
             const float* rows[3] = {strip[0].ptr<float>(y - y0) + x0,
                                     strip[1].ptr<float>(y - y0) + x0,
                                     strip[2].ptr<float>(y - y0) + x0};
-            lit_run(y, x0, x1, rows, scratch.data());
+            lit_run(y, x0, x1, rows, scratch.data(), band_scratch);
           } else {
             dark_run(y, x0, x1);
           }
@@ -321,11 +342,16 @@ void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* 
   if (u) u->create(source.mosaic.size(), CV_32F);
   const DemosaicNoise noise = demosaic_noise(source.layout, DemosaicMethod::kMatched);
   const std::unique_ptr<const DimEdgeCheck> dim_edge = dim_edge_check(noise);
+  const SaturationEdgeCheck saturation_edge = saturation_edge_check();
   const auto window_mean = mosaic_window_mean_of(source);
+  const auto saturation_window =
+      mosaic_window_mean_of(source, saturation_edge.level_dn(), saturation_edge.foreign_above_dn());
   for_each_strip(
       source,
-      [&](int y, int x0, int x1, const float* const* rows, float*) {
+      [&](int y, int x0, int x1, const float** rows, float*, std::vector<std::vector<float>>& bs) {
         const auto n = static_cast<std::size_t>(x1 - x0);
+        saturation_edge.apply(rows, n, x0, y, saturation_window, bs, DimEdgeCheck::kSpan,
+                              !reads_partial());
         float* out = t.ptr<float>(y) + x0;
         estimate_row(rows, n, out);
         if (dim_edge) dim_edge->apply(rows, n, out, x0, y, window_mean);
@@ -342,10 +368,16 @@ void PlaneEstimator::estimate_codes(const MatchedMosaic& source, cv::Mat& codes)
   codes.create(source.mosaic.size(), CV_16U);
   const std::unique_ptr<const DimEdgeCheck> dim_edge =
       dim_edge_check(demosaic_noise(source.layout, DemosaicMethod::kMatched));
+  const SaturationEdgeCheck saturation_edge = saturation_edge_check();
   const auto window_mean = mosaic_window_mean_of(source);
+  const auto saturation_window =
+      mosaic_window_mean_of(source, saturation_edge.level_dn(), saturation_edge.foreign_above_dn());
   for_each_strip(
       source,
-      [&](int y, int x0, int x1, const float* const* rows, float* t) {
+      [&](int y, int x0, int x1, const float** rows, float* t,
+          std::vector<std::vector<float>>& bs) {
+        saturation_edge.apply(rows, static_cast<std::size_t>(x1 - x0), x0, y, saturation_window, bs,
+                              DimEdgeCheck::kSpan, !reads_partial());
         // The run's temperatures, encoded while they are in cache.
         estimate_row(rows, static_cast<std::size_t>(x1 - x0), t);
         if (dim_edge)

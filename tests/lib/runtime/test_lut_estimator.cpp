@@ -29,9 +29,12 @@ TEST(LutEstimator, gives_the_networks_answer_on_noisy_pixels) {
   const NoisyPixels px = noisy_pixels(m, kSweepC, 1500, 15, 200, saturation_signal_dn(m), 0.02, 11);
   const std::vector<cv::Mat> planes = as_planes(px);
   // Rows of band planes go to two threads: the table is filled from both at once.
+  // A row of unrelated pixels, not an image: no neighbours to judge the saturation level by.
   cv::Mat mlp, lut;
-  PlaneEstimator(model, Method::kMlp).estimate(planes, mlp);
-  const PlaneEstimator lut_estimator(model, Method::kLut);
+  PlaneEstimator mlp_estimator(model, Method::kMlp), lut_estimator(model, Method::kLut);
+  mlp_estimator.set_saturation_level(INFINITY);
+  lut_estimator.set_saturation_level(INFINITY);
+  mlp_estimator.estimate(planes, mlp);
   lut_estimator.estimate(planes, lut);
   const Agreement a = compare(mlp, lut, 0.5);
   EXPECT_EQ(a.only_reference, 0u);
@@ -120,13 +123,16 @@ TEST(LutEstimator, a_row_gives_each_pixel_the_bits_it_gets_alone) {
     const auto& o = odd[(i / 13) % 6];
     for (int b = 0; b < 3; ++b) planes[static_cast<std::size_t>(b)].at<float>(0, i) = o[b];
   }
-  const PlaneEstimator lut(model, Method::kLut);
+  // Unrelated pixels, not an image: no neighbours to judge the saturation level by.
+  PlaneEstimator lut(model, Method::kLut), lut_backwards(model, Method::kLut);
+  lut.set_saturation_level(INFINITY);
+  lut_backwards.set_saturation_level(INFINITY);
   cv::Mat row;
   lut.estimate(planes, row);
   std::vector<cv::Mat> reversed(3);
   for (int b = 0; b < 3; ++b) cv::flip(planes[static_cast<std::size_t>(b)], reversed[b], 1);
   cv::Mat backwards;
-  PlaneEstimator(model, Method::kLut).estimate(reversed, backwards);
+  lut_backwards.estimate(reversed, backwards);
   int differ = 0, read = 0;
   for (int i = 0; i < n; ++i) {
     double s[3];

@@ -128,12 +128,14 @@ class DimEdgeCheck {
 // The largest of the means of the four halves (above, below, left, right) of the ring around
 // columns first .. last of row y of `plane` (CV_32F): within `ring.outer` of them, not within
 // `ring.inner - 1`, clipped to the image; a NaN value (no reading) counts as 0, a +INF
-// (saturated) one makes its half's mean +INF. Columns first .. last are in neither the left nor
-// the right half.
-double plane_ring_mean(const cv::Mat& plane, int first, int last, int y, DimEdgeCheck::Ring ring);
+// (saturated) one as `saturated` (by default making its half's mean +INF); NaN where a number
+// lies above `foreign_above`. Columns first .. last are in neither the left nor the right half.
+double plane_ring_mean(const cv::Mat& plane, int first, int last, int y, DimEdgeCheck::Ring ring,
+                       double saturated = INFINITY, double foreign_above = INFINITY);
 // The same over the samples of band `band` of a mosaic (CV_32F, the layout's pattern at its
 // top-left pixel).
 double mosaic_ring_mean(const cv::Mat& mosaic, const MosaicLayout& layout, int band, int first,
-                        int last, int y, DimEdgeCheck::Ring ring);
+                        int last, int y, DimEdgeCheck::Ring ring, double saturated = INFINITY,
+                        double foreign_above = INFINITY);
 
 }  // namespace pyrocam

@@ -17,6 +17,7 @@
 #include "pyrocam/runtime/emissivity.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/misfit.h"
+#include "pyrocam/runtime/saturation_edge.h"
 
 namespace pyrocam {
 
@@ -99,6 +100,12 @@ class PlaneEstimator {
   void set_dim_edge_mosaic(const MatchedMosaic* source) { dim_edge_mosaic_ = source; }
   // Whether the dim-edge check applies: where every band must read (no partial fit).
   bool checks_dim_edges() const { return !reads_partial(); }
+  // The raw level (DN) from which the planes' samples were marked saturated (darksub's
+  // saturation-level), for the saturation-edge check (saturation_edge.h), which runs on every
+  // path; 0 or less: the model profile's inference saturation threshold (the default); +INF: no
+  // check (planes that are not images, such as rows of unrelated pixels). Not while an estimate
+  // runs.
+  void set_saturation_level(double raw_dn) { saturation_level_dn_ = raw_dn; }
 
   // How well the readings fit the model's band spectra, whatever the misfit setting: a few
   // readings of every kFitAuditRows-th row (run on the fused path) go through the band-consistency
@@ -140,17 +147,21 @@ class PlaneEstimator {
   // The dim-edge check (dim_edge.h) for planes of that noise, or null where pixels with a band
   // below the dim threshold go to the likelihood fit (partial bands).
   std::unique_ptr<const DimEdgeCheck> dim_edge_check(const DemosaicNoise& noise) const;
+  SaturationEdgeCheck saturation_edge_check() const;
   bool reads_partial() const;
-  // The ring means the check reads: of the mosaic, or of the planes (set_dim_edge_mosaic).
+  // The ring means the checks read: of the mosaic, or of the planes (set_dim_edge_mosaic), with
+  // saturated values counted as `saturated` and NaN where one lies above `foreign_above`.
   static std::function<double(int, int, int, int)> mosaic_window_mean_of(
-      const MatchedMosaic& source);
+      const MatchedMosaic& source, double saturated = INFINITY, double foreign_above = INFINITY);
   std::function<double(int, int, int, int)> planes_ring_mean_of(
-      const std::vector<cv::Mat>& planes) const;
+      const std::vector<cv::Mat>& planes, double saturated = INFINITY,
+      double foreign_above = INFINITY) const;
   // Throws InputError for a source the fused path cannot read with this model.
   void check_matched_mosaic(const MatchedMosaic& source) const;
-  // The fused path's strips: for each row of each strip, `lit_run(y, x0, x1, rows, scratch)` for
-  // runs of blocks with light (rows: the bands' values at x0; scratch: room for a row of floats)
-  // and `dark_run(y, x0, x1)` for the others.
+  // The fused path's strips: for each row of each strip, `lit_run(y, x0, x1, rows, scratch,
+  // band_scratch)` for runs of blocks with light (rows: the bands' values at x0; scratch: room
+  // for a row of floats; band_scratch: the thread's for SaturationEdgeCheck::apply) and
+  // `dark_run(y, x0, x1)` for the others.
   template <class LitRun, class DarkRun>
   void for_each_strip(const MatchedMosaic& source, const LitRun& lit_run,
                       const DarkRun& dark_run) const;
@@ -169,6 +180,7 @@ class PlaneEstimator {
   double analogue_gain_ = 1.0;
   DemosaicNoise noise_;
   const MatchedMosaic* dim_edge_mosaic_ = nullptr;
+  double saturation_level_dn_ = 0;  // 0 or less: the profile's
   // The audit's check (its own tables; made by the first take_fit_audit) and counts, shared by
   // the rows' threads.
   mutable std::unique_ptr<MisfitCheck> audit_;
