@@ -239,8 +239,8 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
     const FrameMeasurer::Unread why = measurer.unread(t, mask);
     std::cerr << "warning: " << j.frame.filename().string() << ": " << s.valid << " of " << s.pixels
               << " pixels of the ROI read; " << why.saturated
-              << " have a saturated band (shorten the exposure), " << why.dim
-              << " a band below or near the dim threshold ("
+              << " have a band saturated or at the saturation level (shorten the exposure), "
+              << why.dim << " a band below or near the dim threshold ("
               << model.profile().thresholds.inference_dim_dn << " DN; lengthen it)\n";
   }
   TruthScore ts;

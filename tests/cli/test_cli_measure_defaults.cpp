@@ -95,12 +95,13 @@ TEST(CliMeasureDefaults, a_frame_that_reads_little_says_why) {
   const std::string bright = run("bright"), dark = run("dark"), good = run("good");
   const auto pixels = first_stats_row(dir / "good-t").at("pixels");
   EXPECT_NE(bright.find("0 of " + pixels + " pixels of the ROI read; " + pixels +
-                        " have a saturated band (shorten the exposure), 0 a band below"),
+                        " have a band saturated or at the saturation level (shorten the exposure), "
+                        "0 a band below"),
             std::string::npos)
       << bright;
   EXPECT_NE(dark.find("0 of " + pixels +
-                      " pixels of the ROI read; 0 have a saturated band "
-                      "(shorten the exposure), " +
+                      " pixels of the ROI read; 0 have a band saturated or at the saturation "
+                      "level (shorten the exposure), " +
                       pixels + " a band below or near the dim threshold"),
             std::string::npos)
       << dark;

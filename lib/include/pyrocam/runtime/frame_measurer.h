@@ -64,8 +64,9 @@ class FrameMeasurer {
   cv::Size output_size(cv::Size raw) const;
   // Why pixels of the last frame measured have no reading: of those under `mask` (CV_8U of the
   // output's size, non-zero = counted; empty: all) without a reading in `temperature_c`, how many
-  // have a saturated band and how many (of the rest) a band below the model's dim threshold or
-  // near it (DimEdgeCheck::checked_dn).
+  // have a band saturated or near the saturation level (SaturationEdgeCheck::checked_dn) and
+  // how many (of the rest) a band below the model's dim threshold or near it
+  // (DimEdgeCheck::checked_dn).
   struct Unread {
     long saturated = 0, dim = 0;
   };
