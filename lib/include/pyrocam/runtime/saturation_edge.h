@@ -13,8 +13,9 @@ namespace pyrocam {
 // darksub marks a raw sample at the saturation level +INF, and a band value drawn from such a
 // sample is dropped (partial bands) or leaves its pixel without a reading. On a surface whose
 // band lies near that level, the values that stay are those whose noise pulled them down, and
-// the readings lean one way (5x5, a 2600 degC plate exposed at twice the usual: its median 16
-// degC low). The check decides from the band's values around the pixel, in the ring outside
+// the readings lean one way (a colour 1500 degC plate with red at the level: a fifth of it read,
+// 8 degC high; a 5x5 2600 degC plate with a band at the level: 3 degC lower than the exposures
+// around it read). The check decides from the band's values around the pixel, in the ring outside
 // its demosaicking footprint that the dim-edge check reads (dim_edge.h): a band value near the
 // level is marked saturated too where the mean of one of the ring's halves, its saturated
 // values counted at the level, lies within kNoiseMargin of a raw sample's noise below the
@@ -25,7 +26,7 @@ namespace pyrocam {
 // every band must read). Values further above the level than the check's margin are not the
 // frame's own samples (mosaicfuse scales a shorter exposure's up): neither they nor pixels
 // whose ring holds one are checked. (Checked, the bracket targets' fused mosaics read 75 % of
-// the pool hotter than 1300 degC instead of 89 %: every band must read there.)
+// the pool hotter than 1300 degC instead of 87 %: every band must read there.)
 class SaturationEdgeCheck {
  public:
   // A raw sample's noise at the level, in standard deviations: where the surface lies this far
@@ -53,12 +54,12 @@ class SaturationEdgeCheck {
   // Marks +INF the values rows[b][0 .. n) (output pixels x0 .. x0 + n - 1 of row y) between
   // checked_dn and the level plus its margin whose span's ring's largest half mean
   // `window_mean(b, first, last, y)` (spans of `span_columns` from column 0 on; saturated values
-  // counted at level_dn) is at least
-  // mark_dn: such a band's row is copied into scratch[b] (n values) and rows[b] points there.
-  // A band's row without a value to check costs one vectorised pass. With
-  // `every_band_reads` (no partial fit), a pixel with a band already saturated or invalid has no
-  // reading anyway and is not checked (on a plate whose red saturates, green near the level
-  // cost a ring per span for nothing: 60 % more of the colour chain's time).
+  // counted at level_dn) is at least mark_dn: such a band's row is copied into scratch[b] (n
+  // values) and rows[b] points there. A band's row without a value to check costs one
+  // vectorised pass. With `every_band_reads` (no partial fit), a pixel with a band already
+  // saturated or invalid has no reading anyway and is not checked (on a plate whose red
+  // saturates, green near the level cost a ring per span for nothing: 60 % more of the colour
+  // chain's time).
   template <class WindowMean>
   void apply(const float** rows, std::size_t n, int x0, int y, const WindowMean& window_mean,
              std::vector<std::vector<float>>& scratch, int span_columns,
