@@ -248,6 +248,7 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
   if (u) u->create(size, CV_32F);
   const std::unique_ptr<const DimEdgeCheck> dim_edge = dim_edge_check(noise_);
   const SaturationEdgeCheck saturation_edge = saturation_edge_check();
+  const bool every_band_reads = !reads_partial();
   const auto window_mean = planes_ring_mean_of(planes);
   const auto saturation_window =
       planes_ring_mean_of(planes, saturation_edge.level_dn(), saturation_edge.foreign_above_dn());
@@ -258,7 +259,7 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
     for (int y = rows.start; y < rows.end; ++y) {
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
       saturation_edge.apply(row_ptrs.data(), static_cast<std::size_t>(size.width), 0, y,
-                            saturation_window, band_scratch, DimEdgeCheck::kSpan, !reads_partial());
+                            saturation_window, band_scratch, DimEdgeCheck::kSpan, every_band_reads);
       float* out = t.ptr<float>(y);
       estimate_row(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
       if (dim_edge)
@@ -277,6 +278,7 @@ void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat&
   codes.create(size, CV_16U);
   const std::unique_ptr<const DimEdgeCheck> dim_edge = dim_edge_check(noise_);
   const SaturationEdgeCheck saturation_edge = saturation_edge_check();
+  const bool every_band_reads = !reads_partial();
   const auto window_mean = planes_ring_mean_of(planes);
   const auto saturation_window =
       planes_ring_mean_of(planes, saturation_edge.level_dn(), saturation_edge.foreign_above_dn());
@@ -288,7 +290,7 @@ void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat&
     for (int y = rows.start; y < rows.end; ++y) {
       for (int b = 0; b < bands; ++b) row_ptrs[b] = planes[b].ptr<float>(y);
       saturation_edge.apply(row_ptrs.data(), static_cast<std::size_t>(size.width), 0, y,
-                            saturation_window, band_scratch, DimEdgeCheck::kSpan, !reads_partial());
+                            saturation_window, band_scratch, DimEdgeCheck::kSpan, every_band_reads);
       estimate_row(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
       if (dim_edge)
         dim_edge->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data(), 0, y,
@@ -343,6 +345,7 @@ void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* 
   const DemosaicNoise noise = demosaic_noise(source.layout, DemosaicMethod::kMatched);
   const std::unique_ptr<const DimEdgeCheck> dim_edge = dim_edge_check(noise);
   const SaturationEdgeCheck saturation_edge = saturation_edge_check();
+  const bool every_band_reads = !reads_partial();
   const auto window_mean = mosaic_window_mean_of(source);
   const auto saturation_window =
       mosaic_window_mean_of(source, saturation_edge.level_dn(), saturation_edge.foreign_above_dn());
@@ -351,7 +354,7 @@ void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* 
       [&](int y, int x0, int x1, const float** rows, float*, std::vector<std::vector<float>>& bs) {
         const auto n = static_cast<std::size_t>(x1 - x0);
         saturation_edge.apply(rows, n, x0, y, saturation_window, bs, DimEdgeCheck::kSpan,
-                              !reads_partial());
+                              every_band_reads);
         float* out = t.ptr<float>(y) + x0;
         estimate_row(rows, n, out);
         if (dim_edge) dim_edge->apply(rows, n, out, x0, y, window_mean);
@@ -369,6 +372,7 @@ void PlaneEstimator::estimate_codes(const MatchedMosaic& source, cv::Mat& codes)
   const std::unique_ptr<const DimEdgeCheck> dim_edge =
       dim_edge_check(demosaic_noise(source.layout, DemosaicMethod::kMatched));
   const SaturationEdgeCheck saturation_edge = saturation_edge_check();
+  const bool every_band_reads = !reads_partial();
   const auto window_mean = mosaic_window_mean_of(source);
   const auto saturation_window =
       mosaic_window_mean_of(source, saturation_edge.level_dn(), saturation_edge.foreign_above_dn());
@@ -377,7 +381,7 @@ void PlaneEstimator::estimate_codes(const MatchedMosaic& source, cv::Mat& codes)
       [&](int y, int x0, int x1, const float** rows, float* t,
           std::vector<std::vector<float>>& bs) {
         saturation_edge.apply(rows, static_cast<std::size_t>(x1 - x0), x0, y, saturation_window, bs,
-                              DimEdgeCheck::kSpan, !reads_partial());
+                              DimEdgeCheck::kSpan, every_band_reads);
         // The run's temperatures, encoded while they are in cache.
         estimate_row(rows, static_cast<std::size_t>(x1 - x0), t);
         if (dim_edge)

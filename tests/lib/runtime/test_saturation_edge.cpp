@@ -72,6 +72,9 @@ TEST(SaturationEdge, levels_follow_the_noise_model) {
     EXPECT_LT(gained.mark_dn(b), check.mark_dn(b)) << b;
   }
   EXPECT_THROW(SaturationEdgeCheck(profile, 1.0, NAN), InputError);
+  const SaturationEdgeCheck off(profile, 1.0, INFINITY);  // nothing saturates: no check
+  EXPECT_EQ(off.bands(), 0);
+  EXPECT_EQ(off.checked_dn(0), INFINITY);
 }
 
 // On a row: a value near the level is marked where its ring reaches a saturated region or lies

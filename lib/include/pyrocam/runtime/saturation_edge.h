@@ -48,8 +48,9 @@ class SaturationEdgeCheck {
   // scaled up; no plain frame has one short of +INF): a ring holding one is no evidence, and the
   // check leaves its pixels alone.
   double foreign_above_dn() const { return foreign_above_dn_; }
-  float mark_dn(int band) const { return mark_dn_[static_cast<std::size_t>(band)]; }
-  float checked_dn(int band) const { return checked_dn_[static_cast<std::size_t>(band)]; }
+  // Per band; +INF for every band where the check is off (bands() 0).
+  float mark_dn(int band) const { return level(mark_dn_, band); }
+  float checked_dn(int band) const { return level(checked_dn_, band); }
 
   // Marks +INF the values rows[b][0 .. n) (output pixels x0 .. x0 + n - 1 of row y) between
   // checked_dn and the level plus its margin whose span's ring's largest half mean
@@ -97,6 +98,9 @@ class SaturationEdgeCheck {
   bool marks(std::size_t band, double ring_mean) const { return ring_mean >= mark_dn_[band]; }
 
  private:
+  static float level(const std::vector<float>& levels, int band) {
+    return levels.empty() ? INFINITY : levels[static_cast<std::size_t>(band)];
+  }
   // Whether one of values[0 .. n) lies in [low, high] (vectorised).
   static bool any_within(const float* values, std::size_t n, float low, float high);
   static bool all_finite(const float* const* rows, std::size_t bands, std::size_t i) {
