@@ -1,5 +1,6 @@
 // mosaicfuse and pyrocamsrc's bracket: each fused mosaic is, sample by sample, the number of the
-// most exposed of the last `frames` frames that has one, scaled to the most exposed frame held,
+// most exposed of the last `frames` frames that has one (not near the level next to a saturated
+// sample of its band, where another has one), scaled to the most exposed frame held,
 // whose exposure the buffer then carries; frames without an exposure pass unchanged with a
 // warning.
 #include <algorithm>
@@ -20,20 +21,47 @@ FuseRun run(const std::string& launch, const std::function<void(GstElement*)>& p
   return run_bracket<float>(launch, prepare);
 }
 
-std::string chain(const std::string& fuse) {
-  return "pyrocamsrc scene=melt-pool bracket=1,0.333,0.111 num-buffers=9 ! "
-         "video/x-bayer,width=64,height=48 ! darksub dark-level=50 ! " +
-         fuse + " ! fakesink name=sink";
+std::string chain(const std::string& fuse, const std::string& camera = "") {
+  return camera.empty() ? "pyrocamsrc scene=melt-pool bracket=3,1,0.333 num-buffers=9 ! "
+                          "video/x-bayer,width=64,height=48 ! darksub dark-level=50 ! " +
+                              fuse + " ! fakesink name=sink"
+                        : camera + " ! darksub dark-level=50 ! " + fuse + " ! fakesink name=sink";
 }
 
-TEST(MosaicFuse, EachSampleFromTheMostExposedOfTheLastFramesScaledToIt) {
-  REQUIRE_ELEMENT("mosaicfuse");
-  const FuseRun plain = run(chain("mosaicfuse frames=1")),
-                fused = run(chain("mosaicfuse frames=3"));
+// Whether sample i of a width-wide mosaic (cells of `period`) is near the level (at least 85 %
+// of the largest number seen, this frame's included) with a sample of its band within two cells
+// saturated: the fusion takes it only where no frame has a sample free of that.
+std::vector<bool> near_saturated(const std::vector<float>& v, int width, int period,
+                                 float& largest) {
+  for (float x : v)
+    if (std::isfinite(x)) largest = std::max(largest, x);
+  const int height = static_cast<int>(v.size()) / width;
+  std::vector<bool> near(v.size(), false);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      if (!(v[y * width + x] >= 0.85f * largest)) continue;
+      for (int dy = -2 * period; dy <= 2 * period; dy += period)
+        for (int dx = -2 * period; dx <= 2 * period; dx += period) {
+          const int yy = y + dy, xx = x + dx;
+          if (yy >= 0 && yy < height && xx >= 0 && xx < width &&
+              v[yy * width + xx] == std::numeric_limits<float>::infinity())
+            near[y * width + x] = true;
+        }
+    }
+  return near;
+}
+
+void expect_fused(const std::string& camera, int width, int period) {
+  const FuseRun plain = run(chain("mosaicfuse frames=1", camera)),
+                fused = run(chain("mosaicfuse frames=3", camera));
   ASSERT_TRUE(plain.eos && fused.eos);
   ASSERT_EQ(plain.frames.size(), 9u);
   ASSERT_EQ(fused.frames.size(), 9u);
-  std::size_t from_earlier = 0, plain_numbers = 0, fused_numbers = 0;
+  std::vector<std::vector<bool>> near;
+  float largest = 0;
+  for (const auto& f : plain.frames)
+    near.push_back(near_saturated(f.values, width, period, largest));
+  std::size_t from_earlier = 0, plain_numbers = 0, fused_numbers = 0, by_neighbours = 0;
   for (std::size_t k = 0; k < 9; ++k) {
     const std::size_t first = k >= 2 ? k - 2 : 0;
     // The reference: the most exposed frame held (the latest of equals).
@@ -44,18 +72,21 @@ TEST(MosaicFuse, EachSampleFromTheMostExposedOfTheLastFramesScaledToIt) {
     const std::size_t n = plain.frames[k].values.size();
     ASSERT_EQ(fused.frames[k].values.size(), n);
     for (std::size_t i = 0; i < n; ++i) {
-      // The expected sample: the most exposed of k-2..k with a number, the latest on ties.
-      float want = std::numeric_limits<float>::infinity();
-      double best = 0;
+      // The expected sample: the most exposed of k-2..k with a number not near a saturated
+      // one (the latest on ties), else the most exposed with a number.
+      float want = std::numeric_limits<float>::infinity(), any = want;
+      double best = 0, best_any = 0;
       for (std::size_t j = first; j <= k; ++j) {
         const float v = plain.frames[j].values[i];
-        if (std::isfinite(v) && plain.frames[j].exposure_us >= best) {
-          best = plain.frames[j].exposure_us;
-          want = v * static_cast<float>(reference / best);
-        }
+        const double e = plain.frames[j].exposure_us;
+        const float scaled = v * static_cast<float>(reference / e);
+        if (std::isfinite(v) && e >= best_any) best_any = e, any = scaled;
+        if (std::isfinite(v) && !near[j][i] && e >= best) best = e, want = scaled;
       }
+      if (best == 0) want = any;
       ASSERT_EQ(fused.frames[k].values[i], want) << "frame " << k << " sample " << i;
       from_earlier += want != plain.frames[k].values[i];
+      by_neighbours += want != any;
       plain_numbers += std::isfinite(plain.frames[k].values[i]);
       fused_numbers += std::isfinite(want);
     }
@@ -72,10 +103,26 @@ TEST(MosaicFuse, EachSampleFromTheMostExposedOfTheLastFramesScaledToIt) {
     saturated_plain += static_cast<std::size_t>(std::max(0LL, plain.frames[k].saturated));
   }
   EXPECT_GT(saturated_plain, 0u);  // the long exposures saturate the pool
-  // The bracket matters here: samples came from other frames, and more of them are numbers.
+  // The bracket matters here: samples came from other frames, and more of them are numbers;
+  // and some near the level were taken from a shorter frame for their neighbours.
   EXPECT_GT(from_earlier, 0u);
   EXPECT_GT(fused_numbers, plain_numbers);
+  EXPECT_GT(by_neighbours, 0u);
   EXPECT_TRUE(plain.warnings.empty() && fused.warnings.empty());
+}
+
+TEST(MosaicFuse, EachSampleFromTheMostExposedOfTheLastFramesScaledToIt) {
+  REQUIRE_ELEMENT("mosaicfuse");
+  expect_fused("", 64, 2);
+}
+
+// The neighbours of a 5x5 mosaic's sample are 5 pixels apart (the caps' pattern says so).
+TEST(MosaicFuse, A5x5MosaicsNeighboursAreItsBandsSamples) {
+  REQUIRE_ELEMENT("mosaicfuse");
+  expect_fused(
+      "pyrocamsrc profile=nir5x5-reference scene=melt-pool bracket=3,1,0.333 num-buffers=9 "
+      "! video/x-raw,width=100,height=60",
+      100, 5);
 }
 
 bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {

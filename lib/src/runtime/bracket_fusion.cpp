@@ -69,11 +69,73 @@ void BracketFusion::add(const cv::Mat& decikelvin, double light, cv::Mat& out) {
   while (static_cast<int>(held_.size()) > frames_ - 1) held_.pop_front();
 }
 
-MosaicBracketFusion::MosaicBracketFusion(int frames) : frames_(frames) {
+MosaicBracketFusion::MosaicBracketFusion(int frames, int period)
+    : frames_(frames), period_(period) {
   if (frames < 1 || frames > kMaxBracketFrames)
     throw InputError("mosaic bracket fusion: frames must be 1.." +
                      std::to_string(kMaxBracketFrames) + ", not " + std::to_string(frames));
+  if (period < 1 || period > 16)
+    throw InputError("mosaic bracket fusion: the mosaic's period must be 1..16, not " +
+                     std::to_string(period));
 }
+
+namespace {
+
+// Samples of a band this many cells away, along rows, columns and diagonals, are its
+// neighbours: 24 of them. Where one of n neighbours decides, a sample alone saturating decides
+// by its own noise still: the fused values lean phi(z) Phi(z)^n of a sample's standard
+// deviation low (z: the surface's distance below the level in them), at most 0.077 with 8
+// neighbours and 0.033 with 24.
+constexpr int kNeighbourCells = 2;
+// Samples below this fraction of the largest number seen are left to the plain rule: a sample's
+// noise at the saturation level is a few percent of the level at most (the shot noise of a
+// well of a thousand electrons is 3 %), so they are not near it; and on a steep side, where a
+// neighbour saturates, a far dimmer sample would come from a much shorter exposure, with far
+// more noise (without it the bracket targets' wild readings rose from 0.4 to 1.9 %).
+constexpr float kNearLevelFraction = 0.85f;
+
+// 1 where a sample within kNeighbourCells cells of its band's grid (`period` pixels a cell) is
+// +INF and the sample is at least kNearLevelFraction of `largest`, the largest number seen, this
+// frame's included (it is raised to it): at most the saturation level less the dark. A
+// dilation made of a pass along rows and one along columns.
+cv::Mat near_saturated(const cv::Mat& signal, int period, float& largest) {
+  const int w = signal.cols, h = signal.rows, reach = kNeighbourCells * period;
+  cv::Mat saturated(signal.size(), CV_8U), along_rows(signal.size(), CV_8U),
+      out(signal.size(), CV_8U);
+  for (int y = 0; y < h; ++y) {
+    const float* v = signal.ptr<float>(y);
+    std::uint8_t* m = saturated.ptr<std::uint8_t>(y);
+    for (int x = 0; x < w; ++x) {
+      m[x] = v[x] == INFINITY;
+      if (v[x] < INFINITY && v[x] > largest) largest = v[x];
+    }
+  }
+  const float near_level = kNearLevelFraction * largest;
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* m = saturated.ptr<std::uint8_t>(y);
+    std::uint8_t* r = along_rows.ptr<std::uint8_t>(y);
+    for (int x = 0; x < w; ++x) {
+      std::uint8_t any = 0;
+      for (int dx = -reach; dx <= reach; dx += period)
+        if (x + dx >= 0 && x + dx < w) any |= m[x + dx];
+      r[x] = any;
+    }
+  }
+  for (int y = 0; y < h; ++y) {
+    const float* v = signal.ptr<float>(y);
+    std::uint8_t* o = out.ptr<std::uint8_t>(y);
+    for (int x = 0; x < w; ++x) o[x] = 0;
+    for (int dy = -reach; dy <= reach; dy += period) {
+      if (y + dy < 0 || y + dy >= h) continue;
+      const std::uint8_t* r = along_rows.ptr<std::uint8_t>(y + dy);
+      for (int x = 0; x < w; ++x) o[x] |= r[x];
+    }
+    for (int x = 0; x < w; ++x) o[x] &= v[x] >= near_level;
+  }
+  return out;
+}
+
+}  // namespace
 
 double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& out) {
   if (signal.type() != CV_32F)
@@ -81,8 +143,8 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
   if (!(light > 0) || !std::isfinite(light))
     throw InputError("mosaic bracket fusion: a frame's exposure must be above 0, not " +
                      std::to_string(light));
-  if (!held_.empty() && held_.front().signal.size() != signal.size()) held_.clear();
-  const Held now{signal.clone(), light};
+  if (!held_.empty() && held_.front().signal.size() != signal.size()) reset();
+  const Held now{signal.clone(), near_saturated(signal, period_, largest_), light};
   // The frames by light, most first; among equals the latest first.
   std::vector<const Held*> order;
   order.push_back(&now);
@@ -93,21 +155,26 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
   std::vector<float> scale;
   for (const Held* h : order) scale.push_back(static_cast<float>(reference / h->light));
   out.create(signal.size(), CV_32F);
-  constexpr float kInf = std::numeric_limits<float>::infinity();
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   for (int y = 0; y < out.rows; ++y) {
     float* o = out.ptr<float>(y);
     for (int x = 0; x < out.cols; ++x) {
+      float first_number = kNaN;  // the first frame's whose sample is a number, scaled
       bool missing = false, taken = false;
       for (std::size_t k = 0; k < order.size() && !taken; ++k) {
         const float v = order[k]->signal.ptr<float>(y)[x];
         if (std::isfinite(v)) {
-          o[x] = v * scale[k];
-          taken = true;
+          if (std::isnan(first_number)) first_number = v * scale[k];
+          if (order[k]->near_saturated.ptr<std::uint8_t>(y)[x] == 0) {
+            o[x] = v * scale[k];
+            taken = true;
+          }
         }
         missing |= std::isnan(v);
       }
+      if (taken) continue;
       // As everywhere in the chain, no reading (NaN) wins over saturated.
-      if (!taken) o[x] = missing ? std::numeric_limits<float>::quiet_NaN() : kInf;
+      o[x] = !std::isnan(first_number) ? first_number : missing ? kNaN : INFINITY;
     }
   }
   held_.push_back(now);

@@ -51,38 +51,53 @@ class BracketFusion {
 
 // Fuses an exposure bracket before demosaicking: each sample of the dark-subtracted mosaic
 // (CV_32F, +INF saturated, NaN no reading, as darksub gives it) from the frame, among the last
-// `frames`, taken with the most light where it is a number, scaled to the DN of the frame with
-// the most light held (the reference). So every band of a demosaicking footprint has a value
-// even where the footprint spans more brightness than one exposure holds between the dim and
-// the saturation thresholds (a melt pool's steep side), which BracketFusion, taking whole
-// readings, cannot give. A sample that is a number in no frame is NaN if it is NaN in any (no
-// reading wins over saturated, as everywhere in the chain), else +INF. Values above the saturation
-// level are readings then, from a shorter exposure. The scaled samples' noise is that of their own
-// exposure times the scale, more than the noise model of the reference assumes: uncertainties of
-// such pixels are low. Samples from different frames meet in one footprint, so over a pool that
-// moves between the bracket's frames the bands of a pixel near a boundary are from different
-// moments.
+// `frames`, taken with the most light where it is a number and, if it is near the saturation
+// level (within 15 % of the largest number seen), none of its band's samples within two cells
+// (`period` pixels a cell: 2 for Bayer, 5 for a 5x5 mosaic; 24 neighbours) is saturated; scaled
+// to the DN of the frame with the most light held (the reference). So every band of a
+// demosaicking footprint has a value even where the footprint spans more brightness than one
+// exposure holds between the dim and the saturation thresholds (a melt pool's steep side),
+// which BracketFusion, taking whole readings, cannot give. The neighbours decide, not the
+// sample: taken wherever it is below the level, a sample near the level is kept only where its
+// own noise pulled it down, and the fused values there are low by up to 0.4 of a sample's
+// standard deviation (the mean of a normal cut at its mean); decided by the neighbours' noise,
+// at most 0.033 (from the case where the sample alone saturates). Where no frame has such a
+// sample, the first that is a number is taken. A sample that is a number in no frame is NaN if
+// it is NaN in any (no reading wins over saturated, as everywhere in the chain), else +INF.
+// Values above the saturation level are readings then, from a shorter exposure. The scaled
+// samples' noise is that of their own exposure times the scale, more than the noise model of
+// the reference assumes: uncertainties of such pixels are low. Samples from different frames
+// meet in one footprint, so over a pool that moves between the bracket's frames the bands of a
+// pixel near a boundary are from different moments.
 class MosaicBracketFusion {
  public:
-  // frames: 1..kMaxBracketFrames (1: no fusion); throws InputError otherwise.
-  explicit MosaicBracketFusion(int frames);
+  // frames: 1..kMaxBracketFrames (1: no fusion); period: the mosaic's cell size, 1..16 (the
+  // distance between samples of one band); throws InputError otherwise.
+  MosaicBracketFusion(int frames, int period);
 
   // signal: CV_32F; light > 0 (exposure times the linear gain). Writes the fused mosaic to
   // `out` (CV_32F, the same size; may be `signal` itself) and returns the reference light (the
   // most of the frames fused), whose DN its values are in. A frame of another size than the ones
-  // held starts anew. Throws InputError for another type or a light that is not > 0.
+  // held starts anew (reset()). Throws InputError for another type or a light that is not > 0.
   double add(const cv::Mat& signal, double light, cv::Mat& out);
-  void reset() { held_.clear(); }
+  void reset() {
+    held_.clear();
+    largest_ = 0;
+  }
   int frames() const { return frames_; }
   std::size_t held() const { return held_.size(); }
 
  private:
   struct Held {
     cv::Mat signal;
+    cv::Mat near_saturated;  // CV_8U: 1 where a sample of its band `period_` away saturates
     double light;
   };
-  int frames_;
+  int frames_, period_;
   std::deque<Held> held_;  // oldest first, at most frames_ - 1 before the new one
+  // The largest number of any frame since the start, each in its own DN: at most the
+  // saturation level less the dark, and close to it once something has been near the level.
+  float largest_ = 0;
 };
 
 }  // namespace pyrocam
