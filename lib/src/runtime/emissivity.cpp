@@ -22,6 +22,9 @@ std::string percent(double alpha) {
 
 // The central-difference step of dT/d alpha (per 100 nm).
 constexpr double kSensitivityStep = 0.005;
+// The first guess's locus: its step, degC, and the coarse search's stride in steps.
+constexpr double kGuessStepC = 10;
+constexpr std::size_t kGuessStride = 5;
 
 }  // namespace
 
@@ -119,12 +122,17 @@ EmissivitySlopeEstimator::EmissivitySlopeEstimator(
       down{cam.profile, with_emissivity_slope(cam.profile, cam.system_qe, alpha - kSensitivityStep),
            cam.band_scale};
   // Noise-free signals, the dimmest band well above the dim threshold.
-  const auto read = [&](const CameraModel& c, double t) {
+  const auto signals = [&](const CameraModel& c, double t) {
     Eigen::VectorXd s = c.rates(t);
     const double dimmest = s.minCoeff();
-    if (!(dimmest > 0)) return static_cast<double>(NAN);
-    s *= 100 * std::max(dim_dn_, 1.0) / dimmest;
-    return temperature_c(s.data());
+    if (!(dimmest > 0)) return Eigen::VectorXd();
+    return Eigen::VectorXd(s * (100 * std::max(dim_dn_, 1.0) / dimmest));
+  };
+  make_guess_locus(CameraModel{
+      cam.profile, with_emissivity_slope(cam.profile, cam.system_qe, alpha), cam.band_scale});
+  const auto read = [&](const CameraModel& c, double t) {
+    const Eigen::VectorXd s = signals(c, t);
+    return s.size() ? temperature_c(s.data()) : static_cast<double>(NAN);
   };
   table.assign(u.temperature_c.size(), 0.0);
   for (std::size_t i = 0; i < table.size(); ++i) {
@@ -147,11 +155,65 @@ void EmissivitySlopeEstimator::corrected_signals(const double* s, double t_c, do
   for (int b = 0; b < bands_; ++b) out[b] = std::isfinite(s[b]) && s[b] > 0 ? s[b] / f[b] : s[b];
 }
 
+void EmissivitySlopeEstimator::make_guess_locus(const CameraModel& sloped) {
+  const double lo = model_->min_temperature_c, hi = model_->max_temperature_c;
+  for (double t = lo; t < hi + kGuessStepC; t += kGuessStepC) {
+    guess_c_.push_back(std::min(t, hi));
+    const Eigen::VectorXd r = sloped.rates(guess_c_.back());
+    for (int b = 0; b < bands_; ++b) guess_log_rates_.push_back(r[b] > 0 ? std::log(r[b]) : NAN);
+  }
+}
+
+double EmissivitySlopeEstimator::first_guess_c(const double* s) const {
+  double x[kMaxBands], w[kMaxBands];
+  int used[kMaxBands], n = 0;
+  for (int b = 0; b < bands_; ++b)
+    if (std::isfinite(s[b]) && s[b] > 0) {
+      x[n] = std::log(s[b]);
+      // Shot noise: a band's log has a variance about inverse to its signal.
+      w[n] = std::max(s[b], std::max(dim_dn_, 1.0));
+      used[n++] = b;
+    }
+  if (n < 2) return reference_c_;
+  // The weighted spread of the log differences about their mean (the scale is free).
+  const auto distance = [&](std::size_t i) {
+    const double* l = &guess_log_rates_[i * static_cast<std::size_t>(bands_)];
+    double sw = 0, swd = 0, swdd = 0;
+    for (int k = 0; k < n; ++k) {
+      const double d = x[k] - l[used[k]];
+      sw += w[k];
+      swd += w[k] * d;
+      swdd += w[k] * d * d;
+    }
+    const double spread = swdd - swd * swd / sw;
+    return std::isfinite(spread) ? spread : INFINITY;
+  };
+  const std::size_t count = guess_c_.size();
+  std::size_t best = count;
+  double best_distance = INFINITY;
+  const auto consider = [&](std::size_t i) {
+    const double d = distance(i);
+    if (d < best_distance) {
+      best = i;
+      best_distance = d;
+    }
+  };
+  for (std::size_t i = 0; i < count; i += kGuessStride) consider(i);
+  consider(count - 1);
+  if (best == count) return reference_c_;
+  const std::size_t coarse = best;
+  for (std::size_t i = coarse > kGuessStride ? coarse - kGuessStride : 0;
+       i <= std::min(count - 1, coarse + kGuessStride); ++i)
+    consider(i);
+  return guess_c_[best];
+}
+
 double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* passes) const {
   if (passes) *passes = 1;
   if (alpha() == 0) return inner_->temperature_c(s);
   double c[kMaxBands];
   int n = 0;
+  const double start = first_guess_c(s);
   // g(t): the reading of the signals corrected with the factors at t; the answer is g's fixed
   // point. Where the factors change fast with temperature (a colour camera's blue with its
   // near-infrared leak, cold) plain iteration oscillates: the secant method on g(t) - t.
@@ -161,7 +223,7 @@ double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* p
     if (passes) *passes = n;
     return inner_->temperature_c(c);
   };
-  double x0 = g(reference_c_);
+  double x0 = g(start);
   if (!std::isfinite(x0)) return NAN;
   double g0 = g(x0);
   double x1 = g0;
@@ -185,6 +247,7 @@ double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* p
                         x2 <= model_->max_temperature_c + 100;
     x1 = usable ? x2 : g1;
   }
+  if (!std::isfinite(g0)) return NAN;
   return g0;
 }
 
