@@ -205,7 +205,13 @@ double EmissivitySlopeEstimator::first_guess_c(const double* s) const {
   for (std::size_t i = coarse > kGuessStride ? coarse - kGuessStride : 0;
        i <= std::min(count - 1, coarse + kGuessStride); ++i)
     consider(i);
-  return guess_c_[best];
+  // Between the table's samples: the vertex of the parabola through the best and its neighbours.
+  if (best == 0 || best + 1 >= count) return guess_c_[best];
+  const double below = distance(best - 1), above = distance(best + 1);
+  const double curvature = below - 2 * best_distance + above;
+  if (!(curvature > 0)) return guess_c_[best];
+  const double offset = std::clamp(0.5 * (below - above) / curvature, -1.0, 1.0);
+  return guess_c_[best] + offset * (guess_c_[best + 1] - guess_c_[best]);
 }
 
 double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* passes) const {
@@ -248,6 +254,10 @@ double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* p
     x1 = usable ? x2 : g1;
   }
   if (!std::isfinite(g0)) return NAN;
+  // A self-consistent reading far from the first guess is a wrong one: the guess reads then.
+  const double kelvin_ratio = celsius_to_kelvin(start) / kEmissivityGuessReferenceK;
+  if (!(std::abs(g0 - start) <= kEmissivityGuessAgreeC * kelvin_ratio * kelvin_ratio))
+    return in_range(start);
   return g0;
 }
 

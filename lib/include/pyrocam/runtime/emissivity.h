@@ -27,6 +27,11 @@ inline constexpr int kEmissivitySlopeMaxPasses = 12;
 // ... when it did not settle, the reading whose corrected signals read closest to it, if that is
 // within this, degC; else no reading.
 inline constexpr double kEmissivitySlopeAcceptC = 0.5;
+// A settled reading further than this from the first guess (degC at kEmissivityGuessReferenceK,
+// growing as the square of the absolute temperature, as a ratio reading's noise does) is not
+// trusted, and the first guess is the reading.
+inline constexpr double kEmissivityGuessAgreeC = 15;
+inline constexpr double kEmissivityGuessReferenceK = 1500;
 
 // The wavelength the slope pivots on: the middle of the profile's filter pass band, nm.
 double emissivity_slope_centre_nm(const CameraProfile& p);
@@ -75,9 +80,13 @@ class SpectralEmissivity {
 // at the middle of the range, the colour test model's likelihood fit at -50 %/100 nm settled at
 // 1262 degC for a 520 degC surface, its network at -40 %/100 nm at 669 degC, and readings near
 // the range's ends were lost, their first pass reading outside it. (A band pair's ratio cannot
-// serve: on a colour camera with near-infrared leaks none is monotonic.) Not solved: noisy
-// pixels of a colour camera at -30 %/100 nm and steeper near 1000-1300 degC still settle on
-// wrong self-consistent readings, where a fit to the sloped locus itself does not.
+// serve: on a colour camera with near-infrared leaks none is monotonic.) Noisy signals can still
+// settle on a wrong fixed point: a colour camera at -30 %/100 nm, 1200 degC, 1 DN of noise on
+// 150 DN, read from 168 degC low to 96 degC high (10th-90th percentile; the likelihood fit),
+// where the first guess, itself a fit to the sloped surfaces' locus (refined between the table's
+// samples), reads within about 20 degC. So a settled reading further from the guess than
+// kEmissivityGuessAgreeC (scaled) gives way to the guess: there -25 to +16 degC; where the two
+// agree, as on every noise-free surface, the reading is the method's.
 // Bands below the dim threshold, saturated or without a reading pass as they are, so the no-reading
 // decisions are the inner estimator's (allow-partial included: set it on the inner estimator). With
 // alpha = 0 the readings are the inner estimator's, bit for bit.
@@ -122,7 +131,8 @@ class EmissivitySlopeEstimator final : public TemperatureEstimator {
   void make_guess_locus(const CameraModel& sloped);
   // The first guess: the temperature of the point of that locus nearest to the signals (their
   // bands that read; logs weighted by the signal, as shot noise; a coarse search, then a fine one
-  // about its best); reference_c_ where fewer than two bands read.
+  // about its best, then the vertex of a parabola through it and its neighbours); reference_c_
+  // where fewer than two bands read.
   double first_guess_c(const double* signals) const;
   double reference_c_;  // the middle of the model's range
   std::vector<double> guess_c_, guess_log_rates_;
