@@ -230,7 +230,12 @@ double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* p
     return inner_->temperature_c(c);
   };
   double x0 = g(start);
-  if (!std::isfinite(x0)) return NAN;
+  if (!std::isfinite(x0)) return NAN;  // no reading at the guess: the method's decision
+  // A self-consistent reading far from the first guess is a wrong one, and where the method finds
+  // none the guess reads too (the method reads the pixel: its bands are not dim or saturated).
+  const double kelvin_ratio = celsius_to_kelvin(start) / kEmissivityGuessReferenceK;
+  const double agree_c = kEmissivityGuessAgreeC * kelvin_ratio * kelvin_ratio;
+  const double guess = in_range(start);
   double g0 = g(x0);
   double x1 = g0;
   double best = g0, best_h = std::abs(g0 - x0);  // the most self-consistent reading so far
@@ -240,10 +245,14 @@ double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* p
       best_h = std::abs(g0 - x0);
     }
     // No settled reading (a network's kinks can leave g(t) - t short of 0): the best one when
-    // it is consistent to kEmissivitySlopeAcceptC, else none.
-    if (n >= kEmissivitySlopeMaxPasses) return best_h <= kEmissivitySlopeAcceptC ? best : NAN;
+    // it is consistent to kEmissivitySlopeAcceptC, else the guess.
+    if (n >= kEmissivitySlopeMaxPasses) {
+      if (!(best_h <= kEmissivitySlopeAcceptC)) return guess;
+      g0 = best;
+      break;
+    }
     const double g1 = g(x1);
-    if (!std::isfinite(g1)) return NAN;
+    if (!std::isfinite(g1)) return guess;
     const double h0 = g0 - x0, h1 = g1 - x1;
     const double x2 = h1 != h0 ? x1 - h1 * (x1 - x0) / (h1 - h0) : g1;
     x0 = x1;
@@ -253,11 +262,7 @@ double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* p
                         x2 <= model_->max_temperature_c + 100;
     x1 = usable ? x2 : g1;
   }
-  if (!std::isfinite(g0)) return NAN;
-  // A self-consistent reading far from the first guess is a wrong one: the guess reads then.
-  const double kelvin_ratio = celsius_to_kelvin(start) / kEmissivityGuessReferenceK;
-  if (!(std::abs(g0 - start) <= kEmissivityGuessAgreeC * kelvin_ratio * kelvin_ratio))
-    return in_range(start);
+  if (!std::isfinite(g0) || !(std::abs(g0 - start) <= agree_c)) return guess;
   return g0;
 }
 

@@ -160,12 +160,12 @@ TEST(EmissivitySlope, every_method_reads_the_whole_range_at_every_slope) {
 // Noisy signals can settle on a wrong self-consistent reading: the colour model at -30 %/100 nm,
 // a 1200 degC surface, its brightest band at 150 DN with 1 DN of noise, read from 168 degC low to
 // 96 degC high (10th to 90th percentile, the likelihood fit; the network from 124 low to 72 high)
-// before a reading far from the first guess gave way to it; here 159 low to 95 high, median
-// 53 degC high (the network: 121 low to 72 high, median 39 high). Measured since: -18 to +19
-// and -21 to +23 degC, medians +0.6 and -1.7 degC (66 and 78 % read). The bounds: medians
-// within 8 degC and percentiles within 40 degC; with the spread's standard deviation of about
-// 15 degC a percentile of 260 readings has a standard error of about 1.6 degC, so the margins
-// are 4 (median) and 10 of them.
+// before a reading far from the first guess (or none found) gave way to it; here 159 low to 95
+// high, median 53 degC high, 66 % read (the network: 121 low to 72 high, median 39 high, 78 %).
+// Measured since: -18 to +19 degC, medians -0.4 and -0.6 degC, every pixel read. The bounds:
+// medians within 8 degC and percentiles within 40 degC; with the spread's standard deviation of
+// about 15 degC a percentile of 400 readings has a standard error of about 1.3 degC, so the
+// margins are 6 (median) and 15 of them.
 TEST(EmissivitySlope, noisy_signals_do_not_settle_on_a_wrong_reading) {
   const auto model = test_model("test-model-rgb.json");
   for (Method method : {Method::kMlp, Method::kLikelihood}) {
@@ -181,7 +181,7 @@ TEST(EmissivitySlope, noisy_signals_do_not_settle_on_a_wrong_reading) {
       const double read = corrected.temperature_c(s.data());
       if (std::isfinite(read)) errors.push_back(read - 1200);
     }
-    ASSERT_GE(errors.size(), 200u) << method_name(method);
+    ASSERT_GE(errors.size(), 360u) << method_name(method);  // 90 %: 66 and 78 % before
     std::sort(errors.begin(), errors.end());
     const auto at = [&](double q) { return errors[static_cast<std::size_t>(q * errors.size())]; };
     EXPECT_LE(std::abs(at(0.5)), 8) << method_name(method);

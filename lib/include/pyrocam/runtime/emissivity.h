@@ -25,7 +25,7 @@ inline constexpr double kEmissivitySlopeToleranceC = 1e-3;
 // ... or after this many readings of the inner estimator (the first included).
 inline constexpr int kEmissivitySlopeMaxPasses = 12;
 // ... when it did not settle, the reading whose corrected signals read closest to it, if that is
-// within this, degC; else no reading.
+// within this, degC; else the first guess (below).
 inline constexpr double kEmissivitySlopeAcceptC = 0.5;
 // A settled reading further than this from the first guess (degC at kEmissivityGuessReferenceK,
 // growing as the square of the absolute temperature, as a ratio reading's noise does) is not
@@ -84,9 +84,11 @@ class SpectralEmissivity {
 // settle on a wrong fixed point: a colour camera at -30 %/100 nm, 1200 degC, 1 DN of noise on
 // 150 DN, read from 168 degC low to 96 degC high (10th-90th percentile; the likelihood fit),
 // where the first guess, itself a fit to the sloped surfaces' locus (refined between the table's
-// samples), reads within about 20 degC. So a settled reading further from the guess than
-// kEmissivityGuessAgreeC (scaled) gives way to the guess: there -25 to +16 degC; where the two
-// agree, as on every noise-free surface, the reading is the method's.
+// samples), reads within about 20 degC, and a third of the pixels found no settled reading. So
+// a settled reading further from the guess than kEmissivityGuessAgreeC (scaled), or none, gives
+// way to the guess where the method reads the signals corrected at it: there -18 to +19 degC,
+// every pixel read; where the two agree, as on every noise-free surface, the reading is the
+// method's.
 // Bands below the dim threshold, saturated or without a reading pass as they are, so the no-reading
 // decisions are the inner estimator's (allow-partial included: set it on the inner estimator). With
 // alpha = 0 the readings are the inner estimator's, bit for bit.
