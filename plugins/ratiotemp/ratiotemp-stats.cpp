@@ -152,8 +152,8 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
     GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
                         ("%s: %" G_GUINT64_FORMAT " pixels have no reading because light "
                          "saturated a band: the hottest part of the scene may be there, and "
-                         "peak-c and max-c are then only lower bounds; shorten the exposure or "
-                         "put autoexposure in front of darksub",
+                         "peak-c and max-c are then only lower bounds; shorten the exposure (of "
+                         "a bracket: its shortest) or put autoexposure in front of darksub",
                          GST_OBJECT_NAME(self), saturated),
                         ("statistics at %" GST_TIME_FORMAT, GST_TIME_ARGS(pts)));
   st.saturation_warned = saturated > 0;
