@@ -451,8 +451,9 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       "With --recording (a raw recording, record.sh RAW=1) the output is OUT/temperature.npy\n"
       "and OUT/temperature.csv as `pyrocam-calib export` writes them. The ratiotemp settings\n"
       "that change readings (method, e-slope, partial-bands, misfit-probability,\n"
-      "blur-correction, brightness-radius) come from the recording's temperature tags unless\n"
-      "given here; with the recording's model the codes are then the recorded ones.");
+      "blur-correction, brightness-radius) and demosaic25's method (--demosaic) come from\n"
+      "the recording's temperature tags unless given here; with the recording's model the\n"
+      "codes are then the recorded ones.");
   add_input_options(c, a);
   add_output_options(c, a);
   c->callback([&global, &selected, c] {

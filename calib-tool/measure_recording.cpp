@@ -49,9 +49,9 @@ void dark_from_tags(const std::map<std::string, std::string>& fields, const std:
 }
 
 // The settings ratiotemp's tags name (what adopt_recorded_settings takes).
-constexpr const char* kRecordedSettings[] = {"method",          "e-slope",
-                                             "partial-bands",   "misfit-probability",
-                                             "blur-correction", "brightness-radius"};
+constexpr const char* kRecordedSettings[] = {
+    "method",          "e-slope",           "partial-bands", "misfit-probability",
+    "blur-correction", "brightness-radius", "demosaic"};
 
 // What ratiotemp's tags on the recording's temperature segments say it read them with (the
 // comment's fields), or nothing where there are none: the first segment's first frame. A later
@@ -148,6 +148,17 @@ void adopt_recorded_settings(const std::map<std::string, std::string>& fields,
   take("brightness-radius", "--brightness-radius", std::to_string(options.brightness_radius),
        [&](const std::string& v) {
          options.brightness_radius = static_cast<int>(recording_comment_field_number(v));
+       });
+  // demosaic25's method (matched on the fused path); 5x5 mosaics bin with bilinear and bin2x2
+  // alike.
+  take("demosaic", "--demosaic",
+       demosaic_method_name(resolve_demosaic_method(options.demosaic, MosaicLayout{})),
+       [&](const std::string& v) {
+         try {
+           options.demosaic = parse_demosaic_method(v);
+         } catch (const InputError& e) {
+           throw InputError(std::string("the recording's tags: ") + e.what());
+         }
        });
 }
 

@@ -64,16 +64,11 @@ inline pyrocam::DemosaicMethod to_library(GstDemosaic25Method m) {
   }
 }
 
-/* The caps' name of the method (auto is matched): the library's (parse_demosaic_method). */
+/* The caps' name of the method (auto resolved): the library's (parse_demosaic_method). */
 inline const char* method_name(GstDemosaic25Method m) {
-  switch (m) {
-    case GST_DEMOSAIC25_METHOD_BILINEAR:
-      return "bilinear";
-    case GST_DEMOSAIC25_METHOD_BIN2X2:
-      return "bin2x2";
-    default:
-      return "matched";
-  }
+  // auto resolves alike on every layout
+  return pyrocam::demosaic_method_name(
+      pyrocam::resolve_demosaic_method(to_library(m), pyrocam::MosaicLayout{}));
 }
 
 inline bool is_snapshot(const char* pattern) {

@@ -134,8 +134,9 @@
  * the readings or upstream's tags change, the element pushes stream tags downstream: title (the
  * encoding in words) and comment "pyrocam-recording; quantity=temperature; unit=0.1 K;
  * no-reading=0; model=FILE; model-fingerprint=HEX; profile=NAME; method=lut; e-slope=0 %/100 nm;
- * partial-bands=safe; misfit-probability=0; blur-correction=off; brightness-radius=0"
- * (`pyrocam-calib measure --recording` measures a raw recording again with them;
+ * partial-bands=safe; misfit-probability=0; blur-correction=off; brightness-radius=0;
+ * demosaic=matched" (demosaic: how demosaic25 made the planes, where the caps say it;
+ * `pyrocam-calib measure --recording` measures a raw recording again with them;
  * quantity=expanded-uncertainty with output=uncertainty; "; exposure=N us" added when upstream
  * tags carry capturing-shutter-speed). The fingerprint is the model file's checksum_fnv1a64.
  * Matroska keeps the title and comment (it drops most other tags), in every splitmuxsink segment.
@@ -262,6 +263,8 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
     return FALSE;
   st.demosaic_noise =
       st.fused ? pyrocam::DemosaicNoise{} : rt::demosaic_noise_of(GST_ELEMENT(self), in, model);
+  const char* made = gst_structure_get_string(in, PYROCAM_FIELD_DEMOSAIC);
+  st.demosaic = st.fused ? "matched" : made ? made : "";
   st.saturation_level_dn = pg::structure_int(in, PYROCAM_FIELD_SATURATION_LEVEL, -1);
   st.configured = true;
   GST_INFO_OBJECT(self, "%d bands of %dx%d (%s) -> GRAY16_LE%s", st.bands, st.width, st.height,
@@ -430,6 +433,7 @@ static void push_recording_tags(GstRatioTemp* self, const Settings& settings) {
   info.misfit_probability = settings.misfit_probability;
   info.blur_correction = settings.blur_correction;
   info.brightness_radius = settings.brightness_radius;
+  info.demosaic = st.demosaic;
   info.exposure_us = rt::exposure_us_of(st.upstream_tags.get());
   rt::push_recording_tags(self, info, st.upstream_tags.get(), st.pushed_comment);
 }

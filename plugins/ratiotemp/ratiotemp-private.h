@@ -90,6 +90,7 @@ struct State {
   // The fused path (demosaic25 linked to this element): the input is the planes' mosaic,
   // demosaicked here a strip at a time with demosaic25's settings from the caps.
   bool fused = false;
+  std::string demosaic;  // how the planes are made: matched when fused, else the caps' field
   pyrocam::MosaicLayout mosaic_layout;
   float no_signal_dn = 0;
   // Plain planes: what their demosaicking did to the band values' noise (the caps' demosaic
@@ -167,11 +168,12 @@ struct RecordingInfo {
   double e_slope = 0;        // %/100 nm
   // The other settings that change the readings, so that a raw recording is measured again
   // with them (pyrocam-calib measure --recording): partial-bands (off, safe, any; allow-partial
-  // as any), misfit-probability, blur-correction, brightness-radius.
+  // as any), misfit-probability, blur-correction, brightness-radius, and demosaic25's method.
   std::string partial_bands = "safe";
   double misfit_probability = 0;
   bool blur_correction = false;
   unsigned brightness_radius = 0;
+  std::string demosaic;     // how the planes were made (the caps' demosaic field); empty: unknown
   double exposure_us = -1;  // from an upstream capturing-shutter-speed tag; negative: unknown
 };
 /* The comment: pyrocam::kTemperatureRecordingMark, then its fields as "; key=value". */

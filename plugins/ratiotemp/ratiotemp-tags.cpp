@@ -41,6 +41,7 @@ std::string recording_comment(const RecordingInfo& info) {
   c += "; misfit-probability=" + number(info.misfit_probability);
   c += std::string("; blur-correction=") + (info.blur_correction ? "on" : "off");
   c += "; brightness-radius=" + std::to_string(info.brightness_radius);
+  if (!info.demosaic.empty()) c += "; demosaic=" + clean(info.demosaic);
   if (info.exposure_us > 0) c += "; exposure=" + number(info.exposure_us) + " us";
   return c;
 }

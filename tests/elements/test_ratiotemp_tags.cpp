@@ -114,5 +114,17 @@ TEST_F(RatioTempTags, uncertainty_output_says_so_and_no_exposure_when_unknown) {
   unref_all(tags);
 }
 
+// How demosaic25 made the planes changes the readings, so a recording says it where the caps
+// do (a raw recording is then measured again with it).
+TEST_F(RatioTempTags, the_demosaicking_the_caps_name_is_in_the_comment) {
+  start("ratiotemp model=" + rgb_model_path(),
+        std::string(kCaps) + ",demosaic=bilinear,pattern=rggb");
+  auto tags = push_frame();
+  ASSERT_EQ(tags.size(), 1u);
+  const std::string comment = text(tags[0], GST_TAG_COMMENT);
+  EXPECT_NE(comment.find("; brightness-radius=0; demosaic=bilinear"), std::string::npos) << comment;
+  unref_all(tags);
+}
+
 }  // namespace
 }  // namespace pyrocam::test

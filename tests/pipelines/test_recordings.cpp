@@ -533,6 +533,36 @@ TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_anoth
   EXPECT_TRUE(same.data == codes.data) << "re-measured codes differ from the recorded ones";
   EXPECT_EQ(read_csv(dir / "same" / "temperature.csv").size(), kFrames + 1u);
 
+  // demosaic25's method comes from the tags too: the first raw segment read again through
+  // bilinear demosaicking, as a user's own pipeline might have, measures to those codes.
+  const fs::path bilinear = dir / "bilinear";
+  fs::create_directories(bilinear);
+  fs::copy_file(raw[0], bilinear / "raw-00000.mkv");
+  ASSERT_EQ(run_command("gst-launch-1.0 -q filesrc location='" + raw[0] +
+                            "' ! matroskademux ! avdec_ffv1 ! capssetter join=false "
+                            "caps=video/x-bayer,format=rggb ! darksub dark-level=50 ! "
+                            "demosaic25 method=bilinear ! ratiotemp model='" +
+                            rgb_model() +
+                            "' ! avenc_ffv1 gop-size=1 ! matroskamux ! filesink "
+                            "location='" +
+                            (bilinear / "temperature-00000.mkv").string() + "'",
+                        dir / "bilinear.log"),
+            0)
+      << read_text(dir / "bilinear.log");
+  ASSERT_EQ(run_command(tool + "export --recording '" + bilinear.string() + "' --npy '" +
+                            (dir / "bilinear.npy").string() + "' && " + tool +
+                            "measure --recording '" + bilinear.string() + "' --model '" +
+                            rgb_model() + "' --out '" + (dir / "bilinear-out").string() + "'",
+                        dir / "bilinear-measure.log"),
+            0)
+      << read_text(dir / "bilinear-measure.log");
+  const Npy bilinear_codes = read_npy(dir / "bilinear.npy");
+  ASSERT_FALSE(bilinear_codes.data.empty());
+  EXPECT_FALSE(bilinear_codes.data == same.data.substr(0, bilinear_codes.data.size()))
+      << "bilinear demosaicking read as matched does";
+  EXPECT_TRUE(read_npy(dir / "bilinear-out" / "temperature.npy").data == bilinear_codes.data)
+      << "re-measured codes differ from those recorded through bilinear demosaicking";
+
   // A later segment read with other settings is said, naming it.
   Env plain = env;
   plain["OUT"] = (dir / "plain").string();

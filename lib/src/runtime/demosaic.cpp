@@ -278,6 +278,20 @@ DemosaicMethod parse_demosaic_method(const std::string& name) {
                    "' (use bilinear, bin2x2, matched or auto)");
 }
 
+const char* demosaic_method_name(DemosaicMethod method) {
+  switch (method) {
+    case DemosaicMethod::kBilinear:
+      return "bilinear";
+    case DemosaicMethod::kBinCells:
+      return "bin2x2";
+    case DemosaicMethod::kMatched:
+      return "matched";
+    case DemosaicMethod::kAuto:
+      break;
+  }
+  return "auto";
+}
+
 DemosaicMethod resolve_demosaic_method(DemosaicMethod method, const MosaicLayout& /*layout*/) {
   if (method != DemosaicMethod::kAuto) return method;
   return DemosaicMethod::kMatched;

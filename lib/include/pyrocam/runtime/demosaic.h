@@ -46,6 +46,8 @@ DemosaicMethod resolve_demosaic_method(DemosaicMethod method, const MosaicLayout
 
 // "bilinear", "bin2x2", "matched", "auto".
 DemosaicMethod parse_demosaic_method(const std::string& name);
+// The name parse_demosaic_method takes for `method`.
+const char* demosaic_method_name(DemosaicMethod method);
 
 // Output plane size: the input size for bilinear, else floor(input / period) (pixels of an
 // incomplete trailing cell are dropped).
