@@ -14,6 +14,7 @@
 #include "export.h"
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/image_io.h"
+#include "pyrocam/core/profile.h"
 #include "pyrocam/core/recording_comment.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/prebuilt_tables.h"
@@ -162,6 +163,43 @@ void adopt_recorded_settings(const std::map<std::string, std::string>& fields,
        });
 }
 
+std::string mosaic_words(const MosaicLayout& layout) {
+  return layout.kind == MosaicLayout::Kind::kBayer ? lower(layout.pattern) + " Bayer mosaic"
+                                                   : layout.pattern + " mosaic";
+}
+
+// The camera profile the recording's temperatures were read with (their tags) against the
+// model's. The raw tags name the Bayer pattern only where the recording's caps did, so without
+// this a model of another mosaic would read the raw frames as nonsense, with no error.
+void check_recorded_profile(const std::map<std::string, std::string>& recorded,
+                            const ThermalModel& model, const std::string& model_path,
+                            const std::string& recording, bool quiet) {
+  const auto it = recorded.find("profile");
+  const CameraProfile& ours = model.profile();
+  if (it == recorded.end() || it->second == ours.name) return;
+  std::optional<CameraProfile> theirs;
+  try {
+    theirs = load_profile_by_name(it->second);
+  } catch (const InputError&) {
+  }
+  if (!theirs) {
+    if (!quiet)
+      std::cerr << "warning: " << recording << "'s temperatures were read with camera profile "
+                << it->second << " (not found here), the model " << model_path << " is for "
+                << ours.name << ": the raw frames must be of a " << mosaic_words(ours.mosaic)
+                << "\n";
+    return;
+  }
+  const MosaicLayout& a = ours.mosaic;
+  const MosaicLayout& b = theirs->mosaic;
+  const bool same_kind =
+      a.kind == b.kind && (a.kind == MosaicLayout::Kind::kBayer || a.pattern == b.pattern);
+  if (!same_kind)
+    throw InputError(model_path + ": the model was calibrated for a " + mosaic_words(a) +
+                     " (profile " + ours.name + "), the recording " + recording + " for a " +
+                     mosaic_words(b) + " (profile " + it->second + ", its temperatures' tags)");
+}
+
 }  // namespace
 
 void load_prebuilt_table(const FrameMeasurer& measurer, const MeasureOptions& options,
@@ -209,6 +247,10 @@ int measure_recording(const RecordingMeasure& m) {
     if (dark.empty()) {
       // The tags have come with the first frame: the layout and the dark.
       const auto& fields = f.tags->fields;
+      if (f.tags->comment.rfind(kTemperatureRecordingMark, 0) == 0)
+        throw InputError(m.recording + " holds temperatures (ratiotemp's codes), not raw " +
+                         "frames: measure --recording reads the raw-NNNNN.mkv segments of a " +
+                         "recording made with RAW=1");
       if (fields.empty() || f.tags->comment.rfind(kRawRecordingMark, 0) != 0)
         std::cerr << "warning: " << m.recording
                   << " has no pyrocam-raw tags (not recorded by record.sh RAW=1?)\n";
@@ -216,7 +258,9 @@ int measure_recording(const RecordingMeasure& m) {
       const auto tagged = fields.find("pattern");
       if (pattern.empty() && tagged != fields.end()) pattern = lower(tagged->second);
       MeasureOptions options = m.options;
-      adopt_recorded_settings(recorded_settings(m.recording, m.quiet), m.given, options, m.quiet);
+      const auto recorded = recorded_settings(m.recording, m.quiet);
+      check_recorded_profile(recorded, *m.model, m.model_path, m.recording, m.quiet);
+      adopt_recorded_settings(recorded, m.given, options, m.quiet);
       options.bayer_pattern =
           frames_bayer_pattern(*m.model, m.model_path, pattern,
                                m.pattern.empty() ? "the recording's tags" : "--pattern", m.quiet);

@@ -82,8 +82,8 @@ segments=(avenc_ffv1 gop-size=1 ! splitmuxsink async-finalize=true muxer-factory
   max-size-time="$segment_ns")
 # RAW=1: the camera's frames as they came (8-bit Bayer as GRAY8, FFV1 has no Bayer format) in
 # segments beside the temperatures, frame for frame, for `pyrocam-calib measure --recording`;
-# their comment tag gives the Bayer layout when CAPS names it and DARK. identity keeps the
-# encoder's buffer pool from the camera (pyrocamsrc refuses its buffers).
+# their comment tag gives DARK and the mosaic: 5x5, or the Bayer layout when CAPS names it.
+# identity keeps the encoder's buffer pool from the camera (pyrocamsrc refuses its buffers).
 raw_branch=()
 if [[ $RAW == 1 && -n $BRACKET ]]; then
   # measure --recording reads frame by frame: it would not fuse the bracket, and its readings
@@ -93,7 +93,8 @@ if [[ $RAW == 1 && -n $BRACKET ]]; then
 fi
 if [[ $RAW == 1 ]]; then
   raw_tags="pyrocam-raw; dark=$DARK"
-  if [[ $CAPS =~ format=(rggb|bggr|grbg|gbrg) ]]; then raw_tags+="; pattern=${BASH_REMATCH[1]}"; fi
+  if [[ $PROFILE == nir5x5-reference ]]; then raw_tags+="; pattern=5x5"
+  elif [[ $CAPS =~ format=(rggb|bggr|grbg|gbrg) ]]; then raw_tags+="; pattern=${BASH_REMATCH[1]}"; fi
   raw_branch=(camera. ! queue ! identity drop-allocation=true !)
   [[ $CAPS != video/x-bayer* ]] || raw_branch+=(capssetter join=false caps=video/x-raw,format=GRAY8 !)
   raw_branch+=(taginject "tags=\"comment=\\\"$raw_tags\\\"\"" ! "${segments[@]}" "location=$OUT/raw-%05d.mkv")

@@ -619,8 +619,67 @@ TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_anoth
   ASSERT_EQ(measure(test_model("test-model-nir5x5.json"), "nir"), 1);
   EXPECT_NE(read_text(dir / "nir.log").find("5x5 mosaic"), std::string::npos)
       << read_text(dir / "nir.log");
-  EXPECT_NE(read_text(dir / "nir.log").find("frames are rggb"), std::string::npos)
+  EXPECT_NE(read_text(dir / "nir.log").find("rggb Bayer mosaic"), std::string::npos)
       << read_text(dir / "nir.log");
+}
+
+// Without a Bayer format in CAPS the raw tags cannot say the Bayer pattern, but the
+// temperatures' tags say the camera profile: a model of another mosaic is still refused, not
+// read as nonsense. A 5x5 recording's raw tags say its mosaic. A temperature segment given as
+// the recording is refused, saying which segments measure reads.
+TEST(RecordingsRaw, a_model_of_another_mosaic_is_refused_whatever_the_caps_say) {
+  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
+  ScratchDir dir("recordings-raw-mosaic");
+  const std::string tool = "'" + std::string(PYROCAM_CALIB_TOOL) + "' ";
+  const auto measure = [&](const fs::path& rec, const std::string& model, const std::string& log) {
+    return run_command(tool + "measure --recording '" + rec.string() + "' --model '" + model +
+                           "' --out '" + (dir / (log + "-out")).string() + "'",
+                       dir / (log + ".log"));
+  };
+  const fs::path nir = dir / "nir", rgb = dir / "rgb";
+  ASSERT_EQ(run_script("record.sh", {},
+                       {{"PROFILE", "nir5x5-reference"},
+                        {"MODEL", test_model("test-model-nir5x5.json")},
+                        {"OUT", nir.string()},
+                        {"NUM_BUFFERS", "3"},
+                        {"RAW", "1"}},
+                       (dir / "nir-record.log").string(), milliseconds(60000))
+                .status,
+            0)
+      << read_text(dir / "nir-record.log");
+  const auto nir_raw = files_in(nir.string(), "raw-", ".mkv");
+  ASSERT_EQ(nir_raw.size(), 1u);
+  EXPECT_EQ(discovered_tags(nir_raw[0]).second, "pyrocam-raw; dark=dark-level=50; pattern=5x5");
+  EXPECT_EQ(measure(nir, rgb_model(), "nir-with-rgb"), 1);
+  EXPECT_NE(read_text(dir / "nir-with-rgb.log")
+                .find("the model was calibrated for a rggb Bayer mosaic (profile rgb-reference), "
+                      "the recording " +
+                      nir.string() + " for a 5x5 mosaic"),
+            std::string::npos)
+      << read_text(dir / "nir-with-rgb.log");
+
+  ASSERT_EQ(run_script(
+                "record.sh", {},
+                {{"MODEL", rgb_model()}, {"OUT", rgb.string()}, {"NUM_BUFFERS", "3"}, {"RAW", "1"}},
+                (dir / "rgb-record.log").string(), milliseconds(60000))
+                .status,
+            0)
+      << read_text(dir / "rgb-record.log");
+  const auto rgb_raw = files_in(rgb.string(), "raw-", ".mkv");
+  ASSERT_EQ(rgb_raw.size(), 1u);
+  EXPECT_EQ(discovered_tags(rgb_raw[0]).second, "pyrocam-raw; dark=dark-level=50");
+  EXPECT_EQ(measure(rgb, test_model("test-model-nir5x5.json"), "rgb-with-nir"), 1);
+  EXPECT_NE(
+      read_text(dir / "rgb-with-nir.log").find("for a rggb Bayer mosaic (profile rgb-reference"),
+      std::string::npos)
+      << read_text(dir / "rgb-with-nir.log");
+  EXPECT_EQ(measure(rgb, rgb_model(), "rgb-with-rgb"), 0) << read_text(dir / "rgb-with-rgb.log");
+
+  const auto temperatures = files_in(rgb.string(), "temperature-", ".mkv");
+  ASSERT_EQ(temperatures.size(), 1u);
+  EXPECT_EQ(measure(temperatures[0], rgb_model(), "temperatures"), 1);
+  EXPECT_NE(read_text(dir / "temperatures.log").find("holds temperatures"), std::string::npos)
+      << read_text(dir / "temperatures.log");
 }
 
 }  // namespace
