@@ -22,7 +22,7 @@ fi
 # on a machine without one, autovideosink of GStreamer 1.22 falls back to sinks that fail or
 # crash (dfbvideosink: segmentation fault). Usage: require_display "$SINK".
 require_display() {
-  [[ ${1%% *} == autovideosink ]] || return 0
+  [[ $1 =~ (^|[[:space:]!])autovideosink([[:space:]!]|$) ]] || return 0
   [[ -n ${DISPLAY:-} || -n ${WAYLAND_DISPLAY:-} ]] && return 0
   echo "$(basename "$0" .sh): no display to show the view on (DISPLAY and WAYLAND_DISPLAY are unset):" \
     "run it on a desktop or under Xvfb, or set SINK (e.g. SINK=fakesink; docs/live-view.md)" >&2

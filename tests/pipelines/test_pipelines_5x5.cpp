@@ -352,6 +352,15 @@ TEST_F(Pipelines5x5, no_display_is_a_clear_error_not_a_crash_n) {
     EXPECT_EQ(*run.status, 1) << script << ": " << run.log;
     EXPECT_NE(run.log.find("no display"), std::string::npos) << script << ": " << run.log;
   }
+  // autovideosink at the end of a SINK that scales first (docs/live-view.md's example).
+  Env env = settings(3);
+  env["DISPLAY"] = "";
+  env["WAYLAND_DISPLAY"] = "";
+  env["SINK"] = "videoscale ! video/x-raw,width=640,height=480 ! autovideosink";
+  const ScriptRun run = run_script("live-view.sh", {}, env, log("nodisplay-scaled"), kRunLimit);
+  ASSERT_TRUE(run.status.has_value()) << "hung";
+  EXPECT_EQ(*run.status, 1) << run.log;
+  EXPECT_NE(run.log.find("no display"), std::string::npos) << run.log;
 }
 
 // ---------------------------------------------------------------------------------------------
