@@ -90,6 +90,9 @@ set +e
       if [[ $line == *GstWatchdog:camera-sent-no-frame:* ]]; then
         echo "genicam-live: camera ${CAMERA:-(first found)} sent no frame for $WATCHDOG_MS ms: unplugged, switched off, or losing packets" >&2
         stopped=1
+      elif [[ $line == "ERROR: from element "*/GstAravis:*"Could not find camera"* ]]; then
+        echo "genicam-live: camera ${CAMERA:-(first found)} not found: is it on, on this network and named as arv-tool-0.8 lists it?" >&2
+        stopped=1
       elif [[ $line == "ERROR: from element "*/GstAravis:* ]]; then
         echo "genicam-live: camera ${CAMERA:-(first found)} stopped streaming (aravissrc's error above): unplugged, switched off, or losing packets" >&2
         stopped=1

@@ -187,5 +187,19 @@ TEST_F(GenICam, rejects_a_missing_dark_n) {
   EXPECT_NE(run.log.find("set DARK"), std::string::npos) << run.log;
 }
 
+// A camera that is not there (an address of TEST-NET-1, RFC 5737) is named as not found, not
+// as one that stopped streaming. Aravis gives up on it after about 5 s, within the watchdog's
+// time here.
+TEST_F(GenICam, a_camera_not_found_says_so_n) {
+  Env env = settings(5);
+  env["CAMERA"] = "192.0.2.1";
+  env["WATCHDOG_MS"] = "60000";
+  const ScriptRun run = run_script("genicam-live.sh", {}, env, log("genicam"), kRunLimit);
+  ASSERT_TRUE(run.status.has_value()) << "hung";
+  EXPECT_EQ(*run.status, 1) << run.log;
+  EXPECT_NE(run.log.find("camera 192.0.2.1 not found"), std::string::npos) << run.log;
+  EXPECT_EQ(run.log.find("stopped streaming"), std::string::npos) << run.log;
+}
+
 }  // namespace
 }  // namespace pyrocam::test
