@@ -42,7 +42,7 @@ void add_prebuild_command(CLI::App& app, const GlobalOptions& global, Command& s
   c->add_option("--model", model, "Model file (.json)")->required()->check(CLI::ExistingFile);
   c->add_option("--out", out, "Table file to write (default: the model's path + .lut)");
   c->add_option("--max-blocks", max_blocks,
-                "Blocks of the table to prebuild, nearest the locus first (1156 bytes each in "
+                "Blocks of the table to prebuild, nearest the locus first (1160 bytes each in "
                 "the file; the table cache keeps 8192 blocks less these). The table's check "
                 "against the network fills the blocks along the locus too (some hundreds), so "
                 "the file holds at least those")
