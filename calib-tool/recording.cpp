@@ -7,6 +7,7 @@
 #include <gst/video/video.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iostream>
@@ -194,8 +195,10 @@ RecordingDescription read_recording(const std::vector<fs::path>& segments,
                     std::to_string(width) + "x" + std::to_string(height);
           break;
         }
-        // Segments written with offset-to-zero (record.sh) restart at 0: they follow the last.
-        if (frames_here == 0 && index > 0 && pts_s < end_s - 1e-6) offset_s = end_s - pts_s;
+        // Segments written with offset-to-zero (record.sh) restart at 0: they follow the last,
+        // on Matroska's whole milliseconds (the last frame's time was rounded to one).
+        if (frames_here == 0 && index > 0 && pts_s < end_s - 1e-6)
+          offset_s = std::round(end_s * 1000) / 1000 - pts_s;
         f.tags = &description;
         f.index = index++;
         f.timestamp_s = offset_s + pts_s;
