@@ -66,6 +66,12 @@ void respond(SoupServerMessage* msg, guint status, const char* type, const std::
   soup_server_message_set_response(msg, type, SOUP_MEMORY_COPY, body.data(), body.size());
 }
 
+// JSON text that never throws: a message that is not valid UTF-8 (an error text quoting a path)
+// gets U+FFFD in place of its bad bytes, where dump() would throw inside a GLib callback.
+std::string json_text(const nlohmann::json& j) {
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 }  // namespace
 
 nlohmann::json structure_to_json(const GstStructure* s) {
@@ -141,7 +147,7 @@ void WebServer::on_request(SoupServer*, SoupServerMessage* msg, const char* path
   } else if (p == "/stream.mjpg") {
     self->open_stream(msg, true);
   } else if (p == "/status.json") {
-    respond(msg, SOUP_STATUS_OK, "application/json", self->status().dump());
+    respond(msg, SOUP_STATUS_OK, "application/json", json_text(self->status()));
   } else if (p == "/frame.jpg") {
     std::uint64_t seq = 0;
     auto jpeg = self->jpeg_(seq);
@@ -189,7 +195,7 @@ void WebServer::open_stream(SoupServerMessage* msg, bool mjpeg) {
   if (mjpeg)
     send_frame(streams_.back());
   else
-    send(streams_.back(), "hello", status().dump());
+    send(streams_.back(), "hello", json_text(status()));
   GST_INFO("%s stream opened (%zu open)", mjpeg ? "MJPEG" : "event", streams_.size());
 }
 
@@ -231,7 +237,7 @@ void WebServer::send_frame(Stream& stream) {
 
 void WebServer::publish(const std::string& event, const nlohmann::json& data) {
   latest_[event] = data;
-  const std::string text = data.dump();
+  const std::string text = json_text(data);
   // By index: a write error can end a stream (and erase it) while we go.
   for (std::size_t i = 0; i < streams_.size(); ++i)
     if (!streams_[i].mjpeg) send(streams_[i], event, text);
