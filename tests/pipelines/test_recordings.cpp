@@ -2,8 +2,6 @@
 // GstDiscoverer, in every segment), STATS_CSV logs ratiotemp's statistics, `pyrocam-calib
 // export` gives the recorded codes bit-exactly as .npy and TIFF and per-frame statistics as CSV,
 // and examples/read_recording.py reads the same numbers into NumPy.
-#include <gst/pbutils/pbutils.h>
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,12 +13,14 @@
 
 #include "element_support.h"
 #include "pipeline_support.h"
+#include "recording_files.h"
 #include "test_support.h"
 
 namespace pyrocam::test {
 namespace {
 
 namespace fs = std::filesystem;
+using namespace recording_files;  // NOLINT(google-build-using-namespace)
 
 // 320x240: the simulated pool is 10 pixels in radius, enough readings a frame for a window peak
 // (at 160x120, 5 pixels, matched demosaicking reads only its rim: about 6 a frame).
@@ -28,87 +28,6 @@ constexpr int kWidth = 320, kHeight = 240, kFps = 30, kFrames = 30;  // two 0.5 
 const std::string kCaps = "video/x-bayer,width=320,height=240,framerate=30/1";
 const std::string kScene = "pyrocamsrc scene=melt-pool seed=7";
 constexpr int kStatsIntervalMs = 100;
-
-std::string rgb_model() { return test_model("test-model-rgb.json"); }
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
-std::vector<std::vector<std::string>> read_csv(const fs::path& path) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream in(read_text(path));
-  for (std::string line; std::getline(in, line);) {
-    std::vector<std::string> cells;
-    std::size_t start = 0;
-    for (std::size_t comma; (comma = line.find(',', start)) != std::string::npos; start = comma + 1)
-      cells.push_back(line.substr(start, comma - start));
-    cells.push_back(line.substr(start));
-    rows.push_back(cells);
-  }
-  return rows;
-}
-
-// A shell command's exit status, its output in `log`.
-int run_command(const std::string& command, const fs::path& log) {
-  const int status = std::system((command + " > '" + log.string() + "' 2>&1").c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-// A .npy file: its dtype, shape and data bytes.
-struct Npy {
-  std::string descr;
-  std::vector<long> shape;
-  std::string data;
-};
-Npy read_npy(const fs::path& path) {
-  const std::string bytes = read_text(path);
-  Npy n;
-  if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0) return n;
-  const std::size_t len = static_cast<unsigned char>(bytes[8]) |
-                          static_cast<std::size_t>(static_cast<unsigned char>(bytes[9])) << 8;
-  const std::string header = bytes.substr(10, len);
-  const std::size_t d = header.find("'descr': '");
-  if (d != std::string::npos) n.descr = header.substr(d + 10, header.find('\'', d + 10) - d - 10);
-  const std::size_t s = header.find("'shape': (");
-  if (s != std::string::npos) {
-    std::istringstream shape(header.substr(s + 10, header.find(')', s) - s - 10));
-    for (std::string part; std::getline(shape, part, ',');)
-      if (part.find_first_not_of(' ') != std::string::npos) n.shape.push_back(std::stol(part));
-  }
-  n.data = bytes.substr(10 + len);
-  return n;
-}
-
-// The stream tags GstDiscoverer finds in a file, as title and comment.
-std::pair<std::string, std::string> discovered_tags(const std::string& path) {
-  GError* error = nullptr;
-  GstDiscoverer* discoverer = gst_discoverer_new(10 * GST_SECOND, &error);
-  g_clear_error(&error);
-  if (!discoverer) return {};
-  gchar* uri = gst_filename_to_uri(path.c_str(), nullptr);
-  GstDiscovererInfo* info = gst_discoverer_discover_uri(discoverer, uri, &error);
-  g_free(uri);
-  g_clear_error(&error);
-  std::pair<std::string, std::string> out;
-  if (info) {
-    GList* streams = gst_discoverer_info_get_video_streams(info);
-    const GstTagList* tags =
-        streams ? gst_discoverer_stream_info_get_tags(GST_DISCOVERER_STREAM_INFO(streams->data))
-                : nullptr;
-    gchar* v = nullptr;
-    if (tags && gst_tag_list_get_string(tags, GST_TAG_TITLE, &v)) out.first = v;
-    g_free(v);
-    v = nullptr;
-    if (tags && gst_tag_list_get_string(tags, GST_TAG_COMMENT, &v)) out.second = v;
-    g_free(v);
-    gst_discoverer_stream_info_list_free(streams);
-    g_object_unref(info);
-  }
-  g_object_unref(discoverer);
-  return out;
-}
 
 // One recording made by record.sh for every test here, with STATS_CSV, and the same frames
 // computed directly.
@@ -485,201 +404,6 @@ TEST(RecordingsLauncher, alarm_csv_has_a_row_per_change_of_state) {
   EXPECT_EQ(r[7], "2");
   EXPECT_EQ(r[8], std::to_string(GST_SECOND / 30));  // the second frame
   EXPECT_EQ(r[12], "32");
-}
-
-// RAW=1: the camera's mosaic recorded beside the temperatures, frame for frame; measured again
-// with the same model it gives the recorded codes bit for bit (with the settings the temperature
-// segments' tags say they were read with: here brightness-radius=2), with another model others.
-TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_another_model_not) {
-  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
-  ScratchDir dir("recordings-raw");
-  const fs::path rec = dir / "rec";
-  const Env env = {{"MODEL", rgb_model()},
-                   {"OUT", rec.string()},
-                   {"SOURCE", kScene},
-                   {"CAPS", "video/x-bayer,format=rggb,width=320,height=240,framerate=30/1"},
-                   {"NUM_BUFFERS", std::to_string(kFrames)},
-                   {"SEGMENT_SECONDS", "0.5"},
-                   {"BRIGHTNESS_RADIUS", "2"},
-                   {"RAW", "1"}};
-  const ScriptRun run =
-      run_script("record.sh", {}, env, (dir / "record.log").string(), milliseconds(60000));
-  ASSERT_EQ(run.status, 0) << run.log;
-  const auto raw = files_in(rec.string(), "raw-", ".mkv");
-  ASSERT_EQ(raw.size(), 2u);
-  for (const auto& file : raw) {
-    const std::string comment = discovered_tags(file).second;
-    EXPECT_EQ(comment, "pyrocam-raw; dark=dark-level=50; pattern=rggb") << file;
-  }
-  const std::string tool = "'" + std::string(PYROCAM_CALIB_TOOL) + "' -q ";
-  const fs::path recorded = dir / "recorded.npy";
-  ASSERT_EQ(run_command(tool + "export --recording '" + rec.string() + "' --npy '" +
-                            recorded.string() + "'",
-                        dir / "export.log"),
-            0)
-      << read_text(dir / "export.log");
-  const Npy codes = read_npy(recorded);
-  ASSERT_EQ(codes.shape, (std::vector<long>{kFrames, kHeight, kWidth}));
-
-  // The same model and method (auto, as ratiotemp's default): the recorded codes exactly.
-  const auto measure = [&](const std::string& model, const std::string& out) {
-    return run_command(tool + "measure --recording '" + rec.string() + "' --model '" + model +
-                           "' --method auto --out '" + (dir / out).string() + "'",
-                       dir / (out + ".log"));
-  };
-  ASSERT_EQ(measure(rgb_model(), "same"), 0) << read_text(dir / "same.log");
-  const Npy same = read_npy(dir / "same" / "temperature.npy");
-  EXPECT_EQ(same.shape, codes.shape);
-  EXPECT_TRUE(same.data == codes.data) << "re-measured codes differ from the recorded ones";
-  EXPECT_EQ(read_csv(dir / "same" / "temperature.csv").size(), kFrames + 1u);
-
-  // demosaic25's method comes from the tags too: the first raw segment read again through
-  // bilinear demosaicking, as a user's own pipeline might have, measures to those codes.
-  const fs::path bilinear = dir / "bilinear";
-  fs::create_directories(bilinear);
-  fs::copy_file(raw[0], bilinear / "raw-00000.mkv");
-  ASSERT_EQ(run_command("gst-launch-1.0 -q filesrc location='" + raw[0] +
-                            "' ! matroskademux ! avdec_ffv1 ! capssetter join=false "
-                            "caps=video/x-bayer,format=rggb ! darksub dark-level=50 ! "
-                            "demosaic25 method=bilinear ! ratiotemp model='" +
-                            rgb_model() +
-                            "' ! avenc_ffv1 gop-size=1 ! matroskamux ! filesink "
-                            "location='" +
-                            (bilinear / "temperature-00000.mkv").string() + "'",
-                        dir / "bilinear.log"),
-            0)
-      << read_text(dir / "bilinear.log");
-  ASSERT_EQ(run_command(tool + "export --recording '" + bilinear.string() + "' --npy '" +
-                            (dir / "bilinear.npy").string() + "' && " + tool +
-                            "measure --recording '" + bilinear.string() + "' --model '" +
-                            rgb_model() + "' --out '" + (dir / "bilinear-out").string() + "'",
-                        dir / "bilinear-measure.log"),
-            0)
-      << read_text(dir / "bilinear-measure.log");
-  const Npy bilinear_codes = read_npy(dir / "bilinear.npy");
-  ASSERT_FALSE(bilinear_codes.data.empty());
-  EXPECT_FALSE(bilinear_codes.data == same.data.substr(0, bilinear_codes.data.size()))
-      << "bilinear demosaicking read as matched does";
-  EXPECT_TRUE(read_npy(dir / "bilinear-out" / "temperature.npy").data == bilinear_codes.data)
-      << "re-measured codes differ from those recorded through bilinear demosaicking";
-
-  // A later segment read with other settings is said, naming it.
-  Env plain = env;
-  plain["OUT"] = (dir / "plain").string();
-  plain["BRIGHTNESS_RADIUS"] = "0";
-  plain["NUM_BUFFERS"] = "5";
-  ASSERT_EQ(
-      run_script("record.sh", {}, plain, (dir / "plain.log").string(), milliseconds(60000)).status,
-      0);
-  fs::copy(rec, dir / "mixed");
-  fs::copy_file(dir / "plain" / "temperature-00000.mkv", dir / "mixed" / "temperature-00001.mkv",
-                fs::copy_options::overwrite_existing);
-  ASSERT_EQ(run_command("'" + std::string(PYROCAM_CALIB_TOOL) + "' measure --recording '" +
-                            (dir / "mixed").string() + "' --model '" + rgb_model() + "' --out '" +
-                            (dir / "mixed-out").string() + "'",
-                        dir / "mixed.log"),
-            0);
-  EXPECT_NE(read_text(dir / "mixed.log")
-                .find("temperature-00001.mkv was read with brightness-radius 0, "
-                      "temperature-00000.mkv with 2"),
-            std::string::npos)
-      << read_text(dir / "mixed.log");
-
-  // Another model: a hostile unit of the same camera type, calibrated as the test model is.
-  const fs::path other = dir / "other.json", campaign = dir / "campaign";
-  ASSERT_EQ(run_command(tool + "simulate campaign --profile rgb-reference --unit hostile " +
-                            "--frames 2 --size 64x64 --roi-area 1500 --out '" + campaign.string() +
-                            "' && " + tool + "calibrate --dataset '" + campaign.string() +
-                            "' --profile rgb-reference --solver regularised " +
-                            "--epochs 30 --polish-iterations 50 --mc-refits 0 --locus-step 2 " +
-                            "--out '" + other.string() + "'",
-                        dir / "other.log"),
-            0)
-      << read_text(dir / "other.log");
-  ASSERT_EQ(measure(other.string(), "other"), 0) << read_text(dir / "other.log");
-  const Npy changed = read_npy(dir / "other" / "temperature.npy");
-  ASSERT_EQ(changed.data.size(), codes.data.size());
-  std::size_t both = 0, differ = 0;
-  for (std::size_t i = 0; i + 1 < codes.data.size(); i += 2) {
-    const int a = static_cast<unsigned char>(codes.data[i]) |
-                  static_cast<unsigned char>(codes.data[i + 1]) << 8;
-    const int b = static_cast<unsigned char>(changed.data[i]) |
-                  static_cast<unsigned char>(changed.data[i + 1]) << 8;
-    if (a && b) {
-      ++both;
-      differ += a != b;
-    }
-  }
-  std::cout << "[ info     ] another model: " << differ << " of " << both
-            << " readings in both differ\n";
-  EXPECT_GT(both, static_cast<std::size_t>(kFrames) * 10);
-  EXPECT_GT(differ * 2, both) << "another model left most readings unchanged";
-
-  // A model of another mosaic is refused, naming both.
-  ASSERT_EQ(measure(test_model("test-model-nir5x5.json"), "nir"), 1);
-  EXPECT_NE(read_text(dir / "nir.log").find("5x5 mosaic"), std::string::npos)
-      << read_text(dir / "nir.log");
-  EXPECT_NE(read_text(dir / "nir.log").find("rggb Bayer mosaic"), std::string::npos)
-      << read_text(dir / "nir.log");
-}
-
-// Without a Bayer format in CAPS the raw tags cannot say the Bayer pattern, but the
-// temperatures' tags say the camera profile: a model of another mosaic is still refused, not
-// read as nonsense. A 5x5 recording's raw tags say its mosaic. A temperature segment given as
-// the recording is refused, saying which segments measure reads.
-TEST(RecordingsRaw, a_model_of_another_mosaic_is_refused_whatever_the_caps_say) {
-  for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
-  ScratchDir dir("recordings-raw-mosaic");
-  const std::string tool = "'" + std::string(PYROCAM_CALIB_TOOL) + "' ";
-  const auto measure = [&](const fs::path& rec, const std::string& model, const std::string& log) {
-    return run_command(tool + "measure --recording '" + rec.string() + "' --model '" + model +
-                           "' --out '" + (dir / (log + "-out")).string() + "'",
-                       dir / (log + ".log"));
-  };
-  const fs::path nir = dir / "nir", rgb = dir / "rgb";
-  ASSERT_EQ(run_script("record.sh", {},
-                       {{"PROFILE", "nir5x5-reference"},
-                        {"MODEL", test_model("test-model-nir5x5.json")},
-                        {"OUT", nir.string()},
-                        {"NUM_BUFFERS", "3"},
-                        {"RAW", "1"}},
-                       (dir / "nir-record.log").string(), milliseconds(60000))
-                .status,
-            0)
-      << read_text(dir / "nir-record.log");
-  const auto nir_raw = files_in(nir.string(), "raw-", ".mkv");
-  ASSERT_EQ(nir_raw.size(), 1u);
-  EXPECT_EQ(discovered_tags(nir_raw[0]).second, "pyrocam-raw; dark=dark-level=50; pattern=5x5");
-  EXPECT_EQ(measure(nir, rgb_model(), "nir-with-rgb"), 1);
-  EXPECT_NE(read_text(dir / "nir-with-rgb.log")
-                .find("the model was calibrated for a rggb Bayer mosaic (profile rgb-reference), "
-                      "the recording " +
-                      nir.string() + " for a 5x5 mosaic"),
-            std::string::npos)
-      << read_text(dir / "nir-with-rgb.log");
-
-  ASSERT_EQ(run_script(
-                "record.sh", {},
-                {{"MODEL", rgb_model()}, {"OUT", rgb.string()}, {"NUM_BUFFERS", "3"}, {"RAW", "1"}},
-                (dir / "rgb-record.log").string(), milliseconds(60000))
-                .status,
-            0)
-      << read_text(dir / "rgb-record.log");
-  const auto rgb_raw = files_in(rgb.string(), "raw-", ".mkv");
-  ASSERT_EQ(rgb_raw.size(), 1u);
-  EXPECT_EQ(discovered_tags(rgb_raw[0]).second, "pyrocam-raw; dark=dark-level=50");
-  EXPECT_EQ(measure(rgb, test_model("test-model-nir5x5.json"), "rgb-with-nir"), 1);
-  EXPECT_NE(
-      read_text(dir / "rgb-with-nir.log").find("for a rggb Bayer mosaic (profile rgb-reference"),
-      std::string::npos)
-      << read_text(dir / "rgb-with-nir.log");
-  EXPECT_EQ(measure(rgb, rgb_model(), "rgb-with-rgb"), 0) << read_text(dir / "rgb-with-rgb.log");
-
-  const auto temperatures = files_in(rgb.string(), "temperature-", ".mkv");
-  ASSERT_EQ(temperatures.size(), 1u);
-  EXPECT_EQ(measure(temperatures[0], rgb_model(), "temperatures"), 1);
-  EXPECT_NE(read_text(dir / "temperatures.log").find("holds temperatures"), std::string::npos)
-      << read_text(dir / "temperatures.log");
 }
 
 }  // namespace
