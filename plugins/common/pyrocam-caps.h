@@ -93,6 +93,8 @@
 #include <gst/gst.h>
 #include <gst/video/video.h>
 
+#define PYROCAM_BAYER_MEDIA_TYPE "video/x-bayer"
+#define PYROCAM_VIDEO_MEDIA_TYPE "video/x-raw"
 #define PYROCAM_MOSAIC_MEDIA_TYPE "video/x-pyrocam-mosaic"
 #define PYROCAM_BANDS_MEDIA_TYPE "video/x-pyrocam-bands"
 
@@ -112,12 +114,12 @@
 #define PYROCAM_FRAMERATE_RANGE "framerate = (fraction) [ 0/1, max ]"
 
 /* Raw mosaics: 8-bit Bayer, or gray video carrying any mosaic. */
-#define PYROCAM_RAW_BAYER_CAPS                                                      \
-  "video/x-bayer, format = (string) " PYROCAM_BAYER_FORMATS ", " PYROCAM_SIZE_RANGE \
-  ", " PYROCAM_FRAMERATE_RANGE
-#define PYROCAM_RAW_GRAY_CAPS                                                \
-  "video/x-raw, format = (string) { GRAY8, GRAY16_LE }, " PYROCAM_SIZE_RANGE \
-  ", " PYROCAM_FRAMERATE_RANGE
+#define PYROCAM_RAW_BAYER_CAPS                                                                  \
+  PYROCAM_BAYER_MEDIA_TYPE ", format = (string) " PYROCAM_BAYER_FORMATS ", " PYROCAM_SIZE_RANGE \
+                           ", " PYROCAM_FRAMERATE_RANGE
+#define PYROCAM_RAW_GRAY_CAPS                                                              \
+  PYROCAM_VIDEO_MEDIA_TYPE ", format = (string) { GRAY8, GRAY16_LE }, " PYROCAM_SIZE_RANGE \
+                           ", " PYROCAM_FRAMERATE_RANGE
 #define PYROCAM_RAW_CAPS PYROCAM_RAW_BAYER_CAPS "; " PYROCAM_RAW_GRAY_CAPS
 
 #define PYROCAM_MOSAIC_CAPS                                                                       \
@@ -145,5 +147,6 @@
 #define PYROCAM_RGBA_CAPS GST_VIDEO_CAPS_MAKE(PYROCAM_RGBA_FORMATS)
 #define PYROCAM_OVERLAY_CAPS GST_VIDEO_CAPS_MAKE("{ RGBA, BGRA }")
 
-#define PYROCAM_TEMPERATURE_CAPS \
-  "video/x-raw, format = (string) GRAY16_LE, " PYROCAM_SIZE_RANGE ", " PYROCAM_FRAMERATE_RANGE
+#define PYROCAM_TEMPERATURE_CAPS                                                \
+  PYROCAM_VIDEO_MEDIA_TYPE ", format = (string) GRAY16_LE, " PYROCAM_SIZE_RANGE \
+                           ", " PYROCAM_FRAMERATE_RANGE

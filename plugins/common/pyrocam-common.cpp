@@ -16,7 +16,7 @@ bool parse_raw_caps(GstCaps* caps, RawFormat* out) {
   if (!caps || gst_caps_get_size(caps) < 1) return false;
   const GstStructure* s = gst_caps_get_structure(caps, 0);
   RawFormat f;
-  if (gst_structure_has_name(s, "video/x-bayer")) {
+  if (gst_structure_has_name(s, PYROCAM_BAYER_MEDIA_TYPE)) {
     const char* format = gst_structure_get_string(s, "format");
     if (!format || !gst_structure_get_int(s, "width", &f.width) ||
         !gst_structure_get_int(s, "height", &f.height))
@@ -25,7 +25,7 @@ bool parse_raw_caps(GstCaps* caps, RawFormat* out) {
     f.pattern = format;
     f.bytes_per_sample = 1;
     gst_video_info_init(&f.info);
-  } else if (gst_structure_has_name(s, "video/x-raw")) {
+  } else if (gst_structure_has_name(s, PYROCAM_VIDEO_MEDIA_TYPE)) {
     if (!gst_video_info_from_caps(&f.info, caps)) return false;
     const GstVideoFormat vf = GST_VIDEO_INFO_FORMAT(&f.info);
     if (vf != GST_VIDEO_FORMAT_GRAY8 && vf != GST_VIDEO_FORMAT_GRAY16_LE) return false;
@@ -162,7 +162,7 @@ bool is_fused_bands(const GstCaps* caps, guint index) {
 gsize frame_size_of_caps(GstCaps* caps) {
   if (!caps || gst_caps_get_size(caps) < 1) return 0;
   const GstStructure* s = gst_caps_get_structure(caps, 0);
-  if (gst_structure_has_name(s, "video/x-raw")) {
+  if (gst_structure_has_name(s, PYROCAM_VIDEO_MEDIA_TYPE)) {
     GstVideoInfo info;
     return gst_video_info_from_caps(&info, caps) ? GST_VIDEO_INFO_SIZE(&info) : 0;
   }
@@ -192,13 +192,17 @@ void sync_controlled_properties(GstBaseTransform* trans, GstBuffer* buffer) {
   if (trans->segment.format != GST_FORMAT_TIME || !GST_BUFFER_PTS_IS_VALID(buffer)) return;
   const GstClockTime stream_time =
       gst_segment_to_stream_time(&trans->segment, GST_FORMAT_TIME, GST_BUFFER_PTS(buffer));
-  GST_TRACE_OBJECT(trans, "stream time %" GST_TIME_FORMAT, GST_TIME_ARGS(stream_time));
   if (GST_CLOCK_TIME_IS_VALID(stream_time)) gst_object_sync_values(GST_OBJECT(trans), stream_time);
 }
 
 int structure_int(const GstStructure* s, const char* field, int fallback) {
   int v;
   return gst_structure_get_int(s, field, &v) ? v : fallback;
+}
+
+std::string structure_string(const GstStructure* s, const char* field) {
+  const char* v = gst_structure_get_string(s, field);
+  return v ? v : "";
 }
 
 void copy_fields(const GstStructure* from, GstStructure* to,

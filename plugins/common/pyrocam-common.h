@@ -122,6 +122,8 @@ bool parse_region(const std::string& text, Region* out);
 
 /* Integer field of a structure when fixed, else `fallback`. */
 int structure_int(const GstStructure* s, const char* field, int fallback);
+/* String field of a structure, else empty. */
+std::string structure_string(const GstStructure* s, const char* field);
 
 /* Copies those of `fields` that `from` has onto `to`; absent ones are left as they are. */
 void copy_fields(const GstStructure* from, GstStructure* to,

@@ -93,7 +93,7 @@ GstStructure* mosaic_structure(const GstStructure* s, const Settings& settings) 
   GstStructure* out =
       gst_structure_new(PYROCAM_MOSAIC_MEDIA_TYPE, "format", G_TYPE_STRING, "F32LE", nullptr);
   copy_dimensions(s, out);
-  if (gst_structure_has_name(s, "video/x-bayer")) {
+  if (gst_structure_has_name(s, PYROCAM_BAYER_MEDIA_TYPE)) {
     const GValue* format = gst_structure_get_value(s, "format");
     if (format)
       gst_structure_set_value(out, "pattern", format);

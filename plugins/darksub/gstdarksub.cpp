@@ -378,7 +378,7 @@ static gboolean gst_dark_sub_sink_event(GstBaseTransform* trans, GstEvent* event
 static void check_bayer_phase(GstDarkSub* self, State& st, const cv::Mat& signal) {
   constexpr int kCellRowStep = 16;
   constexpr std::size_t kCells = 256;
-  if (st.phase_warned || st.pattern == "5x5") return;
+  if (st.phase_warned || st.pattern == PYROCAM_SNAPSHOT_PATTERN_NAME) return;
   const float lit_dn =
       std::max(4.0f, 0.02f * static_cast<float>(pyrocam::full_scale_dn(st.bit_depth)));
   pyrocam::add_bayer_cell_sums(signal, lit_dn, kCellRowStep, st.phase_sums);

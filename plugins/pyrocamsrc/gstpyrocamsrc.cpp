@@ -170,7 +170,7 @@ static GstCaps* profile_caps(const pyrocam::CameraProfile& profile) {
   std::string pattern = profile.mosaic.pattern;
   for (char& c : pattern) c = static_cast<char>(g_ascii_tolower(c));
   if (profile.mosaic.kind == pyrocam::MosaicLayout::Kind::kBayer && profile.bit_depth == 8) {
-    caps = "video/x-bayer, format = (string) " + pattern;
+    caps = PYROCAM_BAYER_MEDIA_TYPE ", format = (string) " + pattern;
   } else {
     /* The layout and depth travel in the caps (pyrocam-caps.h), so that darksub cannot read
      * the mosaic as another one. */
@@ -178,7 +178,7 @@ static GstCaps* profile_caps(const pyrocam::CameraProfile& profile) {
       pattern = std::to_string(profile.mosaic.period_width) + "x" +
                 std::to_string(profile.mosaic.period_height);
     caps =
-        std::string("video/x-raw, format = (string) ") +
+        std::string(PYROCAM_VIDEO_MEDIA_TYPE ", format = (string) ") +
         (profile.bit_depth == 8 ? "GRAY8" : "GRAY16_LE") +
         ", " PYROCAM_FIELD_PATTERN " = (string) " + pattern +
         ", " PYROCAM_FIELD_BIT_DEPTH " = (int) " + std::to_string(profile.bit_depth) +
@@ -557,8 +557,8 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
   g_object_class_install_property(
       gobject_class, PROP_SEED,
       g_param_spec_uint64("seed", "Seed",
-                          "Seed of the unit's deviation and of the noise; equal seeds give "
-                          "equal frames",
+                          "Seed of the unit's deviation and of the noise (0..2^64-1); equal "
+                          "seeds give equal frames",
                           0, G_MAXUINT64, DEFAULT_SEED, ready));
   g_object_class_install_property(
       gobject_class, PROP_IS_LIVE,

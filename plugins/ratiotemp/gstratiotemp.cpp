@@ -135,11 +135,11 @@
  * encoding in words) and comment "pyrocam-recording; quantity=temperature; unit=0.1 K;
  * no-reading=0; model=FILE; model-fingerprint=HEX; profile=NAME; method=lut; e-slope=0 %/100 nm;
  * partial-bands=safe; misfit-probability=0; blur-correction=off; brightness-radius=0;
- * demosaic=matched" (demosaic: how demosaic25 made the planes, where the caps say it;
- * `pyrocam-calib measure --recording` measures a raw recording again with them;
- * quantity=expanded-uncertainty with output=uncertainty; "; exposure=N us" added when upstream
- * tags carry capturing-shutter-speed). The fingerprint is the model file's checksum_fnv1a64.
- * Matroska keeps the title and comment (it drops most other tags), in every splitmuxsink segment.
+ * demosaic=matched" (demosaic25's method, where the caps say it; quantity=expanded-uncertainty
+ * with output=uncertainty; "; exposure=N us" when upstream tags carry capturing-shutter-speed),
+ * with which `pyrocam-calib measure --recording` measures a raw recording again. The fingerprint
+ * is the model file's checksum_fnv1a64. Matroska keeps the title and comment (it drops most
+ * other tags), in every splitmuxsink segment.
  *
  * Errors: no model set: RESOURCE SETTINGS; a missing model file: RESOURCE NOT_FOUND; a
  * truncated, edited, unparsable or other-version model: RESOURCE READ (the message names the
@@ -263,8 +263,7 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
     return FALSE;
   st.demosaic_noise =
       st.fused ? pyrocam::DemosaicNoise{} : rt::demosaic_noise_of(GST_ELEMENT(self), in, model);
-  const char* made = gst_structure_get_string(in, PYROCAM_FIELD_DEMOSAIC);
-  st.demosaic = st.fused ? "matched" : made ? made : "";
+  st.demosaic = st.fused ? "matched" : pg::structure_string(in, PYROCAM_FIELD_DEMOSAIC);
   st.saturation_level_dn = pg::structure_int(in, PYROCAM_FIELD_SATURATION_LEVEL, -1);
   st.configured = true;
   GST_INFO_OBJECT(self, "%d bands of %dx%d (%s) -> GRAY16_LE%s", st.bands, st.width, st.height,

@@ -92,7 +92,8 @@ void install_properties(GObjectClass* gobject_class) {
       gobject_class, PROP_STATS_INTERVAL,
       g_param_spec_uint64("stats-interval", "Statistics interval",
                           "Nanoseconds of stream time between pyrocam-temperature-stats "
-                          "element messages (0 = none; otherwise the first frame always posts)",
+                          "element messages (0..2^64-1; 0 = none; otherwise the first frame "
+                          "always posts)",
                           0, G_MAXUINT64, DEFAULT_STATS_INTERVAL, playing));
   g_object_class_install_property(
       gobject_class, PROP_REGION,

@@ -27,8 +27,9 @@
  *
  * ## Example launch line
  * |[
- * gst-launch-1.0 ... ! ratiotemp model=model.json ! thermalcolormap palette=inferno \
- *     scale-bar=true isotherm-threshold=2200 ! videoconvert ! autovideosink
+ * gst-launch-1.0 pyrocamsrc ! darksub dark-level=50 ! demosaic25 ! ratiotemp model=model.json ! \
+ *     thermalcolormap palette=inferno scale-bar=true isotherm-threshold=2200 ! videoconvert ! \
+ *     autovideosink
  * ]|
  */
 #include "gstthermalcolormap.h"
@@ -171,7 +172,7 @@ static GstCaps* gst_thermal_colormap_transform_caps(GstBaseTransform* trans,
     GstStructure* s = gst_structure_copy(gst_caps_get_structure(caps, i));
     gst_structure_remove_fields(s, "format", "colorimetry", "chroma-site", nullptr);
     if (direction == GST_PAD_SINK) {
-      pg::set_list_field(s, "format", "{ RGBA, BGRA, RGBx, BGRx }");
+      pg::set_list_field(s, "format", PYROCAM_RGBA_FORMATS);
     } else {
       gst_structure_set(s, "format", G_TYPE_STRING, "GRAY16_LE", nullptr);
     }
@@ -488,7 +489,7 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
       gobject_class, PROP_INVALID_COLOR,
       g_param_spec_uint(
           "invalid-color", "Invalid colour",
-          "Colour of pixels without a reading, 0xAARRGGBB (default fully "
+          "Colour of pixels without a reading, 0xAARRGGBB (0..0xFFFFFFFF; default fully "
           "transparent, so the camera image shows through in thermaloverlay or compositor)",
           0, G_MAXUINT, DEFAULT_INVALID_COLOR, display));
   g_object_class_install_property(
@@ -500,8 +501,9 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
   g_object_class_install_property(
       gobject_class, PROP_ISOTHERM_COLOR,
       g_param_spec_uint("isotherm-color", "Isotherm colour",
-                        "Colour of pixels at or above isotherm-threshold, 0xAARRGGBB", 0, G_MAXUINT,
-                        DEFAULT_ISOTHERM_COLOR, display));
+                        "Colour of pixels at or above isotherm-threshold, 0xAARRGGBB "
+                        "(0..0xFFFFFFFF)",
+                        0, G_MAXUINT, DEFAULT_ISOTHERM_COLOR, display));
   g_object_class_install_property(
       gobject_class, PROP_PEAK_MARKER,
       g_param_spec_boolean("peak-marker", "Peak marker",
