@@ -44,12 +44,22 @@ void PlaneEstimator::set_partial_bands(TemperatureEstimator::PartialBands partia
   partial_ = partial;
   estimator_->set_partial_bands(partial);
   partial_fit_.reset();
+  sloped_partial_fit_.reset();
   if (method_ == Method::kLikelihood || partial == TemperatureEstimator::PartialBands::kOff) return;
   auto fit = make_estimator(model_, Method::kLikelihood);
   fit->set_partial_bands(partial);
   fit->set_analogue_gain(analogue_gain_);
   // A fit that can read none of them would only cost a call per pixel without a reading.
   if (fit->can_read_partial()) partial_fit_ = std::move(fit);
+  make_sloped_partial_fit();
+}
+
+void PlaneEstimator::make_sloped_partial_fit() {
+  sloped_partial_fit_.reset();
+  if (!partial_fit_ || !reads_sloped()) return;
+  auto fit = std::make_unique<EmissivitySlopeEstimator>(partial_fit_, sloped_->alpha(), alpha_u_);
+  fit->set_analogue_gain(analogue_gain_);
+  sloped_partial_fit_ = std::move(fit);
 }
 
 void PlaneEstimator::set_misfit_probability(double probability) {
@@ -66,6 +76,7 @@ void PlaneEstimator::set_analogue_gain(double factor) {
   estimator_->set_analogue_gain(factor);  // refuses before anything changes
   if (sloped_) sloped_->set_analogue_gain(factor);
   if (partial_fit_) partial_fit_->set_analogue_gain(factor);
+  if (sloped_partial_fit_) sloped_partial_fit_->set_analogue_gain(factor);
   if (misfit_) misfit_->set_analogue_gain(factor);
   if (audit_) audit_->set_analogue_gain(factor);
   analogue_gain_ = factor;
@@ -82,6 +93,7 @@ void PlaneEstimator::set_emissivity_slope(double alpha, double alpha_u) {
     sloped_ = std::move(sloped);
   }
   alpha_u_ = alpha_u;
+  make_sloped_partial_fit();
 }
 
 PlaneEstimator::FitAudit PlaneEstimator::take_fit_audit(bool wait) const {
@@ -122,7 +134,7 @@ void PlaneEstimator::audit_row(const float* const* rows, std::size_t n, const fl
     next += audit_stride_;
     for (std::size_t b = 0; b < bands; ++b) s[b] = rows[b][i];
     const double* signals = s;
-    if (sloped_) {  // the grey surface's signals that the reading corrected them to
+    if (reads_sloped()) {  // the grey surface's signals that the reading corrected them to
       sloped_->corrected_signals(s, out[i], c);
       signals = c;
     }
@@ -138,30 +150,34 @@ void PlaneEstimator::audit_row(const float* const* rows, std::size_t n, const fl
 }
 
 void PlaneEstimator::estimate_row(const float* const* rows, std::size_t n, float* out) const {
-  if (!sloped_) {
+  const bool sloped = reads_sloped();
+  if (sloped)
+    sloped_->estimate(rows, n, out);
+  else
     estimator_->estimate(rows, n, out);
-    if (partial_fit_) {
-      // Only pixels with a band the network cannot use: a reading outside its range stays none.
-      const auto bands = static_cast<std::size_t>(model_->profile().band_count());
-      const double dim = model_->profile().thresholds.inference_dim_dn;
-      double s[kMaxBands];
-      for (std::size_t i = 0; i < n; ++i) {
-        if (!std::isnan(out[i])) continue;
-        bool some_unusable = false;
-        for (std::size_t b = 0; b < bands; ++b) {
-          s[b] = rows[b][i];
-          some_unusable |= !(s[b] >= dim && std::isfinite(s[b]));
-        }
-        if (some_unusable) out[i] = static_cast<float>(partial_fit_->temperature_c(s));
+  if (const TemperatureEstimator* partial =
+          sloped ? static_cast<const TemperatureEstimator*>(sloped_partial_fit_.get())
+                 : partial_fit_.get()) {
+    // Only pixels with a band the network cannot use: a reading outside its range stays none.
+    const auto bands = static_cast<std::size_t>(model_->profile().band_count());
+    const double dim = model_->profile().thresholds.inference_dim_dn;
+    double s[kMaxBands];
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!std::isnan(out[i])) continue;
+      bool some_unusable = false;
+      for (std::size_t b = 0; b < bands; ++b) {
+        s[b] = rows[b][i];
+        some_unusable |= !(s[b] >= dim && std::isfinite(s[b]));
       }
+      if (some_unusable) out[i] = static_cast<float>(partial->temperature_c(s));
     }
-    audit_row(rows, n, out);
-    if (misfit_) misfit_->apply(rows, n, out);
-    return;
   }
-  sloped_->estimate(rows, n, out);
   audit_row(rows, n, out);
   if (!misfit_) return;
+  if (!sloped) {
+    misfit_->apply(rows, n, out);
+    return;
+  }
   // The check sees the signals of the grey surface that the reading corrected them to.
   const auto bands = static_cast<std::size_t>(model_->profile().band_count());
   std::vector<float> corrected(bands * n);
@@ -204,8 +220,7 @@ void PlaneEstimator::uncertainty_row(const float* const* rows, std::size_t n, co
 }
 
 bool PlaneEstimator::reads_partial() const {
-  return !sloped_ && (method_ == Method::kLikelihood ? estimator_->can_read_partial()
-                                                     : partial_fit_ != nullptr);
+  return method_ == Method::kLikelihood ? estimator_->can_read_partial() : partial_fit_ != nullptr;
 }
 
 std::unique_ptr<const DimEdgeCheck> PlaneEstimator::dim_edge_check(

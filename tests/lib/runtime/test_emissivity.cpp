@@ -214,6 +214,55 @@ TEST(EmissivitySlope, a_grey_surface_reads_bit_for_bit_as_before) {
   }
 }
 
+// Pixels with dim or saturated bands, read from the rest (partial-bands safe, ratiotemp's
+// default): a slope of 0 with its uncertainty set reads them bit for bit as grey, and a small
+// slope reads the same pixels (it used to leave them without a reading, and at a slope of 0 too).
+TEST(EmissivitySlope, partial_band_pixels_read_with_a_slope_and_its_uncertainty) {
+  // The 5x5 camera: the colour test model reads no such pixel at all (no band pair is safe).
+  // With the network, those pixels go to the likelihood fit (corrected for the slope).
+  for (const char* file : {"test-model-nir5x5.json"}) {
+    const auto model = test_model(file);
+    const int bands = model->profile().band_count();
+    const double dim = model->profile().thresholds.inference_dim_dn;
+    constexpr int kPixels = 60;
+    std::vector<cv::Mat> planes(static_cast<std::size_t>(bands));
+    for (auto& p : planes) p.create(1, kPixels, CV_32F);
+    for (int i = 0; i < kPixels; ++i) {
+      // The dimmest band 40 DN above the dim threshold; in a third of the pixels the brightest
+      // band saturated, in a third the dimmest band at half the threshold.
+      const Eigen::VectorXd s =
+          sloped_signals(*model, 0, 1200 + 20 * i) * ((i % 3 == 2 ? dim / 2 : dim + 40) / 200);
+      for (int b = 0; b < bands; ++b)
+        planes[static_cast<std::size_t>(b)].at<float>(0, i) =
+            i % 3 == 1 && s[b] == s.maxCoeff() ? INFINITY : static_cast<float>(s[b]);
+    }
+    const auto partial = TemperatureEstimator::PartialBands::kSafe;
+    for (Method method : {Method::kMlp, Method::kLikelihood}) {
+      PlaneEstimator grey(model, method, 1e-6), with_u(model, method, 1e-6),
+          sloped(model, method, 1e-6);
+      for (PlaneEstimator* e : {&grey, &with_u, &sloped}) e->set_partial_bands(partial);
+      with_u.set_emissivity_slope(0, model->uncertainty.emissivity_slope_u);
+      sloped.set_emissivity_slope(1e-4);
+      cv::Mat t0, t1, t2;
+      grey.estimate(planes, t0);
+      with_u.estimate(planes, t1);
+      sloped.estimate(planes, t2);
+      int partial_read = 0;
+      for (int i = 0; i < kPixels; ++i) {
+        const float a = t0.at<float>(0, i), b = t1.at<float>(0, i), c = t2.at<float>(0, i);
+        EXPECT_TRUE(std::memcmp(&a, &b, sizeof a) == 0)
+            << file << " " << i << ": " << a << " " << b;
+        EXPECT_EQ(std::isfinite(a), std::isfinite(c)) << file << " " << i;
+        if (std::isfinite(a) && std::isfinite(c)) {
+          EXPECT_NEAR(c, a, 2) << file << " " << i;
+        }
+        partial_read += i % 3 != 0 && std::isfinite(a);
+      }
+      EXPECT_GT(partial_read, kPixels / 3) << file << " " << method_name(method);
+    }
+  }
+}
+
 TEST(EmissivitySlope, the_uncertainty_has_the_emissivity_term_of_the_chosen_slope) {
   const auto model = test_model("test-model-nir5x5.json");
   const UncertaintyModel& um = model->uncertainty;

@@ -64,8 +64,8 @@ class PlaneEstimator {
   }
   // See TemperatureEstimator::set_partial_bands (off by default). With the network or its
   // table, pixels they cannot read because a band is saturated, invalid or dim are read by the
-  // likelihood fit with those rules (a grey surface only: with an emissivity slope they stay
-  // without a reading). Not while an estimate runs; the fit is built when first needed.
+  // likelihood fit with those rules (with an emissivity slope, the fit corrected for it). Not
+  // while an estimate runs; the fit is built when first needed.
   void set_partial_bands(TemperatureEstimator::PartialBands partial);
   void set_allow_partial(bool allow) {
     set_partial_bands(allow ? TemperatureEstimator::PartialBands::kAny
@@ -168,13 +168,19 @@ class PlaneEstimator {
 
   std::shared_ptr<const ThermalModel> model_;
   std::shared_ptr<TemperatureEstimator> estimator_;
-  std::unique_ptr<EmissivitySlopeEstimator> sloped_;  // null for a grey surface
-  double alpha_u_ = -1;                               // as set
+  // Null for a grey surface; at a slope of 0 it carries the slope's uncertainty only, and the
+  // readings are the grey ones (reads_sloped()).
+  std::unique_ptr<EmissivitySlopeEstimator> sloped_;
+  bool reads_sloped() const { return sloped_ && sloped_->alpha() != 0; }
+  void make_sloped_partial_fit();
+  double alpha_u_ = -1;  // as set
   // Made when the check is first turned on (its tables cost a locus).
   std::unique_ptr<MisfitCheck> misfit_;
   Method method_;
   // The likelihood fit for the pixels the network or its table cannot read (set_partial_bands).
-  std::unique_ptr<TemperatureEstimator> partial_fit_;
+  std::shared_ptr<TemperatureEstimator> partial_fit_;
+  // partial_fit_ corrected for a non-zero emissivity slope (set_emissivity_slope).
+  std::unique_ptr<EmissivitySlopeEstimator> sloped_partial_fit_;
   TemperatureEstimator::PartialBands partial_ = TemperatureEstimator::PartialBands::kOff;
   bool partial_set_ = false;
   double analogue_gain_ = 1.0;
