@@ -20,6 +20,7 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 # The build tree's plugin and `launch` (pyrocam-launch, which never hangs after an error).
+takes_arguments=1
 source "$here/lib/setup.sh"
 
 RECORDING=${1:-out/recording}

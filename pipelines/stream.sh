@@ -10,7 +10,8 @@
 #   MODEL        calibrated model; the default is calibrated on first use [out/model-rgb.json,
 #                5x5: out/model-nir5x5.json]
 #   SOURCE       camera element with its properties                   [pyrocamsrc is-live=true profile=PROFILE;
-#                    5x5: scene=plate too]
+#                    5x5: scene=plate too; a typical unit, seed 1: add unit=… seed=N
+#                    for the simulated unit a model was calibrated on, as simulate --unit-seed N]
 #   CAPS         caps after the camera: format, size, frame rate      [video/x-bayer,width=320,height=240,framerate=30/1;
 #                5x5: video/x-raw,width=320,height=240,framerate=30/1]
 #   DARK         darksub settings: dark-level=N or location=dark.pgm  [dark-level=50]

@@ -51,6 +51,7 @@ echo "ensure-model: wrote $model (report: ${model%.json}-report.html)"
 # frames wait; a few seconds, once.
 if [[ $profile == rgb-reference ]]; then
   here=$(cd "$(dirname "$0")/.." && pwd)
+  takes_arguments=1
   source "$here/lib/setup.sh"
   for scene in melt-pool "plate temperature=1300"; do
     # shellcheck disable=SC2086 # the scene's words are pyrocamsrc's properties

@@ -3,6 +3,19 @@
 # (built with the plugin). Unlike gst-launch-1.0 of GStreamer 1.22 it never hangs after an error
 # (exit 1 with the message); with -e SIGINT or SIGTERM sends EOS so that the files are finalised,
 # without it they stop the pipeline.
+# -h or --help: the script's header comment (what it does, its settings, examples). Settings are
+# environment variables: an argument a script does not take (all but playback.sh's RECORDING;
+# a script that takes one sets takes_arguments=1) is refused rather than ignored.
+for arg in "$@"; do
+  if [[ $arg == -h || $arg == --help ]]; then
+    sed -n '2,/^[^#]/{/^#/{s/^# \{0,1\}//;p}}' "$0"
+    exit 0
+  fi
+done
+if [[ ${takes_arguments:-0} != 1 && $# -gt 0 ]]; then
+  echo "$(basename "$0" .sh): no arguments are taken, not '$*': the settings are environment variables (--help lists them)" >&2
+  exit 2
+fi
 if [[ -z ${GST_PLUGIN_PATH:-} && -f $here/../build/plugins/libgstpyrocam.so ]]; then
   export GST_PLUGIN_PATH=$here/../build/plugins
 fi
