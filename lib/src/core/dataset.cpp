@@ -291,14 +291,23 @@ Dataset Dataset::open(const std::filesystem::path& folder) {
         .push_back(g);
   }
   if (d.frames_.empty()) throw InputError(folder.string() + ": manifest lists no frames");
-  for (const auto& f : d.frames_) d.dark_for(f.exposure_us);  // throws if missing
+  for (const auto& f : d.frames_)
+    if (!std::any_of(d.darks_.begin(), d.darks_.end(), [&](const FrameGroup& k) {
+          return same_exposure(k.exposure_us, f.exposure_us);
+        })) {
+      std::ostringstream m;
+      m << std::setprecision(15) << f.files.front().string() << " (manifest.csv line " << f.line
+        << "): frames at " << f.temperature_c << " degC, exposure " << f.exposure_us
+        << " us have no dark row of that exposure";
+      throw InputError(m.str());
+    }
   for (const auto& g : d.references_)
     if (!std::any_of(d.darks_.begin(), d.darks_.end(), [&](const FrameGroup& k) {
           return same_exposure(k.exposure_us, g.exposure_us);
         })) {
       std::ostringstream m;
-      m << g.files.front().string() << " (manifest.csv line " << g.line << "): reference at "
-        << g.temperature_c << " degC, exposure " << g.exposure_us
+      m << std::setprecision(15) << g.files.front().string() << " (manifest.csv line " << g.line
+        << "): reference at " << g.temperature_c << " degC, exposure " << g.exposure_us
         << " us has no dark row of that exposure";
       throw InputError(m.str());
     }
@@ -309,7 +318,8 @@ const FrameGroup& Dataset::dark_for(double exposure_us) const {
   for (const auto& g : darks_)
     if (same_exposure(g.exposure_us, exposure_us)) return g;
   std::ostringstream msg;
-  msg << folder_.string() << ": no dark frame for exposure " << exposure_us << " us";
+  msg << std::setprecision(15) << folder_.string() << ": no dark frame for exposure " << exposure_us
+      << " us";
   throw InputError(msg.str());
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
@@ -166,7 +167,10 @@ TEST_F(DatasetFiles, rejects_exposure_without_dark_n) {
     if (line.find(",dark,") == std::string::npos || line.find("158.76") == std::string::npos)
       kept += line + "\n";
   write_text(dir / "manifest.csv", kept);
-  expect_rejected("no dark frame for exposure 158.76 us");
+  // The first frames of that exposure, by their file and manifest line.
+  expect_rejected(
+      "frames/T0900_e02_f0.pgm (manifest.csv line 10): frames at 900 degC, exposure 158.76 us have "
+      "no dark row of that exposure");
 }
 
 TEST_F(DatasetFiles, rejects_empty_roi_n) {
@@ -423,7 +427,7 @@ TEST_F(ReferenceDatasetFiles, rejects_a_reference_exposure_without_its_dark_n) {
                rows.end());
   });
   std::ostringstream e;
-  e << "(manifest.csv line " << first_reference_line(exposure)
+  e << std::setprecision(15) << "(manifest.csv line " << first_reference_line(exposure)
     << "): reference at 1738 degC, exposure " << exposure << " us has no dark row of that exposure";
   expect_rejected(e.str());
 }
