@@ -100,26 +100,6 @@ TEST(Files, every_pipeline_has_a_purpose_line_and_a_test) {
   for (const auto& name : tested) EXPECT_TRUE(found.count(name)) << name << " is missing";
 }
 
-// --help prints a script's header (its settings) and starts nothing; an argument a script does not
-// take is refused rather than ignored (`record.sh --help` used to calibrate and record).
-TEST(Files, help_prints_the_settings_and_stray_arguments_are_refused_n) {
-  ScratchDir dir("files-help");
-  for (const char* script : {"live-view.sh", "record.sh", "playback.sh", "stream.sh",
-                             "watch-stream.sh", "genicam-live.sh"}) {
-    const ScriptRun help =
-        run_script(script, {"--help"}, {}, (dir / "help.log").string(), milliseconds(20000));
-    ASSERT_TRUE(help.status.has_value()) << script << " hung";
-    EXPECT_EQ(*help.status, 0) << script << ": " << help.log;
-    EXPECT_NE(help.log.find("Settings (environment variables"), std::string::npos)
-        << script << ": " << help.log;
-  }
-  const ScriptRun stray =
-      run_script("record.sh", {"out/x"}, {}, (dir / "stray.log").string(), milliseconds(20000));
-  ASSERT_TRUE(stray.status.has_value()) << "hung";
-  EXPECT_EQ(*stray.status, 2) << stray.log;
-  EXPECT_NE(stray.log.find("no arguments are taken"), std::string::npos) << stray.log;
-}
-
 // The duration GstDiscoverer (gst-discoverer-1.0, players) reports for a file, in seconds; -1
 // when it cannot tell.
 double discovered_duration_s(const std::string& path) {

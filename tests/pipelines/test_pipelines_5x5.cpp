@@ -342,6 +342,26 @@ TEST_F(Pipelines5x5, live_views_show_on_a_display_with_the_default_sink) {
   }
 }
 
+// --help prints a script's header (its settings) and starts nothing; an argument a script does not
+// take is refused rather than ignored (`record.sh --help` used to calibrate and record).
+TEST(Files, help_prints_the_settings_and_stray_arguments_are_refused_n) {
+  ScratchDir dir("files-help");
+  for (const char* script : {"live-view.sh", "record.sh", "playback.sh", "stream.sh",
+                             "watch-stream.sh", "genicam-live.sh"}) {
+    const ScriptRun help =
+        run_script(script, {"--help"}, {}, (dir / "help.log").string(), milliseconds(20000));
+    ASSERT_TRUE(help.status.has_value()) << script << " hung";
+    EXPECT_EQ(*help.status, 0) << script << ": " << help.log;
+    EXPECT_NE(help.log.find("Settings (environment variables"), std::string::npos)
+        << script << ": " << help.log;
+  }
+  const ScriptRun stray =
+      run_script("record.sh", {"out/x"}, {}, (dir / "stray.log").string(), milliseconds(20000));
+  ASSERT_TRUE(stray.status.has_value()) << "hung";
+  EXPECT_EQ(*stray.status, 2) << stray.log;
+  EXPECT_NE(stray.log.find("no arguments are taken"), std::string::npos) << stray.log;
+}
+
 TEST_F(Pipelines5x5, no_display_is_a_clear_error_not_a_crash_n) {
   for (const std::string script : {"live-view.sh", "playback.sh", "watch-stream.sh"}) {
     Env env = settings(3);
