@@ -291,26 +291,21 @@ Dataset Dataset::open(const std::filesystem::path& folder) {
         .push_back(g);
   }
   if (d.frames_.empty()) throw InputError(folder.string() + ": manifest lists no frames");
-  for (const auto& f : d.frames_)
-    if (!std::any_of(d.darks_.begin(), d.darks_.end(), [&](const FrameGroup& k) {
-          return same_exposure(k.exposure_us, f.exposure_us);
-        })) {
-      std::ostringstream m;
-      m << std::setprecision(15) << f.files.front().string() << " (manifest.csv line " << f.line
-        << "): frames at " << f.temperature_c << " degC, exposure " << f.exposure_us
-        << " us have no dark row of that exposure";
-      throw InputError(m.str());
-    }
-  for (const auto& g : d.references_)
-    if (!std::any_of(d.darks_.begin(), d.darks_.end(), [&](const FrameGroup& k) {
+  // Every exposure of the frames and references has a dark; else the first group without one,
+  // by its file and manifest line.
+  const auto require_dark = [&](const FrameGroup& g, const char* what, const char* verb) {
+    if (std::any_of(d.darks_.begin(), d.darks_.end(), [&](const FrameGroup& k) {
           return same_exposure(k.exposure_us, g.exposure_us);
-        })) {
-      std::ostringstream m;
-      m << std::setprecision(15) << g.files.front().string() << " (manifest.csv line " << g.line
-        << "): reference at " << g.temperature_c << " degC, exposure " << g.exposure_us
-        << " us has no dark row of that exposure";
-      throw InputError(m.str());
-    }
+        }))
+      return;
+    std::ostringstream m;
+    m << std::setprecision(15) << g.files.front().string() << " (manifest.csv line " << g.line
+      << "): " << what << " at " << g.temperature_c << " degC, exposure " << g.exposure_us << " us "
+      << verb << " no dark row of that exposure";
+    throw InputError(m.str());
+  };
+  for (const auto& f : d.frames_) require_dark(f, "frames", "have");
+  for (const auto& g : d.references_) require_dark(g, "reference", "has");
   return d;
 }
 
