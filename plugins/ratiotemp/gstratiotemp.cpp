@@ -263,7 +263,7 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
     return FALSE;
   st.demosaic_noise =
       st.fused ? pyrocam::DemosaicNoise{} : rt::demosaic_noise_of(GST_ELEMENT(self), in, model);
-  st.demosaic = st.fused ? "matched" : pg::structure_string(in, PYROCAM_FIELD_DEMOSAIC);
+  st.demosaic = pg::structure_string(in, PYROCAM_FIELD_DEMOSAIC);  // fused caps have it too
   st.saturation_level_dn = pg::structure_int(in, PYROCAM_FIELD_SATURATION_LEVEL, -1);
   st.configured = true;
   GST_INFO_OBJECT(self, "%d bands of %dx%d (%s) -> GRAY16_LE%s", st.bands, st.width, st.height,

@@ -90,7 +90,7 @@ struct State {
   // The fused path (demosaic25 linked to this element): the input is the planes' mosaic,
   // demosaicked here a strip at a time with demosaic25's settings from the caps.
   bool fused = false;
-  std::string demosaic;  // how the planes are made: matched when fused, else the caps' field
+  std::string demosaic;  // how the planes are made: the caps' field (the fused path's too)
   pyrocam::MosaicLayout mosaic_layout;
   float no_signal_dn = 0;
   // Plain planes: what their demosaicking did to the band values' noise (the caps' demosaic

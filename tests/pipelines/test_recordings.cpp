@@ -94,6 +94,8 @@ TEST_F(Recordings, every_segment_says_its_units_model_profile_and_method) {
               0u)
         << file << ": " << comment;
     EXPECT_NE(comment.find("; e-slope=0 %/100 nm"), std::string::npos) << comment;
+    // demosaic25 linked to ratiotemp (the fused path) says its method in the caps too.
+    EXPECT_NE(comment.find("; demosaic=matched"), std::string::npos) << comment;
   }
 }
 
