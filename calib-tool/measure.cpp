@@ -301,9 +301,16 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
     for (const auto& path : written) std::filesystem::remove(path, ec);
     throw;
   }
-  // Said even when quiet: the temperatures written are likely wrong.
-  for (const std::string& problem : measurer.layout_problems())
-    std::cerr << "warning: " << problem << "\n";
+  // Temperatures that would look right and be wrong: a failure, said even when quiet. What was
+  // written stays, to be looked at, and the exit status keeps a script from taking it.
+  const std::vector<std::string> problems = measurer.layout_problems();
+  for (const std::string& problem : problems) std::cerr << "error: " << problem << "\n";
+  if (!problems.empty()) {
+    std::cerr << "pyrocam-calib: error: the frames do not read as the model's camera; what was "
+                 "written in "
+              << a.out << " is kept to be looked at, not as results\n";
+    return kExitFailed;
+  }
   if (!global.quiet)
     std::cout << in.jobs.size() << " frame(s) measured; images and stats.csv in " << a.out << "\n";
   return kExitOk;
@@ -442,7 +449,8 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       "A raw frame does not say which mosaic it was taken through: --pattern names it, or\n"
       "the dataset's mosaic.txt (written by `pyrocam-calib simulate`): the model's kind of\n"
       "mosaic (a colour model reads any of the four Bayer patterns), else nothing is\n"
-      "measured. Frames that read as another phase than they have are a warning.\n"
+      "measured. Frames that read as another phase than they have, or whose readings\n"
+      "mostly misfit the model's band spectra, fail (exit 1; what was written is kept).\n"
       "Examples:\n"
       "  pyrocam-calib measure --model rgb-model.json --dataset pool --out pool-t\n"
       "  pyrocam-calib measure --model rgb-model.json --frame raw.pgm --dark dark.pgm "
