@@ -245,6 +245,22 @@ TEST(RatioTempErrors, rejects_lut_with_the_5x5_model_n) {
   expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS, {"lut", "two ratios"});
 }
 
+// A network no table can follow (its inputs' scale 40 times too small, so that what it reads
+// varies 40 times faster across the ratios): method=lut is refused, naming the difference.
+TEST(RatioTempErrors, rejects_a_lookup_table_that_disagrees_with_the_network_n) {
+  REQUIRE_ELEMENT("ratiotemp");
+  ScratchDir dir("ratiotemp-lut-check");
+  ThermalModel model = load_model(rgb_model_path());
+  nlohmann::json network = model.mlp.to_json();
+  for (auto& scale : network["input_scale"]) scale = scale.get<double>() / 40;
+  model.mlp = Mlp::from_json(network);
+  save_model(model, dir / "wild.json");
+  const auto r =
+      run_chain(kColourChain, "ratiotemp method=lut model=" + (dir / "wild.json").string());
+  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS,
+               {"lookup table differs from its network by up to"});
+}
+
 TEST(RatioTempErrors, rejects_an_invalid_region_n) {
   REQUIRE_ELEMENT("ratiotemp");
   const auto r = run_chain(kColourChain, "ratiotemp region=10,10,0,5 model=" + rgb_model_path());
