@@ -27,6 +27,11 @@ inline int calib(const std::string& args) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// Said when one is missing: meson test sets the folder, and a test without its model fails.
+inline constexpr const char* kNoTestModels =
+    "the build's test models are missing; run the test through meson test, or set "
+    "PYROCAM_TEST_MODEL_DIR to build/tests/data";
+
 // A test model of the build (PYROCAM_TEST_MODEL_DIR) by file name.
 inline std::filesystem::path test_model(const std::string& name) {
   const char* dir = std::getenv("PYROCAM_TEST_MODEL_DIR");

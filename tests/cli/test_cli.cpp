@@ -13,6 +13,7 @@
 #include <sstream>
 #include <utility>
 
+#include "cli_support.h"
 #include "pyrocam/core/dataset.h"
 #include "pyrocam/core/image_io.h"
 #include "pyrocam/runtime/estimator_selection.h"
@@ -23,9 +24,11 @@
 namespace pyrocam {
 namespace {
 
+using test::kNoTestModels;
 using test::png_header;
 using test::read_text;
 using test::ScratchDir;
+using test::test_model;
 using test::write_text;
 
 struct ToolRun {
@@ -47,11 +50,6 @@ ToolRun run_tool(const std::string& args, const ScratchDir& dir) {
 }
 
 std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
-
-std::filesystem::path test_model(const std::string& name) {
-  const char* dir = std::getenv("PYROCAM_TEST_MODEL_DIR");
-  return std::filesystem::path(dir ? dir : ".") / name;
-}
 
 // A small simulated colour campaign that calibrates: 5 temperatures, 3 exposures, 1 frame each.
 class CliDataset : public ::testing::Test {
@@ -389,8 +387,7 @@ TEST(Cli, measure_rejects_an_unknown_pattern_n) {
 class CliMeasure : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!std::filesystem::exists(test_model("test-model-nir5x5.json")))
-      GTEST_SKIP() << "test models not built";
+    ASSERT_TRUE(std::filesystem::exists(test_model("test-model-nir5x5.json"))) << kNoTestModels;
     Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 6});
     SceneSequenceSettings s;
     s.kind = SceneKind::kPlate;
@@ -473,8 +470,7 @@ TEST_F(CliMeasure, measure_method_auto_reads_with_the_method_the_library_chooses
 // it, without it and with a damaged one, which gets a warning naming it.
 TEST_F(CliMeasure, measure_reads_the_prebuilt_table_with_the_same_temperatures) {
   const auto source = test_model("test-model-rgb.json");
-  if (!std::filesystem::exists(source.string() + ".lut"))
-    GTEST_SKIP() << "the test model has no prebuilt table";
+  ASSERT_TRUE(std::filesystem::exists(source.string() + ".lut")) << kNoTestModels;
   const auto model = dir / "m.json", table = dir / "m.json.lut";
   std::filesystem::copy_file(source, model);
   const auto measure = [&](const std::string& name) {

@@ -54,7 +54,7 @@ std::pair<fs::path, fs::path> cropped_plate(const fs::path& plate, const fs::pat
 
 TEST(CliFramesLayout, a_bayer_window_one_column_on_reads_with_its_own_pattern) {
   const fs::path model = test_model("test-model-rgb.json");
-  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
   ScratchDir dir{"cli-layout-bayer"};
   write_plate(dir / "plate", "rgb-reference", 1, 1000, 128);
   const auto [frame0, dark0] = cropped_plate(dir / "plate", dir / "whole", 0, 0);
@@ -95,7 +95,7 @@ TEST(CliFramesLayout, a_bayer_window_one_column_on_reads_with_its_own_pattern) {
 
 TEST(CliFramesLayout, a_5x5_mosaic_shifted_by_a_column_is_said_to_misfit) {
   const fs::path model = test_model("test-model-nir5x5.json");
-  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
   ScratchDir dir{"cli-layout-5x5"};
   write_plate(dir / "plate", "nir5x5-reference", 1, 1000, 250);
   const auto [frame0, dark0] = cropped_plate(dir / "plate", dir / "whole", 0, 0);
@@ -117,7 +117,7 @@ TEST(CliFramesLayout, a_5x5_mosaic_shifted_by_a_column_is_said_to_misfit) {
 
 TEST(CliFramesLayout, a_run_that_fails_part_way_leaves_no_results_n) {
   const fs::path model = test_model("test-model-rgb.json");
-  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
   ScratchDir dir{"cli-layout-partial"};
   Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 2});
   SceneSequenceSettings s;

@@ -35,7 +35,7 @@ std::string calib_stderr(const std::string& args, const fs::path& log) {
 
 TEST(CliMeasureDefaults, a_dim_5x5_plate_reads_from_its_good_bands_by_default) {
   const fs::path model = test_model("test-model-nir5x5.json");
-  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
   ScratchDir dir{"cli-partial"};
   write_plate(dir / "bright", "nir5x5-reference", 1, 900, 100);
   write_plate(dir / "plate", "nir5x5-reference", 1, 900, 100, 0.6);
@@ -64,7 +64,7 @@ TEST(CliMeasureDefaults, a_dim_5x5_plate_reads_from_its_good_bands_by_default) {
 
 TEST(CliMeasureDefaults, the_default_method_is_ratiotemps_auto) {
   const fs::path model = test_model("test-model-rgb.json");
-  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
   ScratchDir dir{"cli-auto"};
   write_plate(dir / "plate", "rgb-reference", 1, 1000, 64);
   const std::string base = "measure --model " + q(model) + " --dataset " + q(dir / "plate");
@@ -80,7 +80,7 @@ TEST(CliMeasureDefaults, the_default_method_is_ratiotemps_auto) {
 
 TEST(CliMeasureDefaults, a_frame_that_reads_little_says_why) {
   const fs::path model = test_model("test-model-rgb.json");
-  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
   ScratchDir dir{"cli-why"};
   write_plate(dir / "good", "rgb-reference", 1, 1000, 64);
   write_plate(dir / "bright", "rgb-reference", 1, 1000, 64, 50);  // far beyond saturation
@@ -113,7 +113,7 @@ TEST(CliMeasureDefaults, a_frame_that_reads_little_says_why) {
 // systematic terms alone and less than a single reading's.
 TEST(CliMeasureDefaults, uncertainty_gives_the_rois_median_its_own) {
   const fs::path model = test_model("test-model-rgb.json");
-  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
   ScratchDir dir{"cli-median-u"};
   write_plate(dir / "plate", "rgb-reference", 1, 1000, 64);
   const std::string base = "measure --model " + q(model) + " --dataset " + q(dir / "plate");

@@ -19,7 +19,7 @@ namespace fs = std::filesystem;
 
 TEST(CliMixedPixels, measure_drops_the_plates_edge_and_keeps_its_inside) {
   const fs::path model = test_model("test-model-rgb.json");
-  if (!fs::exists(model)) GTEST_SKIP() << "test models not built";
+  ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
   ScratchDir dir{"cli-mixed"};
   write_plate(dir / "plate", "rgb-reference", 6, 1200, 100);
   const std::string base =

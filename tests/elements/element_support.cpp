@@ -15,7 +15,7 @@ bool have_element(const char* name) {
   return true;
 }
 
-BusResult run_pipeline(const std::string& description, GstClockTime timeout) {
+BusResult run_pipeline(const std::string& description, GstClockTime timeout, bool until_warning) {
   BusResult r;
   GError* error = nullptr;
   GstElement* pipeline = gst_parse_launch(description.c_str(), &error);
@@ -51,6 +51,15 @@ BusResult run_pipeline(const std::string& description, GstClockTime timeout) {
     r.warnings.push_back(warning->message);
     g_error_free(warning);
     gst_message_unref(msg);
+    msg = nullptr;
+    if (until_warning) break;
+  }
+  if (until_warning && !r.warnings.empty()) {
+    gst_element_set_state(pipeline, GST_STATE_NULL);
+    if (sink) gst_object_unref(sink);
+    gst_object_unref(bus);
+    gst_object_unref(pipeline);
+    return r;
   }
   if (!msg) {
     r.timed_out = true;

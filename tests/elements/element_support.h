@@ -42,8 +42,11 @@ struct BusResult {
   int buffers = 0;                    // buffers that reached the sink named "sink", if any
   std::vector<std::string> warnings;  // the warning messages posted before the end
 };
-// Runs a gst-launch description to EOS or the first error, at most `timeout`.
-BusResult run_pipeline(const std::string& description, GstClockTime timeout = 20 * GST_SECOND);
+// Runs a gst-launch description to EOS or the first error, at most `timeout`; with
+// `until_warning`, also to the first warning (a source without end, for a warning that comes
+// when a thread of the element is ready).
+BusResult run_pipeline(const std::string& description, GstClockTime timeout = 20 * GST_SECOND,
+                       bool until_warning = false);
 
 template <typename T>
 GstBuffer* buffer_from(const std::vector<T>& values) {

@@ -3,6 +3,7 @@
 // sizes that differ are an error.
 #include <gst/check/gstharness.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <thread>
@@ -82,9 +83,16 @@ TEST_F(ThermalOverlay, PairsEachFrameWithTheOverlayOfItsTimestamp) {
 }
 
 TEST_F(ThermalOverlay, AFrameWaitsForItsOverlayHoweverLate) {
-  std::thread camera([&] { EXPECT_EQ(gst_harness_push(video, camera_frame(0, 10)), GST_FLOW_OK); });
+  std::atomic<bool> pushing{false}, pushed{false};
+  std::thread camera([&] {
+    pushing = true;
+    EXPECT_EQ(gst_harness_push(video, camera_frame(0, 10)), GST_FLOW_OK);
+    pushed = true;
+  });
+  while (!pushing) std::this_thread::yield();
   // Nothing goes out while the overlay is not there (here 300 ms; the wait has no limit).
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_FALSE(pushed) << "the camera's frame did not wait for its overlay";
   EXPECT_EQ(gst_harness_buffers_received(video), 0u);
   ASSERT_EQ(gst_harness_push(overlay, overlay_frame(0, 222)), GST_FLOW_OK);
   camera.join();

@@ -552,10 +552,10 @@ TEST_F(Stream, received_on_loopback_by_watch_stream) {
                                      {"NUM_BUFFERS", std::to_string(kFrames)}},
                                     log("stream"), kRunLimit);
   ASSERT_EQ(sent.status, 0) << sent.log;
-  // A screen shows frames until stopped: wait for the last one (and a moment for any extra),
-  // then stop it as a user would.
+  // A screen shows frames until stopped: wait for the last one and any extra, then stop it.
   const auto received = [&] { return files_in(dir.path().string(), "rx-", ".rgba").size(); };
-  wait_until([&] { return received() >= static_cast<std::size_t>(kFrames); }, milliseconds(5000));
+  const auto all = [&] { return received() >= static_cast<std::size_t>(kFrames); };
+  ASSERT_TRUE(wait_until(all, milliseconds(60000))) << received() << " " << screen.log();
   std::this_thread::sleep_for(milliseconds(300));
   ASSERT_TRUE(screen.running()) << screen.log();
   screen.signal_group(SIGINT);

@@ -99,8 +99,9 @@ TEST_F(GenICam, camera_that_vanishes_ends_in_a_clear_error_n) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - gone).count();
   };
   camera.kill_now();
-  ASSERT_TRUE(wait_until(diagnosed, milliseconds(5000)))
-      << "no diagnosis within 5 s of the camera vanishing: " << view.log();
+  // A guard against a view that never says, not a speed target (the latency is printed).
+  ASSERT_TRUE(wait_until(diagnosed, milliseconds(30000)))
+      << "no diagnosis within 30 s of the camera vanishing: " << view.log();
   const double message_s = since_gone();
   const auto status = view.wait_for(milliseconds(30000));
   ASSERT_TRUE(status.has_value()) << "still running 30 s after the camera vanished: " << view.log();

@@ -499,8 +499,16 @@ TEST(Serve, PageInHeadlessChromium) {
                element_text(first, "alarm-0").find("ALARM") != std::string::npos;
       },
       milliseconds(30000));
-  std::this_thread::sleep_for(milliseconds(2000));
-  second = chromium.evaluate(dom_js);
+  // The statistics move on (a slow machine given half a minute): more updates, another time.
+  const auto updates = [](const std::string& dom) {
+    return std::atoi(element_text(dom, "updates-0").c_str());
+  };
+  wait_until(
+      [&] {
+        second = chromium.evaluate(dom_js);
+        return updates(second) > updates(first);
+      },
+      milliseconds(30000));
   for (const std::string* dom : {&first, &second}) {
     EXPECT_NE(dom->find("data-width=\"160\""), std::string::npos) << "no image shown:\n" << *dom;
     EXPECT_NE(element_text(*dom, "camera-0").find("camera running"), std::string::npos) << *dom;
@@ -513,9 +521,7 @@ TEST(Serve, PageInHeadlessChromium) {
     EXPECT_TRUE(std::regex_search(*dom, std::regex("id=\"chart-0\"[^>]*box-sizing")))
         << "Chart.js did not load";
   }
-  // The statistics moved on: more updates, another frame's time.
-  EXPECT_GT(std::atoi(element_text(second, "updates-0").c_str()),
-            std::atoi(element_text(first, "updates-0").c_str()));
+  EXPECT_GT(updates(second), updates(first));
   EXPECT_NE(element_text(first, "time-0"), element_text(second, "time-0"));
   // The alarm: on the page, and logged.
   EXPECT_NE(element_text(second, "alarm-0").find("ALARM median"), std::string::npos) << second;
