@@ -44,6 +44,25 @@ std::string tick_label(double v, double step) {
   return buf;
 }
 
+// Ticks of a log axis (values are log10): whole decades, every second or more where there are
+// many; the library's ticks where the axis spans less than two.
+std::vector<double> decade_ticks(double lo, double hi) {
+  const int first = static_cast<int>(std::ceil(lo - 1e-9)),
+            last = static_cast<int>(std::floor(hi + 1e-9));
+  if (last - first < 1) return axis_ticks(lo, hi);
+  const int every = (last - first) / 8 + 1;
+  std::vector<double> t;
+  for (int k = first; k <= last; k += every) t.push_back(k);
+  return t;
+}
+
+// 10 to a whole power as 10 with a superscript; other values as plain numbers.
+std::string decade_label(double log_value) {
+  const double k = std::round(log_value);
+  if (std::abs(log_value - k) > 1e-9) return fmt(std::pow(10, log_value));
+  return "10<tspan dy='-5' font-size='8'>" + std::to_string(static_cast<int>(k)) + "</tspan>";
+}
+
 std::vector<std::string> tick_labels(const std::vector<double>& ticks) {
   const double step = ticks.size() > 1 ? ticks[1] - ticks[0] : 0;
   std::vector<std::string> labels;
@@ -91,7 +110,9 @@ std::string svg_plot(const PlotSpec& spec, const std::vector<Series>& series) {
   if (y1 == y0) y1 = y0 + (y0 == 0 ? 1 : std::abs(y0) * 0.1);
   const double pad = 0.05 * (y1 - y0);
   y0 -= pad, y1 += pad;
-  const int l = 70, r = 20, t = 30, b = 45;
+  // The legend goes right of the plot, so that it never covers the data.
+  const int legend_width = 170;
+  const int l = 70, r = 20 + legend_width, t = 30, b = 45;
   const int w = spec.width, h = spec.height;
   auto px = [&](double x) { return l + (x - x0) / (x1 - x0) * (w - l - r); };
   auto py = [&](double y) { return h - b - (y - y0) / (y1 - y0) * (h - t - b); };
@@ -105,7 +126,15 @@ std::string svg_plot(const PlotSpec& spec, const std::vector<Series>& series) {
     << html_escape(spec.title) << "</text>";
   o << "<rect x='" << l << "' y='" << t << "' width='" << w - l - r << "' height='" << h - t - b
     << "' fill='none' stroke='#333'/>";
-  const std::vector<double> x_ticks = axis_ticks(x0, x1), y_ticks = axis_ticks(y0, y1);
+  if (std::isfinite(spec.shade_from) && std::isfinite(spec.shade_to)) {
+    const double a = px(std::clamp(spec.shade_from, x0, x1)),
+                 z = px(std::clamp(spec.shade_to, x0, x1));
+    o << "<rect x='" << a << "' y='" << t << "' width='" << std::max(0.0, z - a) << "' height='"
+      << h - t - b << "' fill='#fff3d6'/><text x='" << (a + z) / 2 << "' y='" << t + 12
+      << "' text-anchor='middle' fill='#a07000'>" << html_escape(spec.shade_label) << "</text>";
+  }
+  const std::vector<double> x_ticks = axis_ticks(x0, x1),
+                            y_ticks = spec.log_y ? decade_ticks(y0, y1) : axis_ticks(y0, y1);
   const std::vector<std::string> x_labels = tick_labels(x_ticks), y_labels = tick_labels(y_ticks);
   for (std::size_t i = 0; i < x_ticks.size(); ++i) {
     const double v = x_ticks[i];
@@ -117,7 +146,7 @@ std::string svg_plot(const PlotSpec& spec, const std::vector<Series>& series) {
     const double v = y_ticks[i];
     o << "<line x1='" << l << "' x2='" << w - r << "' y1='" << py(v) << "' y2='" << py(v)
       << "' stroke='#eee'/><text x='" << l - 4 << "' y='" << py(v) + 4 << "' text-anchor='end'>"
-      << (spec.log_y ? fmt(std::pow(10, v)) : y_labels[i]) << "</text>";
+      << (spec.log_y ? decade_label(v) : y_labels[i]) << "</text>";
   }
   o << "<text x='" << (l + w - r) / 2 << "' y='" << h - 8 << "' text-anchor='middle'>"
     << html_escape(spec.x_label) << "</text>";
@@ -140,16 +169,27 @@ std::string svg_plot(const PlotSpec& spec, const std::vector<Series>& series) {
         path << (pen ? " L" : " M") << px(s.x[i]) << "," << py(ty(s.y[i]));
         pen = true;
       }
-      if (i < s.labels.size() && !s.labels[i].empty())
-        o << "<text x='" << px(s.x[i]) + 5 << "' y='" << py(ty(s.y[i])) - 5 << "' fill='"
-          << s.colour << "'>" << html_escape(s.labels[i]) << "</text>";
+      if (i < s.labels.size() && !s.labels[i].empty()) {
+        // Beside the point, on its left near the plot's right edge (so that it is not cut).
+        const bool left = px(s.x[i]) > w - r - 60;
+        o << "<text x='" << px(s.x[i]) + (left ? -5 : 5) << "' y='" << py(ty(s.y[i])) - 5
+          << "' fill='" << s.colour << "'" << (left ? " text-anchor='end'" : "") << ">"
+          << html_escape(s.labels[i]) << "</text>";
+      }
     }
     if (!s.points)
       o << "<path d='" << path.str() << "' fill='none' stroke='" << s.colour
         << "' stroke-width='1.5'" << (s.dashed ? " stroke-dasharray='5,3'" : "") << "/>";
-    o << "<rect x='" << w - r - 150 << "' y='" << legend_y - 8 << "' width='10' height='10' fill='"
-      << s.colour << "'/><text x='" << w - r - 136 << "' y='" << legend_y << "'>"
-      << html_escape(s.label) << "</text>";
+    // The entry drawn as the series is: a marker, a line or a dashed line.
+    const int lx = w - legend_width + 10;
+    if (s.points)
+      o << "<circle cx='" << lx + 8 << "' cy='" << legend_y - 4 << "' r='3' fill='" << s.colour
+        << "'/>";
+    else
+      o << "<line x1='" << lx << "' x2='" << lx + 16 << "' y1='" << legend_y - 4 << "' y2='"
+        << legend_y - 4 << "' stroke='" << s.colour << "' stroke-width='2'"
+        << (s.dashed ? " stroke-dasharray='4,2'" : "") << "/>";
+    o << "<text x='" << lx + 22 << "' y='" << legend_y << "'>" << html_escape(s.label) << "</text>";
     legend_y += 14;
   }
   o << "</svg>";

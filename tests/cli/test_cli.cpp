@@ -157,7 +157,14 @@ TEST(CliReport, the_5x5_test_models_report_plots_the_locus_and_the_error_per_set
       test_model("test-model-nir5x5.json").string() + ".d/report.html";
   ASSERT_TRUE(std::filesystem::exists(report)) << report;
   // The test models' campaigns are 800..1100 degC every 10 degC.
-  expect_report_plots(read_text(report), 31);
+  const std::string html = read_text(report);
+  expect_report_plots(html, 31);
+  // Where the data end and the model extrapolates: said, and shaded on the uncertainty plot.
+  EXPECT_NE(html.find("Furnace data 800–1100 °C"), std::string::npos);
+  EXPECT_NE(html.find(">furnace data</text>"), std::string::npos);
+  // Every band's residual, though the plots show 5 of the 25.
+  EXPECT_NE(html.find("(5 of 25 bands)"), std::string::npos);
+  EXPECT_NE(html.find("<td>b25</td>"), std::string::npos);
 }
 
 TEST_F(CliDataset, calibrate_rejects_a_manifest_path_leaving_the_dataset_n) {

@@ -80,7 +80,7 @@ std::string calibration_verdict(const CalibrationOutcome& out) {
   // Verdict in plain words.
   std::ostringstream v;
   v.precision(2);
-  v << std::fixed << "calibration residual " << 100 * rms_finite(out.rate_residual_optimised)
+  v << std::fixed << "rate residual " << 100 * rms_finite(out.rate_residual_optimised)
     << " % rms (datasheet QE: " << 100 * rms_finite(out.rate_residual_datasheet) << " %)";
   if (!out.table4.empty() && std::isfinite(out.table4[0].rms))
     v << "; MLP " << out.table4[0].rms << " degC rms on " << out.table4[0].true_c.size()
@@ -89,8 +89,10 @@ std::string calibration_verdict(const CalibrationOutcome& out) {
   for (const auto& st : out.rates.status)
     for (PointStatus s : st)
       skipped_sat += s == PointStatus::kSaturated, skipped_dim += s == PointStatus::kDim;
-  v << "; " << skipped_sat << " band points skipped as saturated, " << skipped_dim << " as dim";
-  if (!out.warnings.empty()) v << "; " << out.warnings.size() << " warnings";
+  v << "; " << skipped_sat << " band means of the sweeps skipped as saturated, " << skipped_dim
+    << " as dim";
+  if (!out.warnings.empty())
+    v << "; " << out.warnings.size() << (out.warnings.size() == 1 ? " warning" : " warnings");
   return v.str();
 }
 

@@ -40,14 +40,15 @@ CalibrationOutcome small_outcome() {
 
 TEST(CalibrationVerdict, says_residuals_the_mlps_rms_skipped_points_and_warnings) {
   EXPECT_EQ(calibration_verdict(small_outcome()),
-            "calibration residual 1.00 % rms (datasheet QE: 5.00 %); MLP 0.79 degC rms on 2 "
-            "calibration settings; 3 band points skipped as saturated, 1 as dim; 1 warnings");
+            "rate residual 1.00 % rms (datasheet QE: 5.00 %); MLP 0.79 degC rms on 2 "
+            "calibration settings; 3 band means of the sweeps skipped as saturated, 1 as dim; 1 "
+            "warning");
   CalibrationOutcome no_readings = small_outcome();
   no_readings.table4[0].rms = NAN;
   no_readings.warnings.clear();
   EXPECT_EQ(calibration_verdict(no_readings),
-            "calibration residual 1.00 % rms (datasheet QE: 5.00 %); 3 band points skipped as "
-            "saturated, 1 as dim");
+            "rate residual 1.00 % rms (datasheet QE: 5.00 %); 3 band means of the sweeps skipped "
+            "as saturated, 1 as dim");
 }
 
 // A sound outcome says nothing; furnace rates the QE does not explain (a dataset in kelvin) or
