@@ -153,8 +153,9 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
       write_furnace_campaign(campaign_out, camera, campaign, std::ref(progress));
       if (!global.quiet)
         std::cout << "furnace campaign (" << camera.profile().name << ", unit "
-                  << campaign_camera.unit << ") written to " << campaign_out << "/manifest.csv in "
-                  << progress.elapsed_s() << " s\n";
+                  << campaign_camera.unit << " seed " << campaign_camera.unit_seed
+                  << ") written to " << campaign_out << "/manifest.csv in " << progress.elapsed_s()
+                  << " s\n";
       return kExitOk;
     };
   });
@@ -198,7 +199,8 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global, Command& s
       ProgressPrinter progress(global, "writing " + scene_kind);
       write_scene_sequence(scene_out, camera, scene, std::ref(progress));
       if (!global.quiet)
-        std::cout << scene_kind << " scene (" << camera.profile().name << ") written to "
+        std::cout << scene_kind << " scene (" << camera.profile().name << ", unit "
+                  << scene_camera.unit << " seed " << scene_camera.unit_seed << ") written to "
                   << scene_out << "/manifest.csv\n";
       return kExitOk;
     };
