@@ -45,7 +45,7 @@ std::string tick_label(double v, double step) {
 }
 
 // Ticks of a log axis (values are log10): whole decades, every second or more where there are
-// many; the library's ticks where the axis spans less than two.
+// many; the library's ticks where fewer than two whole decades lie on the axis.
 std::vector<double> decade_ticks(double lo, double hi) {
   const int first = static_cast<int>(std::ceil(lo - 1e-9)),
             last = static_cast<int>(std::floor(hi + 1e-9));
