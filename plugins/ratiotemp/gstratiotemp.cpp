@@ -2,17 +2,16 @@
  * SECTION:element-ratiotemp
  * @title: ratiotemp
  *
- * Turns band planes (video/x-pyrocam-bands from demosaic25, see pyrocam-caps.h) into a
- * temperature image with the thermal model that `pyrocam-calib calibrate` wrote
- * (#GstRatioTemp:model). The output is video/x-raw, format=GRAY16_LE, of the same width,
- * height and framerate: one value per pixel in units of 0.1 K (14732 = 1473.2 K = 1200.05 degC)
- * and 0 for "no reading", so temperatures can be recorded losslessly (e.g. avenc_ffv1 !
- * matroskamux) and read back by any tool. Linked to demosaic25 demosaicking a Bayer mosaic with
- * method matched, it asks for the bands as their mosaic (video/x-pyrocam-bands with the
- * memory:PyrocamMosaic feature, the fused path) and demosaics it here, 16 rows at a time, each
- * strip read while it is in the cache: the same readings (but for the dim-edge check below,
- * whose ring it reads from the mosaic) without the float planes crossing
- * memory, and blocks of columns without light skipped.
+ * Turns band planes (video/x-pyrocam-bands from demosaic25, see pyrocam-caps.h) into a temperature
+ * image with the thermal model that `pyrocam-calib calibrate` wrote (#GstRatioTemp:model). The
+ * output is video/x-raw, format=GRAY16_LE, of the same width, height and framerate: one value per
+ * pixel in units of 0.1 K (14732 = 1473.2 K = 1200.05 degC) and 0 for "no reading", so
+ * temperatures can be recorded losslessly (e.g. avenc_ffv1 ! matroskamux). Linked to demosaic25
+ * demosaicking a Bayer mosaic with method matched, it asks for the bands as their mosaic
+ * (video/x-pyrocam-bands with the memory:PyrocamMosaic feature, the fused path) and demosaics it
+ * here, 16 rows at a time while they are in the cache, skipping columns without light: the planes'
+ * readings (but for the dim-edge check's ring, read from the mosaic, and the curvature check)
+ * without the float planes crossing memory.
  *
  * A pixel has no reading (0) when the estimate falls outside the model's temperature range, or
  * when a band is saturated (+INF), without a reading (NaN) or below the model's dim threshold
@@ -40,8 +39,9 @@
  * band are not those whose noise pulled it down (the sink caps' saturation-level; frames whose
  * PyrocamSaturationMeta counts no saturated sample are not checked).
  *
- * #GstRatioTemp:blur-correction (default off; the fused path only) subtracts matched
- * demosaicking's bias on steep gradients: +180 degC at 150 degC a pixel near 1400 degC.
+ * On the fused path a pixel whose field curves too fast for the kernels (a hot spot a few pixels
+ * across: half its temperature's Laplacian over 100 degC) has no reading. blur-correction (default
+ * off; fused path) subtracts their bias on steep gradients (+180 degC at 150 degC/px, 1400 degC).
  *
  * With #GstRatioTemp:brightness-radius r (default 0, off; the fused path only) each pixel reads
  * from its own sample: its band's scale (exposure, emissivity, calibration) is the mean over a
@@ -247,8 +247,7 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
   }
   st.planes.assign(static_cast<std::size_t>(st.bands), cv::Mat());
   st.fused = pg::is_fused_bands(incaps);
-  st.blur.reset();
-  st.brightness.reset();
+  rt::reset_corrections(st);  // made again for this stream
   if (st.fused &&
       !PYROCAM_GUARDED(self, pg::ErrorKind::kNegotiation, "Unsupported band format", [&] {
         const char* pattern = gst_structure_get_string(in, "pattern");
@@ -508,11 +507,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         if (!uncertainty && !stats_due) {
           // Straight into the output frame (the header wraps it; a copy only if it did not fit).
           cv::Mat codes = out.image;
-          if (st.fused)
-            estimator.estimate_codes(mosaic, codes);
-          else
-            estimator.estimate_codes(st.planes, codes);
-          rt::correct_codes(corrections, in.image(), codes);
+          rt::estimate_codes(chosen, st, mosaic, corrections, codes);
           if (codes.data != out.image.data) codes.copyTo(out.image);
           return;
         }
@@ -523,11 +518,12 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
           estimator.estimate(st.planes, st.temperature_c, u);
         if (uncertainty) {
           rt::correct_temperature(corrections, in.image(), st.temperature_c);
+          st.uncertainty_c.setTo(NAN, st.temperature_c != st.temperature_c);
           pyrocam::encode_decikelvin_difference(st.uncertainty_c).copyTo(out.image);
         } else {
           cv::Mat codes = out.image;
           pyrocam::encode_decikelvin(st.temperature_c, codes);
-          if (corrections.blur || corrections.brightness) {
+          if (corrections.curvature || corrections.blur || corrections.brightness) {
             // From the codes, as on frames without statistics: the same output.
             rt::correct_codes(corrections, in.image(), codes);
             st.temperature_c = pyrocam::decode_decikelvin(codes);

@@ -1,5 +1,5 @@
-/* ratiotemp's steps after the per-pixel estimate: the blur correction and the ratio-scaled
- * brightness readings, both from the mosaic of the fused path. */
+/* ratiotemp's steps after the per-pixel estimate: the curvature check, the blur correction and
+ * the ratio-scaled brightness readings, all from the mosaic of the fused path. */
 #include "ratiotemp-private.h"
 
 #define GST_CAT_DEFAULT gst_ratio_temp_debug
@@ -8,6 +8,10 @@ namespace pyrocam::gst::ratiotemp {
 
 Corrections corrections_for_frame(GstRatioTemp* self, const Settings& settings, State& st) {
   Corrections c;
+  if (st.fused) {
+    if (!st.curvature) st.curvature.emplace(*st.model, st.mosaic_layout);  // the stream's phase
+    c.curvature = &*st.curvature;
+  }
   if (settings.blur_correction && st.fused) {
     // The correction's table is made the first time it is asked for on the fused path.
     if (!st.blur) st.blur.emplace(*st.model, pyrocam::DemosaicMethod::kMatched);
@@ -39,12 +43,39 @@ Corrections corrections_for_frame(GstRatioTemp* self, const Settings& settings, 
   return c;
 }
 
+void reset_corrections(State& st) {
+  st.curvature.reset();
+  st.blur.reset();
+  st.brightness.reset();
+}
+
+void estimate_codes(pyrocam::PlaneEstimator& estimator, const State& st,
+                    const pyrocam::PlaneEstimator::MatchedMosaic& mosaic, const Corrections& c,
+                    cv::Mat& codes) {
+  if (!st.fused) {
+    estimator.estimate_codes(st.planes, codes);
+    correct_codes(c, mosaic.mosaic, codes);
+    return;
+  }
+  struct Unset {  // the check is this call's
+    pyrocam::PlaneEstimator& estimator;
+    ~Unset() { estimator.set_curvature_check(nullptr); }
+  } unset{estimator};
+  estimator.set_curvature_check(c.curvature);
+  estimator.estimate_codes(mosaic, codes);
+  Corrections rest = c;
+  rest.curvature = nullptr;  // done
+  correct_codes(rest, mosaic.mosaic, codes);
+}
+
 void correct_codes(const Corrections& c, const cv::Mat& mosaic, cv::Mat& codes) {
+  if (c.curvature) c.curvature->apply_codes(mosaic, codes);
   if (c.blur) c.blur->apply_codes(codes);
   if (c.brightness) c.brightness->apply_codes(mosaic, codes);
 }
 
 void correct_temperature(const Corrections& c, const cv::Mat& mosaic, cv::Mat& temperature_c) {
+  if (c.curvature) c.curvature->apply(mosaic, temperature_c);
   if (c.blur) c.blur->apply(temperature_c);
   if (c.brightness) c.brightness->apply(mosaic, temperature_c);
 }

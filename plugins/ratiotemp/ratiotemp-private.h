@@ -17,6 +17,7 @@
 #include "pyrocam-common.h"
 #include "pyrocam/core/mosaic.h"
 #include "pyrocam/runtime/blur_bias.h"
+#include "pyrocam/runtime/curvature_check.h"
 #include "pyrocam/runtime/estimator_selection.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/model.h"
@@ -97,6 +98,7 @@ struct State {
   // and pattern fields; none without them), for the uncertainty.
   pyrocam::DemosaicNoise demosaic_noise;
   double saturation_level_dn = -1;                      // darksub's, from the caps; -1: the model's
+  std::optional<pyrocam::CurvatureCheck> curvature;     // on the fused path, for its phase
   std::optional<pyrocam::BlurBiasCorrection> blur;      // on the fused path (matched demosaicking)
   bool blur_warned = false;                             // blur-correction asked for off that path
   std::optional<pyrocam::ScaledBrightness> brightness;  // on the fused path (Bayer mosaics)
@@ -121,6 +123,7 @@ struct State {
 
 /* The steps after the per-pixel estimate that this frame takes (null: not taken). */
 struct Corrections {
+  const pyrocam::CurvatureCheck* curvature = nullptr;  // the fused path, always
   const pyrocam::BlurBiasCorrection* blur = nullptr;
   pyrocam::ScaledBrightness* brightness = nullptr;
 };
@@ -129,7 +132,16 @@ struct Corrections {
  * throws InputError (from the library) if it cannot be. Warns once where the settings ask for a
  * step the stream cannot take. */
 Corrections corrections_for_frame(GstRatioTemp* self, const Settings& settings, State& st);
-/* The blur correction, then the brightness readings, on codes or on degC (fused mosaic). */
+/* Drops the steps built for the last stream (its phase and path). */
+void reset_corrections(State& st);
+/* The frame's codes, straight from the planes or the fused mosaic, with the corrections; on
+ * the fused path the curvature check runs inside the estimate, on each run of codes while its
+ * rows are in the cache. */
+void estimate_codes(pyrocam::PlaneEstimator& estimator, const State& st,
+                    const pyrocam::PlaneEstimator::MatchedMosaic& mosaic, const Corrections& c,
+                    cv::Mat& codes);
+/* The curvature check, the blur correction, then the brightness readings, on codes or on degC
+ * (fused mosaic). */
 void correct_codes(const Corrections& c, const cv::Mat& mosaic, cv::Mat& codes);
 void correct_temperature(const Corrections& c, const cv::Mat& mosaic, cv::Mat& temperature_c);
 

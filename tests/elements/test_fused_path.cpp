@@ -2,9 +2,10 @@
 // mosaic (video/x-pyrocam-bands(memory:PyrocamMosaic)) when linked, and the ratio readings are
 // then the ones the planes give (but for the edge checks' rings, read from the mosaic); the
 // brightness readings and the blur correction are the library's on those; other elements get the
-// planes; turning the mixed-pixel check on while playing goes back to the planes; fused caps
-// without what ratiotemp needs are refused.
+// planes; turning the mixed-pixel check on while playing goes back to the planes; the curvature
+// check takes a hot spot's peak; fused caps without what ratiotemp needs are refused.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -12,9 +13,13 @@
 
 #include "element_support.h"
 #include "pyrocam-caps.h"
+#include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/blur_bias.h"
+#include "pyrocam/runtime/estimator_selection.h"
+#include "pyrocam/runtime/frame_measurer.h"
 #include "pyrocam/runtime/model.h"
 #include "pyrocam/runtime/scaled_brightness.h"
+#include "pyrocam/simulation/simulator.h"
 
 namespace pyrocam::test {
 namespace {
@@ -302,6 +307,52 @@ TEST_F(FusedHarness, fused_only_steps_on_plain_planes_warn_once_and_read_n) {
     EXPECT_EQ(warnings, *named ? 1 : 0);
     TearDown();
   }
+}
+
+// The curvature check on the fused path: a hot spot T = 2000 - 60 r^2 degC (r in pixels; a
+// share of about -140 degC), whose peak the planes path reads about 200 degC low, has no
+// reading there; the frames that post statistics (the check as a pass of its own) give the
+// codes of those that do not (the check inside the estimate), which are the library's.
+TEST_F(FusedHarness, a_hot_spot_a_few_pixels_across_has_no_reading_at_its_peak) {
+  constexpr int kW = 32, kH = 24, kX = 16, kY = 12;
+  cv::Mat spot(kH, kW, CV_32F, cv::Scalar(NAN));
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const double t = 2000 - 60.0 * ((x - kX) * (x - kX) + (y - kY) * (y - kY));
+      if (t > 500) spot.at<float>(y, x) = static_cast<float>(t);
+    }
+  const std::shared_ptr<const ThermalModel> model =
+      std::make_shared<const ThermalModel>(load_model(test_model_path("test-model-rgb.json")));
+  Simulator camera(model->profile(), UnitPerturbation::parse("typical", 1), 3);
+  const cv::Mat raw = camera.render(spot, camera.exposure_for(2000, 150), 1.0);
+  const std::vector<std::uint8_t> frame(raw.datastart, raw.dataend);
+  std::vector<std::vector<std::uint16_t>> out;
+  for (const char* link : {"ratiotemp stats-interval=0", "ratiotemp stats-interval=1",
+                           "video/x-pyrocam-bands ! ratiotemp"}) {
+    start(std::string("darksub dark-level=50 ! demosaic25 ! ") + link +
+              " model=" + test_model_path("test-model-rgb.json"),
+          "video/x-bayer,format=rggb,width=32,height=24,framerate=30/1");
+    GstBuffer* b = push_pull_buffer(h, buffer_from(frame));
+    ASSERT_NE(b, nullptr) << link;
+    out.push_back(values_of<std::uint16_t>(b));
+    gst_buffer_unref(b);
+    TearDown();
+  }
+  constexpr std::size_t kPeak = kY * kW + kX;
+  ASSERT_EQ(out[0].size(), static_cast<std::size_t>(kW * kH));
+  EXPECT_EQ(out[0], out[1]);
+  EXPECT_EQ(out[0][kPeak], kNoReadingCode);
+  // The planes (no check): the same kernels read it, wild.
+  ASSERT_NE(out[2][kPeak], kNoReadingCode);
+  EXPECT_LT(code_to_celsius(out[2][kPeak]), 2000 - 150);
+  MeasureOptions options;
+  options.method = choose_method(model, MethodRequest::kAuto);
+  FrameMeasurer measurer(model, options);
+  cv::Mat t;
+  measurer.measure(raw, cv::Mat(kH, kW, CV_8U, cv::Scalar(50)), t);
+  const cv::Mat codes = encode_decikelvin(t);
+  EXPECT_EQ(std::vector<std::uint16_t>(codes.begin<std::uint16_t>(), codes.end<std::uint16_t>()),
+            out[0]);
 }
 
 TEST_F(FusedHarness, fused_bands_without_a_no_signal_level_are_refused_n) {

@@ -201,6 +201,12 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
     audit_checked_ += audit.checked;
     audit_misfit_ += audit.misfit;
   }
+  // As ratiotemp on the fused path: no reading where the field curves beyond the kernels.
+  if (fused) {
+    if (!curvature_) curvature_.emplace(*model_, layout_);
+    curvature_->apply(signal, temperature_c);
+    if (uncertainty_c) uncertainty_c->setTo(NAN, temperature_c != temperature_c);
+  }
   if (blur_correction_) blur_correction_->apply(temperature_c);
   if (brightness_) {
     // On the codes, as ratiotemp reads them: a recording measured again gives its codes.

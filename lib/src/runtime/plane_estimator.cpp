@@ -402,6 +402,8 @@ void PlaneEstimator::estimate_codes(const MatchedMosaic& source, cv::Mat& codes)
         if (dim_edge)
           dim_edge->apply(rows, static_cast<std::size_t>(x1 - x0), t, x0, y, window_mean);
         encode_temperature_row(t, codes.ptr<std::uint16_t>(y) + x0, x1 - x0);
+        if (curvature_)
+          curvature_->apply_run(source.mosaic, codes.ptr<std::uint16_t>(y), y, x0, x1);
       },
       [&](int y, int x0, int x1) {
         std::fill(codes.ptr<std::uint16_t>(y) + x0, codes.ptr<std::uint16_t>(y) + x1,

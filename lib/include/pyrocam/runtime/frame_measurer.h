@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "pyrocam/runtime/blur_bias.h"
+#include "pyrocam/runtime/curvature_check.h"
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/estimators.h"
@@ -107,6 +108,7 @@ class FrameMeasurer {
   MosaicLayout layout_;
   PlaneEstimator planes_estimator_;
   std::optional<BlurBiasCorrection> blur_correction_;
+  std::optional<CurvatureCheck> curvature_;  // made on the first frame of the fused path
   std::optional<ScaledBrightness> brightness_;
   cv::Mat signal_, codes_;
   std::vector<cv::Mat> planes_;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "pyrocam/core/mosaic.h"
+#include "pyrocam/runtime/curvature_check.h"
 #include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/dim_edge.h"
 #include "pyrocam/runtime/emissivity.h"
@@ -98,6 +99,11 @@ class PlaneEstimator {
   // takes its ring from the mosaic, as the fused path does, and reads what it reads bit for bit;
   // null (the default): from the planes. Held until set again; not while an estimate runs.
   void set_dim_edge_mosaic(const MatchedMosaic* source) { dim_edge_mosaic_ = source; }
+  // A curvature check (curvature_check.h) that estimate_codes() of a matched mosaic applies to
+  // each run of codes while its rows are in the cache: the codes CurvatureCheck::apply_codes
+  // gives afterwards, without a pass of its own over the frame. Null (the default): none. Held
+  // until set again; not while an estimate runs.
+  void set_curvature_check(const CurvatureCheck* check) { curvature_ = check; }
   // Whether the dim-edge check applies: where every band must read (no partial fit).
   bool checks_dim_edges() const { return !reads_partial(); }
   // The raw level (DN) from which the planes' samples were marked saturated (darksub's
@@ -186,6 +192,7 @@ class PlaneEstimator {
   double analogue_gain_ = 1.0;
   DemosaicNoise noise_;
   const MatchedMosaic* dim_edge_mosaic_ = nullptr;
+  const CurvatureCheck* curvature_ = nullptr;
   double saturation_level_dn_ = 0;  // 0 or less: the profile's
   // The audit's check (its own tables; made by the first take_fit_audit) and counts, shared by
   // the rows' threads.
