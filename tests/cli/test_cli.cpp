@@ -24,7 +24,6 @@
 namespace pyrocam {
 namespace {
 
-using test::kNoTestModels;
 using test::png_header;
 using test::read_text;
 using test::ScratchDir;
@@ -156,15 +155,13 @@ TEST(CliReport, the_5x5_test_models_report_plots_the_locus_and_the_error_per_set
   const std::filesystem::path report =
       test_model("test-model-nir5x5.json").string() + ".d/report.html";
   ASSERT_TRUE(std::filesystem::exists(report)) << report;
-  // The test models' campaigns are 800..1100 degC every 10 degC.
   const std::string html = read_text(report);
-  expect_report_plots(html, 31);
-  // Where the data end and the model extrapolates: said, and shaded on the uncertainty plot.
-  EXPECT_NE(html.find("Furnace data 800–1100 °C"), std::string::npos);
-  EXPECT_NE(html.find(">furnace data</text>"), std::string::npos);
-  // Every band's residual, though the plots show 5 of the 25.
-  EXPECT_NE(html.find("(5 of 25 bands)"), std::string::npos);
-  EXPECT_NE(html.find("<td>b25</td>"), std::string::npos);
+  expect_report_plots(html, 31);  // the test models' campaigns: 800..1100 degC every 10 degC
+  // Where the data end (said, and shaded on the uncertainty plot); every band's residual,
+  // though the plots show 5 of the 25.
+  for (const char* part :
+       {"Furnace data 800–1100 °C", ">furnace data</text>", "(5 of 25 bands)", "<td>b25</td>"})
+    EXPECT_NE(html.find(part), std::string::npos) << part;
 }
 
 TEST_F(CliDataset, calibrate_rejects_a_manifest_path_leaving_the_dataset_n) {
@@ -394,7 +391,8 @@ TEST(Cli, measure_rejects_an_unknown_pattern_n) {
 class CliMeasure : public ::testing::Test {
  protected:
   void SetUp() override {
-    ASSERT_TRUE(std::filesystem::exists(test_model("test-model-nir5x5.json"))) << kNoTestModels;
+    ASSERT_TRUE(std::filesystem::exists(test_model("test-model-nir5x5.json")))
+        << test::kNoTestModels;
     Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 6});
     SceneSequenceSettings s;
     s.kind = SceneKind::kPlate;
@@ -477,7 +475,7 @@ TEST_F(CliMeasure, measure_method_auto_reads_with_the_method_the_library_chooses
 // it, without it and with a damaged one, which gets a warning naming it.
 TEST_F(CliMeasure, measure_reads_the_prebuilt_table_with_the_same_temperatures) {
   const auto source = test_model("test-model-rgb.json");
-  ASSERT_TRUE(std::filesystem::exists(source.string() + ".lut")) << kNoTestModels;
+  ASSERT_TRUE(std::filesystem::exists(source.string() + ".lut")) << test::kNoTestModels;
   const auto model = dir / "m.json", table = dir / "m.json.lut";
   std::filesystem::copy_file(source, model);
   const auto measure = [&](const std::string& name) {
