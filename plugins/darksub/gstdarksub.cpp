@@ -85,7 +85,8 @@ struct pyrocam::gst::darksub::State {
   guint capture_requests_seen = 0;
   // Bayer mosaics: the cells' sums that tell where the greens are, until a verdict.
   pyrocam::BayerCellSums phase_sums;
-  bool phase_warned = false;  // since start
+  int phase_first_cell_row = 0;  // moves on a row each frame: every row of a 5x5 period is seen
+  bool phase_warned = false;     // since start
 };
 using ds::State;
 
@@ -373,16 +374,25 @@ static gboolean gst_dark_sub_sink_event(GstBaseTransform* trans, GstEvent* event
 
 /* A Bayer mosaic whose greens are not where its pattern says was shifted by a row or a column
  * (a crop at the top or left by an odd number) and reads temperatures that look right and are
- * wrong: warns once since start. Every 16th row of cells (every 4th took 3 % of the colour
- * chain's CPU), over frames until enough lit ones. */
+ * wrong; so do frames that are no Bayer mosaic, whose greens differ: warns once since start.
+ * Every 16th row of cells (every 4th took 3 % of the colour chain's CPU), a row further on in
+ * each frame (a 5x5 mosaic's cells lie inside a body in one row of its period only), over frames
+ * until enough lit ones. */
 static void check_bayer_phase(GstDarkSub* self, State& st, const cv::Mat& signal) {
   constexpr int kCellRowStep = 16;
   constexpr std::size_t kCells = 256;
   if (st.phase_warned || st.pattern == PYROCAM_SNAPSHOT_PATTERN_NAME) return;
   const float lit_dn =
       std::max(4.0f, 0.02f * static_cast<float>(pyrocam::full_scale_dn(st.bit_depth)));
-  pyrocam::add_bayer_cell_sums(signal, lit_dn, kCellRowStep, st.phase_sums);
+  const float bright_dn = 0.2f * static_cast<float>(pyrocam::full_scale_dn(st.bit_depth));
+  pyrocam::add_bayer_cell_sums(signal, lit_dn, bright_dn, st.phase_first_cell_row, kCellRowStep,
+                               st.phase_sums);
+  st.phase_first_cell_row = (st.phase_first_cell_row + 1) % kCellRowStep;
   if (st.phase_sums.cells < kCells) return;
+  GST_DEBUG_OBJECT(self,
+                   "phase check over %zu lit cells: green places apart in %zu of %zu, %zu of %zu",
+                   st.phase_sums.cells, st.phase_sums.apart[0], st.phase_sums.bright[0],
+                   st.phase_sums.apart[1], st.phase_sums.bright[1]);
   if (pyrocam::bayer_greens_elsewhere(st.phase_sums, st.pattern)) {
     const double* s = &st.phase_sums.at[0][0];
     GST_ELEMENT_WARNING(
@@ -395,6 +405,18 @@ static void check_bayer_phase(GstDarkSub* self, State& st, const cv::Mat& signal
         ("mean DN per cell place (row-major) %.1f %.1f %.1f %.1f over %zu lit cells",
          s[0] / st.phase_sums.cells, s[1] / st.phase_sums.cells, s[2] / st.phase_sums.cells,
          s[3] / st.phase_sums.cells, st.phase_sums.cells));
+    st.phase_warned = true;
+  } else if (pyrocam::bayer_greens_disagree(st.phase_sums, st.pattern)) {
+    const int k = st.pattern == "rggb" || st.pattern == "bggr" ? 1 : 0;
+    GST_ELEMENT_WARNING(
+        self, STREAM, FORMAT,
+        ("%s: the stream says %s, but the two samples where it puts the greens differ by more "
+         "than 12 %% in %zu of %zu bright cells (a Bayer sensor's greens agree within their "
+         "noise): this is no Bayer mosaic (a snapshot mosaic?), and its temperatures would look "
+         "right and be wrong",
+         GST_OBJECT_NAME(self), st.pattern.c_str(), st.phase_sums.apart[k],
+         st.phase_sums.bright[k]),
+        ("over %zu lit cells", st.phase_sums.cells));
     st.phase_warned = true;
   }
   st.phase_sums = {};

@@ -1,7 +1,8 @@
 // pyrocam-calib measure and the frames' layout: a Bayer mosaic whose readout window starts one
 // column further on is read with the pattern it has (the model's filters), and read as the
 // model's pattern it is warned about; a 5x5 mosaic shifted by a column misfits the model's band
-// spectra and is warned about. A run that fails part-way leaves no results that look complete.
+// spectra and is warned about; a 5x5 mosaic read as a Bayer mosaic is said to be none. A run
+// that fails part-way leaves no results that look complete.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -113,6 +114,23 @@ TEST(CliFramesLayout, a_5x5_mosaic_shifted_by_a_column_is_said_to_misfit) {
   EXPECT_NE(shifted.second.find("readings checked do not fit the model's band spectra"),
             std::string::npos)
       << shifted.second;
+}
+
+// A 5x5 snapshot mosaic read with a colour model as a Bayer mosaic: every place of the 2x2 cell
+// averages all 25 filters, so the greens are where rggb says on average; the greens of each
+// cell are two different filters, and the run says so and fails.
+TEST(CliFramesLayout, a_snapshot_mosaic_read_as_a_bayer_mosaic_fails) {
+  const fs::path model = test_model("test-model-rgb.json");
+  ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
+  ScratchDir dir{"cli-layout-snapshot-as-bayer"};
+  write_plate(dir / "plate", "nir5x5-reference", 1, 1400, 250);
+  const auto [frame, dark] = cropped_plate(dir / "plate", dir / "frames", 0, 0);
+  const auto r = run("measure --model " + q(model) + " --frame " + q(frame) + " --dark " + q(dark) +
+                         " --pattern rggb --out " + q(dir / "m"),
+                     dir / "m.log");
+  ASSERT_EQ(r.first, 1) << r.second;
+  EXPECT_NE(r.second.find("the frames are not a Bayer mosaic"), std::string::npos) << r.second;
+  EXPECT_TRUE(fs::exists(dir / "m" / "stats.csv"));
 }
 
 TEST(CliFramesLayout, a_run_that_fails_part_way_leaves_no_results_n) {

@@ -418,5 +418,24 @@ TEST(DarkSubPipeline, warns_when_the_greens_are_not_where_the_pattern_says) {
   }
 }
 
+// A snapshot camera's frames labelled as a Bayer mosaic (aravissrc gives GRAY8 without a
+// pattern, and the user says rggb): every place of the 2x2 cell averages all 25 filters, so the
+// greens look in place on average, but the two of each cell differ: darksub says this is no
+// Bayer mosaic. (A 5x5 mosaic's cells lie inside a body in one row of its period only: the rows
+// looked at move on each frame, or 16 rows apart they would miss it.)
+TEST(DarkSubPipeline, warns_when_a_snapshot_mosaic_is_labelled_bayer) {
+  REQUIRE_ELEMENT("darksub");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  if (!have_element("capssetter")) GTEST_SKIP() << "capssetter (gst-plugins-good) missing";
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=30 profile=nir5x5-reference scene=plate temperature=1500 ! "
+      "video/x-raw,width=320,height=240 ! capssetter caps=video/x-raw,pattern=rggb ! "
+      "darksub dark-level=50 ! fakesink name=sink");
+  expect_eos(r, 30);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  for (const char* part : {"rggb", "no Bayer mosaic", "12 %"})
+    EXPECT_NE(r.warnings[0].find(part), std::string::npos) << r.warnings[0];
+}
+
 }  // namespace
 }  // namespace pyrocam::test

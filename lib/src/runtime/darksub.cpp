@@ -219,10 +219,12 @@ cv::Mat DarkAccumulator::mean() const {
   return dark;
 }
 
-void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, int cell_row_step,
-                         BayerCellSums& sums) {
+void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, int first_cell_row,
+                         int cell_row_step, BayerCellSums& sums) {
   if (signal.type() != CV_32F) throw InputError("Bayer cell sums: the mosaic must be CV_32F");
   if (cell_row_step < 1) throw InputError("Bayer cell sums: the row step must be at least 1");
+  if (first_cell_row < 0 || first_cell_row >= cell_row_step)
+    throw InputError("Bayer cell sums: the first row must be 0 to the row step less one");
   // Only cells inside a body: the cells left, right and below within 20 % of this one. A cell on
   // an edge has its columns (or rows) lit unequally, which on a small body outweighs the colours.
   const auto like = [](float neighbour, float sum) {
@@ -238,7 +240,7 @@ void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, int cell_row_step,
       out[static_cast<std::size_t>(i)] =
           top[2 * i] + top[2 * i + 1] + bottom[2 * i] + bottom[2 * i + 1];
   };
-  for (int y = 0; y + 3 < signal.rows; y += 2 * cell_row_step) {
+  for (int y = 2 * first_cell_row; y + 3 < signal.rows; y += 2 * cell_row_step) {
     cell_sums(y, row);
     cell_sums(y + 2, below);
     const float* top = signal.ptr<float>(y);
@@ -251,6 +253,13 @@ void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, int cell_row_step,
       sums.at[0][0] += top[x], sums.at[0][1] += top[x + 1];
       sums.at[1][0] += bottom[x], sums.at[1][1] += bottom[x + 1];
       ++sums.cells;
+      const float pairs[2][2] = {{top[x], bottom[x + 1]}, {top[x + 1], bottom[x]}};
+      for (int k = 0; k < 2; ++k) {
+        const float mean = 0.5f * (pairs[k][0] + pairs[k][1]);
+        if (!(mean >= bright_dn)) continue;
+        ++sums.bright[k];
+        if (std::abs(pairs[k][0] - pairs[k][1]) > 0.12f * mean) ++sums.apart[k];
+      }
     }
   }
 }
@@ -270,6 +279,17 @@ bool bayer_greens_elsewhere(const BayerCellSums& sums, const std::string& patter
   if (!(g1 > 0 && g2 > 0 && o1 > 0 && o2 > 0)) return false;
   const auto apart = [](double p, double q) { return std::max(p, q) / std::min(p, q); };
   return apart(g1, g2) > 1.10 && apart(o1, o2) < 1.03;
+}
+
+bool bayer_greens_disagree(const BayerCellSums& sums, const std::string& pattern) {
+  int k;  // the diagonal of the pattern's greens
+  if (pattern == "rggb" || pattern == "bggr")
+    k = 1;
+  else if (pattern == "grbg" || pattern == "gbrg")
+    k = 0;
+  else
+    return false;
+  return sums.bright[k] >= 64 && 4 * sums.apart[k] > sums.bright[k];
 }
 
 }  // namespace pyrocam

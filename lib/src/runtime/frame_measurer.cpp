@@ -196,7 +196,8 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
   if (options_.check_layout) {
     if (layout_.kind == MosaicLayout::Kind::kBayer)
       add_bayer_cell_sums(signal, std::max(4.0f, 0.02f * static_cast<float>(profile.max_dn())),
-                          kPhaseCellRowStep, phase_sums_);
+                          0.2f * static_cast<float>(profile.max_dn()), 0, kPhaseCellRowStep,
+                          phase_sums_);
     const PlaneEstimator::FitAudit audit = planes_estimator_.take_fit_audit();
     audit_checked_ += audit.checked;
     audit_misfit_ += audit.misfit;
@@ -227,6 +228,15 @@ std::vector<std::string> FrameMeasurer::layout_problems() const {
         " puts them: the mosaic starts one row or one column further on (a readout window or "
         "crop at an odd row or column); its temperatures would look right and be wrong. Give "
         "the pattern the frames have (--pattern)");
+  } else if (bayer_greens_disagree(phase_sums_, pattern)) {
+    const int k = pattern == "rggb" || pattern == "bggr" ? 1 : 0;
+    problems.push_back(
+        "in " + std::to_string(phase_sums_.apart[k]) + " of " +
+        std::to_string(phase_sums_.bright[k]) + " bright cells the two samples where " + pattern +
+        " puts its greens differ by more than 12 % (a Bayer sensor's two greens agree within "
+        "their noise): the frames are not a Bayer mosaic (a snapshot mosaic?) and its "
+        "temperatures would look right and be wrong. Is the model (" +
+        model_->profile().name + ") for this camera?");
   }
   if (audit_checked_ >= kAuditReadings && 2 * audit_misfit_ > audit_checked_)
     problems.push_back(std::to_string(audit_misfit_) + " of " + std::to_string(audit_checked_) +

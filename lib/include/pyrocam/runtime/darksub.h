@@ -58,14 +58,18 @@ SaturatedSamples find_saturated(const cv::Mat& signal);
 // Evidence on the phase of a Bayer mosaic: the sums of each place of the 2x2 cell over lit cells
 // (no sample saturated or NaN, the cell's mean at least `lit_dn`) inside a body (the cells left,
 // right and below within 20 % of the cell's sum: an edge lights a cell's columns or rows
-// unequally) of every `cell_row_step`-th row of cells, in a CV_32F dark-subtracted mosaic whose
-// cells start at (0, 0). Adds to `sums`.
+// unequally) of every `cell_row_step`-th row of cells from `first_cell_row` (0 to the step less
+// one), in a CV_32F dark-subtracted mosaic whose cells start at (0, 0); and per diagonal of the
+// cell, how many of those cells have the diagonal's two samples at least `bright_dn` on average,
+// and how many of these differ by more than 12 %. Adds to `sums`.
 struct BayerCellSums {
   double at[2][2] = {};  // [row][column] in the cell
   std::size_t cells = 0;
+  // [0]: the diagonal (0,0)-(1,1); [1]: the anti-diagonal (0,1)-(1,0).
+  std::size_t bright[2] = {}, apart[2] = {};
 };
-void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, int cell_row_step,
-                         BayerCellSums& sums);
+void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, int first_cell_row,
+                         int cell_row_step, BayerCellSums& sums);
 // Whether the sums say that the greens sit on the other diagonal of the cell than `pattern`
 // (rggb, bggr, grbg or gbrg) puts them: the pattern's two green places differ by more than 10 %
 // while the other two agree within 3 %. Samples behind one filter agree (a sensor's green
@@ -76,6 +80,16 @@ void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, int cell_row_step,
 // flip, which trades red for blue, keeps the greens in place and is not seen.) False for another
 // pattern or sums that tell nothing.
 bool bayer_greens_elsewhere(const BayerCellSums& sums, const std::string& pattern);
+// Whether the sums say that the frames are no Bayer mosaic of `pattern`: in more than a quarter
+// of at least 64 bright cells, the two samples where the pattern puts its greens differ by more
+// than 12 %. Two samples behind one filter, a pixel apart inside a body, agree to their noise:
+// with `bright_dn` at 20 % of full scale and a full well of 2000 electrons (less than any
+// industrial sensor's) their difference has a standard deviation of at most 7 %, so 12 % is
+// 1.7 sigma and under 10 % of cells go beyond it. Neighbours on a snapshot mosaic (5x5: 25
+// filters, no two neighbours alike) differ by tens of percent: 63-100 % of cells on the
+// simulated cameras' plates at 700-2500 degC. Read as a Bayer mosaic, such frames give
+// temperatures that look right and are wrong. False for another pattern or too few cells.
+bool bayer_greens_disagree(const BayerCellSums& sums, const std::string& pattern);
 
 // Converts a dark image read from a file (CV_8U/CV_16U) to the CV_32F dark subtract_dark takes.
 cv::Mat dark_from_image(const cv::Mat& image);

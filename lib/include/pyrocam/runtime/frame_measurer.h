@@ -86,7 +86,8 @@ class FrameMeasurer {
                               const cv::Mat& mask) const;
   // With MeasureOptions::check_layout, what the frames measured so far say about their mosaic's
   // phase: a Bayer mosaic whose greens sit on the other diagonal (bayer_greens_elsewhere over
-  // every frame's lit cells of every 4th cell row; decided from 256 such cells), and the fit
+  // every frame's lit cells of every 4th cell row; decided from 256 such cells) or frames that
+  // are no Bayer mosaic (bayer_greens_disagree: the pattern's greens differ), and the fit
   // audit (PlaneEstimator::take_fit_audit, one reading in 64 of every row: of those checked
   // against the model's band spectra, how many misfit; most of 16 or more misfitting: bands in
   // the wrong places or another camera). A message for each that fails, none when they pass or
