@@ -127,10 +127,15 @@ std::vector<double> emissivity_uncertainty(const ThermalModel& m, const Uncertai
                                  m.camera.band_scale});
   std::vector<double> u_emissivity_c;
   for (double t : u.temperature_c) {
+    // Against the network's reading of the grey body, not t: the network's own error on the
+    // locus (the calibration summary's locus_rms_error_c) is no emissivity effect; counted here
+    // it widened the term by its full size over the two signs, |A| + |f|.
+    const Eigen::VectorXd grey = normalised_ratios(profile.normalisation, m.camera.rates(t));
+    const double grey_c = m.mlp.predict(grey.data());
     double largest = 0;
     for (const CameraModel& camera : tilted) {
       const Eigen::VectorXd x = normalised_ratios(profile.normalisation, camera.rates(t));
-      largest = std::max(largest, std::abs(m.mlp.predict(x.data()) - t));
+      largest = std::max(largest, std::abs(m.mlp.predict(x.data()) - grey_c));
     }
     u_emissivity_c.push_back(largest);
   }

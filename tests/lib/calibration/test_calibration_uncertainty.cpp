@@ -131,6 +131,11 @@ TEST(UncertaintyModel, tabulates_every_50_degc_and_the_emissivity_term_grows_wit
     SCOPED_TRACE(u.temperature_c[i]);
     EXPECT_GT(shifted[i], u.u_emissivity_c[i]);
   }
+  // A grey body's reading is the reference: the network's own error on the locus is not an
+  // emissivity effect (it made the term 0.5-0.8 degC too large).
+  UncertaintyModel grey = u;
+  grey.emissivity_slope_u = 0;
+  EXPECT_EQ(emissivity_uncertainty(m, grey), std::vector<double>(13, 0.0));
 }
 
 // A 5x5 camera well exposed at 400 degC has a band too dim to read, so no posterior sample reads

@@ -40,8 +40,9 @@ std::vector<double> qe_model_uncertainty(
     const std::vector<double>& temperatures_c, const std::vector<QeSample>& prior_fits = {},
     double hottest_calibrated_c = std::numeric_limits<double>::infinity());
 
-// |network reading - T| for a graybody whose emissivity has the slope u.emissivity_slope_u or
-// its opposite, the larger of the two, at every u.temperature_c.
+// |network reading - network reading of the graybody| for a body whose emissivity has the slope
+// u.emissivity_slope_u or its opposite, the larger of the two, at every u.temperature_c: 0 for
+// a slope of 0.
 std::vector<double> emissivity_uncertainty(const ThermalModel& model, const UncertaintyModel& u);
 
 // Standard uncertainty at every u.temperature_c of the temperature the model's rates imply,
