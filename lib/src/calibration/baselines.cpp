@@ -10,13 +10,14 @@
 namespace pyrocam {
 
 OhnoEstimator::OhnoEstimator(const Locus& locus) : t_(locus.temperature_c) {
-  chroma_ = locus.rates.array().colwise() / locus.rates.rowwise().sum().array();
+  const Eigen::MatrixXd all = locus.rates.array().colwise() / locus.rates.rowwise().sum().array();
+  chroma_ = all.leftCols(std::max<Eigen::Index>(1, all.cols() - 1));
 }
 
 double OhnoEstimator::temperature_c(const Eigen::VectorXd& signals) const {
   const double sum = signals.sum();
   if (!std::isfinite(sum) || !(sum > 0)) return NAN;
-  const Eigen::RowVectorXd c = (signals / sum).transpose();
+  const Eigen::RowVectorXd c = (signals.head(chroma_.cols()) / sum).transpose();
   Eigen::Index i;
   (chroma_.rowwise() - c).rowwise().squaredNorm().minCoeff(&i);
   i = std::clamp<Eigen::Index>(i, 1, t_.size() - 2);

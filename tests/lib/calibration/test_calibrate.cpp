@@ -324,6 +324,18 @@ TEST(Baselines, ohno_inverts_the_noise_free_locus) {
   EXPECT_TRUE(std::isnan(ohno.temperature_c(Eigen::Vector3d(0, 0, 0))));
 }
 
+// The paper's triangular solution in (r, g): off a three-sample locus, by hand 1005.88 degC (in
+// (r, g, b), where b moves with both, 1007.37).
+TEST(Baselines, ohno_measures_distances_in_r_g_as_the_paper) {
+  Locus locus;
+  locus.temperature_c = Eigen::Vector3d(1000, 1010, 1020);
+  locus.rates.resize(3, 3);
+  locus.rates << 0.5, 0.3, 0.2, 0.45, 0.33, 0.22, 0.4, 0.36, 0.24;
+  locus.rates *= 7;  // chromaticities are scale free
+  const OhnoEstimator ohno(locus);
+  EXPECT_NEAR(ohno.temperature_c(Eigen::Vector3d(0.46, 0.30, 0.24) * 3), 1005.882, 0.001);
+}
+
 TEST(Baselines, two_colour_is_exact_for_narrow_bands_without_blue) {
   // Monochromatic R (650 nm) and G (550 nm) under Wien's approximation: the formula is exact.
   const double lr = 650e-9, lg = 550e-9;

@@ -10,7 +10,9 @@
 
 namespace pyrocam {
 
-// Nearest locus sample in chromaticity (s_b / sum s), refined between its neighbours.
+// Nearest locus sample in chromaticity (s_b / sum s), refined between its neighbours. Distances
+// over all chromaticities but the last (which the others fix): (r, g) for a colour camera, as
+// the paper's; with b as well the two directions would weigh differently.
 class OhnoEstimator {
  public:
   explicit OhnoEstimator(const Locus& locus);
