@@ -241,7 +241,13 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
               << " pixels of the ROI read; " << why.saturated
               << " have a band saturated or at the saturation level (shorten the exposure), "
               << why.dim << " a band below or near the dim threshold ("
-              << model.profile().thresholds.inference_dim_dn << " DN; lengthen it)\n";
+              << model.profile().thresholds.inference_dim_dn << " DN; lengthen it)";
+    if (why.both > 0)
+      std::cerr << ", " << why.both
+                << " one band saturated and another dim at once (no one exposure reads them: "
+                   "their bands span more than the sensor's range; bracket exposures and fuse "
+                   "them, as pyrocamsrc bracket and thermalfuse do)";
+    std::cerr << "\n";
   }
   TruthScore ts;
   if (!j.truth.empty()) {

@@ -106,6 +106,26 @@ TEST(CliMeasureDefaults, a_frame_that_reads_little_says_why) {
             std::string::npos)
       << dark;
   EXPECT_EQ(good.find("pixels of the ROI read"), std::string::npos) << good;
+  EXPECT_EQ(bright.find("at once"), std::string::npos) << bright;
+
+  // Red saturated and green 2 DN above dark in every cell: no exposure reads these, and neither
+  // "shorten" nor "lengthen" would; said as such, and counted in neither.
+  cv::Mat frame(64, 64, CV_8U, cv::Scalar(52)), dark_frame(64, 64, CV_8U, cv::Scalar(50));
+  for (int y = 0; y < 64; y += 2)
+    for (int x = 0; x < 64; x += 2)
+      frame.at<std::uint8_t>(y, x) = 255, frame.at<std::uint8_t>(y + 1, x + 1) = 150;
+  write_raw_image(dir / "both.pgm", frame);
+  write_raw_image(dir / "dark.pgm", dark_frame);
+  const std::string both =
+      calib_stderr("measure --model " + q(model) + " --frame " + q(dir / "both.pgm") + " --dark " +
+                       q(dir / "dark.pgm") + " --pattern rggb --out " + q(dir / "both-t"),
+                   dir / "both.log");
+  EXPECT_NE(both.find(" pixels of the ROI read; 0 have a band saturated"), std::string::npos)
+      << both;
+  EXPECT_NE(both.find(", 0 a band below"), std::string::npos) << both;
+  EXPECT_NE(both.find("one band saturated and another dim at once (no one exposure reads them"),
+            std::string::npos)
+      << both;
 }
 
 // --uncertainty adds the ROI median's own expanded uncertainty to stats.csv: the systematic

@@ -99,8 +99,9 @@ FrameMeasurer::Unread FrameMeasurer::unread(const cv::Mat& temperature_c,
         saturated |= v >= near_level.checked_dn(static_cast<int>(b));
         dim_band |= v < (checked ? near.checked_dn(static_cast<int>(b)) : dim_dn);
       }
-      u.saturated += saturated;
+      u.saturated += saturated && !dim_band;
       u.dim += !saturated && dim_band;
+      u.both += saturated && dim_band;
     }
   return u;
 }

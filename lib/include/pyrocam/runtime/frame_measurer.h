@@ -65,11 +65,11 @@ class FrameMeasurer {
   cv::Size output_size(cv::Size raw) const;
   // Why pixels of the last frame measured have no reading: of those under `mask` (CV_8U of the
   // output's size, non-zero = counted; empty: all) without a reading in `temperature_c`, how many
-  // have a band saturated or near the saturation level (SaturationEdgeCheck::checked_dn) and
-  // how many (of the rest) a band below the model's dim threshold or near it
-  // (DimEdgeCheck::checked_dn).
+  // have a band saturated or near the saturation level (SaturationEdgeCheck::checked_dn), how
+  // many a band below the model's dim threshold or near it (DimEdgeCheck::checked_dn), and how
+  // many both at once (counted in neither of the others): no one exposure reads those.
   struct Unread {
-    long saturated = 0, dim = 0;
+    long saturated = 0, dim = 0, both = 0;
   };
   Unread unread(const cv::Mat& temperature_c, const cv::Mat& mask) const;
   // The expanded uncertainty (the model's coverage factor k) of the median of the readings under
