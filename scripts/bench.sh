@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds and runs the benchmarks (never part of `meson test`): the estimators at camera sizes
-# (library level, with their agreement with the references), then per scene the element chains
+# (library level, with their agreement with the references), their per-pixel scatter against
+# the Cramer-Rao bound (the shot-noise limit), then per scene the element chains
 # with bayer2rgb on the same frames in the same run (frames/s, CPU ms per frame, and the chain's
 # rate as a multiple of bayer2rgb's), then a soak per chain: the resident memory over
 # SOAK_FRAMES frames that all differ.
@@ -30,7 +31,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 # Only what the benchmarks run: the tests take long to build.
 [[ -f build/build.ninja ]] || meson setup build --buildtype=release >/dev/null
-ninja -C build bench/bench_estimators bench/bench_chain plugins/libgstpyrocam.so >/dev/null
+ninja -C build bench/bench_estimators bench/bench_chain bench/bench_precision \
+  plugins/libgstpyrocam.so >/dev/null
 tool=build/calib-tool/pyrocam-calib
 data=build/bench-data
 mkdir -p "$data"
@@ -67,6 +69,8 @@ echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -
   "load average $(cut -d' ' -f1-3 /proc/loadavg)"
 build/bench/bench_estimators --rgb-model "$rgb" --nir-model "$nir" --scene "${SCENE:-plate:1500}" \
   --frames 20
+echo
+build/bench/bench_precision --model "$rgb" --model "$nir"
 if [[ -n ${SCENE:-} ]]; then
   echo
   build/bench/bench_chain --rgb-model "$rgb" --nir-model "$nir" --scene "$SCENE" \

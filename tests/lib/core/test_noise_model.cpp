@@ -2,7 +2,12 @@
 // quantisation noise of the frame and of its dark both count, and averaging frames divides it.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
+#include "pyrocam/core/error.h"
 #include "pyrocam/core/noise_model.h"
+#include "pyrocam/core/physics.h"
+#include "pyrocam/core/precision_limit.h"
 #include "pyrocam/core/profile.h"
 
 namespace pyrocam {
@@ -40,6 +45,49 @@ TEST(NoiseModel, bands_with_more_gain_are_noisier) {
       if (p.band_gain[a] > p.band_gain[b]) {
         EXPECT_GT(signal_variance_dn2(p, a, 50), signal_variance_dn2(p, b, 50)) << a << " " << b;
       }
+}
+
+// Bands of one wavelength each (500, 600, 700 nm) with shot noise only: the bound is METHOD.md's
+// shot-noise limit T^4 / (c2^2 N Var_w(1/lambda)), Wien's law being exact to 1e-7 there at
+// 1000 degC; with two bands it is the ratio formula dT = T^2 / c2 lambda1 lambda2 /
+// (lambda2 - lambda1) sqrt(1/N1 + 1/N2); one band tells nothing.
+TEST(PrecisionLimit, is_the_shot_noise_limit_for_bands_of_one_wavelength) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  const double lambda_nm[3] = {500, 600, 700};
+  Eigen::MatrixXd qe = Eigen::MatrixXd::Zero(3, p.grid.size());
+  for (int b = 0; b < 3; ++b) qe(b, p.grid.index_of(lambda_nm[b])) = 1;
+  const CameraModel camera{p, qe, Eigen::VectorXd::Ones(3)};
+  const double t_c = 1000, t_k = celsius_to_kelvin(t_c);
+  const Eigen::VectorXd k = p.dn_per_electron();
+  // A graybody's means at some scale, and shot noise only: N_b electrons.
+  Eigen::VectorXd mean = camera.rates(t_c);
+  mean *= 150 / mean.maxCoeff();
+  const Eigen::VectorXd electrons = mean.cwiseQuotient(k), shot = mean.cwiseProduct(k);
+  double n = 0, mean_inverse = 0, mean_square = 0;
+  for (int b = 0; b < 3; ++b) {
+    const double inverse = 1 / (lambda_nm[b] * 1e-9);
+    n += electrons[b], mean_inverse += electrons[b] * inverse,
+        mean_square += electrons[b] * inverse * inverse;
+  }
+  mean_inverse /= n, mean_square /= n;
+  const double limit =
+      t_k * t_k / (kC2 * std::sqrt(n * (mean_square - mean_inverse * mean_inverse)));
+  EXPECT_NEAR(temperature_precision_limit_k(camera, t_c, mean, shot), limit, 1e-5 * limit);
+
+  Eigen::VectorXd two = mean;
+  two[2] = 0;  // no light: no information
+  const double l1 = 500e-9, l2 = 600e-9;
+  const double ratio_limit =
+      t_k * t_k / kC2 * l1 * l2 / (l2 - l1) * std::sqrt(1 / electrons[0] + 1 / electrons[1]);
+  EXPECT_NEAR(temperature_precision_limit_k(camera, t_c, two, shot), ratio_limit,
+              1e-5 * ratio_limit);
+  two[1] = NAN;
+  EXPECT_TRUE(std::isinf(temperature_precision_limit_k(camera, t_c, two, shot)));
+  // Read noise only adds variance: the bound grows.
+  Eigen::VectorXd noisy = shot;
+  for (int b = 0; b < 3; ++b) noisy[b] = signal_variance_dn2(p, b, mean[b]);
+  EXPECT_GT(temperature_precision_limit_k(camera, t_c, mean, noisy), limit);
+  EXPECT_THROW(temperature_precision_limit_k(camera, t_c, mean.head(2), shot), InputError);
 }
 
 }  // namespace
