@@ -37,7 +37,8 @@ struct MeasureArgs {
   bool uncertainty = false;
   bool blur_correction = false;  // MeasureOptions::blur_correction
   int brightness_radius = 0;     // MeasureOptions::brightness_radius
-  std::set<std::string> given;   // the options on the command line, by name
+  int peak_window = kDefaultPeakWindow;
+  std::set<std::string> given;  // the options on the command line, by name
 };
 
 // Truth comparison at the output resolution: only output pixels whose whole input footprint
@@ -199,7 +200,8 @@ std::ofstream open_stats_csv(const std::string& out) {
   std::filesystem::create_directories(out);
   std::ofstream csv(std::filesystem::path(out) / "stats.csv");
   csv << "file,exposure_us,nominal_c,pixels,valid_fraction,min_c,max_c,mean_c,median_c,"
-         "truth_pixels,truth_valid,truth_rms_c,truth_median_error_c,median_u_c\n";
+         "truth_pixels,truth_valid,truth_rms_c,truth_median_error_c,median_u_c,peak_c,peak_x,"
+         "peak_y,peak_lower_bound,truth_peak_c,truth_max_c,peak_error_c\n";
   return csv;
 }
 
@@ -215,6 +217,13 @@ void write_frame_images(const MeasureArgs& a, const std::string& stem, const cv:
     written.push_back(std::filesystem::path(a.out) / (stem + "_uncertainty" + ext));
     write_raw_image(written.back(), encode_decikelvin_difference(u));
   }
+}
+
+// The largest median of the window x window windows at least half read (region_peak) over the
+// whole frame; none where the window does not fit.
+RegionPeak frame_peak(const cv::Mat& temperature_c, int window) {
+  if (window > temperature_c.cols || window > temperature_c.rows) return {};
+  return region_peak(temperature_c, window);
 }
 
 // One frame measured: its images written and its row of stats.csv.
@@ -250,18 +259,36 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
     std::cerr << "\n";
   }
   TruthScore ts;
+  RegionPeak truth_peak;
+  const RegionPeak peak = frame_peak(t, a.peak_window);
+  double truth_max_c = NAN;
   if (!j.truth.empty()) {
     const cv::Mat truth = read_raw_image(j.truth, raw.size(), "the frame");
     if (truth.depth() != CV_16U)
       throw InputError(j.truth.string() +
                        ": true temperatures must be 16-bit (0.1 K units), this is 8-bit");
     ts = compare_truth(t, truth, model.profile().mosaic, options.demosaic);
+    // The truth's own peak at the output's resolution (a 5x5 cell's mean temperature).
+    cv::Mat truth_c = decode_decikelvin(truth);
+    if (truth_c.size() != t.size()) cv::resize(truth_c, truth_c, t.size(), 0, 0, cv::INTER_AREA);
+    truth_peak = frame_peak(truth_c, a.peak_window);
+    cv::patchNaNs(truth_c, -1);  // code 0, no true temperature: below any
+    cv::minMaxLoc(truth_c, nullptr, &truth_max_c);
+    if (truth_max_c < 0) truth_max_c = NAN;
   }
+  // Pixels without a reading where light saturated a band may be the hottest: the peak read
+  // around them is then only a lower bound.
+  const FrameMeasurer::Unread unread = measurer.unread(t, cv::Mat());
+  const bool lower_bound = unread.saturated + unread.both > 0;
   csv << j.frame.filename().string() << "," << fmt(j.exposure_us) << "," << fmt(j.nominal_c) << ","
       << s.pixels << "," << fmt(s.valid_fraction) << "," << fmt(s.min_c) << "," << fmt(s.max_c)
       << "," << fmt(s.mean_c) << "," << fmt(s.median_c) << "," << ts.pixels << "," << ts.valid
       << "," << fmt(ts.rms_c) << "," << fmt(ts.median_error_c) << ","
-      << fmt(a.uncertainty ? measurer.median_uncertainty_c(t, u, mask) : NAN) << "\n";
+      << fmt(a.uncertainty ? measurer.median_uncertainty_c(t, u, mask) : NAN) << "," << fmt(peak.c)
+      << "," << (peak.found() ? std::to_string(peak.x) : "") << ","
+      << (peak.found() ? std::to_string(peak.y) : "") << "," << (lower_bound ? "true" : "false")
+      << "," << fmt(truth_peak.c) << "," << fmt(truth_max_c) << "," << fmt(peak.c - truth_peak.c)
+      << "\n";
 }
 
 // The whole subcommand once the arguments are checked.
@@ -280,6 +307,7 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
     m.dark_level = a.dark_level;
     m.pattern = a.pattern;
     m.quiet = global.quiet;
+    m.peak_window = a.peak_window;
     m.given = a.given;
     return measure_recording(m);
   }
@@ -396,6 +424,12 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
                 "right")
       ->check(CLI::Range(0, 8))
       ->capture_default_str();
+  c->add_option("--peak-window", a.peak_window,
+                "stats.csv's peak_c: the largest median of these square windows (odd, 1 to 255 "
+                "output pixels) at least half read, over the whole frame, as ratiotemp's "
+                "peak-window")
+      ->check(CLI::Range(1, 255))
+      ->capture_default_str();
   c->add_option("--saturation", a.saturation,
                 "Raw saturation level, DN (0 to 65535; -1: the model's)")
       ->check(finite_range(-1.0, 65535.0))
@@ -451,7 +485,10 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       "Output: <stem>_temperature.png (16-bit, 0.1 K units, 0 = no reading), optionally\n"
       "<stem>_uncertainty.png (expanded, k=2, 0.1 K units), and stats.csv with ROI statistics\n"
       "per frame (and errors against truth/<stem>.png when the dataset has true temperatures;\n"
-      "with --uncertainty, median_u_c: the expanded uncertainty (k=2) of the ROI's median).\n"
+      "with --uncertainty, median_u_c: the expanded uncertainty (k=2) of the ROI's median;\n"
+      "over the whole frame, peak_c, peak_x, peak_y as ratiotemp's peak-c, peak_lower_bound\n"
+      "where a pixel without a reading has a saturated band, and with true temperatures\n"
+      "truth_peak_c, truth_max_c and peak_error_c = peak_c - truth_peak_c).\n"
       "A raw frame does not say which mosaic it was taken through: --pattern names it, or\n"
       "the dataset's mosaic.txt (written by `pyrocam-calib simulate`): the model's kind of\n"
       "mosaic (a colour model reads any of the four Bayer patterns), else nothing is\n"
@@ -471,6 +508,7 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
   add_input_options(c, a);
   add_output_options(c, a);
   c->callback([&global, &selected, c] {
+    if (a.peak_window % 2 == 0) throw CLI::ValidationError("--peak-window", "must be odd");
     check_measure_args(a);
     for (const CLI::Option* o : c->get_options())
       if (o->count() > 0) a.given.insert(o->get_name());

@@ -131,6 +131,39 @@ TEST(CliMeasureDefaults, a_frame_that_reads_little_says_why) {
 // --uncertainty adds the ROI median's own expanded uncertainty to stats.csv: the systematic
 // terms whole (the median has them too) with the noise of many readings, so more than the
 // systematic terms alone and less than a single reading's.
+// stats.csv has the frame's peak as ratiotemp's peak-c (the largest median of 5x5 windows at
+// least half read) with the truth's by the same rule. On a 1000 degC plate the peak is the
+// largest of some 1 300 window medians, which scatter by about 8 degC (measured on this plate),
+// so it lies a few of those above the plate (17 degC here): 5 sd (40 degC) is passed by one of
+// 1 300 independent normal medians with probability 1300 x 2.9e-7 = 4e-4, and correlated ones
+// pass it less often; and it lies above the ROI's median reading. A plate whose every band
+// saturates has no peak, and a saturated band says the peak would be a lower bound.
+TEST(CliMeasureDefaults, stats_have_the_peak_and_the_truths) {
+  const fs::path model = test_model("test-model-rgb.json");
+  ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
+  ScratchDir dir{"cli-peak"};
+  write_plate(dir / "good", "rgb-reference", 1, 1000, 64);
+  write_plate(dir / "bright", "rgb-reference", 1, 1000, 64, 50);
+  const std::string base = "measure --model " + q(model) + " --dataset ";
+  ASSERT_EQ(calib(base + q(dir / "good") + " --out " + q(dir / "good-t")), 0);
+  ASSERT_EQ(calib(base + q(dir / "bright") + " --out " + q(dir / "bright-t")), 0);
+  const auto good = first_stats_row(dir / "good-t"), bright = first_stats_row(dir / "bright-t");
+  ASSERT_FALSE(good.at("peak_c").empty());
+  EXPECT_NEAR(std::stod(good.at("truth_peak_c")), 1000, 0.1);
+  EXPECT_NEAR(std::stod(good.at("truth_max_c")), 1000, 0.1);
+  EXPECT_GE(std::stod(good.at("peak_c")), std::stod(good.at("median_c")));
+  EXPECT_LE(std::stod(good.at("peak_c")), 1040);
+  EXPECT_NEAR(std::stod(good.at("peak_error_c")),
+              std::stod(good.at("peak_c")) - std::stod(good.at("truth_peak_c")), 0.002);
+  EXPECT_EQ(good.at("peak_lower_bound"), "false");
+  const int x = std::stoi(good.at("peak_x")), y = std::stoi(good.at("peak_y"));
+  EXPECT_TRUE(x >= 2 && x < 62 && y >= 2 && y < 62) << x << "," << y;
+  EXPECT_TRUE(bright.at("peak_c").empty());
+  EXPECT_TRUE(bright.at("peak_error_c").empty());
+  EXPECT_EQ(bright.at("peak_lower_bound"), "true");
+  EXPECT_EQ(calib(base + q(dir / "good") + " --peak-window 4 --out " + q(dir / "even")), 2);
+}
+
 TEST(CliMeasureDefaults, uncertainty_gives_the_rois_median_its_own) {
   const fs::path model = test_model("test-model-rgb.json");
   ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
