@@ -181,13 +181,28 @@ void mark_unread(const cv::Mat& values, cv::Mat& mask) {
 
 cv::Mat saturated_band_mask(const std::vector<cv::Mat>& planes) {
   if (planes.empty()) throw InputError("saturation mask: no band planes");
-  cv::Mat mask = cv::Mat::zeros(planes.front().size(), CV_8U);
+  cv::Mat saturated = cv::Mat::zeros(planes.front().size(), CV_8U), nan = saturated.clone();
   for (const cv::Mat& p : planes) {
-    if (p.type() != CV_32F || p.size() != mask.size())
+    if (p.type() != CV_32F || p.size() != saturated.size())
       throw InputError("saturation mask: band planes must be CV_32F of one size");
-    mark_unread(p, mask);
+    for (int y = 0; y < p.rows; ++y) {
+      const float* v = p.ptr<float>(y);
+      std::uint8_t* s = saturated.ptr<std::uint8_t>(y);
+      std::uint8_t* n = nan.ptr<std::uint8_t>(y);
+      for (int x = 0; x < p.cols; ++x) {
+        s[x] |= v[x] == std::numeric_limits<float>::infinity() ? 1 : 0;
+        n[x] |= std::isnan(v[x]) ? 1 : 0;
+      }
+    }
   }
-  return mask;
+  if (cv::countNonZero(nan) == 0) return saturated;
+  // NaN from saturated samples of opposite signs in a kernel lies within the kernels' reach
+  // (2 pixels) of a pixel that saturated outright; one elsewhere (the mixed-pixel check's mark,
+  // a sample darksub left without a value) is no saturation.
+  cv::Mat near;
+  cv::dilate(saturated, near, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
+  saturated |= nan & near;
+  return saturated;
 }
 
 cv::Mat saturated_sample_mask(const cv::Mat& mosaic, int radius) {

@@ -180,9 +180,9 @@ TEST(RegionPeak, matches_the_window_by_window_definition) {
 }
 
 // Cost on a camera-sized frame: run with --gtest_also_run_disabled_tests.
-// Where light saturated a band: +INF or NaN in any plane (not -INF, demosaicking's mark of a
-// sample without light), or within the kernels' reach of such a mosaic sample; counted only
-// where the pixel has no reading.
+// Where light saturated a band: +INF in any plane, or NaN within 2 pixels of one (not -INF,
+// demosaicking's mark of a sample without light), or within the kernels' reach of such a mosaic
+// sample; counted only where the pixel has no reading.
 TEST(Saturation, marks_unread_band_values_and_counts_pixels_without_a_reading_there) {
   constexpr float kInf = std::numeric_limits<float>::infinity();
   cv::Mat red(3, 4, CV_32F, cv::Scalar(100)), green = red.clone();
@@ -198,6 +198,18 @@ TEST(Saturation, marks_unread_band_values_and_counts_pixels_without_a_reading_th
   t.at<float>(0, 1) = kNaN;                       // saturated, no reading: counts
   t.at<float>(1, 1) = kNaN;                       // no reading, nothing saturated: does not
   EXPECT_EQ(count_without_reading(t, mask), 1u);  // (2, 3) has a reading: does not
+  // A NaN more than 2 pixels from any saturated one (a mixed pixel at an edge) is no saturation;
+  // without any +INF, no NaN is.
+  cv::Mat wide_red(6, 9, CV_32F, cv::Scalar(100)), wide_green = wide_red.clone();
+  wide_red.at<float>(0, 0) = kInf;
+  wide_green.at<float>(2, 2) = kNaN;  // within reach
+  wide_green.at<float>(5, 8) = kNaN;  // beyond it
+  const cv::Mat wide = saturated_band_mask({wide_red, wide_green});
+  EXPECT_EQ(cv::countNonZero(wide), 2);
+  EXPECT_EQ(wide.at<std::uint8_t>(2, 2), 1);
+  EXPECT_EQ(wide.at<std::uint8_t>(5, 8), 0);
+  wide_red.at<float>(0, 0) = 100;
+  EXPECT_EQ(cv::countNonZero(saturated_band_mask({wide_red, wide_green})), 0);
   EXPECT_THROW(saturated_band_mask({}), InputError);
   EXPECT_THROW(saturated_band_mask({red, cv::Mat(2, 4, CV_32F)}), InputError);
   EXPECT_THROW(count_without_reading(t, cv::Mat(2, 4, CV_8U)), InputError);

@@ -42,9 +42,10 @@ RegionPeak region_peak(const cv::Mat& temperature_c, int window = kDefaultPeakWi
 // Where light saturated the camera: a pixel without a reading there may be the hottest of the
 // scene, so a peak or maximum read around it is only a lower bound. As a CV_8U mask (1 = a band
 // without a value from the camera), from band planes (CV_32F, all of one size): some band +INF
-// (a saturated sample) or NaN (saturated samples of opposite signs in a demosaicking kernel, or
-// a sample darksub marked without a reading). Throws InputError for no planes or planes of
-// another type or size.
+// (a saturated sample), or NaN within 2 pixels of such a pixel (saturated samples of opposite
+// signs in a demosaicking kernel); a NaN elsewhere (demosaic25's mixed-pixel mark, a sample
+// darksub left without a value) is not light that saturated. Throws InputError for no planes or
+// planes of another type or size.
 cv::Mat saturated_band_mask(const std::vector<cv::Mat>& planes);
 // The same from a dark-subtracted mosaic (CV_32F) that is demosaicked into pixels of its own
 // size: the pixels within `radius` samples (a square, the kernels' reach) of a +INF or NaN one.
