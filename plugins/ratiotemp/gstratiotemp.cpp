@@ -532,6 +532,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         }
       });
   if (!ok) return GST_FLOW_ERROR;
+  if (gap) GST_BUFFER_FLAG_SET(outbuf, GST_BUFFER_FLAG_GAP);  // still no image downstream
   rt::warn_when_readings_misfit(self, st, st.estimators->estimator(st.method));
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not describe the stream in tags",
                        [&] { push_recording_tags(self, settings); }))

@@ -542,4 +542,6 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
 static void gst_thermal_colormap_init(GstThermalColormap* self) {
   self->settings = new Settings();
   self->state = new State();
+  // A frame without an image (GAP: darksub capturing a dark) stays one when coloured.
+  gst_base_transform_set_gap_aware(GST_BASE_TRANSFORM(self), TRUE);
 }

@@ -178,12 +178,14 @@ class RatioTemp : public HarnessTest {
     element = find_element(h, "ratiotemp");
     gst_harness_set_src_caps_str(h, caps.c_str());
   }
+  bool last_gap = false;  // whether run's output frame was flagged GAP (no image)
   // Pushes one frame of band planes (or raw bytes) and returns the output codes.
   template <typename T>
   std::vector<std::uint16_t> run(const std::vector<T>& input, int w, int height,
                                  GstClockTime pts = GST_CLOCK_TIME_NONE) {
     GstBuffer* out = push_pull_buffer(h, with_pts(buffer_from(input), pts));
     if (!out) return {};
+    last_gap = GST_BUFFER_FLAG_IS_SET(out, GST_BUFFER_FLAG_GAP);
     auto v = gray16_of(out, w, height);
     gst_buffer_unref(out);
     return v;

@@ -133,7 +133,9 @@ TEST_F(SaturatedStats, matched_on_the_fused_path) { check("demosaic25", 2); }
 
 // While darksub captures a dark its frames have no image (NaN, flagged GAP): ratiotemp gives them
 // no reading and no statistics, and does not call them saturated (it did: every pixel, with
-// advice to shorten the exposure). The frames after the capture are measured as usual.
+// advice to shorten the exposure); its output keeps the GAP flag (it dropped it: a recording or
+// thermalfuse took the empty frame for one without readings). The frames after the capture are
+// measured as usual.
 class DarkCaptureStats : public RatioTemp {
  protected:
   void check(const std::string& demosaic) {
@@ -148,12 +150,14 @@ class DarkCaptureStats : public RatioTemp {
       const auto out = run(capped, 8, 8, k * GST_SECOND);
       ASSERT_EQ(out.size(), 64u);
       EXPECT_EQ(std::count(out.begin(), out.end(), 0), 64) << "a capture frame read";
+      EXPECT_TRUE(last_gap) << "a capture frame lost its GAP flag";
     }
     auto s = stats();
     EXPECT_TRUE(s.empty()) << "statistics of a capture frame";
     free_all(s);
     EXPECT_TRUE(warnings.empty()) << warnings.front();
     run(raw_bayer_frame(*rgb_model(), 1300), 8, 8, 2 * GST_SECOND);
+    EXPECT_FALSE(last_gap);
     s = stats();
     ASSERT_EQ(s.size(), 1u);
     EXPECT_EQ(field_uint64(s[0], "saturated"), 0u);

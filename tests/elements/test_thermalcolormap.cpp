@@ -73,6 +73,21 @@ TEST_F(ThermalColormap, fixed_range_rgba_matches_the_library_with_transparent_in
   EXPECT_NE(caps.find("format=(string)RGBA"), std::string::npos) << caps;
 }
 
+// A frame without an image (GAP: darksub capturing a dark) stays flagged when coloured, and the
+// next frame with one is not: the base class clears the flag for elements that do not say they
+// keep it, and a recorder downstream took the empty frame for one of a cold scene.
+TEST_F(ThermalColormap, keeps_the_gap_flag) {
+  start("thermalcolormap", nullptr);
+  for (bool gap : {true, false}) {
+    GstBuffer* in = buffer_from(kCodes);
+    if (gap) GST_BUFFER_FLAG_SET(in, GST_BUFFER_FLAG_GAP);
+    GstBuffer* out = push_pull_buffer(h, in);
+    ASSERT_NE(out, nullptr);
+    EXPECT_EQ(GST_BUFFER_FLAG_IS_SET(out, GST_BUFFER_FLAG_GAP), gap);
+    gst_buffer_unref(out);
+  }
+}
+
 TEST_F(ThermalColormap, bgra_output_and_palette_change_while_playing) {
   start("thermalcolormap range-mode=fixed min-temperature=1000 max-temperature=1800", "BGRA");
   ColormapSettings s;
