@@ -242,6 +242,14 @@ GParamSpec* bracket_frames_param(guint default_frames) {
                                                     GST_PARAM_MUTABLE_PLAYING));
 }
 
+void warn_not_changeable_while_running(GstElement* element, const char* property) {
+  GST_ELEMENT_WARNING(element, RESOURCE, SETTINGS,
+                      ("%s: %s can change only in the NULL or READY state; the change is "
+                       "ignored and the current value stays",
+                       GST_OBJECT_NAME(element), property),
+                      ("%s set while running", property));
+}
+
 void warn_frame_without_exposure(GstElement* element, bool& warned) {
   if (warned) return;
   warned = true;

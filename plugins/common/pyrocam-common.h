@@ -138,6 +138,11 @@ GParamSpec* bracket_frames_param(guint default_frames);
 /* The STREAM FORMAT warning of a bracket fusion that passed a frame without
  * PyrocamExposureMeta on unfused: once, when `warned` is false (it is then set). */
 void warn_frame_without_exposure(GstElement* element, bool& warned);
+
+/* A property set while the element runs that can change only in NULL or READY: a RESOURCE
+ * SETTINGS warning on the bus naming the element and the property (the value stays), so that an
+ * application learns it, not only the debug log. Call without the object's lock held. */
+void warn_not_changeable_while_running(GstElement* element, const char* property);
 /* Whether a bracket fusion's frame came earlier than the one before it (its PTS is before
  * `last_pts`, which is then set to it): frames out of time order would be fused as if the
  * earlier were the later, so the fusion starts anew with this frame, with one STREAM FORMAT

@@ -71,13 +71,14 @@ void install_properties(GObjectClass* gobject_class) {
 
 void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpec* pspec) {
   GstDarkSub* self = GST_DARK_SUB(object);
+  bool location_refused = false;  // posted once the lock is released
   {
     ObjectLock lock(self);
     Settings& s = *self->settings;
     switch (prop_id) {
       case PROP_LOCATION:
         if (GST_STATE(self) > GST_STATE_READY) {
-          GST_WARNING_OBJECT(self, "location can only change in NULL or READY");
+          location_refused = true;
         } else {
           const char* v = g_value_get_string(value);
           s.location = v ? v : "";
@@ -103,6 +104,8 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
         break;
     }
   }
+  if (location_refused)
+    pyrocam::gst::warn_not_changeable_while_running(GST_ELEMENT(self), "location");
   /* The saturation level is in the output caps: renegotiate, so that ratiotemp sees it. */
   if (prop_id == PROP_SATURATION_LEVEL)
     gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));

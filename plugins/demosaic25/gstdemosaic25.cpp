@@ -331,6 +331,7 @@ static void gst_demosaic25_set_property(GObject* object, guint prop_id, const GV
                                         GParamSpec* pspec) {
   GstDemosaic25* self = GST_DEMOSAIC25(object);
   bool reconfigure = false;
+  const char* refused_while_running = nullptr;  // posted once the lock is released
   {
     pg::ObjectLock lock(self);
     Settings& s = *self->settings;
@@ -338,7 +339,7 @@ static void gst_demosaic25_set_property(GObject* object, guint prop_id, const GV
     switch (prop_id) {
       case PROP_METHOD:
         if (running)
-          GST_WARNING_OBJECT(self, "method can only change in NULL or READY");
+          refused_while_running = "method";
         else
           s.method = static_cast<GstDemosaic25Method>(g_value_get_enum(value));
         break;
@@ -351,7 +352,7 @@ static void gst_demosaic25_set_property(GObject* object, guint prop_id, const GV
       }
       case PROP_PROFILE:
         if (running) {
-          GST_WARNING_OBJECT(self, "profile can only change in NULL or READY");
+          refused_while_running = "profile";
         } else {
           const char* v = g_value_get_string(value);
           s.profile = v ? v : "";
@@ -362,6 +363,8 @@ static void gst_demosaic25_set_property(GObject* object, guint prop_id, const GV
         break;
     }
   }
+  if (refused_while_running)
+    pg::warn_not_changeable_while_running(GST_ELEMENT(self), refused_while_running);
   if (reconfigure) gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));
 }
 

@@ -392,59 +392,64 @@ static void gst_pyrocam_src_set_property(GObject* object, guint prop_id, const G
     gst_base_src_set_live(GST_BASE_SRC(self), g_value_get_boolean(value));
     return;
   }
-  pg::ObjectLock lock(self);
-  Settings& s = *self->settings;
-  const bool running = GST_STATE(self) > GST_STATE_READY;
-  switch (prop_id) {
-    case PROP_SCENE:
-      s.scene = static_cast<GstPyrocamSrcScene>(g_value_get_enum(value));
-      break;
-    case PROP_PROFILE:
-      if (running) {
-        GST_WARNING_OBJECT(self, "profile can only change in NULL or READY");
-      } else {
+  const char* refused_while_running = nullptr;  // posted once the lock is released
+  {
+    pg::ObjectLock lock(self);
+    Settings& s = *self->settings;
+    const bool running = GST_STATE(self) > GST_STATE_READY;
+    switch (prop_id) {
+      case PROP_SCENE:
+        s.scene = static_cast<GstPyrocamSrcScene>(g_value_get_enum(value));
+        break;
+      case PROP_PROFILE:
+        if (running) {
+          refused_while_running = "profile";
+        } else {
+          const char* v = g_value_get_string(value);
+          s.profile = v && *v ? v : DEFAULT_PROFILE;
+        }
+        break;
+      case PROP_UNIT:
+        if (running)
+          refused_while_running = "unit";
+        else
+          s.unit = static_cast<GstPyrocamSrcUnit>(g_value_get_enum(value));
+        break;
+      case PROP_EXPOSURE:
+        s.exposure_us = g_value_get_double(value);
+        break;
+      case PROP_GAIN:
+        s.gain_db = g_value_get_double(value);
+        break;
+      case PROP_TEMPERATURE:
+        s.temperature_c = g_value_get_double(value);
+        break;
+      case PROP_SEED:
+        if (running)
+          refused_while_running = "seed";
+        else
+          s.seed = g_value_get_uint64(value);
+        break;
+      case PROP_BRACKET: {
         const char* v = g_value_get_string(value);
-        s.profile = v && *v ? v : DEFAULT_PROFILE;
+        s.bracket_text = v ? v : "";
+        try {
+          s.bracket = pyrocam::parse_bracket(s.bracket_text);
+          s.bracket_valid = true;
+        } catch (const std::exception& e) {
+          // Playing: the last good bracket stays; else start() refuses to run.
+          GST_WARNING_OBJECT(self, "%s", e.what());
+          s.bracket_valid = running;
+        }
+        break;
       }
-      break;
-    case PROP_UNIT:
-      if (running)
-        GST_WARNING_OBJECT(self, "unit can only change in NULL or READY");
-      else
-        s.unit = static_cast<GstPyrocamSrcUnit>(g_value_get_enum(value));
-      break;
-    case PROP_EXPOSURE:
-      s.exposure_us = g_value_get_double(value);
-      break;
-    case PROP_GAIN:
-      s.gain_db = g_value_get_double(value);
-      break;
-    case PROP_TEMPERATURE:
-      s.temperature_c = g_value_get_double(value);
-      break;
-    case PROP_SEED:
-      if (running)
-        GST_WARNING_OBJECT(self, "seed can only change in NULL or READY");
-      else
-        s.seed = g_value_get_uint64(value);
-      break;
-    case PROP_BRACKET: {
-      const char* v = g_value_get_string(value);
-      s.bracket_text = v ? v : "";
-      try {
-        s.bracket = pyrocam::parse_bracket(s.bracket_text);
-        s.bracket_valid = true;
-      } catch (const std::exception& e) {
-        // Playing: the last good bracket stays; else start() refuses to run.
-        GST_WARNING_OBJECT(self, "%s", e.what());
-        s.bracket_valid = running;
-      }
-      break;
+      default:
+        G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+        break;
     }
-    default:
-      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
-      break;
   }
+  if (refused_while_running)
+    pg::warn_not_changeable_while_running(GST_ELEMENT(self), refused_while_running);
 }
 
 static void gst_pyrocam_src_get_property(GObject* object, guint prop_id, GValue* value,

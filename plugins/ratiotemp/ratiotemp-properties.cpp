@@ -177,99 +177,104 @@ void install_properties(GObjectClass* gobject_class) {
 
 void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpec* pspec) {
   GstRatioTemp* self = GST_RATIO_TEMP(object);
-  ObjectLock lock(self);
-  Settings& s = *self->settings;
-  const bool running = GST_STATE(self) > GST_STATE_READY;
-  switch (prop_id) {
-    case PROP_MODEL:
-      if (running) {
-        GST_WARNING_OBJECT(self, "model can only change in NULL or READY");
-      } else {
+  const char* refused_while_running = nullptr;  // posted once the lock is released
+  {
+    ObjectLock lock(self);
+    Settings& s = *self->settings;
+    const bool running = GST_STATE(self) > GST_STATE_READY;
+    switch (prop_id) {
+      case PROP_MODEL:
+        if (running) {
+          refused_while_running = "model";
+        } else {
+          const char* v = g_value_get_string(value);
+          s.model = v ? v : "";
+        }
+        break;
+      case PROP_REGION_TRACKS_PEAK:
+        s.region_tracks_peak = g_value_get_boolean(value);
+        break;
+      case PROP_TABLE_CACHE:
+        if (running) {
+          refused_while_running = "table-cache";
+        } else {
+          const char* v = g_value_get_string(value);
+          s.table_cache_set = v != nullptr;
+          s.table_cache = v ? v : "";
+        }
+        break;
+      case PROP_METHOD:
+        s.method = static_cast<GstRatioTempMethod>(g_value_get_enum(value));
+        break;
+      case PROP_OUTPUT:
+        if (running)
+          refused_while_running = "output";
+        else
+          s.output = static_cast<GstRatioTempOutput>(g_value_get_enum(value));
+        break;
+      case PROP_STATS_INTERVAL:
+        s.stats_interval = g_value_get_uint64(value);
+        break;
+      case PROP_ALLOW_PARTIAL:
+        s.allow_partial = g_value_get_boolean(value);
+        break;
+      case PROP_PARTIAL_BANDS:
+        s.partial_bands = static_cast<GstRatioTempPartial>(g_value_get_enum(value));
+        break;
+      case PROP_MISFIT_PROBABILITY:
+        s.misfit_probability = g_value_get_double(value);
+        break;
+      case PROP_BLUR_CORRECTION:
+        s.blur_correction = g_value_get_boolean(value);
+        break;
+      case PROP_BRIGHTNESS_RADIUS:
+        s.brightness_radius = g_value_get_uint(value);
+        break;
+      case PROP_E_SLOPE:
+      case PROP_E_SLOPE_UNCERTAINTY: {
+        const double v = g_value_get_double(value);  // NaN passes the GParamSpec's range check
+        double& to = prop_id == PROP_E_SLOPE ? s.e_slope : s.e_slope_uncertainty;
+        if (std::isnan(v)) {
+          s.refused = std::string(pspec->name) + " NaN refused; keeping " + std::to_string(to);
+          GST_WARNING_OBJECT(self, "%s", s.refused.c_str());
+        } else {
+          to = v;
+          if (s.refused.rfind(std::string(pspec->name) + " ", 0) == 0) s.refused.clear();
+        }
+        break;
+      }
+      case PROP_PEAK_WINDOW: {
+        const guint v = g_value_get_uint(value);
+        if (v % 2 == 0 && v != 0) {
+          s.refused = "peak-window " + std::to_string(v) +
+                      " is even (a window needs a centre "
+                      "pixel); keeping " +
+                      std::to_string(s.peak_window);
+          GST_WARNING_OBJECT(self, "%s", s.refused.c_str());
+        } else {
+          s.peak_window = v;
+          s.peak_window_set = true;
+          if (s.refused.rfind("peak-window ", 0) == 0) s.refused.clear();
+        }
+        break;
+      }
+      case PROP_REGION: {
         const char* v = g_value_get_string(value);
-        s.model = v ? v : "";
+        s.region_text = v ? v : "";
+        s.region = Region();
+        s.region_valid = s.region_text.empty() || parse_region(s.region_text, &s.region);
+        ++s.region_serial;
+        if (!s.region_valid)
+          GST_WARNING_OBJECT(self, "region '%s' is not x,y,width,height", s.region_text.c_str());
+        break;
       }
-      break;
-    case PROP_REGION_TRACKS_PEAK:
-      s.region_tracks_peak = g_value_get_boolean(value);
-      break;
-    case PROP_TABLE_CACHE:
-      if (running) {
-        GST_WARNING_OBJECT(self, "table-cache can only change in NULL or READY");
-      } else {
-        const char* v = g_value_get_string(value);
-        s.table_cache_set = v != nullptr;
-        s.table_cache = v ? v : "";
-      }
-      break;
-    case PROP_METHOD:
-      s.method = static_cast<GstRatioTempMethod>(g_value_get_enum(value));
-      break;
-    case PROP_OUTPUT:
-      if (running)
-        GST_WARNING_OBJECT(self, "output can only change in NULL or READY");
-      else
-        s.output = static_cast<GstRatioTempOutput>(g_value_get_enum(value));
-      break;
-    case PROP_STATS_INTERVAL:
-      s.stats_interval = g_value_get_uint64(value);
-      break;
-    case PROP_ALLOW_PARTIAL:
-      s.allow_partial = g_value_get_boolean(value);
-      break;
-    case PROP_PARTIAL_BANDS:
-      s.partial_bands = static_cast<GstRatioTempPartial>(g_value_get_enum(value));
-      break;
-    case PROP_MISFIT_PROBABILITY:
-      s.misfit_probability = g_value_get_double(value);
-      break;
-    case PROP_BLUR_CORRECTION:
-      s.blur_correction = g_value_get_boolean(value);
-      break;
-    case PROP_BRIGHTNESS_RADIUS:
-      s.brightness_radius = g_value_get_uint(value);
-      break;
-    case PROP_E_SLOPE:
-    case PROP_E_SLOPE_UNCERTAINTY: {
-      const double v = g_value_get_double(value);  // NaN passes the GParamSpec's range check
-      double& to = prop_id == PROP_E_SLOPE ? s.e_slope : s.e_slope_uncertainty;
-      if (std::isnan(v)) {
-        s.refused = std::string(pspec->name) + " NaN refused; keeping " + std::to_string(to);
-        GST_WARNING_OBJECT(self, "%s", s.refused.c_str());
-      } else {
-        to = v;
-        if (s.refused.rfind(std::string(pspec->name) + " ", 0) == 0) s.refused.clear();
-      }
-      break;
+      default:
+        G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+        break;
     }
-    case PROP_PEAK_WINDOW: {
-      const guint v = g_value_get_uint(value);
-      if (v % 2 == 0 && v != 0) {
-        s.refused = "peak-window " + std::to_string(v) +
-                    " is even (a window needs a centre "
-                    "pixel); keeping " +
-                    std::to_string(s.peak_window);
-        GST_WARNING_OBJECT(self, "%s", s.refused.c_str());
-      } else {
-        s.peak_window = v;
-        s.peak_window_set = true;
-        if (s.refused.rfind("peak-window ", 0) == 0) s.refused.clear();
-      }
-      break;
-    }
-    case PROP_REGION: {
-      const char* v = g_value_get_string(value);
-      s.region_text = v ? v : "";
-      s.region = Region();
-      s.region_valid = s.region_text.empty() || parse_region(s.region_text, &s.region);
-      ++s.region_serial;
-      if (!s.region_valid)
-        GST_WARNING_OBJECT(self, "region '%s' is not x,y,width,height", s.region_text.c_str());
-      break;
-    }
-    default:
-      G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
-      break;
   }
+  if (refused_while_running)
+    pyrocam::gst::warn_not_changeable_while_running(GST_ELEMENT(self), refused_while_running);
 }
 
 void get_property(GObject* object, guint prop_id, GValue* value, GParamSpec* pspec) {

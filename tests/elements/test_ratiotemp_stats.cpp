@@ -69,9 +69,10 @@ TEST_F(RatioTemp, stats_message_matches_region_stats_of_the_frame) {
     expect_stats(m, "region-", reg);
     // The median is reported apart from the mean.
     EXPECT_NE(field_double(m, "median-c"), field_double(m, "mean-c"));
-    // Both pixels without a reading have bands without a value from the camera (saturated).
-    EXPECT_EQ(field_uint64(m, "saturated"), 2u);
-    EXPECT_EQ(field_uint64(m, "region-saturated"), 1u);  // (5, 4); (0, 0) is outside
+    // Of the two pixels without a reading, (0, 0) saturated (+INF); (5, 4)'s NaN lies more than
+    // 2 pixels from any saturated pixel (a mixed pixel's mark, not light that saturated).
+    EXPECT_EQ(field_uint64(m, "saturated"), 1u);
+    EXPECT_EQ(field_uint64(m, "region-saturated"), 0u);  // (0, 0) is outside
   }
   free_all(s);
   // A frame without any reading: counts, fraction 0, no temperatures.
@@ -168,6 +169,27 @@ class DarkCaptureStats : public RatioTemp {
 
 TEST_F(DarkCaptureStats, bilinear_planes) { check("demosaic25 method=bilinear"); }
 TEST_F(DarkCaptureStats, matched_on_the_fused_path) { check("demosaic25"); }
+
+// The model, output and table-cache can change only in NULL or READY: set while playing, the
+// change is refused on the bus (it was only in the debug log, and an application never learnt
+// it) and readings go on with the model in use.
+TEST_F(RatioTemp, a_model_set_while_playing_is_refused_on_the_bus) {
+  start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 4));
+  const auto planes = graybody_planes(*rgb_model(), 4, 4, 1000, 1400);
+  const auto expected = library_codes(rgb_model(), rgb_auto_method(), planes, 4, 4);
+  EXPECT_EQ(run(planes, 4, 4, 0), expected);
+  g_object_set(element, "model", nir_model_path().c_str(), nullptr);
+  auto collected = stats();  // collects the warnings
+  free_all(collected);
+  ASSERT_EQ(warnings.size(), 1u);
+  for (const char* part : {"model", "NULL or READY", "ignored"})
+    EXPECT_NE(warnings[0].find(part), std::string::npos) << warnings[0];
+  gchar* model = nullptr;
+  g_object_get(element, "model", &model, nullptr);
+  EXPECT_EQ(std::string(model), rgb_model_path());
+  g_free(model);
+  EXPECT_EQ(run(planes, 4, 4, GST_SECOND), expected);
+}
 
 TEST_F(RatioTemp, survives_flush_and_eos) {
   start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 4));
