@@ -237,6 +237,8 @@ static GstFlowReturn gst_thermal_alarm_transform_frame_ip(GstVideoFilter* filter
       return GST_FLOW_ERROR;
     st.serial = settings.serial;
   }
+  // A frame without an image (GAP: darksub capturing a dark) tells nothing either way.
+  if (GST_BUFFER_FLAG_IS_SET(frame->buffer, GST_BUFFER_FLAG_GAP)) return GST_FLOW_OK;
   const bool off = !(settings.threshold_c > THRESHOLD_OFF);
   if (off) {
     if (st.monitor.update(NAN) != pyrocam::AlarmChange::kNone)

@@ -138,6 +138,13 @@ static GstFlowReturn gst_thermal_fuse_transform_frame_ip(GstVideoFilter* filter,
     st.fusion = std::make_unique<pyrocam::BracketFusion>(frames);
     st.held.clear();
   }
+  // A frame without an image (GAP: darksub capturing a dark) passes as it is, with no reading,
+  // and the fusion starts anew after it: fused with earlier frames it showed their readings.
+  if (GST_BUFFER_FLAG_IS_SET(frame->buffer, GST_BUFFER_FLAG_GAP)) {
+    st.fusion->reset();
+    st.held.clear();
+    return GST_FLOW_OK;
+  }
   if (pg::frame_out_of_time_order(GST_ELEMENT(self), frame->buffer, st.last_pts,
                                   st.warned_out_of_order)) {
     st.fusion->reset();

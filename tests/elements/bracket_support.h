@@ -65,6 +65,30 @@ struct FrameBackInTime {
   }
 };
 
+// Makes the nth buffer into `element` a frame without an image, as ratiotemp passes on
+// darksub's while it captures a dark: no reading anywhere (16-bit codes 0), flagged GAP.
+struct GapFrame {
+  int nth;
+  int seen = 0;
+  void probe(GstElement* pipeline, const char* element) {
+    GstElement* e = gst_bin_get_by_name(GST_BIN(pipeline), element);
+    GstPad* pad = gst_element_get_static_pad(e, "sink");
+    gst_pad_add_probe(pad, GST_PAD_PROBE_TYPE_BUFFER, on_buffer, this, nullptr);
+    gst_object_unref(pad);
+    gst_object_unref(e);
+  }
+  static GstPadProbeReturn on_buffer(GstPad*, GstPadProbeInfo* info, gpointer data) {
+    auto* self = static_cast<GapFrame*>(data);
+    if (++self->seen == self->nth) {
+      GstBuffer* b = gst_buffer_make_writable(GST_PAD_PROBE_INFO_BUFFER(info));
+      gst_buffer_memset(b, 0, 0, gst_buffer_get_size(b));
+      GST_BUFFER_FLAG_SET(b, GST_BUFFER_FLAG_GAP);
+      GST_PAD_PROBE_INFO_DATA(info) = b;
+    }
+    return GST_PAD_PROBE_OK;
+  }
+};
+
 // `prepare`, where given, sees the pipeline before it plays (to add probes).
 template <typename T>
 BracketRun<T> run_bracket(const std::string& launch,

@@ -37,11 +37,13 @@ class ThermalAlarm : public HarnessTest {
   // messages it caused.
   // `saturated`: a PyrocamSaturationMeta naming that rectangle of a mosaic `scale` times this
   // size (1: a colour camera; 5: a 5x5 one, one temperature per 5x5 macro-pixel).
+  // `gap`: flagged GAP, a frame without an image (darksub capturing a dark).
   std::vector<GstStructure*> push(const std::vector<std::uint16_t>& codes,
                                   const cv::Rect& saturated = {}, int scale = 1,
-                                  const std::vector<cv::Point>& spots = {}) {
+                                  const std::vector<cv::Point>& spots = {}, bool gap = false) {
     const GstClockTime pts = gst_util_uint64_scale(n_++, GST_SECOND, 30);
     GstBuffer* in = with_pts(buffer_from(codes), pts);
+    if (gap) GST_BUFFER_FLAG_SET(in, GST_BUFFER_FLAG_GAP);
     if (!saturated.empty())
       add_saturation_meta(in, static_cast<guint64>(saturated.area()),
                           cv::Rect(scale * saturated.x, scale * saturated.y,
@@ -175,6 +177,25 @@ std::vector<std::uint16_t> with_hole(std::vector<std::uint16_t> v, int cx, int c
   for (int y = std::max(0, cy - r); y <= std::min(kH - 1, cy + r); ++y)
     for (int x = std::max(0, cx - r); x <= std::min(kW - 1, cx + r); ++x) v[y * kW + x] = 0;
   return v;
+}
+
+// A frame without an image (GAP) tells nothing, whatever it carries: a saturation meta that
+// would raise the alarm on a frame of the camera's does not, and the run of frames above the
+// threshold goes on across it.
+TEST_F(ThermalAlarm, FramesWithoutAnImageAreSkipped) {
+  start("thermalalarm threshold-c=1500 frames=2 statistic=peak region=4,3,6,6");
+  const auto hot = frame(900, 1600), cored = with_hole(frame(900, 1400), 6, 5, 2);
+  const cv::Rect core(6, 5, 1, 1);
+  for (int k = 0; k < 3; ++k) {
+    auto m = push(cored, core, 1, {}, true);
+    EXPECT_TRUE(m.empty()) << "a frame without an image changed the alarm";
+    for (GstStructure* st : m) gst_structure_free(st);
+  }
+  EXPECT_EQ(states({hot}), ".");
+  auto m = push(hot, {}, 1, {}, true);  // between two frames above the threshold
+  EXPECT_TRUE(m.empty());
+  for (GstStructure* st : m) gst_structure_free(st);
+  EXPECT_EQ(states({hot}), "r");
 }
 
 // A saturated core reads nothing, and the rim's readings are below the object: frames whose

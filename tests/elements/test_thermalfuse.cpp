@@ -125,6 +125,28 @@ TEST(ThermalFuse, AFrameOutOfTimeOrderStartsTheFusionAnewWithOneWarning) {
   EXPECT_NE(fused.frames[5].values, expected_fusion(plain, 3, 5));
 }
 
+// A frame without an image (GAP: darksub capturing a dark) passes with no reading, and the
+// fusion starts anew after it: fused with the frames before, it showed their readings (20 of a
+// pool's pixels after a dark capture began).
+TEST(ThermalFuse, AFrameWithoutAnImageHasNoReadingAndStartsTheFusionAnew) {
+  REQUIRE_ELEMENT("thermalfuse");
+  GapFrame sixth{6};
+  const FuseRun plain = run(chain("thermalfuse frames=1")),
+                fused = run(chain("thermalfuse name=fuse frames=3"),
+                            [&](GstElement*pipeline) { sixth.probe(pipeline, "fuse"); });
+  ASSERT_TRUE(plain.eos && fused.eos);
+  ASSERT_EQ(fused.frames.size(), 9u);
+  EXPECT_TRUE(fused.warnings.empty());
+  const std::vector<std::uint16_t> none(fused.frames[5].values.size(), 0);
+  EXPECT_EQ(fused.frames[5].values, none);
+  for (std::size_t k = 0; k < 9; ++k) {
+    if (k == 5) continue;
+    const std::size_t first = k < 5 ? (k >= 2 ? k - 2 : 0) : std::max<std::size_t>(6, k - 2);
+    EXPECT_EQ(fused.frames[k].values, expected_fusion(plain, first, k)) << "frame " << k;
+  }
+  EXPECT_NE(expected_fusion(plain, 3, 5), none);  // what fusing across it gave
+}
+
 TEST(ThermalFuse, ABadBracketStopsTheCameraWithAClearError) {
   REQUIRE_ELEMENT("pyrocamsrc");
   const BusResult r = run_pipeline("pyrocamsrc bracket=1,zero num-buffers=2 ! fakesink name=sink");
