@@ -378,15 +378,23 @@ static gboolean gst_dark_sub_sink_event(GstBaseTransform* trans, GstEvent* event
  * Every 16th row of cells (every 4th took 3 % of the colour chain's CPU), a row further on in
  * each frame (a 5x5 mosaic's cells lie inside a body in one row of its period only), over frames
  * until enough lit ones. */
-static void check_bayer_phase(GstDarkSub* self, State& st, const cv::Mat& signal) {
+static void check_bayer_phase(GstDarkSub* self, State& st, const cv::Mat& signal,
+                              GstBuffer* buffer) {
   constexpr int kCellRowStep = 16;
   constexpr std::size_t kCells = 256;
   if (st.phase_warned || st.pattern == PYROCAM_SNAPSHOT_PATTERN_NAME) return;
   const float lit_dn =
       std::max(4.0f, 0.02f * static_cast<float>(pyrocam::full_scale_dn(st.bit_depth)));
   const float bright_dn = 0.2f * static_cast<float>(pyrocam::full_scale_dn(st.bit_depth));
+  // No camera profile here: the noise of a sensor whose full well is 5000 electrons (less than
+  // most industrial sensors') at the frame's analogue gain (0 dB without exposure metadata: a
+  // camera at a high gain may then be warned about wrongly), with a read noise of 1 DN.
+  const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(buffer);
+  const double gain = pyrocam::analogue_gain_factor(meta ? meta->gain_db : 0.0);
+  const pyrocam::SignalNoise noise{
+      gain * static_cast<double>(pyrocam::full_scale_dn(st.bit_depth)) / 5000, 2.0};
   pyrocam::add_bayer_cell_sums(signal, lit_dn, bright_dn, st.phase_first_cell_row, kCellRowStep,
-                               st.phase_sums);
+                               noise, st.phase_sums);
   st.phase_first_cell_row = (st.phase_first_cell_row + 1) % kCellRowStep;
   if (st.phase_sums.cells < kCells) return;
   GST_DEBUG_OBJECT(self,
@@ -502,7 +510,7 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
     const cv::Rect& box = saturated.bounds;
     pyrocam_buffer_set_saturation_meta(outbuf, saturated.count, box.x, box.y, box.width, box.height,
                                        st.format.width, st.format.height, saturated.tiles.data());
-    check_bayer_phase(self, st, out.image());
+    check_bayer_phase(self, st, out.image(), inbuf);
   });
   return ok ? ret : GST_FLOW_ERROR;
 }

@@ -220,7 +220,7 @@ cv::Mat DarkAccumulator::mean() const {
 }
 
 void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, int first_cell_row,
-                         int cell_row_step, BayerCellSums& sums) {
+                         int cell_row_step, const SignalNoise& noise, BayerCellSums& sums) {
   if (signal.type() != CV_32F) throw InputError("Bayer cell sums: the mosaic must be CV_32F");
   if (cell_row_step < 1) throw InputError("Bayer cell sums: the row step must be at least 1");
   if (first_cell_row < 0 || first_cell_row >= cell_row_step)
@@ -258,7 +258,10 @@ void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, i
         const float mean = 0.5f * (pairs[k][0] + pairs[k][1]);
         if (!(mean >= bright_dn)) continue;
         ++sums.bright[k];
-        if (std::abs(pairs[k][0] - pairs[k][1]) > 0.12f * mean) ++sums.apart[k];
+        // The difference's variance: each sample's shot noise and floor.
+        const double variance = noise.shot_gain * 2 * mean + 2 * noise.floor_dn2;
+        if (std::abs(pairs[k][0] - pairs[k][1]) > 0.12 * mean + 2 * std::sqrt(variance))
+          ++sums.apart[k];
       }
     }
   }

@@ -195,10 +195,17 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
   planes_estimator_.set_dim_edge_mosaic(fused ? &source : nullptr);
   planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);
   if (options_.check_layout) {
-    if (layout_.kind == MosaicLayout::Kind::kBayer)
+    if (layout_.kind == MosaicLayout::Kind::kBayer) {
+      SignalNoise noisiest{0, 0};
+      for (int b = 0; b < profile.band_count(); ++b) {
+        const SignalNoise n = signal_noise(profile, b, analogue_gain_factor(options_.gain_db));
+        noisiest = {std::max(noisiest.shot_gain, n.shot_gain),
+                    std::max(noisiest.floor_dn2, n.floor_dn2)};
+      }
       add_bayer_cell_sums(signal, std::max(4.0f, 0.02f * static_cast<float>(profile.max_dn())),
                           0.2f * static_cast<float>(profile.max_dn()), 0, kPhaseCellRowStep,
-                          phase_sums_);
+                          noisiest, phase_sums_);
+    }
     const PlaneEstimator::FitAudit audit = planes_estimator_.take_fit_audit();
     audit_checked_ += audit.checked;
     audit_misfit_ += audit.misfit;

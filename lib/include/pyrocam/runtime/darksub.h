@@ -9,6 +9,8 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "pyrocam/core/noise_model.h"
+
 namespace pyrocam {
 
 // The largest raw value of a bit depth: 2^bits - 1.
@@ -61,7 +63,9 @@ SaturatedSamples find_saturated(const cv::Mat& signal);
 // unequally) of every `cell_row_step`-th row of cells from `first_cell_row` (0 to the step less
 // one), in a CV_32F dark-subtracted mosaic whose cells start at (0, 0); and per diagonal of the
 // cell, how many of those cells have the diagonal's two samples at least `bright_dn` on average,
-// and how many of these differ by more than 12 %. Adds to `sums`.
+// and how many of these differ by more than 12 % of their mean plus 2 standard deviations of
+// their difference's noise (`noise`, the noisiest band's: at a high analogue gain few electrons
+// make 20 % of full scale). Adds to `sums`.
 struct BayerCellSums {
   double at[2][2] = {};  // [row][column] in the cell
   std::size_t cells = 0;
@@ -69,7 +73,7 @@ struct BayerCellSums {
   std::size_t bright[2] = {}, apart[2] = {};
 };
 void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, int first_cell_row,
-                         int cell_row_step, BayerCellSums& sums);
+                         int cell_row_step, const SignalNoise& noise, BayerCellSums& sums);
 // Whether the sums say that the greens sit on the other diagonal of the cell than `pattern`
 // (rggb, bggr, grbg or gbrg) puts them: the pattern's two green places differ by more than 10 %
 // while the other two agree within 3 %. Samples behind one filter agree (a sensor's green
@@ -81,14 +85,15 @@ void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, i
 // pattern or sums that tell nothing.
 bool bayer_greens_elsewhere(const BayerCellSums& sums, const std::string& pattern);
 // Whether the sums say that the frames are no Bayer mosaic of `pattern`: in more than a quarter
-// of at least 64 bright cells, the two samples where the pattern puts its greens differ by more
-// than 12 %. Two samples behind one filter, a pixel apart inside a body, agree to their noise:
-// with `bright_dn` at 20 % of full scale and a full well of 2000 electrons (less than any
-// industrial sensor's) their difference has a standard deviation of at most 7 %, so 12 % is
-// 1.7 sigma and under 10 % of cells go beyond it. Neighbours on a snapshot mosaic (5x5: 25
-// filters, no two neighbours alike) differ by tens of percent: 63-100 % of cells on the
-// simulated cameras' plates at 700-2500 degC. Read as a Bayer mosaic, such frames give
-// temperatures that look right and are wrong. False for another pattern or too few cells.
+// of at least 64 bright cells, the two samples where the pattern puts its greens are apart (12 %
+// of their mean plus 2 noise standard deviations). Two samples behind one filter, a pixel apart
+// inside a body, differ by their noise and a sensor's green imbalance (a percent or two): a
+// cell is apart with the probability of normal noise beyond 2 sigma, 4.6 %, and more than a
+// quarter of 64 such cells then has a probability below 1e-6 (binomial). Neighbours on a snapshot
+// mosaic (5x5: 25 filters, no two neighbours alike) differ by tens of percent:
+// 63-100 % of cells on the simulated cameras' plates at 700-2500 degC. Read as a Bayer mosaic,
+// such frames give temperatures that look right and are wrong. False for another pattern or
+// too few cells.
 bool bayer_greens_disagree(const BayerCellSums& sums, const std::string& pattern);
 
 // Converts a dark image read from a file (CV_8U/CV_16U) to the CV_32F dark subtract_dark takes.
