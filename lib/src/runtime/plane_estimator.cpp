@@ -78,6 +78,7 @@ void PlaneEstimator::set_analogue_gain(double factor) {
   if (partial_fit_) partial_fit_->set_analogue_gain(factor);
   if (sloped_partial_fit_) sloped_partial_fit_->set_analogue_gain(factor);
   if (misfit_) misfit_->set_analogue_gain(factor);
+  if (above_) std::const_pointer_cast<AboveRangeCheck>(above_)->set_analogue_gain(factor);
   if (audit_) audit_->set_analogue_gain(factor);
   analogue_gain_ = factor;
 }
@@ -94,6 +95,59 @@ void PlaneEstimator::set_emissivity_slope(double alpha, double alpha_u) {
   }
   alpha_u_ = alpha_u;
   make_sloped_partial_fit();
+}
+
+void PlaneEstimator::set_above_range_check(bool on) {
+  if (!on) {
+    if (above_build_.valid()) above_build_.wait();  // not left running on a model going away
+    above_build_ = {};
+    above_.reset();
+    const std::lock_guard<std::mutex> lock(above_mutex_);
+    above_found_.clear();
+    return;
+  }
+  if (above_range_check()) return;
+  above_build_ = std::async(std::launch::async, [model = model_] {
+    return std::shared_ptr<const AboveRangeCheck>(std::make_shared<AboveRangeCheck>(model));
+  });
+}
+
+void PlaneEstimator::ready_above_range() const {
+  above_checked_.store(0, std::memory_order_relaxed);
+  if (!above_build_.valid()) return;
+  auto check = std::const_pointer_cast<AboveRangeCheck>(above_build_.get());  // rethrows
+  check->set_analogue_gain(analogue_gain_);
+  above_ = std::move(check);
+}
+
+std::vector<cv::Point> PlaneEstimator::take_above_range() const {
+  const std::lock_guard<std::mutex> lock(above_mutex_);
+  std::vector<cv::Point> found;
+  found.swap(above_found_);
+  return found;
+}
+
+void PlaneEstimator::above_range_row(const float* const* rows, std::size_t n, const float* out,
+                                     int x0, int y) const {
+  if (!above_) return;
+  const auto bands = static_cast<std::size_t>(model_->profile().band_count());
+  const double dim = model_->profile().thresholds.inference_dim_dn;
+  double s[kMaxBands];
+  std::vector<cv::Point> found;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isnan(out[i])) continue;
+    bool every_band_reads = true;
+    for (std::size_t b = 0; b < bands && every_band_reads; ++b) {
+      s[b] = rows[b][i];
+      every_band_reads = s[b] >= dim && std::isfinite(s[b]);
+    }
+    if (!every_band_reads) continue;
+    if (above_checked_.fetch_add(1, std::memory_order_relaxed) >= kAboveRangeBudget) break;
+    if (!std::isnan(above_->reading_above(s))) found.emplace_back(x0 + static_cast<int>(i), y);
+  }
+  if (found.empty()) return;
+  const std::lock_guard<std::mutex> lock(above_mutex_);
+  above_found_.insert(above_found_.end(), found.begin(), found.end());
 }
 
 PlaneEstimator::FitAudit PlaneEstimator::take_fit_audit(bool wait) const {
@@ -259,6 +313,7 @@ std::function<double(int, int, int, int)> PlaneEstimator::mosaic_window_mean_of(
 void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv::Mat* u) const {
   const int bands = model_->profile().band_count();
   const cv::Size size = checked_size(planes);
+  ready_above_range();
   t.create(size, CV_32F);
   if (u) u->create(size, CV_32F);
   const std::unique_ptr<const DimEdgeCheck> dim_edge = dim_edge_check(noise_);
@@ -277,6 +332,7 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
                             saturation_window, band_scratch, DimEdgeCheck::kSpan, every_band_reads);
       float* out = t.ptr<float>(y);
       estimate_row(row_ptrs.data(), static_cast<std::size_t>(size.width), out);
+      above_range_row(row_ptrs.data(), static_cast<std::size_t>(size.width), out, 0, y);
       if (dim_edge)
         dim_edge->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), out, 0, y,
                         window_mean);
@@ -290,6 +346,7 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
 void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat& codes) const {
   const int bands = model_->profile().band_count();
   const cv::Size size = checked_size(planes);
+  ready_above_range();
   codes.create(size, CV_16U);
   const std::unique_ptr<const DimEdgeCheck> dim_edge = dim_edge_check(noise_);
   const SaturationEdgeCheck saturation_edge = saturation_edge_check();
@@ -307,6 +364,7 @@ void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat&
       saturation_edge.apply(row_ptrs.data(), static_cast<std::size_t>(size.width), 0, y,
                             saturation_window, band_scratch, DimEdgeCheck::kSpan, every_band_reads);
       estimate_row(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data());
+      above_range_row(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data(), 0, y);
       if (dim_edge)
         dim_edge->apply(row_ptrs.data(), static_cast<std::size_t>(size.width), t.data(), 0, y,
                         window_mean);
@@ -355,6 +413,7 @@ void PlaneEstimator::for_each_strip(const MatchedMosaic& source, const LitRun& l
 
 void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* u) const {
   check_matched_mosaic(source);
+  ready_above_range();
   t.create(source.mosaic.size(), CV_32F);
   if (u) u->create(source.mosaic.size(), CV_32F);
   const DemosaicNoise noise = demosaic_noise(source.layout, DemosaicMethod::kMatched);
@@ -372,6 +431,7 @@ void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* 
                               every_band_reads);
         float* out = t.ptr<float>(y) + x0;
         estimate_row(rows, n, out);
+        above_range_row(rows, n, out, x0, y);
         if (dim_edge) dim_edge->apply(rows, n, out, x0, y, window_mean);
         if (u) uncertainty_row(rows, n, out, u->ptr<float>(y) + x0, x0, y, noise);
       },
@@ -383,6 +443,7 @@ void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* 
 
 void PlaneEstimator::estimate_codes(const MatchedMosaic& source, cv::Mat& codes) const {
   check_matched_mosaic(source);
+  ready_above_range();
   codes.create(source.mosaic.size(), CV_16U);
   const std::unique_ptr<const DimEdgeCheck> dim_edge =
       dim_edge_check(demosaic_noise(source.layout, DemosaicMethod::kMatched));
@@ -399,6 +460,7 @@ void PlaneEstimator::estimate_codes(const MatchedMosaic& source, cv::Mat& codes)
                               DimEdgeCheck::kSpan, every_band_reads);
         // The run's temperatures, encoded while they are in cache.
         estimate_row(rows, static_cast<std::size_t>(x1 - x0), t);
+        above_range_row(rows, static_cast<std::size_t>(x1 - x0), t, x0, y);
         if (dim_edge)
           dim_edge->apply(rows, static_cast<std::size_t>(x1 - x0), t, x0, y, window_mean);
         encode_temperature_row(t, codes.ptr<std::uint16_t>(y) + x0, x1 - x0);

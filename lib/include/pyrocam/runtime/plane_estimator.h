@@ -8,10 +8,12 @@
 #include <functional>
 #include <future>
 #include <memory>
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <vector>
 
 #include "pyrocam/core/mosaic.h"
+#include "pyrocam/runtime/above_range.h"
 #include "pyrocam/runtime/curvature_check.h"
 #include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/dim_edge.h"
@@ -113,6 +115,18 @@ class PlaneEstimator {
   // runs.
   void set_saturation_level(double raw_dn) { saturation_level_dn_ = raw_dn; }
 
+  // The above-range check (above_range.h) on the pixels the estimator leaves without a reading
+  // although every band reads: off by default. Turned on, it is built on a thread of its own
+  // (tens of ms; the first estimate after waits for it) and every estimate from then on collects
+  // the pixels it finds hotter than the model's range (with the grey fit, whatever the emissivity
+  // slope), which take_above_range() hands over: pixel positions of the planes (of the mosaic on
+  // the fused path), in no particular order. Costs nothing where every pixel with all its bands
+  // reads; about 0.5 us of CPU for each pixel checked, at most kAboveRangeBudget pixels an
+  // estimate (which of them then depends on the threads). Not while an estimate runs.
+  void set_above_range_check(bool on);
+  bool above_range_check() const { return above_build_.valid() || above_ != nullptr; }
+  std::vector<cv::Point> take_above_range() const;
+
   // How well the readings fit the model's band spectra, whatever the misfit setting: a few
   // readings of every kFitAuditRows-th row (run on the fused path) go through the band-consistency
   // check at kFitAuditProbability with kFitAuditModelError, and are counted. Most of them
@@ -204,6 +218,17 @@ class PlaneEstimator {
   };
   std::unique_ptr<AuditCounts> audit_counts_ = std::make_unique<AuditCounts>();
   std::size_t audit_rows_ = kFitAuditRows, audit_stride_ = kFitAuditStride;
+  // The above-range check, once built, and what it found since the last take_above_range.
+  mutable std::future<std::shared_ptr<const AboveRangeCheck>> above_build_;
+  mutable std::shared_ptr<const AboveRangeCheck> above_;
+  mutable std::mutex above_mutex_;
+  mutable std::vector<cv::Point> above_found_;
+  mutable std::atomic<std::size_t> above_checked_{0};  // this estimate's, up to kAboveRangeBudget
+  // Waits for the check's build (once) before an estimate's rows run; a new frame's budget.
+  void ready_above_range() const;
+  // The check on the readings `out` of the rows (n pixels from x0 of row y) that have none.
+  void above_range_row(const float* const* rows, std::size_t n, const float* out, int x0,
+                       int y) const;
   // Checks a few of the n readings `out` of the rows (signals as the reading saw them).
   void audit_row(const float* const* rows, std::size_t n, const float* out) const;
 };
