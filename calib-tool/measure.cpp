@@ -201,7 +201,7 @@ std::ofstream open_stats_csv(const std::string& out) {
   std::ofstream csv(std::filesystem::path(out) / "stats.csv");
   csv << "file,exposure_us,nominal_c,pixels,valid_fraction,min_c,max_c,mean_c,median_c,"
          "truth_pixels,truth_valid,truth_rms_c,truth_median_error_c,median_u_c,peak_c,peak_x,"
-         "peak_y,peak_lower_bound,truth_peak_c,truth_max_c,peak_error_c\n";
+         "peak_y,peak_lower_bound,truth_peak_c,truth_max_c,peak_error_c,above_range\n";
   return csv;
 }
 
@@ -276,10 +276,10 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
     cv::minMaxLoc(truth_c, nullptr, &truth_max_c);
     if (truth_max_c < 0) truth_max_c = NAN;
   }
-  // Pixels without a reading where light saturated a band may be the hottest: the peak read
-  // around them is then only a lower bound.
+  // Pixels without a reading where light saturated a band may be the hottest, and those hotter
+  // than the model's range are: the peak read around them is then only a lower bound.
   const FrameMeasurer::Unread unread = measurer.unread(t, cv::Mat());
-  const bool lower_bound = unread.saturated + unread.both > 0;
+  const bool lower_bound = unread.saturated + unread.both > 0 || measurer.above_range() > 0;
   csv << j.frame.filename().string() << "," << fmt(j.exposure_us) << "," << fmt(j.nominal_c) << ","
       << s.pixels << "," << fmt(s.valid_fraction) << "," << fmt(s.min_c) << "," << fmt(s.max_c)
       << "," << fmt(s.mean_c) << "," << fmt(s.median_c) << "," << ts.pixels << "," << ts.valid
@@ -288,7 +288,7 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
       << "," << (peak.found() ? std::to_string(peak.x) : "") << ","
       << (peak.found() ? std::to_string(peak.y) : "") << "," << (lower_bound ? "true" : "false")
       << "," << fmt(truth_peak.c) << "," << fmt(truth_max_c) << "," << fmt(peak.c - truth_peak.c)
-      << "\n";
+      << "," << measurer.above_range() << "\n";
 }
 
 // The whole subcommand once the arguments are checked.
@@ -487,8 +487,9 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       "per frame (and errors against truth/<stem>.png when the dataset has true temperatures;\n"
       "with --uncertainty, median_u_c: the expanded uncertainty (k=2) of the ROI's median;\n"
       "over the whole frame, peak_c, peak_x, peak_y as ratiotemp's peak-c, peak_lower_bound\n"
-      "where a pixel without a reading has a saturated band, and with true temperatures\n"
-      "truth_peak_c, truth_max_c and peak_error_c = peak_c - truth_peak_c).\n"
+      "where a pixel without a reading has a saturated band or is hotter than the model's\n"
+      "range, with true temperatures truth_peak_c, truth_max_c and peak_error_c = peak_c -\n"
+      "truth_peak_c, and above_range: pixels hotter than the model's range, as ratiotemp's).\n"
       "A raw frame does not say which mosaic it was taken through: --pattern names it, or\n"
       "the dataset's mosaic.txt (written by `pyrocam-calib simulate`): the model's kind of\n"
       "mosaic (a colour model reads any of the four Bayer patterns), else nothing is\n"

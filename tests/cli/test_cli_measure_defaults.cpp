@@ -137,7 +137,8 @@ TEST(CliMeasureDefaults, a_frame_that_reads_little_says_why) {
 // so it lies a few of those above the plate (17 degC here): 5 sd (40 degC) is passed by one of
 // 1 300 independent normal medians with probability 1300 x 2.9e-7 = 4e-4, and correlated ones
 // pass it less often; and it lies above the ROI's median reading. A plate whose every band
-// saturates has no peak, and a saturated band says the peak would be a lower bound.
+// saturates has no peak, and a saturated band says the peak would be a lower bound, as does a
+// plate hotter than the model's range.
 TEST(CliMeasureDefaults, stats_have_the_peak_and_the_truths) {
   const fs::path model = test_model("test-model-rgb.json");
   ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
@@ -162,6 +163,16 @@ TEST(CliMeasureDefaults, stats_have_the_peak_and_the_truths) {
   EXPECT_TRUE(bright.at("peak_error_c").empty());
   EXPECT_EQ(bright.at("peak_lower_bound"), "true");
   EXPECT_EQ(calib(base + q(dir / "good") + " --peak-window 4 --out " + q(dir / "even")), 2);
+  // A plate hotter than the model's range (3500 degC) reads nowhere: its pixels are counted as
+  // above it (a 23 x 23 plate, less those at its edge), and the peak is a lower bound.
+  EXPECT_EQ(good.at("above_range"), "0");
+  write_plate(dir / "hot", "rgb-reference", 1, 3800, 64);
+  ASSERT_EQ(calib(base + q(dir / "hot") + " --out " + q(dir / "hot-t")), 0);
+  const auto hot = first_stats_row(dir / "hot-t");
+  EXPECT_EQ(std::stod(hot.at("valid_fraction")), 0);
+  EXPECT_GE(std::stoi(hot.at("above_range")), 400);
+  EXPECT_LE(std::stoi(hot.at("above_range")), 64 * 64 * 36 / 100 + 100);
+  EXPECT_EQ(hot.at("peak_lower_bound"), "true");
 }
 
 TEST(CliMeasureDefaults, uncertainty_gives_the_rois_median_its_own) {

@@ -48,6 +48,7 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
   planes_estimator_.set_emissivity_slope(options.emissivity_slope, options.emissivity_slope_u);
   planes_estimator_.set_analogue_gain(analogue_gain_factor(options.gain_db));
   planes_estimator_.set_demosaic_noise(demosaic_noise(layout_, options.demosaic));
+  planes_estimator_.set_above_range_check(true);
   if (options.blur_correction) blur_correction_.emplace(*model_, options.demosaic);
   if (options.brightness_radius != 0) {
     if (layout_.kind != MosaicLayout::Kind::kBayer ||
@@ -194,6 +195,8 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
   } unset{planes_estimator_};
   planes_estimator_.set_dim_edge_mosaic(fused ? &source : nullptr);
   planes_estimator_.estimate(planes_, temperature_c, uncertainty_c);
+  above_range_ =
+      above_range_spots(planes_estimator_.take_above_range(), temperature_c.size()).count;
   if (options_.check_layout) {
     if (layout_.kind == MosaicLayout::Kind::kBayer) {
       SignalNoise noisiest{0, 0};

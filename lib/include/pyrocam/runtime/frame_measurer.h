@@ -72,6 +72,9 @@ class FrameMeasurer {
     long saturated = 0, dim = 0, both = 0;
   };
   Unread unread(const cv::Mat& temperature_c, const cv::Mat& mask) const;
+  // Pixels of the last frame measured without a reading because they are hotter than the
+  // model's range (PlaneEstimator's above-range check, kept where above_range_spots keeps them).
+  std::size_t above_range() const { return above_range_; }
   // The expanded uncertainty (the model's coverage factor k) of the median of the readings under
   // `mask` (as in unread), from the frame's temperatures and per-pixel expanded uncertainties
   // (measure's uncertainty_c): the systematic terms at the median (calibration, emissivity:
@@ -115,6 +118,7 @@ class FrameMeasurer {
   std::vector<cv::Mat> planes_;
   BayerCellSums phase_sums_;
   std::size_t audit_checked_ = 0, audit_misfit_ = 0;
+  std::size_t above_range_ = 0;
 };
 
 }  // namespace pyrocam
