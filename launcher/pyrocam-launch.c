@@ -56,13 +56,12 @@ static const char* const stats_columns[] = {
     "region-height", "region-pixels",  "region-valid",  "region-valid-fraction",
     "region-min-c",  "region-max-c",   "region-mean-c", "region-median-c",
     "region-peak-c", "region-peak-x",  "region-peak-y", "saturated",
-    "region-saturated", "region-tracks-peak", NULL};
+    "region-saturated", "region-tracks-peak", "above-range", "region-above-range", NULL};
 /* clang-format on */
 static const char* const alarm_columns[] = {
-    "element",      "state",         "active",    "statistic",
-    "value-c",      "threshold-c",   "clear-c",   "frames",
-    "timestamp",    "running-time",  "region-x",  "region-y",
-    "region-width", "region-height", "saturated", NULL};
+    "element",      "state",         "active",    "statistic",    "value-c",  "threshold-c",
+    "clear-c",      "frames",        "timestamp", "running-time", "region-x", "region-y",
+    "region-width", "region-height", "saturated", "above-range",  NULL};
 
 typedef struct {
   GMainLoop* loop;

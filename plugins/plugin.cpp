@@ -29,6 +29,7 @@ static gboolean plugin_init(GstPlugin* plugin) {
   // them up by name (gst_meta_get_info) and attach them to frames of its own.
   pyrocam_exposure_meta_get_info();
   pyrocam_saturation_meta_get_info();
+  pyrocam_above_range_meta_get_info();
   return ok;
 }
 

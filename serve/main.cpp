@@ -265,9 +265,10 @@ int main(int argc, char** argv) {
                                ? alarm["value-c"].get<double>()
                                : std::numeric_limits<double>::quiet_NaN();
       gchar* line = g_strdup_printf(
-          "%s: ALARM %s: %s %.1f degC%s (raised above %.1f, cleared below %.1f degC)", kName,
+          "%s: ALARM %s: %s %.1f degC%s%s (raised above %.1f, cleared below %.1f degC)", kName,
           alarm.value("state", "?").c_str(), alarm.value("statistic", "?").c_str(), value,
           alarm.value("saturated", false) ? " and saturated samples" : "",
+          alarm.value("above-range", false) ? " and pixels above the model's range" : "",
           alarm.value("threshold-c", 0.0), alarm.value("clear-c", 0.0));
       std::cerr << line << std::endl;
       g_free(line);

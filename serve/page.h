@@ -96,9 +96,11 @@ function makePanel(index, server) {
     $("median-label").textContent = r ? "region median" : "median";
     $("median").textContent = fmt(s[r + "median-c"]) + " °C";
     // Pixels too bright to read: the peak read beside them is only a lower bound.
-    const saturated = s[r + "saturated"] ?? 0;
-    $("peak").textContent = (saturated > 0 ? "≥ " : "") + fmt(s[r + "peak-c"]) + " °C" +
-      (saturated > 0 ? ` (${saturated} px saturated)` : "");
+    // Pixels hotter than the model's range likewise.
+    const saturated = s[r + "saturated"] ?? 0, above = s[r + "above-range"] ?? 0;
+    $("peak").textContent = (saturated > 0 || above > 0 ? "≥ " : "") + fmt(s[r + "peak-c"]) + " °C" +
+      (saturated > 0 ? ` (${saturated} px saturated)` : "") +
+      (above > 0 ? ` (${above} px above the model's range)` : "");
     $("peak-at").textContent = s[r + "peak-x"] !== undefined ? `${s[r + "peak-x"]}, ${s[r + "peak-y"]}` : "–";
     $("minmax").textContent = fmt(s[r + "min-c"], 0) + " / " + fmt(s[r + "max-c"], 0);
     $("valid").textContent = fmt(100 * (s[r + "valid-fraction"] ?? NaN), 1) + " %";

@@ -369,4 +369,37 @@ bool saturation_hides_readings(const PyrocamSaturationMeta* meta, const cv::Mat&
   return false;
 }
 
+std::vector<cv::Rect> above_range_rects(const PyrocamAboveRangeMeta* meta, cv::Size size) {
+  std::vector<cv::Rect> rects;
+  if (!meta || meta->pixels == 0 || meta->width <= 0 || meta->height <= 0 ||
+      meta->frame_width <= 0 || meta->frame_height <= 0)
+    return rects;
+  const cv::Rect bounds(meta->x, meta->y, meta->width, meta->height);
+  const auto down = [](int v, int to, gint from) {
+    return static_cast<int>(static_cast<gint64>(v) * to / from);
+  };
+  const auto up = [](int v, int to, gint from) {
+    return static_cast<int>((static_cast<gint64>(v) * to + from - 1) / from);
+  };
+  for (int i = 0; i < pyrocam::kSaturationTiles; ++i)
+    for (int j = 0; j < pyrocam::kSaturationTiles; ++j) {
+      if (!(meta->tiles[i] >> j & 1u)) continue;
+      const cv::Rect tile =
+          pyrocam::saturation_tile_rect(i, j, meta->frame_width, meta->frame_height) & bounds;
+      if (tile.empty()) continue;
+      const cv::Rect scaled(cv::Point(down(tile.x, size.width, meta->frame_width),
+                                      down(tile.y, size.height, meta->frame_height)),
+                            cv::Point(up(tile.x + tile.width, size.width, meta->frame_width),
+                                      up(tile.y + tile.height, size.height, meta->frame_height)));
+      rects.push_back(scaled & cv::Rect(cv::Point(0, 0), size));
+    }
+  return rects;
+}
+
+bool above_range_within(const PyrocamAboveRangeMeta* meta, cv::Size size, const cv::Rect& within) {
+  for (const cv::Rect& r : above_range_rects(meta, size))
+    if (!(r & within).empty()) return true;
+  return false;
+}
+
 }  // namespace pyrocam::gst

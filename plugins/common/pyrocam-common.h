@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "pyrocam-caps.h"
 #include "pyrocam-meta.h"
@@ -159,6 +160,13 @@ bool frame_out_of_time_order(GstElement* element, GstBuffer* buffer, GstClockTim
  * that are left), and then nothing is hidden. */
 bool saturation_hides_readings(const PyrocamSaturationMeta* meta, const cv::Mat& codes,
                                const cv::Rect& within);
+
+/* Where a PyrocamAboveRangeMeta puts pixels hotter than the model's range, in pixels of a frame
+ * of `size`: its tiles that hold any, each cut to the meta's rectangle and scaled from its frame
+ * to `size`. Empty without a meta or with none. */
+std::vector<cv::Rect> above_range_rects(const PyrocamAboveRangeMeta* meta, cv::Size size);
+/* Whether `within` meets one of them. */
+bool above_range_within(const PyrocamAboveRangeMeta* meta, cv::Size size, const cv::Rect& within);
 
 /* How a failure is reported on the bus (STYLE.md: errors carry a domain, a user message and a
  * debug message). */

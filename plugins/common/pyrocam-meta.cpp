@@ -102,3 +102,65 @@ PyrocamSaturationMeta* pyrocam_buffer_set_saturation_meta(GstBuffer* buffer, gui
   }
   return m;
 }
+
+GType pyrocam_above_range_meta_api_get_type(void) {
+  static GType type = 0;
+  static const gchar* tags[] = {nullptr};  // none: consumers scale the rectangle themselves
+  if (g_once_init_enter(&type)) {
+    GType t = gst_meta_api_type_register("PyrocamAboveRangeMetaAPI", tags);
+    g_once_init_leave(&type, t);
+  }
+  return type;
+}
+
+static gboolean above_range_meta_init(GstMeta* meta, gpointer /*params*/, GstBuffer* /*buffer*/) {
+  auto* m = reinterpret_cast<PyrocamAboveRangeMeta*>(meta);
+  m->pixels = 0;
+  m->x = m->y = m->width = m->height = 0;
+  m->frame_width = m->frame_height = 0;
+  for (guint64& t : m->tiles) t = 0;
+  m->max_temperature_c = 0;
+  return TRUE;
+}
+
+static gboolean above_range_meta_transform(GstBuffer* dest, GstMeta* meta, GstBuffer* /*buffer*/,
+                                           GQuark /*type*/, gpointer /*data*/) {
+  auto* m = reinterpret_cast<PyrocamAboveRangeMeta*>(meta);
+  return pyrocam_buffer_set_above_range_meta(dest, m->pixels, m->x, m->y, m->width, m->height,
+                                             m->frame_width, m->frame_height, m->tiles,
+                                             m->max_temperature_c) != nullptr;
+}
+
+const GstMetaInfo* pyrocam_above_range_meta_get_info(void) {
+  static const GstMetaInfo* info = nullptr;
+  if (g_once_init_enter(&info)) {
+    const GstMetaInfo* i = gst_meta_register(
+        PYROCAM_ABOVE_RANGE_META_API_TYPE, "PyrocamAboveRangeMeta", sizeof(PyrocamAboveRangeMeta),
+        above_range_meta_init, nullptr, above_range_meta_transform);
+    g_once_init_leave(&info, i);
+  }
+  return info;
+}
+
+PyrocamAboveRangeMeta* pyrocam_buffer_set_above_range_meta(GstBuffer* buffer, guint64 pixels,
+                                                           gint x, gint y, gint width, gint height,
+                                                           gint frame_width, gint frame_height,
+                                                           const guint64* tiles,
+                                                           gdouble max_temperature_c) {
+  auto* m = pyrocam_buffer_get_above_range_meta(buffer);
+  if (!m)
+    m = reinterpret_cast<PyrocamAboveRangeMeta*>(
+        gst_buffer_add_meta(buffer, pyrocam_above_range_meta_get_info(), nullptr));
+  if (m) {
+    m->pixels = pixels;
+    m->x = x;
+    m->y = y;
+    m->width = width;
+    m->height = height;
+    m->frame_width = frame_width;
+    m->frame_height = frame_height;
+    for (int i = 0; i < 64; ++i) m->tiles[i] = tiles[i];
+    m->max_temperature_c = max_temperature_c;
+  }
+  return m;
+}

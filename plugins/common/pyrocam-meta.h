@@ -55,4 +55,34 @@ PyrocamSaturationMeta* pyrocam_buffer_set_saturation_meta(GstBuffer* buffer, gui
 #define pyrocam_buffer_get_saturation_meta(b) \
   ((PyrocamSaturationMeta*)gst_buffer_get_meta((b), PYROCAM_SATURATION_META_API_TYPE))
 
+/* PyrocamAboveRangeMeta: where a frame's temperatures are hotter than the model's range.
+ * ratiotemp attaches it to every output frame (pixels 0 when none): the pixels without a reading
+ * that its above-range check found hotter than max_temperature_c, where most of a pixel's 3 x 3
+ * neighbourhood is (a spot, not a pixel lifted over the range's end by noise). Like the
+ * saturation meta, it tells thermalcolormap's peak readout and thermalalarm that a part of the
+ * frame without a reading is hotter than the rest, here hotter than max_temperature_c. In pixels
+ * of a frame_width x frame_height frame (ratiotemp's output); without API tags it travels with
+ * the frame through elements that do not crop or flip it. */
+typedef struct {
+  GstMeta meta;
+  guint64 pixels;                 /* pixels hotter than the range; 0: none */
+  gint x, y, width, height;       /* the smallest rectangle holding them; 0 x 0 when none */
+  gint frame_width, frame_height; /* the frame those pixels are of */
+  guint64 tiles[64];              /* as PyrocamSaturationMeta's, for these pixels */
+  gdouble max_temperature_c;      /* the model's range ends here, degC */
+} PyrocamAboveRangeMeta;
+
+GType pyrocam_above_range_meta_api_get_type(void);
+#define PYROCAM_ABOVE_RANGE_META_API_TYPE (pyrocam_above_range_meta_api_get_type())
+const GstMetaInfo* pyrocam_above_range_meta_get_info(void);
+
+/* Adds the meta, or overwrites the buffer's own (one per buffer); `tiles`: 64 words. */
+PyrocamAboveRangeMeta* pyrocam_buffer_set_above_range_meta(GstBuffer* buffer, guint64 pixels,
+                                                           gint x, gint y, gint width, gint height,
+                                                           gint frame_width, gint frame_height,
+                                                           const guint64* tiles,
+                                                           gdouble max_temperature_c);
+#define pyrocam_buffer_get_above_range_meta(b) \
+  ((PyrocamAboveRangeMeta*)gst_buffer_get_meta((b), PYROCAM_ABOVE_RANGE_META_API_TYPE))
+
 G_END_DECLS

@@ -112,6 +112,12 @@
  *   NaN; fused: within the matched kernels' reach of such a sample). Non-zero: the scene's
  *   hottest part may be there, and peak-c and max-c are lower bounds; a warning says so the
  *   first time, and again after statistics without any;
+ * - above-range (guint64): pixels without a reading because they are hotter than the model's
+ *   range (the likelihood fit along the model's locus extended to 6000 degC reads them above
+ *   its end, their bands fit a graybody there, and so do most of their 3x3 neighbours; at most
+ *   65536 pixels are checked a frame). Non-zero: the scene's hottest part is there, peak-c and
+ *   max-c are lower bounds, and a warning says so as for saturated. Every output frame carries
+ *   them as a PyrocamAboveRangeMeta, which thermalcolormap's peak readout and thermalalarm read;
  * - peak-c (double, degC), peak-x, peak-y (int, output pixels): the object's peak, robust to
  *   the wild mixed pixels at sharp edges that make max-c: the largest median of the
  *   #GstRatioTemp:peak-window square windows with at least half their pixels read, and that
@@ -121,9 +127,9 @@
  * - with #GstRatioTemp:region set: region-x, region-y, region-width, region-height (int, the
  *   region clipped to the frame) and region-pixels, region-valid, region-valid-fraction,
  *   region-min-c, region-max-c, region-mean-c, region-median-c, region-saturated,
- *   region-peak-c, region-peak-x, region-peak-y, as above for the region (windows inside
- *   the region; the position still in frame pixels; no peak for a region narrower than the
- *   window).
+ *   region-above-range, region-peak-c, region-peak-x, region-peak-y, as above for the region
+ * (windows inside the region; the position still in frame pixels; no peak for a region narrower
+ * than the window).
  *
  * A message is posted for the first frame, then for the first frame whose timestamp is at
  * least the interval after the last posted one (after a flush or a new segment, the next
@@ -415,27 +421,6 @@ static GstClockTime frame_position(const State& st, GstBuffer* buffer) {
                                static_cast<guint64>(fps_n));
 }
 
-static void push_recording_tags(GstRatioTemp* self, const Settings& settings) {
-  State& st = *self->state;
-  rt::RecordingInfo info;
-  info.model_file = st.model_path;
-  info.fingerprint = st.model->fingerprint;
-  info.profile = st.model->profile().name;
-  info.method = pyrocam::method_name(st.method);
-  info.uncertainty = settings.output == GST_RATIO_TEMP_OUTPUT_UNCERTAINTY;
-  info.e_slope = settings.e_slope;
-  info.partial_bands = settings.allow_partial                                  ? "any"
-                       : settings.partial_bands == GST_RATIO_TEMP_PARTIAL_ANY  ? "any"
-                       : settings.partial_bands == GST_RATIO_TEMP_PARTIAL_SAFE ? "safe"
-                                                                               : "off";
-  info.misfit_probability = settings.misfit_probability;
-  info.blur_correction = settings.blur_correction;
-  info.brightness_radius = settings.brightness_radius;
-  info.demosaic = st.demosaic;
-  info.exposure_us = rt::exposure_us_of(st.upstream_tags.get());
-  rt::push_recording_tags(self, info, st.upstream_tags.get(), st.pushed_comment);
-}
-
 static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer* inbuf,
                                               GstBuffer* outbuf) {
   GstRatioTemp* self = GST_RATIO_TEMP(trans);
@@ -502,6 +487,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
                                  : settings.partial_bands == GST_RATIO_TEMP_PARTIAL_SAFE
                                      ? pyrocam::TemperatureEstimator::PartialBands::kSafe
                                      : pyrocam::TemperatureEstimator::PartialBands::kOff);
+        chosen.set_above_range_check(true);
         const pyrocam::PlaneEstimator& estimator = chosen;
         rt::MappedFrame out(outbuf, &st.out_info);
         if (!uncertainty && !stats_due) {
@@ -533,9 +519,12 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
       });
   if (!ok) return GST_FLOW_ERROR;
   if (gap) GST_BUFFER_FLAG_SET(outbuf, GST_BUFFER_FLAG_GAP);  // still no image downstream
+  if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not find pixels above the range",
+                       [&] { rt::mark_above_range(outbuf, st, gap); }))
+    return GST_FLOW_ERROR;
   rt::warn_when_readings_misfit(self, st, st.estimators->estimator(st.method));
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not describe the stream in tags",
-                       [&] { push_recording_tags(self, settings); }))
+                       [&] { rt::push_stream_tags(self, settings, *self->state); }))
     return GST_FLOW_ERROR;
   if (stats_due) {
     if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not compute temperature statistics",

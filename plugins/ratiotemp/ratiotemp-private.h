@@ -106,6 +106,10 @@ struct State {
   cv::Mat temperature_c, uncertainty_c;
   cv::Mat saturated_mask;          // on frames with statistics: where light saturated a band
   bool saturation_warned = false;  // since the last statistics without saturated pixels
+  // The last frame's pixels hotter than the model's range (pyrocam::above_range_spots), and
+  // whether they were warned about (since the last statistics without any).
+  std::vector<cv::Point> above_range;
+  bool above_range_warned = false;
   GstClockTime last_stats = GST_CLOCK_TIME_NONE;
   guint64 frames = 0;  // since start or the last flush
   guint region_serial_seen = 0;
@@ -150,17 +154,23 @@ void correct_temperature(const Corrections& c, const cv::Mat& mosaic, cv::Mat& t
 cv::Mat saturated_mask(const State& st, const cv::Mat& fused_mosaic);
 /* The "pyrocam-temperature-stats" element message's structure for a frame's temperatures
  * (CV_32F degC, NaN = no reading) at `pts`, with the settings' region when it is valid, and the
- * pixels without a reading inside `saturated` (a CV_8U mask; empty: no such fields). Throws
+ * pixels without a reading inside `saturated` (a CV_8U mask; empty: no such fields) and the
+ * pixels hotter than the model's range (`above_range`, points of the frame). Throws
  * (from the library) before it allocates anything. The peak fields are there only where
  * peak_fits(). */
 GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& saturated,
-                              const Settings& settings, const GstSegment* segment, GstClockTime pts,
-                              Method method);
+                              const std::vector<cv::Point>& above_range, const Settings& settings,
+                              const GstSegment* segment, GstClockTime pts, Method method);
 /* Posts that structure as an element message, warning once per window and frame size when the
  * user's peak-window does not fit (st.peak_warned: the last misfit warned about), and once when
- * saturated pixels appear (again after statistics without any). */
+ * saturated pixels, or pixels hotter than the model's range, appear (again after statistics
+ * without any). */
 void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstClockTime pts);
 
+/* The pixels the frame's estimate found hotter than the model's range, kept in st.above_range
+ * for the statistics (none on a GAP frame) and attached to `outbuf` as a PyrocamAboveRangeMeta
+ * (on every frame, 0 pixels when none). */
+void mark_above_range(GstBuffer* outbuf, State& st, bool gap);
 /* Readings checked against the model's band spectra before a verdict (PlaneEstimator::
  * take_fit_audit: one in every 16th row; a 5x5 frame of 2045x1085 filled by the body
  * gives about 14, a small body's frames add up). With a few percent of a scene's readings misfit
@@ -201,6 +211,8 @@ double exposure_us_of(const GstTagList* tags);
 void push_recording_tags(GstRatioTemp* self, const RecordingInfo& info, const GstTagList* upstream,
                          std::string& pushed_comment);
 
+/* push_recording_tags with what the element's settings and state say. */
+void push_stream_tags(GstRatioTemp* self, const Settings& settings, State& st);
 /* The library's request for a method property value (ratiotemp-properties.cpp). */
 pyrocam::MethodRequest to_library(GstRatioTempMethod method);
 

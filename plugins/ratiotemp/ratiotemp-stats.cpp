@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pyrocam/runtime/above_range.h"
 #include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/region_stats.h"
 #include "ratiotemp-private.h"
@@ -50,8 +51,8 @@ cv::Mat saturated_mask(const State& st, const cv::Mat& fused_mosaic) {
 }
 
 GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& saturated,
-                              const Settings& settings, const GstSegment* segment, GstClockTime pts,
-                              Method method) {
+                              const std::vector<cv::Point>& above_range, const Settings& settings,
+                              const GstSegment* segment, GstClockTime pts, Method method) {
   GstClockTime stream_time = GST_CLOCK_TIME_NONE, running_time = GST_CLOCK_TIME_NONE;
   if (GST_CLOCK_TIME_IS_VALID(pts) && segment->format == GST_FORMAT_TIME) {
     stream_time = gst_segment_to_stream_time(segment, GST_FORMAT_TIME, pts);
@@ -87,6 +88,11 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& satur
       with_saturated && with_region && !r.empty()
           ? pyrocam::count_without_reading(temperature_c(r), saturated(r))
           : 0;
+  const std::size_t region_above_range =
+      with_region && !r.empty() ? static_cast<std::size_t>(std::count_if(
+                                      above_range.begin(), above_range.end(),
+                                      [&r](const cv::Point& p) { return r.contains(p); }))
+                                : 0;
   GstStructure* s = gst_structure_new(
       STATS_MESSAGE, "timestamp", G_TYPE_UINT64, static_cast<guint64>(pts), "stream-time",
       G_TYPE_UINT64, static_cast<guint64>(stream_time), "running-time", G_TYPE_UINT64,
@@ -96,6 +102,8 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& satur
   if (with_saturated)
     gst_structure_set(s, "saturated", G_TYPE_UINT64, static_cast<guint64>(saturated_pixels),
                       nullptr);
+  gst_structure_set(s, "above-range", G_TYPE_UINT64, static_cast<guint64>(above_range.size()),
+                    nullptr);
   set_peak_fields(s, "", whole_peak, cv::Point());
   if (with_region) {
     gst_structure_set(s, "region-x", G_TYPE_INT, r.x, "region-y", G_TYPE_INT, r.y, "region-width",
@@ -106,6 +114,8 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& satur
     if (with_saturated)
       gst_structure_set(s, "region-saturated", G_TYPE_UINT64,
                         static_cast<guint64>(region_saturated), nullptr);
+    gst_structure_set(s, "region-above-range", G_TYPE_UINT64,
+                      static_cast<guint64>(region_above_range), nullptr);
     set_peak_fields(s, "region-", part_peak, r.tl());
   }
   return s;
@@ -141,7 +151,7 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
                           ("the region is in output pixels (a 5x5 camera's are macro-pixels)"));
     st.region_warned = outside;
   }
-  GstStructure* s = stats_structure(temperature_c, st.saturated_mask, settings,
+  GstStructure* s = stats_structure(temperature_c, st.saturated_mask, st.above_range, settings,
                                     &GST_BASE_TRANSFORM(self)->segment, pts, st.method);
   guint64 saturated = 0;
   gst_structure_get_uint64(s, "saturated", &saturated);
@@ -157,6 +167,28 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
                          GST_OBJECT_NAME(self), saturated),
                         ("statistics at %" GST_TIME_FORMAT, GST_TIME_ARGS(pts)));
   st.saturation_warned = saturated > 0;
+  // Beyond the model's range every estimator gives no reading: such a part too looks cold.
+  const std::size_t above = st.above_range.size();
+  if (above > 0 && !st.above_range_warned)
+    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                        ("%s: %zu pixels have no reading because they are hotter than the "
+                         "model's range (up to %.0f degC): the hottest part of the scene is "
+                         "there, and peak-c and max-c are only lower bounds; calibrate a model "
+                         "with a higher --max-temperature",
+                         GST_OBJECT_NAME(self), above, st.model->max_temperature_c),
+                        ("statistics at %" GST_TIME_FORMAT, GST_TIME_ARGS(pts)));
+  st.above_range_warned = above > 0;
+}
+
+void mark_above_range(GstBuffer* outbuf, State& st, bool gap) {
+  const std::vector<cv::Point> found = st.estimators->estimator(st.method).take_above_range();
+  const pyrocam::SaturatedSamples spots = pyrocam::above_range_spots(
+      gap ? std::vector<cv::Point>() : found, cv::Size(st.width, st.height), &st.above_range);
+  guint64 tiles[pyrocam::kSaturationTiles];
+  std::copy(spots.tiles.begin(), spots.tiles.end(), tiles);
+  pyrocam_buffer_set_above_range_meta(outbuf, spots.count, spots.bounds.x, spots.bounds.y,
+                                      spots.bounds.width, spots.bounds.height, st.width, st.height,
+                                      tiles, st.model->max_temperature_c);
 }
 
 void warn_when_readings_misfit(GstRatioTemp* self, State& st,

@@ -74,4 +74,24 @@ void push_recording_tags(GstRatioTemp* self, const RecordingInfo& info, const Gs
                      gst_event_new_tag(recording_tags(info, upstream)));
 }
 
+void push_stream_tags(GstRatioTemp* self, const Settings& settings, State& st) {
+  RecordingInfo info;
+  info.model_file = st.model_path;
+  info.fingerprint = st.model->fingerprint;
+  info.profile = st.model->profile().name;
+  info.method = pyrocam::method_name(st.method);
+  info.uncertainty = settings.output == GST_RATIO_TEMP_OUTPUT_UNCERTAINTY;
+  info.e_slope = settings.e_slope;
+  info.partial_bands = settings.allow_partial                                  ? "any"
+                       : settings.partial_bands == GST_RATIO_TEMP_PARTIAL_ANY  ? "any"
+                       : settings.partial_bands == GST_RATIO_TEMP_PARTIAL_SAFE ? "safe"
+                                                                               : "off";
+  info.misfit_probability = settings.misfit_probability;
+  info.blur_correction = settings.blur_correction;
+  info.brightness_radius = settings.brightness_radius;
+  info.demosaic = st.demosaic;
+  info.exposure_us = exposure_us_of(st.upstream_tags.get());
+  push_recording_tags(self, info, st.upstream_tags.get(), st.pushed_comment);
+}
+
 }  // namespace pyrocam::gst::ratiotemp

@@ -16,7 +16,11 @@
  * PyrocamSaturationMeta (from darksub, carried through demosaic25 and ratiotemp) therefore
  * count as above the threshold by default (#GstThermalAlarm:saturated-raises): the alarm errs
  * towards raising. With the property off, and where saturation left every pixel a reading,
- * they count by their readings.
+ * they count by their readings. Pixels hotter than the model's range have no reading either:
+ * those without a reading in the tiles where the frame's PyrocamAboveRangeMeta (ratiotemp's)
+ * puts such pixels count as hotter than any reading in the statistic (the median or the peak),
+ * and a frame whose statistic is then one of them counts as above the threshold (above-range in
+ * the message; value-c is the range's end, a lower bound), whatever the threshold.
  *
  * The message's fields:
  * - state (string): raised or cleared; active (boolean): true when raised;
@@ -25,6 +29,8 @@
  * - threshold-c, clear-c (double, degC): the levels that raise and clear; frames (guint);
  * - saturated (boolean): the frame that changed the state counted as above the threshold
  *   because saturation left pixels of the region without a reading;
+ * - above-range (boolean): the frame's statistic was that of pixels hotter than the model's
+ *   range;
  * - timestamp, running-time (guint64, ns; GST_CLOCK_TIME_NONE when unknown);
  * - region-x, region-y, region-width, region-height (int): the pixels watched (the region
  *   clipped to the frame).
@@ -84,6 +90,10 @@ constexpr guint MAX_FRAMES = 100000;
 constexpr GstThermalAlarmStatistic DEFAULT_STATISTIC = GST_THERMAL_ALARM_STATISTIC_MEDIAN;
 constexpr guint DEFAULT_PEAK_WINDOW = pyrocam::kDefaultPeakWindow;
 constexpr gboolean DEFAULT_SATURATED_RAISES = TRUE;
+// Stands in for pixels hotter than the model's range in the statistic: above any temperature a
+// code holds (6280.35 degC), so that a statistic beyond that (a median halfway to it, too) is
+// theirs.
+constexpr float kHotterThanRange = 1e6f;
 
 struct Settings {
   double threshold_c = DEFAULT_THRESHOLD;
@@ -168,7 +178,8 @@ static gboolean gst_thermal_alarm_stop(GstBaseTransform* trans) {
 }
 
 static void post_change(GstThermalAlarm* self, const Settings& settings, double value_c,
-                        bool saturated, const cv::Rect& region, GstClockTime pts) {
+                        bool saturated, bool above_range, const cv::Rect& region,
+                        GstClockTime pts) {
   GstBaseTransform* trans = GST_BASE_TRANSFORM(self);
   GstClockTime running_time = GST_CLOCK_TIME_NONE;
   if (GST_CLOCK_TIME_IS_VALID(pts) && trans->segment.format == GST_FORMAT_TIME)
@@ -183,13 +194,15 @@ static void post_change(GstThermalAlarm* self, const Settings& settings, double 
       static_cast<guint64>(pts), "running-time", G_TYPE_UINT64, static_cast<guint64>(running_time),
       "region-x", G_TYPE_INT, region.x, "region-y", G_TYPE_INT, region.y, "region-width",
       G_TYPE_INT, region.width, "region-height", G_TYPE_INT, region.height, "saturated",
-      G_TYPE_BOOLEAN, saturated, nullptr);
+      G_TYPE_BOOLEAN, saturated, "above-range", G_TYPE_BOOLEAN, above_range, nullptr);
   if (!std::isnan(value_c)) gst_structure_set(s, "value-c", G_TYPE_DOUBLE, value_c, nullptr);
   if (active)
     GST_WARNING_OBJECT(self, "alarm raised: %s %.1f degC%s above %.1f degC for %u frames",
                        statistic_name(settings.statistic), value_c,
-                       saturated ? " (saturated: counted as)" : "", rule.threshold_c,
-                       settings.frames);
+                       saturated     ? " (saturated: counted as)"
+                       : above_range ? " (above the model's range: counted as)"
+                                     : "",
+                       rule.threshold_c, settings.frames);
   else
     GST_INFO_OBJECT(self, "alarm cleared: %s %.1f degC", statistic_name(settings.statistic),
                     value_c);
@@ -242,7 +255,7 @@ static GstFlowReturn gst_thermal_alarm_transform_frame_ip(GstVideoFilter* filter
   const bool off = !(settings.threshold_c > THRESHOLD_OFF);
   if (off) {
     if (st.monitor.update(NAN) != pyrocam::AlarmChange::kNone)
-      post_change(self, settings, NAN, false, cv::Rect(0, 0, width, height), pts);
+      post_change(self, settings, NAN, false, false, cv::Rect(0, 0, width, height), pts);
     return GST_FLOW_OK;
   }
   const cv::Rect region = watched_region(self, settings, width, height);
@@ -266,16 +279,27 @@ static GstFlowReturn gst_thermal_alarm_transform_frame_ip(GstVideoFilter* filter
                          pg::saturation_hides_readings(
                              pyrocam_buffer_get_saturation_meta(frame->buffer), codes, region);
   pyrocam::AlarmChange change = pyrocam::AlarmChange::kNone;
+  bool above_range = false;
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kNumeric, "Could not compute the alarm statistic", [&] {
-        const cv::Mat t = pyrocam::decode_decikelvin(codes(region));
+        cv::Mat t = pyrocam::decode_decikelvin(codes(region));
+        // Pixels hotter than the range: above any reading (a temperature no code holds).
+        const PyrocamAboveRangeMeta* meta = pyrocam_buffer_get_above_range_meta(frame->buffer);
+        for (cv::Rect r : pg::above_range_rects(meta, cv::Size(width, height))) {
+          r &= region;
+          if (r.empty()) continue;
+          cv::Mat part = t(r - region.tl());
+          part.setTo(kHotterThanRange, part != part);
+        }
         value_c = settings.statistic == GST_THERMAL_ALARM_STATISTIC_PEAK
                       ? pyrocam::region_peak(t, window).c
                       : pyrocam::region_stats(t).median_c;
-        change = st.monitor.update(saturated ? INFINITY : value_c);
+        above_range = value_c > pyrocam::code_to_celsius(pyrocam::kMaxCode);
+        if (above_range) value_c = meta->max_temperature_c;
+        change = st.monitor.update(saturated || above_range ? INFINITY : value_c);
       }))
     return GST_FLOW_ERROR;
   if (change != pyrocam::AlarmChange::kNone)
-    post_change(self, settings, value_c, saturated, region, pts);
+    post_change(self, settings, value_c, saturated, above_range, region, pts);
   return GST_FLOW_OK;
 }
 

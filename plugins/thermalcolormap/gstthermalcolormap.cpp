@@ -17,7 +17,9 @@
  * temperature at the top left: "peak 2213 degC", or "peak >= 2213 degC (saturated)" where
  * pixels have no reading beside the saturated samples the frame's PyrocamSaturationMeta
  * (darksub's, carried through demosaic25 and ratiotemp) names: that part is hotter than the
- * peak read ("saturated, no reading" when nothing reads).
+ * peak read ("saturated, no reading" when nothing reads). Where the frame's PyrocamAboveRangeMeta
+ * (ratiotemp's) names pixels hotter than the model's range, the ring goes round them and the
+ * label reads "peak > 3500 degC (above range)", the range's end, whatever reads elsewhere.
  *
  * In fixed mode a range narrower than one temperature code (max-temperature - min-temperature
  * below 0.1 degC, including min-temperature >= max-temperature) is refused with a warning on
@@ -303,7 +305,16 @@ static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter
         const bool saturated =
             pg::saturation_hides_readings(pyrocam_buffer_get_saturation_meta(in_frame->buffer), in,
                                           cv::Rect(0, 0, width, height));
-        pyrocam::draw_peak_marker(out, peak.x, peak.y, peak.c, cs.order, saturated);
+        // Parts hotter than the model's range: the ring on them, the label says so.
+        const PyrocamAboveRangeMeta* above = pyrocam_buffer_get_above_range_meta(in_frame->buffer);
+        const std::vector<cv::Rect> hotter = pg::above_range_rects(above, cv::Size(width, height));
+        cv::Rect spot;
+        for (const cv::Rect& r : hotter) spot |= r;
+        if (spot.empty())
+          pyrocam::draw_peak_marker(out, peak.x, peak.y, peak.c, cs.order, saturated);
+        else
+          pyrocam::draw_peak_marker(out, spot.x + spot.width / 2, spot.y + spot.height / 2, peak.c,
+                                    cs.order, saturated, above->max_temperature_c);
       } else if (!st.warned_peak_window) {
         GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
                             ("peak-window %d is larger than the %dx%d frame: no peak marker",

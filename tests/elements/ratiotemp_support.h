@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "element_support.h"
+#include "pyrocam-meta.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/estimator_check.h"
 #include "pyrocam/runtime/model.h"
@@ -179,6 +180,8 @@ class RatioTemp : public HarnessTest {
     gst_harness_set_src_caps_str(h, caps.c_str());
   }
   bool last_gap = false;  // whether run's output frame was flagged GAP (no image)
+  // The pixels its PyrocamAboveRangeMeta counts (G_MAXUINT64: none attached).
+  guint64 last_above_range = G_MAXUINT64;
   // Pushes one frame of band planes (or raw bytes) and returns the output codes.
   template <typename T>
   std::vector<std::uint16_t> run(const std::vector<T>& input, int w, int height,
@@ -186,6 +189,13 @@ class RatioTemp : public HarnessTest {
     GstBuffer* out = push_pull_buffer(h, with_pts(buffer_from(input), pts));
     if (!out) return {};
     last_gap = GST_BUFFER_FLAG_IS_SET(out, GST_BUFFER_FLAG_GAP);
+    // By the API's registered name: the tests do not link the plugin.
+    const GType above_api = g_type_from_name("PyrocamAboveRangeMetaAPI");
+    const auto* above =
+        above_api
+            ? reinterpret_cast<const PyrocamAboveRangeMeta*>(gst_buffer_get_meta(out, above_api))
+            : nullptr;
+    last_above_range = above ? above->pixels : G_MAXUINT64;
     auto v = gray16_of(out, w, height);
     gst_buffer_unref(out);
     return v;

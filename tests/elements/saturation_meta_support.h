@@ -1,6 +1,6 @@
-// Attaches a PyrocamSaturationMeta to a buffer as darksub would, for the tests of the elements
-// that read it. By the meta's registered name: the tests do not link the plugin, which
-// registers it when it loads.
+// Attaches a PyrocamSaturationMeta to a buffer as darksub would (and a PyrocamAboveRangeMeta as
+// ratiotemp would), for the tests of the elements that read them. By the meta's registered name:
+// the tests do not link the plugin, which registers it when it loads.
 #pragma once
 
 #include <gst/gst.h>
@@ -33,6 +33,28 @@ inline void add_saturation_meta(GstBuffer* buffer, guint64 samples, const cv::Re
   for (guint64& t : m->tiles) t = 0;
   for (const cv::Point& p : spots)
     m->tiles[p.y * 64 / frame_height] |= guint64{1} << (p.x * 64 / frame_width);
+}
+
+// `pixels` pixels hotter than a range ending at max_c, filling `box` of a frame_width x
+// frame_height temperature frame (the meta's tiles: those the box meets).
+inline void add_above_range_meta(GstBuffer* buffer, guint64 pixels, const cv::Rect& box,
+                                 int frame_width, int frame_height, double max_c) {
+  const GstMetaInfo* info = gst_meta_get_info("PyrocamAboveRangeMeta");
+  ASSERT_NE(info, nullptr) << "the pyrocam plugin did not register PyrocamAboveRangeMeta";
+  auto* m = reinterpret_cast<PyrocamAboveRangeMeta*>(gst_buffer_add_meta(buffer, info, nullptr));
+  ASSERT_NE(m, nullptr);
+  m->pixels = pixels;
+  m->x = box.x;
+  m->y = box.y;
+  m->width = box.width;
+  m->height = box.height;
+  m->frame_width = frame_width;
+  m->frame_height = frame_height;
+  m->max_temperature_c = max_c;
+  for (guint64& t : m->tiles) t = 0;
+  for (int y = box.y; y < box.y + box.height; ++y)
+    for (int x = box.x; x < box.x + box.width; ++x)
+      m->tiles[y * 64 / frame_height] |= guint64{1} << (x * 64 / frame_width);
 }
 
 }  // namespace pyrocam::test

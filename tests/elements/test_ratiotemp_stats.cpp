@@ -170,6 +170,62 @@ class DarkCaptureStats : public RatioTemp {
 TEST_F(DarkCaptureStats, bilinear_planes) { check("demosaic25 method=bilinear"); }
 TEST_F(DarkCaptureStats, matched_on_the_fused_path) { check("demosaic25"); }
 
+// A part hotter than the model's range (3500 degC) has no reading, like a cold one; the
+// statistics count it (the 6x6 square at 3800 degC, less its corners, whose 3x3 neighbourhoods
+// hold only 4 of its pixels), a warning says so once per appearance, and every output frame
+// carries the count in its PyrocamAboveRangeMeta, 0 without any. On every method.
+class AboveRangeStats : public RatioTemp {
+ protected:
+  static constexpr int kW = 12, kH = 10;
+  // A 6x6 square at hot_c whose corner is (3, 2), 1500 degC around it.
+  static std::vector<float> planes_of(double hot_c) {
+    const ThermalModel& m = *rgb_model();
+    std::vector<float> v(3 * kW * kH);
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) {
+        const bool hot = x >= 3 && x < 9 && y >= 2 && y < 8;
+        const Eigen::VectorXd r = m.camera.rates(hot ? hot_c : 1500);
+        for (int b = 0; b < 3; ++b) v[(b * kH + y) * kW + x] = 150 * r[b] / r.maxCoeff();
+      }
+    return v;
+  }
+  void check(const std::string& method) {
+    start(
+        "ratiotemp stats-interval=1 region=0,0,5,5 method=" + method + " model=" + rgb_model_path(),
+        bands_caps(3, "bayer", kW, kH));
+    const auto out = run(planes_of(3800), kW, kH, 0);
+    ASSERT_EQ(out.size(), static_cast<std::size_t>(kW * kH));
+    EXPECT_EQ(std::count(out.begin(), out.end(), 0), 36);  // the square: no reading
+    EXPECT_EQ(last_above_range, 32u);
+    auto s = stats();
+    ASSERT_EQ(s.size(), 1u);
+    EXPECT_EQ(field_uint64(s[0], "above-range"), 32u);
+    // (4, 2), (3, 3), (4, 3), (3, 4), (4, 4): the square's corner (3, 2) is not one
+    EXPECT_EQ(field_uint64(s[0], "region-above-range"), 5u);
+    free_all(s);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("hotter than the model's range (up to 3500 degC)"),
+              std::string::npos)
+        << warnings[0];
+    run(planes_of(3800), kW, kH, 1);  // still there: no second warning
+    run(planes_of(2000), kW, kH, 2);
+    EXPECT_EQ(last_above_range, 0u);
+    s = stats();
+    ASSERT_EQ(s.size(), 2u);
+    EXPECT_EQ(field_uint64(s[1], "above-range"), 0u);
+    free_all(s);
+    EXPECT_EQ(warnings.size(), 1u);
+    run(planes_of(3800), kW, kH, 3);  // back: warned again
+    s = stats();
+    free_all(s);
+    EXPECT_EQ(warnings.size(), 2u);
+  }
+};
+
+TEST_F(AboveRangeStats, auto_method) { check("auto"); }
+TEST_F(AboveRangeStats, likelihood) { check("likelihood"); }
+TEST_F(AboveRangeStats, mlp) { check("mlp"); }
+
 // The model, output and table-cache can change only in NULL or READY: set while playing, the
 // change is refused on the bus (it was only in the debug log, and an application never learnt
 // it) and readings go on with the model in use.

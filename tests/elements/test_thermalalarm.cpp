@@ -44,6 +44,7 @@ class ThermalAlarm : public HarnessTest {
     const GstClockTime pts = gst_util_uint64_scale(n_++, GST_SECOND, 30);
     GstBuffer* in = with_pts(buffer_from(codes), pts);
     if (gap) GST_BUFFER_FLAG_SET(in, GST_BUFFER_FLAG_GAP);
+    if (!above_.empty()) add_above_range_meta(in, above_.area(), above_, kW, kH, 2000);
     if (!saturated.empty())
       add_saturation_meta(in, static_cast<guint64>(saturated.area()),
                           cv::Rect(scale * saturated.x, scale * saturated.y,
@@ -106,6 +107,7 @@ class ThermalAlarm : public HarnessTest {
     gst_object_unref(e);
   }
   guint64 n_ = 0;
+  cv::Rect above_;  // where push says pixels are hotter than a range ending at 2000 degC
 };
 
 TEST_F(ThermalAlarm, RaisesAfterFramesAboveAndClearsBelowTheHysteresis) {
@@ -242,6 +244,50 @@ TEST_F(ThermalAlarm, SaturatedSamplesThatTookReadingsInTheRegionCountAsAboveTheT
   set("saturated-raises", TRUE);
   EXPECT_EQ(states({near_hole, near_hole}, near, 5), "..");
   EXPECT_EQ(states({cored, cored}, core, 5), ".r");
+}
+
+// A part hotter than the model's range has no reading; ratiotemp's meta says where. Its pixels
+// count as hotter than any reading in the statistic: a core of them raises the median and the
+// peak alarm whatever the threshold (value-c then the range's end), a pixel of them at a corner
+// does not move the peak, and one outside the region is not watched.
+TEST_F(ThermalAlarm, PixelsHotterThanTheModelsRangeCountAsHotterThanAnyReading) {
+  start("thermalalarm threshold-c=1900 frames=2 region=4,3,6,6");
+  const auto rim = frame(900, 1400), cored = with_hole(rim, 6, 5, 2);
+  EXPECT_EQ(states({cored, cored}), "..");    // no meta: a hole is no reading
+  above_ = cv::Rect(5, 4, 5, 5);              // 25 of the region's 36 pixels
+  const auto hole = with_hole(rim, 7, 6, 2);  // the same 5x5 without a reading
+  EXPECT_EQ(states({hole}), ".");
+  auto m = push(hole);
+  ASSERT_EQ(m.size(), 1u);
+  gboolean above = FALSE, saturated = TRUE;
+  double v = 0;
+  EXPECT_TRUE(gst_structure_get_boolean(m[0], "above-range", &above));
+  EXPECT_TRUE(above);
+  EXPECT_TRUE(gst_structure_get_boolean(m[0], "saturated", &saturated));
+  EXPECT_FALSE(saturated);
+  EXPECT_TRUE(gst_structure_get_double(m[0], "value-c", &v));
+  EXPECT_EQ(v, 2000);
+  for (GstStructure* st : m) gst_structure_free(st);
+  above_ = {};
+  EXPECT_EQ(states({hole, hole}), ".c");
+  // Above the range's end too: those pixels are hotter than the model can say.
+  set("threshold-c", 2500.0);
+  above_ = cv::Rect(5, 4, 5, 5);
+  EXPECT_EQ(states({hole, hole}), ".r");
+  above_ = {};
+  EXPECT_EQ(states({rim, rim}), ".c");
+  // The peak: one such pixel at the region's corner leaves every window's median a reading.
+  set("statistic", "peak");
+  set("threshold-c", 1900.0);
+  above_ = cv::Rect(4, 3, 1, 1);
+  EXPECT_EQ(states({with_hole(rim, 4, 3, 1), with_hole(rim, 4, 3, 1)}), "..");
+  above_ = cv::Rect(5, 4, 5, 5);
+  EXPECT_EQ(states({hole, hole}), ".r");
+  above_ = {};
+  EXPECT_EQ(states({rim, rim}), ".c");
+  // Outside the region.
+  above_ = cv::Rect(12, 0, 3, 3);
+  EXPECT_EQ(states({with_hole(rim, 13, 1, 1), with_hole(rim, 13, 1, 1)}), "..");
 }
 
 // Two saturated spots in opposite corners: their rectangle spans the frame, but the meta's

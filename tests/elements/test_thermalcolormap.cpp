@@ -200,6 +200,39 @@ TEST_F(ThermalColormap, peak_readout_is_a_lower_bound_where_saturation_hid_readi
   EXPECT_EQ(elsewhere, 0u);
 }
 
+// Where ratiotemp's above-range meta names pixels hotter than the model's range, the readout
+// says "peak > 2000 degC (above range)" and the ring goes round them, not round the readings'
+// peak.
+TEST_F(ThermalColormap, peak_readout_names_the_range_end_where_pixels_are_hotter_than_it) {
+  const int w = 160, h_ = 120;
+  start("thermalcolormap peak-marker=true range-mode=fixed", "RGBA", w, h_);
+  std::vector<std::uint16_t> codes(w * h_, 0);
+  for (int y = 50; y < 70; ++y)
+    for (int x = 70; x < 90; ++x) codes[y * w + x] = code_of(1600);  // read
+  // (20..29, 90..99): no reading, hotter than the range
+  const auto push_with_meta = [&](bool meta) {
+    GstBuffer* in = buffer_from(codes);
+    if (meta) add_above_range_meta(in, 100, cv::Rect(20, 90, 10, 10), w, h_, 2000);
+    return push_pull<std::uint8_t>(h, in);
+  };
+  const auto plain = push_with_meta(false), flagged = push_with_meta(true);
+  ASSERT_EQ(plain.size(), static_cast<std::size_t>(4 * w * h_));
+  const auto differing = [&](const cv::Rect& r) {
+    std::size_t n = 0;
+    for (int y = r.y; y < r.y + r.height; ++y)
+      for (int x = r.x; x < r.x + r.width; ++x)
+        for (int c = 0; c < 4; ++c) {
+          const std::size_t i = static_cast<std::size_t>(4 * (y * w + x) + c);
+          n += plain[i] != flagged[i];
+        }
+    return n;
+  };
+  EXPECT_GT(differing(cv::Rect(0, 0, w, 24)), 100u);    // the label
+  EXPECT_GT(differing(cv::Rect(10, 80, 30, 30)), 20u);  // the ring, now round the hot part
+  EXPECT_GT(differing(cv::Rect(65, 45, 30, 30)), 20u);  // and no more round the readings
+  EXPECT_EQ(differing(cv::Rect(100, 30, 60, 90)), 0u);  // nothing else
+}
+
 TEST_F(ThermalColormap, empty_fixed_range_warns_and_keeps_working_n) {
   start("thermalcolormap range-mode=fixed min-temperature=1500 max-temperature=1500", nullptr);
   EXPECT_EQ(run(kCodes).size(), kCodes.size() * 4);

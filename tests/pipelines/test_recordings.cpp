@@ -293,12 +293,16 @@ TEST(RecordingsLauncher, stats_csv_keeps_its_columns_without_readings_and_refuse
     return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
   };
   ASSERT_LT(col("region-peak-y"), header.size());
-  ASSERT_EQ(col("region-saturated"), header.size() - 2);  // columns only get appended
-  ASSERT_EQ(col("region-tracks-peak"), header.size() - 1);
+  ASSERT_EQ(col("region-saturated"), header.size() - 4);  // columns only get appended
+  ASSERT_EQ(col("region-tracks-peak"), header.size() - 3);
+  ASSERT_EQ(col("above-range"), header.size() - 2);
+  ASSERT_EQ(col("region-above-range"), header.size() - 1);
   for (std::size_t i = 1; i < rows.size(); ++i) {
     ASSERT_EQ(rows[i].size(), header.size()) << "row " << i;
     EXPECT_NE(rows[i][col("saturated")], "");  // a count, 0 or more
+    EXPECT_EQ(rows[i][col("above-range")], "0");
     EXPECT_EQ(rows[i][col("region-saturated")], "");
+    EXPECT_EQ(rows[i][col("region-above-range")], "");
     EXPECT_EQ(rows[i][col("region-tracks-peak")], "");
     EXPECT_EQ(rows[i][col("valid")], "0");
     EXPECT_EQ(rows[i][col("pixels")], "192");
@@ -390,10 +394,10 @@ TEST(RecordingsLauncher, alarm_csv_has_a_row_per_change_of_state) {
   ASSERT_EQ(p.wait_for(milliseconds(30000)), 0) << p.log();
   const auto rows = read_csv(csv);
   ASSERT_EQ(rows.size(), 2u) << read_text(csv);
-  EXPECT_EQ(rows[0], (std::vector<std::string>{"element", "state", "active", "statistic", "value-c",
-                                               "threshold-c", "clear-c", "frames", "timestamp",
-                                               "running-time", "region-x", "region-y",
-                                               "region-width", "region-height", "saturated"}));
+  EXPECT_EQ(rows[0], (std::vector<std::string>{
+                         "element", "state", "active", "statistic", "value-c", "threshold-c",
+                         "clear-c", "frames", "timestamp", "running-time", "region-x", "region-y",
+                         "region-width", "region-height", "saturated", "above-range"}));
   const auto& r = rows[1];
   ASSERT_EQ(r.size(), rows[0].size());
   EXPECT_EQ(r[0], "thermalalarm0");

@@ -40,8 +40,10 @@ void AboveRangeCheck::set_analogue_gain(double factor) {
   misfit_.set_analogue_gain(factor);
 }
 
-SaturatedSamples above_range_spots(const std::vector<cv::Point>& found, cv::Size size) {
+SaturatedSamples above_range_spots(const std::vector<cv::Point>& found, cv::Size size,
+                                   std::vector<cv::Point>* kept_pixels) {
   SaturatedSamples spots;
+  if (kept_pixels) kept_pixels->clear();
   const cv::Rect frame(cv::Point(0, 0), size);
   cv::Rect bounds;
   for (const cv::Point& p : found)
@@ -62,6 +64,7 @@ SaturatedSamples above_range_spots(const std::vector<cv::Point>& found, cv::Size
       const cv::Point p(x - 1 + bounds.x, y - 1 + bounds.y);
       ++spots.count;
       kept |= cv::Rect(p.x, p.y, 1, 1);
+      if (kept_pixels) kept_pixels->push_back(p);
       spots.tiles[static_cast<std::size_t>(saturation_tile_of(p.y, size.height))] |=
           std::uint64_t{1} << saturation_tile_of(p.x, size.width);
     }

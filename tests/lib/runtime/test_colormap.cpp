@@ -252,12 +252,21 @@ TEST(PeakMarker, SaysWhenThePeakIsALowerBound) {
   EXPECT_EQ(peak_label(2213.4, true), "peak >= 2213 degC (saturated)");
   EXPECT_EQ(peak_label(NAN, true), "saturated, no reading");
   EXPECT_EQ(peak_label(NAN, false), "");
+  // Hotter than the model's range: the range's end, whatever reads.
+  EXPECT_EQ(peak_label(2213.4, false, 3500), "peak > 3500 degC (above range)");
+  EXPECT_EQ(peak_label(NAN, true, 2000), "peak > 2000 degC (above range)");
   cv::Mat image(120, 160, CV_8UC4, cv::Scalar(0, 0, 0, 0));
   draw_peak_marker(image, -1, -1, NAN, ChannelOrder::kRGBA, true);
   std::vector<cv::Mat> channels;
   cv::split(image, channels);
   EXPECT_GT(cv::countNonZero(channels[3](cv::Rect(0, 0, 160, 20))), 50);  // the label
   EXPECT_EQ(cv::countNonZero(channels[3](cv::Rect(0, 30, 160, 90))), 0);  // no ring
+  // Nothing reads, but a part is hotter than the range: label and ring there.
+  image.setTo(cv::Scalar::all(0));
+  draw_peak_marker(image, 100, 80, NAN, ChannelOrder::kRGBA, false, 3500);
+  cv::split(image, channels);
+  EXPECT_GT(cv::countNonZero(channels[3](cv::Rect(0, 0, 160, 20))), 50);
+  EXPECT_GT(cv::countNonZero(channels[3](cv::Rect(90, 70, 21, 21))), 10);
 }
 
 // Opaque overlay pixels replace the image's colour, transparent ones leave it, partial ones mix

@@ -61,7 +61,8 @@ class AboveRangeCheck {
 // above the range: a spot hotter than the model reads, not a pixel that noise lifted over the
 // range's end (a colour plate 100 degC below it reads so about once in 200 pixels, scattered). In
 // darksub's summary of saturated samples: their count, bounds and tiles, in pixels of `size`.
-// Points outside the frame are ignored.
-SaturatedSamples above_range_spots(const std::vector<cv::Point>& found, cv::Size size);
+// Points outside the frame are ignored. `kept`, if given, receives the spots' pixels.
+SaturatedSamples above_range_spots(const std::vector<cv::Point>& found, cv::Size size,
+                                   std::vector<cv::Point>* kept = nullptr);
 
 }  // namespace pyrocam
