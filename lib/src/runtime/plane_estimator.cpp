@@ -104,6 +104,8 @@ void PlaneEstimator::set_above_range_check(bool on) {
     above_.reset();
     const std::lock_guard<std::mutex> lock(above_mutex_);
     above_found_.clear();
+    above_pending_points_.clear();
+    above_pending_signals_.clear();
     return;
   }
   if (above_range_check()) return;
@@ -114,10 +116,39 @@ void PlaneEstimator::set_above_range_check(bool on) {
 
 void PlaneEstimator::ready_above_range() const {
   above_checked_.store(0, std::memory_order_relaxed);
-  if (!above_build_.valid()) return;
-  auto check = std::const_pointer_cast<AboveRangeCheck>(above_build_.get());  // rethrows
-  check->set_analogue_gain(analogue_gain_);
-  above_ = std::move(check);
+  if (above_ || !above_build_.valid() ||
+      above_build_.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+    return;
+  adopt_above_range();
+}
+
+void PlaneEstimator::adopt_above_range() const {
+  try {
+    auto check = std::const_pointer_cast<AboveRangeCheck>(above_build_.get());
+    check->set_analogue_gain(analogue_gain_);
+    above_ = std::move(check);
+  } catch (const std::exception&) {
+    // A model whose locus the extended fit cannot take: no check (nothing found above).
+  }
+}
+
+void PlaneEstimator::finish_above_range() const {
+  if (above_pending_points_.empty()) return;
+  // Pixels that needed the check while it was being built: it is needed now.
+  if (!above_) adopt_above_range();
+  if (!above_) {
+    above_pending_points_.clear();
+    above_pending_signals_.clear();
+    return;
+  }
+  const auto bands = static_cast<std::size_t>(model_->profile().band_count());
+  std::vector<cv::Point> found;
+  for (std::size_t k = 0; k < above_pending_points_.size(); ++k)
+    if (!std::isnan(above_->reading_above(&above_pending_signals_[k * bands])))
+      found.push_back(above_pending_points_[k]);
+  above_pending_points_.clear();
+  above_pending_signals_.clear();
+  above_found_.insert(above_found_.end(), found.begin(), found.end());
 }
 
 std::vector<cv::Point> PlaneEstimator::take_above_range() const {
@@ -129,7 +160,7 @@ std::vector<cv::Point> PlaneEstimator::take_above_range() const {
 
 void PlaneEstimator::above_range_row(const float* const* rows, std::size_t n, const float* out,
                                      int x0, int y) const {
-  if (!above_) return;
+  if (!above_ && !above_build_.valid()) return;
   const auto bands = static_cast<std::size_t>(model_->profile().band_count());
   const double dim = model_->profile().thresholds.inference_dim_dn;
   double s[kMaxBands];
@@ -143,6 +174,12 @@ void PlaneEstimator::above_range_row(const float* const* rows, std::size_t n, co
     }
     if (!every_band_reads) continue;
     if (above_checked_.fetch_add(1, std::memory_order_relaxed) >= kAboveRangeBudget) break;
+    if (!above_) {  // still being built: checked when the estimate ends
+      const std::lock_guard<std::mutex> lock(above_mutex_);
+      above_pending_points_.emplace_back(x0 + static_cast<int>(i), y);
+      above_pending_signals_.insert(above_pending_signals_.end(), s, s + bands);
+      continue;
+    }
     if (!std::isnan(above_->reading_above(s))) found.emplace_back(x0 + static_cast<int>(i), y);
   }
   if (found.empty()) return;
@@ -341,6 +378,7 @@ void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv
                         u->ptr<float>(y), 0, y, noise_);
     }
   });
+  finish_above_range();
 }
 
 void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat& codes) const {
@@ -371,6 +409,7 @@ void PlaneEstimator::estimate_codes(const std::vector<cv::Mat>& planes, cv::Mat&
       encode_temperature_row(t.data(), codes.ptr<std::uint16_t>(y), size.width);
     }
   });
+  finish_above_range();
 }
 
 template <class LitRun, class DarkRun>
@@ -439,6 +478,7 @@ void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* 
         std::fill(t.ptr<float>(y) + x0, t.ptr<float>(y) + x1, NAN);
         if (u) std::fill(u->ptr<float>(y) + x0, u->ptr<float>(y) + x1, NAN);
       });
+  finish_above_range();
 }
 
 void PlaneEstimator::estimate_codes(const MatchedMosaic& source, cv::Mat& codes) const {
@@ -471,6 +511,7 @@ void PlaneEstimator::estimate_codes(const MatchedMosaic& source, cv::Mat& codes)
         std::fill(codes.ptr<std::uint16_t>(y) + x0, codes.ptr<std::uint16_t>(y) + x1,
                   kNoReadingCode);
       });
+  finish_above_range();
 }
 
 void PlaneEstimator::check_matched_mosaic(const MatchedMosaic& source) const {

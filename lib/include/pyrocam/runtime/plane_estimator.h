@@ -117,7 +117,7 @@ class PlaneEstimator {
 
   // The above-range check (above_range.h) on the pixels the estimator leaves without a reading
   // although every band reads: off by default. Turned on, it is built on a thread of its own
-  // (tens of ms; the first estimate after waits for it) and every estimate from then on collects
+  // (tens of ms; an estimate waits for it only where a pixel needs it) and every estimate collects
   // the pixels it finds hotter than the model's range (with the grey fit, whatever the emissivity
   // slope), which take_above_range() hands over: pixel positions of the planes (of the mosaic on
   // the fused path), in no particular order. Costs nothing where every pixel with all its bands
@@ -224,8 +224,15 @@ class PlaneEstimator {
   mutable std::mutex above_mutex_;
   mutable std::vector<cv::Point> above_found_;
   mutable std::atomic<std::size_t> above_checked_{0};  // this estimate's, up to kAboveRangeBudget
-  // Waits for the check's build (once) before an estimate's rows run; a new frame's budget.
+  // Pixels that needed the check before it was built, and their signals (bands each).
+  mutable std::vector<cv::Point> above_pending_points_;
+  mutable std::vector<double> above_pending_signals_;
+  // Before an estimate's rows run: a new frame's budget, and the check if it is built by now.
   void ready_above_range() const;
+  // Waits for the build and takes the check (with the analogue gain).
+  void adopt_above_range() const;
+  // After the rows: the pending pixels checked (waiting for the build only if there are any).
+  void finish_above_range() const;
   // The check on the readings `out` of the rows (n pixels from x0 of row y) that have none.
   void above_range_row(const float* const* rows, std::size_t n, const float* out, int x0,
                        int y) const;
