@@ -148,6 +148,7 @@ void PlaneEstimator::finish_above_range() const {
       found.push_back(above_pending_points_[k]);
   above_pending_points_.clear();
   above_pending_signals_.clear();
+  const std::lock_guard<std::mutex> lock(above_mutex_);
   above_found_.insert(above_found_.end(), found.begin(), found.end());
 }
 
