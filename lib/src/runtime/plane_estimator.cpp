@@ -7,6 +7,7 @@
 #include <exception>
 #include <functional>
 #include <future>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -163,25 +164,48 @@ void PlaneEstimator::above_range_row(const float* const* rows, std::size_t n, co
                                      int x0, int y) const {
   if (!above_ && !above_build_.valid()) return;
   const auto bands = static_cast<std::size_t>(model_->profile().band_count());
-  const double dim = model_->profile().thresholds.inference_dim_dn;
+  const auto dim = static_cast<float>(model_->profile().thresholds.inference_dim_dn);
+  constexpr float kMax = std::numeric_limits<float>::max();
   double s[kMaxBands];
   std::vector<cv::Point> found;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!std::isnan(out[i])) continue;
-    bool every_band_reads = true;
-    for (std::size_t b = 0; b < bands && every_band_reads; ++b) {
-      s[b] = rows[b][i];
-      every_band_reads = s[b] >= dim && std::isfinite(s[b]);
+  // Most pixels read, and most of those that do not have a band that does not: chunk by chunk,
+  // branch-free passes that vectorise say so before any pixel is looked at. (A per-pixel loop
+  // over a 90 % colour plate's rows, whose edges leave pixels without a reading in nearly every
+  // row, took 13 % of the estimate's CPU.)
+  constexpr std::size_t kChunk = 64;
+  for (std::size_t c0 = 0; c0 < n; c0 += kChunk) {
+    const std::size_t c1 = std::min(n, c0 + kChunk);
+    unsigned unread = 0;
+    for (std::size_t i = c0; i < c1; ++i) unread |= static_cast<unsigned>(out[i] != out[i]);
+    if (!unread) continue;
+    if (bands == 3) {
+      const float *r0 = rows[0], *r1 = rows[1], *r2 = rows[2];
+      unsigned candidates = 0;
+      for (std::size_t i = c0; i < c1; ++i)
+        candidates |= static_cast<unsigned>(out[i] != out[i]) & (r0[i] >= dim) & (r1[i] >= dim) &
+                      (r2[i] >= dim) & (r0[i] <= kMax) & (r1[i] <= kMax) & (r2[i] <= kMax);
+      if (!candidates) continue;
     }
-    if (!every_band_reads) continue;
-    if (above_checked_.fetch_add(1, std::memory_order_relaxed) >= kAboveRangeBudget) break;
-    if (!above_) {  // still being built: checked when the estimate ends
-      const std::lock_guard<std::mutex> lock(above_mutex_);
-      above_pending_points_.emplace_back(x0 + static_cast<int>(i), y);
-      above_pending_signals_.insert(above_pending_signals_.end(), s, s + bands);
-      continue;
+    for (std::size_t i = c0; i < c1; ++i) {
+      if (!std::isnan(out[i])) continue;
+      bool every_band_reads = true;
+      for (std::size_t b = 0; b < bands && every_band_reads; ++b) {
+        s[b] = rows[b][i];
+        every_band_reads = s[b] >= dim && s[b] <= kMax;
+      }
+      if (!every_band_reads) continue;
+      if (above_checked_.fetch_add(1, std::memory_order_relaxed) >= kAboveRangeBudget) {
+        c0 = n;  // this estimate's budget is spent
+        break;
+      }
+      if (!above_) {  // still being built: checked when the estimate ends
+        const std::lock_guard<std::mutex> lock(above_mutex_);
+        above_pending_points_.emplace_back(x0 + static_cast<int>(i), y);
+        above_pending_signals_.insert(above_pending_signals_.end(), s, s + bands);
+        continue;
+      }
+      if (!std::isnan(above_->reading_above(s))) found.emplace_back(x0 + static_cast<int>(i), y);
     }
-    if (!std::isnan(above_->reading_above(s))) found.emplace_back(x0 + static_cast<int>(i), y);
   }
   if (found.empty()) return;
   const std::lock_guard<std::mutex> lock(above_mutex_);
