@@ -114,10 +114,11 @@
  *   first time, and again after statistics without any;
  * - above-range (guint64): pixels without a reading because they are hotter than the model's
  *   range (the likelihood fit along the model's locus extended to 6000 degC reads them above
- *   its end, their bands fit a graybody there, and so do most of their 3x3 neighbours; at most
- *   65536 pixels are checked a frame). Non-zero: the scene's hottest part is there, peak-c and
- *   max-c are lower bounds, and a warning says so as for saturated. Every output frame carries
- *   them as a PyrocamAboveRangeMeta, which thermalcolormap's peak readout and thermalalarm read;
+ *   its end by 3 standard deviations of their noise, their bands fit a graybody there, and so
+ *   do most of their 3x3 neighbours; at most 65536 pixels are checked a frame). Non-zero: the
+ * scene's hottest part is there, peak-c and max-c are lower bounds, and a warning says so as for
+ * saturated. Every output frame carries them as a PyrocamAboveRangeMeta, which thermalcolormap's
+ * peak readout and thermalalarm read;
  * - peak-c (double, degC), peak-x, peak-y (int, output pixels): the object's peak, robust to
  *   the wild mixed pixels at sharp edges that make max-c: the largest median of the
  *   #GstRatioTemp:peak-window square windows with at least half their pixels read, and that

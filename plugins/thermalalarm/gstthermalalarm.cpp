@@ -20,7 +20,8 @@
  * those without a reading in the tiles where the frame's PyrocamAboveRangeMeta (ratiotemp's)
  * puts such pixels count as hotter than any reading in the statistic (the median or the peak),
  * and a frame whose statistic is then one of them counts as above the threshold (above-range in
- * the message; value-c is the range's end, a lower bound), whatever the threshold.
+ * the message; value-c is the range's end, a lower bound). A threshold above the range's end
+ * cannot be compared with them: they then count as no reading, and a warning says so.
  *
  * The message's fields:
  * - state (string): raised or cleared; active (boolean): true when raised;
@@ -112,8 +113,9 @@ struct Settings {
 
 struct State {
   pyrocam::AlarmMonitor monitor;
-  guint serial = 0;         // of the settings the monitor has
-  std::string warned_clip;  // the region text whose clipping was warned about
+  guint serial = 0;                 // of the settings the monitor has
+  std::string warned_clip;          // the region text whose clipping was warned about
+  double warned_threshold_c = NAN;  // a threshold warned to lie above the model's range
 };
 
 pyrocam::AlarmSettings to_library(const Settings& s) {
@@ -282,9 +284,21 @@ static GstFlowReturn gst_thermal_alarm_transform_frame_ip(GstVideoFilter* filter
   bool above_range = false;
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kNumeric, "Could not compute the alarm statistic", [&] {
         cv::Mat t = pyrocam::decode_decikelvin(codes(region));
-        // Pixels hotter than the range: above any reading (a temperature no code holds).
+        // Pixels hotter than the range: above any reading (a temperature no code holds), and so
+        // above a threshold within the range; one above it they cannot be compared with.
         const PyrocamAboveRangeMeta* meta = pyrocam_buffer_get_above_range_meta(frame->buffer);
-        for (cv::Rect r : pg::above_range_rects(meta, cv::Size(width, height))) {
+        const bool comparable = !meta || settings.threshold_c <= meta->max_temperature_c;
+        if (!comparable && meta->pixels > 0 && settings.threshold_c != st.warned_threshold_c) {
+          GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                              ("threshold-c %.1f lies above the model's range (up to %.0f degC): "
+                               "pixels hotter than the range cannot be compared with it and "
+                               "count as no reading",
+                               settings.threshold_c, meta->max_temperature_c),
+                              ("ratiotemp's PyrocamAboveRangeMeta names such pixels"));
+          st.warned_threshold_c = settings.threshold_c;
+        }
+        for (cv::Rect r :
+             pg::above_range_rects(comparable ? meta : nullptr, cv::Size(width, height))) {
           r &= region;
           if (r.empty()) continue;
           cv::Mat part = t(r - region.tl());

@@ -248,8 +248,8 @@ TEST_F(ThermalAlarm, SaturatedSamplesThatTookReadingsInTheRegionCountAsAboveTheT
 
 // A part hotter than the model's range has no reading; ratiotemp's meta says where. Its pixels
 // count as hotter than any reading in the statistic: a core of them raises the median and the
-// peak alarm whatever the threshold (value-c then the range's end), a pixel of them at a corner
-// does not move the peak, and one outside the region is not watched.
+// peak alarm (value-c then the range's end), a pixel of them at a corner does not move the peak,
+// one outside the region is not watched, and a threshold above the range cannot be compared.
 TEST_F(ThermalAlarm, PixelsHotterThanTheModelsRangeCountAsHotterThanAnyReading) {
   start("thermalalarm threshold-c=1900 frames=2 region=4,3,6,6");
   const auto rim = frame(900, 1400), cored = with_hole(rim, 6, 5, 2);
@@ -270,12 +270,14 @@ TEST_F(ThermalAlarm, PixelsHotterThanTheModelsRangeCountAsHotterThanAnyReading) 
   for (GstStructure* st : m) gst_structure_free(st);
   above_ = {};
   EXPECT_EQ(states({hole, hole}), ".c");
-  // Above the range's end too: those pixels are hotter than the model can say.
+  // A threshold above the range's end cannot be compared with them: no reading, and a warning.
   set("threshold-c", 2500.0);
   above_ = cv::Rect(5, 4, 5, 5);
-  EXPECT_EQ(states({hole, hole}), ".r");
+  EXPECT_EQ(states({hole, hole}), "..");
+  EXPECT_NE(first_warning_or_error(GST_MESSAGE_WARNING).find("lies above the model's range"),
+            std::string::npos);
+  EXPECT_EQ(first_warning_or_error(GST_MESSAGE_WARNING), "");  // once
   above_ = {};
-  EXPECT_EQ(states({rim, rim}), ".c");
   // The peak: one such pixel at the region's corner leaves every window's median a reading.
   set("statistic", "peak");
   set("threshold-c", 1900.0);

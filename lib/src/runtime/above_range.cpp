@@ -1,9 +1,11 @@
 #include "pyrocam/runtime/above_range.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <utility>
 
+#include "pyrocam/core/noise_model.h"
 #include "runtime/shared_model.h"
 
 namespace pyrocam {
@@ -21,6 +23,8 @@ AboveRangeCheck::AboveRangeCheck(std::shared_ptr<const ThermalModel> model)
     : extended_(extended_model(model)),
       fit_(make_estimator(extended_, Method::kLikelihood)),
       misfit_(extended_, kAboveRangeMisfitProbability, kAboveRangeModelError),
+      locus_(make_locus(extended_->camera, model->max_temperature_c - kCurvatureStepC,
+                        kAboveRangeTopC, kLocusStepC)),
       max_c_(model->max_temperature_c),
       dim_dn_(model->profile().thresholds.inference_dim_dn),
       bands_(model->profile().band_count()) {}
@@ -30,14 +34,40 @@ double AboveRangeCheck::reading_above(const double* signals) const {
     if (!(signals[b] >= dim_dn_ && std::isfinite(signals[b]))) return NAN;
   const double t = fit_->temperature_c(signals);  // NaN at either end of the extended locus
   if (!(t > max_c_)) return NAN;
+  if (!(t - kAboveRangeSigmas * noise_sd_c(signals, t) > max_c_)) return NAN;
   int counted = 0;
   const double chi2 = misfit_.chi2(signals, t, &counted);
   return chi2 <= misfit_.threshold(counted) ? t : NAN;
 }
 
+double AboveRangeCheck::noise_sd_c(const double* signals, double t_c) const {
+  // chi2(T) = sum w (s - a m(T))^2 with the scale profiled out, at the locus sample nearest T
+  // and kCurvatureStepC either side.
+  const Eigen::Index step = static_cast<Eigen::Index>(kCurvatureStepC / kLocusStepC);
+  const Eigen::Index i = std::clamp<Eigen::Index>(
+      static_cast<Eigen::Index>(std::lround((t_c - locus_.temperature_c[0]) / kLocusStepC)), step,
+      locus_.size() - 1 - step);
+  const double h = kCurvatureStepC;
+  const auto chi2_at = [&](Eigen::Index k) {
+    const auto m = locus_.rates.row(k);
+    double ss = 0, sm = 0, mm = 0;
+    for (int b = 0; b < bands_; ++b) {
+      const double w =
+          1 / signal_variance_dn2(extended_->profile(), b, signals[b], 1, analogue_gain_);
+      ss += w * signals[b] * signals[b];
+      sm += w * signals[b] * m[b];
+      mm += w * m[b] * m[b];
+    }
+    return ss - sm * sm / mm;
+  };
+  const double curvature = (chi2_at(i - step) - 2 * chi2_at(i) + chi2_at(i + step)) / (h * h);
+  return curvature > 0 ? std::sqrt(2 / curvature) : INFINITY;
+}
+
 void AboveRangeCheck::set_analogue_gain(double factor) {
   fit_->set_analogue_gain(factor);
   misfit_.set_analogue_gain(factor);
+  analogue_gain_ = factor;
 }
 
 SaturatedSamples above_range_spots(const std::vector<cv::Point>& found, cv::Size size,
