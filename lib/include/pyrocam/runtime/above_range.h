@@ -5,8 +5,8 @@
 // apart: a pixel without a reading whose bands all read (finite, at least the dim threshold, not
 // saturated) is above the range when the likelihood fit along the model camera's locus extended
 // to kAboveRangeTopC reads it above max_temperature_c by more than kAboveRangeSigmas standard
-// deviations of its noise, strictly inside the extension, and its
-// bands fit a graybody there: the band-consistency check (misfit.h) with the bar of ratiotemp's
+// deviations of its noise, strictly inside the extension, and its bands fit a graybody there:
+// the band-consistency check (misfit.h) with the bar of ratiotemp's
 // fit audit (false rejections 1e-9, 5 % model error per band; at 2 %, 5x5 units unlike the
 // model's failed it noise-free). The fit is made over the whole extended locus, so a pixel that
 // fits some temperature inside the range better (one refused for another reason) is not above
@@ -30,10 +30,12 @@ namespace pyrocam {
 inline constexpr double kAboveRangeTopC = 6000;
 inline constexpr double kAboveRangeMisfitProbability = 1e-9, kAboveRangeModelError = 0.05;
 // How far above the range's end a reading must be, in standard deviations of its noise: near
-// the end a surface inside the range reads above it on many of its pixels (the colour camera's
-// readings scatter by 100 degC and more at 3400 degC, and demosaicking makes neighbours scatter
-// together), so only a reading the noise cannot have lifted that far counts. One-sided normal:
-// a pixel at the end itself passes with probability 0.13 %.
+// the end a surface inside the range reads above it on many of its pixels (the colour test
+// camera's readings scatter by about 80 degC at 3450 degC, and demosaicking makes neighbours
+// scatter together: without the margin, plates at 3400-3490 degC were called hotter than a range
+// ending at 3500 over hundreds to thousands of pixels), so only a reading the noise cannot have
+// lifted that far counts. One-sided normal: a pixel at the end itself passes with probability
+// 0.13 %.
 inline constexpr double kAboveRangeSigmas = 3;
 
 // Pixels checked at most per frame (PlaneEstimator): a frame whose whole object is above the
@@ -73,9 +75,10 @@ class AboveRangeCheck {
 
 // Of the pixels `found` above the range in a frame of `size`, those whose 3 x 3 neighbourhood
 // (within the frame) holds at least 5 found pixels, so that the neighbourhood's median reads
-// above the range: a spot hotter than the model reads, not a pixel that noise lifted over the
-// range's end (a colour plate 100 degC below it reads so about once in 200 pixels, scattered). In
-// darksub's summary of saturated samples: their count, bounds and tiles, in pixels of `size`.
+// above the range: a spot hotter than the model reads, not a lone pixel (the noise margin of
+// AboveRangeCheck does the rest: neighbours share demosaicking footprints, so their noise does
+// not average out over a neighbourhood). In darksub's summary of saturated samples: their count,
+// bounds and tiles, in pixels of `size`.
 // Points outside the frame are ignored. `kept`, if given, receives the spots' pixels.
 SaturatedSamples above_range_spots(const std::vector<cv::Point>& found, cv::Size size,
                                    std::vector<cv::Point>* kept = nullptr);
