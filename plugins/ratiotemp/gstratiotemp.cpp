@@ -336,6 +336,7 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
                         ("method auto uses likelihood, not lut, for model %s: %s",
                          settings.model.c_str(), choice.fallback.c_str()),
                         ("lookup table refused in start"));
+  rt::warn_when_network_folds(self, st);
   st.method_request = settings.method;
   st.region_serial_seen = settings.region_serial;
   st.estimators->estimator(st.method).take_fit_audit();  // its check's tables, on their thread
@@ -401,6 +402,7 @@ static void apply_method(GstRatioTemp* self, GstRatioTempMethod request) {
     st.method = chosen;
     st.method_request = request;
     st.refused = false;
+    rt::warn_when_network_folds(self, st);
     return;
   }
   st.refused = true;

@@ -110,6 +110,7 @@ struct State {
   // whether they were warned about (since the last statistics without any).
   std::vector<cv::Point> above_range;
   bool above_range_warned = false;
+  bool fold_warned = false;  // warn_when_network_folds ran for this model
   GstClockTime last_stats = GST_CLOCK_TIME_NONE;
   guint64 frames = 0;  // since start or the last flush
   guint region_serial_seen = 0;
@@ -211,6 +212,10 @@ double exposure_us_of(const GstTagList* tags);
 void push_recording_tags(GstRatioTemp* self, const RecordingInfo& info, const GstTagList* upstream,
                          std::string& pushed_comment);
 
+/* Once a model: where the method in use (the network or its table) reads graybodies hotter than
+ * the model's range as temperatures inside it (pyrocam::fold_above_range), a warning saying so,
+ * as such surfaces then read wrong instead of not at all. */
+void warn_when_network_folds(GstRatioTemp* self, State& st);
 /* push_recording_tags with what the element's settings and state say. */
 void push_stream_tags(GstRatioTemp* self, const Settings& settings, State& st);
 /* The library's request for a method property value (ratiotemp-properties.cpp). */

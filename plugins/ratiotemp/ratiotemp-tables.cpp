@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 
+#include "pyrocam/runtime/estimator_check.h"
 #include "pyrocam/runtime/prebuilt_tables.h"
 #include "ratiotemp-private.h"
 
@@ -56,6 +57,23 @@ void report_table_files(GstRatioTemp* self, const pyrocam::EstimatorSelector& es
                          "--model %s writes one",
                          model_path.c_str(), model_path.c_str()),
                         ("%s not found", prebuilt.c_str()));
+}
+
+void warn_when_network_folds(GstRatioTemp* self, State& st) {
+  if (st.method == pyrocam::Method::kLikelihood || st.fold_warned) return;
+  st.fold_warned = true;
+  const pyrocam::AboveRangeFold fold =
+      pyrocam::fold_above_range(*st.model, st.estimators->estimator(st.method).estimator());
+  if (fold.read_inside == 0) return;
+  GST_ELEMENT_WARNING(
+      self, RESOURCE, SETTINGS,
+      ("%s: with method %s, model %s reads graybodies hotter than its range inside it (%.0f degC "
+       "as %.0f degC): a surface hotter than %.0f degC would read wrong, not as no reading; use "
+       "method=likelihood, or a model calibrated to a higher --max-temperature",
+       GST_OBJECT_NAME(self), pyrocam::method_name(st.method).c_str(), st.model_path.c_str(),
+       fold.worst_true_c, fold.worst_read_c, st.model->max_temperature_c),
+      ("%zu of %zu noise-free graybodies up to 500 degC above the range read inside it",
+       fold.read_inside, fold.samples));
 }
 
 }  // namespace pyrocam::gst::ratiotemp

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <sstream>
 
@@ -11,6 +12,7 @@
 #include "pyrocam/calibration/calibration_uncertainty.h"
 #include "pyrocam/calibration/noisy_locus.h"
 #include "pyrocam/core/error.h"
+#include "pyrocam/runtime/estimator_check.h"
 
 namespace pyrocam {
 namespace {
@@ -141,6 +143,20 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   out.table4 = evaluate_estimators(m, out.rates, locus, sheet_camera, opt.locus_step_c);
   report_stage(progress, "evaluating", 1, 1);
   for (std::string& w : calibration_quality_warnings(out)) out.warnings.push_back(std::move(w));
+  // A network that reads graybodies hotter than the range inside it (a narrow range: the colour
+  // camera's ratios turn over) makes such surfaces read wrong rather than not at all.
+  const AboveRangeFold fold =
+      fold_above_range(m, *make_estimator(std::make_shared<const ThermalModel>(m), Method::kMlp));
+  if (fold.read_inside > 0) {
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "the network reads graybodies hotter than the model's range inside it (%.0f "
+                  "degC as %.0f degC): with ratiotemp method lut, mlp or auto (colour) a surface "
+                  "hotter than %.0f degC reads wrong, not as no reading; use method=likelihood "
+                  "with this model, or calibrate to a higher --max-temperature",
+                  fold.worst_true_c, fold.worst_read_c, m.max_temperature_c);
+    out.warnings.emplace_back(text);
+  }
 
   m.uncertainty = uncertainty_model(m, t_c, rates, opt, progress, references, qe.fit_choices);
   m.uncertainty.u_qe_model_c =

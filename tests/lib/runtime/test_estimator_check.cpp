@@ -2,6 +2,7 @@
 // the size and place of its error.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <memory>
 
@@ -52,6 +53,35 @@ TEST(EstimatorCheck, finds_the_size_and_place_of_a_disagreement) {
   // The blind part: the locus samples below about 600 degC that the network reads.
   EXPECT_GE(r.validity_differs, 18u);
   EXPECT_LE(r.validity_differs, 22u);
+}
+
+// A network that reads what lies beyond the range's end as a temperature inside it (as one
+// trained only up to a narrow range's end does): fold_above_range finds it and the worst case;
+// the test model's own network, trained on its whole range, reads nothing beyond it inside.
+class FoldingEstimator : public TemperatureEstimator {
+ public:
+  explicit FoldingEstimator(const std::shared_ptr<const ThermalModel>& m)
+      : TemperatureEstimator(m), reference_(make_estimator(m, Method::kLikelihood)) {}
+  double temperature_c(const double* s) const override {
+    const double t = reference_->temperature_c(s);
+    return std::isnan(t) ? 1812 : t;  // beyond the range: some temperature inside it
+  }
+
+ private:
+  std::unique_ptr<TemperatureEstimator> reference_;
+};
+
+TEST(EstimatorCheck, a_network_reading_beyond_the_range_inside_it_is_found) {
+  const FoldingEstimator folding(test_model());
+  const AboveRangeFold fold = fold_above_range(*test_model(), folding, 1000, 10);
+  EXPECT_EQ(fold.samples, 100u);  // 3510..4500 degC
+  EXPECT_EQ(fold.read_inside, 100u);
+  EXPECT_EQ(fold.worst_true_c, 4500);
+  EXPECT_FLOAT_EQ(fold.worst_read_c, 1812);
+  const auto mlp = make_estimator(test_model(), Method::kMlp);
+  const AboveRangeFold none = fold_above_range(*test_model(), *mlp);
+  EXPECT_EQ(none.samples, 50u);  // 3510..4000 degC
+  EXPECT_EQ(none.read_inside, 0u) << none.worst_true_c << " read " << none.worst_read_c;
 }
 
 }  // namespace
