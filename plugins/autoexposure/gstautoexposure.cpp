@@ -314,6 +314,7 @@ static void reset_state(GstAutoExposure* self) {
 }
 
 static gboolean gst_auto_exposure_start(GstBaseTransform* trans) {
+  pg::forget_posted_errors(GST_ELEMENT(trans));
   GstAutoExposure* self = GST_AUTO_EXPOSURE(trans);
   const Settings settings = pg::locked_copy(self, *self->settings);
   std::string why;

@@ -280,8 +280,32 @@ bool frame_out_of_time_order(GstElement* element, GstBuffer* buffer, GstClockTim
   return backwards;
 }
 
+static GQuark posted_error_quark() {
+  static const GQuark quark = g_quark_from_static_string("pyrocam-posted-error");
+  return quark;
+}
+
+void forget_posted_errors(GstElement* element) {
+  GST_OBJECT_LOCK(element);
+  g_object_set_qdata_full(G_OBJECT(element), posted_error_quark(), nullptr, nullptr);
+  GST_OBJECT_UNLOCK(element);
+}
+
 void post_error(GstElement* element, ErrorKind kind, const std::string& user,
                 const std::string& debug, const char* function, int line) {
+  GST_OBJECT_LOCK(element);
+  const auto* posted =
+      static_cast<const char*>(g_object_get_qdata(G_OBJECT(element), posted_error_quark()));
+  const bool repeated = posted != nullptr && user == posted;
+  // Without a bus (an element not yet in a pipeline) the message goes nowhere: not posted.
+  if (!repeated && GST_ELEMENT_BUS(element) != nullptr)
+    g_object_set_qdata_full(G_OBJECT(element), posted_error_quark(), g_strdup(user.c_str()),
+                            g_free);
+  GST_OBJECT_UNLOCK(element);
+  if (repeated) {
+    GST_DEBUG_OBJECT(element, "error already posted: %s", user.c_str());
+    return;
+  }
   GQuark domain = GST_RESOURCE_ERROR;
   gint code = GST_RESOURCE_ERROR_FAILED;
   switch (kind) {

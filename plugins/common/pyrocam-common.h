@@ -182,8 +182,13 @@ enum class ErrorKind {
  * or a .json name) that is not there, else READ. */
 ErrorKind profile_error_kind(const std::string& name_or_path);
 
+/* Posts an error message, once: an error the element already posted with the same user message
+ * since forget_posted_errors() is logged only (GstBaseTransform tries set_caps again with caps it
+ * refused, which put the same message on the bus twice or more). */
 void post_error(GstElement* element, ErrorKind kind, const std::string& user,
                 const std::string& debug, const char* function, int line);
+/* Called in start(): a new run posts its errors again. */
+void forget_posted_errors(GstElement* element);
 #define PYROCAM_POST_ERROR(element, kind, user, debug) \
   ::pyrocam::gst::post_error(GST_ELEMENT(element), kind, user, debug, GST_FUNCTION, __LINE__)
 

@@ -322,6 +322,7 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
 }
 
 static gboolean gst_dark_sub_start(GstBaseTransform* trans) {
+  pg::forget_posted_errors(GST_ELEMENT(trans));
   GstDarkSub* self = GST_DARK_SUB(trans);
   const Settings settings = copy_settings(self);
   State& st = *self->state;

@@ -245,6 +245,7 @@ static gboolean gst_demosaic25_set_caps(GstBaseTransform* trans, GstCaps* incaps
 }
 
 static gboolean gst_demosaic25_start(GstBaseTransform* trans) {
+  pg::forget_posted_errors(GST_ELEMENT(trans));
   GstDemosaic25* self = GST_DEMOSAIC25(trans);
   const Settings settings = copy_settings(self);
   State& st = *self->state;

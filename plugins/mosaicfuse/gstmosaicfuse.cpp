@@ -104,6 +104,7 @@ static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
     "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_MOSAIC_CAPS));
 
 static gboolean gst_mosaic_fuse_start(GstBaseTransform* trans) {
+  pg::forget_posted_errors(GST_ELEMENT(trans));
   *GST_MOSAIC_FUSE(trans)->state = State();
   return TRUE;
 }

@@ -278,6 +278,7 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
 }
 
 static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
+  pg::forget_posted_errors(GST_ELEMENT(trans));
   GstRatioTemp* self = GST_RATIO_TEMP(trans);
   const Settings settings = copy_settings(self);
   reset_state(self);

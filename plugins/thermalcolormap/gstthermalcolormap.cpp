@@ -209,6 +209,7 @@ static gboolean gst_thermal_colormap_set_info(GstVideoFilter* filter, GstCaps* /
 }
 
 static gboolean gst_thermal_colormap_start(GstBaseTransform* trans) {
+  pg::forget_posted_errors(GST_ELEMENT(trans));
   GstThermalColormap* self = GST_THERMAL_COLORMAP(trans);
   *self->state = State();
   return TRUE;

@@ -101,6 +101,7 @@ static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
     "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_TEMPERATURE_CAPS));
 
 static gboolean gst_thermal_fuse_start(GstBaseTransform* trans) {
+  pg::forget_posted_errors(GST_ELEMENT(trans));
   *GST_THERMAL_FUSE(trans)->state = State();
   return TRUE;
 }

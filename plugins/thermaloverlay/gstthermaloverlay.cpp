@@ -415,6 +415,7 @@ static GstStateChangeReturn gst_thermal_overlay_change_state(GstElement* element
   GstThermalOverlay* self = GST_THERMAL_OVERLAY(element);
   State& st = *self->state;
   if (transition == GST_STATE_CHANGE_READY_TO_PAUSED) {
+    pg::forget_posted_errors(element);
     std::lock_guard<std::mutex> lock(st.lock);
     st.clear_overlays();
     st.flushing = st.overlay_flushing = st.overlay_eos = st.video_eos = false;

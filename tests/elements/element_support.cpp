@@ -79,6 +79,13 @@ BusResult run_pipeline(const std::string& description, GstClockTime timeout, boo
     g_free(dbg);
   }
   if (msg) gst_message_unref(msg);
+  // READY stops the streaming threads; NULL would flush what they posted before.
+  gst_element_set_state(pipeline, GST_STATE_READY);
+  r.errors = r.error ? 1 : 0;
+  while (GstMessage* more = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR)) {
+    ++r.errors;
+    gst_message_unref(more);
+  }
   gst_element_set_state(pipeline, GST_STATE_NULL);
   if (sink) gst_object_unref(sink);
   gst_object_unref(bus);
@@ -219,10 +226,13 @@ std::vector<std::vector<std::uint8_t>> sink_frames(const std::string& descriptio
 
 void HarnessTest::start(const std::string& launch, const std::string& src_caps) {
   h = gst_harness_new_parse(launch.c_str());
+  // Before the caps: an error set_caps posts is posted once (not again on the first buffer).
+  attach_bus();
   gst_harness_set_src_caps_str(h, src_caps.c_str());
 }
 
 void HarnessTest::attach_bus() {
+  if (bus) return;
   bus = gst_bus_new();
   gst_element_set_bus(h->element, bus);
 }

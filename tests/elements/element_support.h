@@ -41,6 +41,7 @@ struct BusResult {
   std::string message, debug, source;
   int buffers = 0;                    // buffers that reached the sink named "sink", if any
   std::vector<std::string> warnings;  // the warning messages posted before the end
+  int errors = 0;                     // error messages on the bus once the pipeline stopped
 };
 // Runs a gst-launch description to EOS or the first error, at most `timeout`; with
 // `until_warning`, also to the first warning (a source without end, for a warning that comes
@@ -127,9 +128,9 @@ class HarnessTest : public ::testing::Test {
   void SetUp() override { REQUIRE_ELEMENT(element_); }
   // Also called between the cases of one test: everything is released and null again after.
   void TearDown() override;
-  // The harness around a parsed launch line, fed caps `src_caps`.
+  // The harness around a parsed launch line, fed caps `src_caps`, with a bus (attach_bus).
   void start(const std::string& launch, const std::string& src_caps);
-  // A bus on the harnessed element, to see its messages.
+  // A bus on the harnessed element, to see its messages (once: a second call keeps it).
   void attach_bus();
 
   GstHarness* h = nullptr;

@@ -289,6 +289,18 @@ TEST(DarkSubErrors, rejects_a_dark_of_another_size_from_its_header_n) {
       << r.message;
 }
 
+// GstBaseTransform tries set_caps again with the caps it refused: the message is posted once.
+TEST(DarkSubErrors, posts_a_refused_dark_once) {
+  REQUIRE_ELEMENT("darksub");
+  ScratchDir dir("darksub-once");
+  write_raw_image(dir / "dark.pgm", cv::Mat(10, 10, CV_8U, cv::Scalar(50)));
+  const auto r =
+      run_pipeline("pyrocamsrc num-buffers=5 ! darksub location=" + (dir / "dark.pgm").string() +
+                   " ! demosaic25 ! fakesink");
+  expect_error(r, GST_STREAM_ERROR, GST_STREAM_ERROR_FORMAT, {"dark.pgm is 10x10"});
+  EXPECT_EQ(r.errors, 1);
+}
+
 TEST(DarkSubErrors, rejects_an_8_bit_dark_on_a_16_bit_stream) {
   REQUIRE_ELEMENT("darksub");
   ScratchDir dir("darksub-depth8");
