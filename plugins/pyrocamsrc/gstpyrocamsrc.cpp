@@ -54,6 +54,7 @@
 #include "pyrocam/runtime/bracket_fusion.h"
 #include "pyrocam/simulation/scenes.h"
 #include "pyrocam/simulation/simulator.h"
+#include "pyrocamsrc-private.h"
 
 GST_DEBUG_CATEGORY_STATIC(gst_pyrocam_src_debug);
 #define GST_CAT_DEFAULT gst_pyrocam_src_debug
@@ -164,42 +165,12 @@ static Settings copy_settings(GstPyrocamSrc* self) {
   return pg::locked_copy(self, *self->settings);
 }
 
-/* The caps the loaded profile can produce. */
-static GstCaps* profile_caps(const pyrocam::CameraProfile& profile) {
-  std::string caps;
-  std::string pattern = profile.mosaic.pattern;
-  for (char& c : pattern) c = static_cast<char>(g_ascii_tolower(c));
-  if (profile.mosaic.kind == pyrocam::MosaicLayout::Kind::kBayer && profile.bit_depth == 8) {
-    caps = PYROCAM_BAYER_MEDIA_TYPE ", format = (string) " + pattern;
-  } else {
-    /* The layout and depth travel in the caps (pyrocam-caps.h), so that darksub cannot read
-     * the mosaic as another one. */
-    if (profile.mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot)
-      pattern = std::to_string(profile.mosaic.period_width) + "x" +
-                std::to_string(profile.mosaic.period_height);
-    caps =
-        std::string(PYROCAM_VIDEO_MEDIA_TYPE ", format = (string) ") +
-        (profile.bit_depth == 8 ? "GRAY8" : "GRAY16_LE") +
-        ", " PYROCAM_FIELD_PATTERN " = (string) " + pattern +
-        ", " PYROCAM_FIELD_BIT_DEPTH " = (int) " + std::to_string(profile.bit_depth) +
-        ", " PYROCAM_FIELD_SATURATION_LEVEL " = (int) " +
-        std::to_string(static_cast<int>(std::lround(profile.thresholds.inference_saturation_dn)));
-    if (profile.mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot)
-      caps += ", " PYROCAM_FIELD_BAND_MAP " = (string) \"" +
-              pyrocam::gst::band_map_text(profile.mosaic) + "\"";
-  }
-  // 0/1 too, so that caps asking for it reach set_caps and its error names it (else only
-  // "not-negotiated").
-  caps += ", " PYROCAM_SIZE_RANGE ", " PYROCAM_FRAMERATE_RANGE;
-  return gst_caps_from_string(caps.c_str());
-}
-
 static GstCaps* gst_pyrocam_src_get_caps(GstBaseSrc* src, GstCaps* filter) {
   GstPyrocamSrc* self = GST_PYROCAM_SRC(src);
   GstCaps* caps;
   const bool have = pg::locked_copy(self, self->state->camera != nullptr);
   if (have)
-    caps = profile_caps(self->state->camera->profile());
+    caps = pyrocam::gst::pyrocamsrc::profile_caps(self->state->camera->profile());
   else
     caps = gst_pad_get_pad_template_caps(GST_BASE_SRC_PAD(src));
   if (filter) {
@@ -208,6 +179,16 @@ static GstCaps* gst_pyrocam_src_get_caps(GstBaseSrc* src, GstCaps* filter) {
     caps = tmp;
   }
   return caps;
+}
+
+/* GstBaseSrc says only "not-negotiated" when downstream takes none of the profile's formats. */
+static gboolean gst_pyrocam_src_negotiate(GstBaseSrc* src) {
+  if (GST_BASE_SRC_CLASS(gst_pyrocam_src_parent_class)->negotiate(src)) return TRUE;
+  GstPyrocamSrc* self = GST_PYROCAM_SRC(src);
+  if (self->state->camera)
+    pyrocam::gst::pyrocamsrc::explain_refused_caps(GST_ELEMENT(src), GST_BASE_SRC_PAD(src),
+                                                   self->state->camera->profile());
+  return FALSE;
 }
 
 static GstCaps* gst_pyrocam_src_fixate(GstBaseSrc* src, GstCaps* caps) {
@@ -260,6 +241,7 @@ static gboolean gst_pyrocam_src_set_caps(GstBaseSrc* src, GstCaps* caps) {
 }
 
 static gboolean gst_pyrocam_src_start(GstBaseSrc* src) {
+  pg::forget_posted_errors(GST_ELEMENT(src));
   GstPyrocamSrc* self = GST_PYROCAM_SRC(src);
   const Settings settings = copy_settings(self);
   if (!settings.bracket_valid) {
@@ -578,6 +560,7 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
   gst_element_class_add_static_pad_template(element_class, &src_template);
 
   basesrc_class->get_caps = GST_DEBUG_FUNCPTR(gst_pyrocam_src_get_caps);
+  basesrc_class->negotiate = GST_DEBUG_FUNCPTR(gst_pyrocam_src_negotiate);
   basesrc_class->fixate = GST_DEBUG_FUNCPTR(gst_pyrocam_src_fixate);
   basesrc_class->set_caps = GST_DEBUG_FUNCPTR(gst_pyrocam_src_set_caps);
   basesrc_class->start = GST_DEBUG_FUNCPTR(gst_pyrocam_src_start);

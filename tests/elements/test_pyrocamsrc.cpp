@@ -266,5 +266,18 @@ TEST(PyrocamSrcErrors, names_a_variable_frame_rate_n) {
   expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION, {"framerate 0/1"});
 }
 
+// GstBaseSrc alone says "Internal data stream error ... not-negotiated".
+TEST(PyrocamSrcErrors, names_a_mosaic_downstream_does_not_take_n) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  auto r = run_pipeline("pyrocamsrc num-buffers=1 ! video/x-bayer,format=bggr ! fakesink");
+  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION,
+               {"profile rgb-reference gives video/x-bayer, format=(string)rggb",
+                "downstream does not take", "format=(string)bggr"});
+  r = run_pipeline("pyrocamsrc profile=nir5x5-reference num-buffers=1 ! video/x-bayer ! fakesink");
+  expect_error(r, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION,
+               {"profile nir5x5-reference gives video/x-raw, format=(string)GRAY8"});
+  EXPECT_EQ(r.message.find("band-map"), std::string::npos) << r.message;
+}
+
 }  // namespace
 }  // namespace pyrocam::test
