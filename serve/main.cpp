@@ -264,12 +264,16 @@ int main(int argc, char** argv) {
       const double value = alarm.value("value-c", nlohmann::json()).is_number()
                                ? alarm["value-c"].get<double>()
                                : std::numeric_limits<double>::quiet_NaN();
+      // No levels: the alarm was turned off.
+      char levels[96] = "turned off";
+      if (alarm.value("threshold-c", nlohmann::json()).is_number())
+        std::snprintf(levels, sizeof levels, "raised above %.1f, cleared below %.1f degC",
+                      alarm["threshold-c"].get<double>(), alarm.value("clear-c", 0.0));
       gchar* line = g_strdup_printf(
-          "%s: ALARM %s: %s %.1f degC%s%s (raised above %.1f, cleared below %.1f degC)", kName,
-          alarm.value("state", "?").c_str(), alarm.value("statistic", "?").c_str(), value,
+          "%s: ALARM %s: %s %.1f degC%s%s (%s)", kName, alarm.value("state", "?").c_str(),
+          alarm.value("statistic", "?").c_str(), value,
           alarm.value("saturated", false) ? " and saturated samples" : "",
-          alarm.value("above-range", false) ? " and pixels above the model's range" : "",
-          alarm.value("threshold-c", 0.0), alarm.value("clear-c", 0.0));
+          alarm.value("above-range", false) ? " and pixels above the model's range" : "", levels);
       std::cerr << line << std::endl;
       g_free(line);
     }

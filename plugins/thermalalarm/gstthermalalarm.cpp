@@ -27,7 +27,8 @@
  * - state (string): raised or cleared; active (boolean): true when raised;
  * - statistic (string): median or peak; value-c (double, degC): the statistic of the frame that
  *   changed the state (absent when the alarm was turned off with threshold-c);
- * - threshold-c, clear-c (double, degC): the levels that raise and clear; frames (guint);
+ * - threshold-c, clear-c (double, degC): the levels that raise and clear (absent when the alarm
+ *   was turned off); frames (guint);
  * - saturated (boolean): the frame that changed the state counted as above the threshold
  *   because saturation left pixels of the region without a reading;
  * - above-range (boolean): the frame's statistic was that of pixels hotter than the model's
@@ -161,6 +162,7 @@ static GstStaticPadTemplate src_template = GST_STATIC_PAD_TEMPLATE(
     "src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PYROCAM_TEMPERATURE_CAPS));
 
 static gboolean gst_thermal_alarm_start(GstBaseTransform* trans) {
+  pg::forget_posted_errors(GST_ELEMENT(trans));
   GstThermalAlarm* self = GST_THERMAL_ALARM(trans);
   const Settings settings = pg::locked_copy(self, *self->settings);
   *self->state = State();
@@ -191,13 +193,16 @@ static void post_change(GstThermalAlarm* self, const Settings& settings, double 
   GstStructure* s = gst_structure_new(
       ALARM_MESSAGE, "state", G_TYPE_STRING, active ? "raised" : "cleared", "active",
       G_TYPE_BOOLEAN, active, "statistic", G_TYPE_STRING, statistic_name(settings.statistic),
-      "threshold-c", G_TYPE_DOUBLE, rule.threshold_c, "clear-c", G_TYPE_DOUBLE,
-      rule.clear_below_c(), "frames", G_TYPE_UINT, settings.frames, "timestamp", G_TYPE_UINT64,
-      static_cast<guint64>(pts), "running-time", G_TYPE_UINT64, static_cast<guint64>(running_time),
-      "region-x", G_TYPE_INT, region.x, "region-y", G_TYPE_INT, region.y, "region-width",
-      G_TYPE_INT, region.width, "region-height", G_TYPE_INT, region.height, "saturated",
-      G_TYPE_BOOLEAN, saturated, "above-range", G_TYPE_BOOLEAN, above_range, nullptr);
+      "frames", G_TYPE_UINT, settings.frames, "timestamp", G_TYPE_UINT64, static_cast<guint64>(pts),
+      "running-time", G_TYPE_UINT64, static_cast<guint64>(running_time), "region-x", G_TYPE_INT,
+      region.x, "region-y", G_TYPE_INT, region.y, "region-width", G_TYPE_INT, region.width,
+      "region-height", G_TYPE_INT, region.height, "saturated", G_TYPE_BOOLEAN, saturated,
+      "above-range", G_TYPE_BOOLEAN, above_range, nullptr);
   if (!std::isnan(value_c)) gst_structure_set(s, "value-c", G_TYPE_DOUBLE, value_c, nullptr);
+  // Off (NaN) has no levels; a NaN field would print as "nan", which no parser reads back.
+  if (!std::isnan(rule.threshold_c))
+    gst_structure_set(s, "threshold-c", G_TYPE_DOUBLE, rule.threshold_c, "clear-c", G_TYPE_DOUBLE,
+                      rule.clear_below_c(), nullptr);
   if (active)
     GST_WARNING_OBJECT(self, "alarm raised: %s %.1f degC%s above %.1f degC for %u frames",
                        statistic_name(settings.statistic), value_c,
