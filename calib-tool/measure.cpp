@@ -36,6 +36,7 @@ struct MeasureArgs {
   bool allow_partial = false;
   bool uncertainty = false;
   bool blur_correction = false;  // MeasureOptions::blur_correction
+  bool overwrite = false;        // --overwrite: replace a measurement in --out
   int brightness_radius = 0;     // MeasureOptions::brightness_radius
   int peak_window = kDefaultPeakWindow;
   std::set<std::string> given;  // the options on the command line, by name
@@ -291,8 +292,49 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
       << "," << measurer.above_range() << "\n";
 }
 
+// A folder that holds a measurement (frames: stats.csv and an image per frame; a recording:
+// temperature.npy and .csv) is not written into: the new images would sit among the earlier
+// run's, and stats.csv would describe some of them. Refused before any work unless --overwrite;
+// returns the earlier measurement's files (only names this command writes), removed by
+// remove_earlier once the inputs have been read.
+std::vector<std::filesystem::path> earlier_measurement(const MeasureArgs& a) {
+  namespace fs = std::filesystem;
+  const fs::path out(a.out);
+  std::error_code ec;
+  std::vector<fs::path> earlier;
+  if (!fs::is_directory(out, ec)) return earlier;
+  const auto ours = [](const fs::path& p) {
+    const std::string name = p.filename().string(), ext = p.extension().string();
+    const std::string stem = p.stem().string();
+    const auto ends = [&](const std::string& s) {
+      return stem.size() > s.size() && stem.compare(stem.size() - s.size(), s.size(), s) == 0;
+    };
+    return name == "stats.csv" || name == "temperature.npy" || name == "temperature.csv" ||
+           ((ext == ".png" || ext == ".tif") && (ends("_temperature") || ends("_uncertainty")));
+  };
+  for (const auto& entry : fs::directory_iterator(out, ec))
+    if (entry.is_regular_file(ec) && ours(entry.path())) earlier.push_back(entry.path());
+  const bool measured =
+      fs::exists(out / "stats.csv", ec) || fs::exists(out / "temperature.npy", ec);
+  if (!measured) return {};
+  if (!a.overwrite)
+    throw InputError(a.out + " already holds a measurement (" +
+                     (fs::exists(out / "stats.csv", ec) ? "stats.csv" : "temperature.npy") +
+                     "): choose another --out, or --overwrite to replace it");
+  return earlier;
+}
+
+void remove_earlier(const std::vector<std::filesystem::path>& earlier) {
+  std::error_code ec;
+  for (const auto& p : earlier)
+    if (!std::filesystem::remove(p, ec) && ec)
+      throw InputError(p.string() + ": could not remove the earlier measurement's file (" +
+                       ec.message() + ")");
+}
+
 // The whole subcommand once the arguments are checked.
 int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
+  const std::vector<std::filesystem::path> earlier = earlier_measurement(a);
   const auto shared_model = std::make_shared<const ThermalModel>(load_model(a.model));
   const ThermalModel& model = *shared_model;
   const MeasureOptions options = measure_options(a, shared_model, global);
@@ -309,6 +351,7 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
     m.quiet = global.quiet;
     m.peak_window = a.peak_window;
     m.given = a.given;
+    remove_earlier(earlier);
     return measure_recording(m);
   }
   const MeasureInputs in = measure_inputs(a);
@@ -318,6 +361,7 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
   frame_options.check_layout = true;
   FrameMeasurer measurer(shared_model, frame_options);
   load_prebuilt_table(measurer, frame_options, a.model, global.quiet);
+  remove_earlier(earlier);
   std::ofstream csv = open_stats_csv(a.out);
   // A run that fails part-way leaves no results that look complete: what it wrote goes.
   std::vector<std::filesystem::path> written{std::filesystem::path(a.out) / "stats.csv"};
@@ -389,7 +433,13 @@ void add_input_options(CLI::App* c, MeasureArgs& a) {
 
 // Where the results go and how they are read: output folder, estimator and image options.
 void add_output_options(CLI::App* c, MeasureArgs& a) {
-  c->add_option("--out", a.out, "Output folder (created)")->required();
+  c->add_option("--out", a.out,
+                "Output folder (created); one that holds a measurement is refused unless "
+                "--overwrite")
+      ->required();
+  c->add_flag("--overwrite", a.overwrite,
+              "Replace the measurement in --out: its stats.csv and images (or a recording's "
+              "temperature.npy and .csv) are removed first");
   c->add_option("--method", a.method,
                 "Estimator: mlp (the paper's network), lut, likelihood or auto (ratiotemp's "
                 "default: lut where the model has two ratios and its table passes the check "

@@ -471,6 +471,29 @@ TEST_F(CliMeasure, measure_method_auto_reads_with_the_method_the_library_chooses
   EXPECT_EQ(read_text(out / "stats.csv"), read_text(by_name / "stats.csv"));
 }
 
+// A second run into the folder of a first would leave the first's images among its own.
+TEST_F(CliMeasure, measure_refuses_a_folder_that_holds_a_measurement_n) {
+  const std::string command = "-q measure --model " + quoted(test_model("test-model-rgb.json")) +
+                              " --dataset " + quoted(data) + " --out " + quoted(out);
+  ASSERT_EQ(run_tool(command, dir).exit_code, 0);
+  const std::string first = read_text(out / "stats.csv");
+  write_text(out / "9999_temperature.png", "an earlier run's frame");
+  write_text(out / "notes.txt", "the user's");
+  ToolRun r = run_tool(command, dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find(out.string() +
+                       " already holds a measurement (stats.csv): choose another --out, or "
+                       "--overwrite to replace it"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(std::filesystem::exists(out / "9999_temperature.png"));
+  r = run_tool(command + " --overwrite", dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_text(out / "stats.csv"), first);
+  EXPECT_FALSE(std::filesystem::exists(out / "9999_temperature.png"));
+  EXPECT_TRUE(std::filesystem::exists(out / "notes.txt"));
+}
+
 // measure reads the model's prebuilt lookup table as ratiotemp does: the same temperatures with
 // it, without it and with a damaged one, which gets a warning naming it.
 TEST_F(CliMeasure, measure_reads_the_prebuilt_table_with_the_same_temperatures) {

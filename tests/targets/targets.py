@@ -99,7 +99,7 @@ def evaluate_camera(tool, work, key, frames, timings):
             out = os.path.join(work, f"{key}-{scene}-{method}")
             timings[f"{key} measure {scene} {method}"] = run(
                 [tool, "-q", "measure", "--model", model, "--dataset", data, "--method", method,
-                 "--out", out])
+                 "--out", out, "--overwrite"])
             figures[f"{scene}:{method}"] = read_stats(os.path.join(out, "stats.csv"))
     return figures
 
