@@ -393,31 +393,79 @@ bool saturation_hides_readings(const PyrocamSaturationMeta* meta, const cv::Mat&
   return false;
 }
 
-std::vector<cv::Rect> above_range_rects(const PyrocamAboveRangeMeta* meta, cv::Size size) {
-  std::vector<cv::Rect> rects;
-  if (!meta || meta->pixels == 0 || meta->width <= 0 || meta->height <= 0 ||
-      meta->frame_width <= 0 || meta->frame_height <= 0)
-    return rects;
+namespace {
+
+bool has_above_range(const PyrocamAboveRangeMeta* meta) {
+  return meta && meta->pixels > 0 && meta->width > 0 && meta->height > 0 && meta->frame_width > 0 &&
+         meta->frame_height > 0;
+}
+
+/* Tile (i, j) of the meta cut to its rectangle and scaled to `size`; empty if outside it. */
+cv::Rect above_range_tile(const PyrocamAboveRangeMeta* meta, int i, int j, cv::Size size) {
   const cv::Rect bounds(meta->x, meta->y, meta->width, meta->height);
+  const cv::Rect tile =
+      pyrocam::saturation_tile_rect(i, j, meta->frame_width, meta->frame_height) & bounds;
+  if (tile.empty()) return {};
   const auto down = [](int v, int to, gint from) {
     return static_cast<int>(static_cast<gint64>(v) * to / from);
   };
   const auto up = [](int v, int to, gint from) {
     return static_cast<int>((static_cast<gint64>(v) * to + from - 1) / from);
   };
+  const cv::Rect scaled(cv::Point(down(tile.x, size.width, meta->frame_width),
+                                  down(tile.y, size.height, meta->frame_height)),
+                        cv::Point(up(tile.x + tile.width, size.width, meta->frame_width),
+                                  up(tile.y + tile.height, size.height, meta->frame_height)));
+  return scaled & cv::Rect(cv::Point(0, 0), size);
+}
+
+}  // namespace
+
+std::vector<cv::Rect> above_range_rects(const PyrocamAboveRangeMeta* meta, cv::Size size) {
+  std::vector<cv::Rect> rects;
+  if (!has_above_range(meta)) return rects;
   for (int i = 0; i < pyrocam::kSaturationTiles; ++i)
     for (int j = 0; j < pyrocam::kSaturationTiles; ++j) {
       if (!(meta->tiles[i] >> j & 1u)) continue;
-      const cv::Rect tile =
-          pyrocam::saturation_tile_rect(i, j, meta->frame_width, meta->frame_height) & bounds;
-      if (tile.empty()) continue;
-      const cv::Rect scaled(cv::Point(down(tile.x, size.width, meta->frame_width),
-                                      down(tile.y, size.height, meta->frame_height)),
-                            cv::Point(up(tile.x + tile.width, size.width, meta->frame_width),
-                                      up(tile.y + tile.height, size.height, meta->frame_height)));
-      rects.push_back(scaled & cv::Rect(cv::Point(0, 0), size));
+      const cv::Rect tile = above_range_tile(meta, i, j, size);
+      if (!tile.empty()) rects.push_back(tile);
     }
   return rects;
+}
+
+cv::Rect largest_above_range_spot(const PyrocamAboveRangeMeta* meta, cv::Size size) {
+  if (!has_above_range(meta)) return {};
+  constexpr int n = pyrocam::kSaturationTiles;
+  std::vector<char> seen(n * n, 0);
+  std::vector<std::pair<int, int>> stack;
+  cv::Rect largest;
+  int largest_tiles = 0;
+  for (int i0 = 0; i0 < n; ++i0)
+    for (int j0 = 0; j0 < n; ++j0) {
+      if (!(meta->tiles[i0] >> j0 & 1u) || seen[i0 * n + j0]) continue;
+      // A spot: the tiles that touch, corners too.
+      cv::Rect spot;
+      int tiles = 0;
+      seen[i0 * n + j0] = 1;
+      stack.assign(1, {i0, j0});
+      while (!stack.empty()) {
+        const auto [i, j] = stack.back();
+        stack.pop_back();
+        spot |= above_range_tile(meta, i, j, size);
+        ++tiles;
+        for (int di = -1; di <= 1; ++di)
+          for (int dj = -1; dj <= 1; ++dj) {
+            const int ni = i + di, nj = j + dj;
+            if (ni < 0 || nj < 0 || ni >= n || nj >= n || seen[ni * n + nj] ||
+                !(meta->tiles[ni] >> nj & 1u))
+              continue;
+            seen[ni * n + nj] = 1;
+            stack.emplace_back(ni, nj);
+          }
+      }
+      if (tiles > largest_tiles && !spot.empty()) largest = spot, largest_tiles = tiles;
+    }
+  return largest;
 }
 
 bool above_range_within(const PyrocamAboveRangeMeta* meta, cv::Size size, const cv::Rect& within) {

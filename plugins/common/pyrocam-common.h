@@ -165,6 +165,10 @@ bool saturation_hides_readings(const PyrocamSaturationMeta* meta, const cv::Mat&
  * of `size`: its tiles that hold any, each cut to the meta's rectangle and scaled from its frame
  * to `size`. Empty without a meta or with none. */
 std::vector<cv::Rect> above_range_rects(const PyrocamAboveRangeMeta* meta, cv::Size size);
+/* The largest group of those tiles that touch (corners too), as one rectangle in pixels of a
+ * frame of `size`: where a marker goes when several spots are hotter than the range. Empty
+ * without any. */
+cv::Rect largest_above_range_spot(const PyrocamAboveRangeMeta* meta, cv::Size size);
 /* Whether `within` meets one of them. */
 bool above_range_within(const PyrocamAboveRangeMeta* meta, cv::Size size, const cv::Rect& within);
 

@@ -306,11 +306,10 @@ static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter
         const bool saturated =
             pg::saturation_hides_readings(pyrocam_buffer_get_saturation_meta(in_frame->buffer), in,
                                           cv::Rect(0, 0, width, height));
-        // Parts hotter than the model's range: the ring on them, the label says so.
+        // Parts hotter than the model's range: the ring on the largest of them (not between
+        // two), the label says so.
         const PyrocamAboveRangeMeta* above = pyrocam_buffer_get_above_range_meta(in_frame->buffer);
-        const std::vector<cv::Rect> hotter = pg::above_range_rects(above, cv::Size(width, height));
-        cv::Rect spot;
-        for (const cv::Rect& r : hotter) spot |= r;
+        const cv::Rect spot = pg::largest_above_range_spot(above, cv::Size(width, height));
         if (spot.empty())
           pyrocam::draw_peak_marker(out, peak.x, peak.y, peak.c, cs.order, saturated);
         else

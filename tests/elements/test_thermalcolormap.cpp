@@ -233,6 +233,43 @@ TEST_F(ThermalColormap, peak_readout_names_the_range_end_where_pixels_are_hotter
   EXPECT_EQ(differing(cv::Rect(100, 30, 60, 90)), 0u);  // nothing else
 }
 
+// Two spots hotter than the range: the ring goes round the larger, not between them.
+TEST_F(ThermalColormap, peak_ring_goes_round_the_larger_of_two_spots_above_the_range) {
+  const int w = 160, h_ = 120;
+  start("thermalcolormap peak-marker=true range-mode=fixed", "RGBA", w, h_);
+  const std::vector<std::uint16_t> codes(w * h_, 0);
+  const cv::Rect small(140, 10, 4, 4), large(20, 90, 12, 12);
+  const auto push_with_meta = [&](bool two) {
+    GstBuffer* in = buffer_from(codes);
+    add_above_range_meta(in, 100, large, w, h_, 2000);
+    if (two) {
+      auto* m = reinterpret_cast<PyrocamAboveRangeMeta*>(
+          gst_buffer_get_meta(in, gst_meta_get_info("PyrocamAboveRangeMeta")->api));
+      const cv::Rect both = small | large;
+      m->x = both.x, m->y = both.y, m->width = both.width, m->height = both.height;
+      for (int y = small.y; y < small.y + small.height; ++y)
+        for (int x = small.x; x < small.x + small.width; ++x)
+          m->tiles[y * 64 / h_] |= guint64{1} << (x * 64 / w);
+    }
+    return push_pull<std::uint8_t>(h, in);
+  };
+  const auto one = push_with_meta(false), two = push_with_meta(true);
+  ASSERT_EQ(one.size(), static_cast<std::size_t>(4 * w * h_));
+  // The ring round the large spot in both frames; where the union's centre is (80, 56), none.
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < one.size(); ++i) differing += one[i] != two[i];
+  EXPECT_EQ(differing, 0u);
+  const auto lit = [&](const std::vector<std::uint8_t>& f, const cv::Rect& r) {
+    std::size_t n = 0;
+    for (int y = r.y; y < r.y + r.height; ++y)
+      for (int x = r.x; x < r.x + r.width; ++x)
+        n += f[static_cast<std::size_t>(4 * (y * w + x) + 3)] != 0;
+    return n;
+  };
+  EXPECT_GT(lit(two, cv::Rect(10, 80, 32, 32)), 20u);
+  EXPECT_EQ(lit(two, cv::Rect(60, 40, 40, 32)), 0u);
+}
+
 TEST_F(ThermalColormap, empty_fixed_range_warns_and_keeps_working_n) {
   start("thermalcolormap range-mode=fixed min-temperature=1500 max-temperature=1500", nullptr);
   EXPECT_EQ(run(kCodes).size(), kCodes.size() * 4);
