@@ -107,6 +107,8 @@ struct Job {
 struct MeasureInputs {
   std::vector<Job> jobs;
   cv::Mat roi;
+  cv::Size frame_size;  // the first frame's: every frame, dark and the ROI have it
+
   // The frames' layout, and where it came from, for messages.
   std::string pattern, pattern_source = "--pattern";
 };
@@ -191,8 +193,15 @@ MeasureInputs measure_inputs(const MeasureArgs& a) {
   } else {
     in.jobs.push_back({a.frame, a.dark, {}, NAN, NAN});
   }
-  const cv::Size frame_size = read_image_size(in.jobs.front().frame);
-  if (!a.roi.empty()) in.roi = read_raw_image(a.roi, frame_size, "the frame") != 0;
+  in.frame_size = read_image_size(in.jobs.front().frame);
+  if (!a.roi.empty()) in.roi = read_raw_image(a.roi, in.frame_size, "the frame") != 0;
+  // A dataset's ROI of another size would be stretched onto the frames: statistics of the
+  // wrong pixels.
+  if (!in.roi.empty() && in.roi.size() != in.frame_size)
+    throw InputError((a.roi.empty() ? a.dataset + "/roi.png" : a.roi) + ": the ROI is " +
+                     std::to_string(in.roi.cols) + "x" + std::to_string(in.roi.rows) +
+                     ", the frames " + std::to_string(in.frame_size.width) + "x" +
+                     std::to_string(in.frame_size.height));
   return in;
 }
 
@@ -232,8 +241,12 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
                    const ThermalModel& model, const MeasureOptions& options,
                    FrameMeasurer& measurer, std::ostream& csv, bool quiet,
                    std::vector<std::filesystem::path>& written) {
-  const cv::Mat raw = read_raw_image(j.frame);
+  const cv::Mat raw = read_raw_image(j.frame, in.frame_size, "the first frame");
   const cv::Mat dark = read_raw_image(j.dark, raw.size(), "the frame " + j.frame.string());
+  const auto bits = [](const cv::Mat& m) { return std::to_string(8 * m.elemSize1()) + "-bit"; };
+  if (dark.depth() != raw.depth())
+    throw InputError(j.dark.string() + ": the dark has " + bits(dark) + " samples, the frame " +
+                     j.frame.string() + " " + bits(raw) + " ones");
   cv::Mat t, u;
   try {
     measurer.measure(raw, dark, t, a.uncertainty ? &u : nullptr);

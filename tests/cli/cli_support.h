@@ -27,6 +27,24 @@ inline int calib(const std::string& args) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+struct ToolRun {
+  int exit_code = -1;
+  std::string err;
+};
+
+// Runs pyrocam-calib with `args` (already shell-quoted where needed), stdin closed; stderr is
+// kept in `dir`. A timeout ends a run that hangs (a FIFO opened for reading blocks forever).
+inline ToolRun run_tool(const std::string& args, const ScratchDir& dir) {
+  const auto err = dir / "stderr.txt";
+  const std::string command = "timeout 120 '" + std::string(PYROCAM_CALIB_TOOL) + "' " + args +
+                              " < /dev/null > /dev/null 2> '" + err.string() + "'";
+  const int status = std::system(command.c_str());
+  ToolRun r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.err = read_text(err);
+  return r;
+}
+
 // Said when one is missing: meson test sets the folder, and a test without its model fails.
 inline constexpr const char* kNoTestModels =
     "the build's test models are missing; run the test through meson test, or set "

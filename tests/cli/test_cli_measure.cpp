@@ -1,0 +1,311 @@
+// pyrocam-calib measure on datasets and single frames: what it refuses (a model of another
+// mosaic, a pattern that contradicts the dataset, an ROI or dark that does not fit the frames, a
+// folder that holds a measurement) and what its options do to the readings.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <sstream>
+#include <string>
+#include <utility>
+
+#include "cli_support.h"
+#include "pyrocam/core/image_io.h"
+#include "pyrocam/runtime/estimator_selection.h"
+#include "pyrocam/runtime/model.h"
+#include "pyrocam/simulation/scenes.h"
+#include "pyrocam/simulation/simulator.h"
+#include "test_support.h"
+
+namespace pyrocam {
+namespace {
+
+using test::read_text;
+using test::run_tool;
+using test::ScratchDir;
+using test::test_model;
+using test::ToolRun;
+using test::write_text;
+
+std::string quoted(const std::filesystem::path& p) { return test::q(p); }
+
+TEST(Cli, measure_rejects_a_model_path_that_is_a_directory_n) {
+  ScratchDir dir("cli");
+  std::filesystem::create_directory(dir / "model.json");
+  write_raw_image(dir / "f.pgm", cv::Mat::zeros(8, 8, CV_8U));
+  const ToolRun r = run_tool("measure --model " + quoted(dir / "model.json") + " --frame " +
+                                 quoted(dir / "f.pgm") + " --dark " + quoted(dir / "f.pgm") +
+                                 " --pattern rggb --out " + quoted(dir / "out"),
+                             dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("model.json: model file is a directory"), std::string::npos) << r.err;
+}
+
+TEST(Cli, measure_rejects_a_frame_without_pattern_n) {
+  ScratchDir dir("cli");
+  const ToolRun r = run_tool("measure --model m.json --frame f.pgm --dark d.pgm --out o", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--frame needs --pattern"), std::string::npos) << r.err;
+}
+
+TEST(Cli, measure_rejects_an_unknown_pattern_n) {
+  ScratchDir dir("cli");
+  const ToolRun r =
+      run_tool("measure --model m.json --frame f.pgm --dark d.pgm --pattern rgbg --out o", dir);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("mosaic layout 'rgbg' is not rggb, bggr, grbg, gbrg"), std::string::npos)
+      << r.err;
+}
+
+// A 5x5 model on a Bayer frame read a 1200 degC plate as 652 degC.
+class CliMeasure : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(std::filesystem::exists(test_model("test-model-nir5x5.json")))
+        << test::kNoTestModels;
+    Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 6});
+    SceneSequenceSettings s;
+    s.kind = SceneKind::kPlate;
+    s.temperatures_c = {1200};
+    s.width = 100;
+    s.height = 100;
+    write_scene_sequence(data, camera, s);
+  }
+  ScratchDir dir{"cli"};
+  std::filesystem::path data = dir / "plate", out = dir / "out";
+};
+
+TEST_F(CliMeasure, measure_rejects_a_5x5_model_on_a_bayer_dataset_n) {
+  ASSERT_EQ(read_text(data / "mosaic.txt"), "rggb\n");
+  const ToolRun r = run_tool("measure --model " + quoted(test_model("test-model-nir5x5.json")) +
+                                 " --dataset " + quoted(data) + " --out " + quoted(out),
+                             dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("test-model-nir5x5.json: the model was calibrated for a 5x5 mosaic "
+                       "(profile nir5x5-reference), the frames are rggb (" +
+                       (data / "mosaic.txt").string() + ")"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out / "stats.csv"));
+}
+
+TEST_F(CliMeasure, measure_rejects_a_5x5_model_on_a_frame_named_bayer_n) {
+  const ToolRun r =
+      run_tool("measure --model " + quoted(test_model("test-model-nir5x5.json")) + " --frame " +
+                   quoted(data / "frames/0000.pgm") + " --dark " + quoted(data / "darks/0000.pgm") +
+                   " --pattern RGGB --out " + quoted(out),
+               dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("calibrated for a 5x5 mosaic (profile nir5x5-reference), the frames are "
+                       "rggb (--pattern)"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST_F(CliMeasure, measure_rejects_a_pattern_contradicting_the_dataset_n) {
+  const ToolRun r =
+      run_tool("measure --model " + quoted(test_model("test-model-rgb.json")) + " --dataset " +
+                   quoted(data) + " --pattern bggr --out " + quoted(out),
+               dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("--pattern bggr contradicts " + (data / "mosaic.txt").string() + " (rggb)"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST_F(CliMeasure, measure_rejects_a_dataset_that_does_not_name_its_mosaic_n) {
+  std::filesystem::remove(data / "mosaic.txt");
+  const ToolRun r = run_tool("measure --model " + quoted(test_model("test-model-rgb.json")) +
+                                 " --dataset " + quoted(data) + " --out " + quoted(out),
+                             dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("the dataset does not say its frames' mosaic layout (no mosaic.txt); give "
+                       "--pattern"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST_F(CliMeasure, measure_method_auto_reads_with_the_method_the_library_chooses) {
+  const auto model = test_model("test-model-rgb.json");
+  const std::string chosen = method_name(choose_method(
+      std::make_shared<const ThermalModel>(load_model(model.string())), MethodRequest::kAuto));
+  const std::filesystem::path by_name = dir / "by-name";
+  for (const auto& [method, folder] :
+       {std::pair{std::string("auto"), out}, std::pair{chosen, by_name}}) {
+    const ToolRun r =
+        run_tool("-q measure --model " + quoted(model) + " --dataset " + quoted(data) +
+                     " --method " + method + " --out " + quoted(folder),
+                 dir);
+    ASSERT_EQ(r.exit_code, 0) << method << ": " << r.err;
+  }
+  EXPECT_EQ(read_text(out / "stats.csv"), read_text(by_name / "stats.csv"));
+}
+
+// An ROI of another size would be stretched onto the frames, a frame of another size read with
+// its own: statistics of the wrong pixels. A dark of another depth is another camera's.
+TEST_F(CliMeasure, measure_rejects_an_roi_or_dark_that_does_not_fit_the_frames_n) {
+  const std::string command = "-q measure --model " + quoted(test_model("test-model-rgb.json")) +
+                              " --dataset " + quoted(data) + " --out ";
+  const auto roi = data / "roi.png";
+  std::filesystem::copy_file(roi, dir / "roi.png");
+  write_raw_image(roi, cv::Mat(8, 8, CV_8U, cv::Scalar(255)));
+  ToolRun r = run_tool(command + quoted(dir / "o1"), dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find(data.string() + "/roi.png: the ROI is 8x8, the frames 100x100"),
+            std::string::npos)
+      << r.err;
+  std::filesystem::copy_file(dir / "roi.png", roi,
+                             std::filesystem::copy_options::overwrite_existing);
+  const auto dark = data / "darks/0000.pgm";
+  write_raw_image(dark, cv::Mat(100, 100, CV_16U, cv::Scalar(50)));
+  r = run_tool(command + quoted(dir / "o2"), dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find(dark.string() + ": the dark has 16-bit samples, the frame " +
+                       (data / "frames/0000.pgm").string() + " 8-bit ones"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "o2" / "stats.csv"));
+}
+
+// A second run into the folder of a first would leave the first's images among its own.
+TEST_F(CliMeasure, measure_refuses_a_folder_that_holds_a_measurement_n) {
+  const std::string command = "-q measure --model " + quoted(test_model("test-model-rgb.json")) +
+                              " --dataset " + quoted(data) + " --out " + quoted(out);
+  ASSERT_EQ(run_tool(command, dir).exit_code, 0);
+  const std::string first = read_text(out / "stats.csv");
+  write_text(out / "9999_temperature.png", "an earlier run's frame");
+  write_text(out / "notes.txt", "the user's");
+  ToolRun r = run_tool(command, dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find(out.string() +
+                       " already holds a measurement (stats.csv): choose another --out, or "
+                       "--overwrite to replace it"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(std::filesystem::exists(out / "9999_temperature.png"));
+  r = run_tool(command + " --overwrite", dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_text(out / "stats.csv"), first);
+  EXPECT_FALSE(std::filesystem::exists(out / "9999_temperature.png"));
+  EXPECT_TRUE(std::filesystem::exists(out / "notes.txt"));
+}
+
+// measure reads the model's prebuilt lookup table as ratiotemp does: the same temperatures with
+// it, without it and with a damaged one, which gets a warning naming it.
+TEST_F(CliMeasure, measure_reads_the_prebuilt_table_with_the_same_temperatures) {
+  const auto source = test_model("test-model-rgb.json");
+  ASSERT_TRUE(std::filesystem::exists(source.string() + ".lut")) << test::kNoTestModels;
+  const auto model = dir / "m.json", table = dir / "m.json.lut";
+  std::filesystem::copy_file(source, model);
+  const auto measure = [&](const std::string& name) {
+    const ToolRun r = run_tool("measure --model " + quoted(model) + " --dataset " + quoted(data) +
+                                   " --method lut --out " + quoted(dir / name),
+                               dir);
+    EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    return r.err;
+  };
+  const std::string without = measure("without");
+  std::filesystem::copy_file(source.string() + ".lut", table);
+  const std::string with = measure("with");
+  EXPECT_EQ(with.find("prebuilt lookup table"), std::string::npos) << with;
+  {
+    std::fstream f(table, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(-40, std::ios::end);
+    f.put('x');  // inside the last block's values: the checksum no longer holds
+  }
+  const std::string damaged = measure("damaged");
+  EXPECT_NE(damaged.find("warning: prebuilt lookup table " + table.string() + " not used"),
+            std::string::npos)
+      << damaged;
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "without")) {
+    const auto name = entry.path().filename();
+    EXPECT_EQ(read_text(dir / "with" / name), read_text(entry.path())) << name;
+    EXPECT_EQ(read_text(dir / "damaged" / name), read_text(entry.path())) << name;
+  }
+}
+
+// The median_c column of the first frame's row of a measure stats.csv (NaN without one).
+double first_median_c(const std::filesystem::path& stats_csv) {
+  std::istringstream lines(read_text(stats_csv));
+  std::string line;
+  std::getline(lines, line);  // header
+  if (!std::getline(lines, line)) return NAN;
+  std::istringstream fields(line);
+  std::string field;
+  for (int i = 0; i <= 8 && std::getline(fields, field, ','); ++i) {
+  }
+  return field.empty() ? NAN : std::stod(field);
+}
+
+// The median code of a 16-bit image over its nonzero pixels.
+double median_nonzero(const std::filesystem::path& image) {
+  const cv::Mat m = read_raw_image(image);
+  std::vector<int> v;
+  for (int y = 0; y < m.rows; ++y)
+    for (int x = 0; x < m.cols; ++x)
+      if (m.at<std::uint16_t>(y, x) != 0) v.push_back(m.at<std::uint16_t>(y, x));
+  if (v.empty()) return NAN;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+TEST_F(CliMeasure, measure_e_slope_moves_the_reading_and_its_uncertainty) {
+  const std::string base = "-q measure --model " + quoted(test_model("test-model-rgb.json")) +
+                           " --dataset " + quoted(data) + " --method likelihood --uncertainty";
+  const std::filesystem::path grey = dir / "grey", sloped = dir / "sloped";
+  ASSERT_EQ(run_tool(base + " --out " + quoted(grey), dir).exit_code, 0);
+  const ToolRun r =
+      run_tool(base + " --e-slope -20 --e-slope-uncertainty 5 --out " + quoted(sloped), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The simulated plate is grey: read as a surface whose emissivity falls 20 %/100 nm towards
+  // the red (which would read hotter uncorrected), it reads cooler.
+  const double t_grey = first_median_c(grey / "stats.csv"),
+               t_sloped = first_median_c(sloped / "stats.csv");
+  EXPECT_GT(t_grey - t_sloped, 20) << t_grey << " " << t_sloped;
+  // u(alpha) 5 %/100 nm instead of the model's 1 %/100 nm: a larger emissivity term.
+  const double u_grey = median_nonzero(grey / "0000_uncertainty.png"),
+               u_sloped = median_nonzero(sloped / "0000_uncertainty.png");
+  EXPECT_GT(u_sloped, 2 * u_grey) << u_grey << " " << u_sloped;
+}
+
+TEST_F(CliMeasure, measure_rejects_an_e_slope_out_of_range_n) {
+  for (const std::string bad : {"60", "-50.5", "nan"}) {
+    const ToolRun r =
+        run_tool("-q measure --model " + quoted(test_model("test-model-rgb.json")) + " --dataset " +
+                     quoted(data) + " --e-slope " + bad + " --out " + quoted(out),
+                 dir);
+    EXPECT_NE(r.exit_code, 0) << bad;
+    EXPECT_NE(r.err.find("e-slope"), std::string::npos) << bad << ": " << r.err;
+  }
+}
+
+TEST_F(CliMeasure, measure_gain_db_widens_the_uncertainty_not_the_reading) {
+  const std::string base = "-q measure --model " + quoted(test_model("test-model-rgb.json")) +
+                           " --dataset " + quoted(data) + " --method likelihood --uncertainty";
+  const std::filesystem::path plain = dir / "plain", gained = dir / "gained";
+  ASSERT_EQ(run_tool(base + " --out " + quoted(plain), dir).exit_code, 0);
+  const ToolRun r = run_tool(base + " --gain-db 12 --out " + quoted(gained), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The same frames read as taken at 12 dB: each DN holds a quarter of the electrons, so the
+  // shot noise per DN is four times the variance. The ratios are the same, and the likelihood
+  // weights change little on a plate whose bands are all well exposed.
+  const double t_plain = first_median_c(plain / "stats.csv"),
+               t_gained = first_median_c(gained / "stats.csv");
+  EXPECT_NEAR(t_gained, t_plain, 1.0);
+  const double u_plain = median_nonzero(plain / "0000_uncertainty.png"),
+               u_gained = median_nonzero(gained / "0000_uncertainty.png");
+  std::cout << "median expanded uncertainty, codes: 0 dB " << u_plain << ", 12 dB " << u_gained
+            << "\n";
+  EXPECT_GT(u_gained, u_plain);
+  for (const std::string bad : {"-3", "60", "nan"}) {
+    const ToolRun b = run_tool(base + " --gain-db " + bad + " --out " + quoted(out), dir);
+    EXPECT_NE(b.exit_code, 0) << bad;
+    EXPECT_NE(b.err.find("gain-db"), std::string::npos) << bad << ": " << b.err;
+  }
+}
+
+}  // namespace
+}  // namespace pyrocam
