@@ -147,21 +147,37 @@ namespace {
 int run_export(const ExportArgs& a, const GlobalOptions& global) {
   const auto segments = recording_segments(a.recording);
   ExportWriter writer({a.tiff, a.npy, a.csv, a.peak_window});
+  // Readings below 0 degC: no model reads them, an uncertainty's codes (0.1 K of difference)
+  // are mostly there.
+  const std::uint16_t freezing = temperature_code(0);
+  std::uint64_t readings = 0, below_freezing = 0;
   const RecordingDescription d = read_recording(segments, [&](const RecordingFrame& f) {
     if (f.codes.type() != CV_16U)
       throw InputError(a.recording +
                        ": 8-bit frames, not temperatures (a raw recording? "
                        "re-measure it with pyrocam-calib measure --recording)");
+    readings += static_cast<std::uint64_t>(cv::countNonZero(f.codes));
+    below_freezing += static_cast<std::uint64_t>(
+        cv::countNonZero((f.codes < freezing) & (f.codes != kNoReadingCode)));
     writer.add(f.index, f.timestamp_s, f.codes);
   });
   const auto quantity = d.fields.find("quantity");
   if (quantity != d.fields.end() && quantity->second != "temperature")
     throw InputError(a.recording + ": the recording holds " + quantity->second +
                      ", not temperatures");
-  if (d.fields.empty() && !global.quiet)
-    std::cerr << "warning: " << a.recording
-              << " has no pyrocam tags (recorded before they existed, or not by ratiotemp): "
-                 "read as temperatures in 0.1 K, 0 = no reading\n";
+  if (d.fields.empty()) {
+    // matroskamux writes the tags at a segment's end: a segment cut short has none.
+    if (2 * below_freezing > readings)
+      throw InputError(a.recording + ": no pyrocam tags, and " + std::to_string(below_freezing) +
+                       " of its " + std::to_string(readings) +
+                       " readings would be below 0 degC: not temperatures (an uncertainty "
+                       "recording cut short before its tags were written?)");
+    if (!global.quiet)
+      std::cerr << "warning: " << a.recording
+                << " has no pyrocam tags (recorded before they existed, not by ratiotemp, or "
+                   "cut short before matroskamux wrote them at its end): read as temperatures "
+                   "in 0.1 K, 0 = no reading\n";
+  }
   writer.finish();
   if (!global.quiet)
     std::cerr << "exported " << writer.frames() << " frames of " << d.width << "x" << d.height

@@ -41,6 +41,7 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
+#include "pyrocam/core/recording_comment.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/colormap.h"
 #include "pyrocam/runtime/region_stats.h"
@@ -327,6 +328,33 @@ static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter
   return ok ? GST_FLOW_OK : GST_FLOW_ERROR;
 }
 
+/* A stream whose tags say it holds expanded uncertainties (ratiotemp output=uncertainty, or a
+ * recording of it played back) would be coloured and labelled as temperatures near -273 degC. */
+static gboolean gst_thermal_colormap_sink_event(GstBaseTransform* trans, GstEvent* event) {
+  if (GST_EVENT_TYPE(event) == GST_EVENT_TAG) {
+    GstTagList* tags = nullptr;
+    gst_event_parse_tag(event, &tags);
+    gchar* comment = nullptr;
+    std::string quantity;
+    if (gst_tag_list_get_string(tags, GST_TAG_COMMENT, &comment)) {
+      const auto fields = pyrocam::parse_recording_comment(comment);
+      const auto q = fields.find("quantity");
+      if (q != fields.end()) quantity = q->second;
+    }
+    g_free(comment);
+    if (!quantity.empty() && quantity != "temperature") {
+      PYROCAM_POST_ERROR(trans, pg::ErrorKind::kFormat,
+                         std::string(GST_OBJECT_NAME(trans)) + ": the stream holds " + quantity +
+                             " (its tags say so), not temperatures: its colours and labels "
+                             "would read as degC",
+                         "tag comment quantity=" + quantity);
+      gst_event_unref(event);
+      return FALSE;
+    }
+  }
+  return GST_BASE_TRANSFORM_CLASS(gst_thermal_colormap_parent_class)->sink_event(trans, event);
+}
+
 static void gst_thermal_colormap_set_property(GObject* object, guint prop_id, const GValue* value,
                                               GParamSpec* pspec) {
   GstThermalColormap* self = GST_THERMAL_COLORMAP(object);
@@ -541,6 +569,7 @@ static void gst_thermal_colormap_class_init(GstThermalColormapClass* klass) {
   trans_class->start = GST_DEBUG_FUNCPTR(gst_thermal_colormap_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_thermal_colormap_stop);
   trans_class->transform = GST_DEBUG_FUNCPTR(gst_thermal_colormap_transform);
+  trans_class->sink_event = GST_DEBUG_FUNCPTR(gst_thermal_colormap_sink_event);
   trans_class->before_transform = GST_DEBUG_FUNCPTR(pg::sync_controlled_properties);
   filter_class->set_info = GST_DEBUG_FUNCPTR(gst_thermal_colormap_set_info);
   filter_class->transform_frame = GST_DEBUG_FUNCPTR(gst_thermal_colormap_transform_frame);

@@ -41,28 +41,29 @@ ToolResult run_export(const std::string& args, const ScratchDir& dir) {
   return run("timeout 120 " + q(PYROCAM_CALIB_TOOL) + " export " + args, dir / "stderr.txt");
 }
 
-// Frame f: codes around 1000 degC that differ per pixel and frame, some pixels without a
-// reading, and frame 2 with none at all.
-cv::Mat frame_codes(int f) {
+// Frame f: codes from `base` (12732: 1000 degC) that differ per pixel and frame, some pixels
+// without a reading, and frame 2 with none at all.
+cv::Mat frame_codes(int f, int base = 12732) {
   cv::Mat m(kH, kW, CV_16U);
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x)
-      m.at<std::uint16_t>(y, x) =
-          f == 2 || (x + y + f) % 5 == 0
-              ? 0
-              : static_cast<std::uint16_t>(12732 + 37 * x + 101 * y + 7 * f);
+      m.at<std::uint16_t>(y, x) = f == 2 || (x + y + f) % 5 == 0
+                                      ? 0
+                                      : static_cast<std::uint16_t>(base + 37 * x + 101 * y + 7 * f);
   return m;
 }
 
 class CliExport : public ::testing::Test {
  protected:
-  void SetUp() override {
-    fs::create_directories(rec);
+  void SetUp() override { record(rec); }
+  // A recording without pyrocam tags of frame_codes(f, base) in `folder`.
+  void record(const fs::path& folder, int base = 12732) {
+    fs::create_directories(folder);
     // rawvideoparse reads rows at GStreamer's stride: 2 * 7 bytes padded to 16.
     constexpr int kStride = (2 * kW + 3) / 4 * 4;
     std::ofstream raw(dir / "frames.raw", std::ios::binary);
     for (int f = 0; f < kFrames; ++f) {
-      const cv::Mat m = frame_codes(f);
+      const cv::Mat m = frame_codes(f, base);
       for (int y = 0; y < kH; ++y) {
         std::string row(reinterpret_cast<const char*>(m.ptr(y)), 2 * kW);
         row.resize(kStride, '\0');
@@ -80,7 +81,7 @@ class CliExport : public ::testing::Test {
                 " framerate=10/1 ! avenc_ffv1 gop-size=1 ! splitmuxsink "
                 "async-finalize=true muxer-factory=matroskamux "
                 "max-size-time=300000000 location=" +
-                q(rec / "temperature-%05d.mkv"),
+                q(folder / "temperature-%05d.mkv"),
             dir / "gst.txt");
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
@@ -147,6 +148,20 @@ TEST_F(CliExport, writes_the_codes_and_their_statistics) {
             true)
       << read_all(csv);
   EXPECT_FALSE(std::getline(lines, line));
+}
+
+// Without tags (matroskamux writes them at a segment's end, so one cut short has none) an
+// uncertainty recording's codes would read as temperatures near -200 degC.
+TEST_F(CliExport, rejects_untagged_codes_that_read_below_freezing_n) {
+  record(dir / "u", 150);
+  const ToolResult r =
+      run_export("--recording " + q(dir / "u") + " --csv " + q(dir / "u.csv"), dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("no pyrocam tags, and 140 of its 140 readings would be below 0 degC: not "
+                       "temperatures"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir / "u.csv"));
 }
 
 TEST_F(CliExport, rejects_a_missing_folder_n) {

@@ -270,6 +270,25 @@ TEST_F(ThermalColormap, peak_ring_goes_round_the_larger_of_two_spots_above_the_r
   EXPECT_EQ(lit(two, cv::Rect(60, 40, 40, 32)), 0u);
 }
 
+// An uncertainty stream (ratiotemp output=uncertainty, or a recording of one played back) is
+// refused by its tags; a temperature stream's tags pass.
+TEST_F(ThermalColormap, refuses_a_stream_whose_tags_say_it_holds_uncertainties_n) {
+  start("thermalcolormap", nullptr);
+  const auto tagged = [](const char* quantity) {
+    const std::string comment =
+        std::string("pyrocam-recording; quantity=") + quantity + "; unit=0.1 K; no-reading=0";
+    return gst_event_new_tag(
+        gst_tag_list_new(GST_TAG_COMMENT, comment.c_str(), static_cast<const char*>(nullptr)));
+  };
+  gst_harness_push_event(h, tagged("temperature"));
+  EXPECT_EQ(first(GST_MESSAGE_ERROR), "");
+  // A sticky event is stored whatever the element says: the error says it.
+  gst_harness_push_event(h, tagged("expanded-uncertainty"));
+  EXPECT_NE(first(GST_MESSAGE_ERROR)
+                .find("the stream holds expanded-uncertainty (its tags say so), not temperatures"),
+            std::string::npos);
+}
+
 TEST_F(ThermalColormap, empty_fixed_range_warns_and_keeps_working_n) {
   start("thermalcolormap range-mode=fixed min-temperature=1500 max-temperature=1500", nullptr);
   EXPECT_EQ(run(kCodes).size(), kCodes.size() * 4);
