@@ -40,6 +40,13 @@ GstStructure* mosaic_structure(const GstStructure* raw, const Settings& settings
 /* The raw caps (Bayer of the pattern, and gray video) that give a mosaic structure. */
 GstCaps* raw_caps(const GstStructure* mosaic);
 
+/* dark-level as set while playing (it is controllable) into `in_use`: a level above the
+ * full scale of `bit_depth` would leave no reading anywhere and say nothing, so the level in use
+ * stays, with a warning once per refused value (`refused`); without one to keep, an error and
+ * false. */
+bool use_dark_level(GstElement* element, double level, int bit_depth, double& in_use,
+                    double& refused);
+
 /* GObject properties: installed by class_init, read and written under the object lock. */
 void install_properties(GObjectClass* klass);
 void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpec* pspec);

@@ -1,5 +1,9 @@
 /* darksub's GObject properties. */
+#include <cstdio>
+#include <string>
+
 #include "darksub-private.h"
+#include "pyrocam/runtime/darksub.h"
 
 #define GST_CAT_DEFAULT gst_dark_sub_debug
 
@@ -69,16 +73,42 @@ void install_properties(GObjectClass* gobject_class) {
                        0, 16, DEFAULT_BIT_DEPTH, ready));
 }
 
+bool use_dark_level(GstElement* element, double level, int bit_depth, double& in_use,
+                    double& refused) {
+  if (level == in_use) return true;
+  const int full_scale = pyrocam::full_scale_dn(bit_depth);
+  if (level <= full_scale) {
+    in_use = level;
+    return true;
+  }
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", level);
+  const std::string what = std::string(GST_OBJECT_NAME(element)) + ": dark-level " + text +
+                           " is above the " + std::to_string(bit_depth) + "-bit full scale (" +
+                           std::to_string(full_scale) + " DN)";
+  if (in_use < 0) {
+    PYROCAM_POST_ERROR(element, ErrorKind::kSettings, what, "dark-level out of the stream's range");
+    return false;
+  }
+  if (level != refused) {
+    refused = level;
+    GST_ELEMENT_WARNING(element, RESOURCE, SETTINGS,
+                        ("%s: refused, %g DN stays subtracted", what.c_str(), in_use),
+                        ("dark-level set while playing out of the stream's range"));
+  }
+  return true;
+}
+
 void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpec* pspec) {
   GstDarkSub* self = GST_DARK_SUB(object);
-  bool location_refused = false;  // posted once the lock is released
+  const char* refused = nullptr;  // a property refused while running, posted once unlocked
   {
     ObjectLock lock(self);
     Settings& s = *self->settings;
     switch (prop_id) {
       case PROP_LOCATION:
         if (GST_STATE(self) > GST_STATE_READY) {
-          location_refused = true;
+          refused = "location";
         } else {
           const char* v = g_value_get_string(value);
           s.location = v ? v : "";
@@ -94,18 +124,23 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
         s.capture_frames = g_value_get_int(value);
         break;
       case PROP_PATTERN:
-        s.pattern = static_cast<GstDarkSubPattern>(g_value_get_enum(value));
+        if (GST_STATE(self) > GST_STATE_READY)
+          refused = "pattern";
+        else
+          s.pattern = static_cast<GstDarkSubPattern>(g_value_get_enum(value));
         break;
       case PROP_BIT_DEPTH:
-        s.bit_depth = g_value_get_int(value);
+        if (GST_STATE(self) > GST_STATE_READY)
+          refused = "bit-depth";
+        else
+          s.bit_depth = g_value_get_int(value);
         break;
       default:
         G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
         break;
     }
   }
-  if (location_refused)
-    pyrocam::gst::warn_not_changeable_while_running(GST_ELEMENT(self), "location");
+  if (refused) pyrocam::gst::warn_not_changeable_while_running(GST_ELEMENT(self), refused);
   /* The saturation level is in the output caps: renegotiate, so that ratiotemp sees it. */
   if (prop_id == PROP_SATURATION_LEVEL)
     gst_base_transform_reconfigure_src(GST_BASE_TRANSFORM(self));

@@ -78,6 +78,10 @@ struct pyrocam::gst::darksub::State {
   cv::Size file_dark_size;    // from the file's header, read in start()
   int file_dark_bits = 0;     // sample size of the file: 8 or 16
   int saturation_level = -1;  // raw DN from the caps' saturation-level field; -1: none
+  // The dark-level subtracted: a level set while playing above the full scale is refused (it
+  // would leave no reading anywhere), with a warning once per value.
+  double dark_level = -1;
+  double refused_dark_level = NAN;
   cv::Mat captured_dark;
   pyrocam::DarkAccumulator accumulator;
   bool capturing = false;
@@ -311,6 +315,7 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
                        "dark-level out of the stream's range");
     return FALSE;
   }
+  st.dark_level = settings.dark_level;
   if (settings.saturation_level > pyrocam::full_scale_dn(st.bit_depth))
     GST_WARNING_OBJECT(self,
                        "saturation-level %g is above the %d-bit full scale: nothing "
@@ -479,8 +484,12 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
     if (const cv::Mat* dark = frame_dark(st)) {
       saturated = pyrocam::subtract_dark(raw.image(), *dark, saturation, out.image());
     } else if (settings.dark_level >= 0) {
-      saturated =
-          pyrocam::subtract_dark_level(raw.image(), settings.dark_level, saturation, out.image());
+      if (!ds::use_dark_level(GST_ELEMENT(self), settings.dark_level, st.bit_depth, st.dark_level,
+                              st.refused_dark_level)) {
+        ret = GST_FLOW_ERROR;
+        return;
+      }
+      saturated = pyrocam::subtract_dark_level(raw.image(), st.dark_level, saturation, out.image());
     } else {
       PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
                          "No dark frame: set location, dark-level or emit capture-dark",

@@ -191,6 +191,41 @@ TEST_F(DarkSub, capture_dark_averages_frames_and_outputs_nan_meanwhile) {
 
 // A captured dark that no longer fits the stream (its size changed) is dropped, and said on the
 // bus with what is subtracted instead (it was only a debug line).
+// dark-level is controllable: one above the full scale, set while playing, would leave no
+// reading anywhere and say nothing; it is refused with a warning once. bit-depth and pattern
+// cannot change while running: they keep their value, with a warning.
+TEST_F(DarkSub, settings_refused_while_playing_keep_the_last_good_value_and_say_so_n) {
+  start("darksub dark-level=50", kRggb6x4);
+  GstElement* e = find_element(h, "darksub");
+  const auto raw = frame6x4();
+  g_object_set(e, "dark-level", 65535.0, "bit-depth", 16, "pattern", 0 /* rggb */, nullptr);
+  EXPECT_EQ(push_pull<float>(h, padded6x4(raw)), expected(raw, 6, 4, 50, 220));
+  EXPECT_EQ(push_pull<float>(h, padded6x4(raw)), expected(raw, 6, 4, 50, 220));
+  gint bits = -1;
+  g_object_get(e, "bit-depth", &bits, nullptr);
+  EXPECT_EQ(bits, 0);
+  g_object_set(e, "dark-level", 60.0, nullptr);
+  EXPECT_EQ(push_pull<float>(h, padded6x4(raw)), expected(raw, 6, 4, 60, 220));
+  gst_object_unref(e);
+  std::vector<std::string> warnings;
+  while (GstMessage* m = gst_bus_pop_filtered(bus, GST_MESSAGE_WARNING)) {
+    GError* err = nullptr;
+    gst_message_parse_warning(m, &err, nullptr);
+    warnings.emplace_back(err->message);
+    g_error_free(err);
+    gst_message_unref(m);
+  }
+  const auto count = [&](const std::string& part) {
+    return std::count_if(warnings.begin(), warnings.end(),
+                         [&](const std::string& w) { return w.find(part) != std::string::npos; });
+  };
+  EXPECT_EQ(count("dark-level 65535 is above the 8-bit full scale (255 DN): refused, 50 DN stays "
+                  "subtracted"),
+            1);
+  EXPECT_EQ(count("bit-depth can change only in the NULL or READY state"), 1);
+  EXPECT_EQ(count("pattern can change only in the NULL or READY state"), 1);
+}
+
 TEST_F(DarkSub, a_captured_dark_dropped_on_a_size_change_is_said) {
   start("darksub capture-frames=1 dark-level=10",
         "video/x-raw,format=GRAY8,width=4,height=2,framerate=30/1,pattern=rggb");
