@@ -165,6 +165,10 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
         if (!file.empty() && !folder.empty() && !std::filesystem::is_directory(folder, ec))
           throw InputError(file + ": the folder " + folder.string() + " does not exist");
       }
+      std::error_code ec;
+      if (std::filesystem::is_directory(a.out, ec))
+        throw InputError(a.out + ": is a folder; --out names the model file to write (e.g. " +
+                         (std::filesystem::path(a.out) / "model.json").string() + ")");
       const Dataset dataset = Dataset::open(a.dataset);
       // Without --profile, a 5x5 dataset is the shipped 5x5 camera's, not the colour default.
       std::string profile_name = a.profile;

@@ -62,7 +62,9 @@ struct ExportWriter::Output {
     if (!done) fs::remove(partial, ec);
   }
   void commit() {
-    fs::rename(partial, path);
+    std::error_code ec;
+    fs::rename(partial, path, ec);
+    if (ec) throw InputError(path.string() + ": cannot write there (" + ec.message() + ")");
     done = true;
   }
   fs::path path, partial;

@@ -148,6 +148,18 @@ TEST(CliReport, the_5x5_test_models_report_plots_the_locus_and_the_error_per_set
     EXPECT_NE(html.find(part), std::string::npos) << part;
 }
 
+// A folder as --out was found only when the model was renamed into place, minutes later, with
+// the model left beside it as model.json.partial.
+TEST_F(CliDataset, calibrate_rejects_a_folder_as_out_before_calibrating_n) {
+  std::filesystem::create_directories(model);
+  const ToolRun r = calibrate();
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find(model.string() + ": is a folder; --out names the model file to write"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(model.string() + ".partial"));
+}
+
 TEST_F(CliDataset, calibrate_rejects_a_manifest_path_leaving_the_dataset_n) {
   const int line = line_of(first_frame);
   replace_in_manifest(first_frame, "../../../../etc/passwd");

@@ -204,7 +204,13 @@ void save_model(const ThermalModel& m, const std::filesystem::path& path) {
     out << file.dump(1) << "\n";
     if (!out) throw InputError(path.string() + ": write failed");
   }
-  std::filesystem::rename(tmp, path);
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    const std::string why = ec.message();
+    std::filesystem::remove(tmp, ec);
+    throw InputError(path.string() + ": cannot write the model file there (" + why + ")");
+  }
 }
 
 ThermalModel load_model(const std::filesystem::path& path) {
