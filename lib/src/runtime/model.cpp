@@ -1,5 +1,6 @@
 #include "pyrocam/runtime/model.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -95,26 +96,51 @@ double number_within(const json& j, const std::string& what, double lo, double h
   return v;
 }
 
-// fnv1a_hex(payload.dump()) without the dump, from the file's own text, when the file is as
-// save_model writes it: dump() is the payload's text with the white space outside strings left
-// out. "" when the payload is not found (then the caller dumps the parsed payload).
-std::string payload_text_checksum(const std::string& text) {
+// FNV-1a 64's offset basis, and the one models were written with before 2026-12 (a digit
+// short), still read.
+constexpr std::uint64_t kFnv1aOffsetBasis = 14695981039346656037ull;
+constexpr std::uint64_t kEarlierOffsetBasis = 1469598103934665603ull;
+constexpr std::uint64_t kFnv1aPrime = 1099511628211ull;
+
+std::string hex16(std::uint64_t h) {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::string fnv1a_hex_from(std::uint64_t basis, const std::string& text) {
+  std::uint64_t h = basis;
+  for (unsigned char c : text) h = (h ^ c) * kFnv1aPrime;
+  return hex16(h);
+}
+
+// Whether `checksum` is the payload text's, with either offset basis.
+bool checksum_of(const std::string& checksum, const std::string& payload_text) {
+  return !checksum.empty() && (fnv1a_hex_from(kFnv1aOffsetBasis, payload_text) == checksum ||
+                               fnv1a_hex_from(kEarlierOffsetBasis, payload_text) == checksum);
+}
+
+// The checksums (both offset bases) of payload.dump() without the dump, from the file's own
+// text, when the file is as save_model writes it: dump() is the payload's text with the white
+// space outside strings left out. Empty when the payload is not found (then the caller dumps the
+// parsed payload).
+std::vector<std::string> payload_text_checksums(const std::string& text) {
   auto skip_space = [&](std::size_t i) { return detail::json_skip_space(text, i); };
-  std::string found;  // the payload's checksum
+  std::vector<std::string> found;  // the payload's checksums
   std::size_t i = skip_space(0);
-  if (i >= text.size() || text[i] != '{') return "";
+  if (i >= text.size() || text[i] != '{') return {};
   for (i = skip_space(i + 1); i < text.size() && text[i] == '"';) {
     const std::size_t key_end = detail::json_value_end(text, i);
-    if (key_end == std::string::npos) return "";
+    if (key_end == std::string::npos) return {};
     const bool payload = text.compare(i, key_end - i, "\"payload\"") == 0;
     i = skip_space(key_end);
-    if (i >= text.size() || text[i] != ':') return "";
+    if (i >= text.size() || text[i] != ':') return {};
     const std::size_t start = skip_space(i + 1), end = detail::json_value_end(text, start);
-    if (end == std::string::npos) return "";
+    if (end == std::string::npos) return {};
     if (payload) {
       // The parser keeps the last of two payloads: with two, the dump decides.
-      if (!found.empty()) return "";
-      std::uint64_t h = 1469598103934665603ull;
+      if (!found.empty()) return {};
+      std::uint64_t h = kFnv1aOffsetBasis, earlier = kEarlierOffsetBasis;
       bool in_string = false, escaped = false;
       for (std::size_t k = start; k < end; ++k) {
         const unsigned char c = static_cast<unsigned char>(text[k]);
@@ -130,11 +156,10 @@ std::string payload_text_checksum(const std::string& text) {
         } else if (c == ' ' || c == '\n' || c == '\t' || c == '\r') {
           continue;
         }
-        h = (h ^ c) * 1099511628211ull;
+        h = (h ^ c) * kFnv1aPrime;
+        earlier = (earlier ^ c) * kFnv1aPrime;
       }
-      char buf[17];
-      std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-      found = buf;
+      found = {hex16(h), hex16(earlier)};
     }
     i = skip_space(end);
     if (i < text.size() && text[i] == ',') i = skip_space(i + 1);
@@ -151,16 +176,7 @@ double UncertaintyModel::systematic_u_c(double t) const {
   return std::sqrt(a * a + b * b + c * c);
 }
 
-std::string fnv1a_hex(const std::string& text) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : text) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
-}
+std::string fnv1a_hex(const std::string& text) { return fnv1a_hex_from(kFnv1aOffsetBasis, text); }
 
 void save_model(const ThermalModel& m, const std::filesystem::path& path) {
   json payload;
@@ -247,7 +263,7 @@ ThermalModel load_model(const std::filesystem::path& path) {
   // on allocation failure.
   const std::size_t layer_bytes = span ? span->second - span->first : 0;
   const bool layers_beside_checksum = span && 6 * (text.size() - layer_bytes) > text.size();
-  std::string from_text;
+  std::vector<std::string> from_text;
   std::optional<std::vector<MlpLayer>> layers;
   const auto read_layers = [&] {
     if (span)
@@ -255,7 +271,7 @@ ThermalModel load_model(const std::filesystem::path& path) {
   };
   const auto checksum_and_layers = [&] {
     try {
-      from_text = payload_text_checksum(text);
+      from_text = payload_text_checksums(text);
       if (layers_beside_checksum) read_layers();
     } catch (...) {
       from_text.clear();  // the dump decides
@@ -311,12 +327,14 @@ ThermalModel load_model(const std::filesystem::path& path) {
     // (another program's white space or number format) is checked as before, by its dump, for
     // which the layers must be parsed too.
     const std::string checksum = file.value("checksum_fnv1a64", std::string());
-    if (layers && (from_text.empty() || from_text != checksum)) {
+    const bool text_checked = !checksum.empty() && std::find(from_text.begin(), from_text.end(),
+                                                             checksum) != from_text.end();
+    if (layers && !text_checked) {
       layers.reset();
       file = parse(text);
     }
     const json& payload = file.at("payload");
-    if ((from_text.empty() || from_text != checksum) && fnv1a_hex(payload.dump()) != checksum)
+    if (!text_checked && !checksum_of(checksum, payload.dump()))
       throw InputError(where + ": checksum mismatch: the model file was edited or corrupted");
 
     ThermalModel m;

@@ -171,6 +171,27 @@ TEST_F(ModelFileDamage, reads_an_mlp_of_format_version_1) {
   EXPECT_EQ(old.mlp.predict(x), now.mlp.predict(x));
 }
 
+// The checksum is FNV-1a 64 as published (offset basis 14695981039346656037), so that another
+// tool can check or sign a model; models signed with the basis used before (a digit short) load.
+TEST_F(ModelFileDamage, checksum_is_standard_fnv1a_and_the_earlier_basis_still_loads) {
+  const auto fnv1a = [](const std::string& t, std::uint64_t h) {
+    for (unsigned char c : t) h = (h ^ c) * 1099511628211ull;
+    char buf[17];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+    return std::string(buf);
+  };
+  EXPECT_EQ(fnv1a_hex(""), "cbf29ce484222325");   // the offset basis itself
+  EXPECT_EQ(fnv1a_hex("a"), "af63dc4c8601ec8c");  // a published test vector
+  nlohmann::json file = nlohmann::json::parse(text);
+  const std::string payload = file["payload"].dump();
+  EXPECT_EQ(file["checksum_fnv1a64"], fnv1a(payload, 14695981039346656037ull));
+  file["checksum_fnv1a64"] = fnv1a(payload, 1469598103934665603ull);
+  test::write_text(dir / "earlier.json", file.dump(1));
+  EXPECT_NO_THROW(load_model(dir / "earlier.json"));
+  file["checksum_fnv1a64"] = fnv1a(payload, 1469598103934665604ull);
+  expect_rejected(file.dump(1), "checksum mismatch");
+}
+
 TEST_F(ModelFileDamage, rejects_a_missing_file_n) {
   EXPECT_THROW(load_model(dir / "none.json"), InputError);
 }
