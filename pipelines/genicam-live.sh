@@ -59,6 +59,7 @@ require_display "$SINK"
 
 # A model or dark level that belongs to another camera gives temperatures that look right and are
 # wrong: no defaults for these two.
+[[ $WATCHDOG_MS =~ ^[1-9][0-9]*$ ]] || { echo "genicam-live: WATCHDOG_MS must be a whole number of milliseconds, 1 or more, not '$WATCHDOG_MS'" >&2; exit 2; }
 [[ -n $MODEL ]] || { echo "genicam-live: set MODEL to the calibrated model of this camera" >&2; exit 2; }
 [[ -f $MODEL ]] || { echo "genicam-live: no model file $MODEL" >&2; exit 1; }
 [[ -n $DARK ]] || { echo "genicam-live: set DARK to this camera's dark: DARK=location=dark.pgm or DARK=dark-level=N" >&2; exit 2; }

@@ -55,11 +55,14 @@ here=$(cd "$(dirname "$0")" && pwd)
 # The build tree's plugin and `launch` (pyrocam-launch, which never hangs after an error).
 source "$here/lib/setup.sh"
 
-source "$here/lib/camera.sh"
 OUT=${OUT:-out/recording}
 SEGMENT_SECONDS=${SEGMENT_SECONDS:-10}
 SNAPSHOT_RATE=${SNAPSHOT_RATE:-1}
 RAW=${RAW:-0}
+# Before camera.sh, which may calibrate a model first.
+[[ $SNAPSHOT_RATE =~ ^[1-9][0-9]*$ ]] ||
+  { echo "record: SNAPSHOT_RATE must be a whole number of snapshots a second, 1 or more, not '$SNAPSHOT_RATE'" >&2; exit 2; }
+source "$here/lib/camera.sh"
 
 segment_ns=$(awk -v s="$SEGMENT_SECONDS" 'BEGIN { if (s + 0 <= 0) exit 1; printf "%.0f", s * 1e9 }') ||
   { echo "record: SEGMENT_SECONDS must be a positive number of seconds, not '$SEGMENT_SECONDS'" >&2; exit 2; }

@@ -42,6 +42,7 @@ BRACKET=${BRACKET:-}
 [[ $PEAK_MARKER =~ ^[01]$ ]] || { echo "$name: PEAK_MARKER must be 0 or 1, not '$PEAK_MARKER'" >&2; exit 2; }
 [[ -z $ALARM_C || $ALARM_C =~ ^[0-9]+([.][0-9]+)?$ ]] || { echo "$name: ALARM_C must be a temperature in degC, not '$ALARM_C'" >&2; exit 2; }
 [[ $LATENCY_MS =~ ^[0-9]+$ ]] || { echo "$name: LATENCY_MS must be a whole number of milliseconds, not '$LATENCY_MS'" >&2; exit 2; }
+[[ $WATCHDOG_MS =~ ^[0-9]+$ ]] || { echo "$name: WATCHDOG_MS must be a whole number of milliseconds (0: never), not '$WATCHDOG_MS'" >&2; exit 2; }
 # BRACKET: the camera cycles through these exposure factors and thermalfuse fuses each cycle
 # (high dynamic range). The simulated camera brackets itself (its frames say their exposure);
 # another camera (aravissrc, genicam-live) is bracketed by autoexposure, which holds each

@@ -273,6 +273,30 @@ TEST_F(Recordings, a_last_segment_cut_off_as_it_began_leaves_the_rest_readable) 
 
 // pyrocam-launch --stats-csv on its own: frames without a reading keep every column (empty
 // temperature cells), and a file that cannot be created is a usage error before anything runs.
+// Refused by record.sh, naming the variable (gst-launch named only the element's property), before
+// anything is calibrated or recorded.
+TEST(RecordingsScript, bad_snapshot_rate_and_watchdog_are_refused_by_name_n) {
+  ScratchDir dir("record-bad-settings");
+  for (const auto& [key, value] :
+       std::vector<std::pair<std::string, std::string>>{{"SNAPSHOT_RATE", "0"},
+                                                        {"SNAPSHOT_RATE", "fast"},
+                                                        {"WATCHDOG_MS", "abc"},
+                                                        {"WATCHDOG_MS", "-5"}}) {
+    Env env = {{"MODEL", rgb_model()},
+               {"OUT", (dir / "rec").string()},
+               {"SOURCE", kScene},
+               {"CAPS", kCaps},
+               {"NUM_BUFFERS", "2"}};
+    env[key] = value;
+    const ScriptRun r =
+        run_script("record.sh", {}, env, (dir / (key + ".log")).string(), milliseconds(60000));
+    ASSERT_TRUE(r.status.has_value()) << "hung";
+    EXPECT_EQ(*r.status, 2) << key << "=" << value << ": " << r.log;
+    EXPECT_NE(r.log.find(key + " must be a whole number"), std::string::npos) << r.log;
+    EXPECT_FALSE(fs::exists(dir / "rec")) << key << "=" << value;
+  }
+}
+
 TEST(RecordingsLauncher, stats_csv_keeps_its_columns_without_readings_and_refuses_a_bad_path_n) {
   for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
   const char* env = std::getenv("PYROCAM_LAUNCH");
