@@ -3,10 +3,12 @@
  * streaming. */
 #pragma once
 
+#include <opencv2/core.hpp>
 #include <string>
 
 #include "gstdarksub.h"
 #include "pyrocam-common.h"
+#include "pyrocam/runtime/dark_level_check.h"
 
 GST_DEBUG_CATEGORY_EXTERN(gst_dark_sub_debug);
 
@@ -46,6 +48,17 @@ GstCaps* raw_caps(const GstStructure* mosaic);
  * false. */
 bool use_dark_level(GstElement* element, double level, int bit_depth, double& in_use,
                     double& refused);
+
+/* Whether the dark subtracted is the camera's (pyrocam/runtime/dark_level_check.h): samples of
+ * the dark-subtracted frames until a verdict; a dark that looks off is warned about once since
+ * start, naming the dark frame subtracted (`dark_frame`) or, without one, `dark_level`. */
+struct DarkLevelWatch {
+  pyrocam::DarkLevelSamples samples;
+  unsigned frame = 0;
+  bool warned = false;
+};
+void watch_dark_level(GstElement* element, DarkLevelWatch& watch, const cv::Mat& signal, int period,
+                      int bit_depth, const std::string& dark_frame, double dark_level);
 
 /* GObject properties: installed by class_init, read and written under the object lock. */
 void install_properties(GObjectClass* klass);

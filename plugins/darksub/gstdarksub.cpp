@@ -91,6 +91,7 @@ struct pyrocam::gst::darksub::State {
   pyrocam::BayerCellSums phase_sums;
   int phase_first_cell_row = 0;  // moves on a row each frame: every row of a 5x5 period is seen
   bool phase_warned = false;     // since start
+  ds::DarkLevelWatch dark_level_watch;
 };
 using ds::State;
 
@@ -521,6 +522,10 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
     pyrocam_buffer_set_saturation_meta(outbuf, saturated.count, box.x, box.y, box.width, box.height,
                                        st.format.width, st.format.height, saturated.tiles.data());
     check_bayer_phase(self, st, out.image(), inbuf);
+    ds::watch_dark_level(GST_ELEMENT(self), st.dark_level_watch, out.image(),
+                         st.pattern == PYROCAM_SNAPSHOT_PATTERN_NAME ? 5 : 2, st.bit_depth,
+                         !st.captured_dark.empty() ? "the captured dark" : st.file_dark_path,
+                         st.dark_level);
   });
   return ok ? ret : GST_FLOW_ERROR;
 }

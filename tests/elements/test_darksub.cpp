@@ -445,6 +445,32 @@ TEST(DarkSubErrors, rejects_running_without_a_dark) {
 // A Bayer mosaic labelled as shifted by one column (grbg, as a crop of the left column leaves
 // rggb) or one row (gbrg) reads temperatures that look right and are not: darksub warns. The
 // labels that are true, and a shift by both (bggr: red and blue traded, not seen), say nothing.
+// A dark level 20 DN off leaves the cold background at +-20 DN in every band: said once; the
+// camera's own (pyrocamsrc's clamped black level, 50 DN) is not.
+TEST(DarkSubPipeline, warns_when_the_dark_level_is_not_the_cameras) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto warnings_with = [](const std::string& source, const std::string& darksub) {
+    const BusResult r = run_pipeline(source + " scene=plate temperature=1500 num-buffers=6 ! " +
+                                     darksub + " ! fakesink");
+    EXPECT_TRUE(r.eos) << r.message;
+    std::string dark;
+    for (const std::string& w : r.warnings)
+      if (w.find("cold background reads 0") != std::string::npos) dark += w + "\n";
+    return dark;
+  };
+  const std::string colour = "pyrocamsrc", snapshot = "pyrocamsrc profile=nir5x5-reference";
+  EXPECT_EQ(warnings_with(colour, "darksub dark-level=50"), "");
+  EXPECT_EQ(warnings_with(snapshot, "darksub pattern=5x5 dark-level=50"), "");
+  const std::string low = warnings_with(colour, "darksub dark-level=30");
+  EXPECT_NE(low.find("after the dark (dark-level 30 DN) the frame's darkest parts read +20 DN"),
+            std::string::npos)
+      << low;
+  EXPECT_NE(low.find("the dark is about 20 DN too low"), std::string::npos) << low;
+  EXPECT_EQ(std::count(low.begin(), low.end(), '\n'), 1) << low;  // once
+  EXPECT_NE(warnings_with(snapshot, "darksub pattern=5x5 dark-level=70").find("20 DN too high"),
+            std::string::npos);
+}
+
 TEST(DarkSubPipeline, warns_when_the_greens_are_not_where_the_pattern_says) {
   REQUIRE_ELEMENT("darksub");
   REQUIRE_ELEMENT("pyrocamsrc");
