@@ -55,6 +55,7 @@ bool use_dark_level(GstElement* element, double level, int bit_depth, double& in
 struct DarkLevelWatch {
   pyrocam::DarkLevelSamples samples;
   unsigned frame = 0;
+  bool decided = false;  // a first verdict came
   bool warned = false;
 };
 void watch_dark_level(GstElement* element, DarkLevelWatch& watch, const cv::Mat& signal, int period,

@@ -20,8 +20,8 @@ void add_dark_level_samples(const cv::Mat& signal, int period_width, int period_
   }
   const int period_rows = signal.rows / period_height, period_cols = signal.cols / period_width;
   if (period_rows < 1 || period_cols < 1) return;
-  // About 64 rows and 128 columns of periods a frame.
-  const int row_step = std::max(1, period_rows / 64), col_step = std::max(1, period_cols / 128);
+  // About 32 rows and 64 columns of periods a frame.
+  const int row_step = std::max(1, period_rows / 32), col_step = std::max(1, period_cols / 64);
   for (int pr = static_cast<int>(frame % static_cast<unsigned>(row_step)); pr < period_rows;
        pr += row_step)
     for (int dy = 0; dy < period_height; ++dy) {

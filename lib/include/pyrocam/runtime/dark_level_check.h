@@ -12,7 +12,7 @@
 namespace pyrocam {
 
 // Samples of a CV_32F dark-subtracted mosaic per place of its period (period_width x
-// period_height: 2x2 Bayer, 5x5 snapshot), gathered over frames: each frame adds about 32768
+// period_height: 2x2 Bayer, 5x5 snapshot), gathered over frames: each frame adds about 8192
 // samples from every few rows of periods (a row further on in each frame, `frame`) and columns
 // of periods, finite samples only (+INF marks saturation, NaN no reading).
 struct DarkLevelSamples {
