@@ -394,6 +394,10 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
   }
   // Temperatures that would look right and be wrong: a failure, said even when quiet. What was
   // written stays, to be looked at, and the exit status keeps a script from taking it.
+  // Said even when quiet, as darksub says it: the dark is the user's to measure.
+  if (!measurer.dark_level_problem().empty())
+    std::cerr << "warning: " << measurer.dark_level_problem()
+              << "; measure the dark (a dark frame of the exposure, lens capped)\n";
   const std::vector<std::string> problems = measurer.layout_problems();
   for (const std::string& problem : problems) std::cerr << "error: " << problem << "\n";
   if (!problems.empty()) {

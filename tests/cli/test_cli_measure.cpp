@@ -170,6 +170,27 @@ TEST_F(CliMeasure, measure_rejects_an_roi_or_dark_that_does_not_fit_the_frames_n
   EXPECT_FALSE(std::filesystem::exists(dir / "o2" / "stats.csv"));
 }
 
+// A dark 20 DN below the camera's (a dark frame of another camera or setting) is said, as darksub
+// says it; the dataset's own is not.
+TEST_F(CliMeasure, measure_warns_of_a_dark_that_is_not_the_cameras) {
+  const std::string command = "measure --model " + quoted(test_model("test-model-rgb.json")) +
+                              " --dataset " + quoted(data) + " --out ";
+  ToolRun r = run_tool(command + quoted(dir / "right"), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("cold background"), std::string::npos) << r.err;
+  const auto dark = data / "darks/0000.pgm";
+  cv::Mat lower;
+  read_raw_image(dark).convertTo(lower, CV_8U, 1, -20);
+  write_raw_image(dark, lower);
+  r = run_tool(command + quoted(dir / "low"), dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  // 20 DN and the dark's own rounding (its samples average 49.6 DN where the frames' clamp is 50).
+  const auto at = r.err.find("warning: after the dark the frames' darkest parts read +");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  EXPECT_NEAR(std::stod(r.err.substr(at + 56)), 20, 1.5) << r.err;
+  EXPECT_NE(r.err.find(" DN too low for this camera"), std::string::npos) << r.err;
+}
+
 // A second run into the folder of a first would leave the first's images among its own.
 TEST_F(CliMeasure, measure_refuses_a_folder_that_holds_a_measurement_n) {
   const std::string command = "-q measure --model " + quoted(test_model("test-model-rgb.json")) +

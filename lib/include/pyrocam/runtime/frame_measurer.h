@@ -11,6 +11,7 @@
 
 #include "pyrocam/runtime/blur_bias.h"
 #include "pyrocam/runtime/curvature_check.h"
+#include "pyrocam/runtime/dark_level_check.h"
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/demosaic.h"
 #include "pyrocam/runtime/estimators.h"
@@ -96,6 +97,9 @@ class FrameMeasurer {
   // the wrong places or another camera). A message for each that fails, none when they pass or
   // cannot tell yet.
   std::vector<std::string> layout_problems() const;
+  // With MeasureOptions::check_layout, whether the dark subtracted looked off on the frames
+  // measured so far (dark_level_check.h, as darksub checks it): a message, or "" when not.
+  const std::string& dark_level_problem() const { return dark_level_problem_; }
   const MosaicLayout& layout() const { return layout_; }
 
   // Adds a table file's blocks (the model's prebuilt lookup table, prebuilt_tables.h) to the
@@ -117,6 +121,9 @@ class FrameMeasurer {
   cv::Mat signal_, codes_;
   std::vector<cv::Mat> planes_;
   BayerCellSums phase_sums_;
+  DarkLevelSamples dark_level_samples_;
+  unsigned dark_level_frames_ = 0;
+  std::string dark_level_problem_;
   std::size_t audit_checked_ = 0, audit_misfit_ = 0;
   std::size_t above_range_ = 0;
 };
