@@ -24,10 +24,10 @@ void add_dark_level_samples(const cv::Mat& signal, int period_width, int period_
 
 // The verdict once every place has `min_samples`: per place, the centre of its darkest samples
 // (from the means of its lowest 20 % and 5 %, as of a normal distribution: the mean of a cold
-// background covering at least a fifth of the frame, whatever its noise). `offset_dn` is their mean when they all lie beyond the larger of 2 %
-// of the full scale and 4 noise standard deviations on the same side of 0, within a factor of
-// 1.2 of each other (a glowing body's bands differ by 1.44 and more on the shipped cameras,
-// dim or bright, and no body reads below 0); else 0.
+// background covering at least a fifth of the frame, whatever its noise). `offset_dn` is their mean
+// when they all lie beyond the larger of 2 % of the full scale and 4 noise standard deviations on
+// the same side of 0, within a factor of 1.2 of each other (a glowing body's bands differ by 1.44
+// and more on the shipped cameras, dim or bright, and no body reads below 0); else 0.
 struct DarkLevelVerdict {
   bool decided = false;  // enough samples
   double offset_dn = 0;  // > 0: the dark subtracted is about this much too low; < 0: too high
