@@ -49,13 +49,11 @@ GstCaps* raw_caps(const GstStructure* mosaic);
 bool use_dark_level(GstElement* element, double level, int bit_depth, double& in_use,
                     double& refused);
 
-/* Whether the dark subtracted is the camera's (pyrocam/runtime/dark_level_check.h): samples of
- * the dark-subtracted frames until a verdict; a dark that looks off is warned about once since
- * start, naming the dark frame subtracted (`dark_frame`) or, without one, `dark_level`. */
+/* Whether the dark subtracted is the camera's (pyrocam::DarkLevelWatch): a dark that looks off
+ * is warned about once since start, naming the dark frame subtracted (`dark_frame`) or, without
+ * one, `dark_level`. */
 struct DarkLevelWatch {
-  pyrocam::DarkLevelSamples samples;
-  unsigned frame = 0;
-  bool decided = false;  // a first verdict came
+  pyrocam::DarkLevelWatch check;
   bool warned = false;
 };
 void watch_dark_level(GstElement* element, DarkLevelWatch& watch, const cv::Mat& signal, int period,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "pyrocam/core/error.h"
 #include "pyrocam/runtime/darksub.h"
@@ -73,6 +74,30 @@ DarkLevelVerdict dark_level_verdict(DarkLevelSamples& samples, int bit_depth,
   }
   for (auto& place : samples.by_place) place.clear();
   return v;
+}
+
+std::optional<DarkLevelVerdict> DarkLevelWatch::add(const cv::Mat& signal, int period,
+                                                    int bit_depth) {
+  const unsigned frame = frame_++;
+  if (decided_ && frame % 8 != 0) return std::nullopt;
+  add_dark_level_samples(signal, period, period, decided_ ? frame / 8 : frame, samples_);
+  const DarkLevelVerdict v = dark_level_verdict(samples_, bit_depth);
+  if (!v.decided) return std::nullopt;
+  decided_ = true;
+  return v;
+}
+
+std::string dark_level_message(const DarkLevelVerdict& v, const std::string& dark_used,
+                               const std::string& frames) {
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "after the dark%s%s%s %s darkest parts read %+.0f DN (%.0f..%.0f) in every band "
+                "alike, where a cold background reads 0: the dark is about %.0f DN too %s for "
+                "this camera, and the temperatures would look right and be wrong",
+                dark_used.empty() ? "" : " (", dark_used.c_str(), dark_used.empty() ? "" : ")",
+                frames.c_str(), v.offset_dn, v.least_dn, v.most_dn, std::abs(v.offset_dn),
+                v.offset_dn > 0 ? "low" : "high");
+  return text;
 }
 
 }  // namespace pyrocam

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstdio>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -212,19 +212,9 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
     }
     if (dark_level_problem_.empty()) {
       const int period = layout_.kind == MosaicLayout::Kind::kSnapshot ? layout_.period_width : 2;
-      add_dark_level_samples(signal, period, period, dark_level_frames_++, dark_level_samples_);
-      const DarkLevelVerdict v = dark_level_verdict(dark_level_samples_, profile.bit_depth);
-      if (v.offset_dn != 0) {
-        char text[320];
-        std::snprintf(text, sizeof text,
-                      "after the dark the frames' darkest parts read %+.0f DN (%.0f..%.0f) in "
-                      "every band alike, where a cold background reads 0: the dark is about "
-                      "%.0f DN too %s for this camera, and the temperatures would look right and "
-                      "be wrong",
-                      v.offset_dn, v.least_dn, v.most_dn, std::abs(v.offset_dn),
-                      v.offset_dn > 0 ? "low" : "high");
-        dark_level_problem_ = text;
-      }
+      const std::optional<DarkLevelVerdict> v =
+          dark_level_watch_.add(signal, period, profile.bit_depth);
+      if (v && v->offset_dn != 0) dark_level_problem_ = dark_level_message(*v, "", "the frames'");
     }
     const PlaneEstimator::FitAudit audit = planes_estimator_.take_fit_audit();
     audit_checked_ += audit.checked;

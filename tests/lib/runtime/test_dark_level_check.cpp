@@ -77,5 +77,27 @@ TEST(DarkLevelCheck, waits_for_enough_samples_of_every_place) {
   EXPECT_THROW(add_dark_level_samples(cv::Mat(8, 8, CV_8U), 2, 2, 0, samples), InputError);
 }
 
+// Every frame until a first verdict, then every 8th; the message says which way and how much.
+TEST(DarkLevelCheck, the_watch_samples_every_8th_frame_after_a_verdict) {
+  cv::Mat frame(240, 320, CV_32F);
+  cv::RNG rng(3);
+  rng.fill(frame, cv::RNG::NORMAL, 20, 1);  // a background 20 DN up
+  DarkLevelWatch watch;
+  std::string verdicts;
+  for (int i = 0; i < 17; ++i) {
+    const auto v = watch.add(frame, 2, 8);
+    verdicts += v ? "v" : ".";
+    if (v) {
+      EXPECT_NEAR(v->offset_dn, 20, 1);
+    }
+  }
+  EXPECT_EQ(verdicts, "v.......v.......v");
+  DarkLevelVerdict v;
+  v.offset_dn = -20, v.least_dn = -21, v.most_dn = -19;
+  EXPECT_EQ(dark_level_message(v, "dark-level 70 DN", "the frame's").substr(0, 68),
+            "after the dark (dark-level 70 DN) the frame's darkest parts read -20");
+  EXPECT_NE(dark_level_message(v, "", "x").find("about 20 DN too high"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace pyrocam

@@ -7,6 +7,8 @@
 
 #include <cstddef>
 #include <opencv2/core.hpp>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace pyrocam {
@@ -35,5 +37,23 @@ struct DarkLevelVerdict {
 };
 DarkLevelVerdict dark_level_verdict(DarkLevelSamples& samples, int bit_depth,
                                     std::size_t min_samples = 1024);
+
+// The check over a stream of frames, as darksub and FrameMeasurer run it: every frame sampled
+// until a first verdict, then every 8th (about 0.12 ms of CPU a 2048x2048 frame it samples).
+class DarkLevelWatch {
+ public:
+  // A verdict when this frame brought one.
+  std::optional<DarkLevelVerdict> add(const cv::Mat& signal, int period, int bit_depth);
+
+ private:
+  DarkLevelSamples samples_;
+  unsigned frame_ = 0;
+  bool decided_ = false;
+};
+
+// What a verdict with an offset says: "after the dark (<dark_used>) <frames> darkest parts read
+// +20 DN ... the dark is about 20 DN too low for this camera, ...", `frames` e.g. "the frame's".
+std::string dark_level_message(const DarkLevelVerdict& verdict, const std::string& dark_used,
+                               const std::string& frames);
 
 }  // namespace pyrocam

@@ -121,8 +121,7 @@ class FrameMeasurer {
   cv::Mat signal_, codes_;
   std::vector<cv::Mat> planes_;
   BayerCellSums phase_sums_;
-  DarkLevelSamples dark_level_samples_;
-  unsigned dark_level_frames_ = 0;
+  DarkLevelWatch dark_level_watch_;
   std::string dark_level_problem_;
   std::size_t audit_checked_ = 0, audit_misfit_ = 0;
   std::size_t above_range_ = 0;
