@@ -392,20 +392,7 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
     for (const auto& path : written) std::filesystem::remove(path, ec);
     throw;
   }
-  // Temperatures that would look right and be wrong: a failure, said even when quiet. What was
-  // written stays, to be looked at, and the exit status keeps a script from taking it.
-  // Said even when quiet, as darksub says it: the dark is the user's to measure.
-  if (!measurer.dark_level_problem().empty())
-    std::cerr << "warning: " << measurer.dark_level_problem()
-              << "; measure the dark (a dark frame of the exposure, lens capped)\n";
-  const std::vector<std::string> problems = measurer.layout_problems();
-  for (const std::string& problem : problems) std::cerr << "error: " << problem << "\n";
-  if (!problems.empty()) {
-    std::cerr << "pyrocam-calib: error: the frames do not read as the model's camera; what was "
-                 "written in "
-              << a.out << " is kept to be looked at, not as results\n";
-    return kExitFailed;
-  }
+  if (!frames_read_as_the_camera(measurer, a.out)) return kExitFailed;
   if (!global.quiet)
     std::cout << in.jobs.size() << " frame(s) measured; images and stats.csv in " << a.out << "\n";
   return kExitOk;

@@ -235,6 +235,19 @@ std::string frames_bayer_pattern(const ThermalModel& model, const std::string& m
   return frames;
 }
 
+bool frames_read_as_the_camera(const FrameMeasurer& measurer, const std::string& out) {
+  if (!measurer.dark_level_problem().empty())
+    std::cerr << "warning: " << measurer.dark_level_problem()
+              << "; measure the dark (a dark frame of the exposure, lens capped)\n";
+  const std::vector<std::string> problems = measurer.layout_problems();
+  for (const std::string& problem : problems) std::cerr << "error: " << problem << "\n";
+  if (problems.empty()) return true;
+  std::cerr << "pyrocam-calib: error: the frames do not read as the model's camera; what was "
+               "written in "
+            << out << " is kept to be looked at, not as results\n";
+  return false;
+}
+
 int measure_recording(const RecordingMeasure& m) {
   const auto segments = recording_segments(m.recording, "raw-");
   const std::filesystem::path out(m.out);
@@ -258,6 +271,7 @@ int measure_recording(const RecordingMeasure& m) {
       const auto tagged = fields.find("pattern");
       if (pattern.empty() && tagged != fields.end()) pattern = lower(tagged->second);
       MeasureOptions options = m.options;
+      options.check_layout = true;
       const auto recorded = recorded_settings(m.recording, m.quiet);
       check_recorded_profile(recorded, *m.model, m.model_path, m.recording, m.quiet);
       adopt_recorded_settings(recorded, m.given, options, m.quiet);
@@ -277,6 +291,7 @@ int measure_recording(const RecordingMeasure& m) {
     writer.add(f.index, f.timestamp_s, encode_decikelvin(t));
   });
   writer.finish();
+  if (measurer && !frames_read_as_the_camera(*measurer, m.out)) return kExitFailed;
   if (!m.quiet)
     std::cerr << "measured " << writer.frames() << " raw frames of " << m.recording << " into "
               << (out / "temperature.npy").string() << " and " << (out / "temperature.csv").string()

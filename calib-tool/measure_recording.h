@@ -34,6 +34,13 @@ int measure_recording(const RecordingMeasure& m);
 void load_prebuilt_table(const FrameMeasurer& measurer, const MeasureOptions& options,
                          const std::string& model_path, bool quiet);
 
+// What the checks of the frames measured (MeasureOptions::check_layout) said, on stderr even when
+// quiet: a dark that looks off (a warning: the dark is the user's to measure) and frames that do
+// not read as the model's camera (errors: temperatures that would look right and be wrong).
+// Returns false after the errors: what was written in `out` is kept to be looked at, and the
+// exit status keeps a script from taking it.
+bool frames_read_as_the_camera(const FrameMeasurer& measurer, const std::string& out);
+
 // The frames' layout against the model's (both lower case; `frames` from `source`, for messages):
 // empty where they are the same; the frames' pattern where both are Bayer patterns (the same
 // filters, a readout window that starts on another cell: MeasureOptions::bayer_pattern), said

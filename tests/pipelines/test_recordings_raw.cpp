@@ -67,6 +67,19 @@ TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_anoth
   EXPECT_EQ(same.shape, codes.shape);
   EXPECT_TRUE(same.data == codes.data) << "re-measured codes differ from the recorded ones";
   EXPECT_EQ(read_csv(dir / "same" / "temperature.csv").size(), kFrames + 1u);
+  EXPECT_EQ(read_text(dir / "same.log").find("dark"), std::string::npos)
+      << read_text(dir / "same.log");
+
+  // A dark that is not the camera's (its black is 50 DN) is said, as darksub says it, even
+  // with -q: the cold background reads 20 DN above 0 in every place of the mosaic.
+  ASSERT_EQ(
+      run_command(tool + "measure --recording '" + rec.string() + "' --model '" + rgb_model() +
+                      "' --dark-level 30 --out '" + (dir / "dark-30").string() + "'",
+                  dir / "dark-30.log"),
+      0)
+      << read_text(dir / "dark-30.log");
+  EXPECT_NE(read_text(dir / "dark-30.log").find("too low"), std::string::npos)
+      << read_text(dir / "dark-30.log");
 
   // demosaic25's method comes from the tags too: the first raw segment read again through
   // bilinear demosaicking, as a user's own pipeline might have, measures to those codes.
