@@ -70,6 +70,7 @@ struct State {
   bool warned_no_exposure = false;
   guint serial = G_MAXUINT;
   bool warned_limit = false;
+  bool warned_hot_pixels = false;  // hot-pixels larger than the frame
   ~State() {
     if (camera) gst_object_unref(camera);
   }

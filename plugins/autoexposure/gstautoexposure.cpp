@@ -168,6 +168,23 @@ static void set_camera(GstAutoExposure* self, double exposure_us, std::optional<
   }
 }
 
+/* The frame's hot level. A hot-pixels larger than the frame would measure its darkest sample, and
+ * the exposure would run to its limit for a hot region that is the background: said once. */
+static pyrocam::HotLevel measure_hot_level(GstAutoExposure* self, const Settings& settings,
+                                           const cv::Mat& image) {
+  State& st = *self->state;
+  if (settings.hot_pixels > image.total() && !st.warned_hot_pixels) {
+    st.warned_hot_pixels = true;
+    GST_ELEMENT_WARNING(
+        self, RESOURCE, SETTINGS,
+        ("%s: hot-pixels %u is more than the %dx%d frame's %zu samples: the "
+         "level measured is the frame's darkest",
+         GST_OBJECT_NAME(self), settings.hot_pixels, image.cols, image.rows, image.total()),
+        ("hot-pixels larger than the frame"));
+  }
+  return pyrocam::hot_level(image, static_cast<int>(settings.hot_pixels), st.saturation_dn);
+}
+
 /* Bracketing by the camera's setting (see the element's doc): one frame per step passes, the
  * first factor's frames drive the base exposure, and each step sets the camera to base x its
  * factor. Returns whether the frame passes. */
@@ -186,8 +203,7 @@ static bool bracket_frame(GstAutoExposure* self, const Settings& settings, GstBu
     if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not measure the frame", [&] {
           pg::MappedImage image;
           image.map_raw(buffer, st.format);
-          level = pyrocam::hot_level(image.image(), static_cast<int>(settings.hot_pixels),
-                                     st.saturation_dn);
+          level = measure_hot_level(self, settings, image.image());
           command = st.controller->update(level, taken, st.base);
         })) {
       failed = true;
@@ -279,8 +295,7 @@ static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, Gst
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not measure the frame", [&] {
         pg::MappedImage image;
         image.map_raw(buffer, st.format);
-        level = pyrocam::hot_level(image.image(), static_cast<int>(settings.hot_pixels),
-                                   st.saturation_dn);
+        level = measure_hot_level(self, settings, image.image());
         command = st.controller->update(level, frame, current);
       }))
     return GST_FLOW_ERROR;

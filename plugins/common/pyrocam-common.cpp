@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "pyrocam/core/recording_comment.h"
 #include "pyrocam/runtime/bracket_fusion.h"
 #include "pyrocam/runtime/darksub.h"
 
@@ -248,6 +249,26 @@ void warn_not_changeable_while_running(GstElement* element, const char* property
                        "ignored and the current value stays",
                        GST_OBJECT_NAME(element), property),
                       ("%s set while running", property));
+}
+
+bool refuses_other_quantity(GstElement* element, GstEvent* event) {
+  if (GST_EVENT_TYPE(event) != GST_EVENT_TAG) return false;
+  GstTagList* tags = nullptr;
+  gst_event_parse_tag(event, &tags);
+  gchar* comment = nullptr;
+  std::string quantity;
+  if (gst_tag_list_get_string(tags, GST_TAG_COMMENT, &comment)) {
+    const auto fields = parse_recording_comment(comment);
+    const auto q = fields.find("quantity");
+    if (q != fields.end()) quantity = q->second;
+  }
+  g_free(comment);
+  if (quantity.empty() || quantity == "temperature") return false;
+  PYROCAM_POST_ERROR(element, ErrorKind::kFormat,
+                     std::string(GST_OBJECT_NAME(element)) + ": the stream holds " + quantity +
+                         " (its tags say so), not temperatures: its codes would read as degC",
+                     "tag comment quantity=" + quantity);
+  return true;
 }
 
 void warn_frame_without_exposure(GstElement* element, bool& warned) {

@@ -144,6 +144,13 @@ void warn_frame_without_exposure(GstElement* element, bool& warned);
  * SETTINGS warning on the bus naming the element and the property (the value stays), so that an
  * application learns it, not only the debug log. Call without the object's lock held. */
 void warn_not_changeable_while_running(GstElement* element, const char* property);
+/* For the elements that take a stream's codes as temperatures (thermalcolormap, thermalalarm):
+ * whether `event` is a tag event whose comment says the stream holds another quantity
+ * (`quantity=expanded-uncertainty`: ratiotemp output=uncertainty, or a recording of it played
+ * back), whose codes would read as temperatures near -273 degC. Then a STREAM FORMAT error is
+ * posted, naming the element and the quantity, and the caller drops the event and returns
+ * FALSE. */
+bool refuses_other_quantity(GstElement* element, GstEvent* event);
 /* Whether a bracket fusion's frame came earlier than the one before it (its PTS is before
  * `last_pts`, which is then set to it): frames out of time order would be fused as if the
  * earlier were the later, so the fusion starts anew with this frame, with one STREAM FORMAT

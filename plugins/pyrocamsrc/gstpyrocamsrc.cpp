@@ -87,7 +87,6 @@ constexpr guint64 DEFAULT_SEED = 1;
 constexpr gboolean DEFAULT_IS_LIVE = FALSE;
 constexpr int DEFAULT_WIDTH = 320, DEFAULT_HEIGHT = 240, DEFAULT_FPS = 30;
 constexpr int kMeltPoolFrames = 100;
-constexpr double kMaxExposureUs = 1e7;  // the exposure property's range, automatic included
 // Exposure and emissivities as pyrocam-calib's scene sequences (pyrocam::kSceneDefaults); the
 // exposure property's description and the documentation above give these numbers.
 constexpr pyrocam::SceneDefaults kScene = pyrocam::kSceneDefaults;
@@ -117,6 +116,7 @@ struct State {
   bool bayer_caps = false;
   gsize stride = 0, frame_size = 0;
   guint64 frame = 0;
+  bool exposure_held = false;  // a frame's exposure was held to the range (warned once)
   // The last static scene, kept while scene and temperature do not change.
   cv::Mat scene_map;
   GstPyrocamSrcScene scene_kind = DEFAULT_SCENE;
@@ -333,13 +333,8 @@ static GstFlowReturn gst_pyrocam_src_fill(GstPushSrc* push, GstBuffer* buffer) {
     // The automatic exposure of a cold scene runs to hours (a 300 degC plate: 7500 s): held to
     // the property's range, as a camera holds it to its own.
     const double exposure =
-        factor * (settings.exposure_us > 0
-                      ? settings.exposure_us
-                      : std::min(kMaxExposureUs, st.camera->exposure_for(
-                                                     nominal_c,
-                                                     pyrocam::scaled_target_dn(
-                                                         kScene.target_dn, st.camera->profile()),
-                                                     emissivity)));
+        pg::pyrocamsrc::frame_exposure_us(GST_ELEMENT(self), *st.camera, settings.exposure_us,
+                                          factor, nominal_c, emissivity, st.exposure_held);
     const cv::Mat raw = st.camera->render(*map, exposure, emissivity, settings.gain_db);
     pyrocam_buffer_add_exposure_meta(buffer, exposure, settings.gain_db);
     GstMapInfo info;
@@ -375,6 +370,7 @@ static void gst_pyrocam_src_set_property(GObject* object, guint prop_id, const G
     return;
   }
   const char* refused_while_running = nullptr;  // posted once the lock is released
+  std::string refused_bracket;                  // the same
   {
     pg::ObjectLock lock(self);
     Settings& s = *self->settings;
@@ -414,14 +410,19 @@ static void gst_pyrocam_src_set_property(GObject* object, guint prop_id, const G
         break;
       case PROP_BRACKET: {
         const char* v = g_value_get_string(value);
-        s.bracket_text = v ? v : "";
         try {
-          s.bracket = pyrocam::parse_bracket(s.bracket_text);
+          s.bracket = pyrocam::parse_bracket(v ? v : "");
+          s.bracket_text = v ? v : "";
           s.bracket_valid = true;
         } catch (const std::exception& e) {
-          // Playing: the last good bracket stays; else start() refuses to run.
-          GST_WARNING_OBJECT(self, "%s", e.what());
-          s.bracket_valid = running;
+          // Playing: the last good bracket stays, and reads back; else start() refuses to run.
+          if (running) {
+            refused_bracket = std::string("bracket '") + (v ? v : "") + "' refused (" + e.what() +
+                              "); the bracket stays '" + s.bracket_text + "'";
+          } else {
+            s.bracket_text = v ? v : "";
+            s.bracket_valid = false;
+          }
         }
         break;
       }
@@ -432,6 +433,9 @@ static void gst_pyrocam_src_set_property(GObject* object, guint prop_id, const G
   }
   if (refused_while_running)
     pg::warn_not_changeable_while_running(GST_ELEMENT(self), refused_while_running);
+  if (!refused_bracket.empty())
+    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS, ("%s", refused_bracket.c_str()),
+                        ("bracket set while running"));
 }
 
 static void gst_pyrocam_src_get_property(GObject* object, guint prop_id, GValue* value,
@@ -520,7 +524,7 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
                           "brightest band 140 DN above dark (8-bit; deeper cameras: the same share "
                           "of their range) at the scene's nominal temperature (melt pool: 2000 "
                           "degC)",
-                          0.0, kMaxExposureUs, DEFAULT_EXPOSURE, playing));
+                          0.0, pg::pyrocamsrc::kMaxExposureUs, DEFAULT_EXPOSURE, playing));
   g_object_class_install_property(
       gobject_class, PROP_GAIN,
       g_param_spec_double("gain", "Gain",

@@ -1,9 +1,10 @@
-/* pyrocamsrc's caps, shared by its files. */
+/* pyrocamsrc's caps and frame exposures, shared by its files. */
 #pragma once
 
 #include <gst/gst.h>
 
 #include "pyrocam/core/profile.h"
+#include "pyrocam/simulation/simulator.h"
 
 namespace pyrocam::gst::pyrocamsrc {
 
@@ -13,5 +14,14 @@ GstCaps* profile_caps(const CameraProfile& profile);
 /* After a failed negotiation: when downstream takes none of the profile's formats, an error
  * naming both (a camera cannot give another mosaic than its sensor's). */
 void explain_refused_caps(GstElement* element, GstPad* src_pad, const CameraProfile& profile);
+
+/* The longest exposure, the property's (automatic included) and a bracket step's. */
+inline constexpr double kMaxExposureUs = 1e7;
+
+/* A frame's exposure: `exposure_us` (0: the camera's automatic one for the scene's nominal
+ * temperature, held to kMaxExposureUs) times the bracket's `factor`, held to kMaxExposureUs
+ * with one RESOURCE SETTINGS warning (when `warned` is false; it is then set). */
+double frame_exposure_us(GstElement* element, const Simulator& camera, double exposure_us,
+                         double factor, double nominal_c, double emissivity, bool& warned);
 
 }  // namespace pyrocam::gst::pyrocamsrc

@@ -114,8 +114,9 @@ struct State {
   GstClockTime last_stats = GST_CLOCK_TIME_NONE;
   guint64 frames = 0;  // since start or the last flush
   guint region_serial_seen = 0;
-  std::string peak_warned;    // the last peak-window/frame misfit warned about
-  std::string region_warned;  // the last region/frame size seen (warned if outside)
+  std::string peak_warned;       // the last peak-window/frame misfit warned about
+  std::string region_warned;     // the last region/frame size seen (warned if outside)
+  bool tracking_warned = false;  // region-tracks-peak without a region
   // The readings' fit audit (warn_when_readings_misfit), accumulated until a verdict.
   std::size_t fit_checked = 0, fit_misfit = 0;
   bool fit_warned = false;  // since start

@@ -178,10 +178,20 @@ void install_properties(GObjectClass* gobject_class) {
 void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpec* pspec) {
   GstRatioTemp* self = GST_RATIO_TEMP(object);
   const char* refused_while_running = nullptr;  // posted once the lock is released
+  std::string refused_value;                    // the same
   {
     ObjectLock lock(self);
     Settings& s = *self->settings;
     const bool running = GST_STATE(self) > GST_STATE_READY;
+    // A value that cannot be used: while running a warning, the value in use staying; before,
+    // start() fails with it.
+    const auto refuse = [&](const std::string& why, const std::string& kept) {
+      if (running)
+        refused_value = why + "; the value in use stays " + kept;
+      else
+        s.refused = why;
+      GST_WARNING_OBJECT(self, "%s", why.c_str());
+    };
     switch (prop_id) {
       case PROP_MODEL:
         if (running) {
@@ -235,8 +245,7 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
         const double v = g_value_get_double(value);  // NaN passes the GParamSpec's range check
         double& to = prop_id == PROP_E_SLOPE ? s.e_slope : s.e_slope_uncertainty;
         if (std::isnan(v)) {
-          s.refused = std::string(pspec->name) + " NaN refused; keeping " + std::to_string(to);
-          GST_WARNING_OBJECT(self, "%s", s.refused.c_str());
+          refuse(std::string(pspec->name) + " NaN refused", std::to_string(to));
         } else {
           to = v;
           if (s.refused.rfind(std::string(pspec->name) + " ", 0) == 0) s.refused.clear();
@@ -246,11 +255,8 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
       case PROP_PEAK_WINDOW: {
         const guint v = g_value_get_uint(value);
         if (v % 2 == 0 && v != 0) {
-          s.refused = "peak-window " + std::to_string(v) +
-                      " is even (a window needs a centre "
-                      "pixel); keeping " +
-                      std::to_string(s.peak_window);
-          GST_WARNING_OBJECT(self, "%s", s.refused.c_str());
+          refuse("peak-window " + std::to_string(v) + " is even (a window needs a centre pixel)",
+                 std::to_string(s.peak_window));
         } else {
           s.peak_window = v;
           s.peak_window_set = true;
@@ -275,6 +281,10 @@ void set_property(GObject* object, guint prop_id, const GValue* value, GParamSpe
   }
   if (refused_while_running)
     pyrocam::gst::warn_not_changeable_while_running(GST_ELEMENT(self), refused_while_running);
+  if (!refused_value.empty())
+    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                        ("%s: %s", GST_OBJECT_NAME(self), refused_value.c_str()),
+                        ("property value refused while running"));
 }
 
 void get_property(GObject* object, guint prop_id, GValue* value, GParamSpec* pspec) {

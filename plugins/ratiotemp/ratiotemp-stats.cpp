@@ -137,6 +137,13 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
                           ("the window must fit in the frame"));
     peak_warned = misfit;
   }
+  if (settings.region_tracks_peak && settings.region_text.empty() && !st.tracking_warned)
+    GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                        ("%s: region-tracks-peak needs a region (its size): no region is "
+                         "tracked",
+                         GST_OBJECT_NAME(self)),
+                        ("region-tracks-peak without region"));
+  st.tracking_warned = settings.region_tracks_peak && settings.region_text.empty();
   if (!settings.region_text.empty() && settings.region_valid && !settings.region_tracks_peak) {
     // Once per region and frame size: a 5x5 camera's frames are the sensor's fifth.
     const cv::Rect wanted(settings.region.x, settings.region.y, settings.region.width,

@@ -351,11 +351,10 @@ static void gst_thermal_alarm_set_property(GObject* object, guint prop_id, const
           s.region = r;
           s.refused_region.clear();
         } else {
-          refused = "region '" + text +
-                    "' is not x,y,width,height (non-negative integers, width and height at "
-                    "least 1); keeping '" +
-                    s.region_text + "'";
-          s.refused_region = refused;
+          s.refused_region = "region '" + text +
+                             "' is not x,y,width,height (non-negative integers, width and "
+                             "height at least 1)";
+          refused = s.refused_region + "; keeping '" + s.region_text + "'";
         }
         break;
       }
@@ -365,9 +364,8 @@ static void gst_thermal_alarm_set_property(GObject* object, guint prop_id, const
           s.peak_window = w;
           s.refused_window.clear();
         } else {
-          refused = "peak-window " + std::to_string(w) + " is not odd; keeping " +
-                    std::to_string(s.peak_window);
-          s.refused_window = refused;
+          s.refused_window = "peak-window " + std::to_string(w) + " is not odd";
+          refused = s.refused_window + "; keeping " + std::to_string(s.peak_window);
         }
         break;
       }
@@ -416,6 +414,16 @@ static void gst_thermal_alarm_get_property(GObject* object, guint prop_id, GValu
       G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
       break;
   }
+}
+
+/* A stream of expanded uncertainties (ratiotemp output=uncertainty) would be compared with the
+ * thresholds as temperatures near -273 degC: an alarm that never rises, or always. */
+static gboolean gst_thermal_alarm_sink_event(GstBaseTransform* trans, GstEvent* event) {
+  if (pg::refuses_other_quantity(GST_ELEMENT(trans), event)) {
+    gst_event_unref(event);
+    return FALSE;
+  }
+  return GST_BASE_TRANSFORM_CLASS(gst_thermal_alarm_parent_class)->sink_event(trans, event);
 }
 
 static void gst_thermal_alarm_finalize(GObject* object) {
@@ -492,6 +500,7 @@ static void gst_thermal_alarm_class_init(GstThermalAlarmClass* klass) {
   gst_element_class_add_static_pad_template(element_class, &sink_template);
   gst_element_class_add_static_pad_template(element_class, &src_template);
 
+  trans_class->sink_event = GST_DEBUG_FUNCPTR(gst_thermal_alarm_sink_event);
   trans_class->start = GST_DEBUG_FUNCPTR(gst_thermal_alarm_start);
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_thermal_alarm_stop);
   trans_class->passthrough_on_same_caps = TRUE;

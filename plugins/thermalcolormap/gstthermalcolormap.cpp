@@ -41,7 +41,6 @@
 
 #include "pyrocam-caps.h"
 #include "pyrocam-common.h"
-#include "pyrocam/core/recording_comment.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/colormap.h"
 #include "pyrocam/runtime/region_stats.h"
@@ -331,26 +330,9 @@ static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter
 /* A stream whose tags say it holds expanded uncertainties (ratiotemp output=uncertainty, or a
  * recording of it played back) would be coloured and labelled as temperatures near -273 degC. */
 static gboolean gst_thermal_colormap_sink_event(GstBaseTransform* trans, GstEvent* event) {
-  if (GST_EVENT_TYPE(event) == GST_EVENT_TAG) {
-    GstTagList* tags = nullptr;
-    gst_event_parse_tag(event, &tags);
-    gchar* comment = nullptr;
-    std::string quantity;
-    if (gst_tag_list_get_string(tags, GST_TAG_COMMENT, &comment)) {
-      const auto fields = pyrocam::parse_recording_comment(comment);
-      const auto q = fields.find("quantity");
-      if (q != fields.end()) quantity = q->second;
-    }
-    g_free(comment);
-    if (!quantity.empty() && quantity != "temperature") {
-      PYROCAM_POST_ERROR(trans, pg::ErrorKind::kFormat,
-                         std::string(GST_OBJECT_NAME(trans)) + ": the stream holds " + quantity +
-                             " (its tags say so), not temperatures: its colours and labels "
-                             "would read as degC",
-                         "tag comment quantity=" + quantity);
-      gst_event_unref(event);
-      return FALSE;
-    }
+  if (pg::refuses_other_quantity(GST_ELEMENT(trans), event)) {
+    gst_event_unref(event);
+    return FALSE;
   }
   return GST_BASE_TRANSFORM_CLASS(gst_thermal_colormap_parent_class)->sink_event(trans, event);
 }

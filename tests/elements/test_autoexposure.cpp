@@ -295,6 +295,26 @@ TEST(AutoExposure, AnExposureOutsideTheRangeIsClampedWithAWarning) {
       << r.warnings[0];
 }
 
+// hot-pixels beyond the frame's samples measured the darkest one, and the exposure ran to its
+// limit with a warning that blamed the scene: it is said, once.
+TEST(AutoExposure, HotPixelsLargerThanTheFrameIsSaidOnce) {
+  REQUIRE_ELEMENT("autoexposure");
+  const RunResult r =
+      run("pyrocamsrc name=camera scene=plate exposure=50 num-buffers=4 ! "
+          "video/x-bayer,width=40,height=20,framerate=30/1 ! "
+          "autoexposure dark-level=50 hot-pixels=801 ! fakesink name=sink sync=false",
+          1500, 1500, 0);
+  EXPECT_TRUE(r.eos);
+  ASSERT_GE(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("hot-pixels 801 is more than the 40x20 frame's 800 samples"),
+            std::string::npos)
+      << r.warnings[0];
+  EXPECT_EQ(std::count_if(
+                r.warnings.begin(), r.warnings.end(),
+                [](const std::string& w) { return w.find("hot-pixels 801") != std::string::npos; }),
+            1);
+}
+
 // The exposure each frame was taken with reaches the temperatures: the meta passes darksub,
 // demosaic25 and ratiotemp.
 void on_temperature(GstElement*, GstBuffer* buffer, GstPad*, gpointer data) {

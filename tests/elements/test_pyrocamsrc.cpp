@@ -2,6 +2,7 @@
 // changes, gain, bus errors, and the smoke pipeline through darksub and demosaic25.
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "element_support.h"
 #include "pyrocam-meta.h"
@@ -216,6 +217,34 @@ TEST_F(PyrocamSrc, automatic_exposure_of_a_cold_scene_stays_in_range) {
   EXPECT_GT(mean, 45);  // the profiles' 50 DN black level, a plate barely glowing on it
   EXPECT_LT(mean, 60);
   gst_buffer_unref(b);
+}
+
+// A bracket that does not parse, set while playing, is refused on the bus; the bracket in use
+// stays, and reads back (it read back the refused text, and a restart then used the old one
+// silently).
+TEST_F(PyrocamSrc, a_bad_bracket_set_while_playing_is_refused_on_the_bus_n) {
+  h = gst_harness_new_parse("pyrocamsrc scene=plate temperature=1500 bracket=1,0.5");
+  attach_bus();
+  gst_harness_set_sink_caps_str(h, "video/x-bayer,width=40,height=20");
+  gst_harness_play(h);
+  gst_buffer_unref(gst_harness_pull(h));
+  GstElement* src = find_element(h, "pyrocamsrc");
+  g_object_set(src, "bracket", "abc", nullptr);
+  gchar* bracket = nullptr;
+  g_object_get(src, "bracket", &bracket, nullptr);
+  EXPECT_STREQ(bracket, "1,0.5");
+  g_free(bracket);
+  gst_object_unref(src);
+  GstMessage* m = gst_bus_pop_filtered(bus, GST_MESSAGE_WARNING);
+  ASSERT_NE(m, nullptr);
+  GError* err = nullptr;
+  gst_message_parse_warning(m, &err, nullptr);
+  EXPECT_NE(std::string(err->message).find("bracket 'abc' refused"), std::string::npos)
+      << err->message;
+  EXPECT_NE(std::string(err->message).find("the bracket stays '1,0.5'"), std::string::npos)
+      << err->message;
+  g_error_free(err);
+  gst_message_unref(m);
 }
 
 TEST(PyrocamSrcPipeline, smoke_runs_through_darksub_and_demosaic25_to_eos) {

@@ -247,6 +247,31 @@ TEST_F(RatioTemp, a_model_set_while_playing_is_refused_on_the_bus) {
   EXPECT_EQ(run(planes, 4, 4, GST_SECOND), expected);
 }
 
+// An even peak-window set while playing is refused on the bus, the value in use staying (it was
+// only in the debug log); region-tracks-peak without a region is said once.
+TEST_F(RatioTemp, values_refused_while_playing_are_said_on_the_bus) {
+  start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 4));
+  const auto planes = graybody_planes(*rgb_model(), 4, 4, 1000, 1400);
+  const auto expected = library_codes(rgb_model(), rgb_auto_method(), planes, 4, 4);
+  EXPECT_EQ(run(planes, 4, 4, 0), expected);
+  g_object_set(element, "peak-window", 4u, "region-tracks-peak", TRUE, nullptr);
+  EXPECT_EQ(run(planes, 4, 4, GST_SECOND), expected);
+  auto collected = stats();  // collects the warnings
+  free_all(collected);
+  guint window = 0;
+  g_object_get(element, "peak-window", &window, nullptr);
+  EXPECT_EQ(window, 5u);
+  const auto count = [&](const std::string& part) {
+    return std::count_if(warnings.begin(), warnings.end(),
+                         [&](const std::string& w) { return w.find(part) != std::string::npos; });
+  };
+  EXPECT_EQ(count("peak-window 4 is even (a window needs a centre pixel); the value in use "
+                  "stays 5"),
+            1);
+  EXPECT_EQ(count("region-tracks-peak needs a region"), 1);
+  EXPECT_EQ(warnings.size(), 2u);
+}
+
 TEST_F(RatioTemp, survives_flush_and_eos) {
   start("ratiotemp model=" + rgb_model_path(), bands_caps(3, "bayer", 4, 4));
   const auto planes = graybody_planes(*rgb_model(), 4, 4, 1000, 1400);
@@ -327,7 +352,8 @@ TEST_F(RatioTemp, stats_peak_is_the_hot_spot_not_a_wild_pixel) {
   EXPECT_FALSE(gst_structure_has_field(s[0], "region-peak-c"));
   EXPECT_TRUE(gst_structure_has_field(s[0], "max-c"));
   free_all(s);
-  EXPECT_TRUE(warnings.empty());
+  ASSERT_EQ(warnings.size(), 1u);  // the refused window
+  EXPECT_NE(warnings[0].find("peak-window 4 is even"), std::string::npos) << warnings[0];
 }
 
 // region-tracks-peak: the region (its size from region) is centred on the frame's peak, moved

@@ -154,4 +154,23 @@ TEST(ThermalFuse, ABadBracketStopsTheCameraWithAClearError) {
 }
 
 }  // namespace
+// A bracket step past the camera's range is taken at its end, with one warning and the
+// exposure the frame was taken with in its meta: a cold plate's automatic exposure is already
+// the longest (10 s), and 9 times it was 90 s, whose simulated dark current filled full pixels
+// to below the saturation level (read as 1100-1300 degC over a 600 degC 5x5 plate).
+TEST(ThermalFuse, ABracketStepPastTheCamerasRangeIsHeldToItWithOneWarning) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const BracketRun<std::uint8_t> r = run_bracket<std::uint8_t>(
+      "pyrocamsrc scene=plate temperature=300 bracket=9,1,0.5 num-buffers=6 ! "
+      "video/x-bayer,width=40,height=20 ! fakesink name=sink");
+  ASSERT_TRUE(r.eos);
+  ASSERT_EQ(r.frames.size(), 6u);
+  for (std::size_t k = 0; k < 6; ++k)
+    EXPECT_EQ(r.frames[k].exposure_us, k % 3 == 2 ? 5e6 : 1e7) << "frame " << k;
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("9e+07 us (9 times 1e+07 us) is longer than the camera's longest"),
+            std::string::npos)
+      << r.warnings[0];
+}
+
 }  // namespace pyrocam::test
