@@ -265,6 +265,10 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
               << " have a band saturated or at the saturation level (shorten the exposure), "
               << why.dim << " a band below or near the dim threshold ("
               << model.profile().thresholds.inference_dim_dn << " DN; lengthen it)";
+    if (measurer.above_range() > 0)
+      std::cerr << ", " << measurer.above_range()
+                << " of the frame hotter than the model's range (up to " << model.max_temperature_c
+                << " degC: a model calibrated higher reads them)";
     if (why.both > 0)
       std::cerr << ", " << why.both
                 << " one band saturated and another dim at once (no one exposure reads them: "
@@ -374,6 +378,7 @@ int run_measure(const MeasureArgs& a, const GlobalOptions& global) {
   frame_options.check_layout = true;
   FrameMeasurer measurer(shared_model, frame_options);
   load_prebuilt_table(measurer, frame_options, a.model, global.quiet);
+  warn_when_network_folds(measurer, frame_options, model, a.model);
   remove_earlier(earlier);
   std::ofstream csv = open_stats_csv(a.out);
   // A run that fails part-way leaves no results that look complete: what it wrote goes.

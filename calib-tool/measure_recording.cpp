@@ -4,6 +4,7 @@
 #include "measure_recording.h"
 
 #include <cctype>
+#include <cmath>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -217,6 +218,19 @@ void load_prebuilt_table(const FrameMeasurer& measurer, const MeasureOptions& op
   }
 }
 
+void warn_when_network_folds(const FrameMeasurer& measurer, const MeasureOptions& options,
+                             const ThermalModel& model, const std::string& model_path) {
+  if (options.method == Method::kLikelihood) return;  // it gives no reading there
+  const AboveRangeFold fold = measurer.above_range_fold();
+  if (fold.read_inside == 0) return;
+  std::cerr << "warning: with method " << method_name(options.method) << ", model " << model_path
+            << " reads graybodies hotter than its range inside it (" << fold.worst_true_c
+            << " degC as " << std::lround(fold.worst_read_c) << " degC): a surface hotter than "
+            << model.max_temperature_c
+            << " degC reads wrong, not as no reading; use --method likelihood, or a model "
+               "calibrated to a higher --max-temperature\n";
+}
+
 std::string frames_bayer_pattern(const ThermalModel& model, const std::string& model_path,
                                  const std::string& frames, const std::string& source, bool quiet) {
   const std::string model_pattern = lower(model.profile().mosaic.pattern);
@@ -280,6 +294,7 @@ int measure_recording(const RecordingMeasure& m) {
                                m.pattern.empty() ? "the recording's tags" : "--pattern", m.quiet);
       measurer.emplace(m.model, options);
       load_prebuilt_table(*measurer, options, m.model_path, m.quiet);
+      warn_when_network_folds(*measurer, options, *m.model, m.model_path);
       double level = m.dark_level;
       std::string file = m.dark;
       if (file.empty() && level < 0) dark_from_tags(fields, m.recording, &level, &file);

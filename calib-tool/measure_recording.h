@@ -34,6 +34,12 @@ int measure_recording(const RecordingMeasure& m);
 void load_prebuilt_table(const FrameMeasurer& measurer, const MeasureOptions& options,
                          const std::string& model_path, bool quiet);
 
+// Says on stderr, even when quiet, where the method reads graybodies hotter than the model's
+// range as temperatures inside it (a network trained only up to a narrow range's end), as
+// ratiotemp says it when it starts: a surface that hot would read wrong, not as no reading.
+void warn_when_network_folds(const FrameMeasurer& measurer, const MeasureOptions& options,
+                             const ThermalModel& model, const std::string& model_path);
+
 // What the checks of the frames measured (MeasureOptions::check_layout) said, on stderr even when
 // quiet: a dark that looks off (a warning: the dark is the user's to measure) and frames that do
 // not read as the model's camera (errors: temperatures that would look right and be wrong).

@@ -191,6 +191,58 @@ TEST_F(CliMeasure, measure_warns_of_a_dark_that_is_not_the_cameras) {
   EXPECT_NE(r.err.find(" DN too low for this camera"), std::string::npos) << r.err;
 }
 
+// A model calibrated only up to 1200 degC read a 1700 degC plate as 1000 degC with the network
+// (its ratios fold into the range), exit 0 and no word; ratiotemp warned, measure did not. Now
+// measure says so, and a frame that reads little counts the pixels hotter than the range.
+TEST_F(CliMeasure, measure_warns_of_a_network_that_reads_hotter_surfaces_inside_its_range) {
+  const auto campaign = dir / "campaign", narrow = dir / "narrow.json", hot = dir / "hot";
+  ASSERT_EQ(run_tool("-q simulate campaign --out " + quoted(campaign) +
+                         " --size 64x64 --temperatures 700,800,900,1000,1100 --exposures 12 "
+                         "--exposure-factor 2 --frames 1 --roi-area 800",
+                     dir)
+                .exit_code,
+            0);
+  ASSERT_EQ(run_tool("-q calibrate --dataset " + quoted(campaign) + " --out " + quoted(narrow) +
+                         " --max-temperature 1200 --epochs 1 --polish-iterations 20 "
+                         "--mc-refits 0 --noisy-copies 0 --locus-step 5 --no-prebuilt-table",
+                     dir)
+                .exit_code,
+            0);
+  const std::string model = "measure --model " + quoted(narrow) + " --dataset " + quoted(data);
+  ToolRun r = run_tool("-q " + model + " --out " + quoted(dir / "mlp"), dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: with method "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("reads graybodies hotter than its range inside it"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("use --method likelihood"), std::string::npos) << r.err;
+  // The fit gives a 1700 degC plate no reading, and says why (it said: a band too dim).
+  ASSERT_EQ(run_tool("-q simulate scene --scene plate --temperatures 1700 --size 64x64 --out " +
+                         quoted(hot),
+                     dir)
+                .exit_code,
+            0);
+  r = run_tool("measure --model " + quoted(narrow) + " --dataset " + quoted(hot) +
+                   " --method likelihood --out " + quoted(dir / "fit"),
+               dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("reads graybodies hotter"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("of the frame hotter than the model's range (up to 1200 degC"),
+            std::string::npos)
+      << r.err;
+}
+
+// A saturation level above the full scale marks no sample saturated, and saturated bands read
+// hundreds of degrees too hot.
+TEST_F(CliMeasure, measure_refuses_a_saturation_level_above_the_full_scale_n) {
+  const ToolRun r =
+      run_tool("measure --model " + quoted(test_model("test-model-rgb.json")) + " --dataset " +
+                   quoted(data) + " --saturation 1000 --out " + quoted(out),
+               dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("the saturation level 1000"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("above the 8-bit camera's full scale, 255 DN"), std::string::npos) << r.err;
+}
+
 // A second run into the folder of a first would leave the first's images among its own.
 TEST_F(CliMeasure, measure_refuses_a_folder_that_holds_a_measurement_n) {
   const std::string command = "-q measure --model " + quoted(test_model("test-model-rgb.json")) +

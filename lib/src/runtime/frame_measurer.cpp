@@ -67,6 +67,12 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
         std::to_string(options_.saturation_level_dn));
   if (options_.saturation_level_dn < 0)
     options_.saturation_level_dn = model_->profile().thresholds.inference_saturation_dn;
+  // Above the full scale no sample is saturated, and a saturated band reads (too hot).
+  if (options_.saturation_level_dn > model_->profile().max_dn())
+    throw InputError("the saturation level " + std::to_string(options_.saturation_level_dn) +
+                     " DN is above the " + std::to_string(model_->profile().bit_depth) +
+                     "-bit camera's full scale, " + std::to_string(model_->profile().max_dn()) +
+                     " DN: no sample would count as saturated");
   planes_estimator_.set_saturation_level(options_.saturation_level_dn);
   if (options.check_layout) {
     planes_estimator_.set_fit_audit_sampling(1, kAuditStride);

@@ -14,6 +14,7 @@
 #include "pyrocam/runtime/dark_level_check.h"
 #include "pyrocam/runtime/darksub.h"
 #include "pyrocam/runtime/demosaic.h"
+#include "pyrocam/runtime/estimator_check.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/mixed_pixels.h"
 #include "pyrocam/runtime/plane_estimator.h"
@@ -101,6 +102,11 @@ class FrameMeasurer {
   // measured so far (dark_level_check.h, as darksub checks it): a message, or "" when not.
   const std::string& dark_level_problem() const { return dark_level_problem_; }
   const MosaicLayout& layout() const { return layout_; }
+  // How the method reads graybodies hotter than the model's range (fold_above_range): a network
+  // trained only up to a narrow range's end reads them as temperatures inside it.
+  AboveRangeFold above_range_fold() const {
+    return fold_above_range(*model_, planes_estimator_.estimator());
+  }
 
   // Adds a table file's blocks (the model's prebuilt lookup table, prebuilt_tables.h) to the
   // estimator's table: the same readings, without filling those blocks on the first frames.
