@@ -201,11 +201,26 @@ gboolean Camera::on_bus(GstBus*, GstMessage* message, gpointer data) {
         self->chain_error_ = kind == "darksub" || kind == "demosaic25" || kind == "ratiotemp" ||
                              kind == "thermalalarm" || kind == "thermalcolormap";
       }
+      // Nor caps or settings the camera refuses (a size that is no whole number of mosaic
+      // periods): a camera that is away fails otherwise.
+      if (err != nullptr && (g_error_matches(err, GST_CORE_ERROR, GST_CORE_ERROR_NEGOTIATION) ||
+                             g_error_matches(err, GST_STREAM_ERROR, GST_STREAM_ERROR_FORMAT) ||
+                             g_error_matches(err, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS)))
+        self->chain_error_ = true;
       GST_WARNING("camera pipeline error: %s (%s)", why.c_str(), debug != nullptr ? debug : "");
       if (err != nullptr) g_error_free(err);
       g_free(debug);
       self->lost(why);
       return G_SOURCE_REMOVE;
+    }
+    case GST_MESSAGE_WARNING: {
+      GError* err = nullptr;
+      gst_message_parse_warning(message, &err, nullptr);
+      if (self->callbacks_.on_warning)
+        self->callbacks_.on_warning(GST_OBJECT_NAME(GST_MESSAGE_SRC(message)),
+                                    err != nullptr ? err->message : "warning");
+      if (err != nullptr) g_error_free(err);
+      break;
     }
     case GST_MESSAGE_EOS:
       self->lost("the camera ended its stream");

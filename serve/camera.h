@@ -53,6 +53,9 @@ class Camera {
     std::function<void(const std::string& why, bool fatal)> on_lost;
     // Main context: the first frame after a (re)start.
     std::function<void()> on_running;
+    // Main context: a warning an element posted (a dark that is not the camera's, a model
+    // whose network reads hotter surfaces inside its range, ...): the element's name and text.
+    std::function<void(const std::string& source, const std::string& text)> on_warning;
   };
 
   Camera(CameraConfig config, Callbacks callbacks);

@@ -157,7 +157,23 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(100, 600000));
   app.add_flag("--print-pipeline", o.print_pipeline, "Print the camera pipeline and exit");
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);  // prints the help, or the error and the usage
+    return code == 0 ? 0 : 2;      // a usage error: 2, as pyrocam-calib's
+  }
+  // NaN passes CLI::Range, and thermalalarm would keep its default: the alarm off, silently.
+  if (o.alarm_threshold_c && !(*o.alarm_threshold_c > -273.15 && *o.alarm_threshold_c <= 10000)) {
+    std::cerr << kName << ": --alarm-threshold-c must be a temperature above -273.15 and at "
+              << "most 10000 degC, not " << *o.alarm_threshold_c << "\n";
+    return 2;
+  }
+  if (!(o.alarm_hysteresis_c >= 0 && o.alarm_hysteresis_c <= 1000)) {
+    std::cerr << kName << ": --alarm-hysteresis-c must be from 0 to 1000 degC, not "
+              << o.alarm_hysteresis_c << "\n";
+    return 2;
+  }
 
   double fps = 30;
   int width = 0, height = 0;
@@ -278,6 +294,13 @@ int main(int argc, char** argv) {
       g_free(line);
     }
   };
+  callbacks.on_warning = [&web](const std::string& source, const std::string& text) {
+    // Most elements' messages name them already.
+    const bool named = text.rfind(source + ":", 0) == 0;
+    std::cerr << kName << ": warning: " << (named ? "" : source + ": ") << text << std::endl;
+    web.publish("warning",
+                {{"source", source}, {"message", text}, {"wall-time", g_get_real_time() / 1000}});
+  };
   callbacks.on_running = [&web]() {
     std::cerr << kName << ": camera running" << std::endl;
     web.publish("camera", {{"state", "running"}});
@@ -295,6 +318,11 @@ int main(int argc, char** argv) {
                 << "retrying" << std::endl;
     }
   };
+  if (o.alarm_threshold_c)  // armed and clear until thermalalarm says otherwise
+    web.publish("alarm", {{"state", "clear"},
+                          {"statistic", o.alarm_statistic},
+                          {"threshold-c", *o.alarm_threshold_c},
+                          {"clear-c", *o.alarm_threshold_c - o.alarm_hysteresis_c}});
   Camera camera(o.camera, callbacks);
   camera_ptr = &camera;
   if (!camera.start(error)) {

@@ -126,6 +126,9 @@ function makePanel(index, server) {
                                     : `alarm clear (< ${fmt(a["threshold-c"])} °C)`;
     if (!quiet) log(`alarm ${a.state}: ${a.statistic} ${fmt(a["value-c"])} °C`);
   }
+  function showWarning(w) {
+    log("warning: " + (w.message.startsWith(w.source + ":") ? "" : w.source + ": ") + w.message);
+  }
   function showCamera(c) {
     $("camera").className = "badge " + (c.state === "running" ? "ok" : "lost");
     $("camera").textContent = c.state === "running" ? "camera running" : "camera lost";
@@ -140,12 +143,14 @@ function makePanel(index, server) {
     if (s.camera) showCamera(s.camera);
     (s["alarm-log"] || []).forEach((a) => log(`alarm ${a.state}: ${a.statistic} ${fmt(a["value-c"])} °C`));
     if (s.alarm) showAlarm(s.alarm, true);
+    if (s.warning) showWarning(s.warning);
     if (index === 0 && !query.has("servers"))
       (s.servers || []).filter(isHostPort).forEach((other, i) => makePanel(i + 1, other));
   });
   events.addEventListener("stats", (e) => showStats(JSON.parse(e.data)));
   events.addEventListener("alarm", (e) => showAlarm(JSON.parse(e.data), false));
   events.addEventListener("camera", (e) => showCamera(JSON.parse(e.data)));
+  events.addEventListener("warning", (e) => showWarning(JSON.parse(e.data)));
   events.onerror = () => { $("camera").className = "badge lost"; $("camera").textContent = "server unreachable"; };
 }
 

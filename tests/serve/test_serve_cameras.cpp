@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "http_client.h"
 #include "serve_support.h"
@@ -44,6 +45,68 @@ TEST(Serve, Cameras5x5NeedsItsFrameSize) {
   ASSERT_TRUE(status.has_value()) << p.log();
   EXPECT_EQ(*status, 2);
   EXPECT_NE(p.log().find("multiples of 5"), std::string::npos) << p.log();
+}
+
+// A warning from the chain (here darksub's: a dark 20 DN below the camera's black) reaches the
+// log and the page: under gst-launch it is printed, and the server dropped it while the page
+// showed a plate 60 degC too cold. An alarm that is set shows as clear from the start.
+TEST(Serve, CamerasChainWarningsReachThePageAndAnArmedAlarmShowsClear) {
+  ScratchDir dir("serve-warning");
+  Server server = start_server(
+      dir, {"--camera", kCamera, "--dark", "dark-level=30", "--alarm-threshold-c", "3000"});
+  ASSERT_NE(server.http, 0) << server.log();
+  nlohmann::json json;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const std::string status = http_get(server.http, "/status.json");
+        json = nlohmann::json::parse(status.substr(status.find("\r\n\r\n") + 4));
+        return json.contains("warning");
+      },
+      milliseconds(30000)))
+      << server.log();
+  EXPECT_EQ(json["warning"]["source"], "darksub0") << json;
+  EXPECT_NE(json["warning"]["message"].get<std::string>().find("20 DN too low"), std::string::npos)
+      << json;
+  EXPECT_NE(server.log().find("warning: darksub0: after the dark"), std::string::npos)
+      << server.log();
+  EXPECT_EQ(json["alarm"]["state"], "clear") << json;
+  EXPECT_EQ(json["alarm"]["threshold-c"], 3000.0) << json;
+}
+
+// Options that cannot work: a usage error (exit 2) naming them, before anything starts. A NaN
+// threshold passed CLI11's range check and left thermalalarm off, silently; unknown options
+// exited 109.
+TEST(Serve, BadInputAlarmAndUsageErrorsExitTwo) {
+  ScratchDir dir("serve-usage");
+  int k = 0;
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"--alarm-threshold-c", "nan"},
+        {"--alarm-threshold-c", "-300"},
+        {"--alarm-hysteresis-c", "nan"},
+        {"--no-such-option"}}) {
+    std::vector<std::string> argv = {serve_binary(), "--rtsp-port", "0", "--http-port", "0",
+                                     "--model",      rgb_model()};
+    argv.insert(argv.end(), args.begin(), args.end());
+    Process p(argv, Env{}, (dir / ("usage" + std::to_string(k++) + ".log")).string());
+    const auto status = p.wait_for(milliseconds(20000));
+    ASSERT_TRUE(status.has_value()) << args[0] << ": still running";
+    EXPECT_EQ(*status, 2) << args[0] << ": " << p.log();
+    EXPECT_NE(p.log().find(args[0]), std::string::npos) << p.log();
+  }
+}
+
+// Caps the camera refuses (not a whole number of mosaic periods) fail for good: the server
+// retried them forever.
+TEST(Serve, BadInputCapsTheCameraRefusesEndTheServer) {
+  ScratchDir dir("serve-bad-caps");
+  Process p({serve_binary(), "--address", "127.0.0.1", "--rtsp-port", "0", "--http-port", "0",
+             "--model", rgb_model(), "--caps", "video/x-bayer,width=63,height=64,framerate=10/1"},
+            Env{}, (dir / "serve.log").string());
+  const auto status = p.wait_for(milliseconds(30000));
+  ASSERT_TRUE(status.has_value()) << "still retrying: " << p.log();
+  EXPECT_EQ(*status, 1);
+  EXPECT_NE(p.log().find("63x64 is not a whole number of RGGB mosaic periods"), std::string::npos)
+      << p.log();
 }
 
 TEST(Serve, PageNamesServersAsText) {
