@@ -248,6 +248,7 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
     throw InputError(j.dark.string() + ": the dark has " + bits(dark) + " samples, the frame " +
                      j.frame.string() + " " + bits(raw) + " ones");
   cv::Mat t, u;
+  measurer.set_dark_name(j.dark.string());
   try {
     measurer.measure(raw, dark, t, a.uncertainty ? &u : nullptr);
   } catch (const InputError& e) {

@@ -5,6 +5,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -250,8 +251,8 @@ std::string frames_bayer_pattern(const ThermalModel& model, const std::string& m
 }
 
 bool frames_read_as_the_camera(const FrameMeasurer& measurer, const std::string& out) {
-  if (!measurer.dark_level_problem().empty())
-    std::cerr << "warning: " << measurer.dark_level_problem()
+  for (const std::string& problem : measurer.dark_level_problems())
+    std::cerr << "warning: " << problem
               << "; measure the dark (a dark frame of the exposure, lens capped)\n";
   const std::vector<std::string> problems = measurer.layout_problems();
   for (const std::string& problem : problems) std::cerr << "error: " << problem << "\n";
@@ -300,6 +301,9 @@ int measure_recording(const RecordingMeasure& m) {
       if (file.empty() && level < 0) dark_from_tags(fields, m.recording, &level, &file);
       dark = file.empty() ? cv::Mat(f.codes.size(), CV_32F, cv::Scalar(level))
                           : read_raw_image(file, f.codes.size(), "the recording's frames");
+      char level_text[48];
+      std::snprintf(level_text, sizeof level_text, "dark level %g DN", level);
+      measurer->set_dark_name(file.empty() ? level_text : file);
     }
     cv::Mat t;
     measurer->measure(f.codes, dark, t);

@@ -3,6 +3,7 @@
 // folder that holds a measurement) and what its options do to the readings.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -185,10 +186,37 @@ TEST_F(CliMeasure, measure_warns_of_a_dark_that_is_not_the_cameras) {
   r = run_tool(command + quoted(dir / "low"), dir);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   // 20 DN and the dark's own rounding (its samples average 49.6 DN where the frames' clamp is 50).
-  const auto at = r.err.find("warning: after the dark the frames' darkest parts read +");
+  const std::string said =
+      "warning: after the dark (" + dark.string() + ") the frames' darkest parts read +";
+  const auto at = r.err.find(said);
   ASSERT_NE(at, std::string::npos) << r.err;
-  EXPECT_NEAR(std::stod(r.err.substr(at + 56)), 20, 1.5) << r.err;
+  EXPECT_NEAR(std::stod(r.err.substr(at + said.size())), 20, 1.5) << r.err;
   EXPECT_NE(r.err.find(" DN too low for this camera"), std::string::npos) << r.err;
+}
+
+// A dataset's darks are one per exposure: one wrong among them was missed (one check took every
+// frame, and after its first verdict only every 8th), and a 1300 degC plate read 1235 degC.
+TEST_F(CliMeasure, measure_checks_each_dark_of_a_dataset_on_its_own_frames) {
+  Simulator camera(load_profile_by_name("rgb-reference"), UnitPerturbation{"typical", 6});
+  SceneSequenceSettings s;
+  s.kind = SceneKind::kPlate;
+  s.temperatures_c = {900, 1100, 1300, 1500};
+  s.width = 100;
+  s.height = 100;
+  const auto plates = dir / "plates";
+  write_scene_sequence(plates, camera, s);
+  const auto dark = plates / "darks/0002.pgm";
+  ASSERT_TRUE(std::filesystem::exists(dark));
+  cv::Mat lower;
+  read_raw_image(dark).convertTo(lower, CV_8U, 1, -20);
+  write_raw_image(dark, lower);
+  const ToolRun r = run_tool("-q measure --model " + quoted(test_model("test-model-rgb.json")) +
+                                 " --dataset " + quoted(plates) + " --out " + quoted(out),
+                             dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: after the dark (" + dark.string() + ")"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;  // that dark alone
 }
 
 // A model calibrated only up to 1200 degC read a 1700 degC plate as 1000 degC with the network

@@ -216,11 +216,14 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
                           0.2f * static_cast<float>(profile.max_dn()), 0, kPhaseCellRowStep,
                           noisiest, phase_sums_);
     }
-    if (dark_level_problem_.empty()) {
+    DarkCheck& check = dark_checks_[dark_name_];
+    if (!check.said) {
       const int period = layout_.kind == MosaicLayout::Kind::kSnapshot ? layout_.period_width : 2;
-      const std::optional<DarkLevelVerdict> v =
-          dark_level_watch_.add(signal, period, profile.bit_depth);
-      if (v && v->offset_dn != 0) dark_level_problem_ = dark_level_message(*v, "", "the frames'");
+      const std::optional<DarkLevelVerdict> v = check.watch.add(signal, period, profile.bit_depth);
+      if (v && v->offset_dn != 0) {
+        check.said = true;
+        dark_level_problems_.push_back(dark_level_message(*v, dark_name_, "the frames'"));
+      }
     }
     const PlaneEstimator::FitAudit audit = planes_estimator_.take_fit_audit();
     audit_checked_ += audit.checked;

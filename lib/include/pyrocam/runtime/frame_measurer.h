@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
@@ -98,9 +99,14 @@ class FrameMeasurer {
   // the wrong places or another camera). A message for each that fails, none when they pass or
   // cannot tell yet.
   std::vector<std::string> layout_problems() const;
-  // With MeasureOptions::check_layout, whether the dark subtracted looked off on the frames
-  // measured so far (dark_level_check.h, as darksub checks it): a message, or "" when not.
-  const std::string& dark_level_problem() const { return dark_level_problem_; }
+  // With MeasureOptions::check_layout, whether the darks subtracted looked off on the frames
+  // measured so far (dark_level_check.h, as darksub checks it): a message for each that did.
+  // Each dark named by set_dark_name is checked on its own frames (a dataset's darks are one
+  // per exposure: one wrong among them was missed where one check took every frame), and named.
+  const std::vector<std::string>& dark_level_problems() const { return dark_level_problems_; }
+  // The dark the next frames are measured with (a file name, for the checks' messages); frames
+  // measured without a name share one check.
+  void set_dark_name(const std::string& name) { dark_name_ = name; }
   const MosaicLayout& layout() const { return layout_; }
   // How the method reads graybodies hotter than the model's range (fold_above_range): a network
   // trained only up to a narrow range's end reads them as temperatures inside it.
@@ -127,8 +133,13 @@ class FrameMeasurer {
   cv::Mat signal_, codes_;
   std::vector<cv::Mat> planes_;
   BayerCellSums phase_sums_;
-  DarkLevelWatch dark_level_watch_;
-  std::string dark_level_problem_;
+  struct DarkCheck {
+    DarkLevelWatch watch;
+    bool said = false;
+  };
+  std::map<std::string, DarkCheck> dark_checks_;  // by dark name
+  std::string dark_name_;
+  std::vector<std::string> dark_level_problems_;
   std::size_t audit_checked_ = 0, audit_misfit_ = 0;
   std::size_t above_range_ = 0;
 };
