@@ -229,6 +229,22 @@ TEST_F(CliDataset, calibrate_rejects_a_dataset_at_one_temperature_n) {
                               "degC); calibration needs frames at 2 or more temperatures"});
 }
 
+// Two temperatures: the QE's cross-validation left one temperature a fold ("band 'R' has 1
+// usable calibration rates"), while the docs said two were enough.
+TEST_F(CliDataset, calibrate_rejects_a_dataset_at_two_temperatures_for_a_fitted_qe_n) {
+  std::string kept;
+  std::ifstream in(data / "manifest.csv");
+  for (std::string line; std::getline(in, line);)
+    if (line.find(",frame,") == std::string::npos ||
+        line.find(",frame,1000,") != std::string::npos ||
+        line.find(",frame,1100,") != std::string::npos)
+      kept += line + "\n";
+  in.close();
+  write_text(data / "manifest.csv", kept);
+  expect_failed(calibrate(), {"furnace: frames at 2 temperatures; fitting the QE needs 3 or more",
+                              "or --solver datasheet"});
+}
+
 TEST_F(CliDataset, calibrate_rejects_a_dataset_of_another_mosaic_than_the_profile_n) {
   write_text(data / "mosaic.txt", "5x5\n");
   const char* error = "mosaic.txt: the images are 5x5, the profile rgb-reference describes a";

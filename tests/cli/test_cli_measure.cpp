@@ -259,6 +259,23 @@ TEST_F(CliMeasure, measure_warns_of_a_network_that_reads_hotter_surfaces_inside_
       << r.err;
 }
 
+// Two sources whose temperatures round to one whole degree were written to one file name, the
+// second over the first, and the manifest listed it twice (its own calibrate then refused it).
+TEST(Cli, simulate_campaign_refuses_temperatures_that_share_a_file_name_n) {
+  ScratchDir dir("cli-campaign-names");
+  for (const std::string& args :
+       {std::string("--temperatures 700,700.4,800"), std::string("--reference 1324.2,1324.4")}) {
+    const ToolRun r =
+        run_tool("simulate campaign --size 64x64 " + args + " --out " + quoted(dir / "c"), dir);
+    EXPECT_EQ(r.exit_code, 1) << args << ": " << r.err;
+    EXPECT_NE(r.err.find("round to " + std::string(args[2] == 't' ? "700" : "1324") +
+                         " degC, the whole degrees its files are named by"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "c" / "manifest.csv"));
+  }
+}
+
 // A saturation level above the full scale marks no sample saturated, and saturated bands read
 // hundreds of degrees too hot.
 TEST_F(CliMeasure, measure_refuses_a_saturation_level_above_the_full_scale_n) {

@@ -1,5 +1,6 @@
 #include "pyrocam/calibration/calibration_qe.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -92,7 +93,9 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
     report_stage(progress, "cross-validating QE (" + solvers[s] + ")", s, solvers.size());
     QeFitOptions folds = qo;
     folds.regularised.posterior_samples = 0;  // the folds' spread is all that is used
-    CrossValidation cv = cross_validate(profile, data, folds, 5);
+    // Five folds, or one a temperature where a campaign has fewer (two is the least it may).
+    const int groups = static_cast<int>(std::min<std::size_t>(5, data.temperatures_c.size()));
+    CrossValidation cv = cross_validate(profile, data, folds, groups);
     rep.held_out_residual = rms_of(cv.heldout_residual);
     rep.seconds = since(t0);
     best.reports.push_back(rep);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <set>
 #include <sstream>
 
 #include "detail/portable_math.h"
@@ -199,6 +200,17 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
       !(s.reference_uncertainty_c > 0 && std::isfinite(s.reference_uncertainty_c)))
     throw InputError("campaign: the reference temperature uncertainty must be a number > 0 degC");
   camera.profile().mosaic.check_whole_periods(s.width, s.height, "campaign frame size");
+  // Files are named by the whole degrees: two sources in one name would overwrite each other.
+  for (const std::vector<double>* list : {&s.temperatures_c, &s.reference_temperatures_c}) {
+    std::set<long> seen;
+    for (double t : *list)
+      if (!seen.insert(std::lround(t)).second)
+        throw InputError("campaign: two " +
+                         std::string(list == &s.temperatures_c ? "furnace temperatures"
+                                                               : "reference temperatures") +
+                         " round to " + std::to_string(std::lround(t)) +
+                         " degC, the whole degrees its files are named by; give each once");
+  }
   // Checked before anything is written, so a refused campaign leaves no folders behind.
   const double aspect = 1.2;  // a plate seen at an angle
   const double ry = std::sqrt(s.roi_area_px / (M_PI * aspect)), rx = aspect * ry;
