@@ -75,6 +75,12 @@ class CliMeasure : public ::testing::Test {
     s.height = 100;
     write_scene_sequence(data, camera, s);
   }
+  // measure with the colour test model on the plate into `out`, with `options` added.
+  ToolRun measure_plate(const std::string& options) {
+    return run_tool("measure --model " + quoted(test_model("test-model-rgb.json")) + " --dataset " +
+                        quoted(data) + " " + options + " --out " + quoted(out),
+                    dir);
+  }
   ScratchDir dir{"cli"};
   std::filesystem::path data = dir / "plate", out = dir / "out";
 };
@@ -107,10 +113,7 @@ TEST_F(CliMeasure, measure_rejects_a_5x5_model_on_a_frame_named_bayer_n) {
 }
 
 TEST_F(CliMeasure, measure_rejects_a_pattern_contradicting_the_dataset_n) {
-  const ToolRun r =
-      run_tool("measure --model " + quoted(test_model("test-model-rgb.json")) + " --dataset " +
-                   quoted(data) + " --pattern bggr --out " + quoted(out),
-               dir);
+  const ToolRun r = measure_plate("--pattern bggr");
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("--pattern bggr contradicts " + (data / "mosaic.txt").string() + " (rggb)"),
             std::string::npos)
@@ -279,10 +282,7 @@ TEST(Cli, simulate_campaign_refuses_temperatures_that_share_a_file_name_n) {
 // A saturation level above the full scale marks no sample saturated, and saturated bands read
 // hundreds of degrees too hot.
 TEST_F(CliMeasure, measure_refuses_a_saturation_level_above_the_full_scale_n) {
-  const ToolRun r =
-      run_tool("measure --model " + quoted(test_model("test-model-rgb.json")) + " --dataset " +
-                   quoted(data) + " --saturation 1000 --out " + quoted(out),
-               dir);
+  const ToolRun r = measure_plate("--saturation 1000");
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("the saturation level 1000"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("above the 8-bit camera's full scale, 255 DN"), std::string::npos) << r.err;
