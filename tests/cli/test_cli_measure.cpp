@@ -268,8 +268,9 @@ TEST(Cli, simulate_campaign_refuses_temperatures_that_share_a_file_name_n) {
   ScratchDir dir("cli-campaign-names");
   for (const std::string& args :
        {std::string("--temperatures 700,700.4,800"), std::string("--reference 1324.2,1324.4")}) {
-    const ToolRun r =
-        run_tool("simulate campaign --size 64x64 " + args + " --out " + quoted(dir / "c"), dir);
+    const ToolRun r = run_tool(
+        "simulate campaign --size 64x64 --roi-area 800 " + args + " --out " + quoted(dir / "c"),
+        dir);
     EXPECT_EQ(r.exit_code, 1) << args << ": " << r.err;
     EXPECT_NE(r.err.find("round to " + std::string(args[2] == 't' ? "700" : "1324") +
                          " degC, the whole degrees its files are named by"),
