@@ -42,15 +42,6 @@ void check_calibration_inputs(const Dataset& dataset, const CameraProfile& profi
       << nominal_c.front() << " degC); calibration needs frames at 2 or more temperatures";
     throw InputError(m.str());
   }
-  // A fitted QE is cross-validated on folds that each leave out some temperatures, and a fold
-  // of one temperature gives each band one rate.
-  if (nominal_c.size() < 3 && opt.qe_solver != "datasheet") {
-    std::ostringstream m;
-    m << dataset.folder().string() << ": frames at " << nominal_c.size()
-      << " temperatures; fitting the QE needs 3 or more (its cross-validation fits it without "
-         "each group of them): add furnace temperatures, or --solver datasheet";
-    throw InputError(m.str());
-  }
   if (!(opt.min_temperature_c >= kModelMinTemperatureC &&
         opt.max_temperature_c <= kModelMaxTemperatureC)) {
     std::ostringstream m;
@@ -77,6 +68,15 @@ void check_calibration_inputs(const Dataset& dataset, const CameraProfile& profi
         << opt.max_temperature_c << " degC (--min-temperature, --max-temperature)";
       throw InputError(m.str());
     }
+  // A fitted QE is cross-validated on folds that each leave out some temperatures, and a fold
+  // of one temperature gives each band one rate.
+  if (nominal_c.size() < 3 && opt.qe_solver != "datasheet") {
+    std::ostringstream m;
+    m << dataset.folder().string() << ": frames at " << nominal_c.size()
+      << " temperatures; fitting the QE needs 3 or more (its cross-validation fits it without "
+         "each group of them): add furnace temperatures, or --solver datasheet";
+    throw InputError(m.str());
+  }
 }
 
 // The network on the model camera's locus (and on noisy copies of it when asked for): sets
