@@ -93,7 +93,8 @@ QeChoice choose_system_qe(const CameraProfile& profile, const Eigen::MatrixXd& d
     report_stage(progress, "cross-validating QE (" + solvers[s] + ")", s, solvers.size());
     QeFitOptions folds = qo;
     folds.regularised.posterior_samples = 0;  // the folds' spread is all that is used
-    // Five folds, or one a temperature where a campaign has fewer (two is the least it may).
+    // Five folds, or one a temperature where a campaign has fewer (calibrate lets no fitted QE
+    // through with fewer than three).
     const int groups = static_cast<int>(std::min<std::size_t>(5, data.temperatures_c.size()));
     CrossValidation cv = cross_validate(profile, data, folds, groups);
     rep.held_out_residual = rms_of(cv.heldout_residual);
