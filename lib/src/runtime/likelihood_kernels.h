@@ -94,8 +94,8 @@ void profiled_chi2_three_four(const double* const* m, const double* const* m2,
                               const double* const* ws, const double* const* w, int width,
                               const double* sss, double* const* chi2);
 
-// sum(fast s) / sum(s) over the bands (fast: 0 or 1 per band), each summed band after band: the
-// descent's first guess (NaN or infinite where sum(s) is 0).
+// sum(fast s) / sum(s) over the bands (fast: a weight per band, 0 .. 1), each summed band after
+// band: the descent's first guess (NaN or infinite where sum(s) is 0).
 double fast_fraction(const double* s, const double* fast, int bands);
 
 // The likelihood fit's weights of one pixel: w = 1 / variance for a band with a reading (finite
@@ -112,7 +112,7 @@ struct FourWeighed {
   int reading[4], bright[4], saturated[4];  // bands: weighed, at the dim threshold, +INF
 };
 
-// weigh_bands and fast_fraction (fast: 0 or 1 per band) of the four pixels from .. from + 3 of
+// weigh_bands and fast_fraction (fast: a weight per band) of the four pixels from .. from + 3 of
 // the band rows planes[b], the same bits: pixel k's w and ws into w[k] and ws[k] (to
 // padded_bands(bands), rows on 32 bytes), its signals as doubles into s[k] unless s is null
 // (whole lanes of four: zero past the bands), sum w s^2, the fraction and the counts into out.
