@@ -20,6 +20,9 @@ std::string percent(double alpha) {
   return buf;
 }
 
+// The step of the table of the method's readings of grey surfaces, degC: a network's error
+// changes by up to 1.5 degC over a few degrees.
+constexpr double kGreyStepC = 2;
 // The central-difference step of dT/d alpha (per 100 nm).
 constexpr double kSensitivityStep = 0.005;
 // The first guess's locus: its step, degC, and the coarse search's stride in steps.
@@ -130,6 +133,18 @@ EmissivitySlopeEstimator::EmissivitySlopeEstimator(
   };
   make_guess_locus(CameraModel{
       cam.profile, with_emissivity_slope(cam.profile, cam.system_qe, alpha), cam.band_scale});
+  // The method's own readings of grey surfaces across the range.
+  for (double t = model_->min_temperature_c; t <= model_->max_temperature_c; t += kGreyStepC) {
+    const Eigen::VectorXd s = signals(cam, t);
+    const double r = s.size() ? inner_->temperature_c(s.data()) : static_cast<double>(NAN);
+    if (!std::isfinite(r)) continue;
+    if (!grey_read_c_.empty() && !(r > grey_read_c_.back())) {
+      grey_c_.clear(), grey_read_c_.clear();  // not monotonic: readings as they are
+      break;
+    }
+    grey_c_.push_back(t);
+    grey_read_c_.push_back(r);
+  }
   const auto read = [&](const CameraModel& c, double t) {
     const Eigen::VectorXd s = signals(c, t);
     return s.size() ? temperature_c(s.data()) : static_cast<double>(NAN);
@@ -153,6 +168,20 @@ void EmissivitySlopeEstimator::corrected_signals(const double* s, double t_c, do
   double f[kMaxBands];
   emissivity_.factors(t_c, f);
   for (int b = 0; b < bands_; ++b) out[b] = std::isfinite(s[b]) && s[b] > 0 ? s[b] / f[b] : s[b];
+}
+
+double EmissivitySlopeEstimator::as_grey_c(double read_c) const {
+  if (grey_c_.size() < 2 || !std::isfinite(read_c)) return read_c;
+  const auto above = std::upper_bound(grey_read_c_.begin(), grey_read_c_.end(), read_c);
+  const std::size_t i = std::clamp<std::size_t>(
+      static_cast<std::size_t>(above - grey_read_c_.begin()), 1, grey_c_.size() - 1);
+  if (above == grey_read_c_.begin() || above == grey_read_c_.end()) {
+    // Beyond the table: the error at its end.
+    const std::size_t end = above == grey_read_c_.begin() ? 0 : grey_c_.size() - 1;
+    return read_c - (grey_read_c_[end] - grey_c_[end]);
+  }
+  const double f = (read_c - grey_read_c_[i - 1]) / (grey_read_c_[i] - grey_read_c_[i - 1]);
+  return grey_c_[i - 1] + f * (grey_c_[i] - grey_c_[i - 1]);
 }
 
 void EmissivitySlopeEstimator::make_guess_locus(const CameraModel& sloped) {
@@ -227,7 +256,7 @@ double EmissivitySlopeEstimator::corrected_temperature_c(const double* s, int* p
     corrected_signals(s, t, c);
     ++n;
     if (passes) *passes = n;
-    return inner_->temperature_c(c);
+    return as_grey_c(inner_->temperature_c(c));
   };
   double x0 = g(start);
   if (!std::isfinite(x0)) return NAN;  // no reading at the guess: the method's decision

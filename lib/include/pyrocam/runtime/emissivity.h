@@ -138,6 +138,14 @@ class EmissivitySlopeEstimator final : public TemperatureEstimator {
   double first_guess_c(const double* signals) const;
   double reference_c_;  // the middle of the model's range
   std::vector<double> guess_c_, guess_log_rates_;
+  // The inner method's readings of noise-free grey surfaces (grey_read_c_) at temperatures
+  // grey_c_ across the model's range, rising (else empty). The signals corrected at the true
+  // temperature are a grey surface's, and the answer is the fixed point of reading them: where
+  // the factors change fast with temperature (the colour camera's blue, cold) it multiplies the
+  // method's own error (a network's 0.5 degC at 1100 degC read 7 degC off at -30 %/100 nm). Each
+  // reading of corrected signals is therefore taken as the grey surface's that reads so.
+  std::vector<double> grey_c_, grey_read_c_;
+  double as_grey_c(double read_c) const;
   UncertaintyModel systematic_;  // the model's, with the emissivity term at this slope
 };
 
