@@ -11,6 +11,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <sstream>
 
 #include "commands.h"
 #include "export.h"
@@ -30,25 +31,69 @@ std::string lower(std::string s) {
   return s;
 }
 
-// The dark record.sh recorded with: its DARK setting, "dark-level=N" or "location=FILE".
-void dark_from_tags(const std::map<std::string, std::string>& fields, const std::string& where,
-                    double* level, std::string* file) {
+// What record.sh's DARK setting (darksub's properties, as the raw tags' dark field) says
+// measure needs: the dark (a level or a file), darksub's saturation level and mosaic pattern.
+struct RecordedDarksub {
+  double level = -1;  // DN; negative: none
+  std::string file;
+  double saturation = -1;  // DN; negative: darksub's default
+  std::string pattern;     // lower case; empty: none
+};
+
+RecordedDarksub recorded_darksub(const std::map<std::string, std::string>& fields,
+                                 const std::string& where, bool quiet) {
+  RecordedDarksub d;
   const auto it = fields.find("dark");
-  if (it == fields.end())
-    throw InputError(where + ": the recording does not say its dark; give --dark or --dark-level");
-  const std::string& v = it->second;
-  try {
-    if (v.rfind("dark-level=", 0) == 0) {
-      *level = std::stod(v.substr(11));
-      if (*level >= 0) return;
-    } else if (v.rfind("location=", 0) == 0 && v.size() > 9) {
-      *file = v.substr(9);
-      return;
+  if (it == fields.end()) return d;
+  std::istringstream words(it->second);
+  std::string word;
+  const auto number = [&](const std::string& text, double low, double high) {
+    try {
+      std::size_t used = 0;
+      const double v = std::stod(text, &used);
+      if (used == text.size() && v >= low && v <= high) return v;
+    } catch (const std::exception&) {
     }
-  } catch (const std::exception&) {
+    throw InputError(where + ": the recording's dark setting '" + word +
+                     "' is not a number of DN; give --dark or --dark-level (and --saturation)");
+  };
+  while (words >> word) {
+    const auto eq = word.find('=');
+    const std::string key = word.substr(0, eq),
+                      value = eq == std::string::npos ? "" : word.substr(eq + 1);
+    if (key == "dark-level") {
+      d.level = number(value, 0, 65535);
+    } else if (key == "location" && !value.empty()) {
+      d.file = value;
+    } else if (key == "saturation-level") {
+      d.saturation = number(value, -1, 65535);
+    } else if (key == "pattern" && value != "auto") {
+      d.pattern = lower(value);
+    } else if (key != "pattern" && !quiet) {
+      // bit-depth, capture-frames, ...: what they change is not measure's to know.
+      std::cerr << "warning: " << where << ": the recording's dark settings '" << it->second
+                << "' name " << word
+                << ", which measure --recording does not take: its codes may differ from the "
+                   "recorded ones (give --saturation as darksub had it)\n";
+    }
   }
-  throw InputError(where + ": the recording's dark '" + v +
-                   "' is neither dark-level=N nor location=FILE; give --dark or --dark-level");
+  return d;
+}
+
+// The recorded dark (level or file) where the command line gave none.
+void dark_from_tags(const RecordedDarksub& recorded,
+                    const std::map<std::string, std::string>& fields, const std::string& where,
+                    double* level, std::string* file) {
+  if (fields.find("dark") == fields.end())
+    throw InputError(where + ": the recording does not say its dark; give --dark or --dark-level");
+  if (!recorded.file.empty()) {
+    *file = recorded.file;
+  } else if (recorded.level >= 0) {
+    *level = recorded.level;
+  } else {
+    throw InputError(where + ": the recording's dark '" + fields.at("dark") +
+                     "' has neither dark-level=N nor location=FILE; give --dark or --dark-level");
+  }
 }
 
 // The settings ratiotemp's tags name (what adopt_recorded_settings takes).
@@ -77,6 +122,9 @@ std::map<std::string, std::string> recorded_settings(const std::string& recordin
         first = fields;
         continue;
       }
+      // Matroska writes its tags as a segment is closed: one cut short by SIGKILL has none, and
+      // says nothing of its settings.
+      if (fields.empty()) continue;
       for (const char* key : kRecordedSettings) {
         const auto a = first.find(key), b = fields.find(key);
         const bool same = (a == first.end()) == (b == fields.end()) &&
@@ -282,10 +330,21 @@ int measure_recording(const RecordingMeasure& m) {
       if (fields.empty() || f.tags->comment.rfind(kRawRecordingMark, 0) != 0)
         std::cerr << "warning: " << m.recording
                   << " has no pyrocam-raw tags (not recorded by record.sh RAW=1?)\n";
+      const RecordedDarksub darksub = recorded_darksub(fields, m.recording, m.quiet);
       std::string pattern = lower(m.pattern);
       const auto tagged = fields.find("pattern");
       if (pattern.empty() && tagged != fields.end()) pattern = lower(tagged->second);
+      if (pattern.empty()) pattern = darksub.pattern;
+      // Read as the model's layout, a Bayer camera of another one reads about half its
+      // temperature, and no check of the frames tells red from blue.
+      if (pattern.empty() && m.model->profile().mosaic.kind == MosaicLayout::Kind::kBayer)
+        throw InputError(m.recording +
+                         ": the recording does not say its Bayer layout (its raw tags name no "
+                         "pattern: recorded with a CAPS that has no format=?); give --pattern "
+                         "rggb, bggr, grbg or gbrg as the camera sent it");
       MeasureOptions options = m.options;
+      if (!m.given.count("--saturation") && darksub.saturation >= 0)
+        options.saturation_level_dn = darksub.saturation;
       options.check_layout = true;
       const auto recorded = recorded_settings(m.recording, m.quiet);
       check_recorded_profile(recorded, *m.model, m.model_path, m.recording, m.quiet);
@@ -298,7 +357,7 @@ int measure_recording(const RecordingMeasure& m) {
       warn_when_network_folds(*measurer, options, *m.model, m.model_path);
       double level = m.dark_level;
       std::string file = m.dark;
-      if (file.empty() && level < 0) dark_from_tags(fields, m.recording, &level, &file);
+      if (file.empty() && level < 0) dark_from_tags(darksub, fields, m.recording, &level, &file);
       dark = file.empty() ? cv::Mat(f.codes.size(), CV_32F, cv::Scalar(level))
                           : read_raw_image(file, f.codes.size(), "the recording's frames");
       char level_text[48];

@@ -214,10 +214,10 @@ RecordingDescription read_recording(const std::vector<fs::path>& segments,
     }
     gst_element_set_state(pipeline.get(), GST_STATE_NULL);
     gst_object_unref(bus);
-    const std::string problem =
-        !failure.empty()   ? "not a readable temperature recording segment (" + failure + ")"
-        : frames_here == 0 ? "no frames (an empty or truncated segment)"
-                           : std::string();
+    const std::string problem = !failure.empty()
+                                    ? "not a readable recording segment (" + failure + ")"
+                                : frames_here == 0 ? "no frames (an empty or truncated segment)"
+                                                   : std::string();
     if (problem.empty()) continue;
     // A recording killed (or its machine cut off) as a segment began, or while it was written,
     // leaves its last segment empty or a Matroska file cut short: the segments before it, and

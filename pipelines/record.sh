@@ -42,7 +42,8 @@
 #   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]
 #   STATS_INTERVAL_MS  ms between statistics rows                   [1000]
 #   ALARM_CSV    write alarm messages (thermalalarm) here as CSV    [none]
-#   RAW              1: also the camera's raw mosaic, lossless, in OUT/raw-NNNNN.mkv [0]
+#   RAW              1: also the camera's raw mosaic, lossless, in OUT/raw-NNNNN.mkv; a Bayer
+#                    camera other than the simulated one needs its layout in CAPS (format=) or DARK (pattern=) [0]
 #
 # Example: 300 frames of the simulated melt pool (10 s at 30 fps) into out/pool
 #   OUT=out/pool NUM_BUFFERS=300 SOURCE="pyrocamsrc scene=melt-pool" pipelines/record.sh
@@ -64,8 +65,10 @@ RAW=${RAW:-0}
   { echo "record: SNAPSHOT_RATE must be a whole number of snapshots a second, 1 or more, not '$SNAPSHOT_RATE'" >&2; exit 2; }
 source "$here/lib/camera.sh"
 
-segment_ns=$(awk -v s="$SEGMENT_SECONDS" 'BEGIN { if (s + 0 <= 0) exit 1; printf "%.0f", s * 1e9 }') ||
-  { echo "record: SEGMENT_SECONDS must be a positive number of seconds, not '$SEGMENT_SECONDS'" >&2; exit 2; }
+# 0 would be one segment for the whole recording, and splitmuxsink takes at most 2^64 ns.
+[[ $SEGMENT_SECONDS =~ ^[0-9]*[.]?[0-9]+$ ]] &&
+  segment_ns=$(awk -v s="$SEGMENT_SECONDS" 'BEGIN { if (!(s >= 0.1 && s <= 86400)) exit 1; printf "%.0f", s * 1e9 }') ||
+  { echo "record: SEGMENT_SECONDS must be a number of seconds from 0.1 to 86400, not '$SEGMENT_SECONDS'" >&2; exit 2; }
 mkdir -p "$OUT"
 if compgen -G "$OUT/temperature-*.mkv" >/dev/null; then
   echo "record: $OUT already holds a recording; choose another OUT" >&2
@@ -86,7 +89,7 @@ segments=(avenc_ffv1 gop-size=1 ! splitmuxsink async-finalize=true muxer-factory
   max-size-time="$segment_ns")
 # RAW=1: the camera's frames as they came (8-bit Bayer as GRAY8, FFV1 has no Bayer format) in
 # segments beside the temperatures, frame for frame, for `pyrocam-calib measure --recording`;
-# their comment tag gives DARK and the mosaic: 5x5, or the Bayer layout when CAPS names it.
+# their comment tag gives DARK and the mosaic: 5x5, or the Bayer layout.
 # identity keeps the encoder's buffer pool from the camera (pyrocamsrc refuses its buffers).
 raw_branch=()
 if [[ $RAW == 1 && -n $BRACKET ]]; then
@@ -96,9 +99,18 @@ if [[ $RAW == 1 && -n $BRACKET ]]; then
   exit 2
 fi
 if [[ $RAW == 1 ]]; then
-  raw_tags="pyrocam-raw; dark=$DARK"
-  if [[ $PROFILE == nir5x5-reference ]]; then raw_tags+="; pattern=5x5"
-  elif [[ $CAPS =~ format=(rggb|bggr|grbg|gbrg) ]]; then raw_tags+="; pattern=${BASH_REMATCH[1]}"; fi
+  # A raw Bayer frame does not say its layout, and read as another one it gives about half the
+  # temperature: the layout comes from CAPS, DARK or the simulated camera's profile, or RAW=1 is
+  # refused.
+  if [[ $PROFILE == nir5x5-reference ]]; then raw_pattern=5x5
+  elif [[ $CAPS =~ format=(rggb|bggr|grbg|gbrg) ]]; then raw_pattern=${BASH_REMATCH[1]}
+  elif [[ " $DARK " =~ \ pattern=(rggb|bggr|grbg|gbrg)\  ]]; then raw_pattern=${BASH_REMATCH[1]}
+  elif [[ -z $camera_given ]]; then raw_pattern=rggb  # the rgb-reference profile's
+  else
+    echo "record: RAW=1 needs the camera's Bayer layout, which raw frames do not say: name it in CAPS (video/x-bayer,format=rggb, bggr, grbg or gbrg) or DARK (pattern=...)" >&2
+    exit 2
+  fi
+  raw_tags="pyrocam-raw; dark=$DARK; pattern=$raw_pattern"
   raw_branch=(camera. ! queue ! identity drop-allocation=true !)
   [[ $CAPS != video/x-bayer* ]] || raw_branch+=(capssetter join=false caps=video/x-raw,format=GRAY8 !)
   raw_branch+=(taginject "tags=\"comment=\\\"$raw_tags\\\"\"" ! "${segments[@]}" "location=$OUT/raw-%05d.mkv")

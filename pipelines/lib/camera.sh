@@ -23,6 +23,7 @@ case $PROFILE in
 esac
 
 model_given=${MODEL:+yes}
+camera_given=${SOURCE:+yes}${CAPS:+yes}  # empty: the simulated camera as its profile makes it
 MODEL=${MODEL:-$default_model}
 # The simulated 5x5 camera looks at a plate: its melt pool is a few macro-pixels across, most of
 # them straddling the pool's edge (no reading).
@@ -38,6 +39,7 @@ PEAK_MARKER=${PEAK_MARKER:-0}
 ALARM_C=${ALARM_C:-}
 BRACKET=${BRACKET:-}
 
+[[ $NUM_BUFFERS =~ ^(-1|[0-9]+)$ ]] || { echo "$name: NUM_BUFFERS must be a whole number of frames (-1: until stopped), not '$NUM_BUFFERS'" >&2; exit 2; }
 [[ $EXPOSURE_CONTROL =~ ^[01]$ ]] || { echo "$name: EXPOSURE_CONTROL must be 0 or 1, not '$EXPOSURE_CONTROL'" >&2; exit 2; }
 [[ $PEAK_MARKER =~ ^[01]$ ]] || { echo "$name: PEAK_MARKER must be 0 or 1, not '$PEAK_MARKER'" >&2; exit 2; }
 [[ -z $ALARM_C || $ALARM_C =~ ^[0-9]+([.][0-9]+)?$ ]] || { echo "$name: ALARM_C must be a temperature in degC, not '$ALARM_C'" >&2; exit 2; }

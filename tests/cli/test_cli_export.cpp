@@ -187,7 +187,7 @@ TEST_F(CliExport, rejects_a_segment_that_is_not_matroska_n) {
   const ToolResult r = run_export(
       "--recording " + q(rec) + " --npy " + q(dir / "t.npy") + " --csv " + q(dir / "t.csv"), dir);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.err.find("temperature-00002.mkv: not a readable temperature recording segment"),
+  EXPECT_NE(r.err.find("temperature-00002.mkv: not a readable recording segment"),
             std::string::npos)
       << r.err;
   // Nothing under the names asked for, and no partial files left.

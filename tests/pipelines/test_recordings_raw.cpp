@@ -171,10 +171,12 @@ TEST(RecordingsRaw, remeasured_with_its_model_gives_the_recorded_codes_and_anoth
       << read_text(dir / "nir.log");
 }
 
-// Without a Bayer format in CAPS the raw tags cannot say the Bayer pattern, but the
-// temperatures' tags say the camera profile: a model of another mosaic is still refused, not
-// read as nonsense. A 5x5 recording's raw tags say its mosaic. A temperature segment given as
-// the recording is refused, saying which segments measure reads.
+// The raw tags say the mosaic whatever the caps say (the default simulated camera's, its
+// profile's rggb), and the temperatures' tags the camera profile: a model of another mosaic is
+// refused, not read as nonsense. A temperature segment given as the recording is refused, saying
+// which segments measure reads. A Bayer recording whose tags name no layout is refused unless
+// --pattern names it (read as the model's rggb a bggr camera read 1300 degC at 631), and so is
+// RAW=1 where record.sh cannot know the layout; darksub's saturation level in DARK is measure's.
 TEST(RecordingsRaw, a_model_of_another_mosaic_is_refused_whatever_the_caps_say) {
   for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
   ScratchDir dir("recordings-raw-mosaic");
@@ -215,7 +217,7 @@ TEST(RecordingsRaw, a_model_of_another_mosaic_is_refused_whatever_the_caps_say) 
       << read_text(dir / "rgb-record.log");
   const auto rgb_raw = files_in(rgb.string(), "raw-", ".mkv");
   ASSERT_EQ(rgb_raw.size(), 1u);
-  EXPECT_EQ(discovered_tags(rgb_raw[0]).second, "pyrocam-raw; dark=dark-level=50");
+  EXPECT_EQ(discovered_tags(rgb_raw[0]).second, "pyrocam-raw; dark=dark-level=50; pattern=rggb");
   EXPECT_EQ(measure(rgb, test_model("test-model-nir5x5.json"), "rgb-with-nir"), 1);
   EXPECT_NE(
       read_text(dir / "rgb-with-nir.log").find("for a rggb Bayer mosaic (profile rgb-reference"),
@@ -228,6 +230,63 @@ TEST(RecordingsRaw, a_model_of_another_mosaic_is_refused_whatever_the_caps_say) 
   EXPECT_EQ(measure(temperatures[0], rgb_model(), "temperatures"), 1);
   EXPECT_NE(read_text(dir / "temperatures.log").find("holds temperatures"), std::string::npos)
       << read_text(dir / "temperatures.log");
+
+  // Tags without the layout (as record.sh wrote them with a CAPS without format=).
+  const fs::path untold = dir / "untold";
+  fs::create_directories(untold);
+  ASSERT_EQ(run_command("gst-launch-1.0 -q pyrocamsrc num-buffers=3 ! "
+                        "video/x-bayer,width=320,height=240,framerate=30/1 ! capssetter "
+                        "join=false caps=video/x-raw,format=GRAY8 ! taginject "
+                        "'tags=\"comment=\\\"pyrocam-raw; dark=dark-level=50\\\"\"' ! avenc_ffv1 "
+                        "gop-size=1 ! matroskamux ! filesink location='" +
+                            (untold / "raw-00000.mkv").string() + "'",
+                        dir / "untold-make.log"),
+            0)
+      << read_text(dir / "untold-make.log");
+  ASSERT_EQ(discovered_tags((untold / "raw-00000.mkv").string()).second,
+            "pyrocam-raw; dark=dark-level=50");
+  EXPECT_EQ(measure(untold, rgb_model(), "untold"), 1);
+  EXPECT_NE(read_text(dir / "untold.log").find("does not say its Bayer layout"), std::string::npos)
+      << read_text(dir / "untold.log");
+  EXPECT_EQ(
+      run_command(tool + "measure --recording '" + untold.string() + "' --model '" + rgb_model() +
+                      "' --pattern rggb --out '" + (dir / "untold-rggb").string() + "'",
+                  dir / "untold-rggb.log"),
+      0)
+      << read_text(dir / "untold-rggb.log");
+
+  Env custom = {{"MODEL", rgb_model()},
+                {"OUT", (dir / "custom").string()},
+                {"SOURCE", "pyrocamsrc is-live=true"},
+                {"NUM_BUFFERS", "3"},
+                {"RAW", "1"}};
+  EXPECT_EQ(run_script("record.sh", {}, custom, (dir / "custom.log").string(), milliseconds(60000))
+                .status,
+            2);
+  EXPECT_NE(read_text(dir / "custom.log").find("RAW=1 needs the camera's Bayer layout"),
+            std::string::npos)
+      << read_text(dir / "custom.log");
+  custom["DARK"] = "dark-level=50 pattern=rggb saturation-level=150";
+  ASSERT_EQ(run_script("record.sh", {}, custom, (dir / "custom.log").string(), milliseconds(60000))
+                .status,
+            0)
+      << read_text(dir / "custom.log");
+  ASSERT_EQ(run_command(tool + "-q export --recording '" + (dir / "custom").string() + "' --npy '" +
+                            (dir / "custom.npy").string() + "'",
+                        dir / "custom-export.log"),
+            0)
+      << read_text(dir / "custom-export.log");
+  ASSERT_EQ(measure(dir / "custom", rgb_model(), "custom-measure"), 0)
+      << read_text(dir / "custom-measure.log");
+  const Npy low_saturation = read_npy(dir / "custom.npy");
+  EXPECT_TRUE(read_npy(dir / "custom-measure-out" / "temperature.npy").data == low_saturation.data)
+      << "saturation-level=150 in DARK not measure's";
+  // With its saturation at 150 DN the simulated plate reads little (every codes' pair 0 in most
+  // pixels), unlike the default camera's recording.
+  std::size_t zero = 0;
+  for (std::size_t i = 0; i + 1 < low_saturation.data.size(); i += 2)
+    zero += low_saturation.data[i] == 0 && low_saturation.data[i + 1] == 0;
+  EXPECT_GT(zero * 2, low_saturation.data.size() / 2) << "saturation-level=150 changed nothing";
 }
 
 }  // namespace
