@@ -35,22 +35,34 @@ esac
 SINK=${SINK:-autovideosink}
 require_display "$SINK"
 
+(($# <= 1)) || { echo "playback: one RECORDING at a time, not $#: '$*'" >&2; exit 2; }
+
+# Whether a segment holds a frame (one decoded within 10 s).
+holds_frame() {
+  local out
+  out=$(timeout 10 gst-launch-1.0 -v filesrc "location=$1" ! matroskademux ! fakesink num-buffers=1 silent=false 2>&1) || true
+  [[ $out == *chain* ]]
+}
+
 if [[ -d $RECORDING ]]; then
   compgen -G "$RECORDING/temperature-*.mkv" >/dev/null ||
     { echo "playback: no temperature-*.mkv segments in $RECORDING" >&2; exit 1; }
   files="$RECORDING/temperature-*.mkv"
-  # A recording killed as a segment began leaves that segment empty, which splitmuxsrc cannot
-  # open: the others are played, through links in a folder of their own.
-  empty=$(find "$RECORDING" -maxdepth 1 -name 'temperature-*.mkv' -empty | sort)
-  if [[ -n $empty ]]; then
-    echo "playback: leaving out empty segments (a recording cut off as they began): $(tr '\n' ' ' <<<"$empty")" >&2
+  # A recording killed as a segment began leaves that segment empty, or with its header and no
+  # frame (a full disk, a copy cut short): splitmuxsrc cannot open the one and waits for ever on
+  # the other. The others are played, through links in a folder of their own.
+  left_out=$(find "$RECORDING" -maxdepth 1 -name 'temperature-*.mkv' -empty -printf '%f\n' | sort)
+  last=$(compgen -G "$RECORDING/temperature-*.mkv" | sort | tail -1)
+  if [[ -s $last ]] && ! holds_frame "$last"; then left_out+=${left_out:+$'\n'}$(basename "$last"); fi
+  if [[ -n $left_out ]]; then
+    echo "playback: leaving out segments of $RECORDING without a frame (a recording cut off as they began): $(tr '\n' ' ' <<<"$left_out")" >&2
     kept=$(mktemp -d)
     trap 'rm -rf "$kept"' EXIT
     for f in "$RECORDING"/temperature-*.mkv; do
-      if [[ -s $f ]]; then ln -s "$(cd "$(dirname "$f")" && pwd)/$(basename "$f")" "$kept/"; fi
+      if ! grep -qxF -- "$(basename "$f")" <<<"$left_out"; then ln -s "$(cd "$(dirname "$f")" && pwd)/$(basename "$f")" "$kept/"; fi
     done
     compgen -G "$kept/temperature-*.mkv" >/dev/null ||
-      { echo "playback: every segment of $RECORDING is empty" >&2; exit 1; }
+      { echo "playback: no segment of $RECORDING holds a frame" >&2; exit 1; }
     files="$kept/temperature-*.mkv"
   fi
 elif [[ -f $RECORDING ]]; then

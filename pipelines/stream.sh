@@ -42,6 +42,14 @@ HOST=${HOST:-127.0.0.1}
 PORT=${PORT:-5004}
 BITRATE=${BITRATE:-2000}
 KEY_SECONDS=${KEY_SECONDS:-1}
+[[ $PORT =~ ^[0-9]+$ ]] && ((10#$PORT >= 1 && 10#$PORT <= 65535)) ||
+  { echo "stream: PORT must be a UDP port, 1 to 65535, not '$PORT'" >&2; exit 2; }
+[[ $BITRATE =~ ^[0-9]+$ ]] && ((10#$BITRATE >= 1 && 10#$BITRATE <= 2048000)) ||
+  { echo "stream: BITRATE must be a whole number of kbit/s, 1 to 2048000, not '$BITRATE'" >&2; exit 2; }
+[[ $KEY_SECONDS =~ ^[0-9]*[.]?[0-9]+$ ]] && awk -v s="$KEY_SECONDS" 'BEGIN { exit !(s > 0) }' ||
+  { echo "stream: KEY_SECONDS must be a positive number of seconds, not '$KEY_SECONDS'" >&2; exit 2; }
+getent ahosts "$HOST" >/dev/null ||
+  { echo "stream: HOST '$HOST' is neither an address nor a name this machine resolves" >&2; exit 2; }
 source "$here/lib/camera.sh"
 fps=$(sed -n 's/.*framerate=\(([a-z]*)\)\{0,1\} *\([0-9]*\)\/\([0-9]*\).*/\2 \3/p' <<<"$CAPS")
 key_int=$(awk -v f="${fps:-30 1}" -v s="$KEY_SECONDS" 'BEGIN { split(f, r, " "); k = int(s * r[1] / r[2] + 0.5); print (k < 1 ? 1 : k) }')

@@ -23,6 +23,12 @@ PORT=${PORT:-5004}
 LATENCY_MS=${LATENCY_MS:-100}
 WATCHDOG_MS=${WATCHDOG_MS:-10000}
 SINK=${SINK:-autovideosink}
+[[ $PORT =~ ^[0-9]+$ ]] && ((10#$PORT >= 1 && 10#$PORT <= 65535)) ||
+  { echo "watch-stream: PORT must be a UDP port, 1 to 65535, not '$PORT'" >&2; exit 2; }
+[[ $LATENCY_MS =~ ^[0-9]+$ ]] || { echo "watch-stream: LATENCY_MS must be a whole number of milliseconds, not '$LATENCY_MS'" >&2; exit 2; }
+[[ $WATCHDOG_MS =~ ^[0-9]+$ ]] || { echo "watch-stream: WATCHDOG_MS must be a whole number of milliseconds, not '$WATCHDOG_MS'" >&2; exit 2; }
+[[ $ADDRESS =~ ^[0-9]{1,3}([.][0-9]{1,3}){3}$ || $ADDRESS == *:* ]] && getent ahosts "$ADDRESS" >/dev/null ||
+  { echo "watch-stream: ADDRESS must be an IP address of this machine or a multicast group, not '$ADDRESS'" >&2; exit 2; }
 require_display "$SINK"
 
 set -f # the fragments above split on spaces into the launcher's words
