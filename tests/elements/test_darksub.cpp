@@ -394,6 +394,21 @@ TEST(DarkSubErrors, rejects_a_dark_level_above_the_full_scale_n) {
                {"dark-level 300", "8-bit full scale (255 DN)"});
 }
 
+// A saturation level at or below the dark level marks every pixel saturated, and ratiotemp
+// then asks for a shorter exposure: refused, naming both (the default 220 too).
+TEST(DarkSubErrors, rejects_a_saturation_level_not_above_the_dark_level_n) {
+  REQUIRE_ELEMENT("darksub");
+  expect_error(run_on_gray8("darksub dark-level=50 saturation-level=40 pattern=rggb"),
+               GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS,
+               {"saturation-level 40 DN is at or below dark-level 50 DN"});
+  expect_error(run_on_gray8("darksub dark-level=230 pattern=rggb"), GST_RESOURCE_ERROR,
+               GST_RESOURCE_ERROR_SETTINGS,
+               {"saturation-level 220 DN is at or below dark-level 230 DN"});
+  const auto fine = run_on_gray8("darksub dark-level=50 saturation-level=51 pattern=rggb");
+  EXPECT_FALSE(fine.error) << fine.message;
+  EXPECT_TRUE(fine.eos);
+}
+
 // 8-bit samples scaled to 16 bits (videoconvert) with bit-depth 8 still in the caps: every
 // pixel would read as saturated; an error names the samples and the bit depth. 16 bits: fine.
 TEST(DarkSubErrors, rejects_samples_above_the_stated_bit_depth_n) {

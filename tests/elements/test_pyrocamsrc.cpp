@@ -256,6 +256,17 @@ TEST(PyrocamSrcPipeline, smoke_runs_through_darksub_and_demosaic25_to_eos) {
   expect_eos(r, 5);
 }
 
+// Bayer frames carried as GRAY8 (capssetter) into an element that proposes a buffer pool for
+// its own caps: the frames go into pyrocamsrc's own pool ("output buffer too small" before).
+TEST(PyrocamSrcPipeline, frames_fill_their_own_pool_whatever_downstream_proposes) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline(
+      "pyrocamsrc num-buffers=5 ! video/x-bayer,width=320,height=240,framerate=30/1 ! "
+      "capssetter join=false caps=video/x-raw,format=GRAY8,width=320,height=240,"
+      "framerate=30/1 ! videoflip video-direction=horiz ! fakesink name=sink");
+  expect_eos(r, 5);
+}
+
 TEST(PyrocamSrcPipeline, live_snapshot_camera_through_the_chain) {
   REQUIRE_ELEMENT("pyrocamsrc");
   const auto r = run_pipeline(
