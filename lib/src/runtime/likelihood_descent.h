@@ -14,13 +14,13 @@ namespace pyrocam {
 // locus when the camera's spectra change shape steadily with temperature (the 5x5 camera's 25
 // bands). There the
 // exhaustive scan's answer is the 1 degC sample whose chi2 is below both neighbours' that a walk
-// from a good guess reaches: the ratio of the sums of the bands that brighten fastest and of the
-// others, which rises steadily with temperature, read on the locus. The walk jumps to the vertex
-// of the parabola through three samples and stops at a sample below its neighbours: two steps on
-// most pixels, whatever the scene. Where this ratio does not rise steadily (the colour camera's
-// three bands turn over), the descent is not usable. It proves no global minimum: the estimator
-// checks it against the scan on its own model when it is made (check_pixels) and keeps the
-// scan where they differ.
+// from a good guess reaches: the fraction of the signal in the bands that brighten fastest (each
+// weighed by its slope), which rises steadily with temperature, read on the locus. The walk jumps
+// to the vertex of the parabola through three samples and stops at a sample below its neighbours:
+// two steps on most pixels, whatever the scene. Where the faster half of the bands' fraction does
+// not rise steadily (the colour camera's three bands turn over), the descent is not usable. It
+// proves no global minimum: the estimator checks it against the scan on its own model when it is
+// made (check_pixels) and keeps the scan where they differ.
 class LocusDescent {
  public:
   // rates (samples x bands, DN/s) and the fit's tables of m and m^2, row after row, `width`
