@@ -111,6 +111,9 @@ if [[ $PROFILE == nir5x5-reference ]]; then
   demosaic=(demosaic25 "profile=$PROFILE")
 else
   camera_view=(bayer2rgb)
+  # Bayer carried as gray video (a 12-bit camera as GRAY16_LE, DARK with pattern=): bayer2rgb
+  # takes 8-bit video/x-bayer only, so the overlay goes over the mosaic in gray.
+  [[ $(grep -o 'video/x-[a-z]*' <<<"$CAPS" | tail -1) != video/x-raw ]] || camera_view=(videoconvert)
   colormap_scale=()
   demosaic=(demosaic25)
 fi

@@ -266,7 +266,12 @@ TEST(RecordingsRaw, a_model_of_another_mosaic_is_refused_whatever_the_caps_say) 
   EXPECT_NE(read_text(dir / "custom.log").find("RAW=1 needs the camera's Bayer layout"),
             std::string::npos)
       << read_text(dir / "custom.log");
+  // The layout from DARK, the camera's Bayer frames carried as gray video (the overlay then goes
+  // over the gray mosaic: bayer2rgb takes video/x-bayer only).
   custom["DARK"] = "dark-level=50 pattern=rggb saturation-level=150";
+  custom["CAPS"] =
+      "video/x-bayer,width=320,height=240,framerate=30/1 ! capssetter join=false "
+      "caps=video/x-raw,format=GRAY8,width=320,height=240,framerate=30/1";
   ASSERT_EQ(run_script("record.sh", {}, custom, (dir / "custom.log").string(), milliseconds(60000))
                 .status,
             0)
