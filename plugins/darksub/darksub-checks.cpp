@@ -1,12 +1,32 @@
 /* darksub's check of the dark it subtracts. */
 #include <cstdio>
 #include <optional>
+#include <string>
 
 #include "darksub-private.h"
+#include "pyrocam/runtime/darksub.h"
 
 #define GST_CAT_DEFAULT gst_dark_sub_debug
 
 namespace pyrocam::gst::darksub {
+
+double saturation_in_use(const Settings& settings, int caps_level, int bit_depth) {
+  return settings.saturation_level >= 0 ? settings.saturation_level
+         : caps_level >= 0              ? caps_level
+                                        : pyrocam::default_saturation_level(bit_depth);
+}
+
+bool saturation_above_dark(GstElement* element, const Settings& settings, double saturation) {
+  if (!settings.location.empty() || settings.dark_level < 0 || saturation > settings.dark_level)
+    return true;
+  char text[96];
+  std::snprintf(text, sizeof text, "saturation-level %g DN is at or below dark-level %g DN",
+                saturation, settings.dark_level);
+  PYROCAM_POST_ERROR(element, ErrorKind::kSettings,
+                     std::string(text) + ": every pixel would be marked saturated",
+                     "saturation level not above the dark level");
+  return false;
+}
 
 void watch_dark_level(GstElement* element, DarkLevelWatch& watch, const cv::Mat& signal, int period,
                       int bit_depth, const std::string& dark_frame, double dark_level) {

@@ -49,6 +49,13 @@ GstCaps* raw_caps(const GstStructure* mosaic);
 bool use_dark_level(GstElement* element, double level, int bit_depth, double& in_use,
                     double& refused);
 
+/* The saturation level in use, raw DN: the property, else the caps' (`caps_level`, -1: none),
+ * else the default share of the bit depth's full scale. */
+double saturation_in_use(const Settings& settings, int caps_level, int bit_depth);
+/* Without a dark frame, a saturation level at or below the dark level marks every pixel
+ * saturated (and ratiotemp then asks for a shorter exposure): an error naming both, and false. */
+bool saturation_above_dark(GstElement* element, const Settings& settings, double saturation);
+
 /* Whether the dark subtracted is the camera's (pyrocam::DarkLevelWatch): a dark that looks off
  * is warned about once since start, naming the dark frame subtracted (`dark_frame`) or, without
  * one, `dark_level`. */

@@ -317,20 +317,10 @@ static gboolean gst_dark_sub_set_caps(GstBaseTransform* trans, GstCaps* incaps, 
     return FALSE;
   }
   st.dark_level = settings.dark_level;
-  const double saturation = settings.saturation_level >= 0 ? settings.saturation_level
-                            : st.saturation_level >= 0
-                                ? st.saturation_level
-                                : pyrocam::default_saturation_level(st.bit_depth);
-  if (settings.location.empty() && settings.dark_level >= 0 && saturation <= settings.dark_level) {
-    // Every pixel would be marked saturated, and ratiotemp would ask for a shorter exposure.
-    char text[96];
-    std::snprintf(text, sizeof text, "saturation-level %g DN is at or below dark-level %g DN",
-                  saturation, settings.dark_level);
-    PYROCAM_POST_ERROR(self, pg::ErrorKind::kSettings,
-                       std::string(text) + ": every pixel would be marked saturated",
-                       "saturation level not above the dark level");
+  if (!ds::saturation_above_dark(
+          GST_ELEMENT(self), settings,
+          ds::saturation_in_use(settings, st.saturation_level, st.bit_depth)))
     return FALSE;
-  }
   if (settings.saturation_level > pyrocam::full_scale_dn(st.bit_depth))
     GST_WARNING_OBJECT(self,
                        "saturation-level %g is above the %d-bit full scale: nothing "
@@ -491,10 +481,7 @@ static GstFlowReturn gst_dark_sub_transform(GstBaseTransform* trans, GstBuffer* 
       }
       return;
     }
-    const double saturation = settings.saturation_level >= 0 ? settings.saturation_level
-                              : st.saturation_level >= 0
-                                  ? st.saturation_level
-                                  : pyrocam::default_saturation_level(st.bit_depth);
+    const double saturation = ds::saturation_in_use(settings, st.saturation_level, st.bit_depth);
     pyrocam::SaturatedSamples saturated;
     if (const cv::Mat* dark = frame_dark(st)) {
       saturated = pyrocam::subtract_dark(raw.image(), *dark, saturation, out.image());

@@ -240,22 +240,8 @@ static gboolean gst_pyrocam_src_set_caps(GstBaseSrc* src, GstCaps* caps) {
   return TRUE;
 }
 
-/* Frames go into a pool of their own size: a pool proposed downstream may be for other caps (a
- * capssetter between, as in carrying Bayer as GRAY8 into an encoder) and its buffers too small. */
 static gboolean gst_pyrocam_src_decide_allocation(GstBaseSrc* src, GstQuery* query) {
-  GstPyrocamSrc* self = GST_PYROCAM_SRC(src);
-  GstCaps* caps = nullptr;
-  gst_query_parse_allocation(query, &caps, nullptr);
-  const guint size = static_cast<guint>(self->state->frame_size);
-  GstBufferPool* pool = gst_buffer_pool_new();
-  GstStructure* config = gst_buffer_pool_get_config(pool);
-  gst_buffer_pool_config_set_params(config, caps, size, 0, 0);
-  gst_buffer_pool_set_config(pool, config);
-  if (gst_query_get_n_allocation_pools(query) > 0)
-    gst_query_set_nth_allocation_pool(query, 0, pool, size, 0, 0);
-  else
-    gst_query_add_allocation_pool(query, pool, size, 0, 0);
-  gst_object_unref(pool);
+  pg::pyrocamsrc::propose_own_pool(query, GST_PYROCAM_SRC(src)->state->frame_size);
   return GST_BASE_SRC_CLASS(gst_pyrocam_src_parent_class)->decide_allocation(src, query);
 }
 

@@ -71,4 +71,19 @@ void explain_refused_caps(GstElement* element, GstPad* src_pad, const CameraProf
   if (theirs) gst_caps_unref(theirs);
 }
 
+void propose_own_pool(GstQuery* query, gsize frame_size) {
+  GstCaps* caps = nullptr;
+  gst_query_parse_allocation(query, &caps, nullptr);
+  const auto size = static_cast<guint>(frame_size);
+  GstBufferPool* pool = gst_buffer_pool_new();
+  GstStructure* config = gst_buffer_pool_get_config(pool);
+  gst_buffer_pool_config_set_params(config, caps, size, 0, 0);
+  gst_buffer_pool_set_config(pool, config);
+  if (gst_query_get_n_allocation_pools(query) > 0)
+    gst_query_set_nth_allocation_pool(query, 0, pool, size, 0, 0);
+  else
+    gst_query_add_allocation_pool(query, pool, size, 0, 0);
+  gst_object_unref(pool);
+}
+
 }  // namespace pyrocam::gst::pyrocamsrc

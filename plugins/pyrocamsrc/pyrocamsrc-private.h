@@ -15,6 +15,11 @@ GstCaps* profile_caps(const CameraProfile& profile);
  * naming both (a camera cannot give another mosaic than its sensor's). */
 void explain_refused_caps(GstElement* element, GstPad* src_pad, const CameraProfile& profile);
 
+/* Frames go into a pool of their own size (`frame_size` bytes), first in the allocation query:
+ * a pool proposed downstream may be for other caps (a capssetter between, as in carrying Bayer
+ * as GRAY8 into an encoder) and its buffers too small. */
+void propose_own_pool(GstQuery* query, gsize frame_size);
+
 /* The longest exposure, the property's (automatic included) and a bracket step's. */
 inline constexpr double kMaxExposureUs = 1e7;
 

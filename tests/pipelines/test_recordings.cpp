@@ -10,6 +10,8 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <tuple>
+#include <vector>
 
 #include "element_support.h"
 #include "pipeline_support.h"
@@ -283,8 +285,33 @@ TEST_F(Recordings, a_last_segment_cut_off_as_it_began_leaves_the_rest_readable) 
   EXPECT_NE(read_text(log).find("temperature-00000.mkv"), std::string::npos) << read_text(log);
 }
 
-// pyrocam-launch --stats-csv on its own: frames without a reading keep every column (empty
-// temperature cells), and a file that cannot be created is a usage error before anything runs.
+// Settings that gst-launch took silently (a host that resolves to nothing streamed nowhere, a
+// KEY_SECONDS that is not a number made every frame a key frame) or refused naming an element's
+// property are refused by name, before the camera starts.
+TEST(StreamSettings, bad_settings_are_refused_by_name_n) {
+  ScratchDir dir("stream-bad-settings");
+  for (const auto& [script, key, value] :
+       std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"stream.sh", "HOST", "not..a.host"},
+           {"stream.sh", "PORT", "0"},
+           {"stream.sh", "PORT", "70000"},
+           {"stream.sh", "BITRATE", "abc"},
+           {"stream.sh", "KEY_SECONDS", "abc"},
+           {"stream.sh", "KEY_SECONDS", "-5"},
+           {"watch-stream.sh", "ADDRESS", "300.1.1.1"},
+           {"watch-stream.sh", "PORT", "x"},
+           {"watch-stream.sh", "LATENCY_MS", "soon"}}) {
+    const ScriptRun run = run_script(
+        script, {},
+        {{key, value}, {"MODEL", rgb_model()}, {"NUM_BUFFERS", "3"}, {"SINK", "fakesink"}},
+        (dir / ("bad-" + key + ".log")).string(), milliseconds(60000));
+    ASSERT_TRUE(run.status.has_value()) << "hung";
+    EXPECT_EQ(*run.status, 2) << script << " " << key << "=" << value << ": " << run.log;
+    EXPECT_NE(run.log.find(key + " "), std::string::npos) << run.log;
+    EXPECT_NE(run.log.find("'" + value + "'"), std::string::npos) << run.log;
+  }
+}
+
 // Refused by record.sh, naming the variable (gst-launch named only the element's property), before
 // anything is calibrated or recorded.
 // SEGMENT_SECONDS=1e-12 was one unsplit segment (0 ns: no limit), 1e30 an error naming
@@ -318,6 +345,8 @@ TEST(RecordingsScript, bad_snapshot_rate_and_watchdog_are_refused_by_name_n) {
   }
 }
 
+// pyrocam-launch --stats-csv on its own: frames without a reading keep every column (empty
+// temperature cells), and a file that cannot be created is a usage error before anything runs.
 TEST(RecordingsLauncher, stats_csv_keeps_its_columns_without_readings_and_refuses_a_bad_path_n) {
   for (const char* e : {"pyrocamsrc", "darksub", "demosaic25", "ratiotemp"}) REQUIRE_ELEMENT(e);
   const char* env = std::getenv("PYROCAM_LAUNCH");
