@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iostream>
@@ -119,6 +121,24 @@ std::vector<fs::path> recording_segments(const fs::path& where, const std::strin
   if (out.empty())
     throw InputError(where.string() + ": not a recording (no " + prefix + "NNNNN.mkv segments)");
   std::sort(out.begin(), out.end());
+  // Segments restart at time 0, each placed after the one before: without one, the frames after
+  // it would read as earlier than they were.
+  long expected = -1;
+  for (const fs::path& p : out) {
+    const std::string digits = p.stem().string().substr(prefix.size());
+    char* end = nullptr;
+    const long n = std::strtol(digits.c_str(), &end, 10);
+    if (digits.empty() || *end != '\0') continue;  // not record.sh's numbering: as it comes
+    if (expected >= 0 && n != expected) {
+      char name[64];
+      std::snprintf(name, sizeof name, "%s%05ld.mkv", prefix.c_str(), expected);
+      throw InputError(where.string() + ": " + name + " is missing (the segments jump to " +
+                       p.filename().string() +
+                       "): the frames after it cannot be placed in time; give the segments "
+                       "before it, or after it, one by one");
+    }
+    expected = n + 1;
+  }
   return out;
 }
 
@@ -156,6 +176,8 @@ RecordingDescription read_recording(const std::vector<fs::path>& segments,
     std::string failure;
     double offset_s = 0;  // added to this segment's timestamps
     std::size_t frames_here = 0;
+    gint64 declared_ns = -1;  // the segment's duration as its header says it (closed segments)
+    double frame_s = 0, first_s = 0;  // a frame's duration, the first frame's time
     if (gst_element_set_state(pipeline.get(), GST_STATE_PLAYING) == GST_STATE_CHANGE_FAILURE)
       failure = "cannot start decoding";
     GstClockTime waited = 0;  // since the last frame
@@ -199,10 +221,16 @@ RecordingDescription read_recording(const std::vector<fs::path>& segments,
         // on Matroska's whole milliseconds (the last frame's time was rounded to one).
         if (frames_here == 0 && index > 0 && pts_s < end_s - 1e-6)
           offset_s = std::round(end_s * 1000) / 1000 - pts_s;
+        if (frames_here == 0) {
+          first_s = pts_s;
+          if (!gst_element_query_duration(pipeline.get(), GST_FORMAT_TIME, &declared_ns))
+            declared_ns = -1;
+        }
         f.tags = &description;
         f.index = index++;
         f.timestamp_s = offset_s + pts_s;
         end_s = std::max(end_s, f.timestamp_s + duration_s);
+        frame_s = duration_s;
         ++frames_here;
         on_frame(f);
       } catch (...) {
@@ -214,6 +242,18 @@ RecordingDescription read_recording(const std::vector<fs::path>& segments,
     }
     gst_element_set_state(pipeline.get(), GST_STATE_NULL);
     gst_object_unref(bus);
+    // A closed segment whose frames end before its header's duration was cut short (a copy, a
+    // disk): its last frames are missing, and the next segment starts at the duration, not at
+    // the last frame read (they restart at 0), so that later frames keep their times.
+    const double declared_end_s = offset_s + first_s + static_cast<double>(declared_ns) / 1e9;
+    if (!last && frames_here > 0 && declared_ns > 0 &&
+        declared_end_s > end_s + 0.5 * frame_s + 2e-3) {
+      std::cerr << "warning: " << file.string() << ": its frames end " << end_s - offset_s - first_s
+                << " s into its " << declared_ns / 1e9
+                << " s: cut short, its last frames are missing; the later segments keep their "
+                   "times\n";
+      end_s = declared_end_s;
+    }
     const std::string problem = !failure.empty()
                                     ? "not a readable recording segment (" + failure + ")"
                                 : frames_here == 0 ? "no frames (an empty or truncated segment)"

@@ -82,6 +82,13 @@ def read_recording(folder):
     segments = sorted(glob.glob(os.path.join(glob.escape(folder), "temperature-*.mkv")))
     if not segments:
         raise RuntimeError(f"{folder}: not a recording (no temperature-NNNNN.mkv segments)")
+    # Frame k is the k-th of the recording only if no segment is missing from the numbering.
+    numbers = [int(os.path.basename(p)[12:-4]) for p in segments
+               if os.path.basename(p)[12:-4].isdigit()]
+    for a, b in zip(numbers, numbers[1:]):
+        if b != a + 1:
+            raise RuntimeError(f"{folder}: temperature-{a + 1:05d}.mkv is missing (the segments "
+                               f"jump to temperature-{b:05d}.mkv)")
     codes, comment = [], ""
     for k, path in enumerate(segments):
         frames, tag, problem = read_segment(path)

@@ -9,6 +9,8 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/region_stats.h"
@@ -56,8 +58,10 @@ cv::Mat frame_codes(int f, int base = 12732) {
 class CliExport : public ::testing::Test {
  protected:
   void SetUp() override { record(rec); }
-  // A recording without pyrocam tags of frame_codes(f, base) in `folder`.
-  void record(const fs::path& folder, int base = 12732) {
+  // A recording without pyrocam tags of frame_codes(f, base) in `folder`, segments of
+  // `segment_ms`; `restarting`: each segment's times from 0, as record.sh writes them.
+  void record(const fs::path& folder, int base = 12732, int segment_ms = 300,
+              bool restarting = false) {
     fs::create_directories(folder);
     // rawvideoparse reads rows at GStreamer's stride: 2 * 7 bytes padded to 16.
     constexpr int kStride = (2 * kW + 3) / 4 * 4;
@@ -79,9 +83,12 @@ class CliExport : public ::testing::Test {
                 " ! rawvideoparse format=gray16-le width=" + std::to_string(kW) +
                 " height=" + std::to_string(kH) +
                 " framerate=10/1 ! avenc_ffv1 gop-size=1 ! splitmuxsink "
-                "async-finalize=true muxer-factory=matroskamux "
-                "max-size-time=300000000 location=" +
-                q(folder / "temperature-%05d.mkv"),
+                "async-finalize=true muxer-factory=matroskamux " +
+                (restarting ? "'muxer-properties=properties,min-cluster-duration=(guint64)0,"
+                              "offset-to-zero=true' "
+                            : "") +
+                "max-size-time=" + std::to_string(segment_ms) +
+                "000000 location=" + q(folder / "temperature-%05d.mkv"),
             dir / "gst.txt");
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
@@ -215,6 +222,38 @@ TEST_F(CliExport, rejects_a_segment_truncated_before_its_first_frame_n) {
   EXPECT_NE(r.err.find("temperature-00001.mkv: not a readable"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("last segment, cut short"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("3 frames of 7x5 from 2 segment(s)"), std::string::npos) << r.err;
+}
+
+// A segment inside the recording cut short after its first frame (a copy, a full disk): its
+// missing frame is said, and the next segment, whose times restart at 0, still starts at 0.4 s
+// (it was read at 0.3 s, each later frame a frame early). A segment missing from the numbering is
+// refused: the frames after it could not be placed in time.
+TEST_F(CliExport, a_cut_middle_segment_keeps_later_times_and_a_missing_one_is_refused_n) {
+  const fs::path cut = dir / "cut";
+  record(cut, 12732, 200, true);  // 0-1, 2-3, 4-5
+  const fs::path middle = cut / "temperature-00001.mkv";
+  const std::string bytes = read_all(middle);
+  const std::string cluster = "\x1f\x43\xb6\x75";
+  const auto second = bytes.find(cluster, bytes.find(cluster) + 1);
+  ASSERT_NE(second, std::string::npos);
+  std::ofstream(middle, std::ios::binary | std::ios::trunc) << bytes.substr(0, second);
+  ToolResult r = run_export("--recording " + q(cut) + " --csv " + q(dir / "cut.csv"), dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("temperature-00001.mkv: its frames end 0.1 s into its 0.2 s: cut short"),
+            std::string::npos)
+      << r.err;
+  std::istringstream lines(read_all(dir / "cut.csv"));
+  std::string line;
+  std::vector<std::string> times;
+  std::getline(lines, line);  // the header
+  while (std::getline(lines, line)) times.push_back(line.substr(0, line.find(',', 2)));
+  EXPECT_EQ(times, (std::vector<std::string>{"0,0.000000", "1,0.100000", "2,0.200000", "3,0.400000",
+                                             "4,0.500000"}));
+  fs::remove(middle);
+  r = run_export("--recording " + q(cut) + " --csv " + q(dir / "gap.csv"), dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("temperature-00001.mkv is missing"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "gap.csv"));
 }
 
 TEST_F(CliExport, needs_an_output_and_a_tiff_name_n) {
