@@ -22,9 +22,14 @@ struct CameraOptions {
 CLI::Validator seed_check() {
   return CLI::Validator(
       [](std::string& value) {
-        return value.find_first_not_of("0123456789") == std::string::npos
-                   ? std::string()
-                   : "a seed is a whole number from 0 up, not " + value;
+        // Digits that fit 64 bits (more were taken as 2^64 - 1, two seeds as one unit).
+        const bool digits =
+            !value.empty() && value.find_first_not_of("0123456789") == std::string::npos;
+        const std::string largest = "18446744073709551615";
+        const std::string v = value.substr(std::min(value.find_first_not_of('0'), value.size()));
+        const bool fits = v.size() < largest.size() || (v.size() == largest.size() && v <= largest);
+        return digits && fits ? std::string()
+                              : "a seed is a whole number from 0 to " + largest + ", not " + value;
       },
       "SEED");
 }
@@ -69,7 +74,9 @@ void add_format_option(CLI::App* cmd, std::string& extension) {
 }
 
 void parse_size(const std::string& text, int& w, int& h) {
-  if (std::sscanf(text.c_str(), "%dx%d", &w, &h) != 2 || w < 1 || h < 1)
+  int used = 0;
+  if (std::sscanf(text.c_str(), "%dx%d%n", &w, &h, &used) != 2 ||
+      used != static_cast<int>(text.size()) || w < 1 || h < 1)
     throw CLI::ValidationError("--size", "expected WIDTHxHEIGHT, e.g. 128x128");
 }
 

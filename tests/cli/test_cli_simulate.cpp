@@ -63,6 +63,23 @@ TEST(CliSimulate, numbers_that_are_not_finite_are_refused_n) {
     EXPECT_EQ(calib(campaign + " " + bad), 2) << bad;
     EXPECT_FALSE(std::filesystem::exists(dir / "c")) << bad;
   }
+  // Trailing text after the size, and seeds past 64 bits (read as 2^64 - 1: two seeds, one unit).
+  for (const char* bad :
+       {"--size 16x16junk", "--size 16x16x5", "--unit-seed 99999999999999999999999",
+        "--unit-seed 18446744073709551616"}) {
+    EXPECT_EQ(calib(campaign + " " + bad), 2) << bad;
+    EXPECT_FALSE(std::filesystem::exists(dir / "c")) << bad;
+  }
+  EXPECT_EQ(calib("simulate campaign --profile rgb-reference --exposures 2 --frames 1 --size 16x16 "
+                  "--roi-area 50 --unit-seed 18446744073709551615 --out " +
+                  q(dir / "c2")),
+            0);
+  // A longest exposure past the camera's 1e8 us (factor 10, 200 exposures: 1e201 us).
+  EXPECT_EQ(calib("simulate campaign --profile rgb-reference --exposures 200 --exposure-factor 10 "
+                  "--frames 1 --size 16x16 --roi-area 50 --out " +
+                  q(dir / "c")),
+            1);
+  EXPECT_FALSE(std::filesystem::exists(dir / "c"));
   for (const char* bad : {"--saturation nan", "--saturation inf", "--mixed-pixels nan"}) {
     EXPECT_EQ(calib("measure --model " + q(test::test_model("test-model-rgb.json")) +
                     " --frame x.pgm --pattern rggb " + bad + " --out " + q(dir / "m")),

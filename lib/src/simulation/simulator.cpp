@@ -194,6 +194,16 @@ void write_furnace_campaign(const std::filesystem::path& folder, Simulator& came
   if (s.first_exposure_us <= 0) s.first_exposure_us = colour ? 100 : 10000;
   if (s.exposure_count < 1 || s.frames_per_setting < 1 || s.width < 8 || s.height < 8)
     throw InputError("campaign: needs at least one exposure and frame, and 8x8 pixels");
+  // A camera's exposure ends somewhere: 1e8 us, as the first exposure's range says (factor 10
+  // and 200 exposures made 1e201 us, and the frames a camera that does not exist).
+  const double longest_us = s.first_exposure_us * std::pow(s.exposure_factor, s.exposure_count - 1);
+  if (!(longest_us <= 1e8)) {
+    std::ostringstream m;
+    m << "campaign: the longest exposure, " << s.first_exposure_us << " us x " << s.exposure_factor
+      << "^" << s.exposure_count - 1 << " = " << longest_us
+      << " us, is past 1e8 us: fewer exposures or a smaller factor";
+    throw InputError(m.str());
+  }
   if (!std::isfinite(s.black_level_drift_dn))
     throw InputError("campaign: the black level drift must be a number of DN");
   if (!s.reference_temperatures_c.empty() &&
