@@ -24,6 +24,18 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    // The first word that is not an option names the command: CLI11 says of an unknown one only
+    // that a subcommand is required.
+    for (int i = 1; i < argc; ++i) {
+      const std::string word = argv[i];
+      if (word.empty() || word[0] == '-') continue;
+      bool known = false;
+      for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->get_name() == word;
+      if (known) break;
+      std::cerr << "pyrocam-calib: unknown command '" << word
+                << "': simulate, calibrate, measure, export or prebuild (--help lists them)\n";
+      return kExitUsage;
+    }
     const int code = app.exit(e);
     return code == 0 ? kExitOk : kExitUsage;
   }

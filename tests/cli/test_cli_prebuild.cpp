@@ -75,6 +75,15 @@ TEST(CliPrebuild, writes_the_table_beside_an_existing_model_that_ratiotemp_then_
             1);
   EXPECT_NE(err.find("is not a lookup table"), std::string::npos) << err;
   EXPECT_EQ(read_all(model), json);
+  // --out a folder: said as such (it was "not a lookup table (the model itself?)").
+  EXPECT_EQ(
+      calib("prebuild --model " + q(model) + " --max-blocks 8 --out " + q(dir.path()), dir, err),
+      1);
+  EXPECT_NE(err.find("is a folder, not a lookup table file"), std::string::npos) << err;
+
+  // An unknown command is named (CLI11 said only "A subcommand is required").
+  EXPECT_EQ(calib("bogus --model " + q(model), dir, err), 2);
+  EXPECT_NE(err.find("unknown command 'bogus'"), std::string::npos) << err;
 }
 
 TEST(CliPrebuild, a_5x5_model_gets_no_table_and_the_reason_n) {

@@ -109,7 +109,10 @@ PrebuiltTables prebuild_tables(std::shared_ptr<const ThermalModel> model, const 
   if (std::filesystem::exists(file, ec) &&
       !(std::filesystem::is_regular_file(file, ec) && std::filesystem::file_size(file, ec) == 0) &&
       !holds_a_table(file)) {
-    r.problem = file + " exists and is not a lookup table (the model itself?): left as it is";
+    r.problem =
+        file + (std::filesystem::is_directory(file, ec)
+                    ? " is a folder, not a lookup table file: left as it is"
+                    : " exists and is not a lookup table (the model itself?): left as it is");
     return r;
   }
   const auto drop_stale = [&] {
