@@ -51,6 +51,20 @@ if [[ -d $RECORDING ]]; then
   # A recording killed as a segment began leaves that segment empty, or with its header and no
   # frame (a full disk, a copy cut short): splitmuxsrc cannot open the one and waits for ever on
   # the other. The others are played, through links in a folder of their own.
+  # A segment missing from the numbering (deleted, not copied) is a gap in time that splitmuxsrc
+  # plays straight through: say so.
+  expected=0
+  for f in $(compgen -G "$RECORDING/temperature-*.mkv" | sort); do
+    n=$(basename "$f" .mkv); n=${n#temperature-}
+    [[ $n =~ ^[0-9]+$ ]] || continue
+    n=$((10#$n))
+    if ((n == expected + 1)); then
+      echo "playback: segment $expected of $RECORDING is missing: the playback jumps over its time" >&2
+    elif ((n > expected)); then
+      echo "playback: segments $expected..$((n - 1)) of $RECORDING are missing: the playback jumps over their time" >&2
+    fi
+    expected=$((n + 1))
+  done
   left_out=$(find "$RECORDING" -maxdepth 1 -name 'temperature-*.mkv' -empty -printf '%f\n' | sort)
   last=$(compgen -G "$RECORDING/temperature-*.mkv" | sort | tail -1)
   if [[ -s $last ]] && ! holds_frame "$last"; then left_out+=${left_out:+$'\n'}$(basename "$last"); fi

@@ -90,7 +90,8 @@ segments=(avenc_ffv1 gop-size=1 ! splitmuxsink async-finalize=true muxer-factory
 # RAW=1: the camera's frames as they came (8-bit Bayer as GRAY8, FFV1 has no Bayer format) in
 # segments beside the temperatures, frame for frame, for `pyrocam-calib measure --recording`;
 # their comment tag gives DARK and the mosaic: 5x5, or the Bayer layout.
-# identity keeps the encoder's buffer pool from the camera (pyrocamsrc refuses its buffers).
+# identity keeps the encoder's allocation query from the camera, which then allocates from its
+# own pool whatever the encoder would propose.
 raw_branch=()
 if [[ $RAW == 1 && -n $BRACKET ]]; then
   # measure --recording reads frame by frame: it would not fuse the bracket, and its readings

@@ -80,6 +80,15 @@ TEST(CliSimulate, numbers_that_are_not_finite_are_refused_n) {
                   q(dir / "c")),
             1);
   EXPECT_FALSE(std::filesystem::exists(dir / "c"));
+  // A scene whose automatic exposure is past 1e8 us (a faint surface: all saturated frames once),
+  // or whose exposure rounds to 0 at the manifest's 0.001 us.
+  for (const char* bad : {"--emissivity 1e-9", "--exposure 1e-9"}) {
+    EXPECT_EQ(calib("simulate scene --scene plate --size 16x16 --temperatures 1000 " +
+                    std::string(bad) + " --out " + q(dir / "s")),
+              1)
+        << bad;
+    EXPECT_FALSE(std::filesystem::exists(dir / "s")) << bad;
+  }
   for (const char* bad : {"--saturation nan", "--saturation inf", "--mixed-pixels nan"}) {
     EXPECT_EQ(calib("measure --model " + q(test::test_model("test-model-rgb.json")) +
                     " --frame x.pgm --pattern rggb " + bad + " --out " + q(dir / "m")),

@@ -289,6 +289,25 @@ TEST_F(Recordings, a_last_segment_cut_off_as_it_began_leaves_the_rest_readable) 
   EXPECT_NE(read_text(log).find("temperature-00000.mkv"), std::string::npos) << read_text(log);
 }
 
+// A segment missing from the numbering is a gap in time that splitmuxsrc plays through:
+// playback.sh names it.
+TEST_F(Recordings, a_missing_segment_is_named_when_played) {
+  const fs::path gap = *dir / "gap";
+  fs::create_directories(gap);
+  const std::vector<std::string> all = segments();
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "temperature-%05zu.mkv", i + 1 == all.size() ? i + 1 : i);
+    fs::copy_file(all[i], gap / name);
+  }
+  const ScriptRun played = run_script("playback.sh", {gap.string()}, {{"SINK", "fakesink"}},
+                                      (*dir / "gap-playback.log").string(), milliseconds(60000));
+  EXPECT_EQ(played.status, 0) << played.log;
+  const std::string missing =
+      "segment " + std::to_string(all.size() - 1) + " of " + gap.string() + " is missing";
+  EXPECT_NE(played.log.find(missing), std::string::npos) << played.log;
+}
+
 // Settings that gst-launch took silently (a host that resolves to nothing streamed nowhere, a
 // KEY_SECONDS that is not a number made every frame a key frame) or refused naming an element's
 // property are refused by name, before the camera starts.

@@ -113,8 +113,6 @@ void write_scene_sequence(const std::filesystem::path& folder, Simulator& camera
   const int count =
       s.kind == SceneKind::kMeltPool ? s.frames : static_cast<int>(s.temperatures_c.size());
   if (count < 1) throw InputError("scene: no frames to write");
-  for (const char* dir : {"frames", "darks", "truth"})
-    std::filesystem::create_directories(folder / dir);
 
   std::vector<cv::Mat> maps;
   std::vector<double> nominal;
@@ -140,12 +138,32 @@ void write_scene_sequence(const std::filesystem::path& folder, Simulator& camera
     fixed_exposure =
         camera.exposure_for(kSceneDefaults.melt_pool_exposure_c, target_dn, s.emissivity);
 
+  // The manifest holds exposures to 0.001 us, and a camera's exposure ends somewhere (1e8 us,
+  // as a campaign's): a faint scene's automatic exposure of 5e11 us made frames that were all
+  // saturated, and --exposure 1e-9 was written as 0.
+  std::vector<double> exposures;
+  for (int i = 0; i < count; ++i) {
+    const double wanted = fixed_exposure > 0
+                              ? fixed_exposure
+                              : camera.exposure_for(nominal[i], target_dn, s.emissivity);
+    const double exposure = std::round(wanted * 1000) / 1000;
+    if (!(exposure > 0 && exposure <= 1e8)) {
+      std::ostringstream m;
+      m << "scene: frame " << i << " (" << nominal[i] << " degC, emissivity " << s.emissivity
+        << ") needs an exposure of " << wanted << " us, "
+        << (exposure > 0 ? "past 1e8 us: a higher emissivity or temperature"
+                         : "under the manifest's 0.001 us: a longer --exposure");
+      throw InputError(m.str());
+    }
+    exposures.push_back(exposure);
+  }
+  for (const char* dir : {"frames", "darks", "truth"})
+    std::filesystem::create_directories(folder / dir);
+
   std::vector<ManifestRow> rows;
   std::vector<double> dark_exposures;
   for (int i = 0; i < count; ++i) {
-    double exposure = fixed_exposure > 0 ? fixed_exposure
-                                         : camera.exposure_for(nominal[i], target_dn, s.emissivity);
-    exposure = std::round(exposure * 1000) / 1000;
+    const double exposure = exposures[static_cast<std::size_t>(i)];
     std::ostringstream stem;
     stem << std::setw(4) << std::setfill('0') << i;
     const std::string frame = "frames/" + stem.str() + s.image_extension;
