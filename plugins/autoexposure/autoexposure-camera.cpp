@@ -1,9 +1,12 @@
 /* autoexposure: finding the camera whose exposure it sets, and the controller's settings from
  * the camera's property ranges. */
 #include <algorithm>
+#include <sstream>
 #include <string>
 
 #include "autoexposure-private.h"
+
+#include "pyrocam/core/error.h"
 
 #define GST_CAT_DEFAULT gst_auto_exposure_debug
 
@@ -73,6 +76,13 @@ void look_up_camera(GstAutoExposure* self, const Settings& settings) {
                   GST_OBJECT_NAME(camera), st.has_gain ? "with a" : "without");
 }
 
+// Microseconds as a user wrote them (1e+07, 1500).
+static std::string us_text(double us) {
+  std::ostringstream text;
+  text << us;
+  return text.str();
+}
+
 pyrocam::ExposureControlSettings controller_settings(GstAutoExposure* self,
                                                      const Settings& settings) {
   State& st = *self->state;
@@ -83,6 +93,17 @@ pyrocam::ExposureControlSettings controller_settings(GstAutoExposure* self,
   // The camera property's range too: a value outside it would not be set at all.
   c.min_exposure_us = std::max({settings.min_exposure_us, st.property_min_us, 1e-3});
   c.max_exposure_us = std::min(settings.max_exposure_us, st.property_max_us);
+  if (settings.min_exposure_us > settings.max_exposure_us)
+    throw pyrocam::InputError("min-exposure " + us_text(settings.min_exposure_us) +
+                              " us is above max-exposure " +
+                              us_text(settings.max_exposure_us) + " us");
+  if (c.min_exposure_us > c.max_exposure_us)
+    throw pyrocam::InputError(
+        "min-exposure .. max-exposure (" + us_text(settings.min_exposure_us) +
+        " .. " + us_text(settings.max_exposure_us) + " us) is outside camera " +
+        GST_OBJECT_NAME(st.camera) + "'s exposure range (" +
+        us_text(st.property_min_us) + " .. " +
+        us_text(st.property_max_us) + " us)");
   c.max_step = settings.max_step;
   c.tolerance = settings.tolerance;
   c.latency_frames = static_cast<int>(settings.latency);

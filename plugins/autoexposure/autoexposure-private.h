@@ -80,7 +80,8 @@ struct State {
  * reads its exposure and gain properties' ranges into the state; warns when there is none. */
 void look_up_camera(GstAutoExposure* self, const Settings& settings);
 
-/* The controller's settings from the properties and the camera's property ranges. */
+/* The controller's settings from the properties and the camera's property ranges; throws
+ * pyrocam::InputError, naming both, where they do not overlap. */
 pyrocam::ExposureControlSettings controller_settings(GstAutoExposure* self,
                                                      const Settings& settings);
 

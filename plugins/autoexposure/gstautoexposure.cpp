@@ -240,8 +240,9 @@ static GstFlowReturn gst_auto_exposure_transform_ip(GstBaseTransform* trans, Gst
   if (!st.camera_looked_up) look_up_camera(self, settings);
   if (!st.camera) return GST_FLOW_OK;
   if (settings.serial != st.serial) {
-    const pyrocam::ExposureControlSettings c = controller_settings(self, settings);
+    pyrocam::ExposureControlSettings c;
     if (!PYROCAM_GUARDED(self, pg::ErrorKind::kSettings, "Bad exposure control settings", [&] {
+          c = controller_settings(self, settings);
           st.controller = std::make_unique<pyrocam::ExposureController>(c);
           st.in_effect = std::make_unique<pyrocam::SettingInEffect>(c.latency_frames);
           st.bracket = settings.bracket.empty() ? nullptr

@@ -410,6 +410,19 @@ TEST(AutoExposure, AnUnusableBracketIsAnErrorNamingIt) {
                GST_RESOURCE_ERROR_SETTINGS, {"'x'", "exposure factor"});
 }
 
+// An exposure range outside the camera property's (pyrocamsrc: 0 .. 1e7 us), or upside down, is
+// an error naming the values; it said "0 < min <= max" of values that were in order.
+TEST(AutoExposure, AnExposureRangeTheCameraCannotSetIsAnErrorNamingIt) {
+  REQUIRE_ELEMENT("autoexposure");
+  const std::string head =
+      "pyrocamsrc num-buffers=2 ! video/x-bayer,width=64,height=48 ! autoexposure dark-level=50 ";
+  expect_error(run_pipeline(head + "min-exposure=2e7 max-exposure=5e7 ! fakesink"),
+               GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS,
+               {"2e+07 .. 5e+07 us", "exposure range (0 .. 1e+07 us)"});
+  expect_error(run_pipeline(head + "min-exposure=1.5e6 ! fakesink"), GST_RESOURCE_ERROR,
+               GST_RESOURCE_ERROR_SETTINGS, {"min-exposure 1.5e+06 us is above max-exposure 1e+06"});
+}
+
 // A camera whose exposure reads as not set (aravissrc's -1) has nothing to scale from: one
 // warning, the control starts from 1 ms and then works as usual.
 TEST(AutoExposure, ACameraWithoutAnExposureSetStartsFromOneMillisecond) {

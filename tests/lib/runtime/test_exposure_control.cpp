@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <vector>
 
 #include "pyrocam/core/error.h"
 #include "pyrocam/runtime/exposure_control.h"
@@ -230,6 +231,31 @@ TEST(ExposureController, ClampsToTheCameraRangeAndSaysSo) {
   // Asked again with a frame at the limit: nothing new to set, still at the limit.
   EXPECT_FALSE(control.update(dim, 1e6, 1e6));
   EXPECT_TRUE(control.at_limit());
+}
+
+// A level clipped at one setting and no signal at the setting max_step below it (dark_dn set
+// above the frames' own black level of 50 DN: 104 DN at 1000 us, saturated at 8000 us): the
+// controller went 1000 -> 8000 -> 1000 us for ever. It now looks in between and settles.
+TEST(ExposureController, ClippedAtOneSettingAndDarkAtTheNextLooksInBetween) {
+  ExposureControlSettings s = settings();
+  s.dark_dn = 120;
+  s.saturation_dn = 220;
+  ExposureController control(s);
+  const double rate = 0.054;  // DN per us above the real black level of 50
+  double set_us = 1000;
+  std::vector<double> settings_seen;
+  for (int frame = 0; frame < 30; ++frame) {
+    HotLevel h;
+    h.level_dn = std::floor(std::min(255.0, 50 + rate * set_us));
+    h.clipped = h.level_dn >= 220;
+    if (auto c = control.update(h, set_us, set_us)) set_us = c->exposure_us;
+    settings_seen.push_back(set_us);
+  }
+  // Settled: the last ten frames at one setting, whose level is within 10 % of the target.
+  for (std::size_t i = 20; i < settings_seen.size(); ++i)
+    EXPECT_EQ(settings_seen[i], settings_seen.back()) << "frame " << i;
+  const double level = 50 + rate * set_us, target = 120 + 0.7 * (220 - 120);
+  EXPECT_NEAR(level, target, 0.1 * (target - 120));
 }
 
 TEST(ExposureController, RefusesSettingsOutOfRange) {

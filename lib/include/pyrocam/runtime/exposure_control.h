@@ -81,6 +81,14 @@ class ExposureController {
   bool at_limit_ = false;
   ExposureControlSettings settings_;
   std::optional<ExposureSetting> commanded_;
+  // The last brightness (exposure us at 0 dB) whose level was no signal, and the last one whose
+  // level clipped, while no level in between was seen: the next setting lies between them.
+  std::optional<double> dark_at_, clipped_at_;
+  // The last level neither clipped nor without signal, and its brightness.
+  struct ReadLevel {
+    double brightness, signal;
+  };
+  std::optional<ReadLevel> last_read_;
   int frames_since_command_ = 0;
 };
 
