@@ -202,6 +202,10 @@ MeasureInputs measure_inputs(const MeasureArgs& a) {
                      std::to_string(in.roi.cols) + "x" + std::to_string(in.roi.rows) +
                      ", the frames " + std::to_string(in.frame_size.width) + "x" +
                      std::to_string(in.frame_size.height));
+  // An empty ROI measured every frame into rows of empty statistics, exit 0.
+  if (!in.roi.empty() && cv::countNonZero(in.roi) == 0)
+    throw InputError((a.roi.empty() ? a.dataset + "/roi.png" : a.roi) +
+                     ": the ROI is empty (no nonzero pixel)");
   return in;
 }
 

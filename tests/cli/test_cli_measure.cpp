@@ -161,6 +161,12 @@ TEST_F(CliMeasure, measure_rejects_an_roi_or_dark_that_does_not_fit_the_frames_n
   EXPECT_NE(r.err.find(data.string() + "/roi.png: the ROI is 8x8, the frames 100x100"),
             std::string::npos)
       << r.err;
+  // An empty --roi gave rows of empty statistics and exit 0.
+  write_raw_image(dir / "empty.png", cv::Mat(100, 100, CV_8U, cv::Scalar(0)));
+  r = run_tool(command + quoted(dir / "o0") + " --roi " + quoted(dir / "empty.png"), dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("empty.png: the ROI is empty"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "o0" / "stats.csv"));
   std::filesystem::copy_file(dir / "roi.png", roi,
                              std::filesystem::copy_options::overwrite_existing);
   const auto dark = data / "darks/0000.pgm";
