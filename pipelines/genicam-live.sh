@@ -85,9 +85,22 @@ set +e
   2>&1 | (
   trap '' INT
   stopped=0
+  # aravissrc's error says why in the lines after it: caps the camera cannot give (not-negotiated)
+  # are no lost camera.
+  pending=0
+  lost="genicam-live: camera ${CAMERA:-(first found)} stopped streaming (aravissrc's error above): unplugged, switched off, or losing packets"
   while IFS= read -r line; do
     printf '%s\n' "$line"
-    if ((stopped == 0)); then
+    if ((pending > 0)); then
+      if [[ $line == *"reason not-negotiated"* ]]; then
+        echo "genicam-live: camera ${CAMERA:-(first found)} cannot send CAPS ($CAPS): check the size and format against what the camera offers (arv-tool-0.8 control Width Height PixelFormat)" >&2
+        pending=0 stopped=1
+      elif [[ $line == *"streaming stopped, reason"* ]] || ((--pending == 0)); then
+        pending=0
+        echo "$lost" >&2
+        stopped=1
+      fi
+    elif ((stopped == 0)); then
       if [[ $line == *GstWatchdog:camera-sent-no-frame:* ]]; then
         echo "genicam-live: camera ${CAMERA:-(first found)} sent no frame for $WATCHDOG_MS ms: unplugged, switched off, or losing packets" >&2
         stopped=1
@@ -95,11 +108,11 @@ set +e
         echo "genicam-live: camera ${CAMERA:-(first found)} not found: is it on, on this network and named as arv-tool-0.8 lists it?" >&2
         stopped=1
       elif [[ $line == "ERROR: from element "*/GstAravis:* ]]; then
-        echo "genicam-live: camera ${CAMERA:-(first found)} stopped streaming (aravissrc's error above): unplugged, switched off, or losing packets" >&2
-        stopped=1
+        pending=4
       fi
     fi
   done
+  if ((pending > 0)); then echo "$lost" >&2; stopped=1; fi
   exit $((stopped ? 3 : 0)))
 statuses=("${PIPESTATUS[@]}")
 set -e

@@ -188,6 +188,22 @@ TEST_F(GenICam, rejects_a_missing_dark_n) {
   EXPECT_NE(run.log.find("set DARK"), std::string::npos) << run.log;
 }
 
+// Caps the camera cannot give (the fake camera's frames are at most 2048 pixels wide) are said
+// to be the caps, not a camera that stopped streaming.
+TEST_F(GenICam, caps_the_camera_cannot_give_are_named_n) {
+  FakeGigECamera camera(log("camera"));
+  ASSERT_TRUE(camera.ok()) << camera.error();
+  Env env = settings(5);
+  env["CAPS"] = "video/x-bayer,format=rggb,width=4000,height=4000";
+  const ScriptRun run = run_script("genicam-live.sh", {}, env, log("genicam"), kRunLimit);
+  ASSERT_TRUE(run.status.has_value()) << "hung";
+  EXPECT_EQ(*run.status, 1) << run.log;
+  EXPECT_NE(run.log.find("camera 127.0.0.1 cannot send CAPS (video/x-bayer,format=rggb,width=4000"),
+            std::string::npos)
+      << run.log;
+  EXPECT_EQ(run.log.find("stopped streaming ("), std::string::npos) << run.log;
+}
+
 // A camera that is not there (an address of TEST-NET-1, RFC 5737) is named as not found, not
 // as one that stopped streaming. Aravis gives up on it after about 5 s, within the watchdog's
 // time here.
