@@ -15,6 +15,7 @@
 #include <iostream>
 #include <limits>
 #include <optional>
+#include <regex>
 #include <string>
 
 #include "camera.h"
@@ -169,6 +170,19 @@ int main(int argc, char** argv) {
               << "most 10000 degC, not " << *o.alarm_threshold_c << "\n";
     return 2;
   }
+  if (!(o.key_seconds >= 0.1 && o.key_seconds <= 60)) {  // NaN made every frame a key frame
+    std::cerr << kName << ": --key-seconds must be from 0.1 to 60 s, not " << o.key_seconds << "\n";
+    return 2;
+  }
+  // The page's panels take host:port (a host name, an IPv4 address or an [IPv6] one): anything
+  // else, such as the next option taken as the value, is no server.
+  static const std::regex host_port(R"(^([A-Za-z0-9.-]+|\[[0-9A-Fa-f:.]+\])(:[0-9]{1,5})?$)");
+  for (const std::string& server : o.web.servers)
+    if (server.empty() || server[0] == '-' || !std::regex_match(server, host_port)) {
+      std::cerr << kName << ": --server takes host:port of another pyrocam-serve's page, not '"
+                << server << "'\n";
+      return 2;
+    }
   if (!(o.alarm_hysteresis_c >= 0 && o.alarm_hysteresis_c <= 1000)) {
     std::cerr << kName << ": --alarm-hysteresis-c must be from 0 to 1000 degC, not "
               << o.alarm_hysteresis_c << "\n";
@@ -304,6 +318,19 @@ int main(int argc, char** argv) {
   callbacks.on_running = [&web]() {
     std::cerr << kName << ": camera running" << std::endl;
     web.publish("camera", {{"state", "running"}});
+    // A restarted chain's thermalalarm starts clear and says so only when it is raised again: the
+    // alarm raised before the restart stayed on the page while the new frames read below it.
+    nlohmann::json alarm = web.latest("alarm");
+    if (alarm.is_object() && alarm.value("state", "") == "raised") {
+      alarm["state"] = "cleared";
+      alarm["value-c"] = nullptr;
+      alarm["why"] = "camera restarted: the alarm starts clear";
+      alarm["wall-time"] = g_get_real_time() / 1000;
+      web.publish("alarm", alarm);
+      web.log_alarm(alarm);
+      std::cerr << kName << ": ALARM cleared: the camera restarted and the alarm starts clear"
+                << std::endl;
+    }
   };
   callbacks.on_lost = [&](const std::string& why, bool fatal) {
     rtsp.camera_lost();
@@ -330,7 +357,11 @@ int main(int argc, char** argv) {
               << " (check --camera, --caps, --dark, --region)\n";
     return 1;
   }
-  const std::string host = o.rtsp.address == "0.0.0.0" ? host_name() : o.rtsp.address;
+  // All addresses: the host's name; an IPv6 address goes in brackets in a URL.
+  const std::string host = o.rtsp.address == "0.0.0.0" || o.rtsp.address == "::" ? host_name()
+                           : o.rtsp.address.find(':') != std::string::npos
+                               ? "[" + o.rtsp.address + "]"
+                               : o.rtsp.address;
   std::cerr << kName << ": RTSP on port " << rtsp.bound_port() << ": rtsp://" << host << ":"
             << rtsp.bound_port() << "/thermal and rtsp://" << host << ":" << rtsp.bound_port()
             << "/temperature; the page on port " << web.bound_port() << ": http://" << host << ":"

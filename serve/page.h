@@ -117,6 +117,8 @@ function makePanel(index, server) {
       chart.update("none");
     }
   }
+  const alarmLine = (a) => a.why ? `alarm ${a.state}: ${a.why}`
+                                 : `alarm ${a.state}: ${a.statistic} ${fmt(a["value-c"])} °C`;
   function showAlarm(a, quiet) {
     threshold = a["threshold-c"] ?? null;
     const raised = a.state === "raised";
@@ -124,7 +126,7 @@ function makePanel(index, server) {
     $("alarm").textContent = raised ? `ALARM ${a.statistic} ${fmt(a["value-c"])} °C` +
                                         (a.saturated ? " and saturated" : "") + ` > ${fmt(a["threshold-c"])}`
                                     : `alarm clear (< ${fmt(a["threshold-c"])} °C)`;
-    if (!quiet) log(`alarm ${a.state}: ${a.statistic} ${fmt(a["value-c"])} °C`);
+    if (!quiet) log(alarmLine(a));
   }
   function showWarning(w) {
     log("warning: " + (w.message.startsWith(w.source + ":") ? "" : w.source + ": ") + w.message);
@@ -137,15 +139,23 @@ function makePanel(index, server) {
   // The image's size once a frame came (tests read it from the DOM).
   setInterval(() => { $("frame").dataset.width = String($("frame").naturalWidth); }, 250);
   const events = new EventSource(base + "/events");
+  // Every connection starts with a hello, a reconnection too: the log and the other servers'
+  // panels only from the first (a second copy of each panel shared the first one's ids).
+  let greeted = false;
   events.addEventListener("hello", (e) => {
     const s = JSON.parse(e.data);
     if (s.stats) showStats(s.stats);
     if (s.camera) showCamera(s.camera);
-    (s["alarm-log"] || []).forEach((a) => log(`alarm ${a.state}: ${a.statistic} ${fmt(a["value-c"])} °C`));
+    if (!greeted) {
+      (s["alarm-log"] || []).forEach((a) => log(alarmLine(a)));
+      if (s.warning) showWarning(s.warning);
+      if (index === 0 && !query.has("servers"))
+        (s.servers || []).filter(isHostPort).forEach((other, i) => makePanel(i + 1, other));
+    } else {
+      log("reconnected to the server");
+    }
     if (s.alarm) showAlarm(s.alarm, true);
-    if (s.warning) showWarning(s.warning);
-    if (index === 0 && !query.has("servers"))
-      (s.servers || []).filter(isHostPort).forEach((other, i) => makePanel(i + 1, other));
+    greeted = true;
   });
   events.addEventListener("stats", (e) => showStats(JSON.parse(e.data)));
   events.addEventListener("alarm", (e) => showAlarm(JSON.parse(e.data), false));

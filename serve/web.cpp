@@ -222,6 +222,19 @@ void WebServer::append(Stream& stream, const std::string& bytes) {
 }
 
 void WebServer::send(Stream& stream, const std::string& event, const std::string& data) {
+  if (stream.ended) return;
+  // A reader that stopped reading grew the server's memory by every event (4 MB an hour each at
+  // the default rates): past the limit its stream ends, and a reader that wakes up reconnects
+  // and gets the latest state in its hello. (Dropping events instead would leave its page
+  // showing a state that is no longer so.)
+  if (stream.pending > kMaxPendingBytes) {
+    GST_WARNING("an event stream's reader took no data for %zu bytes: ending its stream",
+                stream.pending);
+    stream.ended = true;
+    soup_message_body_complete(soup_server_message_get_response_body(stream.msg));
+    soup_server_message_unpause(stream.msg);
+    return;
+  }
   append(stream, event.empty() ? ": ping\n\n" : "event: " + event + "\ndata: " + data + "\n\n");
 }
 

@@ -48,6 +48,11 @@ class WebServer {
   // Main context: to every open event stream, and kept for /status.json and new streams.
   void publish(const std::string& event, const nlohmann::json& data);
   void log_alarm(const nlohmann::json& alarm);
+  // The last data published for `event` (null if none).
+  nlohmann::json latest(const std::string& event) const {
+    const auto it = latest_.find(event);
+    return it == latest_.end() ? nlohmann::json() : *it;
+  }
 
  private:
   static void on_request(SoupServer* server, SoupServerMessage* msg, const char* path,
@@ -58,6 +63,7 @@ class WebServer {
     SoupServerMessage* msg;
     bool mjpeg;
     std::size_t pending = 0;  // bytes handed to libsoup and not yet written
+    bool ended = false;       // an event stream completed for a reader that stopped reading
   };
   void open_stream(SoupServerMessage* msg, bool mjpeg);
   static void on_wrote_body_data(SoupServerMessage* msg, guint size, gpointer self);

@@ -160,6 +160,22 @@ bool is_fused_bands(const GstCaps* caps, guint index) {
          gst_caps_features_contains(features, PYROCAM_CAPS_FEATURE_MOSAIC);
 }
 
+bool temperature_frame_fits(GstBaseTransform* trans, const GstVideoInfo& info, GstBuffer* buffer) {
+  GstVideoFrame frame;
+  if (gst_video_frame_map(&frame, const_cast<GstVideoInfo*>(&info), buffer, GST_MAP_READ)) {
+    gst_video_frame_unmap(&frame);
+    return true;
+  }
+  PYROCAM_POST_ERROR(trans, ErrorKind::kFormat,
+                     "A temperature buffer of " + std::to_string(gst_buffer_get_size(buffer)) +
+                         " bytes does not hold a " + std::to_string(GST_VIDEO_INFO_WIDTH(&info)) +
+                         "x" + std::to_string(GST_VIDEO_INFO_HEIGHT(&info)) +
+                         " GRAY16_LE frame of " + std::to_string(GST_VIDEO_INFO_SIZE(&info)) +
+                         " bytes",
+                     "gst_video_frame_map failed on the input buffer");
+  return false;
+}
+
 gsize frame_size_of_caps(GstCaps* caps) {
   if (!caps || gst_caps_get_size(caps) < 1) return 0;
   const GstStructure* s = gst_caps_get_structure(caps, 0);

@@ -103,6 +103,11 @@ gsize frame_size_of_caps(GstCaps* caps);
  * PYROCAM_CAPS_FEATURE_MOSAIC). */
 bool is_fused_bands(const GstCaps* caps, guint index = 0);
 
+/* Whether a temperature buffer (GRAY16_LE codes, negotiated as `info`) holds a whole frame; if
+ * not, posts a STREAM FORMAT error naming both sizes. GstVideoFilter answered such a buffer with
+ * a CORE NOT_IMPLEMENTED warning ("please file a bug") and dropped it. */
+bool temperature_frame_fits(GstBaseTransform* trans, const GstVideoInfo& info, GstBuffer* buffer);
+
 /* GstBaseTransform::decide_allocation of the pyrocam filters, which derive from GstBaseTransform
  * directly: a pool of output frames (ensure_buffer_pool) when downstream offers none, then
  * GstBaseTransform's own choice. */

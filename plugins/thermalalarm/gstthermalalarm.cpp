@@ -243,6 +243,15 @@ static cv::Rect watched_region(GstThermalAlarm* self, const Settings& settings, 
   return clipped;
 }
 
+/* A buffer too short for the frame is a STREAM FORMAT error (GstVideoFilter warned "please file a
+ * bug", dropped it and the alarm never looked at the stream). */
+static GstFlowReturn gst_thermal_alarm_transform_ip(GstBaseTransform* trans, GstBuffer* buffer) {
+  GstVideoFilter* filter = GST_VIDEO_FILTER(trans);
+  if (filter->negotiated && !pg::temperature_frame_fits(trans, filter->in_info, buffer))
+    return GST_FLOW_ERROR;
+  return GST_BASE_TRANSFORM_CLASS(gst_thermal_alarm_parent_class)->transform_ip(trans, buffer);
+}
+
 static GstFlowReturn gst_thermal_alarm_transform_frame_ip(GstVideoFilter* filter,
                                                           GstVideoFrame* frame) {
   GstThermalAlarm* self = GST_THERMAL_ALARM(filter);
@@ -505,6 +514,7 @@ static void gst_thermal_alarm_class_init(GstThermalAlarmClass* klass) {
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_thermal_alarm_stop);
   trans_class->passthrough_on_same_caps = TRUE;
   trans_class->transform_ip_on_passthrough = TRUE;
+  trans_class->transform_ip = GST_DEBUG_FUNCPTR(gst_thermal_alarm_transform_ip);
   filter_class->transform_frame_ip = GST_DEBUG_FUNCPTR(gst_thermal_alarm_transform_frame_ip);
 
   gst_type_mark_as_plugin_api(GST_TYPE_THERMAL_ALARM_STATISTIC, static_cast<GstPluginAPIFlags>(0));

@@ -230,18 +230,7 @@ static GstFlowReturn gst_thermal_colormap_transform(GstBaseTransform* trans, Gst
                        "transform called before set_caps");
     return GST_FLOW_NOT_NEGOTIATED;
   }
-  GstVideoFrame frame;
-  if (!gst_video_frame_map(&frame, &filter->in_info, inbuf, GST_MAP_READ)) {
-    PYROCAM_POST_ERROR(
-        trans, pg::ErrorKind::kFormat,
-        "A temperature buffer of " + std::to_string(gst_buffer_get_size(inbuf)) +
-            " bytes does not hold a " + std::to_string(GST_VIDEO_INFO_WIDTH(&filter->in_info)) +
-            "x" + std::to_string(GST_VIDEO_INFO_HEIGHT(&filter->in_info)) + " GRAY16_LE frame of " +
-            std::to_string(GST_VIDEO_INFO_SIZE(&filter->in_info)) + " bytes",
-        "gst_video_frame_map failed on the input buffer");
-    return GST_FLOW_ERROR;
-  }
-  gst_video_frame_unmap(&frame);
+  if (!pg::temperature_frame_fits(trans, filter->in_info, inbuf)) return GST_FLOW_ERROR;
   return GST_BASE_TRANSFORM_CLASS(gst_thermal_colormap_parent_class)
       ->transform(trans, inbuf, outbuf);
 }

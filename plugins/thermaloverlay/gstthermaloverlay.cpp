@@ -77,6 +77,7 @@ struct State {
   GstVideoInfo video_info{}, overlay_info{};
   bool have_video_info = false, have_overlay_info = false;
   guint64 paired = 0, bare = 0, dropped = 0;
+  bool warned_unlinked = false;  // said once that nothing is linked to overlay_sink
 
   void clear_overlays() {
     for (GstBuffer* b : overlays) gst_buffer_unref(b);
@@ -176,6 +177,17 @@ static GstFlowReturn gst_thermal_overlay_video_chain(GstPad*, GstObject* parent,
   State& st = *self->state;
   const GstClockTime pts = GST_BUFFER_PTS(frame);
   GstBuffer* overlay = nullptr;
+  // With nothing linked to overlay_sink no overlay can come: the frame waited for one for ever
+  // (a launch line that forgot the branch prerolled for ever, without a word).
+  const bool overlay_linked = gst_pad_is_linked(self->overlay_pad);
+  if (!overlay_linked && !st.warned_unlinked) {
+    st.warned_unlinked = true;
+    GST_ELEMENT_WARNING(self, CORE, PAD,
+                        ("%s: nothing is linked to overlay_sink: camera frames go out without "
+                         "an overlay",
+                         GST_OBJECT_NAME(self)),
+                        ("overlay_sink unlinked"));
+  }
   {
     std::unique_lock<std::mutex> lock(st.lock);
     if (!st.have_video_info) {
@@ -205,7 +217,7 @@ static GstFlowReturn gst_thermal_overlay_video_chain(GstPad*, GstObject* parent,
         }
         break;  // else the next overlay is a later frame's: this one has none
       }
-      if (st.overlay_eos) break;
+      if (st.overlay_eos || !overlay_linked) break;
       st.changed.wait(lock);
     }
     if (overlay != nullptr)

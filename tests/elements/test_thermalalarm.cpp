@@ -377,6 +377,18 @@ TEST(ThermalAlarmLaunch, a_malformed_setting_in_a_launch_line_stops_the_pipeline
   }
 }
 
+// Buffers too short for their frame: GstVideoFilter warned "please file a bug" and dropped them,
+// and the alarm never looked at the stream. They are a STREAM FORMAT error, as in
+// thermalcolormap.
+TEST(ThermalAlarmLaunch, a_buffer_too_short_for_its_frame_is_an_error_naming_both_sizes_n) {
+  REQUIRE_ELEMENT("thermalalarm");
+  const auto r = run_pipeline(
+      "videotestsrc num-buffers=2 ! video/x-raw,format=GRAY16_LE,width=40,height=30 ! "
+      "capssetter join=false caps=video/x-raw,format=GRAY16_LE,width=40,height=40 ! "
+      "thermalalarm threshold-c=100 frames=1 ! fakesink");
+  expect_error(r, GST_STREAM_ERROR, GST_STREAM_ERROR_FORMAT, {"2400 bytes", "40x40"});
+}
+
 // ratiotemp output=uncertainty gives expanded uncertainties in the codes' steps: compared with a
 // threshold as temperatures, 53 K read as -220 degC and a real threshold never raised.
 TEST(ThermalAlarmLaunch, an_uncertainty_stream_is_refused_by_its_tags_n) {

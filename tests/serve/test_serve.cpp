@@ -323,8 +323,10 @@ TEST(Serve, TemperatureStreamIsLossless) {
 
 TEST(Serve, CameraVanishesAndReturns) {
   ScratchDir dir("serve-vanish");
-  // 40 frames (4 s), then the camera ends; the server restarts it after 1 s.
-  Server server = start_server(dir, {"--camera", kCamera + " num-buffers=40"});
+  // 40 frames (4 s), then the camera ends; the server restarts it after 1 s. The plate is above
+  // the alarm's threshold: raised in the first run, and so in the second.
+  Server server = start_server(dir, {"--camera", kCamera + " num-buffers=40", "--alarm-threshold-c",
+                                     "500", "--alarm-frames", "1"});
   ASSERT_NE(server.rtsp, 0) << server.log();
   RtspClient watching(server.url("/thermal"), kRgba, "tcp");
   watching.pull(100000, milliseconds(20000));
@@ -349,6 +351,16 @@ TEST(Serve, CameraVanishesAndReturns) {
   again.pull(10, milliseconds(20000));
   EXPECT_GE(again.frames.size(), 10u) << again.error() << "\n" << server.log();
   EXPECT_TRUE(server.process->running());
+  // The restarted chain's alarm starts clear, and the page says so (the raised alarm of the first
+  // run stayed on it while the new frames read below the threshold); then the new run raises it.
+  const std::string log = server.log();
+  const auto restarted = log.find("ALARM cleared: the camera restarted");
+  ASSERT_NE(restarted, std::string::npos) << log;
+  EXPECT_NE(log.find("ALARM raised"), std::string::npos) << log;
+  EXPECT_TRUE(wait_until(
+      [&] { return server.log().find("ALARM raised", restarted) != std::string::npos; },
+      milliseconds(20000)))
+      << server.log();
 }
 
 TEST(Serve, BadInputHttpRequests) {
