@@ -20,6 +20,8 @@ constexpr int kTicksPerPing = 200;  // a comment every 10 s finds streams whose 
 constexpr std::size_t kAlarmLogSize = 100;
 // A reader this far behind misses frames (a stalled screen must not grow the server's memory).
 constexpr std::size_t kMaxPendingBytes = 2 << 20;
+// An event stream's: about 3.5 minutes of events at the default rates.
+constexpr std::size_t kMaxPendingEventBytes = 256 << 10;
 constexpr const char* kBoundary = "pyrocamframe";
 
 gboolean add_field(GQuark field, const GValue* value, gpointer data) {
@@ -227,7 +229,7 @@ void WebServer::send(Stream& stream, const std::string& event, const std::string
   // the default rates): past the limit its stream ends, and a reader that wakes up reconnects
   // and gets the latest state in its hello. (Dropping events instead would leave its page
   // showing a state that is no longer so.)
-  if (stream.pending > kMaxPendingBytes) {
+  if (stream.pending > kMaxPendingEventBytes) {
     GST_WARNING("an event stream's reader took no data for %zu bytes: ending its stream",
                 stream.pending);
     stream.ended = true;
