@@ -554,6 +554,8 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       "where a pixel without a reading has a saturated band or is hotter than the model's\n"
       "range, with true temperatures truth_peak_c, truth_max_c and peak_error_c = peak_c -\n"
       "truth_peak_c, and above_range: pixels hotter than the model's range, as ratiotemp's).\n"
+      "stats.csv always has the same columns: those that do not apply are empty (without\n"
+      "true temperatures truth_pixels and truth_valid are 0).\n"
       "A raw frame does not say which mosaic it was taken through: --pattern names it, or\n"
       "the dataset's mosaic.txt (written by `pyrocam-calib simulate`): the model's kind of\n"
       "mosaic (a colour model reads any of the four Bayer patterns), else nothing is\n"
