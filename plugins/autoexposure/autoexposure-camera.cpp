@@ -5,7 +5,6 @@
 #include <string>
 
 #include "autoexposure-private.h"
-
 #include "pyrocam/core/error.h"
 
 #define GST_CAT_DEFAULT gst_auto_exposure_debug
@@ -95,15 +94,14 @@ pyrocam::ExposureControlSettings controller_settings(GstAutoExposure* self,
   c.max_exposure_us = std::min(settings.max_exposure_us, st.property_max_us);
   if (settings.min_exposure_us > settings.max_exposure_us)
     throw pyrocam::InputError("min-exposure " + us_text(settings.min_exposure_us) +
-                              " us is above max-exposure " +
-                              us_text(settings.max_exposure_us) + " us");
+                              " us is above max-exposure " + us_text(settings.max_exposure_us) +
+                              " us");
   if (c.min_exposure_us > c.max_exposure_us)
-    throw pyrocam::InputError(
-        "min-exposure .. max-exposure (" + us_text(settings.min_exposure_us) +
-        " .. " + us_text(settings.max_exposure_us) + " us) is outside camera " +
-        GST_OBJECT_NAME(st.camera) + "'s exposure range (" +
-        us_text(st.property_min_us) + " .. " +
-        us_text(st.property_max_us) + " us)");
+    throw pyrocam::InputError("min-exposure .. max-exposure (" + us_text(settings.min_exposure_us) +
+                              " .. " + us_text(settings.max_exposure_us) +
+                              " us) is outside camera " + GST_OBJECT_NAME(st.camera) +
+                              "'s exposure range (" + us_text(st.property_min_us) + " .. " +
+                              us_text(st.property_max_us) + " us)");
   c.max_step = settings.max_step;
   c.tolerance = settings.tolerance;
   c.latency_frames = static_cast<int>(settings.latency);

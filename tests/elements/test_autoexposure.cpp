@@ -420,7 +420,8 @@ TEST(AutoExposure, AnExposureRangeTheCameraCannotSetIsAnErrorNamingIt) {
                GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS,
                {"2e+07 .. 5e+07 us", "exposure range (0 .. 1e+07 us)"});
   expect_error(run_pipeline(head + "min-exposure=1.5e6 ! fakesink"), GST_RESOURCE_ERROR,
-               GST_RESOURCE_ERROR_SETTINGS, {"min-exposure 1.5e+06 us is above max-exposure 1e+06"});
+               GST_RESOURCE_ERROR_SETTINGS,
+               {"min-exposure 1.5e+06 us is above max-exposure 1e+06"});
 }
 
 // A camera whose exposure reads as not set (aravissrc's -1) has nothing to scale from: one

@@ -129,9 +129,9 @@ TEST(ThermalOverlayPipeline, AnOverlayOfAnotherSizeIsAnError) {
 // pipeline prerolled for ever without a word. Frames go out bare, with a warning.
 TEST(ThermalOverlayPipeline, WithoutAnOverlayLinkedFramesGoOutBareWithAWarning) {
   REQUIRE_ELEMENT("thermaloverlay");
-  const BusResult r =
-      run_pipeline("videotestsrc num-buffers=5 ! video/x-raw,format=RGBA,width=16,height=16 ! "
-                   "mix.video_sink thermaloverlay name=mix ! fakesink name=sink");
+  const BusResult r = run_pipeline(
+      "videotestsrc num-buffers=5 ! video/x-raw,format=RGBA,width=16,height=16 ! "
+      "mix.video_sink thermaloverlay name=mix ! fakesink name=sink");
   expect_eos(r, 5);
   ASSERT_EQ(r.warnings.size(), 1u);
   EXPECT_NE(r.warnings[0].find("nothing is linked to overlay_sink"), std::string::npos)

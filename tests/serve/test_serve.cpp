@@ -357,9 +357,9 @@ TEST(Serve, CameraVanishesAndReturns) {
   const auto restarted = log.find("ALARM cleared: the camera restarted");
   ASSERT_NE(restarted, std::string::npos) << log;
   EXPECT_NE(log.find("ALARM raised"), std::string::npos) << log;
-  EXPECT_TRUE(wait_until(
-      [&] { return server.log().find("ALARM raised", restarted) != std::string::npos; },
-      milliseconds(20000)))
+  EXPECT_TRUE(
+      wait_until([&] { return server.log().find("ALARM raised", restarted) != std::string::npos; },
+                 milliseconds(20000)))
       << server.log();
 }
 

@@ -83,7 +83,7 @@ TEST(Serve, BadInputAlarmAndUsageErrorsExitTwo) {
        {std::vector<std::string>{"--alarm-threshold-c", "nan"},
         {"--alarm-threshold-c", "-300"},
         {"--alarm-hysteresis-c", "nan"},
-        {"--key-seconds", "nan"},  // every frame a key frame
+        {"--key-seconds", "nan"},          // every frame a key frame
         {"--server", "--print-pipeline"},  // the next option taken as a server
         {"--no-such-option"}}) {
     std::vector<std::string> argv = {serve_binary(), "--rtsp-port", "0", "--http-port", "0",

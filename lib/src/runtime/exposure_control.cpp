@@ -116,9 +116,10 @@ std::optional<ExposureCommand> ExposureController::update(const HotLevel& level,
   // back and forth for ever (a dark-level set above the frames' black level, 104 DN at
   // 1 ms and saturated at 8 ms).
   if ((level.clipped || signal <= 0) && dark_at_ && clipped_at_)
-    ratio = std::clamp(std::sqrt(*dark_at_ * *clipped_at_) / brightness, 1 / s.max_step,
-                       s.max_step);
-  if (!level.clipped && signal > 0 && std::abs(signal - wanted_signal) <= s.tolerance * wanted_signal) {
+    ratio =
+        std::clamp(std::sqrt(*dark_at_ * *clipped_at_) / brightness, 1 / s.max_step, s.max_step);
+  if (!level.clipped && signal > 0 &&
+      std::abs(signal - wanted_signal) <= s.tolerance * wanted_signal) {
     at_limit_ = false;
     return std::nullopt;
   }
