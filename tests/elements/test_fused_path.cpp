@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "element_support.h"
@@ -353,6 +354,50 @@ TEST_F(FusedHarness, a_hot_spot_a_few_pixels_across_has_no_reading_at_its_peak) 
   const cv::Mat codes = encode_decikelvin(t);
   EXPECT_EQ(std::vector<std::uint16_t>(codes.begin<std::uint16_t>(), codes.end<std::uint16_t>()),
             out[0]);
+}
+
+// blur-correction and brightness-radius give the codes `pyrocam-calib measure` gives for the same
+// frame (the measurer corrected floats and differed by a code on a quarter of a plate's pixels).
+TEST_F(FusedHarness, corrections_give_the_measurers_codes) {
+  constexpr int kW = 64, kH = 48;
+  cv::Mat ramp(kH, kW, CV_32F);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) ramp.at<float>(y, x) = static_cast<float>(1600 + 8.0 * x + 2 * y);
+  const std::shared_ptr<const ThermalModel> model =
+      std::make_shared<const ThermalModel>(load_model(test_model_path("test-model-rgb.json")));
+  Simulator camera(model->profile(), UnitPerturbation::parse("typical", 1), 5);
+  const cv::Mat raw = camera.render(ramp, camera.exposure_for(2200, 150), 1.0);
+  const std::vector<std::uint8_t> frame(raw.datastart, raw.dataend);
+  for (const auto& [setting, blur, radius] :
+       {std::tuple{"blur-correction=true", true, 0},
+        {"brightness-radius=2", false, 2},
+        {"blur-correction=true brightness-radius=2", true, 2}}) {
+    SCOPED_TRACE(setting);
+    start(std::string("darksub dark-level=50 ! demosaic25 ! ratiotemp stats-interval=0 ") +
+              setting + " model=" + test_model_path("test-model-rgb.json"),
+          "video/x-bayer,format=rggb,width=64,height=48,framerate=30/1");
+    GstBuffer* b = push_pull_buffer(h, buffer_from(frame));
+    ASSERT_NE(b, nullptr);
+    const std::vector<std::uint16_t> element = values_of<std::uint16_t>(b);
+    gst_buffer_unref(b);
+    TearDown();
+    MeasureOptions options;
+    options.method = choose_method(model, MethodRequest::kAuto);
+    options.blur_correction = blur;
+    options.brightness_radius = radius;
+    FrameMeasurer measurer(model, options);
+    cv::Mat t;
+    measurer.measure(raw, cv::Mat(kH, kW, CV_8U, cv::Scalar(50)), t);
+    const cv::Mat codes = encode_decikelvin(t);
+    const std::vector<std::uint16_t> measured(codes.begin<std::uint16_t>(),
+                                              codes.end<std::uint16_t>());
+    ASSERT_EQ(measured.size(), element.size());
+    int read = 0, differ = 0;
+    for (std::size_t i = 0; i < measured.size(); ++i)
+      read += element[i] != kNoReadingCode, differ += element[i] != measured[i];
+    EXPECT_GT(read, kW * kH / 2);
+    EXPECT_EQ(differ, 0);
+  }
 }
 
 TEST_F(FusedHarness, fused_bands_without_a_no_signal_level_are_refused_n) {

@@ -99,7 +99,8 @@ TEST_F(RatioTempTags, describe_the_recording_and_follow_changes) {
   EXPECT_NE(changed.find("; method=mlp;"), std::string::npos) << changed;
   EXPECT_NE(changed.find("; e-slope=-12.5 %/100 nm"), std::string::npos) << changed;
   EXPECT_NE(changed.find("; misfit-probability=1e-06;"), std::string::npos) << changed;
-  EXPECT_NE(changed.find("; brightness-radius=2;"), std::string::npos) << changed;
+  // These planes are not the fused path: the brightness readings are not made, nor said.
+  EXPECT_NE(changed.find("; brightness-radius=0;"), std::string::npos) << changed;
   unref_all(tags);
 }
 
@@ -123,6 +124,21 @@ TEST_F(RatioTempTags, the_demosaicking_the_caps_name_is_in_the_comment) {
   ASSERT_EQ(tags.size(), 1u);
   const std::string comment = text(tags[0], GST_TAG_COMMENT);
   EXPECT_NE(comment.find("; brightness-radius=0; demosaic=bilinear"), std::string::npos) << comment;
+  unref_all(tags);
+}
+
+// blur-correction and brightness-radius need the fused path: on plain planes they are not
+// applied (a warning says so), and the comment said they were, so that measure --recording read
+// the frames otherwise than ratiotemp had.
+TEST_F(RatioTempTags, corrections_not_applied_are_not_in_the_comment) {
+  start("ratiotemp blur-correction=true brightness-radius=2 model=" + rgb_model_path(),
+        std::string(kCaps) + ",demosaic=bilinear,pattern=rggb");
+  auto tags = push_frame();
+  ASSERT_EQ(tags.size(), 1u);
+  const std::string comment = text(tags[0], GST_TAG_COMMENT);
+  EXPECT_NE(comment.find("; blur-correction=off; brightness-radius=0; demosaic=bilinear"),
+            std::string::npos)
+      << comment;
   unref_all(tags);
 }
 

@@ -235,11 +235,12 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
     curvature_->apply(signal, temperature_c);
     if (uncertainty_c) uncertainty_c->setTo(NAN, temperature_c != temperature_c);
   }
-  if (blur_correction_) blur_correction_->apply(temperature_c);
-  if (brightness_) {
-    // On the codes, as ratiotemp reads them: a recording measured again gives its codes.
+  if (blur_correction_ || brightness_) {
+    // On the codes, as ratiotemp reads them: a recording measured again gives its codes (the
+    // blur correction on floats differed from ratiotemp's by a code on a quarter of a plate).
     encode_decikelvin(temperature_c, codes_);
-    brightness_->apply_codes(signal, codes_);
+    if (blur_correction_) blur_correction_->apply_codes(codes_);
+    if (brightness_) brightness_->apply_codes(signal, codes_);
     decode_decikelvin(codes_).copyTo(temperature_c);
   }
 }
