@@ -102,7 +102,8 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
   c->add_option("--max-temperature", a.options.max_temperature_c, "Locus end, degC")
       ->check(finite_range(kModelMinTemperatureC, kModelMaxTemperatureC))
       ->capture_default_str();
-  c->add_option("--locus-step", a.options.locus_step_c, "Locus step, degC (0.01 to 100)")
+  c->add_option("--locus-step", a.options.locus_step_c,
+                "Locus step, degC (0.01 to 100, whole steps over the range)")
       ->check(finite_range(0.01, 100.0))
       ->capture_default_str();
   c->add_option("--epochs", a.options.mlp.epochs, "MLP training: Adam epochs")
@@ -140,6 +141,14 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
   c->callback([&global, &selected, profile_option] {
     if (!(a.options.min_temperature_c < a.options.max_temperature_c))
       throw CLI::ValidationError("--min-temperature", "must be below --max-temperature");
+    // The locus the network learns ends on a whole step: at 690..1100 degC with steps of 100 it
+    // ended at 1090 while the model said 1100.
+    const double steps =
+        (a.options.max_temperature_c - a.options.min_temperature_c) / a.options.locus_step_c;
+    if (std::abs(steps - std::round(steps)) > 1e-6 * std::max(1.0, steps))
+      throw CLI::ValidationError("--locus-step",
+                                 "must divide the range from --min-temperature to "
+                                 "--max-temperature into whole steps");
     a.options.fit_choices.leak_terms = a.leak_terms == "keep"   ? LeakTerms::kKeep
                                        : a.leak_terms == "drop" ? LeakTerms::kDrop
                                                                 : LeakTerms::kSelect;
@@ -169,6 +178,24 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
       if (std::filesystem::is_directory(a.out, ec))
         throw InputError(a.out + ": is a folder; --out names the model file to write (e.g. " +
                          (std::filesystem::path(a.out) / "model.json").string() + ")");
+      std::string prefix = a.report;
+      if (prefix.empty()) {
+        std::filesystem::path p(a.out);
+        prefix = (p.parent_path() / p.stem()).string() + "-report";
+      }
+      // --out cam.json --report cam wrote the report's JSON over the model, and said the model
+      // was written.
+      const auto same_file = [](const std::string& x, const std::string& y) {
+        std::error_code e1, e2;
+        return std::filesystem::weakly_canonical(std::filesystem::absolute(x), e1) ==
+                   std::filesystem::weakly_canonical(std::filesystem::absolute(y), e2) &&
+               !e1 && !e2;
+      };
+      for (const std::string& report : {prefix + ".html", prefix + ".json"})
+        for (const std::string& model : {a.out, prebuilt_tables_file(a.out)})
+          if (same_file(report, model))
+            throw InputError("--report " + prefix + " would write " + report +
+                             " over the model's " + model + ": give the report another name");
       const Dataset dataset = Dataset::open(a.dataset);
       // Without --profile, a 5x5 dataset is the shipped 5x5 camera's, not the colour default.
       std::string profile_name = a.profile;
@@ -198,14 +225,23 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global, Command& 
       };
       const CalibrationOutcome o = calibrate(dataset, profile, a.options, progress);
       if (!global.quiet) std::fprintf(stderr, "\n");
-      std::string prefix = a.report;
-      if (prefix.empty()) {
-        std::filesystem::path p(a.out);
-        prefix = (p.parent_path() / p.stem()).string() + "-report";
+      // The model replaces an earlier one only once the reports are written: a report that
+      // could not be written left a new model beside the old model's table.
+      const std::string staged = a.out + ".partial";
+      save_model(o.model, staged);
+      try {
+        write_report_html(o, prefix + ".html");
+        write_report_json(o, prefix + ".json");
+      } catch (...) {
+        std::filesystem::remove(staged, ec);
+        throw;
       }
-      save_model(o.model, a.out);
-      write_report_html(o, prefix + ".html");
-      write_report_json(o, prefix + ".json");
+      std::filesystem::rename(staged, a.out, ec);
+      if (ec) {
+        const std::string why = ec.message();
+        std::filesystem::remove(staged, ec);
+        throw InputError(a.out + ": cannot write the model: " + why);
+      }
       std::vector<std::string> table_lines, warnings = o.warnings;
       if (!a.no_table) {
         prebuild_beside(a.out, table_lines, warnings);

@@ -120,7 +120,20 @@ std::vector<fs::path> recording_segments(const fs::path& where, const std::strin
   if (ec) throw InputError(where.string() + ": cannot list the folder: " + ec.message());
   if (out.empty())
     throw InputError(where.string() + ": not a recording (no " + prefix + "NNNNN.mkv segments)");
-  std::sort(out.begin(), out.end());
+  // By number where record.sh numbered them (temperature-100000 after temperature-99999, which
+  // text order put first: a recording of more than 100000 segments was refused as having a gap),
+  // the others by name after them.
+  const auto number = [&prefix](const fs::path& p) {
+    const std::string digits = p.stem().string().substr(prefix.size());
+    char* end = nullptr;
+    const long n = std::strtol(digits.c_str(), &end, 10);
+    return digits.empty() || *end != '\0' || digits[0] == '-' ? -1L : n;
+  };
+  std::sort(out.begin(), out.end(), [&number](const fs::path& a, const fs::path& b) {
+    const long na = number(a), nb = number(b);
+    if ((na < 0) != (nb < 0)) return na >= 0;
+    return na != nb ? na < nb : a < b;
+  });
   // Segments restart at time 0, each placed after the one before: without one, the frames after
   // it would read as earlier than they were.
   long expected = -1;

@@ -7,6 +7,7 @@ returns an array of shape (frames, height, width), float32 degC, NaN where there
 
     examples/read_recording.py out/run1                  # per-frame statistics on stdout
     examples/read_recording.py out/run1 --save t.npy     # also the array, for numpy.load
+    examples/read_recording.py out/run1/temperature-00002.mkv   # one segment
 
 Needs python3-gi, gir1.2-gstreamer-1.0, gir1.2-gst-plugins-base-1.0 and python3-numpy (Debian 12
 packages; run it with /usr/bin/python3). Exit status 1 with a message for a folder that is not a
@@ -79,7 +80,17 @@ def read_segment(path):
 def read_recording(folder):
     """(degC array (frames, height, width) float32 with NaN = no reading, the comment tag)."""
     Gst.init(None)
-    segments = sorted(glob.glob(os.path.join(glob.escape(folder), "temperature-*.mkv")))
+    if os.path.isfile(folder):  # one segment
+        segments = [folder]
+    elif not os.path.isdir(folder):
+        raise RuntimeError(f"{folder}: no such recording (neither a folder nor a file)")
+    else:
+        # By number: temperature-100000 comes after temperature-99999.
+        def number(p):
+            digits = os.path.basename(p)[12:-4]
+            return (0, int(digits), p) if digits.isdigit() else (1, 0, p)
+        segments = sorted(glob.glob(os.path.join(glob.escape(folder), "temperature-*.mkv")),
+                          key=number)
     if not segments:
         raise RuntimeError(f"{folder}: not a recording (no temperature-NNNNN.mkv segments)")
     # Frame k is the k-th of the recording only if no segment is missing from the numbering.
@@ -113,7 +124,8 @@ def read_recording(folder):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("recording", help="recording folder (temperature-NNNNN.mkv segments)")
+    parser.add_argument(
+        "recording", help="recording folder (temperature-NNNNN.mkv segments), or one segment")
     parser.add_argument("--save", help="write the degC array to this .npy file")
     args = parser.parse_args()
     try:

@@ -53,20 +53,22 @@ if [[ -d $RECORDING ]]; then
   # the other. The others are played, through links in a folder of their own.
   # A segment missing from the numbering (deleted, not copied) is a gap in time that splitmuxsrc
   # plays straight through: say so.
-  expected=0
-  for f in $(compgen -G "$RECORDING/temperature-*.mkv" | sort); do
+  expected=-1  # a recording may start later (its first segments deleted): gaps between them only
+  while IFS= read -r f; do
     n=$(basename "$f" .mkv); n=${n#temperature-}
     [[ $n =~ ^[0-9]+$ ]] || continue
     n=$((10#$n))
-    if ((n == expected + 1)); then
+    if ((expected < 0)); then
+      :
+    elif ((n == expected + 1)); then
       echo "playback: segment $expected of $RECORDING is missing: the playback jumps over its time" >&2
     elif ((n > expected)); then
       echo "playback: segments $expected..$((n - 1)) of $RECORDING are missing: the playback jumps over their time" >&2
     fi
     expected=$((n + 1))
-  done
+  done < <(compgen -G "$RECORDING/temperature-*.mkv" | sort -V)  # -V: 100000 after 99999
   left_out=$(find "$RECORDING" -maxdepth 1 -name 'temperature-*.mkv' -empty -printf '%f\n' | sort)
-  last=$(compgen -G "$RECORDING/temperature-*.mkv" | sort | tail -1)
+  last=$(compgen -G "$RECORDING/temperature-*.mkv" | sort -V | tail -1)
   if [[ -s $last ]] && ! holds_frame "$last"; then left_out+=${left_out:+$'\n'}$(basename "$last"); fi
   if [[ -n $left_out ]]; then
     echo "playback: leaving out segments of $RECORDING without a frame (a recording cut off as they began): $(tr '\n' ' ' <<<"$left_out")" >&2

@@ -371,6 +371,12 @@ static void gst_pyrocam_src_set_property(GObject* object, guint prop_id, const G
                                          GParamSpec* pspec) {
   GstPyrocamSrc* self = GST_PYROCAM_SRC(object);
   if (prop_id == PROP_IS_LIVE) {
+    // Made live while PLAYING, basesrc waited for a PLAYING that had already come: no frame
+    // again, no error, no end.
+    if (GST_STATE(self) > GST_STATE_READY) {
+      pg::warn_not_changeable_while_running(GST_ELEMENT(self), "is-live");
+      return;
+    }
     gst_base_src_set_live(GST_BASE_SRC(self), g_value_get_boolean(value));
     return;
   }

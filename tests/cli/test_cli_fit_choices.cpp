@@ -165,5 +165,24 @@ TEST(CliFitChoices, calibrate_refuses_an_output_folder_that_is_not_there_first_n
   }
 }
 
+// A report named as the model (--out cam.json --report cam) wrote its JSON over the model, and
+// said the model was written: refused before the calibration, nothing written.
+TEST(CliFitChoices, calibrate_refuses_a_report_named_as_the_model_n) {
+  ScratchDir dir("cli");
+  const auto err = dir / "stderr.txt";
+  const std::string command = "cd " + q(dir.path()) + " && timeout 120 '" +
+                              std::string(PYROCAM_CALIB_TOOL) +
+                              "' calibrate --dataset no-dataset --out cam.json --report cam "
+                              "< /dev/null > /dev/null 2> " +
+                              q(err);
+  const int status = std::system(command.c_str());
+  EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 1);
+  const std::string message = read_text(err);
+  EXPECT_NE(message.find("--report cam would write cam.json over the model's cam.json"),
+            std::string::npos)
+      << message;
+  EXPECT_FALSE(std::filesystem::exists(dir / "cam.json"));
+}
+
 }  // namespace
 }  // namespace pyrocam

@@ -247,6 +247,34 @@ TEST_F(PyrocamSrc, a_bad_bracket_set_while_playing_is_refused_on_the_bus_n) {
   gst_message_unref(m);
 }
 
+// is-live set while playing: basesrc waited for a PLAYING that had come, and no frame came
+// again. It is refused with a warning, and the frames go on.
+TEST_F(PyrocamSrc, is_live_set_while_playing_is_refused_and_the_frames_go_on_n) {
+  h = gst_harness_new_parse("pyrocamsrc scene=plate temperature=1500");
+  attach_bus();
+  gst_harness_set_sink_caps_str(h, "video/x-bayer,width=40,height=20");
+  gst_harness_play(h);
+  gst_buffer_unref(gst_harness_pull(h));
+  GstElement* src = find_element(h, "pyrocamsrc");
+  g_object_set(src, "is-live", TRUE, nullptr);
+  gboolean live = TRUE;
+  g_object_get(src, "is-live", &live, nullptr);
+  EXPECT_FALSE(live);
+  gst_object_unref(src);
+  for (int i = 0; i < 3; ++i) {
+    GstBuffer* b = gst_harness_pull(h);  // blocked for ever before
+    ASSERT_NE(b, nullptr);
+    gst_buffer_unref(b);
+  }
+  GstMessage* m = gst_bus_pop_filtered(bus, GST_MESSAGE_WARNING);
+  ASSERT_NE(m, nullptr);
+  GError* err = nullptr;
+  gst_message_parse_warning(m, &err, nullptr);
+  EXPECT_NE(std::string(err->message).find("is-live"), std::string::npos) << err->message;
+  g_error_free(err);
+  gst_message_unref(m);
+}
+
 TEST(PyrocamSrcPipeline, smoke_runs_through_darksub_and_demosaic25_to_eos) {
   REQUIRE_ELEMENT("pyrocamsrc");
   REQUIRE_ELEMENT("darksub");
@@ -280,6 +308,15 @@ TEST(PyrocamSrcErrors, rejects_a_missing_profile) {
   REQUIRE_ELEMENT("pyrocamsrc");
   const auto r = run_pipeline("pyrocamsrc profile=/nonexistent/camera.json ! fakesink");
   expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_NOT_FOUND, {"/nonexistent/camera.json"});
+}
+
+// A path to a file that is no .json was looked up as a shipped profile's name ("/etc/passwd.json:
+// camera profile not found").
+TEST(PyrocamSrcErrors, names_a_path_that_is_no_profile_n) {
+  REQUIRE_ELEMENT("pyrocamsrc");
+  const auto r = run_pipeline("pyrocamsrc profile=/etc/passwd ! fakesink");
+  expect_error(r, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_READ,
+               {"/etc/passwd: not a camera profile"});
 }
 
 TEST(PyrocamSrcErrors, rejects_a_corrupt_profile) {

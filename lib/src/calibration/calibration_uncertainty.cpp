@@ -210,6 +210,9 @@ UncertaintyModel uncertainty_model(const ThermalModel& m, const std::vector<doub
   u.monte_carlo_refits = m.qe_solver == "datasheet" ? 0 : opt.monte_carlo_refits;
   for (double t = opt.min_temperature_c; t <= opt.max_temperature_c + 1e-9; t += 50)
     u.temperature_c.push_back(t);
+  // To the range's end, whatever its length (690..1100 degC ended at 1090).
+  if (u.temperature_c.back() < opt.max_temperature_c - 1e-6)
+    u.temperature_c.push_back(opt.max_temperature_c);
   u.u_emissivity_c = emissivity_uncertainty(m, u);
   u.u_calibration_c =
       thermocouple_uncertainty(m, u, t_c, rates, opt.seed, progress, references, fit_choices);

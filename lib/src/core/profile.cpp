@@ -465,7 +465,15 @@ std::filesystem::path builtin_profile_dir() {
 
 CameraProfile load_profile_by_name(const std::string& name_or_path) {
   std::filesystem::path p(name_or_path);
-  if (p.extension() != ".json") p = builtin_profile_dir() / (name_or_path + ".json");
+  if (p.extension() != ".json") {
+    // A path to something else was looked up as a shipped profile's name: "/etc/passwd.json:
+    // camera profile not found".
+    if (name_or_path.find('/') != std::string::npos)
+      throw InputError(name_or_path +
+                       ": not a camera profile (a profile is a .json file, or a shipped one's "
+                       "name: rgb-reference, nir5x5-reference)");
+    p = builtin_profile_dir() / (name_or_path + ".json");
+  }
   return load_profile(p);
 }
 
