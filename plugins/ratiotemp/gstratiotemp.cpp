@@ -330,8 +330,8 @@ static gboolean gst_ratio_temp_start(GstBaseTransform* trans) {
     return FALSE;
   }
   const bool lut = st.method == pyrocam::Method::kLut;
-  rt::report_table_files(self, *st.estimators, settings.model, lut || !choice.fallback.empty(),
-                         lut);
+  rt::report_table_files(self, *st.estimators, settings.model, lut || !choice.fallback.empty(), lut,
+                         settings.table_cache_set && settings.table_cache.empty());
   if (!choice.fallback.empty())
     GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
                         ("method auto uses likelihood, not lut, for model %s: %s",

@@ -257,11 +257,12 @@ struct MappedFrame {
  * table cache, set on the selector before it builds the table; then, when it built one
  * (`lut_built`), what they gave, as info, or as a warning on the bus for a prebuilt table that
  * could not be used, or, when the table reads the frames (`lut_used`), for a cold start (no
- * prebuilt table, nothing cached). */
+ * prebuilt table, nothing cached; `cache_off`: table-cache="", no cache at all). */
 void set_table_files(pyrocam::EstimatorSelector& estimators, const pyrocam::ThermalModel& model,
                      const Settings& settings);
 void report_table_files(GstRatioTemp* self, const pyrocam::EstimatorSelector& estimators,
-                        const std::string& model_path, bool lut_built, bool lut_used);
+                        const std::string& model_path, bool lut_built, bool lut_used,
+                        bool cache_off);
 
 /* GObject properties: installed by class_init, read and written under the object lock. */
 void install_properties(GObjectClass* klass);

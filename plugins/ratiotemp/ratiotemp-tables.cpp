@@ -20,7 +20,8 @@ void set_table_files(pyrocam::EstimatorSelector& estimators, const pyrocam::Ther
 }
 
 void report_table_files(GstRatioTemp* self, const pyrocam::EstimatorSelector& estimators,
-                        const std::string& model_path, bool lut_built, bool lut_used) {
+                        const std::string& model_path, bool lut_built, bool lut_used,
+                        bool cache_off) {
   if (!lut_built) return;
   const std::string prebuilt = pyrocam::prebuilt_tables_file(model_path);
   if (!estimators.prebuilt_problem().empty()) {
@@ -51,12 +52,14 @@ void report_table_files(GstRatioTemp* self, const pyrocam::EstimatorSelector& es
   std::error_code ec;
   if (lut_used && estimators.prebuilt_blocks_read() == 0 && estimators.cache_blocks_read() == 0 &&
       estimators.prebuilt_problem().empty() && !std::filesystem::exists(prebuilt, ec))
-    GST_ELEMENT_WARNING(self, RESOURCE, NOT_FOUND,
-                        ("No prebuilt lookup table beside model %s, and none in the table cache: "
-                         "the first frames fill the table (seconds); pyrocam-calib prebuild "
-                         "--model %s writes one",
-                         model_path.c_str(), model_path.c_str()),
-                        ("%s not found", prebuilt.c_str()));
+    GST_ELEMENT_WARNING(
+        self, RESOURCE, NOT_FOUND,
+        ("No prebuilt lookup table beside model %s, and %s: the first frames "
+         "fill the table (seconds); pyrocam-calib prebuild --model %s writes one",
+         model_path.c_str(),
+         cache_off ? "no table cache (table-cache is empty)" : "none in the table cache",
+         model_path.c_str()),
+        ("%s not found", prebuilt.c_str()));
 }
 
 void warn_when_network_folds(GstRatioTemp* self, State& st) {

@@ -129,6 +129,8 @@ TEST(RatioTempPrebuiltTable, it_is_read_and_gives_the_same_codes_an_altered_one_
   ASSERT_TRUE(cold.ok);
   ASSERT_EQ(cold.codes.size(), 3u * 64 * 48 * 2);
   EXPECT_TRUE(cold.warned("No prebuilt lookup table beside model")) << cold.warnings.size();
+  // table-cache="": no cache to look in (the warning said "none in the table cache").
+  EXPECT_TRUE(cold.warned("and no table cache (table-cache is empty)")) << cold.warnings.size();
 
   std::filesystem::copy_file(prebuilt, model + ".lut");
   const PlateRun with = run_plate(model, "", (dir / "with.raw").string());
