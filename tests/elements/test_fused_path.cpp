@@ -311,8 +311,8 @@ TEST_F(FusedHarness, fused_only_steps_on_plain_planes_warn_once_and_read_n) {
 }
 
 // The curvature check on the fused path: a hot spot T = 2000 - 60 r^2 degC (r in pixels; a
-// share of about -140 degC), whose peak the planes path reads 125 degC low (over 150 when the
-// colour model read all three bands above its calibration, not the red/green ratio), has no
+// share of about -140 degC), whose peak the planes path reads about 200 degC low (bound at 100:
+// a model reading the red/green ratio above its calibration read it 125 degC low), has no
 // reading there; the frames that post statistics (the check as a pass of its own) give the
 // codes of those that do not (the check inside the estimate), which are the library's.
 TEST_F(FusedHarness, a_hot_spot_a_few_pixels_across_has_no_reading_at_its_peak) {
