@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "pyrocam/calibration/calibration_summary.h"
 #include "pyrocam/core/locus.h"
 #include "pyrocam/core/spectrum.h"
 #include "svg_plot.h"
@@ -111,6 +112,8 @@ void html_head(const CalibrationOutcome& o, std::ostream& h) {
   else
     h << o.references.size()
       << " reference source(s) beyond the furnace constrained the QE fit (below). ";
+  if (const std::string pair = above_calibration_summary(m); !pair.empty())
+    h << html_escape(with_degree_signs("Reading: " + pair)) << ". ";
   h << "</p><p>QE solver chosen: <b>" << html_escape(m.qe_solver) << "</b>. Calibration took "
     << num(o.seconds, 1) << " s. Created " << html_escape(m.provenance.value("created_utc", ""))
     << " from <code>" << html_escape(m.provenance.value("dataset_path", "")) << "</code>.</p>";

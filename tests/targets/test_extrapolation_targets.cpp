@@ -46,12 +46,13 @@ Figures evaluate(const std::string& profile_name, bool references, int units) {
     const CalibrationRates data = simulate_calibration_rates(p, truth, campaign);
     const QeFitResult fit = fit_qe(p, data, options);
     const CameraModel model{p, fit.system_qe, fit.gains};
-    const std::vector<double> e = extrapolation_errors(p, truth, model, temps);
+    const double top = hottest_calibrated_c(data);  // as pyrocam-calib stores it in the model
+    const std::vector<double> e = extrapolation_errors(p, truth, model, temps, top);
     // Coverage is counted without reference rows only: no prior refits for the others.
     const std::vector<double> u = qe_model_uncertainty(
         model, fit.posterior, temps,
         references ? std::vector<QeSample>{} : prior_sensitivity_fits(p, data, options, fit),
-        *std::max_element(data.temperatures_c.begin(), data.temperatures_c.end()));
+        *std::max_element(data.temperatures_c.begin(), data.temperatures_c.end()), top);
     // The default emissivity term: the reading of a grey-assuming model for rates with the
     // model's default slope uncertainty.
     const Eigen::MatrixXd tilted =
@@ -59,7 +60,7 @@ Figures evaluate(const std::string& profile_name, bool references, int units) {
             .array()
             .colwise() *
         fit.gains.array();
-    const std::vector<double> u_e = extrapolation_errors(p, tilted, model, temps);
+    const std::vector<double> u_e = extrapolation_errors(p, tilted, model, temps, top);
     std::printf("  unit %d:", static_cast<int>(unit));
     for (std::size_t i = 0; i < temps.size(); ++i) {
       std::printf(" %.0f", e[i]);
@@ -90,23 +91,22 @@ TEST(ExtrapolationTargets, colour) {
   const Figures refs = evaluate("rgb-reference", true, 20);
   EXPECT_LT(plain.in_range, 0.8);       // target: no worse than before (0.8)
   EXPECT_LT(refs.range_700_2600, 5.0);  // target 5 degC rms with three reference rows
-  // Target 15, NOT MET: 30.5 measured over these 20 units (30.4 before the prior widths were
-  // chosen by the evidence, 37.6 while the furnace offsets' trend was held at zero, 35.8 before
-  // the fit converged; 33.1 over the first 6, 52 there before the shape changes joined the fit);
-  // a regression bound. The figures are deterministic (portable maths), so the margins guard
-  // against regressions, not noise.
-  EXPECT_LT(plain.range_1800_2600, 45);
-  // Coverage target 95 +- 3 % for the interval a reading carries: with the default emissivity
-  // term 229 of 240 measured (95.4 %; 230 while every prior-sensitivity fit counted, whatever
-  // its evidence). The QE-model term alone covers 226 (94.2 %; 227), a regression
-  // bound: it covered 230 while the fit stopped at its iteration limit, where a hundredth of a
-  // degree's change of the furnace data moved the readings at 2600 degC by tens of degrees and
-  // widened the prior-sensitivity fits' spread by chance. Over the first six units alone the
+  // Target 15, NOT MET: 22.0 measured over these 20 units since above the calibration the
+  // colour camera reads from the ratio of the two bands the furnace constrains best (30.4 from
+  // every band, 37.6 while the furnace offsets' trend was held at zero, 35.8 before the fit
+  // converged); a regression bound. The figures are deterministic (portable maths), so the
+  // margins guard against regressions, not noise.
+  EXPECT_LT(plain.range_1800_2600, 26);
+  // Coverage target 95 +- 3 %: the QE-model term's k=2 interval covers 229 of 240 measured
+  // (95.4 %; 226 when every band read). With the default emissivity term too it covers all 240:
+  // that term is the reading's change for a surface 1 %/100 nm off grey, and the simulated
+  // surfaces are grey, so it can only widen the interval here (one ratio of nearer bands moves
+  // more with a slope than two: 229 of 240 when every band read). Over six units alone the
   // coverage is too poorly sampled to tell (a unit's twelve temperatures are covered or missed
   // together).
-  EXPECT_GE(plain.covered_with_emissivity, 0.92 * plain.counted);
-  EXPECT_LE(plain.covered_with_emissivity, 0.98 * plain.counted);
-  EXPECT_GE(plain.covered, 0.875 * plain.counted);
+  EXPECT_GE(plain.covered, 0.92 * plain.counted);
+  EXPECT_LE(plain.covered, 0.98 * plain.counted);
+  EXPECT_GE(plain.covered_with_emissivity, plain.covered);
 }
 
 TEST(ExtrapolationTargets, multispectral) {

@@ -139,6 +139,10 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   m.min_temperature_c = opt.min_temperature_c;
   m.max_temperature_c = opt.max_temperature_c;
   m.camera = CameraModel{profile, qe.system_qe, qe.band_scale};
+  const double hottest_furnace_c = *std::max_element(t_c.begin(), t_c.end());
+  m.calibrated_up_to_c = hottest_furnace_c;
+  for (const ReferenceRates& r : references)
+    m.calibrated_up_to_c = std::max(m.calibrated_up_to_c, r.temperature_c);
   const CameraModel sheet_camera{profile, datasheet, band_scale(profile, datasheet, t_c, rates)};
   out.rate_residual_datasheet = rate_residuals(sheet_camera, t_c, rates);
   out.rate_residual_optimised = rate_residuals(m.camera, t_c, rates);
@@ -170,7 +174,7 @@ CalibrationOutcome calibrate(const Dataset& dataset, const CameraProfile& profil
   m.uncertainty = uncertainty_model(m, t_c, rates, opt, progress, references, qe.fit_choices);
   m.uncertainty.u_qe_model_c =
       qe_model_uncertainty(m.camera, qe.posterior, m.uncertainty.temperature_c, qe.prior_fits,
-                           *std::max_element(t_c.begin(), t_c.end()));
+                           hottest_furnace_c, m.calibrated_up_to_c, m.max_temperature_c);
   for (std::size_t r = 0; r < references.size(); ++r) {
     ReferenceCheck check{references[r].name, references[r].temperature_c,
                          references[r].temperature_uncertainty_c};

@@ -1,11 +1,14 @@
 #include "pyrocam/calibration/calibration_summary.h"
 
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <fstream>
 #include <sstream>
 
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/locus.h"
+#include "pyrocam/runtime/extrapolation_pair.h"
 
 namespace pyrocam {
 namespace {
@@ -96,6 +99,39 @@ std::string calibration_verdict(const CalibrationOutcome& out) {
   return v.str();
 }
 
+std::string above_calibration_summary(const ThermalModel& m) {
+  const Locus locus = make_locus(m.camera, m.min_temperature_c, m.max_temperature_c, 1);
+  const ExtrapolationPair pair =
+      extrapolation_pair(m.camera, locus, m.calibrated_up_to_c, m.max_temperature_c);
+  if (!pair.active()) return "";
+  const std::vector<std::string>& names = m.profile().band_names;
+  int other = 0;
+  while (other == pair.numerator || other == pair.denominator) ++other;
+  double whole = NAN, last = NAN;  // where the pair reads alone
+  for (Eigen::Index k = 0; k < locus.size(); ++k)
+    if (pair.weight[static_cast<std::size_t>(k)] >= 1) {
+      if (std::isnan(whole)) whole = locus.temperature_c[k];
+      last = locus.temperature_c[k];
+    }
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "above %.0f degC (the hottest temperature calibrated) the model reads from the "
+                "ratio of %s and %s (their light at %.0f degC overlaps %.2f and %.2f with that at "
+                "%.0f degC, %s's %.2f)",
+                pair.from_c, names[pair.numerator].c_str(), names[pair.denominator].c_str(),
+                kExtrapolationOverlapC, pair.overlap[pair.numerator],
+                pair.overlap[pair.denominator], pair.from_c, names[other].c_str(),
+                pair.overlap[other]);
+  std::string s = text;
+  if (std::isfinite(whole)) {
+    std::snprintf(text, sizeof text, ", alone from %.0f to %.0f degC", whole, last);
+    s += text;
+  } else {
+    s += ", never alone (too noisy)";
+  }
+  return s;
+}
+
 nlohmann::json outcome_summary(const CalibrationOutcome& o) {
   using nlohmann::json;
   json j;
@@ -133,6 +169,7 @@ nlohmann::json outcome_summary(const CalibrationOutcome& o) {
                     {"error_datasheet_c", r.error_datasheet_c},
                     {"error_fitted_c", r.error_fitted_c}});
   j["references"] = refs;
+  j["above_calibration"] = above_calibration_summary(o.model);
   j["mlp"] = {{"final_train_rmse_c", o.mlp_report.final_train_rmse},
               {"final_test_rmse_c", o.mlp_report.final_test_rmse},
               {"locus_max_error_c", o.mlp_locus_max_error_c},

@@ -52,7 +52,8 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
                                          const std::vector<QeSample>& posterior,
                                          const std::vector<double>& temperatures_c,
                                          const std::vector<QeSample>& prior_fits,
-                                         double hottest_calibrated_c) {
+                                         double hottest_calibrated_c, double calibrated_up_to_c,
+                                         double range_top_c) {
   std::vector<double> u;
   if (posterior.size() < 2) return u;
   const double lo = *std::min_element(temperatures_c.begin(), temperatures_c.end());
@@ -64,6 +65,8 @@ std::vector<double> qe_model_uncertainty(const CameraModel& fitted,
   model->datasheet_qe = fitted.profile.system_qe();
   model->min_temperature_c = lo - 300;
   model->max_temperature_c = hi + 300;
+  model->calibrated_up_to_c = calibrated_up_to_c;
+  model->pair_top_c = range_top_c;
   const auto reader = make_estimator(model, Method::kLikelihood);
   const auto read = [&](const CameraModel& camera, double t) {
     Eigen::VectorXd s = camera.rates(t);

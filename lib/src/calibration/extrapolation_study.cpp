@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "detail/random.h"
@@ -75,12 +76,14 @@ CalibrationRates simulate_calibration_rates(const CameraProfile& profile,
 
 std::vector<double> extrapolation_errors(const CameraProfile& profile,
                                          const Eigen::MatrixXd& true_qe, const CameraModel& fitted,
-                                         const std::vector<double>& temperatures_c) {
+                                         const std::vector<double>& temperatures_c,
+                                         double calibrated_up_to_c) {
   auto model = std::make_shared<ThermalModel>();
   model->camera = fitted;
   model->datasheet_qe = profile.system_qe();
   model->min_temperature_c = 400;
   model->max_temperature_c = 3600;
+  model->calibrated_up_to_c = calibrated_up_to_c;
   const auto estimator = make_estimator(model, Method::kLikelihood);
   std::vector<double> errors;
   for (double t : temperatures_c) {
@@ -89,6 +92,13 @@ std::vector<double> extrapolation_errors(const CameraProfile& profile,
     errors.push_back(estimator->temperature_c(s.data()) - t);
   }
   return errors;
+}
+
+double hottest_calibrated_c(const CalibrationRates& data) {
+  double hottest = -std::numeric_limits<double>::infinity();
+  for (double t : data.temperatures_c) hottest = std::max(hottest, t);
+  for (const ReferenceRates& r : data.references) hottest = std::max(hottest, r.temperature_c);
+  return std::isfinite(hottest) ? hottest : NAN;
 }
 
 }  // namespace pyrocam

@@ -187,6 +187,7 @@ void save_model(const ThermalModel& m, const std::filesystem::path& path) {
   payload["band_scale"] = std::vector<double>(k.data(), k.data() + k.size());
   payload["qe_solver"] = m.qe_solver;
   payload["temperature_range_c"] = {m.min_temperature_c, m.max_temperature_c};
+  if (std::isfinite(m.calibrated_up_to_c)) payload["calibrated_up_to_c"] = m.calibrated_up_to_c;
   payload["mlp"] = m.mlp.to_json();
   const UncertaintyModel& u = m.uncertainty;
   // JSON has no NaN: it would be written as null and the model refused when loaded.
@@ -359,6 +360,15 @@ ThermalModel load_model(const std::filesystem::path& path) {
       throw InputError(where + ": temperature_range_c must be [min, max] with min < max");
     m.min_temperature_c = range[0];
     m.max_temperature_c = range[1];
+    if (payload.contains("calibrated_up_to_c")) {
+      const json& top = payload.at("calibrated_up_to_c");
+      if (!top.is_number() ||
+          !(top.get<double>() >= m.min_temperature_c && top.get<double>() <= m.max_temperature_c))
+        throw InputError(where +
+                         ": calibrated_up_to_c must be a temperature within "
+                         "temperature_range_c");
+      m.calibrated_up_to_c = top.get<double>();
+    }
     try {
       m.mlp = Mlp::from_json(payload.at("mlp"), std::move(layers));
     } catch (const std::exception& e) {

@@ -61,6 +61,16 @@ TEST(ModelFile, keeps_the_qe_model_term_and_adds_it) {
   EXPECT_NEAR(back.uncertainty.systematic_u_c(2000), std::sqrt(without * without + 16), 1e-12);
 }
 
+TEST(ModelFile, keeps_the_hottest_calibrated_temperature_and_none_when_not_known) {
+  ScratchDir dir("model-calibrated-top");
+  ThermalModel m = small_model(load_profile_by_name("rgb-reference"));
+  save_model(m, dir / "unknown.json");
+  EXPECT_TRUE(std::isnan(load_model(dir / "unknown.json").calibrated_up_to_c));
+  m.calibrated_up_to_c = 1100;
+  save_model(m, dir / "m.json");
+  EXPECT_EQ(load_model(dir / "m.json").calibrated_up_to_c, 1100);
+}
+
 // JSON has no NaN: a term that is not a number is refused when saving (it would be written as
 // null and the model refused when loaded), and no file is left.
 TEST(ModelFile, refuses_to_save_an_uncertainty_that_is_not_a_number_n) {
@@ -271,6 +281,13 @@ TEST_F(ModelFileContent, rejects_a_temperature_range_below_zero_celsius_n) {
         p["temperature_range_c"] = {-400, 1000};
       },
       "temperature_range_c[0] is -400, outside 0..5000");
+}
+
+TEST_F(ModelFileContent, rejects_a_calibrated_top_outside_the_range_n) {
+  const std::string needle = "calibrated_up_to_c must be a temperature within temperature_range_c";
+  expect_edit_rejected([](nlohmann::json& p) { p["calibrated_up_to_c"] = 4000; }, needle);
+  expect_edit_rejected([](nlohmann::json& p) { p["calibrated_up_to_c"] = "1100"; }, needle);
+  expect_edit_rejected([](nlohmann::json& p) { p["calibrated_up_to_c"] = nullptr; }, needle);
 }
 
 TEST_F(ModelFileContent, rejects_a_negative_coverage_factor_n) {

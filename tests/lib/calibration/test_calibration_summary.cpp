@@ -97,6 +97,21 @@ TEST(OutcomeSummary, holds_the_verdict_solver_residuals_and_table4) {
   EXPECT_EQ(j["warnings"].size(), 1u);
 }
 
+TEST(AboveCalibrationSummary, names_the_pair_where_it_reads_and_nothing_without_a_top) {
+  ThermalModel m;
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  m.camera = CameraModel{p, p.system_qe(), Eigen::VectorXd::Ones(3)};
+  EXPECT_EQ(above_calibration_summary(m), "");  // no calibrated top: every band everywhere
+  m.calibrated_up_to_c = 1100;
+  const std::string s = above_calibration_summary(m);
+  EXPECT_NE(s.find("above 1100 degC"), std::string::npos) << s;
+  EXPECT_NE(s.find("ratio of R and G"), std::string::npos) << s;
+  EXPECT_NE(s.find("B's 0.3"), std::string::npos) << s;  // blue overlaps least
+  // The blend ends 200 degC above the calibrated top (the pair as precise as the three bands
+  // there) and starts 200 degC below the range's (500-3500 degC).
+  EXPECT_NE(s.find("alone from 1300 to 3300 degC"), std::string::npos) << s;
+}
+
 TEST(ModelProvenance, names_the_tool_profile_dataset_and_seed) {
   test::ScratchDir dir("provenance");
   const CameraProfile p = load_profile_by_name("rgb-reference");

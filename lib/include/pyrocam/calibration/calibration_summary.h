@@ -30,6 +30,11 @@ double rms_finite(const Eigen::MatrixXd& m);
 inline constexpr double kResidualWarn = 0.05, kSettingsWarnC = 10;
 std::vector<std::string> calibration_quality_warnings(const CalibrationOutcome& outcome);
 
+// How the model reads above the hottest temperature its calibration saw (extrapolation_pair.h),
+// in one sentence: from which band ratio and from where; "" for a model that reads every band
+// everywhere.
+std::string above_calibration_summary(const ThermalModel& model);
+
 // A plain-language and JSON account of the outcome (the report's JSON summary).
 nlohmann::json outcome_summary(const CalibrationOutcome& outcome);
 

@@ -34,11 +34,16 @@ UncertaintyModel uncertainty_model(const ThermalModel& model, const std::vector<
 // (the samples' readings pivot too). That temperature is sought at or below
 // hottest_calibrated_c (the furnace's hottest step) where it is given: above the furnace the
 // term never shrinks going up. Small inside the furnace range, growing where the data do not
-// constrain the QE. Empty without samples.
+// constrain the QE. Empty without samples. The readings are those of a model calibrated up to
+// calibrated_up_to_c (ThermalModel::calibrated_up_to_c: above it a colour model reads one
+// ratio, handing back to every band below range_top_c, the model's top; NaN: beyond these
+// temperatures); NaN: with every band everywhere.
 std::vector<double> qe_model_uncertainty(
     const CameraModel& fitted, const std::vector<QeSample>& posterior,
     const std::vector<double>& temperatures_c, const std::vector<QeSample>& prior_fits = {},
-    double hottest_calibrated_c = std::numeric_limits<double>::infinity());
+    double hottest_calibrated_c = std::numeric_limits<double>::infinity(),
+    double calibrated_up_to_c = std::numeric_limits<double>::quiet_NaN(),
+    double range_top_c = std::numeric_limits<double>::quiet_NaN());
 
 // |network reading - network reading of the graybody| for a body whose emissivity has the slope
 // u.emissivity_slope_u or its opposite, the larger of the two, at every u.temperature_c: 0 for

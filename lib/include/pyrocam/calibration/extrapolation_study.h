@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -37,10 +38,16 @@ CalibrationRates simulate_calibration_rates(const CameraProfile& profile,
 
 // Reading error (degC) of `fitted` at each temperature for a graybody seen by the true QE:
 // the nearest point of the fitted model's locus (a baseline inverse, not the network), so the
-// figure is the QE model's error alone.
+// figure is the QE model's error alone. calibrated_up_to_c: as ThermalModel's (the hottest
+// furnace or reference temperature the fit saw: above it a colour model reads one ratio); NaN
+// reads with every band everywhere.
 std::vector<double> extrapolation_errors(const CameraProfile& profile,
                                          const Eigen::MatrixXd& true_system_qe,
                                          const CameraModel& fitted,
-                                         const std::vector<double>& temperatures_c);
+                                         const std::vector<double>& temperatures_c,
+                                         double calibrated_up_to_c = NAN);
+
+// The hottest temperature of a campaign's rates: furnace steps and reference sources.
+double hottest_calibrated_c(const CalibrationRates& data);
 
 }  // namespace pyrocam

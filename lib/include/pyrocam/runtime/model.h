@@ -2,6 +2,7 @@
 // self-describing, checksummed JSON (format in docs/model-format.md).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -52,6 +53,14 @@ struct ThermalModel {
   Eigen::MatrixXd datasheet_qe;
   std::string qe_solver;  // "paper" or "regularised"
   double min_temperature_c = 500, max_temperature_c = 3500;
+  // The hottest temperature the calibration saw (furnace or reference source); above it a colour
+  // model reads from one band ratio (extrapolation_pair.h). NaN: not known (models made before
+  // it existed, or built in code), every band reads at every temperature.
+  double calibrated_up_to_c = NAN;
+  // Not in the file: where that ratio hands back to every band, at the top of the range
+  // (extrapolation_pair.h); NaN: max_temperature_c. A reader that widens the range to see
+  // readings beyond it (the network's training copies) keeps the model's top here.
+  double pair_top_c = NAN;
   Mlp mlp;  // normalised ratios -> degC
   UncertaintyModel uncertainty;
   nlohmann::json provenance;  // tool version, date, dataset hash, profile source
