@@ -32,8 +32,6 @@ NoisyLocus::NoisyLocus(const ThermalModel& model, const Locus& locus,
   wide->camera = model.camera;
   wide->min_temperature_c = std::max(kLowestFitC, model.min_temperature_c - kFitMarginC);
   wide->max_temperature_c = model.max_temperature_c + kFitMarginC;
-  wide->calibrated_up_to_c = model.calibrated_up_to_c;
-  wide->pair_top_c = model.max_temperature_c;
   model_ = std::move(wide);
   if (options.target == NoisyLocusTarget::kLikelihoodFit) {
     likelihood_ = make_estimator(model_, Method::kLikelihood);

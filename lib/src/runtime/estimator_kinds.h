@@ -3,20 +3,36 @@
 // make_estimator calls.
 #pragma once
 
+#include <cmath>
 #include <memory>
 
 #include "pyrocam/runtime/estimators.h"
+#include "pyrocam/runtime/extrapolation_pair.h"
 
 namespace pyrocam {
 
 // Bands an estimator reads at most (per-pixel arrays on the stack).
 inline constexpr int kMaxBands = 64;
 
-// The paper's network on normalised ratios (Method::kMlp; mlp_estimator.cpp).
+// The paper's network on normalised ratios (Method::kMlp; mlp_estimator.cpp). The network is
+// trained on readings of every band; above the model's calibration a colour model's reading
+// then passes to the pair's as the likelihood fit's does (extrapolation_pair.h), a function of
+// the same ratios, so that the lookup table tabulates it too.
 class MlpEstimator : public TemperatureEstimator {
  public:
-  using TemperatureEstimator::TemperatureEstimator;
+  explicit MlpEstimator(std::shared_ptr<const ThermalModel> model);
   double temperature_c(const double* s) const override;
+  // The network's reading t_c of normalised ratios x, moved to the pair's above the
+  // calibration; not checked against the range.
+  double above_calibration(double t_c, const double* x) const {
+    if (!pair_.active() || !(t_c > pair_.from_c)) return t_c;
+    const double num = pair_.numerator_ratio < 0 ? 1.0 : x[pair_.numerator_ratio];
+    const double den = pair_.denominator_ratio < 0 ? 1.0 : x[pair_.denominator_ratio];
+    return num > 0 && den > 0 ? pair_.read(t_c, std::log(num / den)) : t_c;
+  }
+
+ private:
+  ExtrapolationPair pair_;
 };
 
 // lut_estimator.cpp: throws InputError unless the model has exactly two ratios.

@@ -75,8 +75,83 @@ ExtrapolationPair extrapolation_pair(const CameraModel& camera, const Locus& loc
     pair.weight[static_cast<std::size_t>(k)] = ramp * precise;
     any = any || ramp * precise > 0;
   }
-  if (any) pair.numerator = i, pair.denominator = j;
+  const Normalisation& ratios = camera.profile.normalisation;
+  const auto place = [&](int band) {
+    for (std::size_t k = 0; k < ratios.numerators.size(); ++k)
+      if (ratios.numerators[k] == band) return static_cast<int>(k);
+    return ratios.reference.size() == 1 && ratios.reference[0] == band ? -1 : -2;
+  };
+  if (!any || place(i) == -2 || place(j) == -2) return pair;
+  pair.numerator = i, pair.denominator = j;
+  pair.numerator_ratio = place(i), pair.denominator_ratio = place(j);
+  pair.locus_start_c = locus.temperature_c[0];
+  pair.locus_step_c = step;
+  for (Eigen::Index k = 0; k < n; ++k) pair.log_ratio.push_back(log_ratio(k, i));
+  // The branches: runs of intervals over which the ratio moves one way (a flat interval joins
+  // the run before it).
+  const auto direction = [&](std::size_t k) {
+    const double d = pair.log_ratio[k + 1] - pair.log_ratio[k];
+    return d > 0 ? 1 : d < 0 ? -1 : 0;
+  };
+  const std::size_t intervals = pair.log_ratio.size() - 1;
+  pair.branch_first.assign(intervals, 0);
+  pair.branch_last.assign(intervals, 0);
+  for (std::size_t start = 0; start < intervals;) {
+    int way = direction(start);
+    std::size_t end = start + 1;  // one past the run's last interval
+    for (; end < intervals; ++end) {
+      const int d = direction(end);
+      if (way == 0) way = d;
+      if (d != 0 && d != way) break;
+    }
+    for (std::size_t k = start; k < end; ++k) {
+      pair.branch_first[k] = static_cast<int>(start);
+      pair.branch_last[k] = static_cast<int>(end);
+    }
+    start = end;
+  }
   return pair;
+}
+
+double ExtrapolationPair::weight_at(double t) const {
+  const double at = (t - locus_start_c) / locus_step_c;
+  const auto last = static_cast<double>(weight.size() - 1);
+  if (!(at > 0)) return weight.front();
+  if (!(at < last)) return weight.back();
+  const auto k = static_cast<std::size_t>(at);
+  const double f = at - static_cast<double>(k);
+  return weight[k] + f * (weight[k + 1] - weight[k]);
+}
+
+double ExtrapolationPair::read(double t, double pixel_log_ratio) const {
+  if (!active() || !(t > from_c) || std::isnan(pixel_log_ratio)) return t;
+  const auto intervals = static_cast<std::ptrdiff_t>(log_ratio.size()) - 1;
+  const std::ptrdiff_t at = std::clamp<std::ptrdiff_t>(
+      static_cast<std::ptrdiff_t>(std::floor((t - locus_start_c) / locus_step_c)), 0,
+      intervals - 1);
+  const auto first = static_cast<std::size_t>(branch_first[static_cast<std::size_t>(at)]);
+  const auto last = static_cast<std::size_t>(branch_last[static_cast<std::size_t>(at)]);
+  // Along the branch with the ratio rising: s = +-log ratio.
+  const double sign = log_ratio[last] >= log_ratio[first] ? 1.0 : -1.0;
+  const double l = sign * pixel_log_ratio;
+  double pair_t;
+  if (l <= sign * log_ratio[first]) {
+    pair_t = locus_start_c + static_cast<double>(first) * locus_step_c;
+  } else if (l >= sign * log_ratio[last]) {
+    pair_t = locus_start_c + static_cast<double>(last) * locus_step_c;
+  } else {
+    std::size_t lo = first, hi = last;  // sign * ratio at lo < l <= at hi
+    while (hi - lo > 1) {
+      const std::size_t mid = (lo + hi) / 2;
+      (sign * log_ratio[mid] < l ? lo : hi) = mid;
+    }
+    const double a = sign * log_ratio[lo], b = sign * log_ratio[hi];
+    pair_t = locus_start_c + (static_cast<double>(lo) + (l - a) / (b - a)) * locus_step_c;
+  }
+  const double gap = std::abs(pair_t - t) / (t + kZeroCelsius);
+  const double agree = std::clamp((kPairNoGap - gap) / (kPairNoGap - kPairFullGap), 0.0, 1.0);
+  const double w = std::min(weight_at(t), weight_at(pair_t)) * agree;
+  return t + w * (pair_t - t);
 }
 
 }  // namespace pyrocam

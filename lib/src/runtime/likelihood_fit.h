@@ -73,10 +73,6 @@ class LikelihoodFit : public TemperatureEstimator {
       }
     pair_ =
         extrapolation_pair(model_->camera, locus_, model_->calibrated_up_to_c, model_->pair_top_c);
-    if (pair_.active())
-      for (Eigen::Index k = 0; k < locus_.size(); ++k)
-        pair_log_ratio_.push_back(
-            std::log(locus_.rates(k, pair_.numerator) / locus_.rates(k, pair_.denominator)));
   }
 
   // In chunks of pixels: those with fewer bands that read than the fit needs (the cold
@@ -214,38 +210,14 @@ class LikelihoodFit : public TemperatureEstimator {
     return pair_.active() ? above_calibration(t, px) : t;
   }
 
-  // Above the calibration a three-band reading t passes, by the pair's weight at t, to the
-  // reading of the pair's ratio (extrapolation_pair.h): the temperature nearest t where the
-  // locus has the pixel's ratio, interpolated between samples, within kPairSearchC of t. A pixel
-  // whose pair does not read (a band dropped, no such temperature) keeps t.
-  static constexpr double kPairSearchC = 500;
+  // Above the calibration a three-band reading t passes to the pair's (extrapolation_pair.h);
+  // a pixel whose pair does not read (a band dropped) keeps t.
   double above_calibration(double t, const Weighted& px) const {
-    if (!(t > pair_.from_c)) return t;
-    const Eigen::Index n = locus_.size();
-    const double t0 = locus_.temperature_c[0], step = locus_.temperature_c[1] - t0;
-    const Eigen::Index at = std::clamp<Eigen::Index>(std::lround((t - t0) / step), 0, n - 1);
-    const double w = pair_.weight[static_cast<std::size_t>(at)];
     const int i = pair_.numerator, j = pair_.denominator;
-    if (w == 0 || px.w[i] == 0.0 || px.w[j] == 0.0) return t;
+    if (!(t > pair_.from_c) || px.w[i] == 0.0 || px.w[j] == 0.0) return t;
     const double si = px.ws[i] / px.w[i], sj = px.ws[j] / px.w[j];
     if (!(si > 0 && sj > 0)) return t;
-    const double l = std::log(si / sj);
-    // The crossing of the pixel's ratio between samples a and a + 1, as a temperature; NaN if none.
-    const auto crossing = [&](Eigen::Index a) -> double {
-      if (a < 0 || a + 1 >= n) return NAN;
-      const double da = pair_log_ratio_[static_cast<std::size_t>(a)] - l,
-                   db = pair_log_ratio_[static_cast<std::size_t>(a + 1)] - l;
-      if (!((da <= 0 && db > 0) || (da >= 0 && db < 0))) return NAN;
-      return locus_.temperature_c[a] + da / (da - db) * step;
-    };
-    const auto reach = static_cast<Eigen::Index>(kPairSearchC / step);
-    for (Eigen::Index d = 0; d <= reach; ++d) {
-      const double up = crossing(at + d), down = crossing(at - d - 1);
-      if (std::isnan(up) && std::isnan(down)) continue;
-      const double pair_t = std::isnan(down) ? up : std::isnan(up) || t - down < up - t ? down : up;
-      return in_range(t + w * (pair_t - t));
-    }
-    return t;
+    return in_range(pair_.read(t, std::log(si / sj)));
   }
 
   Locus locus_;
@@ -265,7 +237,6 @@ class LikelihoodFit : public TemperatureEstimator {
   double weigh_dim_dn_ = 0;
   std::vector<std::uint8_t> monotonic_;  // bands x bands: ratio monotonic over the locus
   ExtrapolationPair pair_;               // the ratio read above the calibration, if any
-  std::vector<double> pair_log_ratio_;   // its log ratio at every locus sample
 };
 
 }  // namespace pyrocam

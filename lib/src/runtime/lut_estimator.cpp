@@ -425,7 +425,7 @@ class LutEstimator : public TemperatureEstimator {
     return mlp_.temperature_c(s);
   }
 
-  // The network at a block's nodes, row after row: kNodeFloats values.
+  // The network's reading (MlpEstimator's) at a block's nodes, row after row: kNodeFloats values.
   void compute_nodes(int bx, int by, float* nodes) const {
     Eigen::MatrixXd x(kBlockNodes * kBlockNodes, 2);
     for (int j = 0; j < kBlockNodes; ++j)
@@ -433,7 +433,12 @@ class LutEstimator : public TemperatureEstimator {
         x(j * kBlockNodes + i, 0) = x0_ + (bx * kBlockCells + i) * h_;
         x(j * kBlockNodes + i, 1) = y0_ + (by * kBlockCells + j) * h_;
       }
-    const Eigen::VectorXd t = to_output_space(model_->mlp.predict(x));
+    Eigen::VectorXd t_c = model_->mlp.predict(x);
+    for (Eigen::Index k = 0; k < t_c.size(); ++k) {
+      const double ratios[2] = {x(k, 0), x(k, 1)};
+      t_c[k] = mlp_.above_calibration(t_c[k], ratios);
+    }
+    const Eigen::VectorXd t = to_output_space(t_c);
     for (std::size_t k = 0; k < kNodeFloats; ++k)
       nodes[k] = static_cast<float>(t[static_cast<Eigen::Index>(k)]);
   }

@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 #include "pyrocam/core/locus.h"
 #include "pyrocam/core/profile.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/extrapolation_pair.h"
+#include "runtime/estimator_test_support.h"
 
 namespace pyrocam {
 namespace {
@@ -73,6 +75,14 @@ TEST(ExtrapolationPair, none_without_a_calibrated_top_inside_the_locus_or_three_
   EXPECT_FALSE(extrapolation_pair(colour, locus, NAN).active());
   EXPECT_FALSE(extrapolation_pair(colour, locus, 3500).active());  // nothing above it
   EXPECT_FALSE(extrapolation_pair(colour, locus, 400).active());
+  // A reference that is the mean of several bands: the pair's ratio is not one the network
+  // reads, so no reader takes it.
+  CameraModel mean_reference = colour;
+  mean_reference.profile.normalisation.reference = {0, 1, 2};
+  EXPECT_FALSE(extrapolation_pair(mean_reference, locus, 1100).active());
+  const ExtrapolationPair pair = extrapolation_pair(colour, locus, 1100);
+  EXPECT_EQ(pair.numerator_ratio, 0);     // R: the first numerator
+  EXPECT_EQ(pair.denominator_ratio, -1);  // G: the reference
   // The 5x5 camera's 25 bands are read together (their extrapolation holds without this).
   const CameraModel snapshot = datasheet_camera("nir5x5-reference");
   EXPECT_FALSE(extrapolation_pair(snapshot, make_locus(snapshot, 500, 3500, 5), 1100).active());
@@ -124,6 +134,66 @@ TEST(ExtrapolationPair, the_likelihood_fit_reads_the_pair_above_the_calibration)
   }
   const Eigen::VectorXd s_hot = signals(2000);
   EXPECT_NEAR(low->temperature_c(s_hot.data()), 2000, 0.5);
+}
+
+// The reading is a continuous function of the three-band reading and the pair's ratio, even
+// across the ratio's turning point (near 890 degC on this camera, above a top of 700 degC) and
+// for ratios the locus never has: a lookup table of it interpolates. (Read instead at the
+// crossing nearest the three-band reading, it jumped by hundreds of degrees where the nearest
+// crossing changed branch or vanished.)
+TEST(ExtrapolationPair, reads_continuously_across_branches) {
+  const CameraModel camera = datasheet_camera("rgb-reference");
+  const Locus locus = make_locus(camera, 500, 3500, 1);
+  const ExtrapolationPair pair = extrapolation_pair(camera, locus, 700);
+  ASSERT_TRUE(pair.active());
+  const auto [lo, hi] = std::minmax_element(pair.log_ratio.begin(), pair.log_ratio.end());
+  // Steps small enough that the steepest slope (where the pair reads hundreds of degrees from
+  // the three bands and its weight changes) moves the reading by well under the bound.
+  const double dl = (*hi - *lo) / 200000, dt = 0.005;
+  double largest_step_l = 0, largest_step_t = 0;
+  for (double t = 650; t < 3550; t += 7.3)
+    for (double l = *lo - 0.2; l < *hi + 0.2; l += (*hi - *lo) / 300) {
+      const double r = pair.read(t, l);
+      ASSERT_TRUE(std::isfinite(r));
+      largest_step_l = std::max(largest_step_l, std::abs(pair.read(t, l + dl) - r));
+      largest_step_t = std::max(largest_step_t, std::abs(pair.read(t + dt, l) - r));
+    }
+  EXPECT_LT(largest_step_l, 1.0);
+  EXPECT_LT(largest_step_t, 1.0);
+  std::printf("largest change: %.3f degC for a ratio %.2g apart, %.3f for %.3f degC\n",
+              largest_step_l, dl, largest_step_t, dt);
+}
+
+// The network learns the readings of every band; above the calibration its reading, and so its
+// lookup table's, passes to the pair's as the likelihood fit's does.
+TEST(ExtrapolationPair, the_network_and_its_table_read_the_pair_above_the_calibration) {
+  const std::shared_ptr<const ThermalModel> calibrated = test::test_model("test-model-rgb.json");
+  ASSERT_TRUE(std::isfinite(calibrated->calibrated_up_to_c));
+  auto plain = std::make_shared<ThermalModel>(*calibrated);
+  plain->calibrated_up_to_c = NAN;
+  const auto every_band = make_estimator(plain, Method::kMlp);
+  const auto network = make_estimator(calibrated, Method::kMlp);
+  const auto table = make_estimator(calibrated, Method::kLut);
+  const auto fit = make_estimator(calibrated, Method::kLikelihood);
+  const double top = calibrated->calibrated_up_to_c;
+  const auto signals = [&](double t) {
+    Eigen::VectorXd s = calibrated->camera.rates(t);
+    s *= 150.0 / s.maxCoeff();
+    s[2] *= 1.05;  // the unit's blue band is 5 % brighter than its model says
+    return s;
+  };
+  for (double t : {top + 400, top + 900, top + 1500}) {
+    const Eigen::VectorXd s = signals(t);
+    EXPECT_GT(std::abs(every_band->temperature_c(s.data()) - t), 5) << t;
+    EXPECT_NEAR(network->temperature_c(s.data()), t, 0.5) << t;
+    EXPECT_NEAR(fit->temperature_c(s.data()), network->temperature_c(s.data()), 0.5) << t;
+    EXPECT_NEAR(table->temperature_c(s.data()), network->temperature_c(s.data()), 0.1) << t;
+  }
+  // Within the calibration the network reads as it was trained.
+  for (double t : {top - 300, top}) {
+    const Eigen::VectorXd s = signals(t);
+    EXPECT_EQ(network->temperature_c(s.data()), every_band->temperature_c(s.data())) << t;
+  }
 }
 
 }  // namespace
