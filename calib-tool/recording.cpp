@@ -7,6 +7,7 @@
 #include <gst/video/video.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -123,11 +124,12 @@ std::vector<fs::path> recording_segments(const fs::path& where, const std::strin
   // By number where record.sh numbered them (temperature-100000 after temperature-99999, which
   // text order put first: a recording of more than 100000 segments was refused as having a gap),
   // the others by name after them.
-  const auto number = [&prefix](const fs::path& p) {
+  const auto number = [&prefix](const fs::path& p) -> long {
     const std::string digits = p.stem().string().substr(prefix.size());
-    char* end = nullptr;
-    const long n = std::strtol(digits.c_str(), &end, 10);
-    return digits.empty() || *end != '\0' || digits[0] == '-' ? -1L : n;
+    const bool numbered = !digits.empty() && digits.size() <= 9 &&
+                          std::all_of(digits.begin(), digits.end(),
+                                      [](unsigned char c) { return std::isdigit(c) != 0; });
+    return numbered ? std::stol(digits) : -1;
   };
   std::sort(out.begin(), out.end(), [&number](const fs::path& a, const fs::path& b) {
     const long na = number(a), nb = number(b);
@@ -138,10 +140,8 @@ std::vector<fs::path> recording_segments(const fs::path& where, const std::strin
   // it would read as earlier than they were.
   long expected = -1;
   for (const fs::path& p : out) {
-    const std::string digits = p.stem().string().substr(prefix.size());
-    char* end = nullptr;
-    const long n = std::strtol(digits.c_str(), &end, 10);
-    if (digits.empty() || *end != '\0') continue;  // not record.sh's numbering: as it comes
+    const long n = number(p);
+    if (n < 0) continue;  // not record.sh's numbering: as it comes
     if (expected >= 0 && n != expected) {
       char name[64];
       std::snprintf(name, sizeof name, "%s%05ld.mkv", prefix.c_str(), expected);

@@ -77,6 +77,14 @@ def read_segment(path):
     return frames, (comment[-1] if comment else ""), problem
 
 
+SEGMENT_PREFIX, SEGMENT_SUFFIX = "temperature-", ".mkv"
+
+
+def segment_digits(path):
+    """What stands between the prefix and the suffix of a segment's name (record.sh's number)."""
+    return os.path.basename(path)[len(SEGMENT_PREFIX):-len(SEGMENT_SUFFIX)]
+
+
 def read_recording(folder):
     """(degC array (frames, height, width) float32 with NaN = no reading, the comment tag)."""
     Gst.init(None)
@@ -87,15 +95,14 @@ def read_recording(folder):
     else:
         # By number: temperature-100000 comes after temperature-99999.
         def number(p):
-            digits = os.path.basename(p)[12:-4]
+            digits = segment_digits(p)
             return (0, int(digits), p) if digits.isdigit() else (1, 0, p)
-        segments = sorted(glob.glob(os.path.join(glob.escape(folder), "temperature-*.mkv")),
-                          key=number)
+        pattern = os.path.join(glob.escape(folder), SEGMENT_PREFIX + "*" + SEGMENT_SUFFIX)
+        segments = sorted(glob.glob(pattern), key=number)
     if not segments:
         raise RuntimeError(f"{folder}: not a recording (no temperature-NNNNN.mkv segments)")
     # Frame k is the k-th of the recording only if no segment is missing from the numbering.
-    numbers = [int(os.path.basename(p)[12:-4]) for p in segments
-               if os.path.basename(p)[12:-4].isdigit()]
+    numbers = [int(segment_digits(p)) for p in segments if segment_digits(p).isdigit()]
     for a, b in zip(numbers, numbers[1:]):
         if b != a + 1:
             raise RuntimeError(f"{folder}: temperature-{a + 1:05d}.mkv is missing (the segments "
