@@ -248,6 +248,9 @@ void Camera::lost(const std::string& why) {
     std::lock_guard<std::mutex> lock(mutex_);
     seen = frame_seen_;
     frame_seen_ = false;
+    // The last image is not the camera's now: /frame.jpg says so instead of serving it as live.
+    jpeg_.reset();
+    ++jpeg_seq_;
   }
   const bool fatal = !ever_ran_ && !seen && chain_error_;
   chain_error_ = false;

@@ -135,6 +135,8 @@ function makePanel(index, server) {
     $("camera").className = "badge " + (c.state === "running" ? "ok" : "lost");
     $("camera").textContent = c.state === "running" ? "camera running" : "camera lost";
     if (c.state !== "running") log("camera lost: " + (c.why || ""));
+    // The last image stays in view but faded: it is not the camera's now.
+    $("frame").style.opacity = c.state === "running" ? "" : "0.35";
   }
   // The image's size once a frame came (tests read it from the DOM).
   setInterval(() => { $("frame").dataset.width = String($("frame").naturalWidth); }, 250);
@@ -161,7 +163,11 @@ function makePanel(index, server) {
   events.addEventListener("alarm", (e) => showAlarm(JSON.parse(e.data), false));
   events.addEventListener("camera", (e) => showCamera(JSON.parse(e.data)));
   events.addEventListener("warning", (e) => showWarning(JSON.parse(e.data)));
-  events.onerror = () => { $("camera").className = "badge lost"; $("camera").textContent = "server unreachable"; };
+  events.onerror = () => {
+    $("camera").className = "badge lost";
+    $("camera").textContent = "server unreachable";
+    $("frame").style.opacity = "0.35";
+  };
 }
 
 const servers = query.has("servers") ? query.get("servers").split(",").filter(isHostPort) : [""];

@@ -155,7 +155,8 @@ void WebServer::on_request(SoupServer*, SoupServerMessage* msg, const char* path
     auto jpeg = self->jpeg_(seq);
     if (jpeg == nullptr || jpeg->empty()) {
       respond(msg, SOUP_STATUS_SERVICE_UNAVAILABLE, "text/plain",
-              "pyrocam-serve: no frame yet: the camera is not running\n");
+              "pyrocam-serve: no current frame: the camera is not running (its state is in "
+              "/status.json)\n");
       return;
     }
     set_common_headers(msg);
