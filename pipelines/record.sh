@@ -69,7 +69,6 @@ source "$here/lib/camera.sh"
 [[ $SEGMENT_SECONDS =~ ^[0-9]*[.]?[0-9]+$ ]] &&
   segment_ns=$(awk -v s="$SEGMENT_SECONDS" 'BEGIN { if (!(s >= 0.1 && s <= 86400)) exit 1; printf "%.0f", s * 1e9 }') ||
   { echo "record: SEGMENT_SECONDS must be a number of seconds from 0.1 to 86400, not '$SEGMENT_SECONDS'" >&2; exit 2; }
-mkdir -p "$OUT"
 if compgen -G "$OUT/temperature-*.mkv" >/dev/null; then
   echo "record: $OUT already holds a recording; choose another OUT" >&2
   exit 1
@@ -119,6 +118,8 @@ elif [[ $RAW != 0 ]]; then
   echo "record: RAW must be 0 or 1, not '$RAW'" >&2
   exit 2
 fi
+# Only now, so that a refused setting leaves no empty folder behind.
+mkdir -p "$OUT" || { echo "record: cannot create the folder OUT=$OUT" >&2; exit 1; }
 exec "$launch" -e "${launch_options[@]}" "${camera_chain[@]}" \
   "${thermal_chain[@]}" ! tee name=temperature \
   temperature. ! queue ! "${segments[@]}" "location=$OUT/temperature-%05d.mkv" \

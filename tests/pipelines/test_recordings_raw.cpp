@@ -266,6 +266,7 @@ TEST(RecordingsRaw, a_model_of_another_mosaic_is_refused_whatever_the_caps_say) 
   EXPECT_NE(read_text(dir / "custom.log").find("RAW=1 needs the camera's Bayer layout"),
             std::string::npos)
       << read_text(dir / "custom.log");
+  EXPECT_FALSE(fs::exists(dir / "custom")) << "a refused setting left OUT behind";
   // The layout from DARK, the camera's Bayer frames carried as gray video (the overlay then goes
   // over the gray mosaic: bayer2rgb takes video/x-bayer only).
   custom["DARK"] = "dark-level=50 pattern=rggb saturation-level=150";
