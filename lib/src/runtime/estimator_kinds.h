@@ -3,9 +3,9 @@
 // make_estimator calls.
 #pragma once
 
-#include <cmath>
 #include <memory>
 
+#include "detail/portable_math.h"
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/extrapolation_pair.h"
 
@@ -28,7 +28,7 @@ class MlpEstimator : public TemperatureEstimator {
     if (!pair_.active() || !(t_c > pair_.from_c)) return t_c;
     const double num = pair_.numerator_ratio < 0 ? 1.0 : x[pair_.numerator_ratio];
     const double den = pair_.denominator_ratio < 0 ? 1.0 : x[pair_.denominator_ratio];
-    return num > 0 && den > 0 ? pair_.read(t_c, std::log(num / den)) : t_c;
+    return num > 0 && den > 0 ? pair_.read(t_c, portable::log(num / den)) : t_c;
   }
 
  private:

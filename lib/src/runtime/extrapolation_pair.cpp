@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "detail/portable_math.h"
 #include "pyrocam/core/noise_model.h"
 #include "pyrocam/core/physics.h"
 
@@ -46,7 +47,7 @@ ExtrapolationPair extrapolation_pair(const CameraModel& camera, const Locus& loc
   // pair), x2 = ln(s_o / s_j); v_b the relative variance of band b.
   const double step = locus.temperature_c[1] - locus.temperature_c[0];
   const auto log_ratio = [&](Eigen::Index k, int a) {
-    return std::log(locus.rates(k, a) / locus.rates(k, j));
+    return portable::log(locus.rates(k, a) / locus.rates(k, j));
   };
   pair.noise_ratio.assign(static_cast<std::size_t>(n), std::numeric_limits<double>::infinity());
   pair.weight.assign(static_cast<std::size_t>(n), 0.0);

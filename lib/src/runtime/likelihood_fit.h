@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "detail/portable_math.h"
 #include "pyrocam/core/locus.h"
 #include "pyrocam/core/noise_model.h"
 #include "pyrocam/runtime/extrapolation_pair.h"
@@ -217,7 +218,7 @@ class LikelihoodFit : public TemperatureEstimator {
     if (!(t > pair_.from_c) || px.w[i] == 0.0 || px.w[j] == 0.0) return t;
     const double si = px.ws[i] / px.w[i], sj = px.ws[j] / px.w[j];
     if (!(si > 0 && sj > 0)) return t;
-    return in_range(pair_.read(t, std::log(si / sj)));
+    return in_range(pair_.read(t, portable::log(si / sj)));
   }
 
   Locus locus_;
