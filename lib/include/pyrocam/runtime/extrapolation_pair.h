@@ -42,7 +42,8 @@ inline constexpr double kPairFullNoiseRatio = 1.5, kPairNoNoiseRatio = 2.5;
 // A pixel whose pair reads far from its three bands is not a grey body the model describes (a
 // mixed or edge pixel): the pair's weight falls from 1 where the two readings differ by
 // kPairFullGap of the three-band reading's absolute temperature to 0 at kPairNoGap. (A pixel's
-// noise moves the two apart by about 2 % at 2500 degC, brightest band at 150 DN.)
+// noise moves the two apart by sqrt(sd_pair^2 - sd_all^2): 1.5 % at 2500 degC, brightest band
+// at 150 DN.)
 inline constexpr double kPairFullGap = 0.1, kPairNoGap = 0.2;
 // The signal of the brightest band of the pixel the noise ratio is computed for, DN.
 inline constexpr double kPairNoiseSignalDn = 150;
