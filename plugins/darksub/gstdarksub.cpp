@@ -398,8 +398,9 @@ static void check_bayer_phase(GstDarkSub* self, State& st, const cv::Mat& signal
       std::max(4.0f, 0.02f * static_cast<float>(pyrocam::full_scale_dn(st.bit_depth)));
   const float bright_dn = 0.2f * static_cast<float>(pyrocam::full_scale_dn(st.bit_depth));
   // No camera profile here: the noise of a sensor whose full well is 5000 electrons (less than
-  // most industrial sensors') at the frame's analogue gain (0 dB without exposure metadata: a
-  // camera at a high gain may then be warned about wrongly), with a read noise of 1 DN.
+  // most industrial sensors') at the frame's analogue gain (0 dB without exposure metadata), with
+  // a read noise of 1 DN; where the frame's samples scatter more (a higher gain than that),
+  // add_bayer_cell_sums widens it to their measured scatter.
   const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(buffer);
   const double gain = pyrocam::analogue_gain_factor(meta ? meta->gain_db : 0.0);
   const pyrocam::SignalNoise noise{

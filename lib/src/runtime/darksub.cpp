@@ -240,6 +240,18 @@ void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, i
       out[static_cast<std::size_t>(i)] =
           top[2 * i] + top[2 * i + 1] + bottom[2 * i] + bottom[2 * i + 1];
   };
+  // The green pairs to judge, with their means and differences, and the scatter of samples
+  // behind one filter: each place of a cell against the same place 5 cells (10 pixels) on, one
+  // filter on a Bayer mosaic and on a 5x5 one alike, inside the same body.
+  struct Pair {
+    int k;
+    float mean, difference;
+  };
+  std::vector<Pair> pairs_seen;
+  std::vector<double> same_filter_z2;           // squared differences over their modelled variance
+  const auto variance_of = [&](double total) {  // of a difference of two samples summing to this
+    return noise.shot_gain * total + 2 * noise.floor_dn2;
+  };
   for (int y = 2 * first_cell_row; y + 3 < signal.rows; y += 2 * cell_row_step) {
     cell_sums(y, row);
     cell_sums(y + 2, below);
@@ -256,14 +268,34 @@ void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, i
       const float pairs[2][2] = {{top[x], bottom[x + 1]}, {top[x + 1], bottom[x]}};
       for (int k = 0; k < 2; ++k) {
         const float mean = 0.5f * (pairs[k][0] + pairs[k][1]);
-        if (!(mean >= bright_dn)) continue;
-        ++sums.bright[k];
-        // The difference's variance: each sample's shot noise and floor.
-        const double variance = noise.shot_gain * 2 * mean + 2 * noise.floor_dn2;
-        if (std::abs(pairs[k][0] - pairs[k][1]) > 0.12 * mean + 2 * std::sqrt(variance))
-          ++sums.apart[k];
+        if (mean >= bright_dn) pairs_seen.push_back({k, mean, pairs[k][0] - pairs[k][1]});
+      }
+      if (i + 5 < row.size() && like(row[i + 5], sum) && std::isfinite(row[i + 5]) &&
+          variance_of(0) > 0) {
+        const std::size_t x5 = x + 10;
+        for (const auto& [a, b] : {std::pair{top[x], top[x5]},
+                                   {top[x + 1], top[x5 + 1]},
+                                   {bottom[x], bottom[x5]},
+                                   {bottom[x + 1], bottom[x5 + 1]}})
+          same_filter_z2.push_back(static_cast<double>(a - b) * (a - b) / variance_of(a + b));
       }
     }
+  }
+  // A camera at a gain the model does not know (darksub has no profile, and no gain without
+  // exposure metadata) scatters more than modelled: the model's variance times the measured
+  // one's ratio to it, never less (the median of a chi2 with one degree of freedom is 0.455;
+  // a gradient along the 10 pixels only widens it, and then fewer cells are called apart).
+  double scale = 1;
+  if (same_filter_z2.size() >= 32) {
+    auto middle = same_filter_z2.begin() + static_cast<long>(same_filter_z2.size() / 2);
+    std::nth_element(same_filter_z2.begin(), middle, same_filter_z2.end());
+    scale = std::max(1.0, *middle / 0.4549);
+  }
+  for (const Pair& pair : pairs_seen) {
+    ++sums.bright[pair.k];
+    if (std::abs(pair.difference) >
+        0.12 * pair.mean + 2 * std::sqrt(scale * variance_of(2 * pair.mean)))
+      ++sums.apart[pair.k];
   }
 }
 

@@ -246,6 +246,38 @@ TEST(DarkSub, frames_that_are_no_bayer_mosaic_have_greens_that_disagree) {
   }
 }
 
+// darksub knows no camera profile, and without exposure metadata no gain: it assumes a full well
+// of 5000 electrons at 0 dB. A colour camera at 24-36 dB (51 DN of green are 54-14 electrons)
+// scatters far more than that, and its greens must still not be called apart; nor may the
+// measured scatter hide a snapshot mosaic, whatever its exposure.
+TEST(DarkSub, greens_at_a_gain_the_noise_model_does_not_know_are_not_called_apart) {
+  const SignalNoise assumed{255.0 / 5000, 2.0};  // darksub's for 8 bits without metadata
+  const auto sums_of = [&](const CameraProfile& p, double t, double longer, double gain_db) {
+    Simulator camera(p, UnitPerturbation::parse("typical", 3), 17);
+    const double exposure = longer * camera.exposure_for(t, 170) / analogue_gain_factor(gain_db);
+    cv::Mat signal;
+    subtract_dark(camera.render(plate_scene(320, 240, t, 0.8), exposure, 1.0, gain_db),
+                  dark_from_image(camera.render_dark(320, 240, exposure)), 220, signal);
+    BayerCellSums sums;
+    add_bayer_cell_sums(signal, 5, 51, 0, 1, assumed, sums);
+    return sums;
+  };
+  const CameraProfile colour = load_profile_by_name("rgb-reference");
+  const CameraProfile snapshot = load_profile_by_name("nir5x5-reference");
+  for (double t : {1000.0, 2000.0}) {
+    for (double gain_db : {24.0, 30.0, 36.0}) {
+      for (double longer : {0.3, 0.6}) {
+        SCOPED_TRACE(std::to_string(t) + " degC, " + std::to_string(gain_db) + " dB, x" +
+                     std::to_string(longer));
+        const BayerCellSums c = sums_of(colour, t, longer, gain_db);
+        EXPECT_FALSE(bayer_greens_disagree(c, "rggb")) << c.apart[1] << " of " << c.bright[1];
+        const BayerCellSums s = sums_of(snapshot, t, longer + 0.4, gain_db);
+        EXPECT_TRUE(bayer_greens_disagree(s, "rggb")) << s.apart[1] << " of " << s.bright[1];
+      }
+    }
+  }
+}
+
 TEST(DarkSub, bayer_cell_sums_tell_nothing_without_light_or_for_5x5) {
   BayerCellSums sums;
   add_bayer_cell_sums(cv::Mat(8, 8, CV_32F, cv::Scalar(2.0f)), 4, 51, 0, 1, SignalNoise{}, sums);

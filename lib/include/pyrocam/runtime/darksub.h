@@ -65,7 +65,9 @@ SaturatedSamples find_saturated(const cv::Mat& signal);
 // cell, how many of those cells have the diagonal's two samples at least `bright_dn` on average,
 // and how many of these differ by more than 12 % of their mean plus 2 standard deviations of
 // their difference's noise (`noise`, the noisiest band's: at a high analogue gain few electrons
-// make 20 % of full scale). Adds to `sums`.
+// make 20 % of full scale; where samples behind one filter, 10 pixels apart inside a body,
+// scatter more than it says, as at a gain it does not know, by their measured scatter). Adds to
+// `sums`.
 struct BayerCellSums {
   double at[2][2] = {};  // [row][column] in the cell
   std::size_t cells = 0;
