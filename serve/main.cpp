@@ -19,6 +19,7 @@
 #include <string>
 
 #include "camera.h"
+#include "page.h"
 #include "rtsp.h"
 #include "web.h"
 
@@ -176,7 +177,7 @@ int main(int argc, char** argv) {
   }
   // The page's panels take host:port (a host name, an IPv4 address or an [IPv6] one): anything
   // else, such as the next option taken as the value, is no server.
-  static const std::regex host_port(R"(^([A-Za-z0-9.-]+|\[[0-9A-Fa-f:.]+\])(:[0-9]{1,5})?$)");
+  static const std::regex host_port(PYROCAM_SERVE_HOST_PORT);
   for (const std::string& server : o.web.servers)
     if (server.empty() || server[0] == '-' || !std::regex_match(server, host_port)) {
       std::cerr << kName << ": --server takes host:port of another pyrocam-serve's page, not '"
@@ -205,6 +206,7 @@ int main(int argc, char** argv) {
     }
     o.camera.sensor_width = width;
     o.camera.sensor_height = height;
+    o.web.output_pixel = 5;
   }
   o.rtsp.key_frames = std::max(1, static_cast<int>(o.key_seconds * fps + 0.5));
   o.web.address = o.rtsp.address;

@@ -5,6 +5,11 @@
 
 namespace pyrocam::serve {
 
+// host:port (a name, an IPv4 address or a bracketed IPv6 one), in the ECMAScript syntax both
+// std::regex and the page's JavaScript read: the server checks --server with it, the page the
+// names it is given (anything else is left out).
+#define PYROCAM_SERVE_HOST_PORT R"(^([A-Za-z0-9.-]+|\[[0-9A-Fa-f:.]+\])(:[0-9]{1,5})?$)"
+
 inline constexpr const char* kPage = R"PAGE(<!DOCTYPE html>
 <html lang="en">
 <head>
@@ -38,8 +43,7 @@ const fmt = (v, d = 1) => (typeof v === "number" ? v.toFixed(d) : "–");
 const query = new URLSearchParams(location.search);
 const maxPoints = 300;
 
-// host:port (a name, an IPv4 address or a bracketed IPv6 one); anything else is left out.
-const isHostPort = (s) => /^([A-Za-z0-9.-]+|\[[0-9A-Fa-f:.]+\])(:[0-9]{1,5})?$/.test(s);
+const isHostPort = (s) => /)PAGE" PYROCAM_SERVE_HOST_PORT R"PAGE(/.test(s);
 
 function makePanel(index, server) {
   const base = server ? "http://" + server : "";
@@ -54,7 +58,7 @@ function makePanel(index, server) {
       <tr><td id="median-label-${index}">median</td><td class="v" id="median-${index}">–</td>
           <td>peak</td><td class="v" id="peak-${index}">–</td></tr>
       <tr><td>min / max</td><td class="v" id="minmax-${index}">–</td>
-          <td>peak at (x, y)</td><td class="v" id="peak-at-${index}">–</td></tr>
+          <td id="peak-at-label-${index}">peak at (x, y)</td><td class="v" id="peak-at-${index}">–</td></tr>
       <tr><td>valid pixels</td><td class="v" id="valid-${index}">–</td>
           <td>frame time</td><td class="v" id="time-${index}">–</td></tr>
       <tr><td>updates</td><td class="v" id="updates-${index}">0</td>
@@ -84,7 +88,7 @@ function makePanel(index, server) {
     $("chart").replaceWith(Object.assign(document.createElement("p"),
       { textContent: "No plot: Chart.js did not load (install libjs-chart.js on the server)." }));
   }
-  let updates = 0, threshold = null;
+  let updates = 0, threshold = null, outputPixel = 1;  // sensor pixels a reading spans, a side
 
   function log(text) {
     const line = document.createElement("div");
@@ -101,7 +105,10 @@ function makePanel(index, server) {
     $("peak").textContent = (saturated > 0 || above > 0 ? "≥ " : "") + fmt(s[r + "peak-c"]) + " °C" +
       (saturated > 0 ? ` (${saturated} px saturated)` : "") +
       (above > 0 ? ` (${above} px above the model's range)` : "");
-    $("peak-at").textContent = s[r + "peak-x"] !== undefined ? `${s[r + "peak-x"]}, ${s[r + "peak-y"]}` : "–";
+    // In sensor pixels: a 5x5 camera's readings are per macro-pixel, the peak at its centre.
+    const at = (v) => v * outputPixel + (outputPixel - 1) / 2;
+    $("peak-at-label").textContent = outputPixel > 1 ? "peak at (x, y), sensor px" : "peak at (x, y)";
+    $("peak-at").textContent = s[r + "peak-x"] !== undefined ? `${at(s[r + "peak-x"])}, ${at(s[r + "peak-y"])}` : "–";
     $("minmax").textContent = fmt(s[r + "min-c"], 0) + " / " + fmt(s[r + "max-c"], 0);
     $("valid").textContent = fmt(100 * (s[r + "valid-fraction"] ?? NaN), 1) + " %";
     $("time").textContent = s.timestamp != null ? fmt(s.timestamp / 1e9, 2) + " s" : "–";
@@ -146,6 +153,7 @@ function makePanel(index, server) {
   let greeted = false;
   events.addEventListener("hello", (e) => {
     const s = JSON.parse(e.data);
+    if (Number.isInteger(s["output-pixel"]) && s["output-pixel"] > 0) outputPixel = s["output-pixel"];
     if (s.stats) showStats(s.stats);
     if (s.camera) showCamera(s.camera);
     if (!greeted) {

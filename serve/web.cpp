@@ -127,6 +127,7 @@ nlohmann::json WebServer::status() const {
   for (const auto& a : alarm_log_) s["alarm-log"].push_back(a);
   s["rtsp-port"] = config_.rtsp_port;
   s["servers"] = config_.servers;
+  s["output-pixel"] = config_.output_pixel;
   return s;
 }
 

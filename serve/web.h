@@ -28,6 +28,7 @@ struct WebConfig {
   std::string chart_js;              // path of Chart.js
   std::vector<std::string> servers;  // host:port of other servers the page lists by default
   int rtsp_port = 8554;
+  int output_pixel = 1;  // sensor pixels a temperature spans, a side (5 for a 5x5 camera)
 };
 
 // A GstStructure's fields as JSON (unknown times and NaN as null), with its name as "type".

@@ -398,6 +398,7 @@ TEST(Serve, BadInputHttpRequests) {
   const std::string status = http_get(server.http, "/status.json");
   const auto json = nlohmann::json::parse(status.substr(status.find("\r\n\r\n") + 4));
   EXPECT_GT(json["stats"]["median-c"].get<double>(), 500.0);
+  EXPECT_EQ(json["output-pixel"], 1);  // a Bayer camera reads every sensor pixel
   const std::string jpeg = http_get(server.http, "/frame.jpg");
   EXPECT_EQ(jpeg.rfind("HTTP/1.1 200", 0), 0u);
   EXPECT_NE(jpeg.find("image/jpeg"), std::string::npos);

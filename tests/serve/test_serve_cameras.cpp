@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,28 @@ TEST(Serve, Cameras5x5IsServed) {
   EXPECT_GT(json["stats"]["median-c"].get<double>(), 500.0) << status;
   EXPECT_EQ(http_get(server.http, "/frame.jpg").rfind("HTTP/1.1 200", 0), 0u) << server.log();
   EXPECT_EQ(server.log().find("does not fit"), std::string::npos) << server.log();
+  // A reading spans 5x5 sensor pixels; the page gives the peak's place in sensor pixels, at
+  // the centre of its macro-pixel (it gave the macro-pixel's indices, a fifth of the place).
+  EXPECT_EQ(json["output-pixel"], 5) << status;
+  if (std::filesystem::exists("/usr/bin/chromium")) {
+    Chromium chromium(dir.path());
+    ASSERT_TRUE(chromium.ok()) << chromium.log();
+    ASSERT_TRUE(chromium.open("http://127.0.0.1:" + std::to_string(server.http) + "/"))
+        << chromium.log();
+    const std::regex place("id=\"peak-at-0\"[^>]*>([0-9]+), ([0-9]+)<");
+    std::string dom;
+    std::smatch m;
+    ASSERT_TRUE(wait_until(
+        [&] {
+          dom = chromium.evaluate("document.documentElement.outerHTML");
+          return std::regex_search(dom, m, place);
+        },
+        milliseconds(30000)))
+        << dom;
+    const int x = std::stoi(m[1].str()), y = std::stoi(m[2].str());
+    EXPECT_TRUE(x % 5 == 2 && x < 160 && y % 5 == 2 && y < 120) << x << ", " << y;
+    EXPECT_NE(dom.find("sensor px"), std::string::npos) << dom;
+  }
   EXPECT_TRUE(server.process->running()) << server.log();
 }
 
