@@ -253,6 +253,7 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
                      j.frame.string() + " " + bits(raw) + " ones");
   cv::Mat t, u;
   measurer.set_dark_name(j.dark.string());
+  measurer.set_exposure_us(j.exposure_us);  // NaN for a single --frame: unknown
   try {
     measurer.measure(raw, dark, t, a.uncertainty ? &u : nullptr);
   } catch (const InputError& e) {

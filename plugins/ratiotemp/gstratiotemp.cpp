@@ -479,6 +479,7 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         // The frame's gain scales its shot noise per DN; rebuilt only when it changes.
         const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(inbuf);
         chosen.set_analogue_gain(meta ? pyrocam::analogue_gain_factor(meta->gain_db) : 1.0);
+        chosen.set_exposure_us(meta ? meta->exposure_us : 0);  // 0: unknown
         chosen.set_misfit_probability(settings.misfit_probability);
         chosen.set_demosaic_noise(st.demosaic_noise);
         // A frame without a saturated sample dropped nothing: the saturation-edge check is off.

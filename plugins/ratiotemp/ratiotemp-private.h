@@ -118,8 +118,8 @@ struct State {
   std::string region_warned;     // the last region/frame size seen (warned if outside)
   bool tracking_warned = false;  // region-tracks-peak without a region
   // The readings' fit audit (warn_when_readings_misfit), accumulated until a verdict.
-  std::size_t fit_checked = 0, fit_misfit = 0;
-  bool fit_warned = false;  // since start
+  std::size_t fit_checked = 0, fit_misfit = 0, fit_too_bright = 0;
+  bool fit_warned = false, too_bright_warned = false;  // since start
   struct TagListUnref {
     void operator()(GstTagList* t) const { gst_tag_list_unref(t); }
   };

@@ -203,24 +203,51 @@ void warn_when_readings_misfit(GstRatioTemp* self, State& st,
   const pyrocam::PlaneEstimator::FitAudit audit = estimator.take_fit_audit();
   st.fit_checked += audit.checked;
   st.fit_misfit += audit.misfit;
+  st.fit_too_bright += audit.too_bright;
   if (st.fit_checked < kFitAuditReadings) return;
   // More than half: a true graybody pixel fails at kFitAuditProbability; edges, reflections and
-  // a calibration a few percent off make a few percent at most.
-  if (2 * st.fit_misfit > st.fit_checked && !st.fit_warned) {
+  // a calibration a few percent off make a few percent at most. And a surface a thousand times
+  // brighter than a black body at its reading is no aperture or filter between calibration and
+  // use: the readings are far too cold. Bands in the wrong places often do both; one warning.
+  const bool misfit = 2 * st.fit_misfit > st.fit_checked;
+  const bool too_bright = 2 * st.fit_too_bright > st.fit_checked;
+  const char* model_name = st.model->profile().name.c_str();
+  if (misfit && !st.fit_warned) {
     GST_ELEMENT_WARNING(
         self, STREAM, FORMAT,
-        ("%s: %zu of %zu readings checked do not fit the model's band spectra: the "
+        ("%s: %zu of %zu readings checked do not fit the model's band spectra%s: the "
          "temperatures are likely wrong. Is the mosaic's phase right (a crop at the top or left "
          "by other than whole mosaic periods, or a flip, before darksub shifts it: crop at the "
          "right and bottom)? Is the model (%s) for this camera?",
-         GST_OBJECT_NAME(self), st.fit_misfit, st.fit_checked, st.model->profile().name.c_str()),
+         GST_OBJECT_NAME(self), st.fit_misfit, st.fit_checked,
+         too_bright ? ", and most are over a thousand times as bright as a black body at the "
+                      "temperature read"
+                    : "",
+         model_name),
         ("band-consistency check of a sample of readings at false-rejection probability %g, "
          "model error %g",
          pyrocam::PlaneEstimator::kFitAuditProbability,
          pyrocam::PlaneEstimator::kFitAuditModelError));
     st.fit_warned = true;
+    st.too_bright_warned = st.too_bright_warned || too_bright;
+  } else if (too_bright && !st.too_bright_warned) {
+    const bool bayer = st.model->profile().mosaic.kind == pyrocam::MosaicLayout::Kind::kBayer;
+    GST_ELEMENT_WARNING(
+        self, STREAM, FORMAT,
+        ("%s: %zu of %zu readings checked are over %.0f times as bright as a black body at the "
+         "temperature read (at the frames' exposure and gain): the temperatures are far too "
+         "cold. %s Is the model (%s) for this camera?",
+         GST_OBJECT_NAME(self), st.fit_too_bright, st.fit_checked,
+         pyrocam::PlaneEstimator::kImpossibleBrightness,
+         bayer ? "Are red and blue traded (a bggr sensor given as rggb, a crop by one row and "
+                 "one column, a flip)?"
+               : "Is the mosaic's phase right (a crop at the top or left by other than whole "
+                 "mosaic periods)?",
+         model_name),
+        ("brightness against the model's rates (DN/s at emissivity 1) in the fit audit's sample"));
+    st.too_bright_warned = true;
   }
-  st.fit_checked = st.fit_misfit = 0;
+  st.fit_checked = st.fit_misfit = st.fit_too_bright = 0;
 }
 
 }  // namespace pyrocam::gst::ratiotemp

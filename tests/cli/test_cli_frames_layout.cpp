@@ -94,6 +94,28 @@ TEST(CliFramesLayout, a_bayer_window_one_column_on_reads_with_its_own_pattern) {
             1);
 }
 
+// A colour dataset whose mosaic.txt says bggr for rggb frames: red and blue traded, the greens in
+// place (the green check cannot see it), the plate read far too cold on the model's locus (the
+// band check passes it). At the rows' exposures it is thousands of times brighter than a black
+// body at that reading: the run says so and fails. Labelled right, nothing is said.
+TEST(CliFramesLayout, red_and_blue_traded_are_said_to_be_brighter_than_a_black_body) {
+  const fs::path model = test_model("test-model-rgb.json");
+  ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;
+  ScratchDir dir{"cli-layout-traded"};
+  write_plate(dir / "plate", "rgb-reference", 1, 1300, 128);
+  const std::string base = "measure --model " + q(model) + " --dataset " + q(dir / "plate");
+  const auto right = run(base + " --out " + q(dir / "m-right"), dir / "right.log");
+  write_text(dir / "plate" / "mosaic.txt", "bggr\n");
+  const auto traded = run(base + " --out " + q(dir / "m-traded"), dir / "traded.log");
+  ASSERT_EQ(right.first, 0) << right.second;
+  ASSERT_EQ(traded.first, 1) << traded.second;
+  EXPECT_EQ(right.second.find("black body"), std::string::npos) << right.second;
+  EXPECT_NE(traded.second.find("over a thousand times as bright as a black body"),
+            std::string::npos)
+      << traded.second;
+  EXPECT_LT(median_of_first_frame(dir / "m-traded"), 900);  // what it read, kept to be seen
+}
+
 TEST(CliFramesLayout, a_5x5_mosaic_shifted_by_a_column_is_said_to_misfit) {
   const fs::path model = test_model("test-model-nir5x5.json");
   ASSERT_TRUE(fs::exists(model)) << model << ": " << kNoTestModels;

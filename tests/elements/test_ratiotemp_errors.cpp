@@ -311,6 +311,31 @@ TEST(RatioTempErrors, warns_when_the_readings_do_not_fit_the_model_s_spectra) {
     EXPECT_NE(shifted.warnings[0].find(part), std::string::npos) << shifted.warnings[0];
 }
 
+// A colour camera's red and blue traded (an rggb sensor whose frames say bggr: the greens stay in
+// place, so darksub's check cannot see it) read a 1300 degC plate near 630 degC, on the locus:
+// the band check passes them. Their brightness at the frames' exposure (pyrocamsrc's meta) is
+// about 80 000 times a black body's at 630 degC, and ratiotemp warns; the right label says nothing.
+TEST(RatioTempErrors, warns_when_the_readings_are_brighter_than_a_black_body) {
+  REQUIRE_ELEMENT("ratiotemp");
+  REQUIRE_ELEMENT("pyrocamsrc");
+  if (!have_element("capssetter")) GTEST_SKIP() << "capssetter (gst-plugins-good) missing";
+  const auto chain = [](const std::string& frames, const char* label) {
+    return "pyrocamsrc is-live=true " + frames +
+           " scene=plate temperature=1300 ! video/x-bayer,format=rggb,width=160,height=120,"
+           "framerate=30/1 ! capssetter caps=video/x-bayer,format=" +
+           label + " ! darksub dark-level=50 ! demosaic25 ! ratiotemp model=" + rgb_model_path() +
+           " ! fakesink name=sink";
+  };
+  const auto right = run_pipeline(chain("num-buffers=40", "rggb"));
+  expect_eos(right, 40);
+  EXPECT_TRUE(right.warnings.empty()) << right.warnings.front();
+  const auto traded = run_pipeline(chain("", "bggr"), 60 * GST_SECOND, true);
+  ASSERT_FALSE(traded.error) << traded.message;
+  ASSERT_EQ(traded.warnings.size(), 1u) << "no warning within a minute";
+  for (const char* part : {"times as bright as a black body", "far too cold", "red and blue"})
+    EXPECT_NE(traded.warnings[0].find(part), std::string::npos) << traded.warnings[0];
+}
+
 // A region in the sensor's pixels on a 5x5 camera, whose frames are macro-pixels (64x48 here):
 // its statistics are empty, and a warning says why; one inside says nothing.
 TEST(RatioTempErrors, warns_of_a_region_outside_the_frame_n) {

@@ -228,6 +228,7 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
     const PlaneEstimator::FitAudit audit = planes_estimator_.take_fit_audit();
     audit_checked_ += audit.checked;
     audit_misfit_ += audit.misfit;
+    audit_too_bright_ += audit.too_bright;
   }
   // As ratiotemp on the fused path: no reading where the field curves beyond the kernels.
   if (fused) {
@@ -266,6 +267,15 @@ std::vector<std::string> FrameMeasurer::layout_problems() const {
         "temperatures would look right and be wrong. Is the model (" +
         model_->profile().name + ") for this camera?");
   }
+  const bool too_bright =
+      audit_checked_ >= kAuditReadings && 2 * audit_too_bright_ > audit_checked_;
+  if (too_bright && layout_.kind == MosaicLayout::Kind::kBayer)
+    problems.push_back(std::to_string(audit_too_bright_) + " of " + std::to_string(audit_checked_) +
+                       " readings checked are over a thousand times as bright as a black body at "
+                       "the temperature read (at the frames' exposure): the temperatures are far "
+                       "too cold. Are red and blue traded (a bggr sensor given as rggb)? Give the "
+                       "pattern the camera's documentation gives (--pattern). Is the model (" +
+                       model_->profile().name + ") for this camera?");
   if (audit_checked_ >= kAuditReadings && 2 * audit_misfit_ > audit_checked_)
     problems.push_back(std::to_string(audit_misfit_) + " of " + std::to_string(audit_checked_) +
                        " readings checked do not fit the model's band spectra (at a false-"

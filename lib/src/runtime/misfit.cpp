@@ -257,8 +257,10 @@ MisfitCheck::MisfitCheck(std::shared_ptr<const ThermalModel> shared_model, doubl
   step_c_ = locus.temperature_c[1] - locus.temperature_c[0];
   table_.resize(static_cast<std::size_t>(bands_) * static_cast<std::size_t>(samples_));
   table_d_.resize(table_.size());
+  norm_.resize(static_cast<std::size_t>(samples_));
   for (int i = 0; i < samples_; ++i) {
     const double norm = locus.rates.row(i).norm();
+    norm_[static_cast<std::size_t>(i)] = norm;
     if (!(norm > 0) || !std::isfinite(norm))
       throw InputError("misfit check: the model's locus has no signal at " +
                        std::to_string(locus.temperature_c[i]) + " degC");
@@ -307,9 +309,10 @@ double MisfitCheck::threshold(int counted) const {
   return thresholds_[static_cast<std::size_t>(counted)];
 }
 
-double MisfitCheck::chi2(const double* s, double t_c, int* counted_out) const {
+double MisfitCheck::chi2(const double* s, double t_c, int* counted_out, double* rate_scale) const {
   int counted = 0;
   if (counted_out) *counted_out = 0;
+  if (rate_scale) *rate_scale = NAN;
   if (!(t_c >= model_->min_temperature_c && t_c <= model_->max_temperature_c)) return NAN;
   const double u = std::clamp((t_c - t0_c_) / step_c_, 0.0, static_cast<double>(samples_ - 1));
   const int i = std::min(static_cast<int>(u), samples_ - 2);
@@ -333,6 +336,10 @@ double MisfitCheck::chi2(const double* s, double t_c, int* counted_out) const {
   if (counted_out) *counted_out = counted;
   if (!counted) return NAN;
   const double a = sm / mm, along = md / mm;
+  if (rate_scale) {
+    const auto at = static_cast<std::size_t>(i);
+    *rate_scale = a / (norm_[at] + f * (norm_[at + 1] - norm_[at]));
+  }
   double chi2 = 0, curvature = 0;
   for (int b = 0; b < bands_; ++b) {
     if (!(w[b] > 0)) continue;

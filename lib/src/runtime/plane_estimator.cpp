@@ -230,7 +230,8 @@ PlaneEstimator::FitAudit PlaneEstimator::take_fit_audit(bool wait) const {
     }
     return {};
   }
-  return {audit_counts_->checked.exchange(0), audit_counts_->misfit.exchange(0)};
+  return {audit_counts_->checked.exchange(0), audit_counts_->misfit.exchange(0),
+          audit_counts_->too_bright.exchange(0)};
 }
 
 void PlaneEstimator::audit_row(const float* const* rows, std::size_t n, const float* out) const {
@@ -238,8 +239,9 @@ void PlaneEstimator::audit_row(const float* const* rows, std::size_t n, const fl
   // Every audit_rows_-th row (or run) that the threads estimate: a pass over its readings.
   if (audit_counts_->rows.fetch_add(1, std::memory_order_relaxed) % audit_rows_ != 0) return;
   const auto bands = static_cast<std::size_t>(model_->profile().band_count());
-  std::size_t checked = 0, misfit = 0;
+  std::size_t checked = 0, misfit = 0, too_bright = 0;
   double s[kMaxBands], c[kMaxBands];
+  const double black_body_scale = exposure_s_ * analogue_gain_;  // 0: exposure unknown
   // Readings, not pixels, so that a small hot body has its share: the middle one of the row's
   // readings (away from a body's edges) where there are few, else every audit_stride_-th.
   std::size_t readings = 0;
@@ -255,14 +257,17 @@ void PlaneEstimator::audit_row(const float* const* rows, std::size_t n, const fl
       signals = c;
     }
     int counted = 0;
-    const double chi2 = audit_->chi2(signals, out[i], &counted);
+    double scale = NAN;
+    const double chi2 = audit_->chi2(signals, out[i], &counted, &scale);
     if (!std::isfinite(chi2) || counted < 3) continue;  // nothing to check
     ++checked;
     misfit += chi2 > audit_->threshold(counted);
+    too_bright += black_body_scale > 0 && scale > kImpossibleBrightness * black_body_scale;
   }
   if (checked == 0) return;
   audit_counts_->checked.fetch_add(checked, std::memory_order_relaxed);
   audit_counts_->misfit.fetch_add(misfit, std::memory_order_relaxed);
+  audit_counts_->too_bright.fetch_add(too_bright, std::memory_order_relaxed);
 }
 
 void PlaneEstimator::estimate_row(const float* const* rows, std::size_t n, float* out) const {

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/locus.h"
 #include "pyrocam/core/noise_model.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/darksub.h"
@@ -210,6 +211,40 @@ TEST(PlaneEstimator, the_fit_audit_tells_bands_in_the_wrong_places) {
   EXPECT_GT(2 * misplaced.misfit, misplaced.checked);
   std::printf("fit audit: %zu of %zu checked misfit; bands shifted: %zu of %zu\n", fitting.misfit,
               fitting.checked, misplaced.misfit, misplaced.checked);
+}
+
+// The brightness count: a plate of emissivity 0.8 whose signals are what the model's rates give
+// at the frames' exposure is never too bright; its red and blue traded (a bggr sensor read as
+// rggb) read a colder temperature on the locus, about a hundred thousand times too bright for
+// it. Without the exposure nothing is counted.
+TEST(PlaneEstimator, the_fit_audit_counts_readings_brighter_than_a_black_body) {
+  const auto model = test_model("test-model-rgb.json");
+  const Locus locus = make_locus(model->camera, 1300, 1300, 1);
+  const double exposure_s = 150 / (0.8 * locus.rates.row(0).maxCoeff());
+  std::vector<cv::Mat> planes;
+  for (int b = 0; b < 3; ++b)
+    planes.emplace_back(64, 64, CV_32F, cv::Scalar(0.8 * locus.rates(0, b) * exposure_s));
+  std::vector<cv::Mat> traded = {planes[2], planes[1], planes[0]};
+  PlaneEstimator estimator(model, Method::kLikelihood);
+  cv::Mat t;
+  estimator.estimate(planes, t);
+  estimator.take_fit_audit(true);  // made: counted from now on
+  const auto audit = [&](const std::vector<cv::Mat>& p, double exposure_us) {
+    estimator.set_exposure_us(exposure_us);
+    estimator.estimate(p, t);
+    return estimator.take_fit_audit();
+  };
+  const PlaneEstimator::FitAudit right = audit(planes, exposure_s * 1e6);
+  EXPECT_NEAR(t.at<float>(32, 32), 1300, 1);
+  EXPECT_GE(right.checked, 3u);
+  EXPECT_EQ(right.too_bright, 0u);
+  const PlaneEstimator::FitAudit wrong = audit(traded, exposure_s * 1e6);
+  const float read = t.at<float>(32, 32);
+  EXPECT_LT(read, 900);  // a reading, and far too cold
+  EXPECT_GE(wrong.checked, 3u);
+  EXPECT_EQ(wrong.too_bright, wrong.checked) << "read " << read;
+  EXPECT_EQ(audit(traded, 0).too_bright, 0u);
+  EXPECT_EQ(audit(traded, NAN).too_bright, 0u);
 }
 
 TEST(PlaneEstimator, refuses_no_model_n) {

@@ -96,9 +96,13 @@ class FrameMeasurer {
   // are no Bayer mosaic (bayer_greens_disagree: the pattern's greens differ), and the fit
   // audit (PlaneEstimator::take_fit_audit, one reading in 64 of every row: of those checked
   // against the model's band spectra, how many misfit; most of 16 or more misfitting: bands in
-  // the wrong places or another camera). A message for each that fails, none when they pass or
-  // cannot tell yet.
+  // the wrong places or another camera; with the frames' exposure set, most of them over
+  // PlaneEstimator::kImpossibleBrightness times as bright as a black body at their reading: red
+  // and blue traded). A message for each that fails, none when they pass or cannot tell yet.
   std::vector<std::string> layout_problems() const;
+  // The exposure of the next frames, microseconds (a dataset row's), for the fit audit's
+  // brightness count; 0 or not finite: unknown (the default), not counted.
+  void set_exposure_us(double exposure_us) { planes_estimator_.set_exposure_us(exposure_us); }
   // With MeasureOptions::check_layout, whether the darks subtracted looked off on the frames
   // measured so far (dark_level_check.h, as darksub checks it): a message for each that did.
   // Each dark named by set_dark_name is checked on its own frames (a dataset's darks are one
@@ -140,7 +144,7 @@ class FrameMeasurer {
   std::map<std::string, DarkCheck> dark_checks_;  // by dark name
   std::string dark_name_;
   std::vector<std::string> dark_level_problems_;
-  std::size_t audit_checked_ = 0, audit_misfit_ = 0;
+  std::size_t audit_checked_ = 0, audit_misfit_ = 0, audit_too_bright_ = 0;
   std::size_t above_range_ = 0;
 };
 

@@ -60,9 +60,12 @@ class MisfitCheck {
   double analogue_gain() const { return analogue_gain_; }
 
   // chi2 of one pixel at the best temperature within the window around t_c (double precision,
-  // the definition); *counted = bands that count.
+  // the definition); *counted = bands that count; *rate_scale = the scale a of the graybody
+  // that fits at t_c, s_b ~ a r_b(T) with r_b the model's rates (DN/s at emissivity 1): the
+  // emissivity times the exposure in seconds times the analogue gain factor.
   // NaN for t_c outside the model's range or no counted band.
-  double chi2(const double* signals, double t_c, int* counted = nullptr) const;
+  double chi2(const double* signals, double t_c, int* counted = nullptr,
+              double* rate_scale = nullptr) const;
   // The rejection threshold for `counted` bands (+inf below 3 bands or when disabled).
   double threshold(int counted) const;
 
@@ -80,6 +83,7 @@ class MisfitCheck {
   int samples_;
   std::vector<float> table_;  // bands x samples, each sample's rates scaled to unit length
   std::vector<double> table_d_;
+  std::vector<double> norm_;         // per sample, the length table_ divided its rates by
   std::vector<float> gain_, floor_;  // variance = gain s + floor + (model_error s)^2
   std::vector<float> thresholds_f_;  // by counted bands, 0 .. bands
   std::vector<double> thresholds_;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstddef>
 #include <functional>
 #include <future>
@@ -91,6 +92,11 @@ class PlaneEstimator {
   // positive.
   void set_analogue_gain(double factor);
   double analogue_gain() const { return analogue_gain_; }
+  // The frames' exposure, microseconds, for the fit audit's brightness count; 0 (the default)
+  // or not finite: unknown, not counted. Not while an estimate runs.
+  void set_exposure_us(double exposure_us) {
+    exposure_s_ = exposure_us > 0 && std::isfinite(exposure_us) ? exposure_us * 1e-6 : 0;
+  }
   // What demosaicking did to the band values' noise (demosaic_noise of the layout and method
   // that made the planes), for the uncertainty; by default none (each value one sample's, an
   // overestimate after averaging kernels). The fused path always uses kMatched's. Not while an
@@ -142,8 +148,18 @@ class PlaneEstimator {
   // every 4th row took 3 % of the colour chain's CPU on a 90 % plate; the verdict needs 32.)
   static constexpr std::size_t kFitAuditStride = 2048;
   static constexpr std::size_t kFitAuditRows = 16;  // of the rows, those checked
+  // With the frames' exposure known (set_exposure_us), the audit also counts the checked
+  // readings whose signals are more than kImpossibleBrightness times those of a black body at
+  // the reading (at the analogue gain set): no surface emits more than a black body, and the
+  // calibration's optics differ from the camera's now by an aperture or a filter, not by a
+  // thousand. A reading that far too cold is wrong: a colour camera's red and blue traded
+  // (a bggr sensor read as rggb) read a 1300 degC plate near 630 degC, about 80 000 times too
+  // bright, and land on the locus, so the band check cannot tell (below 1150 degC the factor
+  // falls under a thousand and near the bands' crossing, about 900 degC, the trade reads right).
+  static constexpr double kImpossibleBrightness = 1000;
   struct FitAudit {
     std::size_t checked = 0, misfit = 0;
+    std::size_t too_bright = 0;  // of the checked, with the exposure known; 0 otherwise
   };
   FitAudit take_fit_audit(bool wait = false) const;
   // A denser sample for offline use, where frames are few and time is not short: every
@@ -204,6 +220,7 @@ class PlaneEstimator {
   TemperatureEstimator::PartialBands partial_ = TemperatureEstimator::PartialBands::kOff;
   bool partial_set_ = false;
   double analogue_gain_ = 1.0;
+  double exposure_s_ = 0;  // 0: unknown
   DemosaicNoise noise_;
   const MatchedMosaic* dim_edge_mosaic_ = nullptr;
   const CurvatureCheck* curvature_ = nullptr;
@@ -214,7 +231,7 @@ class PlaneEstimator {
   mutable std::future<std::unique_ptr<MisfitCheck>> audit_build_;
   mutable bool audit_refused_ = false;
   struct AuditCounts {
-    std::atomic<std::size_t> checked{0}, misfit{0}, rows{0};
+    std::atomic<std::size_t> checked{0}, misfit{0}, too_bright{0}, rows{0};
   };
   std::unique_ptr<AuditCounts> audit_counts_ = std::make_unique<AuditCounts>();
   std::size_t audit_rows_ = kFitAuditRows, audit_stride_ = kFitAuditStride;
