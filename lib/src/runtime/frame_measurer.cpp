@@ -267,22 +267,25 @@ std::vector<std::string> FrameMeasurer::layout_problems() const {
         "temperatures would look right and be wrong. Is the model (" +
         model_->profile().name + ") for this camera?");
   }
-  const bool too_bright =
-      audit_checked_ >= kAuditReadings && 2 * audit_too_bright_ > audit_checked_;
-  if (too_bright && layout_.kind == MosaicLayout::Kind::kBayer)
-    problems.push_back(std::to_string(audit_too_bright_) + " of " + std::to_string(audit_checked_) +
-                       " readings checked are over a thousand times as bright as a black body at "
-                       "the temperature read (at the frames' exposure): the temperatures are far "
-                       "too cold. Are red and blue traded (a bggr sensor given as rggb)? Give the "
-                       "pattern the camera's documentation gives (--pattern). Is the model (" +
-                       model_->profile().name + ") for this camera?");
+  const auto of_checked = [&](std::size_t n) {
+    return std::to_string(n) + " of " + std::to_string(audit_checked_) + " readings checked ";
+  };
+  const std::string model_question =
+      " Is the model (" + model_->profile().name + ") for this camera?";
+  if (audit_checked_ >= kAuditReadings && 2 * audit_too_bright_ > audit_checked_ &&
+      layout_.kind == MosaicLayout::Kind::kBayer)
+    problems.push_back(of_checked(audit_too_bright_) +
+                       "are over a thousand times as bright as a black body at the temperature "
+                       "read (at the frames' exposure): the temperatures are far too cold. Are red "
+                       "and blue traded (a bggr sensor given as rggb)? Give the pattern the "
+                       "camera's documentation gives (--pattern)." +
+                       model_question);
   if (audit_checked_ >= kAuditReadings && 2 * audit_misfit_ > audit_checked_)
-    problems.push_back(std::to_string(audit_misfit_) + " of " + std::to_string(audit_checked_) +
-                       " readings checked do not fit the model's band spectra (at a false-"
-                       "rejection probability of 1e-9): the temperatures are likely wrong. Is "
-                       "the mosaic's phase right (a readout window or crop that starts other than "
-                       "on a whole mosaic period)? Is the model (" +
-                       model_->profile().name + ") for this camera?");
+    problems.push_back(of_checked(audit_misfit_) +
+                       "do not fit the model's band spectra (at a false-rejection probability of "
+                       "1e-9): the temperatures are likely wrong. Is the mosaic's phase right (a "
+                       "readout window or crop that starts other than on a whole mosaic period)?" +
+                       model_question);
   return problems;
 }
 
