@@ -314,7 +314,8 @@ TEST(RatioTempErrors, warns_when_the_readings_do_not_fit_the_model_s_spectra) {
 // A colour camera's red and blue traded (an rggb sensor whose frames say bggr: the greens stay in
 // place, so darksub's check cannot see it) read a 1300 degC plate near 630 degC, on the locus:
 // the band check passes them. Their brightness at the frames' exposure (pyrocamsrc's meta) is
-// about 80 000 times a black body's at 630 degC, and ratiotemp warns; the right label says nothing.
+// about ten thousand times a black body's at 630 degC, and ratiotemp warns; the right label says
+// nothing.
 TEST(RatioTempErrors, warns_when_the_readings_are_brighter_than_a_black_body) {
   REQUIRE_ELEMENT("ratiotemp");
   REQUIRE_ELEMENT("pyrocamsrc");

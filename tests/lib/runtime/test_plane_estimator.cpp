@@ -215,7 +215,7 @@ TEST(PlaneEstimator, the_fit_audit_tells_bands_in_the_wrong_places) {
 
 // The brightness count: a plate of emissivity 0.8 whose signals are what the model's rates give
 // at the frames' exposure is never too bright; its red and blue traded (a bggr sensor read as
-// rggb) read a colder temperature on the locus, about a hundred thousand times too bright for
+// rggb) read a colder temperature on the locus, about ten thousand times too bright for
 // it. Without the exposure nothing is counted.
 TEST(PlaneEstimator, the_fit_audit_counts_readings_brighter_than_a_black_body) {
   const auto model = test_model("test-model-rgb.json");

@@ -153,8 +153,8 @@ class PlaneEstimator {
   // the reading (at the analogue gain set): no surface emits more than a black body, and the
   // calibration's optics differ from the camera's now by an aperture or a filter, not by a
   // thousand. A reading that far too cold is wrong: a colour camera's red and blue traded
-  // (a bggr sensor read as rggb) read a 1300 degC plate near 630 degC, about 80 000 times too
-  // bright, and land on the locus, so the band check cannot tell (below 1150 degC the factor
+  // (a bggr sensor read as rggb) read a 1300 degC plate near 630 degC, about 10 000 times too
+  // bright, and land on the locus, so the band check cannot tell (below about 1200 degC the factor
   // falls under a thousand and near the bands' crossing, about 900 degC, the trade reads right).
   static constexpr double kImpossibleBrightness = 1000;
   struct FitAudit {
