@@ -386,13 +386,13 @@ static gboolean gst_dark_sub_sink_event(GstBaseTransform* trans, GstEvent* event
 /* A Bayer mosaic whose greens are not where its pattern says was shifted by a row or a column
  * (a crop at the top or left by an odd number) and reads temperatures that look right and are
  * wrong; so do frames that are no Bayer mosaic, whose greens differ: warns once since start.
- * Every 16th row of cells (every 4th took 3 % of the colour chain's CPU), a row further on in
- * each frame (a 5x5 mosaic's cells lie inside a body in one row of its period only), over frames
- * until enough lit ones. */
+ * Every 16th row of cells (every 4th took 3 % of the colour chain's CPU) up to 4096 lit cells a
+ * frame (all of a bright plate's took 8 ms), a row further on in each frame (a 5x5 mosaic's cells
+ * lie inside a body in one row of its period only), over frames until enough lit ones. */
 static void check_bayer_phase(GstDarkSub* self, State& st, const cv::Mat& signal,
                               GstBuffer* buffer) {
   constexpr int kCellRowStep = 16;
-  constexpr std::size_t kCells = 256;
+  constexpr std::size_t kCells = 256, kCellsAFrame = 16 * kCells;
   if (st.phase_warned || st.pattern == PYROCAM_SNAPSHOT_PATTERN_NAME) return;
   const float lit_dn =
       std::max(4.0f, 0.02f * static_cast<float>(pyrocam::full_scale_dn(st.bit_depth)));
@@ -406,7 +406,7 @@ static void check_bayer_phase(GstDarkSub* self, State& st, const cv::Mat& signal
   const pyrocam::SignalNoise noise{
       gain * static_cast<double>(pyrocam::full_scale_dn(st.bit_depth)) / 5000, 2.0};
   pyrocam::add_bayer_cell_sums(signal, lit_dn, bright_dn, st.phase_first_cell_row, kCellRowStep,
-                               noise, st.phase_sums);
+                               noise, st.phase_sums, kCellsAFrame);
   st.phase_first_cell_row = (st.phase_first_cell_row + 1) % kCellRowStep;
   if (st.phase_sums.cells < kCells) return;
   GST_DEBUG_OBJECT(self,

@@ -220,7 +220,8 @@ cv::Mat DarkAccumulator::mean() const {
 }
 
 void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, int first_cell_row,
-                         int cell_row_step, const SignalNoise& noise, BayerCellSums& sums) {
+                         int cell_row_step, const SignalNoise& noise, BayerCellSums& sums,
+                         std::size_t max_cells) {
   if (signal.type() != CV_32F) throw InputError("Bayer cell sums: the mosaic must be CV_32F");
   if (cell_row_step < 1) throw InputError("Bayer cell sums: the row step must be at least 1");
   if (first_cell_row < 0 || first_cell_row >= cell_row_step)
@@ -252,12 +253,14 @@ void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, i
   const auto variance_of = [&](double total) {  // of a difference of two samples summing to this
     return noise.shot_gain * total + 2 * noise.floor_dn2;
   };
-  for (int y = 2 * first_cell_row; y + 3 < signal.rows; y += 2 * cell_row_step) {
+  std::size_t cells_here = 0;
+  for (int y = 2 * first_cell_row; y + 3 < signal.rows && cells_here < max_cells;
+       y += 2 * cell_row_step) {
     cell_sums(y, row);
     cell_sums(y + 2, below);
     const float* top = signal.ptr<float>(y);
     const float* bottom = signal.ptr<float>(y + 1);
-    for (std::size_t i = 1; i + 1 < row.size(); ++i) {
+    for (std::size_t i = 1; i + 1 < row.size() && cells_here < max_cells; ++i) {
       const float sum = row[i];
       if (!(sum >= 4 * lit_dn) || !std::isfinite(sum)) continue;
       if (!like(row[i - 1], sum) || !like(row[i + 1], sum) || !like(below[i], sum)) continue;
@@ -265,6 +268,7 @@ void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, i
       sums.at[0][0] += top[x], sums.at[0][1] += top[x + 1];
       sums.at[1][0] += bottom[x], sums.at[1][1] += bottom[x + 1];
       ++sums.cells;
+      ++cells_here;
       const float pairs[2][2] = {{top[x], bottom[x + 1]}, {top[x + 1], bottom[x]}};
       for (int k = 0; k < 2; ++k) {
         const float mean = 0.5f * (pairs[k][0] + pairs[k][1]);

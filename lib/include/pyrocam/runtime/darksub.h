@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <string>
 
@@ -67,7 +68,8 @@ SaturatedSamples find_saturated(const cv::Mat& signal);
 // their difference's noise (`noise`, the noisiest band's: at a high analogue gain few electrons
 // make 20 % of full scale; where samples behind one filter, 10 pixels apart inside a body,
 // scatter more than it says, as at a gain it does not know, by their measured scatter). Adds to
-// `sums`.
+// `sums`; stops after `max_cells` lit cells (a bright plate has tens of thousands a frame, and
+// judging them all cost 8 ms of a 2048x2048 frame).
 struct BayerCellSums {
   double at[2][2] = {};  // [row][column] in the cell
   std::size_t cells = 0;
@@ -75,7 +77,8 @@ struct BayerCellSums {
   std::size_t bright[2] = {}, apart[2] = {};
 };
 void add_bayer_cell_sums(const cv::Mat& signal, float lit_dn, float bright_dn, int first_cell_row,
-                         int cell_row_step, const SignalNoise& noise, BayerCellSums& sums);
+                         int cell_row_step, const SignalNoise& noise, BayerCellSums& sums,
+                         std::size_t max_cells = std::numeric_limits<std::size_t>::max());
 // Whether the sums say that the greens sit on the other diagonal of the cell than `pattern`
 // (rggb, bggr, grbg or gbrg) puts them: the pattern's two green places differ by more than 10 %
 // while the other two agree within 3 %. Samples behind one filter agree (a sensor's green
