@@ -194,6 +194,27 @@ TEST(DarkSub, a_small_bodys_edges_neither_hide_nor_fake_a_shift) {
   }
 }
 
+// darksub judges at most max_cells lit cells a frame (all of a bright 2048x2048 plate's took 8 ms
+// a frame): the sums stop there and still tell a shift.
+TEST(DarkSub, bayer_cell_sums_stop_after_max_cells) {
+  const CameraProfile p = load_profile_by_name("rgb-reference");
+  Simulator camera(p, UnitPerturbation::parse("typical", 1), 7);
+  const double exposure = camera.exposure_for(1500, 140, 0.7);
+  const cv::Mat raw = camera.render(plate_scene(128, 128, 1500), exposure, 0.7);
+  const cv::Mat dark = camera.render_dark(128, 128, exposure);
+  cv::Mat signal;
+  subtract_dark(raw.colRange(1, 127).clone(), dark_from_image(dark.colRange(1, 127).clone()), 220,
+                signal);
+  BayerCellSums all, capped;
+  add_bayer_cell_sums(signal, 5, 51, 0, 1, SignalNoise{}, all);
+  add_bayer_cell_sums(signal, 5, 51, 0, 1, SignalNoise{}, capped, 300);
+  EXPECT_GT(all.cells, 1000u);
+  EXPECT_EQ(capped.cells, 300u);
+  EXPECT_LE(capped.bright[0] + capped.bright[1], 600u);
+  EXPECT_TRUE(bayer_greens_elsewhere(all, "rggb"));
+  EXPECT_TRUE(bayer_greens_elsewhere(capped, "rggb"));
+}
+
 // Frames of a snapshot mosaic (5x5: no two neighbours behind one filter) read as a Bayer mosaic
 // give temperatures that look right and are wrong (a 1400 degC plate read 1031 with a colour
 // model), and their cell sums, every place of the 2x2 cell averaging all 25 filters, do not show
