@@ -194,7 +194,7 @@ TEST(DarkSub, a_small_bodys_edges_neither_hide_nor_fake_a_shift) {
   }
 }
 
-// darksub judges at most max_cells lit cells a frame (all of a bright 2048x2048 plate's took 8 ms
+// darksub judges at most max_cells lit cells a frame (all of a bright 2048x2048 plate's took 7 ms
 // a frame): the sums stop there and still tell a shift.
 TEST(DarkSub, bayer_cell_sums_stop_after_max_cells) {
   const CameraProfile p = load_profile_by_name("rgb-reference");
