@@ -51,12 +51,13 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
   planes_estimator_.set_demosaic_noise(demosaic_noise(layout_, options.demosaic));
   planes_estimator_.set_above_range_check(true);
   if (options.blur_correction) blur_correction_.emplace(*model_, options.demosaic);
-  if (options.brightness_radius != 0) {
-    if (layout_.kind != MosaicLayout::Kind::kBayer ||
-        resolve_demosaic_method(options.demosaic, layout_) == DemosaicMethod::kBinCells)
+  if (options.brightness_radius != 0 && layout_.kind == MosaicLayout::Kind::kSnapshot) {
+    snapshot_brightness_.emplace(*model_, options.brightness_radius);
+  } else if (options.brightness_radius != 0) {
+    if (resolve_demosaic_method(options.demosaic, layout_) == DemosaicMethod::kBinCells)
       throw InputError(
-          "brightness readings need a Bayer mosaic demosaicked at full resolution (not binned, "
-          "not a snapshot mosaic)");
+          "brightness readings of a Bayer mosaic need it demosaicked at full resolution (not "
+          "binned)");
     brightness_.emplace(*model_, options.brightness_radius, layout_);
   }
   // NaN would mark no sample saturated, and a saturated band would read.
@@ -143,10 +144,13 @@ double FrameMeasurer::median_uncertainty_c(const cv::Mat& temperature_c,
   // fewer independent ones. A brightness reading's scale is a mean over its window of ratio
   // readings, each reaching its footprint's samples: counted as one per window widened by the
   // footprint (5 x 5 pixels), an upper bound on the sharing, with a median's sqrt(pi/2).
+  // A snapshot cell's window is widened by the matched kernels' 3 x 3 cells.
+  const double window = brightness_            ? brightness_->window_pixels() + 4
+                        : snapshot_brightness_ ? snapshot_brightness_->window_cells() + 2
+                                               : 0;
   const double share =
-      brightness_ ? (n > 2 ? M_PI / 2 : 1.0) /
-                        std::max(1.0, n / std::pow(brightness_->window_pixels() + 4, 2))
-                  : median_noise_share(used, demosaic_noise_area(layout_, options_.demosaic));
+      window > 0 ? (n > 2 ? M_PI / 2 : 1.0) / std::max(1.0, n / (window * window))
+                 : median_noise_share(used, demosaic_noise_area(layout_, options_.demosaic));
   const double systematic = estimator.systematic_u_c(t_median);
   return k * std::sqrt(systematic * systematic + share * u_noise * u_noise);
 }
@@ -236,12 +240,13 @@ void FrameMeasurer::measure_signal(const cv::Mat& signal, cv::Mat& temperature_c
     curvature_->apply(signal, temperature_c);
     if (uncertainty_c) uncertainty_c->setTo(NAN, temperature_c != temperature_c);
   }
-  if (blur_correction_ || brightness_) {
+  if (blur_correction_ || brightness_ || snapshot_brightness_) {
     // On the codes, as ratiotemp reads them: a recording measured again gives its codes (the
     // blur correction on floats differed from ratiotemp's by a code on a quarter of a plate).
     encode_decikelvin(temperature_c, codes_);
     if (blur_correction_) blur_correction_->apply_codes(codes_);
     if (brightness_) brightness_->apply_codes(signal, codes_);
+    if (snapshot_brightness_) snapshot_brightness_->apply_codes(planes_, codes_);
     decode_decikelvin(codes_).copyTo(temperature_c);
   }
 }

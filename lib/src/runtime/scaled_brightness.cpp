@@ -9,6 +9,7 @@
 #include <string>
 #include <type_traits>
 
+#include "detail/log_positive.h"
 #include "detail/vector_clones.h"
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/locus.h"
@@ -21,24 +22,6 @@ namespace {
 // Inverse table points: the log rate spans up to ~25 nats over the model's range, so a step is
 // about 1.5e-3 nats, a fraction of a degree, with linear interpolation far below 0.01 degC.
 constexpr int kInverseSamples = 16384;
-
-// Natural log of a positive normal float to about 1e-6, with +, -, *, / and bit operations only:
-// the same bits on every machine, and a loop of it vectorises. x = 2^k m with m in [sqrt(1/2),
-// sqrt(2)) (the offset moves the exponent's boundary there, as musl's logf does); log m =
-// 2 atanh(s), s = (m - 1) / (m + 1), |s| < 0.172, five terms of the series.
-inline float log_positive(float x) {
-  constexpr std::uint32_t kOne = 0x3f800000u, kSqrtHalf = 0x3f3504f3u;
-  std::uint32_t bits;
-  std::memcpy(&bits, &x, sizeof bits);
-  bits += kOne - kSqrtHalf;
-  const int k = static_cast<int>(bits >> 23) - 127;
-  bits = (bits & 0x7fffffu) + kSqrtHalf;
-  float m;
-  std::memcpy(&m, &bits, sizeof m);
-  const float s = (m - 1.f) / (m + 1.f), z = s * s;
-  const float series = 1.f + z * (1.f / 3 + z * (1.f / 5 + z * (1.f / 7 + z * (1.f / 9))));
-  return static_cast<float>(k) * 0.693147181f + 2.f * s * series;
-}
 
 // table[i] at `at` (0 <= at <= last), interpolated, in a form that vectorises (a gather).
 inline float lookup(const float* table, int last, float at) {

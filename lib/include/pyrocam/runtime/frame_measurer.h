@@ -20,6 +20,7 @@
 #include "pyrocam/runtime/mixed_pixels.h"
 #include "pyrocam/runtime/plane_estimator.h"
 #include "pyrocam/runtime/scaled_brightness.h"
+#include "pyrocam/runtime/snapshot_brightness.h"
 
 namespace pyrocam {
 
@@ -41,8 +42,9 @@ struct MeasureOptions {
   double gain_db = 0;
   // Subtract the matched kernel's bias on gradients (blur_bias.h); needs matched demosaicking.
   bool blur_correction = false;
-  // Ratio-scaled brightness readings (scaled_brightness.h) with this window radius, Bayer cells;
-  // 0: the ratio readings as they are. Needs a Bayer mosaic demosaicked at full resolution. After
+  // Ratio-scaled brightness readings with this window radius: Bayer cells for a Bayer mosaic
+  // (scaled_brightness.h), which must be demosaicked at full resolution; cells of a snapshot
+  // mosaic (snapshot_brightness.h). 0: the ratio readings as they are. After
   // the blur correction, which then acts on the scales only. Read on the 0.1 K codes
   // (temperature_codes.h), as ratiotemp reads them, so a recording measured again gives its
   // codes bit for bit.
@@ -134,6 +136,7 @@ class FrameMeasurer {
   std::optional<BlurBiasCorrection> blur_correction_;
   std::optional<CurvatureCheck> curvature_;  // made on the first frame of the fused path
   std::optional<ScaledBrightness> brightness_;
+  std::optional<SnapshotBrightness> snapshot_brightness_;
   cv::Mat signal_, codes_;
   std::vector<cv::Mat> planes_;
   BayerCellSums phase_sums_;
