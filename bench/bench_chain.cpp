@@ -25,7 +25,8 @@
 //
 // Usage: bench_chain --rgb-model M.json --nir-model N.json [--frames N] [--mlp-frames N]
 //                    [--scene plate:T[:P]|filament:T|melt-pool[@F] | --scenes S1,S2,...] [--queues]
-//                    [--only colour|5x5] [--methods lut,likelihood,mlp]
+//                    [--only colour|5x5] [--methods lut,likelihood,mlp] [--misfit-probability P]
+//                    [--brightness-radius R]
 //        bench_chain --rgb-model M.json [--nir-model N.json] --soak N [--soak-size WxH]
 //                    [--only colour|5x5]
 // (scripts/bench.sh builds the models and runs this.)
@@ -57,6 +58,7 @@ struct Options {
   std::string only;                            // "colour" or "5x5": one chain
   std::string methods = "lut,likelihood,mlp";  // ratiotemp methods to run
   std::string misfit_probability = "0";        // ratiotemp's band-consistency check (0: off)
+  std::string brightness_radius = "0";         // ratiotemp's brightness readings (0: off)
   int soak = 0;                                // frames of the soak run (0: no soak)
   int soak_width = 320, soak_height = 240;
 
@@ -127,7 +129,8 @@ void bench_colour(const Options& o, const pyrocam::ThermalModel& m, const std::s
   }
   const std::string chain = "darksub dark-level=50" + q + " ! demosaic25" + q +
                             " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
-                            " misfit-probability=" + o.misfit_probability;
+                            " misfit-probability=" + o.misfit_probability +
+                            " brightness-radius=" + o.brightness_radius;
   if (o.wanted("lut")) {
     row.colour_lut = run_chain(chain + " method=lut", caps, raw, o.frames, o.warmup);
     print_run("darksub ! demosaic25 ! ratiotemp method=lut", row.colour_lut, bayer);
@@ -141,7 +144,8 @@ void bench_colour(const Options& o, const pyrocam::ThermalModel& m, const std::s
       const auto with = [&](const std::string& demosaic) {
         return "darksub dark-level=50" + q + " ! demosaic25 " + demosaic + q +
                " ! ratiotemp stats-interval=0 model=" + o.rgb_model +
-               " misfit-probability=" + o.misfit_probability + " method=lut";
+               " misfit-probability=" + o.misfit_probability +
+               " brightness-radius=" + o.brightness_radius + " method=lut";
       };
       print_run("the same, demosaic25 method=bilinear",
                 run_chain(with("method=bilinear"), caps, raw, o.frames, o.warmup), bayer);
@@ -189,12 +193,18 @@ void bench_5x5(const Options& o, const pyrocam::ThermalModel& m, const std::stri
               bayer);
   const std::string chain = "darksub dark-level=50 pattern=5x5" + q + " ! demosaic25" + q +
                             " ! ratiotemp stats-interval=0 model=" + o.nir_model +
-                            " misfit-probability=" + o.misfit_probability;
+                            " misfit-probability=" + o.misfit_probability +
+                            " brightness-radius=" + o.brightness_radius;
   if (o.wanted("likelihood")) {
     // Half the frames (the slower chain), but never fewer than 10 timed past the warm-up.
     row.nir_likelihood = run_chain(chain + " method=likelihood", caps, raw,
                                    std::max(o.frames / 2, o.warmup + 11), o.warmup);
     print_run("darksub ! demosaic25 ! ratiotemp method=likelihood", row.nir_likelihood, bayer);
+    if (detailed)  // what reading each cell from its own bands costs
+      print_run("the same, ratiotemp brightness-radius=2",
+                run_chain(chain + " method=likelihood brightness-radius=2", caps, raw,
+                          std::max(o.frames / 2, o.warmup + 11), o.warmup),
+                bayer);
   }
   if (detailed && o.wanted("mlp"))
     print_run("darksub ! demosaic25 ! ratiotemp method=mlp",
@@ -287,6 +297,8 @@ int main(int argc, char** argv) {
       o.methods = value();
     else if (a == "--misfit-probability")
       o.misfit_probability = value();
+    else if (a == "--brightness-radius")
+      o.brightness_radius = value();
     else if (a == "--soak")
       o.soak = std::atoi(value().c_str());
     else if (a == "--soak-size") {
@@ -308,6 +320,7 @@ int main(int argc, char** argv) {
         "usage: %s --rgb-model M.json --nir-model N.json [--frames N] [--mlp-frames N]\n"
         "         [--scene plate:T[:P]|filament:T|melt-pool[@F] | --scenes S1,S2,...] [--queues]\n"
         "         [--only colour|5x5] [--methods lut,likelihood,mlp] [--misfit-probability P]\n"
+        "         [--brightness-radius R]\n"
         "       %s --rgb-model M.json [--nir-model N.json] --soak FRAMES [--soak-size WxH]\n"
         "         [--only colour|5x5]\n",
         argv[0], argv[0]);

@@ -481,12 +481,13 @@ void add_output_options(CLI::App* c, MeasureArgs& a) {
               "+180 degC at 150 degC a pixel near 1400 degC), the gradient taken from the "
               "readings; off by default");
   c->add_option("--brightness-radius", a.brightness_radius,
-                "Bayer, full-resolution demosaicking: read each pixel from its own sample, its "
-                "band's scale the mean of what the ratio readings imply over a window of "
-                "(4 r + 1) x (4 r + 1) pixels (r in 2 x 2 cells, 1 to 8, e.g. 2; 0 = the ratio "
-                "readings as they are), as ratiotemp's brightness-radius. Assumes one emissivity "
-                "over the window: near an emissivity step it reads wrong where the ratio reads "
-                "right")
+                "Read each pixel from its own brightness, its bands' scales the mean of what "
+                "the ratio readings imply over a window: Bayer (full-resolution demosaicking), "
+                "each pixel from its own sample, the window (4 r + 1) x (4 r + 1) pixels; "
+                "snapshot (5x5), each cell from all its bands, the window (2 r + 1) x (2 r + 1) "
+                "cells. r from 1 to 8, e.g. 2; 0 = the ratio readings as they are. As "
+                "ratiotemp's brightness-radius. Assumes one emissivity over the window: near an "
+                "emissivity step it reads wrong where the ratio reads right")
       ->check(CLI::Range(0, 8))
       ->capture_default_str();
   c->add_option("--peak-window", a.peak_window,

@@ -24,7 +24,7 @@
 #   BRACKET          exposure factors the camera cycles through (autoexposure brackets it; one frame passes per EXPOSURE_LATENCY + 1), fused by thermalfuse (high dynamic range), e.g. 1,8 []
 #   BRACKET_FUSION   readings: thermalfuse after ratiotemp, each pixel from one frame; mosaics: mosaicfuse before demosaic25, each sample from one frame (more of a still pool reads; a moving one reads wild) [readings]
 #   BLUR_CORRECTION ratiotemp blur-correction: steep sides read their footprint's mean temperature, not hotter (1; colour camera) [1 with BRACKET_FUSION=mosaics, else 0]
-#   BRIGHTNESS_RADIUS ratiotemp brightness-radius: each pixel read from its own sample, scaled over a (4r+1)-pixel window; only for surfaces of one emissivity over the window (0 = off, 1-8; colour camera) [0]
+#   BRIGHTNESS_RADIUS ratiotemp brightness-radius: each pixel read from its own brightness, scaled over a window (colour: (4r+1) pixels; 5x5: (2r+1) cells); only for surfaces of one emissivity over the window (0 = off, 1-8) [0]
 #   PEAK_MARKER  ring the frame's peak and write its temperature on the overlay (1) [0]
 #   ALARM_C      thermalalarm: a pyrocam-alarm message when the peak stays above this, degC []
 #   SINK         where the view goes                                  [autovideosink]

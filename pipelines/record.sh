@@ -36,7 +36,7 @@
 #   BRACKET          exposure factors the camera cycles through, fused by thermalfuse (high dynamic range), e.g. 9,3,1,0.333,0.111,0.037; a camera other than the simulated one is bracketed by autoexposure, one frame passing per EXPOSURE_LATENCY + 1 []
 #   BRACKET_FUSION   readings: thermalfuse after ratiotemp, each pixel from one frame; mosaics: mosaicfuse before demosaic25, each sample from one frame (more of a still pool reads; a moving one reads wild) [readings]
 #   BLUR_CORRECTION ratiotemp blur-correction: steep sides read their footprint's mean temperature, not hotter (1; colour camera) [1 with BRACKET_FUSION=mosaics, else 0]
-#   BRIGHTNESS_RADIUS ratiotemp brightness-radius: each pixel read from its own sample, scaled over a (4r+1)-pixel window; only for surfaces of one emissivity over the window (0 = off, 1-8; colour camera) [0]
+#   BRIGHTNESS_RADIUS ratiotemp brightness-radius: each pixel read from its own brightness, scaled over a window (colour: (4r+1) pixels; 5x5: (2r+1) cells); only for surfaces of one emissivity over the window (0 = off, 1-8) [0]
 #   SEGMENT_SECONDS  length of one segment in seconds (decimals allowed) [10]
 #   SNAPSHOT_RATE    snapshots per second (at most the frame rate)       [1]
 #   STATS_CSV    write ratiotemp's statistics here as CSV, a row every STATS_INTERVAL_MS [none]

@@ -56,7 +56,7 @@ BRACKET_FUSION=${BRACKET_FUSION:-readings}
 BLUR_CORRECTION=${BLUR_CORRECTION:-}
 [[ -z $BLUR_CORRECTION || $BLUR_CORRECTION =~ ^[01]$ ]] || { echo "$name: BLUR_CORRECTION must be 0 or 1, not '$BLUR_CORRECTION'" >&2; exit 2; }
 BRIGHTNESS_RADIUS=${BRIGHTNESS_RADIUS:-0}
-[[ $BRIGHTNESS_RADIUS =~ ^[0-8]$ ]] || { echo "$name: BRIGHTNESS_RADIUS must be 0 to 8 (Bayer cells), not '$BRIGHTNESS_RADIUS'" >&2; exit 2; }
+[[ $BRIGHTNESS_RADIUS =~ ^[0-8]$ ]] || { echo "$name: BRIGHTNESS_RADIUS must be 0 to 8 (Bayer or 5x5 cells), not '$BRIGHTNESS_RADIUS'" >&2; exit 2; }
 EXPOSURE_LATENCY=${EXPOSURE_LATENCY:-}
 [[ -z $EXPOSURE_LATENCY || $EXPOSURE_LATENCY =~ ^[0-9]+$ ]] || { echo "$name: EXPOSURE_LATENCY must be a whole number of frames, not '$EXPOSURE_LATENCY'" >&2; exit 2; }
 bracket_frames=0
@@ -131,9 +131,10 @@ fi
 blur_correction=()
 [[ $BLUR_CORRECTION == 1 && $PROFILE != nir5x5-reference ]] && blur_correction=(blur-correction=true)
 # BRIGHTNESS_RADIUS=r: ratiotemp brightness-radius=r (colour camera: each pixel read from its own
-# sample, scaled over a (4r+1)-pixel window; for surfaces of one emissivity over the window).
+# sample, scaled over a (4r+1)-pixel window; 5x5: each cell from all its bands, scaled over
+# (2r+1) x (2r+1) cells; for surfaces of one emissivity over the window).
 brightness=()
-[[ $BRIGHTNESS_RADIUS != 0 && $PROFILE != nir5x5-reference ]] && brightness=("brightness-radius=$BRIGHTNESS_RADIUS")
+[[ $BRIGHTNESS_RADIUS != 0 ]] && brightness=("brightness-radius=$BRIGHTNESS_RADIUS")
 thermal_chain=(camera. ! queue ! darksub $DARK ! "${mosaic_fusion[@]}" "${demosaic[@]}" !
   ratiotemp "model=$MODEL" "${blur_correction[@]}" "${brightness[@]}")
 # The temperature overlay (transparent where there is no reading) over the camera's image:

@@ -43,12 +43,14 @@
  * across: half its temperature's Laplacian over 100 degC) has no reading. blur-correction (default
  * off; fused path) subtracts their bias on steep gradients (+180 degC at 150 degC/px, 1400 degC).
  *
- * With #GstRatioTemp:brightness-radius r (default 0, off; the fused path only) each pixel reads
- * from its own sample: its band's scale (exposure, emissivity, calibration) is the mean over a
- * (4r + 1)-pixel square window of what the ratio readings imply, and the sample gives the
- * temperature at that pixel: the ratio's mean and mask with the noise of one sample, and a melt
- * pool's peak not aliased by the Bayer pattern. It assumes one emissivity over the window; near
- * an emissivity step it reads wrong where the ratio reads right.
+ * With #GstRatioTemp:brightness-radius r (default 0, off; on a Bayer mosaic the fused path only)
+ * each pixel reads from its own sample: its band's scale (exposure, emissivity, calibration) is
+ * the mean over a (4r + 1)-pixel square window of what the ratio readings imply, and the sample
+ * gives the temperature at that pixel: the ratio's mean and mask with the noise of one sample,
+ * and a melt pool's peak not aliased by the Bayer pattern. On a snapshot (5x5) model's planes
+ * each cell reads from all its bands with their scales' means over (2r + 1) x (2r + 1) cells:
+ * a third of the fit's spread on plates. It assumes one emissivity over the window; near an
+ * emissivity step it reads wrong where the ratio reads right.
  *
  * With #GstRatioTemp:misfit-probability above 0 (e.g. 1e-6; default 0, off) every reading goes
  * through a band-consistency check: the band signals must be those of a graybody within 1 % of
@@ -254,6 +256,7 @@ static gboolean gst_ratio_temp_set_caps(GstBaseTransform* trans, GstCaps* incaps
   }
   st.planes.assign(static_cast<std::size_t>(st.bands), cv::Mat());
   st.fused = pg::is_fused_bands(incaps);
+  st.snapshot = !st.fused && model.profile().mosaic.kind == pyrocam::MosaicLayout::Kind::kSnapshot;
   rt::reset_corrections(st);  // made again for this stream
   if (st.fused &&
       !PYROCAM_GUARDED(self, pg::ErrorKind::kNegotiation, "Unsupported band format", [&] {
@@ -514,7 +517,8 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         } else {
           cv::Mat codes = out.image;
           pyrocam::encode_decikelvin(st.temperature_c, codes);
-          if (corrections.curvature || corrections.blur || corrections.brightness) {
+          if (corrections.curvature || corrections.blur || corrections.brightness ||
+              corrections.snapshot_brightness) {
             // From the codes, as on frames without statistics: the same output.
             rt::correct_codes(corrections, in.image(), codes);
             st.temperature_c = pyrocam::decode_decikelvin(codes);

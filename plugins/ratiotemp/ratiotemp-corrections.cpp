@@ -1,5 +1,6 @@
 /* ratiotemp's steps after the per-pixel estimate: the curvature check, the blur correction and
- * the ratio-scaled brightness readings, all from the mosaic of the fused path. */
+ * the ratio-scaled brightness readings, from the mosaic of the fused path (a snapshot model's
+ * brightness readings from its band planes). */
 #include "ratiotemp-private.h"
 
 #define GST_CAT_DEFAULT gst_ratio_temp_debug
@@ -31,7 +32,13 @@ Corrections corrections_for_frame(GstRatioTemp* self, const Settings& settings, 
       st.brightness.emplace(*st.model, radius, st.mosaic_layout);  // the stream's phase
     c.brightness = &*st.brightness;
   }
-  if (radius > 0 && !st.fused && !st.brightness_warned) {
+  if (radius > 0 && st.snapshot) {
+    if (!st.snapshot_brightness || st.snapshot_brightness->window_radius() != radius)
+      st.snapshot_brightness.emplace(*st.model, radius);
+    c.snapshot_brightness = &*st.snapshot_brightness;
+    c.planes = &st.planes;
+  }
+  if (radius > 0 && !st.fused && !st.snapshot && !st.brightness_warned) {
     st.brightness_warned = true;
     GST_ELEMENT_WARNING(self, STREAM, FORMAT,
                         ("brightness-radius %d needs demosaic25 with method matched or auto on "
@@ -47,6 +54,7 @@ void reset_corrections(State& st) {
   st.curvature.reset();
   st.blur.reset();
   st.brightness.reset();
+  st.snapshot_brightness.reset();
 }
 
 void estimate_codes(pyrocam::PlaneEstimator& estimator, const State& st,
@@ -72,12 +80,14 @@ void correct_codes(const Corrections& c, const cv::Mat& mosaic, cv::Mat& codes) 
   if (c.curvature) c.curvature->apply_codes(mosaic, codes);
   if (c.blur) c.blur->apply_codes(codes);
   if (c.brightness) c.brightness->apply_codes(mosaic, codes);
+  if (c.snapshot_brightness) c.snapshot_brightness->apply_codes(*c.planes, codes);
 }
 
 void correct_temperature(const Corrections& c, const cv::Mat& mosaic, cv::Mat& temperature_c) {
   if (c.curvature) c.curvature->apply(mosaic, temperature_c);
   if (c.blur) c.blur->apply(temperature_c);
   if (c.brightness) c.brightness->apply(mosaic, temperature_c);
+  if (c.snapshot_brightness) c.snapshot_brightness->apply(*c.planes, temperature_c);
 }
 
 }  // namespace pyrocam::gst::ratiotemp

@@ -22,6 +22,7 @@
 #include "pyrocam/runtime/estimators.h"
 #include "pyrocam/runtime/model.h"
 #include "pyrocam/runtime/scaled_brightness.h"
+#include "pyrocam/runtime/snapshot_brightness.h"
 
 GST_DEBUG_CATEGORY_EXTERN(gst_ratio_temp_debug);
 
@@ -103,6 +104,9 @@ struct State {
   bool blur_warned = false;                             // blur-correction asked for off that path
   std::optional<pyrocam::ScaledBrightness> brightness;  // on the fused path (Bayer mosaics)
   bool brightness_warned = false;                       // brightness-radius asked for off that path
+  // Plain planes of a snapshot model: brightness-radius reads them (no fused path needed).
+  bool snapshot = false;
+  std::optional<pyrocam::SnapshotBrightness> snapshot_brightness;
   cv::Mat temperature_c, uncertainty_c;
   cv::Mat saturated_mask;          // on frames with statistics: where light saturated a band
   bool saturation_warned = false;  // since the last statistics without saturated pixels
@@ -132,6 +136,8 @@ struct Corrections {
   const pyrocam::CurvatureCheck* curvature = nullptr;  // the fused path, always
   const pyrocam::BlurBiasCorrection* blur = nullptr;
   pyrocam::ScaledBrightness* brightness = nullptr;
+  pyrocam::SnapshotBrightness* snapshot_brightness = nullptr;  // on a snapshot model's planes
+  const std::vector<cv::Mat>* planes = nullptr;                // the frame's, for that step
 };
 /* The settings' steps that the stream allows: both need the fused path's mosaic. Each is built
  * the first time it is asked for there (and the brightness step again when its radius changes);

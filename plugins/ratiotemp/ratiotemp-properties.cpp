@@ -142,13 +142,15 @@ void install_properties(GObjectClass* gobject_class) {
       gobject_class, PROP_BRIGHTNESS_RADIUS,
       g_param_spec_uint(
           "brightness-radius", "Brightness window radius",
-          "Read each pixel from its own sample, its band's scale the mean of what the ratio "
-          "readings imply over a window of (4 r + 1) x (4 r + 1) pixels: r in 2 x 2 Bayer cells, "
-          "1 to 8 (2: 9 x 9 pixels); 0 (default) = the ratio readings as they are. Assumes one "
-          "emissivity over the window: within r Bayer cells of an emissivity step readings move "
-          "by up to the step's log ratio in temperature (about 100 degC at 2000 degC for a "
-          "factor 2). Only on the fused path (demosaic25 method matched or auto on a Bayer "
-          "mosaic, linked to this element); elsewhere a warning and the ratio readings",
+          "Read each pixel from its own brightness, its bands' scales the mean of what the "
+          "ratio readings imply over a window. Bayer: each pixel from its own sample, the "
+          "window (4 r + 1) x (4 r + 1) pixels, r in 2 x 2 Bayer cells (2: 9 x 9 pixels), only "
+          "on the fused path (demosaic25 method matched or auto on a Bayer mosaic, linked to "
+          "this element; elsewhere a warning and the ratio readings). Snapshot (5x5) band "
+          "planes: each cell from all its bands, the window (2 r + 1) x (2 r + 1) cells. r from "
+          "1 to 8; 0 (default) = the ratio readings as they are. Assumes one emissivity over "
+          "the window: within r cells of an emissivity step readings move by up to the step's "
+          "log ratio in temperature (about 100 degC at 2000 degC for a factor 2)",
           0, MAX_BRIGHTNESS_RADIUS, DEFAULT_BRIGHTNESS_RADIUS, playing));
   g_object_class_install_property(
       gobject_class, PROP_PEAK_WINDOW,

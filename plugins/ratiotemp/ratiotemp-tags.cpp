@@ -87,9 +87,10 @@ void push_stream_tags(GstRatioTemp* self, const Settings& settings, State& st) {
                        : settings.partial_bands == GST_RATIO_TEMP_PARTIAL_SAFE ? "safe"
                                                                                : "off";
   info.misfit_probability = settings.misfit_probability;
-  // What was applied: both need the fused path, and are left out (with a warning) without it.
+  // What was applied: both need the fused path (brightness readings, on a Bayer mosaic), and are
+  // left out (with a warning) without it.
   info.blur_correction = settings.blur_correction && st.fused;
-  info.brightness_radius = st.fused ? settings.brightness_radius : 0;
+  info.brightness_radius = st.fused || st.snapshot ? settings.brightness_radius : 0;
   info.demosaic = st.demosaic;
   info.exposure_us = exposure_us_of(st.upstream_tags.get());
   push_recording_tags(self, info, st.upstream_tags.get(), st.pushed_comment);

@@ -3,7 +3,8 @@
 // then the ones the planes give (but for the edge checks' rings, read from the mosaic); the
 // brightness readings and the blur correction are the library's on those; other elements get the
 // planes; turning the mixed-pixel check on while playing goes back to the planes; the curvature
-// check takes a hot spot's peak; fused caps without what ratiotemp needs are refused.
+// check takes a hot spot's peak; fused caps without what ratiotemp needs are refused; a 5x5
+// model's brightness readings on its planes.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -399,6 +400,55 @@ TEST_F(FusedHarness, corrections_give_the_measurers_codes) {
     EXPECT_GT(read, kW * kH / 2);
     EXPECT_EQ(differ, 0);
   }
+}
+
+// On a snapshot (5x5) model's band planes, which take no fused path, brightness-radius reads each
+// cell from all its bands (snapshot_brightness.h): the codes `pyrocam-calib measure` gives, the
+// fit's cells, most of them moved.
+TEST_F(FusedHarness, snapshot_brightness_readings_give_the_measurers_codes) {
+  constexpr int kW = 60, kH = 40;  // 12 x 8 cells
+  cv::Mat ramp(kH, kW, CV_32F);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) ramp.at<float>(y, x) = static_cast<float>(1500 + 3.0 * x + y);
+  const std::string path = test_model_path("test-model-nir5x5.json");
+  const std::shared_ptr<const ThermalModel> model =
+      std::make_shared<const ThermalModel>(load_model(path));
+  Simulator camera(model->profile(), UnitPerturbation::parse("typical", 1), 5);
+  const cv::Mat raw = camera.render(ramp, camera.exposure_for(1650, 150), 1.0);
+  const std::vector<std::uint8_t> frame(raw.datastart, raw.dataend);
+  std::vector<std::uint16_t> element[2];
+  for (int radius : {0, 2}) {
+    start("darksub dark-level=50 ! demosaic25 ! ratiotemp stats-interval=0 brightness-radius=" +
+              std::to_string(radius) + " model=" + path,
+          "video/x-raw,format=GRAY8,pattern=5x5,bit-depth=8,width=60,height=40,framerate=30/1");
+    GstBuffer* b = push_pull_buffer(h, buffer_from(frame));
+    ASSERT_NE(b, nullptr);
+    element[radius / 2] = values_of<std::uint16_t>(b);
+    gst_buffer_unref(b);
+    TearDown();
+  }
+  MeasureOptions options;
+  options.method = choose_method(model, MethodRequest::kAuto);
+  options.safe_partial = true;  // ratiotemp's default partial-bands
+  options.brightness_radius = 2;
+  FrameMeasurer measurer(model, options);
+  cv::Mat t;
+  measurer.measure(raw, cv::Mat(kH, kW, CV_8U, cv::Scalar(50)), t);
+  const cv::Mat codes = encode_decikelvin(t);
+  const std::vector<std::uint16_t> measured(codes.begin<std::uint16_t>(),
+                                            codes.end<std::uint16_t>());
+  ASSERT_EQ(measured.size(), element[1].size());
+  ASSERT_EQ(element[0].size(), element[1].size());
+  int read = 0, differ = 0, moved = 0;
+  for (std::size_t i = 0; i < measured.size(); ++i) {
+    EXPECT_EQ(element[0][i] != kNoReadingCode, element[1][i] != kNoReadingCode) << i;
+    read += element[1][i] != kNoReadingCode;
+    differ += element[1][i] != measured[i];
+    moved += element[1][i] != element[0][i];
+  }
+  EXPECT_GT(read, 12 * 8 / 2);
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(moved, read / 2);
 }
 
 TEST_F(FusedHarness, fused_bands_without_a_no_signal_level_are_refused_n) {

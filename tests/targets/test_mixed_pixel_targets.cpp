@@ -328,7 +328,8 @@ struct SnapshotFigures {
   int frames = 0, within_10 = 0;  // frames whose core median is within 10 degC
 };
 
-SnapshotFigures snapshot_study(DemosaicMethod demosaic) {
+SnapshotFigures snapshot_study(DemosaicMethod demosaic, int brightness_radius = 0, int seeds = 2,
+                               const std::vector<double>& peaks = {1500, 2000, 2500}) {
   const CameraProfile p = load_profile_by_name("nir5x5-reference");
   const UnitPerturbation unit = UnitPerturbation::parse("typical", 3);
   auto model = std::make_shared<ThermalModel>();
@@ -337,14 +338,15 @@ SnapshotFigures snapshot_study(DemosaicMethod demosaic) {
   options.method = Method::kLikelihood;
   options.demosaic = demosaic;
   options.safe_partial = true;
+  options.brightness_radius = brightness_radius;
   FrameMeasurer measurer(model, options);
   constexpr int kSensorW = 640, kSensorH = 480;
   SnapshotFigures f;
   double sum2 = 0;
   long readings = 0, wild = 0;
-  for (double peak : {1500.0, 2000.0, 2500.0})
+  for (double peak : peaks)
     for (double size : {1.0, 0.5})
-      for (int seed = 0; seed < 2; ++seed) {
+      for (int seed = 0; seed < seeds; ++seed) {
         Simulator camera(p, unit, 200 + seed);
         const cv::Mat truth = parabolic_pool(peak, 321.3 + seed, 243.7 - seed, 160 * size,
                                              70 * size, kSensorW, kSensorH);
@@ -401,6 +403,27 @@ TEST(SnapshotMeltPoolTargets, MatchedReadsTheCoreAndFewWildCells) {
   EXPECT_LE(matched.wild_percent, 0.5);
   EXPECT_GT(binned.core_rms_c, 2 * matched.core_rms_c);
   EXPECT_GT(binned.wild_percent, 2 * matched.wild_percent);
+}
+
+// The core target on the 5x5 camera: peaks 1500-2500 degC in steps of 250, both sizes, four
+// noise seeds (40 frames). The fit's core median is within 10 degC in 37 of 40 (4.9 degC rms):
+// what misses is the noise of a median of 16-60 cells (a cell reads about 25 degC rms at 2500
+// degC). Brightness readings (snapshot_brightness.h) read each cell from its own 25 bands, their
+// scales the fit's over 5 x 5 cells: 39 of 40 (4.0 degC rms), the target of 95 % met on these
+// scenes. Regression bounds two frames below the count.
+TEST(SnapshotMeltPoolTargets, BrightnessReadingsPutTheCoreMedianWithinTenDegrees) {
+  const std::vector<double> peaks = {1500, 1750, 2000, 2250, 2500};
+  const SnapshotFigures fit = snapshot_study(DemosaicMethod::kMatched, 0, 4, peaks);
+  const SnapshotFigures bright = snapshot_study(DemosaicMethod::kMatched, 2, 4, peaks);
+  for (const auto& [name, f] : {std::pair{"fit", fit}, {"brightness-radius 2", bright}})
+    std::printf(
+        "5x5 parabolic pools, %-19s %d frames: core median within 10 degC in %d (%.1f degC "
+        "rms), wild %.2f %%\n",
+        name, f.frames, f.within_10, f.core_rms_c, f.wild_percent);
+  ASSERT_EQ(bright.frames, 40);
+  EXPECT_GE(bright.within_10, 37);
+  EXPECT_LT(bright.core_rms_c, fit.core_rms_c);
+  EXPECT_LE(bright.wild_percent, 0.5);
 }
 
 }  // namespace
