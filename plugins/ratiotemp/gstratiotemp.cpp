@@ -481,7 +481,10 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
         pyrocam::PlaneEstimator& chosen = st.estimators->estimator(st.method);
         // The frame's gain scales its shot noise per DN; rebuilt only when it changes.
         const PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(inbuf);
-        chosen.set_analogue_gain(meta ? pyrocam::analogue_gain_factor(meta->gain_db) : 1.0);
+        const double gain = meta ? pyrocam::analogue_gain_factor(meta->gain_db) : 1.0;
+        chosen.set_analogue_gain(gain);
+        if (corrections.snapshot_brightness)
+          corrections.snapshot_brightness->set_analogue_gain(gain);
         chosen.set_exposure_us(meta ? meta->exposure_us : 0);  // 0: unknown
         chosen.set_misfit_probability(settings.misfit_probability);
         chosen.set_demosaic_noise(st.demosaic_noise);

@@ -53,6 +53,7 @@ FrameMeasurer::FrameMeasurer(std::shared_ptr<const ThermalModel> model,
   if (options.blur_correction) blur_correction_.emplace(*model_, options.demosaic);
   if (options.brightness_radius != 0 && layout_.kind == MosaicLayout::Kind::kSnapshot) {
     snapshot_brightness_.emplace(*model_, options.brightness_radius);
+    snapshot_brightness_->set_analogue_gain(analogue_gain_factor(options.gain_db));
   } else if (options.brightness_radius != 0) {
     if (resolve_demosaic_method(options.demosaic, layout_) == DemosaicMethod::kBinCells)
       throw InputError(

@@ -100,8 +100,8 @@ void window_means(const double* __restrict scale, const double* __restrict count
 }  // namespace
 
 SnapshotBrightness::SnapshotBrightness(const ThermalModel& model, int window_radius)
-    : radius_(window_radius) {
-  const CameraProfile& profile = model.profile();
+    : radius_(window_radius), profile_(model.profile()) {
+  const CameraProfile& profile = profile_;
   if (profile.mosaic.kind != MosaicLayout::Kind::kSnapshot)
     throw InputError("snapshot brightness readings need a snapshot mosaic; the model's camera (" +
                      profile.name + ") has a Bayer mosaic");
@@ -123,9 +123,23 @@ SnapshotBrightness::SnapshotBrightness(const ThermalModel& model, int window_rad
       table.push_back(portable::log(rate));
     }
     log_rate_.emplace_back(table.begin(), table.end());
-    const SignalNoise noise = signal_noise(profile, static_cast<int>(b));
-    shot_gain_.push_back(noise.shot_gain);
-    floor_dn2_.push_back(noise.floor_dn2);
+  }
+  shot_gain_.resize(log_rate_.size());
+  floor_dn2_.resize(log_rate_.size());
+  gain_ = 0;  // made at unity gain below
+  set_analogue_gain(1);
+}
+
+void SnapshotBrightness::set_analogue_gain(double factor) {
+  if (!(factor > 0) || !std::isfinite(factor))
+    throw InputError("brightness readings: analogue gain factor " + std::to_string(factor) +
+                     " must be a positive number");
+  if (factor == gain_) return;
+  gain_ = factor;
+  for (std::size_t b = 0; b < log_rate_.size(); ++b) {
+    const SignalNoise noise = signal_noise(profile_, static_cast<int>(b), factor);
+    shot_gain_[b] = noise.shot_gain;
+    floor_dn2_[b] = noise.floor_dn2;
   }
 }
 

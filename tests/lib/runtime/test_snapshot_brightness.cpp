@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "pyrocam/core/error.h"
+#include "pyrocam/core/noise_model.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/frame_measurer.h"
 #include "pyrocam/runtime/snapshot_brightness.h"
@@ -271,6 +272,35 @@ TEST(SnapshotBrightness, CodesReadAsDegreesAndUnreadCellsKeepTheirs) {
         EXPECT_NEAR(code_to_celsius(codes.at<std::uint16_t>(y, x)), t.at<float>(y, x), 0.1);
       }
     }
+}
+
+// The frames' analogue gain scales each sample's shot noise, and so the bands' weights: a cell
+// whose bands disagree (a dim band 20 % brighter, a bright one 10 % duller) reads otherwise at
+// 24 dB than at 0 dB, and at 0 dB again as before, bit for bit; cells whose bands agree read
+// the same at any gain.
+TEST(SnapshotBrightness, WeighsTheBandsAtTheFramesAnalogueGain) {
+  Uniform u;
+  const Eigen::VectorXd rates = u.s.model->camera.rates(1500);
+  Eigen::Index dim_band = 0, bright_band = 0;
+  rates.minCoeff(&dim_band);
+  rates.maxCoeff(&bright_band);
+  u.planes[static_cast<std::size_t>(dim_band)].at<float>(6, 6) *= 1.2f;
+  u.planes[static_cast<std::size_t>(bright_band)].at<float>(6, 6) *= 0.9f;
+  SnapshotBrightness sb(*u.s.model, 1);
+  auto read = [&](double factor) {
+    sb.set_analogue_gain(factor);
+    cv::Mat t = u.fit.clone();
+    sb.apply(u.planes, t);
+    return t;
+  };
+  const cv::Mat unity = read(1), high = read(analogue_gain_factor(24)), again = read(1);
+  std::printf("the disagreeing cell: %.3f degC at 0 dB, %.3f at 24 dB\n", unity.at<float>(6, 6),
+              high.at<float>(6, 6));
+  EXPECT_GT(std::abs(high.at<float>(6, 6) - unity.at<float>(6, 6)), 0.01);
+  EXPECT_EQ(cv::countNonZero(again != unity), 0);
+  EXPECT_NEAR(high.at<float>(11, 11), unity.at<float>(11, 11), 1e-3);  // out of its window
+  EXPECT_THROW(sb.set_analogue_gain(0), InputError);
+  EXPECT_THROW(sb.set_analogue_gain(std::numeric_limits<double>::quiet_NaN()), InputError);
 }
 
 TEST(SnapshotBrightness, RefusesBadInput) {

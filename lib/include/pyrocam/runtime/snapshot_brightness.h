@@ -30,6 +30,8 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "pyrocam/core/profile.h"
+
 namespace pyrocam {
 
 struct ThermalModel;
@@ -42,6 +44,10 @@ class SnapshotBrightness {
   // InputError for a Bayer camera, a radius out of range, or a band whose modelled signal does
   // not rise over the model's range.
   SnapshotBrightness(const ThermalModel& model, int window_radius);
+
+  // The analogue gain the frames were taken with, as a factor (analogue_gain_factor): it scales
+  // each sample's shot noise and noise floor in DN, which weigh the bands. 1 until set.
+  void set_analogue_gain(double factor);
 
   int window_radius() const { return radius_; }
   int window_cells() const { return 2 * radius_ + 1; }  // side of the window, cells
@@ -58,6 +64,8 @@ class SnapshotBrightness {
   void check(const std::vector<cv::Mat>& planes, const cv::Mat& readings, int type) const;
 
   int radius_ = 2;
+  CameraProfile profile_;
+  double gain_ = 1;
   double dim_dn_ = 0;
   double min_c_ = 0, max_c_ = 0;
   std::vector<std::vector<float>> log_rate_;   // per band, per degC from min_c_
