@@ -29,6 +29,7 @@
 #include <memory>
 #include <vector>
 
+#include "../lib/true_model.h"
 #include "pyrocam/core/temperature_codes.h"
 #include "pyrocam/runtime/bracket_fusion.h"
 #include "pyrocam/runtime/darksub.h"
@@ -90,8 +91,7 @@ struct Bracket {
 BracketStudy study(DemosaicMethod demosaic, Bracket bracket = {}) {
   const CameraProfile p = load_profile_by_name("rgb-reference");
   const UnitPerturbation unit = UnitPerturbation::parse("typical", 3);
-  auto model = std::make_shared<ThermalModel>();
-  model->camera = CameraModel{p, true_system_qe(p, unit), Eigen::VectorXd::Ones(p.band_count())};
+  const auto model = test::true_model(p, unit);
   MeasureOptions options;
   options.method = Method::kLikelihood;
   options.demosaic = demosaic;

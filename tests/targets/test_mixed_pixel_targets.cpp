@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "../lib/true_model.h"
 #include "pyrocam/core/physics.h"
 #include "pyrocam/runtime/frame_measurer.h"
 #include "pyrocam/simulation/scenes.h"
@@ -78,9 +79,7 @@ struct Study {
 Study run(double spread, DemosaicMethod demosaic = DemosaicMethod::kBilinear) {
   const CameraProfile p = load_profile_by_name("rgb-reference");
   const UnitPerturbation unit = UnitPerturbation::parse("typical", 3);
-  auto model = std::make_shared<ThermalModel>();
-  const Eigen::MatrixXd qe = true_system_qe(p, unit);
-  model->camera = CameraModel{p, qe, Eigen::VectorXd::Ones(p.band_count())};
+  const auto model = test::true_model(p, unit);
   MeasureOptions plain_options;
   plain_options.method = Method::kLikelihood;
   plain_options.demosaic = DemosaicMethod::kBilinear;
@@ -187,8 +186,7 @@ CoreFigures core_study(bool safe_partial, bool exposed_for_the_peak, int brightn
                        const std::vector<cv::Mat>& scenes = pool_frames()) {
   const CameraProfile p = load_profile_by_name("rgb-reference");
   const UnitPerturbation unit = UnitPerturbation::parse("typical", 3);
-  auto model = std::make_shared<ThermalModel>();
-  model->camera = CameraModel{p, true_system_qe(p, unit), Eigen::VectorXd::Ones(p.band_count())};
+  const auto model = test::true_model(p, unit);
   MeasureOptions options;
   options.method = Method::kLikelihood;
   options.safe_partial = safe_partial;
@@ -332,8 +330,7 @@ SnapshotFigures snapshot_study(DemosaicMethod demosaic, int brightness_radius = 
                                const std::vector<double>& peaks = {1500, 2000, 2500}) {
   const CameraProfile p = load_profile_by_name("nir5x5-reference");
   const UnitPerturbation unit = UnitPerturbation::parse("typical", 3);
-  auto model = std::make_shared<ThermalModel>();
-  model->camera = CameraModel{p, true_system_qe(p, unit), Eigen::VectorXd::Ones(p.band_count())};
+  const auto model = test::true_model(p, unit);
   MeasureOptions options;
   options.method = Method::kLikelihood;
   options.demosaic = demosaic;

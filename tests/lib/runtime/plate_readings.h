@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "../true_model.h"
 #include "pyrocam/runtime/frame_measurer.h"
 #include "pyrocam/simulation/scenes.h"
 #include "pyrocam/simulation/simulator.h"
@@ -24,14 +25,8 @@ struct TrueQeColourPlate {
   UnitPerturbation unit = UnitPerturbation::parse("typical", 3);
   Simulator camera{profile, unit, 11};
   cv::Mat truth = plate_scene(200, 150, kTruthC, 0.8);
-  FrameMeasurer measurer{true_qe_model(profile, unit), options()};
+  FrameMeasurer measurer{test::true_model(profile, unit), options()};
 
-  static std::shared_ptr<ThermalModel> true_qe_model(const CameraProfile& p,
-                                                     const UnitPerturbation& u) {
-    auto model = std::make_shared<ThermalModel>();
-    model->camera = CameraModel{p, true_system_qe(p, u), Eigen::VectorXd::Ones(p.band_count())};
-    return model;
-  }
   static MeasureOptions options() {
     MeasureOptions o;
     o.method = Method::kLikelihood;

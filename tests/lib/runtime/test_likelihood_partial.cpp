@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "../true_model.h"
 #include "pyrocam/core/locus.h"
 #include "pyrocam/core/noise_model.h"
 #include "pyrocam/runtime/darksub.h"
@@ -295,8 +296,7 @@ TEST(LikelihoodEstimator, safe_partial_readings_must_be_precise) {
 TEST(LikelihoodEstimator, partial_readings_of_a_plate_are_the_plates) {
   const CameraProfile p = load_profile_by_name("nir5x5-reference");
   const UnitPerturbation unit = UnitPerturbation::parse("typical", 3);
-  auto model = std::make_shared<ThermalModel>();
-  model->camera = CameraModel{p, true_system_qe(p, unit), Eigen::VectorXd::Ones(p.band_count())};
+  const auto model = test::true_model(p, unit);
   MeasureOptions options;
   options.method = Method::kLikelihood;
   options.demosaic = DemosaicMethod::kMatched;

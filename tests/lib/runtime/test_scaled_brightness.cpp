@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "../true_model.h"
 #include "pyrocam/core/error.h"
 #include "pyrocam/core/locus.h"
 #include "pyrocam/core/temperature_codes.h"
@@ -26,8 +27,7 @@ constexpr int kW = 160, kH = 120;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 std::shared_ptr<ThermalModel> true_model(const CameraProfile& p, const UnitPerturbation& unit) {
-  auto model = std::make_shared<ThermalModel>();
-  model->camera = CameraModel{p, true_system_qe(p, unit), Eigen::VectorXd::Ones(p.band_count())};
+  const auto model = test::true_model(p, unit);
   return model;
 }
 
