@@ -26,6 +26,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -78,6 +79,8 @@ struct Coverage {
 
 struct BracketStudy {
   Coverage long_only, short_only, fused, fused_mosaics;
+  // Moving: fused readings (and readings of fused mosaics) far from every frame's truth.
+  long readings_of_no_moment = 0, mosaics_of_no_moment = 0;
 };
 
 // A bracket of `n` exposures, each a third of the one before, the longest `longest` times the
@@ -86,6 +89,7 @@ struct Bracket {
   double longest = 1;
   int n = 6;
   bool blur_correction = false;
+  bool moving = false;  // the simulator's pool 0.67 pixels further each frame
 };
 
 BracketStudy study(DemosaicMethod demosaic, Bracket bracket = {}) {
@@ -109,8 +113,9 @@ BracketStudy study(DemosaicMethod demosaic, Bracket bracket = {}) {
   constexpr double ratio = 3;
   const int n = bracket.n;
   BracketStudy b;
-  auto frame = [&](const cv::Mat& truth_with_nan) {
-    cv::Mat truth = truth_with_nan.clone();
+  // Frame k of the bracket sees scene(k); the fused frame is scored against the last one.
+  auto frame = [&](const std::function<cv::Mat(int)>& scene) {
+    cv::Mat truth = scene(n - 1);
     cv::patchNaNs(truth, 0);  // NaN: the scene's cold background
     BracketFusion fusion(n);
     MosaicBracketFusion mosaic_fusion(n, 2);
@@ -119,7 +124,7 @@ BracketStudy study(DemosaicMethod demosaic, Bracket bracket = {}) {
     for (int k = 0; k < n; ++k) exposures[k] = long_us / std::pow(ratio, k);
     for (int k = 0; k < n; ++k) {
       cv::Mat t;
-      subtract_dark(camera.render(truth_with_nan, exposures[k]),
+      subtract_dark(camera.render(scene(k), exposures[k]),
                     dark_from_image(camera.render_dark(kW, kH, exposures[k])),
                     p.thresholds.inference_saturation_dn, signal);
       measurer.measure_signal(signal, t);
@@ -133,9 +138,36 @@ BracketStudy study(DemosaicMethod demosaic, Bracket bracket = {}) {
     cv::Mat t;
     measurer.measure_signal(fused_signal, t);
     b.fused_mosaics.add(truth, encode_decikelvin(t));
+    if (!bracket.moving) return;
+    // Readings of no moment: far from the truth of every frame of the bracket.
+    std::vector<cv::Mat> truths;
+    for (int k = 0; k < n; ++k) truths.push_back(scene(k));
+    auto of_no_moment = [&](const cv::Mat& codes) {
+      long count = 0;
+      for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+          const std::uint16_t c = codes.at<std::uint16_t>(y, x);
+          if (c == kNoReadingCode) continue;
+          bool near_one = false;
+          for (const cv::Mat& m : truths) {
+            const double tk = std::isfinite(m.at<float>(y, x)) ? m.at<float>(y, x) : 0.0;
+            near_one |= std::abs(code_to_celsius(c) - tk) <= std::max(150.0, 0.1 * tk);
+          }
+          count += !near_one;
+        }
+      return count;
+    };
+    b.readings_of_no_moment += of_no_moment(out);
+    b.mosaics_of_no_moment += of_no_moment(encode_decikelvin(t));
   };
-  for (int i = 0; i < 60; i += 4) frame(melt_pool_scene(kW, kH, i, 60));
-  for (double peak : {1500.0, 2000.0, 2500.0}) frame(parabolic_pool(peak));
+  if (bracket.moving) {
+    // 320 pixels at 0.5 / 239 of the width a frame: 0.67 pixels.
+    for (int i = 0; i < 240 - n; i += 16)
+      frame([&](int k) { return melt_pool_scene(kW, kH, i + k, 240); });
+    return b;
+  }
+  for (int i = 0; i < 60; i += 4) frame([&](int) { return melt_pool_scene(kW, kH, i, 60); });
+  for (double peak : {1500.0, 2000.0, 2500.0}) frame([&](int) { return parabolic_pool(peak); });
   return b;
 }
 
@@ -196,6 +228,29 @@ TEST(BracketTargets, ALongerBracketWithTheBlurCorrectionReadsTheRim) {
   // and at most 0.7 times as many as without (114; the difference 112, its deviation 15).
   EXPECT_LE(fixed.fused_mosaics.wild_percent(), 0.75);
   EXPECT_LE(fixed.fused_mosaics.wild, 0.7 * plain.fused_mosaics.wild);
+}
+
+// The simulator's pool moving 0.67 pixels a frame over the bracket (six frames: about four
+// pixels), each fused frame scored against the last frame's truth. thermalfuse's readings are
+// each of one frame, some of them older (where the pool was then); mosaicfuse's footprints
+// hold samples of different moments, and on the pool's steep sides their ratios are of no
+// temperature at all. Measured 9.4 % of 4144 fused readings off the last frame's truth, none
+// far from every frame's; fused mosaics 34.2 % of 7058, 535 far from every frame's. (A check that
+// left a sample without a number where the frames disagreed on it beyond a bound on its noise
+// caught 18 of those 535: each sample of such a footprint agrees with the frames that can see
+// it, a short exposure's noise scaled up hides the rest; not kept.) The bounds are about 8
+// Poisson deviations from those counts.
+TEST(BracketTargets, OnAMovingPoolFusedReadingsAreEachOfOneMoment) {
+  Bracket moving;
+  moving.moving = true;
+  const BracketStudy b = study(DemosaicMethod::kAuto, moving);
+  print("matched, the pool moving 0.67 pixels a frame", b);
+  std::printf(
+      "  far from every frame's truth: %ld of the fused readings, %ld of the fused mosaics'\n",
+      b.readings_of_no_moment, b.mosaics_of_no_moment);
+  EXPECT_LE(b.readings_of_no_moment, 20);
+  EXPECT_GE(b.mosaics_of_no_moment, 350);
+  EXPECT_LT(b.fused.wild_percent(), 0.5 * b.fused_mosaics.wild_percent());
 }
 
 }  // namespace
