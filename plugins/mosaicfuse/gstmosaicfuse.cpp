@@ -23,7 +23,12 @@
  * A sample from a shorter exposure, scaled up, is noisier than the noise model of the longest
  * one says: ratiotemp's uncertainty output and misfit check are too confident on such pixels.
  * Samples of different frames meet in one footprint: over a pool that moves between the frames
- * of a bracket, the bands of a pixel near the boundary are from different moments.
+ * of a bracket, the bands of a pixel near the boundary are from different moments, and its
+ * reading may be of no temperature at all. So each frame is compared with the one before on the
+ * samples both expose well, scaled to one exposure: once, over the stream, they disagree beyond
+ * a bound on the noise several times a sensor's on at least 20 samples and 0.2 % of those
+ * compared, one warning on the bus (STREAM FORMAT) says that the scene moves and to fuse with
+ * thermalfuse instead; the fusion goes on as before (a still pool's frames disagree on none).
  *
  * A frame without exposure metadata passes unchanged and starts the fusion anew, with one
  * warning on the bus (STREAM FORMAT). A frame whose time is before the frame's before it
@@ -31,7 +36,7 @@
  *
  * ## Example launch line
  * (pyrocamsrc's melt pool moves, about 1.6 pixels a frame at 320x240: its boundaries read wild
- * here, without a warning; for a moving pool use thermalfuse)
+ * here, and mosaicfuse warns that the scene moves; for a moving pool use thermalfuse)
  * |[
  * gst-launch-1.0 pyrocamsrc scene=melt-pool bracket=3,1,0.333,0.111,0.037,0.012,0.004 ! \
  *     darksub dark-level=50 ! mosaicfuse frames=7 ! demosaic25 ! \
@@ -81,6 +86,8 @@ struct State {
   bool warned_no_exposure = false;
   GstClockTime last_pts = GST_CLOCK_TIME_NONE;  // of the frame before
   bool warned_out_of_order = false;
+  pyrocam::MosaicBracketFusion::Agreement agreement;  // of consecutive frames, since the start
+  bool warned_moving = false;
   void reset() {
     if (fusion) fusion->reset();
     exposures.clear();
@@ -173,6 +180,22 @@ static GstFlowReturn gst_mosaic_fuse_transform_ip(GstBaseTransform* trans, GstBu
     mosaic.map_float(buffer, st.width, st.height, 1,
                      static_cast<GstMapFlags>(GST_MAP_READ | GST_MAP_WRITE));
     const double reference = st.fusion->add(mosaic.image(), now.light, mosaic.image());
+    const pyrocam::MosaicBracketFusion::Agreement& agreement = st.fusion->last_agreement();
+    GST_LOG_OBJECT(self, "the frame before disagrees on %zu of %zu samples", agreement.disagreeing,
+                   agreement.compared);
+    st.agreement += agreement;
+    if (!st.warned_moving && st.agreement.moved()) {
+      st.warned_moving = true;
+      GST_ELEMENT_WARNING(self, STREAM, FORMAT,
+                          ("The scene moves between the bracket's frames: consecutive frames "
+                           "disagree on %zu of %zu samples both expose well. Samples of different "
+                           "moments meet in one demosaicking footprint, whose reading may be of "
+                           "no temperature; fuse a moving scene's readings with thermalfuse after "
+                           "ratiotemp instead",
+                           st.agreement.disagreeing, st.agreement.compared),
+                          ("beyond 4 standard deviations of a bound on the noise (1 DN of shot "
+                           "variance per DN, 4 DN^2 floor) and 5 %%"));
+    }
     // Saturated now only where no frame of the bracket read: say where, for the elements
     // downstream, in place of darksub's count for this frame alone.
     const pyrocam::SaturatedSamples saturated = pyrocam::find_saturated(mosaic.image());

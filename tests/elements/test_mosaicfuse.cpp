@@ -160,5 +160,22 @@ TEST(MosaicFuse, FramesWithoutAnExposurePassUnchangedWithOneWarning) {
   EXPECT_NE(r.warnings[0].find("without its exposure"), std::string::npos) << r.warnings[0];
 }
 
+// Over a moving pool the bracket's frames disagree on the samples of its steep sides: one
+// warning, the fusion going on; over a still plate none (its frames agree on every sample).
+TEST(MosaicFuse, AMovingSceneGetsOneWarningAStillOneNone) {
+  REQUIRE_ELEMENT("mosaicfuse");
+  auto camera = [](const std::string& scene) {
+    return "pyrocamsrc " + scene +
+           " bracket=3,1,0.333 num-buffers=24 ! video/x-bayer,width=320,height=240";
+  };
+  const FuseRun moving = run(chain("mosaicfuse frames=3", camera("scene=melt-pool"))),
+                still = run(chain("mosaicfuse frames=3", camera("scene=plate temperature=1500")));
+  ASSERT_TRUE(moving.eos && still.eos);
+  EXPECT_EQ(moving.frames.size(), 24u);
+  ASSERT_EQ(moving.warnings.size(), 1u);
+  EXPECT_NE(moving.warnings[0].find("The scene moves"), std::string::npos) << moving.warnings[0];
+  EXPECT_TRUE(still.warnings.empty()) << still.warnings[0];
+}
+
 }  // namespace
 }  // namespace pyrocam::test

@@ -94,6 +94,35 @@ constexpr int kNeighbourCells = 2;
 // more noise (without it the bracket targets' wild readings rose from 0.4 to 1.9 %).
 constexpr float kNearLevelFraction = 0.85f;
 
+// MosaicBracketFusion::Agreement's bound on a sample's noise (see there).
+constexpr double kMotionShotDnPerDn = 1;
+constexpr double kMotionFloorDn2 = 4;
+constexpr double kMotionRelative = 0.05;
+constexpr double kMotionDeviations = 4;
+
+// How `now` (light `now_light`) agrees with `before`: samples in [low, high] in both.
+MosaicBracketFusion::Agreement agreement(const cv::Mat& now, double now_light,
+                                         const cv::Mat& before, double before_light, double low,
+                                         double high) {
+  MosaicBracketFusion::Agreement a;
+  const double reference = std::max(now_light, before_light);
+  const double s_now = reference / now_light, s_before = reference / before_light;
+  for (int y = 0; y < now.rows; ++y) {
+    const float *p = now.ptr<float>(y), *q = before.ptr<float>(y);
+    for (int x = 0; x < now.cols; ++x) {
+      const double u = p[x], v = q[x];
+      if (!(u >= low && u <= high && v >= low && v <= high)) continue;  // NaN, +INF fail
+      ++a.compared;
+      const double su = u * s_now, sv = v * s_before;
+      const double variance = (kMotionShotDnPerDn * u + kMotionFloorDn2) * s_now * s_now +
+                              (kMotionShotDnPerDn * v + kMotionFloorDn2) * s_before * s_before;
+      a.disagreeing += std::abs(su - sv) >
+                       kMotionDeviations * std::sqrt(variance) + kMotionRelative * std::max(su, sv);
+    }
+  }
+  return a;
+}
+
 // 1 where a sample within kNeighbourCells cells of its band's grid (`period` pixels a cell) is
 // +INF and the sample is at least kNearLevelFraction of `largest`, the largest number seen, this
 // frame's included (it is raised to it): at most the saturation level less the dark. A
@@ -145,6 +174,9 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
                      std::to_string(light));
   if (!held_.empty() && held_.front().signal.size() != signal.size()) reset();
   const Held now{signal.clone(), near_saturated(signal, period_, largest_), light};
+  agreement_ = held_.empty() ? Agreement{}
+                             : agreement(now.signal, light, held_.back().signal, held_.back().light,
+                                         kMotionLowDn, kNearLevelFraction * largest_);
   // The frames by light, most first; among equals the latest first.
   std::vector<const Held*> order;
   order.push_back(&now);

@@ -152,6 +152,42 @@ TEST(MosaicBracketFusion, ASampleNearTheLevelNextToASaturatedOneIsTakenFromAShor
   expect_samples(out, {100, 100, 96, 100, 98, 100, kSat, 100, 90, 100, 60, 100, 99, 100});
 }
 
+// Consecutive frames are compared on the samples both expose well (16 DN up to 85 % of the
+// largest number seen), scaled to one exposure: a still scene agrees, an edge that moved between
+// them does not where the bound on the noise cannot explain the difference.
+TEST(MosaicBracketFusion, ConsecutiveFramesDisagreeWhereAnEdgeMoved) {
+  constexpr int kW = 200;
+  // 200 DN left of `edge`, 50 right of it, times `scale`; one sample at 400 (the largest number
+  // seen: samples up to 340 compare).
+  auto frame = [](int edge, float scale) {
+    cv::Mat m(1, kW, CV_32F);
+    for (int x = 0; x < kW; ++x) m.at<float>(0, x) = (x < edge ? 200.f : 50.f) * scale;
+    m.at<float>(0, kW - 1) = 400 * scale;
+    return m;
+  };
+  MosaicBracketFusion still(2, 2), moving(2, 2);
+  cv::Mat out;
+  still.add(frame(100, 1), 3, out);
+  EXPECT_EQ(still.last_agreement().compared, 0u);  // nothing before it
+  still.add(frame(100, 1.f / 3), 1, out);
+  EXPECT_EQ(still.last_agreement().compared, kW - 1u);
+  EXPECT_EQ(still.last_agreement().disagreeing, 0u);
+  // The edge 10 samples further on in the second frame: there the long frame says 50 and the
+  // short one 200 (scaled), 150 apart, beyond 4 sqrt(50 + 4 + (66.7 + 4) 9) + 10 = 115.
+  moving.add(frame(100, 1), 3, out);
+  moving.add(frame(110, 1.f / 3), 1, out);
+  MosaicBracketFusion::Agreement sum = moving.last_agreement();
+  EXPECT_EQ(sum.compared, kW - 1u);
+  EXPECT_EQ(sum.disagreeing, 10u);
+  EXPECT_FALSE(sum.moved());          // fewer than 20 samples
+  moving.add(frame(120, 1), 3, out);  // and on again, now the long frame
+  sum += moving.last_agreement();
+  EXPECT_EQ(sum.disagreeing, 20u);
+  EXPECT_TRUE(sum.moved());
+  moving.reset();
+  EXPECT_EQ(moving.last_agreement().compared, 0u);
+}
+
 // A uniform surface whose samples lie near the saturation level in the long frame: the fused
 // samples' mean is the surface's. Taken wherever it is below the level, a sample is kept where
 // its own noise pulled it down: the mean of a normal cut at z standard deviations above its

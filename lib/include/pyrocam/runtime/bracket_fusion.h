@@ -68,7 +68,8 @@ class BracketFusion {
 // samples' noise is that of their own exposure times the scale, more than the noise model of
 // the reference assumes: uncertainties of such pixels are low. Samples from different frames
 // meet in one footprint, so over a pool that moves between the bracket's frames the bands of a
-// pixel near a boundary are from different moments.
+// pixel near a boundary are from different moments: last_agreement() says how each frame agrees
+// with the one before, for a warning (mosaicfuse's).
 class MosaicBracketFusion {
  public:
   // frames: 1..kMaxBracketFrames (1: no fusion); period: the mosaic's cell size, 1..16 (the
@@ -83,9 +84,35 @@ class MosaicBracketFusion {
   void reset() {
     held_.clear();
     largest_ = 0;
+    agreement_ = {};
   }
   int frames() const { return frames_; }
   std::size_t held() const { return held_.size(); }
+
+  // How the last frame added agrees with the one before it, sample by sample, scaled to one
+  // exposure: of the samples well exposed in both (at least kMotionLowDn and below the level's
+  // neighbourhood in each frame's own DN), how many differ by more than a bound on their noise
+  // (shot variance of at most 1 DN per DN, a floor of 4 DN^2, 4 standard deviations, and 5 % for
+  // the exposures' own inaccuracy). The bound is several times a real sensor's noise, so a still
+  // scene disagrees on next to none; a pool that moves between the frames disagrees on its steep
+  // sides. `moved`: at least kMovedShare of them and kMovedSamples (a small pool gives a few a
+  // frame: sum the frames' agreements, as mosaicfuse does over its stream).
+  struct Agreement {
+    std::size_t compared = 0, disagreeing = 0;
+    Agreement& operator+=(const Agreement& o) {
+      compared += o.compared;
+      disagreeing += o.disagreeing;
+      return *this;
+    }
+    bool moved() const {
+      return disagreeing >= kMovedSamples &&
+             static_cast<double>(disagreeing) >= kMovedShare * static_cast<double>(compared);
+    }
+  };
+  static constexpr double kMotionLowDn = 16;
+  static constexpr std::size_t kMovedSamples = 20;
+  static constexpr double kMovedShare = 0.002;
+  const Agreement& last_agreement() const { return agreement_; }
 
  private:
   struct Held {
@@ -98,6 +125,7 @@ class MosaicBracketFusion {
   // The largest number of any frame since the start, each in its own DN: at most the
   // saturation level less the dark, and close to it once something has been near the level.
   float largest_ = 0;
+  Agreement agreement_;
 };
 
 }  // namespace pyrocam
