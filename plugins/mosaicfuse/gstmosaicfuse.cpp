@@ -191,7 +191,8 @@ static GstFlowReturn gst_mosaic_fuse_transform_ip(GstBaseTransform* trans, GstBu
                            "disagree on %zu of %zu samples both expose well. Samples of different "
                            "moments meet in one demosaicking footprint, whose reading may be of "
                            "no temperature; fuse a moving scene's readings with thermalfuse after "
-                           "ratiotemp instead",
+                           "ratiotemp instead (or, if the scene holds still, the frames were not "
+                           "taken with the exposures their metadata say)",
                            st.agreement.disagreeing, st.agreement.compared),
                           ("beyond 4 standard deviations of a bound on the noise (1 DN of shot "
                            "variance per DN, 4 DN^2 floor) and 5 %%"));
