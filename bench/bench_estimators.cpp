@@ -192,21 +192,13 @@ int main(int argc, char** argv) {
                  time_frames(frames, [&] { likelihood.estimate(planes, t_fast); }));
     print_timing("likelihood estimate_codes (fast)",
                  time_frames(frames, [&] { likelihood.estimate_codes(planes, codes); }));
-    // The exhaustive scan as a per-pixel estimator, on the same rows.
-    const auto exhaustive = pyrocam::make_exhaustive_likelihood_estimator(model);
-    exhaustive->set_partial_bands(kSafe);
-    print_timing("likelihood, exhaustive scan (reference)", time_frames(0, [&] {
-                   t_exhaustive.create(planes[0].size(), CV_32F);
-                   cv::parallel_for_(cv::Range(0, planes[0].rows), [&](const cv::Range& r) {
-                     std::vector<const float*> rows(planes.size());
-                     for (int y = r.start; y < r.end; ++y) {
-                       for (std::size_t b = 0; b < planes.size(); ++b)
-                         rows[b] = planes[b].ptr<float>(y);
-                       exhaustive->estimate(rows.data(), static_cast<std::size_t>(planes[0].cols),
-                                            t_exhaustive.ptr<float>(y));
-                     }
-                   });
-                 }));
+    // The exhaustive scan in the same plane estimator (the same checks before the fit: the
+    // saturation edge drops bands near the level on over-exposed frames).
+    pyrocam::PlaneEstimator exhaustive(model, pyrocam::make_exhaustive_likelihood_estimator(model),
+                                       Method::kLikelihood);
+    exhaustive.set_partial_bands(kSafe);
+    print_timing("likelihood, exhaustive scan (reference)",
+                 time_frames(0, [&] { exhaustive.estimate(planes, t_exhaustive); }));
     const pyrocam::PlaneEstimator mlp(model, Method::kMlp);
     print_timing("mlp estimate", time_frames(0, [&] { mlp.estimate(planes, t_mlp); }));
     print_agreement("fast likelihood against exhaustive", t_exhaustive, t_fast, 0.01);
