@@ -359,22 +359,31 @@ SaturationEdgeCheck PlaneEstimator::saturation_edge_check() const {
   return SaturationEdgeCheck(model_->profile(), analogue_gain_, level);
 }
 
-std::function<double(int, int, int, int)> PlaneEstimator::planes_ring_mean_of(
-    const std::vector<cv::Mat>& planes, double saturated, double foreign_above) const {
+RingMeans PlaneEstimator::planes_ring_mean_of(const std::vector<cv::Mat>& planes, double saturated,
+                                              double foreign_above) const {
   if (dim_edge_mosaic_) return mosaic_window_mean_of(*dim_edge_mosaic_, saturated, foreign_above);
   const DimEdgeCheck::Ring ring = DimEdgeCheck::plane_ring(model_->profile().mosaic);
-  return [&planes, ring, saturated, foreign_above](int b, int first, int last, int y) {
-    return plane_ring_mean(planes[static_cast<std::size_t>(b)], first, last, y, ring, saturated,
-                           foreign_above);
-  };
+  return {
+      [&planes, ring, saturated, foreign_above](int b, int first, int last, int y) {
+        return plane_ring_mean(planes[static_cast<std::size_t>(b)], first, last, y, ring, saturated,
+                               foreign_above);
+      },
+      [&planes, ring, saturated, foreign_above](int b, int first, int span, int y, double* means) {
+        plane_ring_means_four(planes[static_cast<std::size_t>(b)], first, span, y, ring, means,
+                              saturated, foreign_above);
+      }};
 }
 
-std::function<double(int, int, int, int)> PlaneEstimator::mosaic_window_mean_of(
-    const MatchedMosaic& source, double saturated, double foreign_above) {
-  return [&source, saturated, foreign_above](int b, int first, int last, int y) {
-    return mosaic_ring_mean(source.mosaic, source.layout, b, first, last, y,
-                            DimEdgeCheck::kMosaicRing, saturated, foreign_above);
-  };
+RingMeans PlaneEstimator::mosaic_window_mean_of(const MatchedMosaic& source, double saturated,
+                                                double foreign_above) {
+  return {[&source, saturated, foreign_above](int b, int first, int last, int y) {
+            return mosaic_ring_mean(source.mosaic, source.layout, b, first, last, y,
+                                    DimEdgeCheck::kMosaicRing, saturated, foreign_above);
+          },
+          [&source, saturated, foreign_above](int b, int first, int span, int y, double* means) {
+            mosaic_ring_means_four(source.mosaic, source.layout, b, first, span, y,
+                                   DimEdgeCheck::kMosaicRing, means, saturated, foreign_above);
+          }};
 }
 
 void PlaneEstimator::estimate(const std::vector<cv::Mat>& planes, cv::Mat& t, cv::Mat* u) const {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <vector>
 
@@ -96,6 +97,55 @@ TEST(DimEdge, the_rings_largest_half_sees_inside_a_body) {
   for (int b = 0; b < 3; ++b)
     EXPECT_FLOAT_EQ(mosaic_ring_mean(mosaic, rggb, b, 15, 15, 15, {3, 6}), static_cast<float>(b))
         << b;
+}
+
+// Four spans' ring means side by side are each span's own, bit for bit: on planes and mosaics of
+// noisy values with NaN, +INF and foreign ones, at every place (the image's edges included, where
+// the rings are clipped and the spans are read one by one), with a saturated value counted as
+// +INF and as a level.
+TEST(DimEdge, four_spans_ring_means_are_each_spans_own) {
+  cv::Mat image(37, 45, CV_32F);
+  cv::RNG rng(7);
+  rng.fill(image, cv::RNG::UNIFORM, 0, 200);
+  for (int k = 0; k < 60; ++k) {
+    const int x = rng.uniform(0, image.cols), y = rng.uniform(0, image.rows);
+    image.at<float>(y, x) = k % 3 == 0 ? NAN : k % 3 == 1 ? INFINITY : 900.0f;  // 900: foreign
+  }
+  const auto same = [](double a, double b) {
+    return (std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof a) == 0;
+  };
+  const MosaicLayout rggb = MosaicLayout::bayer("RGGB");
+  std::vector<int> cells(25);
+  for (int b = 0; b < 25; ++b) cells[static_cast<std::size_t>(b)] = b;
+  const MosaicLayout five = MosaicLayout::snapshot(5, 5, cells);
+  int compared = 0, differ = 0, foreign = 0;
+  for (const double saturated : {static_cast<double>(INFINITY), 187.3})
+    for (int y = 0; y < image.rows; ++y)
+      for (int first = 0; first < image.cols; first += 2) {
+        double means[4];
+        for (const DimEdgeCheck::Ring ring : {DimEdgeCheck::Ring{5, 6}, DimEdgeCheck::Ring{3, 3}}) {
+          plane_ring_means_four(image, first, 2, y, ring, means, saturated, 500);
+          for (int k = 0; k < 4 && first + 2 * k < image.cols; ++k, ++compared) {
+            const int at = first + 2 * k;
+            const double one = plane_ring_mean(image, at, at + 1, y, ring, saturated, 500);
+            differ += !same(means[k], one);
+            foreign += std::isnan(one);
+          }
+        }
+        for (const auto& [layout, band] :
+             {std::pair{rggb, 0}, std::pair{rggb, 1}, std::pair{rggb, 2}, std::pair{five, 7}}) {
+          mosaic_ring_means_four(image, layout, band, first, 2, y, DimEdgeCheck::kMosaicRing, means,
+                                 saturated, 500);
+          for (int k = 0; k < 4 && first + 2 * k < image.cols; ++k, ++compared) {
+            const int at = first + 2 * k;
+            const double one = mosaic_ring_mean(image, layout, band, at, at + 1, y,
+                                                DimEdgeCheck::kMosaicRing, saturated, 500);
+            differ += !same(means[k], one);
+          }
+        }
+      }
+  EXPECT_EQ(differ, 0) << "of " << compared;
+  EXPECT_GT(foreign, 0);  // rings with a foreign value were among them
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -137,5 +138,24 @@ double plane_ring_mean(const cv::Mat& plane, int first, int last, int y, DimEdge
 double mosaic_ring_mean(const cv::Mat& mosaic, const MosaicLayout& layout, int band, int first,
                         int last, int y, DimEdgeCheck::Ring ring, double saturated = INFINITY,
                         double foreign_above = INFINITY);
+// The ring means a check reads (plane_ring_mean or mosaic_ring_mean with their settings): of one
+// span, columns first .. last, and of four neighbouring ones at once (the ..._four functions).
+struct RingMeans {
+  std::function<double(int band, int first, int last, int y)> one;
+  std::function<void(int band, int first, int span, int y, double* means)> four;
+  double operator()(int band, int first, int last, int y) const {
+    return one(band, first, last, y);
+  }
+};
+
+// plane_ring_mean and mosaic_ring_mean of four neighbouring spans, columns first + k span ..
+// first + k span + span - 1 (k < 4), into means[k] (NaN for a span that starts past the image):
+// the same bits, side by side where the rings lie inside the image.
+void plane_ring_means_four(const cv::Mat& plane, int first, int span, int y,
+                           DimEdgeCheck::Ring ring, double* means, double saturated = INFINITY,
+                           double foreign_above = INFINITY);
+void mosaic_ring_means_four(const cv::Mat& mosaic, const MosaicLayout& layout, int band, int first,
+                            int span, int y, DimEdgeCheck::Ring ring, double* means,
+                            double saturated = INFINITY, double foreign_above = INFINITY);
 
 }  // namespace pyrocam

@@ -187,11 +187,10 @@ class PlaneEstimator {
   bool reads_partial() const;
   // The ring means the checks read: of the mosaic, or of the planes (set_dim_edge_mosaic), with
   // saturated values counted as `saturated` and NaN where one lies above `foreign_above`.
-  static std::function<double(int, int, int, int)> mosaic_window_mean_of(
-      const MatchedMosaic& source, double saturated = INFINITY, double foreign_above = INFINITY);
-  std::function<double(int, int, int, int)> planes_ring_mean_of(
-      const std::vector<cv::Mat>& planes, double saturated = INFINITY,
-      double foreign_above = INFINITY) const;
+  static RingMeans mosaic_window_mean_of(const MatchedMosaic& source, double saturated = INFINITY,
+                                         double foreign_above = INFINITY);
+  RingMeans planes_ring_mean_of(const std::vector<cv::Mat>& planes, double saturated = INFINITY,
+                                double foreign_above = INFINITY) const;
   // Throws InputError for a source the fused path cannot read with this model.
   void check_matched_mosaic(const MatchedMosaic& source) const;
   // The fused path's strips: for each row of each strip, `lit_run(y, x0, x1, rows, scratch,

@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <type_traits>
 #include <vector>
 
 #include "pyrocam/core/profile.h"
+#include "pyrocam/runtime/dim_edge.h"
 
 namespace pyrocam {
 
@@ -74,13 +76,25 @@ class SaturationEdgeCheck {
       float* copy = nullptr;  // made at the first mark
       int span_of = -1;
       bool span_marks = false;
+      int four_from = -1;  // RingMeans: the first of four spans' means held
+      double four[4];
       for (std::size_t i = 0; i < n; ++i) {
         if (!(row[i] >= low && row[i] <= high)) continue;
         if (every_band_reads && !all_finite(rows, nb, i)) continue;
         const int span = (x0 + static_cast<int>(i)) / span_columns * span_columns;
         if (span != span_of) {  // the span's ring, read once
           span_of = span;
-          span_marks = marks(b, window_mean(static_cast<int>(b), span, span + span_columns - 1, y));
+          double mean;
+          if constexpr (std::is_same_v<WindowMean, RingMeans>) {
+            if (four_from < 0 || span < four_from || span >= four_from + 4 * span_columns) {
+              four_from = span;
+              window_mean.four(static_cast<int>(b), span, span_columns, y, four);
+            }
+            mean = four[(span - four_from) / span_columns];
+          } else {
+            mean = window_mean(static_cast<int>(b), span, span + span_columns - 1, y);
+          }
+          span_marks = marks(b, mean);
         }
         if (!span_marks) continue;
         if (!copy) {
