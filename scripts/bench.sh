@@ -10,12 +10,14 @@
 # made once into build/bench-data (3 minutes or more each) unless given. Environment:
 #   RGB_MODEL, NIR_MODEL  model files to use instead
 #   SCENES       the per-scene table's scenes, comma-separated
-#                [plate:1500:36,plate:1500:90,plate:1500:90@2,plate:1500:90@3,melt-pool,
-#                filament:1800]:
+#                [plate:1500:36,plate:1500:36@1.2,plate:1500:90,plate:1500:90@2,
+#                plate:1500:90@3,melt-pool,filament:1800]:
 #                plate:T[:P] a plate at T degC covering P % of the frame (36 unless given),
 #                filament:T, melt-pool; a suffix @F exposes F times longer (e.g.
-#                plate:1500:36@1.3: the brightest bands of most hot pixels saturate; @2: most
-#                5x5 bands of the hot pixels saturate; @3: all but 7 of the 25)
+#                plate:1500:36@1.2: the colour camera's red band just below the saturation
+#                level, where the saturation-edge check reads a ring around most pixels;
+#                @1.3: the brightest bands of most hot pixels saturate; @2: most 5x5 bands of
+#                the hot pixels saturate; @3: all but 7 of the 25)
 #   FRAMES       frames per timed chain run, warm-up included [600] (the 5x5 chain: half)
 #   SOAK_FRAMES  frames of each soak [10000]; 0: no soak. The soaks run the simulated camera
 #                (pyrocamsrc, melt pool, 320x240, every frame new) through the colour chain with
@@ -78,7 +80,7 @@ if [[ -n ${SCENE:-} ]]; then
 fi
 echo
 build/bench/bench_chain --rgb-model "$rgb" --nir-model "$nir" --methods lut,likelihood \
-  --scenes "${SCENES:-plate:1500:36,plate:1500:90,plate:1500:90@2,plate:1500:90@3,melt-pool,filament:1800}" \
+  --scenes "${SCENES:-plate:1500:36,plate:1500:36@1.2,plate:1500:90,plate:1500:90@2,plate:1500:90@3,melt-pool,filament:1800}" \
   --frames "${FRAMES:-600}"
 echo "load average after the chains: $(cut -d' ' -f1-3 /proc/loadavg)"
 if ((${SOAK_FRAMES:-10000} > 0)); then
