@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
   std::vector<double> references;
   RateCampaign base;
   app.add_option("--profile", profiles, "camera profiles");
-  app.add_option("--family", families, "unit families");
+  app.add_option("--family", families, "unit families: typical, hostile, foreign, datasheet");
   app.add_option("--units", units, "seeded units per family");
   app.add_option("--reference", references, "reference temperatures, degC")->delimiter(',');
   app.add_option("--noise", base.relative_noise, "relative rms noise of a furnace rate");

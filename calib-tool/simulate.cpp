@@ -41,8 +41,9 @@ void add_camera_options(CLI::App* cmd, CameraOptions& o) {
       ->capture_default_str();
   cmd->add_option(
          "--unit", o.unit,
-         "How the simulated unit differs from its datasheet: datasheet, typical or hostile")
-      ->check(CLI::IsMember({"datasheet", "typical", "hostile"}))
+         "How the simulated unit differs from its datasheet: datasheet, typical, hostile or "
+         "foreign")
+      ->check(CLI::IsMember({"datasheet", "typical", "hostile", "foreign"}))
       ->capture_default_str();
   cmd->add_option("--unit-seed", o.unit_seed, "Seed of the unit's deviation")
       ->check(seed_check())

@@ -7,7 +7,9 @@
  * profile with EMVA 1288 noise (pyrocam::Simulator). The "typical" unit deviates from the
  * profile's datasheet the way a real camera does (filter leak, per-band scale and tilt); the
  * "hostile" one also has moved filter edges, narrow leaks, a sloping ND glass and band shape
- * changes.
+ * changes; the "foreign" one, deviations of other kinds (a moved and softened filter, weak
+ * blocking everywhere outside its pass band, a bent lens transmission, stretched and reshaped
+ * bands).
  *
  * Output follows the profile: 8-bit Bayer profiles give video/x-bayer (format = the pattern),
  * 5x5 profiles give video/x-raw GRAY8, profiles deeper than 8 bit GRAY16_LE; gray video carries
@@ -152,6 +154,8 @@ const char* unit_name(GstPyrocamSrcUnit unit) {
       return "typical";
     case GST_PYROCAM_SRC_UNIT_HOSTILE:
       return "hostile";
+    case GST_PYROCAM_SRC_UNIT_FOREIGN:
+      return "foreign";
     default:
       return "datasheet";
   }
@@ -526,7 +530,7 @@ static void gst_pyrocam_src_class_init(GstPyrocamSrcClass* klass) {
       gobject_class, PROP_UNIT,
       g_param_spec_enum("unit", "Camera unit",
                         "Which unit of the camera model: the datasheet itself, a typical unit "
-                        "deviating from it, or a hostile one (drawn from seed)",
+                        "deviating from it, or a hostile or foreign one (drawn from seed)",
                         GST_TYPE_PYROCAM_SRC_UNIT, DEFAULT_UNIT, ready));
   g_object_class_install_property(
       gobject_class, PROP_EXPOSURE,

@@ -21,6 +21,7 @@ typedef enum {
   GST_PYROCAM_SRC_UNIT_DATASHEET,
   GST_PYROCAM_SRC_UNIT_TYPICAL,
   GST_PYROCAM_SRC_UNIT_HOSTILE,
+  GST_PYROCAM_SRC_UNIT_FOREIGN,
 } GstPyrocamSrcUnit;
 #define GST_TYPE_PYROCAM_SRC_UNIT (gst_pyrocam_src_unit_get_type())
 GType gst_pyrocam_src_unit_get_type(void);

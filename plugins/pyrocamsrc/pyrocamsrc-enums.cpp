@@ -27,6 +27,10 @@ GType gst_pyrocam_src_unit_get_type(void) {
        "Typical plus moved filter edges, narrow leaks, a sloping ND glass and band shape "
        "changes (seeded)",
        "hostile"},
+      {GST_PYROCAM_SRC_UNIT_FOREIGN,
+       "Typical plus a moved and softened filter, weak blocking, a bent lens transmission and "
+       "stretched, reshaped bands (seeded)",
+       "foreign"},
       {0, nullptr, nullptr},
   };
   if (g_once_init_enter(&type)) {

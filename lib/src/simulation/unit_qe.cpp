@@ -70,18 +70,68 @@ Eigen::VectorXd hostile_shape(const Eigen::VectorXd& sensor, const WavelengthGri
   return factor;
 }
 
+// The foreign family: deviations of other kinds than the hostile family's, made to check the QE
+// fit on cameras it was not built around (nothing is chosen by its figures). The filter's curve
+// moved as a whole (an interference filter seen at an angle moves to the blue: -12..+3 nm) with
+// its edges softened (a Gaussian of 1-6 nm), blocking that lets 0.05-0.5 % through everywhere,
+// and a lens or window whose transmission bends smoothly over the whole range (log: linear and
+// quadratic terms of 0.1 rms over the grid).
+Eigen::VectorXd foreign_optics(const CameraProfile& profile, Random& rng) {
+  const WavelengthGrid& grid = profile.grid;
+  const Eigen::VectorXd moved = shift_curve(profile.optics_transmission, grid, rng.uniform(-12, 3));
+  const double sigma = rng.uniform(1, 6), background = rng.uniform(0.0005, 0.005);
+  const double a = 0.1 * rng.normal(), b = 0.1 * rng.normal();
+  const double first = grid.nm()[0], span = grid.nm()[grid.size() - 1] - first;
+  Eigen::VectorXd optics(grid.size());
+  for (Eigen::Index i = 0; i < grid.size(); ++i) {
+    double sum = 0, weights = 0;  // the edges softened
+    for (Eigen::Index j = 0; j < grid.size(); ++j) {
+      const double z = (grid.nm()[j] - grid.nm()[i]) / sigma;
+      if (std::abs(z) > 4) continue;
+      const double w = portable::exp(-0.5 * z * z);
+      sum += w * moved[j], weights += w;
+    }
+    const double x = 2 * (grid.nm()[i] - first) / span - 1;
+    const double lens = portable::exp(a * x + b * (x * x - 1.0 / 3));
+    optics[i] = std::clamp((sum / weights + background) * lens, 0.0, 1.0);
+  }
+  return optics;
+}
+
+// Per band: the sensor's response stretched or squeezed about its peak by 3 % rms, and a smooth
+// random change of its shape (four sinusoids of 100-400 nm period in its log, each of 0.05 rms).
+Eigen::VectorXd foreign_band(const Eigen::VectorXd& sensor, const WavelengthGrid& grid,
+                             Random& rng) {
+  Eigen::Index peak = 0;
+  sensor.maxCoeff(&peak);
+  const double centre = grid.nm()[peak], stretch = 1 + 0.03 * rng.normal();
+  Eigen::ArrayXd source = centre + (grid.nm().array() - centre) / stretch;
+  Eigen::VectorXd band = detail::warp_curve(sensor, grid, source);
+  double period[4], phase[4], amplitude[4];
+  for (int k = 0; k < 4; ++k)
+    period[k] = rng.uniform(100, 400), phase[k] = rng.uniform(0, 2 * M_PI),
+    amplitude[k] = 0.05 * std::sqrt(2.0) * rng.normal();
+  for (Eigen::Index i = 0; i < grid.size(); ++i) {
+    double log_factor = 0;
+    for (int k = 0; k < 4; ++k)
+      log_factor += amplitude[k] * portable::sin(2 * M_PI * grid.nm()[i] / period[k] + phase[k]);
+    band[i] *= portable::exp(log_factor);
+  }
+  return band;
+}
+
 }  // namespace
 
 UnitPerturbation UnitPerturbation::parse(const std::string& name, std::uint64_t seed) {
-  if (name != "datasheet" && name != "typical" && name != "hostile")
+  if (name != "datasheet" && name != "typical" && name != "hostile" && name != "foreign")
     throw InputError("unknown unit perturbation '" + name +
-                     "' (use datasheet, typical or hostile)");
+                     "' (use datasheet, typical, hostile or foreign)");
   return UnitPerturbation{name, seed};
 }
 
 Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbation& unit) {
   if (unit.name == "datasheet") return profile.system_qe();
-  const bool hostile = unit.name == "hostile";
+  const bool hostile = unit.name == "hostile", foreign = unit.name == "foreign";
   const UnitVariation& v = profile.unit_variation;
   Random rng(mix(unit.seed));
   const auto normal = [](Random& r) { return r.normal(); };
@@ -131,6 +181,7 @@ Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbat
   // stay as they were).
   Random hostile_rng(mix(unit.seed ^ 0x4057115Eull));
   if (hostile) optics = hostile_optics(profile, hostile_rng);
+  if (foreign) optics = foreign_optics(profile, hostile_rng);
 
   Eigen::MatrixXd q(profile.band_count(), grid.size());
   for (int band = 0; band < profile.band_count(); ++band) {
@@ -139,6 +190,7 @@ Eigen::MatrixXd true_system_qe(const CameraProfile& profile, const UnitPerturbat
     const double tilt = v.tilt_sigma * normal(rng);
     Eigen::VectorXd sensor = shift_curve(profile.sensor_qe.row(band).transpose(), grid, shift);
     if (hostile) sensor = sensor.cwiseProduct(hostile_shape(sensor, grid, hostile_rng));
+    if (foreign) sensor = foreign_band(sensor, grid, hostile_rng);
     const Eigen::VectorXd band_ripple = ripple().cwiseProduct(common_ripple);
     for (Eigen::Index i = 0; i < grid.size(); ++i) {
       const double factor =

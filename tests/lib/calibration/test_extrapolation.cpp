@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <string>
 
 #include "calibration/synthetic_calibration.h"
 #include "pyrocam/calibration/calibration_uncertainty.h"
@@ -43,6 +44,35 @@ TEST(HostileUnits, differ_from_typical_and_are_seeded) {
   std::cout << "largest relative change of a band against the typical unit: " << change << "\n";
   EXPECT_GT(change, 0.03);
   EXPECT_THROW(UnitPerturbation::parse("friendly", 1), InputError);
+}
+
+// The foreign family: seeded, within [0, 1], and off the typical unit by deviations of its own
+// (on every band, and outside the pass band where the typical unit's filter blocks).
+TEST(ForeignUnits, differ_from_typical_and_hostile_and_are_seeded) {
+  for (const char* name : {"rgb-reference", "nir5x5-reference"}) {
+    const CameraProfile p = load_profile_by_name(name);
+    const Eigen::MatrixXd typical = true_system_qe(p, UnitPerturbation::parse("typical", 4));
+    const Eigen::MatrixXd hostile = true_system_qe(p, UnitPerturbation::parse("hostile", 4));
+    const Eigen::MatrixXd foreign = true_system_qe(p, UnitPerturbation::parse("foreign", 4));
+    EXPECT_EQ(foreign, true_system_qe(p, UnitPerturbation::parse("foreign", 4)));
+    EXPECT_NE(foreign, true_system_qe(p, UnitPerturbation::parse("foreign", 5)));
+    EXPECT_NE(foreign, hostile);
+    EXPECT_GE(foreign.minCoeff(), 0.0);
+    EXPECT_LE(foreign.maxCoeff(), 1.0);
+    const Eigen::ArrayXd change =
+        (foreign - typical).rowwise().norm().array() / typical.rowwise().norm().array();
+    std::cout << name << ": smallest and largest relative change of a band against the typical "
+              << "unit: " << change.minCoeff() << ", " << change.maxCoeff() << "\n";
+    EXPECT_GT(change.minCoeff(), 0.01);
+    // The weak blocking: light outside the pass band that the typical unit's filter stops (the
+    // colour camera's below it, the 5x5 camera's below 650 nm).
+    const double cut = std::string(name) == "rgb-reference" ? p.filter_pass_band_nm[0] - 45 : 650.0;
+    double outside_typical = 0, outside_foreign = 0;
+    for (Eigen::Index i = 0; i < p.grid.size(); ++i)
+      if (p.grid.nm()[i] < cut)
+        outside_typical += typical.col(i).sum(), outside_foreign += foreign.col(i).sum();
+    EXPECT_GT(outside_foreign, 2 * outside_typical);
+  }
 }
 
 // What the hostile family does to the fit without and with three reference rows.

@@ -21,6 +21,11 @@ struct UnitPerturbation {
   // what no solver here is built around: the filter's pass-band edges moved 3-10 nm, narrow
   // leaks within 50 nm outside an edge at 0.2-3 % transmission, a neutral-density glass sloping
   // +-30 % over 700-1000 nm, and per-band shape changes (curvature, skew, a bump) of ~5 %.
+  // "foreign": typical plus deviations of other kinds, to check the QE fit on cameras it was
+  // not built around (no setting is chosen by them): the filter moved as a whole by -12..+3 nm
+  // and its edges softened by a 1-6 nm Gaussian, blocking that passes 0.05-0.5 % everywhere
+  // outside the pass band, a lens whose transmission bends smoothly over the grid (~10 %), and
+  // each band stretched about its peak (3 % rms) with a smooth random change of shape (~10 %).
   std::string name = "datasheet";
   std::uint64_t seed = 1;
 
