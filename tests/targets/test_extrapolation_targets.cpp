@@ -7,7 +7,8 @@
 // (the part of the interval ratiotemp output=uncertainty and measure --uncertainty report that
 // this level of study holds; the reading's noise and the thermocouple's term only widen it).
 // Prints every figure; asserts the targets that hold with loose bounds and, for those not yet
-// met, that they do not get worse than measured when this test was written.
+// met, that they do not get worse than measured when this test was written. Last, six units of
+// the foreign family (out of family, no targets): the interval still covers their errors.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -27,17 +28,18 @@ struct Figures {
   int covered_with_emissivity = 0;
 };
 
-Figures evaluate(const std::string& profile_name, bool references, int units) {
+Figures evaluate(const std::string& profile_name, bool references, int units,
+                 const std::string& family = "hostile") {
   const CameraProfile p = load_profile_by_name(profile_name);
   std::vector<double> temps;
   for (double t = 700; t <= 2600; t += 100) temps.push_back(t);
   double ss[4] = {0, 0, 0, 0};
   int n[4] = {0, 0, 0, 0};
   Figures f;
-  std::printf("%s, %d hostile units%s\n", profile_name.c_str(), units,
+  std::printf("%s, %d %s units%s\n", profile_name.c_str(), units, family.c_str(),
               references ? ", three reference rows" : "");
   for (std::uint64_t unit = 1; unit <= static_cast<std::uint64_t>(units); ++unit) {
-    const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse("hostile", unit));
+    const Eigen::MatrixXd truth = true_system_qe(p, UnitPerturbation::parse(family, unit));
     RateCampaign campaign;
     campaign.seed = 100 + unit;
     if (references) campaign.reference_temperatures_c = {1324, 1738, 2474};
@@ -129,6 +131,19 @@ TEST(ExtrapolationTargets, multispectral) {
   // window leaves out those the data reject). Six units are too few to tell (a unit's twelve
   // temperatures are covered or missed together): asserted as a lower bound only.
   EXPECT_GE(plain.covered, 65);
+}
+
+// Out of family: units whose deviations the QE model was not built around (the simulator's
+// foreign family; docs/extrapolation.md), which no setting was chosen by. No target there: the
+// readings go further wrong above the furnace (they lean low at 2600 degC, from leaks the furnace
+// cannot see), and what must hold is that the interval a reading carries says so, and that the
+// furnace range reads as on any unit.
+TEST(ExtrapolationOutOfFamily, foreign_units_read_within_their_interval) {
+  for (const char* camera : {"rgb-reference", "nir5x5-reference"}) {
+    const Figures f = evaluate(camera, false, 6, "foreign");
+    EXPECT_LT(f.in_range, 0.8);
+    EXPECT_GE(f.covered_with_emissivity, 0.95 * f.counted);
+  }
 }
 
 }  // namespace
