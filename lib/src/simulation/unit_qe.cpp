@@ -74,8 +74,8 @@ Eigen::VectorXd hostile_shape(const Eigen::VectorXd& sensor, const WavelengthGri
 // fit on cameras it was not built around (nothing is chosen by its figures). The filter's curve
 // moved as a whole (an interference filter seen at an angle moves to the blue: -12..+3 nm) with
 // its edges softened (a Gaussian of 1-6 nm), blocking that lets 0.05-0.5 % through everywhere,
-// and a lens or window whose transmission bends smoothly over the whole range (log: linear and
-// quadratic terms of 0.1 rms over the grid).
+// and a lens or window whose transmission bends smoothly over the whole range (its log a linear
+// and a quadratic term over the grid, coefficients of 0.1 rms).
 Eigen::VectorXd foreign_optics(const CameraProfile& profile, Random& rng) {
   const WavelengthGrid& grid = profile.grid;
   const Eigen::VectorXd moved = shift_curve(profile.optics_transmission, grid, rng.uniform(-12, 3));
