@@ -56,7 +56,8 @@ static const char* const stats_columns[] = {
     "region-height", "region-pixels",  "region-valid",  "region-valid-fraction",
     "region-min-c",  "region-max-c",   "region-mean-c", "region-median-c",
     "region-peak-c", "region-peak-x",  "region-peak-y", "saturated",
-    "region-saturated", "region-tracks-peak", "above-range", "region-above-range", NULL};
+    "region-saturated", "region-tracks-peak", "above-range", "region-above-range",
+    "peak-u-sys-c",  "region-peak-u-sys-c", NULL};
 /* clang-format on */
 static const char* const alarm_columns[] = {
     "element",      "state",         "active",    "statistic",    "value-c",  "threshold-c",

@@ -30,6 +30,7 @@ static gboolean plugin_init(GstPlugin* plugin) {
   pyrocam_exposure_meta_get_info();
   pyrocam_saturation_meta_get_info();
   pyrocam_above_range_meta_get_info();
+  pyrocam_uncertainty_meta_get_info();
   return ok;
 }
 

@@ -102,7 +102,10 @@ function makePanel(index, server) {
     // Pixels too bright to read: the peak read beside them is only a lower bound.
     // Pixels hotter than the model's range likewise.
     const saturated = s[r + "saturated"] ?? 0, above = s[r + "above-range"] ?? 0;
+    // A lower bound has no interval; a reading has the expanded systematic one of the model.
+    const sys = saturated > 0 || above > 0 ? undefined : s[r + "peak-u-sys-c"];
     $("peak").textContent = (saturated > 0 || above > 0 ? "≥ " : "") + fmt(s[r + "peak-c"]) + " °C" +
+      (sys !== undefined ? ` ± ${fmt(sys, 0)} sys.` : "") +
       (saturated > 0 ? ` (${saturated} px saturated)` : "") +
       (above > 0 ? ` (${above} px above the model's range)` : "");
     // In sensor pixels: a 5x5 camera's readings are per macro-pixel, the peak at its centre.

@@ -1,6 +1,7 @@
 #include "pyrocam-common.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -10,6 +11,7 @@
 #include "pyrocam/core/recording_comment.h"
 #include "pyrocam/runtime/bracket_fusion.h"
 #include "pyrocam/runtime/darksub.h"
+#include "pyrocam/runtime/uncertainty.h"
 
 namespace pyrocam::gst {
 
@@ -509,6 +511,16 @@ bool above_range_within(const PyrocamAboveRangeMeta* meta, cv::Size size, const 
   for (const cv::Rect& r : above_range_rects(meta, size))
     if (!(r & within).empty()) return true;
   return false;
+}
+
+double systematic_u_at(GstBuffer* buffer, double t_c) {
+  const PyrocamUncertaintyMeta* meta = pyrocam_buffer_get_uncertainty_meta(buffer);
+  if (!meta) return NAN;
+  pyrocam::SystematicUncertaintyTable table;
+  table.coverage_factor = meta->coverage_factor;
+  table.temperature_c.assign(meta->temperature_c, meta->temperature_c + meta->count);
+  table.expanded_u_c.assign(meta->expanded_u_c, meta->expanded_u_c + meta->count);
+  return table.at(t_c);
 }
 
 }  // namespace pyrocam::gst

@@ -184,6 +184,10 @@ cv::Rect largest_above_range_spot(const PyrocamAboveRangeMeta* meta, cv::Size si
 /* Whether `within` meets one of them. */
 bool above_range_within(const PyrocamAboveRangeMeta* meta, cv::Size size, const cv::Rect& within);
 
+/* The expanded systematic uncertainty of a reading at t_c, degC, from the buffer's
+ * PyrocamUncertaintyMeta (interpolated); NaN without one or outside its temperatures. */
+double systematic_u_at(GstBuffer* buffer, double t_c);
+
 /* How a failure is reported on the bus (STYLE.md: errors carry a domain, a user message and a
  * debug message). */
 enum class ErrorKind {

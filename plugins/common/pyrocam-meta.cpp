@@ -164,3 +164,57 @@ PyrocamAboveRangeMeta* pyrocam_buffer_set_above_range_meta(GstBuffer* buffer, gu
   }
   return m;
 }
+
+GType pyrocam_uncertainty_meta_api_get_type(void) {
+  static GType type = 0;
+  static const gchar* tags[] = {nullptr};  // none: per temperature, not per pixel
+  if (g_once_init_enter(&type)) {
+    GType t = gst_meta_api_type_register("PyrocamUncertaintyMetaAPI", tags);
+    g_once_init_leave(&type, t);
+  }
+  return type;
+}
+
+static gboolean uncertainty_meta_init(GstMeta* meta, gpointer /*params*/, GstBuffer* /*buffer*/) {
+  auto* m = reinterpret_cast<PyrocamUncertaintyMeta*>(meta);
+  m->coverage_factor = 2;
+  m->count = 0;
+  return TRUE;
+}
+
+static gboolean uncertainty_meta_transform(GstBuffer* dest, GstMeta* meta, GstBuffer* /*buffer*/,
+                                           GQuark /*type*/, gpointer /*data*/) {
+  auto* m = reinterpret_cast<PyrocamUncertaintyMeta*>(meta);
+  return pyrocam_buffer_set_uncertainty_meta(dest, m->coverage_factor, m->count, m->temperature_c,
+                                             m->expanded_u_c) != nullptr;
+}
+
+const GstMetaInfo* pyrocam_uncertainty_meta_get_info(void) {
+  static const GstMetaInfo* info = nullptr;
+  if (g_once_init_enter(&info)) {
+    const GstMetaInfo* i = gst_meta_register(
+        PYROCAM_UNCERTAINTY_META_API_TYPE, "PyrocamUncertaintyMeta", sizeof(PyrocamUncertaintyMeta),
+        uncertainty_meta_init, nullptr, uncertainty_meta_transform);
+    g_once_init_leave(&info, i);
+  }
+  return info;
+}
+
+PyrocamUncertaintyMeta* pyrocam_buffer_set_uncertainty_meta(GstBuffer* buffer,
+                                                            gdouble coverage_factor, guint count,
+                                                            const gdouble* temperature_c,
+                                                            const gdouble* expanded_u_c) {
+  auto* m = pyrocam_buffer_get_uncertainty_meta(buffer);
+  if (!m)
+    m = reinterpret_cast<PyrocamUncertaintyMeta*>(
+        gst_buffer_add_meta(buffer, pyrocam_uncertainty_meta_get_info(), nullptr));
+  if (m) {
+    m->coverage_factor = coverage_factor;
+    m->count = count < PYROCAM_UNCERTAINTY_META_SAMPLES ? count : PYROCAM_UNCERTAINTY_META_SAMPLES;
+    for (guint i = 0; i < m->count; ++i) {
+      m->temperature_c[i] = temperature_c[i];
+      m->expanded_u_c[i] = expanded_u_c[i];
+    }
+  }
+  return m;
+}

@@ -85,4 +85,31 @@ PyrocamAboveRangeMeta* pyrocam_buffer_set_above_range_meta(GstBuffer* buffer, gu
 #define pyrocam_buffer_get_above_range_meta(b) \
   ((PyrocamAboveRangeMeta*)gst_buffer_get_meta((b), PYROCAM_ABOVE_RANGE_META_API_TYPE))
 
+/* PyrocamUncertaintyMeta: what a reading of a frame is uncertain by, whatever its pixel's noise.
+ * ratiotemp attaches it to every temperature frame: the expanded (coverage_factor) systematic
+ * uncertainty of its readings (calibration, QE model, emissivity slope) at `count` temperatures
+ * evenly over the model's range, so that an element that sees only temperatures
+ * (thermalcolormap's peak readout) can say how far a reading is to be trusted: above the
+ * furnace's range it grows where the model extrapolates. The sensor noise of a pixel is not in
+ * it (ratiotemp output=uncertainty has both). Without API tags it travels with the frame. */
+#define PYROCAM_UNCERTAINTY_META_SAMPLES 64
+typedef struct {
+  GstMeta meta;
+  gdouble coverage_factor; /* k of the values (2 unless the model says otherwise) */
+  guint count;             /* samples used, at most PYROCAM_UNCERTAINTY_META_SAMPLES */
+  gdouble temperature_c[PYROCAM_UNCERTAINTY_META_SAMPLES]; /* ascending, degC */
+  gdouble expanded_u_c[PYROCAM_UNCERTAINTY_META_SAMPLES];  /* degC, at those temperatures */
+} PyrocamUncertaintyMeta;
+GType pyrocam_uncertainty_meta_api_get_type(void);
+#define PYROCAM_UNCERTAINTY_META_API_TYPE (pyrocam_uncertainty_meta_api_get_type())
+const GstMetaInfo* pyrocam_uncertainty_meta_get_info(void);
+/* Adds the meta, or overwrites the buffer's own (one per buffer); `count` values of each array
+ * (at most PYROCAM_UNCERTAINTY_META_SAMPLES are kept). */
+PyrocamUncertaintyMeta* pyrocam_buffer_set_uncertainty_meta(GstBuffer* buffer,
+                                                            gdouble coverage_factor, guint count,
+                                                            const gdouble* temperature_c,
+                                                            const gdouble* expanded_u_c);
+#define pyrocam_buffer_get_uncertainty_meta(b) \
+  ((PyrocamUncertaintyMeta*)gst_buffer_get_meta((b), PYROCAM_UNCERTAINTY_META_API_TYPE))
+
 G_END_DECLS

@@ -127,10 +127,12 @@
  *   window's centre; absent when no window qualifies, with peak-window 0, or when the window
  *   does not fit in the frame (a warning once if peak-window was set). About 75 ms of one
  *   core per 2048x2048 frame at window 5, on the frames that post statistics only;
+ * - peak-u-sys-c (double, degC): k times the systematic uncertainty of a reading at peak-c (no
+ *   noise), from the table every temperature frame carries as a PyrocamUncertaintyMeta;
  * - with #GstRatioTemp:region set: region-x, region-y, region-width, region-height (int, the
  *   region clipped to the frame) and region-pixels, region-valid, region-valid-fraction,
  *   region-min-c, region-max-c, region-mean-c, region-median-c, region-saturated,
- *   region-above-range, region-peak-c, region-peak-x, region-peak-y, as above for the region
+ *   region-above-range, region-peak-c, -x, -y, -u-sys-c, as above for the region
  * (windows inside the region; the position still in frame pixels; no peak for a region narrower
  * than the window).
  *
@@ -531,8 +533,8 @@ static GstFlowReturn gst_ratio_temp_transform(GstBaseTransform* trans, GstBuffer
       });
   if (!ok) return GST_FLOW_ERROR;
   if (gap) GST_BUFFER_FLAG_SET(outbuf, GST_BUFFER_FLAG_GAP);  // still no image downstream
-  if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not find pixels above the range",
-                       [&] { rt::mark_above_range(outbuf, st, gap); }))
+  if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not describe the frame in metas",
+                       [&] { rt::attach_frame_metas(outbuf, settings, st, gap); }))
     return GST_FLOW_ERROR;
   rt::warn_when_readings_misfit(self, st, st.estimators->estimator(st.method));
   if (!PYROCAM_GUARDED(self, pg::ErrorKind::kFormat, "Could not describe the stream in tags",

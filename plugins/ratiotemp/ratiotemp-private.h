@@ -23,6 +23,7 @@
 #include "pyrocam/runtime/model.h"
 #include "pyrocam/runtime/scaled_brightness.h"
 #include "pyrocam/runtime/snapshot_brightness.h"
+#include "pyrocam/runtime/uncertainty.h"
 
 GST_DEBUG_CATEGORY_EXTERN(gst_ratio_temp_debug);
 
@@ -113,6 +114,7 @@ struct State {
   // The last frame's pixels hotter than the model's range (pyrocam::above_range_spots), and
   // whether they were warned about (since the last statistics without any).
   std::vector<cv::Point> above_range;
+  pyrocam::SystematicUncertaintyTable systematic;  // of the last frame's estimator
   bool above_range_warned = false;
   bool fold_warned = false;  // warn_when_network_folds ran for this model
   GstClockTime last_stats = GST_CLOCK_TIME_NONE;
@@ -168,7 +170,8 @@ cv::Mat saturated_mask(const State& st, const cv::Mat& fused_mosaic);
  * peak_fits(). */
 GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& saturated,
                               const std::vector<cv::Point>& above_range, const Settings& settings,
-                              const GstSegment* segment, GstClockTime pts, Method method);
+                              const GstSegment* segment, GstClockTime pts, Method method,
+                              const pyrocam::SystematicUncertaintyTable* systematic = nullptr);
 /* Posts that structure as an element message, warning once per window and frame size when the
  * user's peak-window does not fit (st.peak_warned: the last misfit warned about), and once when
  * saturated pixels, or pixels hotter than the model's range, appear (again after statistics
@@ -177,8 +180,9 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
 
 /* The pixels the frame's estimate found hotter than the model's range, kept in st.above_range
  * for the statistics (none on a GAP frame) and attached to `outbuf` as a PyrocamAboveRangeMeta
- * (on every frame, 0 pixels when none). */
-void mark_above_range(GstBuffer* outbuf, State& st, bool gap);
+ * (on every frame, 0 pixels when none); the readings' systematic uncertainty, kept in
+ * st.systematic and, on temperature frames, attached as a PyrocamUncertaintyMeta. */
+void attach_frame_metas(GstBuffer* outbuf, const Settings& settings, State& st, bool gap);
 /* Readings checked against the model's band spectra before a verdict (PlaneEstimator::
  * take_fit_audit: one in every 16th row; a 5x5 frame of 2045x1085 filled by the body
  * gives about 14, a small body's frames add up). With a few percent of a scene's readings misfit

@@ -13,6 +13,7 @@ namespace pyrocam::gst::ratiotemp {
 namespace {
 
 constexpr const char* STATS_MESSAGE = "pyrocam-temperature-stats";
+static_assert(pyrocam::kSystematicTableSamples <= PYROCAM_UNCERTAINTY_META_SAMPLES);
 
 void set_stats_fields(GstStructure* s, const std::string& prefix, const RegionStats& r) {
   gst_structure_set(s, (prefix + "pixels").c_str(), G_TYPE_UINT64, static_cast<guint64>(r.pixels),
@@ -25,13 +26,17 @@ void set_stats_fields(GstStructure* s, const std::string& prefix, const RegionSt
                     r.median_c, nullptr);
 }
 
-// Peak fields with the window centre in frame pixels (`offset`: the region's corner).
+// Peak fields with the window centre in frame pixels (`offset`: the region's corner), and the
+// expanded systematic uncertainty of a reading at the peak where known.
 void set_peak_fields(GstStructure* s, const std::string& prefix, const RegionPeak& p,
-                     cv::Point offset) {
+                     cv::Point offset, const pyrocam::SystematicUncertaintyTable* systematic) {
   if (!p.found()) return;
   gst_structure_set(s, (prefix + "peak-c").c_str(), G_TYPE_DOUBLE, p.c, (prefix + "peak-x").c_str(),
                     G_TYPE_INT, p.x + offset.x, (prefix + "peak-y").c_str(), G_TYPE_INT,
                     p.y + offset.y, nullptr);
+  const double u = systematic ? systematic->at(p.c) : NAN;
+  if (std::isfinite(u))
+    gst_structure_set(s, (prefix + "peak-u-sys-c").c_str(), G_TYPE_DOUBLE, u, nullptr);
 }
 
 RegionPeak peak_of(const cv::Mat& t, const Settings& settings) {
@@ -52,7 +57,8 @@ cv::Mat saturated_mask(const State& st, const cv::Mat& fused_mosaic) {
 
 GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& saturated,
                               const std::vector<cv::Point>& above_range, const Settings& settings,
-                              const GstSegment* segment, GstClockTime pts, Method method) {
+                              const GstSegment* segment, GstClockTime pts, Method method,
+                              const pyrocam::SystematicUncertaintyTable* systematic) {
   GstClockTime stream_time = GST_CLOCK_TIME_NONE, running_time = GST_CLOCK_TIME_NONE;
   if (GST_CLOCK_TIME_IS_VALID(pts) && segment->format == GST_FORMAT_TIME) {
     stream_time = gst_segment_to_stream_time(segment, GST_FORMAT_TIME, pts);
@@ -104,7 +110,7 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& satur
                       nullptr);
   gst_structure_set(s, "above-range", G_TYPE_UINT64, static_cast<guint64>(above_range.size()),
                     nullptr);
-  set_peak_fields(s, "", whole_peak, cv::Point());
+  set_peak_fields(s, "", whole_peak, cv::Point(), systematic);
   if (with_region) {
     gst_structure_set(s, "region-x", G_TYPE_INT, r.x, "region-y", G_TYPE_INT, r.y, "region-width",
                       G_TYPE_INT, r.width, "region-height", G_TYPE_INT, r.height,
@@ -116,7 +122,7 @@ GstStructure* stats_structure(const cv::Mat& temperature_c, const cv::Mat& satur
                         static_cast<guint64>(region_saturated), nullptr);
     gst_structure_set(s, "region-above-range", G_TYPE_UINT64,
                       static_cast<guint64>(region_above_range), nullptr);
-    set_peak_fields(s, "region-", part_peak, r.tl());
+    set_peak_fields(s, "region-", part_peak, r.tl(), systematic);
   }
   return s;
 }
@@ -158,8 +164,9 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
                           ("the region is in output pixels (a 5x5 camera's are macro-pixels)"));
     st.region_warned = outside;
   }
-  GstStructure* s = stats_structure(temperature_c, st.saturated_mask, st.above_range, settings,
-                                    &GST_BASE_TRANSFORM(self)->segment, pts, st.method);
+  GstStructure* s =
+      stats_structure(temperature_c, st.saturated_mask, st.above_range, settings,
+                      &GST_BASE_TRANSFORM(self)->segment, pts, st.method, &st.systematic);
   guint64 saturated = 0;
   gst_structure_get_uint64(s, "saturated", &saturated);
   gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), s));
@@ -187,8 +194,16 @@ void post_stats(GstRatioTemp* self, const Settings& settings, State& st, GstCloc
   st.above_range_warned = above > 0;
 }
 
-void mark_above_range(GstBuffer* outbuf, State& st, bool gap) {
-  const std::vector<cv::Point> found = st.estimators->estimator(st.method).take_above_range();
+void attach_frame_metas(GstBuffer* outbuf, const Settings& settings, State& st, bool gap) {
+  const pyrocam::PlaneEstimator& estimator = st.estimators->estimator(st.method);
+  // A few microseconds: the estimator's terms follow the emissivity slope, set per frame.
+  st.systematic = pyrocam::systematic_uncertainty_table(estimator.estimator());
+  if (settings.output != GST_RATIO_TEMP_OUTPUT_UNCERTAINTY)
+    pyrocam_buffer_set_uncertainty_meta(outbuf, st.systematic.coverage_factor,
+                                        static_cast<guint>(st.systematic.temperature_c.size()),
+                                        st.systematic.temperature_c.data(),
+                                        st.systematic.expanded_u_c.data());
+  const std::vector<cv::Point> found = estimator.take_above_range();
   const pyrocam::SaturatedSamples spots = pyrocam::above_range_spots(
       gap ? std::vector<cv::Point>() : found, cv::Size(st.width, st.height), &st.above_range);
   guint64 tiles[pyrocam::kSaturationTiles];

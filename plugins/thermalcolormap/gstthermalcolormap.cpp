@@ -19,7 +19,9 @@
  * (darksub's, carried through demosaic25 and ratiotemp) names: that part is hotter than the
  * peak read ("saturated, no reading" when nothing reads). Where the frame's PyrocamAboveRangeMeta
  * (ratiotemp's) names pixels hotter than the model's range, the ring goes round them and the
- * label reads "peak > 3500 degC (above range)", the range's end, whatever reads elsewhere.
+ * label reads "peak > 3500 degC (above range)", the range's end, whatever reads elsewhere. On
+ * frames whose PyrocamUncertaintyMeta (ratiotemp's) gives the model's systematic uncertainty, a
+ * peak that reads says it: "peak 2213 degC +/-38 sys" (expanded; the pixels' noise not in it).
  *
  * In fixed mode a range narrower than one temperature code (max-temperature - min-temperature
  * below 0.1 degC, including min-temperature >= max-temperature) is refused with a warning on
@@ -300,7 +302,8 @@ static GstFlowReturn gst_thermal_colormap_transform_frame(GstVideoFilter* filter
         const PyrocamAboveRangeMeta* above = pyrocam_buffer_get_above_range_meta(in_frame->buffer);
         const cv::Rect spot = pg::largest_above_range_spot(above, cv::Size(width, height));
         if (spot.empty())
-          pyrocam::draw_peak_marker(out, peak.x, peak.y, peak.c, cs.order, saturated);
+          pyrocam::draw_peak_marker(out, peak.x, peak.y, peak.c, cs.order, saturated, NAN,
+                                    pg::systematic_u_at(in_frame->buffer, peak.c));
         else
           pyrocam::draw_peak_marker(out, spot.x + spot.width / 2, spot.y + spot.height / 2, peak.c,
                                     cs.order, saturated, above->max_temperature_c);

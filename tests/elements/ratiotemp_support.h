@@ -182,6 +182,8 @@ class RatioTemp : public HarnessTest {
   bool last_gap = false;  // whether run's output frame was flagged GAP (no image)
   // The pixels its PyrocamAboveRangeMeta counts (G_MAXUINT64: none attached).
   guint64 last_above_range = G_MAXUINT64;
+  // Its PyrocamUncertaintyMeta's temperatures and expanded uncertainties (empty: none attached).
+  std::vector<double> last_u_temperature_c, last_u_expanded_c;
   // Pushes one frame of band planes (or raw bytes) and returns the output codes.
   template <typename T>
   std::vector<std::uint16_t> run(const std::vector<T>& input, int w, int height,
@@ -196,6 +198,14 @@ class RatioTemp : public HarnessTest {
             ? reinterpret_cast<const PyrocamAboveRangeMeta*>(gst_buffer_get_meta(out, above_api))
             : nullptr;
     last_above_range = above ? above->pixels : G_MAXUINT64;
+    const GType u_api = g_type_from_name("PyrocamUncertaintyMetaAPI");
+    const auto* u =
+        u_api ? reinterpret_cast<const PyrocamUncertaintyMeta*>(gst_buffer_get_meta(out, u_api))
+              : nullptr;
+    last_u_temperature_c.assign(u ? u->temperature_c : nullptr,
+                                u ? u->temperature_c + u->count : nullptr);
+    last_u_expanded_c.assign(u ? u->expanded_u_c : nullptr,
+                             u ? u->expanded_u_c + u->count : nullptr);
     auto v = gray16_of(out, w, height);
     gst_buffer_unref(out);
     return v;

@@ -1,6 +1,6 @@
-// Attaches a PyrocamSaturationMeta to a buffer as darksub would (and a PyrocamAboveRangeMeta as
-// ratiotemp would), for the tests of the elements that read them. By the meta's registered name:
-// the tests do not link the plugin, which registers it when it loads.
+// Attaches a PyrocamSaturationMeta to a buffer as darksub would (and a PyrocamAboveRangeMeta or a
+// PyrocamUncertaintyMeta as ratiotemp would), for the tests of the elements that read them. By the
+// meta's registered name: the tests do not link the plugin, which registers it when it loads.
 #pragma once
 
 #include <gst/gst.h>
@@ -55,6 +55,22 @@ inline void add_above_range_meta(GstBuffer* buffer, guint64 pixels, const cv::Re
   for (int y = box.y; y < box.y + box.height; ++y)
     for (int x = box.x; x < box.x + box.width; ++x)
       m->tiles[y * 64 / frame_height] |= guint64{1} << (x * 64 / frame_width);
+}
+
+// An expanded systematic uncertainty of u0_c at t0_c rising linearly to u1_c at t1_c (two
+// samples), with coverage factor 2.
+inline void add_uncertainty_meta(GstBuffer* buffer, double t0_c, double u0_c, double t1_c,
+                                 double u1_c) {
+  const GstMetaInfo* info = gst_meta_get_info("PyrocamUncertaintyMeta");
+  ASSERT_NE(info, nullptr) << "the pyrocam plugin did not register PyrocamUncertaintyMeta";
+  auto* m = reinterpret_cast<PyrocamUncertaintyMeta*>(gst_buffer_add_meta(buffer, info, nullptr));
+  ASSERT_NE(m, nullptr);
+  m->coverage_factor = 2;
+  m->count = 2;
+  m->temperature_c[0] = t0_c;
+  m->expanded_u_c[0] = u0_c;
+  m->temperature_c[1] = t1_c;
+  m->expanded_u_c[1] = u1_c;
 }
 
 }  // namespace pyrocam::test

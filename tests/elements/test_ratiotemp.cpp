@@ -91,6 +91,8 @@ TEST_F(RatioTemp, uncertainty_output_gives_the_library_uncertainty) {
   EXPECT_TRUE(gst_structure_get_double(s[0], "median-c", &median));
   EXPECT_DOUBLE_EQ(median, region_stats(lib.t).median_c);
   free_all(s);
+  // Frames of uncertainties carry no table of them (temperature frames do: ratiotemp_stats).
+  EXPECT_TRUE(last_u_expanded_c.empty());
 }
 
 // Planes that say how demosaic25 made them (demosaic, pattern): each band value's noise is its

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "pyrocam/runtime/region_stats.h"
+#include "pyrocam/runtime/uncertainty.h"
 #include "ratiotemp_support.h"
 
 namespace pyrocam::test {
@@ -339,6 +340,15 @@ TEST_F(RatioTemp, stats_peak_is_the_hot_spot_not_a_wild_pixel) {
   EXPECT_TRUE(gst_structure_get_int(s[0], "region-peak-y", &y));
   EXPECT_EQ(x, in_region.x + 8);
   EXPECT_EQ(y, in_region.y + 2);
+  // Each peak with the expanded systematic uncertainty of a reading there, which every output
+  // frame carries as a table (PyrocamUncertaintyMeta).
+  const auto estimator = make_estimator(rgb_model(), rgb_auto_method());
+  const SystematicUncertaintyTable table = systematic_uncertainty_table(*estimator);
+  EXPECT_DOUBLE_EQ(field_double(s[0], "peak-u-sys-c"), table.at(want.c));
+  EXPECT_DOUBLE_EQ(field_double(s[0], "region-peak-u-sys-c"), table.at(in_region.c));
+  EXPECT_GT(table.at(want.c), 0);
+  EXPECT_EQ(last_u_temperature_c, table.temperature_c);
+  EXPECT_EQ(last_u_expanded_c, table.expanded_u_c);
   free_all(s);
   // peak-window 0: no peak; even values are refused.
   g_object_set(element, "peak-window", 4u, nullptr);

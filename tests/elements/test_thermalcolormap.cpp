@@ -168,18 +168,42 @@ TEST_F(ThermalColormap, scale_bar_is_opaque_over_invalid_pixels) {
   EXPECT_GT(opaque, 300);
 }
 
+// A 20 x 20 spot at 1600 degC on a w x h frame without readings, and the same with its 4 x 4
+// core left without a reading (saturated).
+struct SpotFrames {
+  std::vector<std::uint16_t> spot, cored;
+};
+SpotFrames spot_frames(int w, int h) {
+  SpotFrames f{std::vector<std::uint16_t>(static_cast<std::size_t>(w * h), 0), {}};
+  for (int y = 50; y < 70; ++y)
+    for (int x = 70; x < 90; ++x) f.spot[static_cast<std::size_t>(y * w + x)] = code_of(1600);
+  f.cored = f.spot;
+  for (int y = 58; y < 62; ++y)
+    for (int x = 78; x < 82; ++x) f.cored[static_cast<std::size_t>(y * w + x)] = 0;
+  return f;
+}
+
+// How many RGBA bytes of two w x h outputs differ in the label's rows (the top 24) and below.
+std::pair<std::size_t, std::size_t> label_and_other_differences(const std::vector<std::uint8_t>& a,
+                                                                const std::vector<std::uint8_t>& b,
+                                                                int w, int h) {
+  std::size_t label = 0, other = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 4; ++c) {
+        const std::size_t i = static_cast<std::size_t>(4 * (y * w + x) + c);
+        (y < 24 ? label : other) += a[i] != b[i];
+      }
+  return {label, other};
+}
+
 // The peak readout says "peak >= N degC (saturated)" where the frame's saturation meta names
 // samples that left pixels without a reading, and not where every pixel still reads: the label
 // differs (the same width of text would be drawn the same), nothing else does.
 TEST_F(ThermalColormap, peak_readout_is_a_lower_bound_where_saturation_hid_readings) {
   const int w = 160, h_ = 120;
   start("thermalcolormap peak-marker=true range-mode=fixed", "RGBA", w, h_);
-  std::vector<std::uint16_t> spot(w * h_, 0), cored;
-  for (int y = 50; y < 70; ++y)
-    for (int x = 70; x < 90; ++x) spot[y * w + x] = code_of(1600);
-  cored = spot;
-  for (int y = 58; y < 62; ++y)
-    for (int x = 78; x < 82; ++x) cored[y * w + x] = 0;  // the saturated core
+  const auto [spot, cored] = spot_frames(w, h_);
   const auto push_with_meta = [&](const std::vector<std::uint16_t>& codes, bool meta) {
     GstBuffer* in = buffer_from(codes);
     if (meta) add_saturation_meta(in, 4, cv::Rect(79, 59, 2, 2), w, h_);
@@ -189,15 +213,30 @@ TEST_F(ThermalColormap, peak_readout_is_a_lower_bound_where_saturation_hid_readi
              all_read = push_with_meta(spot, true), spot_plain = push_with_meta(spot, false);
   ASSERT_EQ(plain.size(), static_cast<std::size_t>(4 * w * h_));
   EXPECT_EQ(all_read, spot_plain);  // saturation that hid nothing changes nothing
-  std::size_t label = 0, elsewhere = 0;
-  for (int y = 0; y < h_; ++y)
-    for (int x = 0; x < w; ++x)
-      for (int c = 0; c < 4; ++c) {
-        const std::size_t i = static_cast<std::size_t>(4 * (y * w + x) + c);
-        (y < 24 ? label : elsewhere) += plain[i] != flagged[i];
-      }
+  const auto [label, elsewhere] = label_and_other_differences(plain, flagged, w, h_);
   EXPECT_GT(label, 100u);  // "peak >= N degC (saturated)" against "peak N degC"
   EXPECT_EQ(elsewhere, 0u);
+}
+
+// With ratiotemp's uncertainty meta, a peak that reads carries the model's systematic interval
+// ("peak 1600 degC +/-30 sys"): only the label changes. A peak that is only a lower bound
+// (saturation hid readings) carries none.
+TEST_F(ThermalColormap, peak_readout_carries_the_systematic_uncertainty_of_a_reading) {
+  const int w = 160, h_ = 120;
+  start("thermalcolormap peak-marker=true range-mode=fixed", "RGBA", w, h_);
+  const auto [spot, cored] = spot_frames(w, h_);
+  const auto push = [&](const std::vector<std::uint16_t>& codes, bool uncertainty, bool saturated) {
+    GstBuffer* in = buffer_from(codes);
+    if (uncertainty) add_uncertainty_meta(in, 500, 10, 3500, 50);  // 30 degC at 1600
+    if (saturated) add_saturation_meta(in, 4, cv::Rect(79, 59, 2, 2), w, h_);
+    return push_pull<std::uint8_t>(h, in);
+  };
+  const auto plain = push(spot, false, false), with_u = push(spot, true, false);
+  ASSERT_EQ(plain.size(), static_cast<std::size_t>(4 * w * h_));
+  const auto [label, elsewhere] = label_and_other_differences(plain, with_u, w, h_);
+  EXPECT_GT(label, 100u);
+  EXPECT_EQ(elsewhere, 0u);
+  EXPECT_EQ(push(cored, true, true), push(cored, false, true));
 }
 
 // Where ratiotemp's above-range meta names pixels hotter than the model's range, the readout

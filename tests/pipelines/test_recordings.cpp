@@ -419,16 +419,20 @@ TEST(RecordingsLauncher, stats_csv_keeps_its_columns_without_readings_and_refuse
     return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
   };
   ASSERT_LT(col("region-peak-y"), header.size());
-  ASSERT_EQ(col("region-saturated"), header.size() - 4);  // columns only get appended
-  ASSERT_EQ(col("region-tracks-peak"), header.size() - 3);
-  ASSERT_EQ(col("above-range"), header.size() - 2);
-  ASSERT_EQ(col("region-above-range"), header.size() - 1);
+  ASSERT_EQ(col("region-saturated"), header.size() - 6);  // columns only get appended
+  ASSERT_EQ(col("region-tracks-peak"), header.size() - 5);
+  ASSERT_EQ(col("above-range"), header.size() - 4);
+  ASSERT_EQ(col("region-above-range"), header.size() - 3);
+  ASSERT_EQ(col("peak-u-sys-c"), header.size() - 2);
+  ASSERT_EQ(col("region-peak-u-sys-c"), header.size() - 1);
   for (std::size_t i = 1; i < rows.size(); ++i) {
     ASSERT_EQ(rows[i].size(), header.size()) << "row " << i;
     EXPECT_NE(rows[i][col("saturated")], "");  // a count, 0 or more
     EXPECT_EQ(rows[i][col("above-range")], "0");
     EXPECT_EQ(rows[i][col("region-saturated")], "");
     EXPECT_EQ(rows[i][col("region-above-range")], "");
+    EXPECT_EQ(rows[i][col("peak-u-sys-c")], "");  // no reading, no peak
+    EXPECT_EQ(rows[i][col("region-peak-u-sys-c")], "");
     EXPECT_EQ(rows[i][col("region-tracks-peak")], "");
     EXPECT_EQ(rows[i][col("valid")], "0");
     EXPECT_EQ(rows[i][col("pixels")], "192");

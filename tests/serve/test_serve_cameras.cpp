@@ -35,6 +35,8 @@ TEST(Serve, Cameras5x5IsServed) {
   // A reading spans 5x5 sensor pixels; the page gives the peak's place in sensor pixels, at
   // the centre of its macro-pixel (it gave the macro-pixel's indices, a fifth of the place).
   EXPECT_EQ(json["output-pixel"], 5) << status;
+  // The peak with what the model says a reading there may be off by (its systematic terms).
+  EXPECT_GT(json["stats"].value("peak-u-sys-c", 0.0), 0.0) << status;
   if (std::filesystem::exists("/usr/bin/chromium")) {
     Chromium chromium(dir.path());
     ASSERT_TRUE(chromium.ok()) << chromium.log();
@@ -53,6 +55,8 @@ TEST(Serve, Cameras5x5IsServed) {
     const int x = std::stoi(m[1].str()), y = std::stoi(m[2].str());
     EXPECT_TRUE(x % 5 == 2 && x < 160 && y % 5 == 2 && y < 120) << x << ", " << y;
     EXPECT_NE(dom.find("sensor px"), std::string::npos) << dom;
+    const std::regex peak("id=\"peak-0\"[^>]*>[0-9.]+ °C ± [0-9]+ sys\\.<");
+    EXPECT_TRUE(std::regex_search(dom, peak)) << dom;
   }
   EXPECT_TRUE(server.process->running()) << server.log();
 }

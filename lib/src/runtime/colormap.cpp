@@ -326,23 +326,28 @@ void draw_scale_bar(cv::Mat& image, Palette palette, double min_c, double max_c,
   }
 }
 
-std::string peak_label(double peak_c, bool saturated, double above_range_c) {
+std::string peak_label(double peak_c, bool saturated, double above_range_c, double systematic_u_c) {
   char text[64];
   if (!std::isnan(above_range_c)) {
     std::snprintf(text, sizeof text, "peak > %.0f degC (above range)", above_range_c);
     return text;
   }
   if (std::isnan(peak_c)) return saturated ? "saturated, no reading" : "";
-  std::snprintf(text, sizeof text, saturated ? "peak >= %.0f degC (saturated)" : "peak %.0f degC",
-                peak_c);
+  if (saturated)
+    std::snprintf(text, sizeof text, "peak >= %.0f degC (saturated)", peak_c);
+  else if (std::isfinite(systematic_u_c) && systematic_u_c >= 0)
+    std::snprintf(text, sizeof text, "peak %.0f degC +/-%.0f sys", peak_c, systematic_u_c);
+  else
+    std::snprintf(text, sizeof text, "peak %.0f degC", peak_c);
   return text;
 }
 
 void draw_peak_marker(cv::Mat& image, int x, int y, double peak_c, ChannelOrder order,
-                      bool saturated, double above_range_c) {
+                      bool saturated, double above_range_c, double systematic_u_c) {
   if (image.type() != CV_8UC4) throw InputError("peak marker: image must be CV_8UC4");
   const bool found = x >= 0 && y >= 0 && !(std::isnan(peak_c) && std::isnan(above_range_c));
-  const std::string text = peak_label(found ? peak_c : NAN, saturated, above_range_c);
+  const std::string text =
+      peak_label(found ? peak_c : NAN, saturated, above_range_c, systematic_u_c);
   if (text.empty()) return;
   auto scalar = [order](std::uint8_t r, std::uint8_t g, std::uint8_t b) {
     return order == ChannelOrder::kRGBA ? cv::Scalar(r, g, b, 255) : cv::Scalar(b, g, r, 255);

@@ -1,5 +1,6 @@
 #include "pyrocam/runtime/uncertainty.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "pyrocam/core/noise_model.h"
@@ -37,6 +38,33 @@ double expanded_uncertainty_c(const TemperatureEstimator& est, const double* sig
   }
   const double sys = est.systematic_u_c(t_c);
   return m.uncertainty.coverage_factor * std::sqrt(var + sys * sys);
+}
+
+double SystematicUncertaintyTable::at(double t_c) const {
+  const std::size_t n = std::min(temperature_c.size(), expanded_u_c.size());
+  if (n == 0 || !(t_c >= temperature_c.front() && t_c <= temperature_c[n - 1])) return NAN;
+  const auto hi = static_cast<std::size_t>(
+      std::upper_bound(temperature_c.begin(), temperature_c.begin() + static_cast<long>(n), t_c) -
+      temperature_c.begin());
+  if (hi >= n) return expanded_u_c[n - 1];
+  const std::size_t lo = hi - 1;  // hi >= 1: t_c >= the first sample
+  const double f = (t_c - temperature_c[lo]) / (temperature_c[hi] - temperature_c[lo]);
+  return expanded_u_c[lo] + f * (expanded_u_c[hi] - expanded_u_c[lo]);
+}
+
+SystematicUncertaintyTable systematic_uncertainty_table(const TemperatureEstimator& estimator,
+                                                        int samples) {
+  const ThermalModel& m = estimator.model();
+  SystematicUncertaintyTable table;
+  table.coverage_factor = m.uncertainty.coverage_factor;
+  samples = std::max(samples, 2);
+  for (int i = 0; i < samples; ++i) {
+    const double t =
+        m.min_temperature_c + (m.max_temperature_c - m.min_temperature_c) * i / (samples - 1);
+    table.temperature_c.push_back(t);
+    table.expanded_u_c.push_back(table.coverage_factor * estimator.systematic_u_c(t));
+  }
+  return table;
 }
 
 }  // namespace pyrocam

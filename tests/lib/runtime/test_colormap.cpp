@@ -249,6 +249,10 @@ TEST(PeakMarker, RingsThePeakAndLabelsItOrDrawsNothingWithoutOne) {
 // without a peak too (nothing read).
 TEST(PeakMarker, SaysWhenThePeakIsALowerBound) {
   EXPECT_EQ(peak_label(2213.4, false), "peak 2213 degC");
+  EXPECT_EQ(peak_label(2213.4, false, NAN, 37.6), "peak 2213 degC +/-38 sys");
+  EXPECT_EQ(peak_label(2213.4, true, NAN, 37.6), "peak >= 2213 degC (saturated)");  // a bound
+  EXPECT_EQ(peak_label(2213.4, false, 3500, 37.6), "peak > 3500 degC (above range)");
+  EXPECT_EQ(peak_label(NAN, false, NAN, 37.6), "");
   EXPECT_EQ(peak_label(2213.4, true), "peak >= 2213 degC (saturated)");
   EXPECT_EQ(peak_label(NAN, true), "saturated, no reading");
   EXPECT_EQ(peak_label(NAN, false), "");

@@ -297,6 +297,36 @@ TEST(EmissivitySlope, the_uncertainty_has_the_emissivity_term_of_the_chosen_slop
   EXPECT_GE(expanded, um.coverage_factor * steep.emissivity_u_c(t) - 1e-9);
 }
 
+// The table a peak readout takes (PyrocamUncertaintyMeta): k times the estimator's systematic
+// term, its own at every sample, between its neighbours in between, none outside the range; with
+// a chosen emissivity slope the slope's term.
+TEST(EmissivitySlope, the_systematic_table_is_the_estimators_expanded_term) {
+  const auto model = test_model("test-model-rgb.json");
+  const auto lik =
+      std::shared_ptr<const TemperatureEstimator>(make_estimator(model, Method::kLikelihood));
+  const double k = model->uncertainty.coverage_factor;
+  const SystematicUncertaintyTable table = systematic_uncertainty_table(*lik);
+  ASSERT_EQ(table.temperature_c.size(), static_cast<std::size_t>(kSystematicTableSamples));
+  EXPECT_EQ(table.temperature_c.front(), model->min_temperature_c);
+  EXPECT_EQ(table.temperature_c.back(), model->max_temperature_c);
+  EXPECT_EQ(table.coverage_factor, k);
+  for (std::size_t i = 0; i < table.temperature_c.size(); ++i) {
+    const double t = table.temperature_c[i];
+    EXPECT_DOUBLE_EQ(table.expanded_u_c[i], k * lik->systematic_u_c(t)) << t;
+    EXPECT_DOUBLE_EQ(table.at(t), table.expanded_u_c[i]) << t;
+    if (i == 0) continue;
+    const double mid = table.at(0.5 * (t + table.temperature_c[i - 1]));
+    EXPECT_NEAR(mid, 0.5 * (table.expanded_u_c[i] + table.expanded_u_c[i - 1]), 1e-9) << t;
+  }
+  EXPECT_TRUE(std::isnan(table.at(model->min_temperature_c - 1)));
+  EXPECT_TRUE(std::isnan(table.at(model->max_temperature_c + 1)));
+  EXPECT_TRUE(std::isnan(table.at(NAN)));
+  // Above the calibration the QE model's term makes it grow.
+  EXPECT_GT(table.at(2500), table.at(1000));
+  const EmissivitySlopeEstimator wide(lik, 0, 3 * model->uncertainty.emissivity_slope_u);
+  EXPECT_GT(systematic_uncertainty_table(wide).at(2000), table.at(2000));
+}
+
 TEST(EmissivitySlope, a_refused_slope_keeps_the_previous_one) {
   const auto model = test_model("test-model-rgb.json");
   PlaneEstimator est(model, Method::kLikelihood);

@@ -131,8 +131,11 @@ void draw_scale_bar(cv::Mat& image, Palette palette, double min_c, double max_c,
 // without a reading that are hotter than what reads), "peak >= 2213 degC (saturated)", or
 // "saturated, no reading" without a peak; "" without either (NaN: no peak). Where parts are
 // hotter than the model's range, which ends at above_range_c (NaN: none are), "peak > 3500 degC
-// (above range)" whatever reads.
-std::string peak_label(double peak_c, bool saturated, double above_range_c = NAN);
+// (above range)" whatever reads. With the expanded systematic uncertainty of a reading at the peak
+// (SystematicUncertaintyTable; NaN: not known), a peak that reads says it: "peak 2213 degC
+// +/-38 sys".
+std::string peak_label(double peak_c, bool saturated, double above_range_c = NAN,
+                       double systematic_u_c = NAN);
 
 // Marks the peak of a temperature image on its CV_8UC4 colouring: a ring around (x, y) and
 // peak_label at the top left (outlined, legible on any background), so that a live view or a
@@ -140,7 +143,8 @@ std::string peak_label(double peak_c, bool saturated, double above_range_c = NAN
 // temperature, no label where peak_label is empty. With above_range_c, (x, y) is where the part
 // hotter than the range is, and the ring goes there. Throws InputError for another image type.
 void draw_peak_marker(cv::Mat& image, int x, int y, double peak_c, ChannelOrder order,
-                      bool saturated = false, double above_range_c = NAN);
+                      bool saturated = false, double above_range_c = NAN,
+                      double systematic_u_c = NAN);
 
 // Lays a colour map's CV_8UC4 output (straight alpha, bytes in `overlay_order`) over a CV_8UC4
 // image of the same size in place (bytes in `image_order`): each colour byte becomes
