@@ -215,7 +215,8 @@ std::ofstream open_stats_csv(const std::string& out) {
   std::ofstream csv(std::filesystem::path(out) / "stats.csv");
   csv << "file,exposure_us,nominal_c,pixels,valid_fraction,min_c,max_c,mean_c,median_c,"
          "truth_pixels,truth_valid,truth_rms_c,truth_median_error_c,median_u_c,peak_c,peak_x,"
-         "peak_y,peak_lower_bound,truth_peak_c,truth_max_c,peak_error_c,above_range\n";
+         "peak_y,peak_lower_bound,truth_peak_c,truth_max_c,peak_error_c,above_range,"
+         "peak_u_sys_c\n";
   return csv;
 }
 
@@ -312,7 +313,8 @@ void measure_frame(const Job& j, const MeasureArgs& a, const MeasureInputs& in,
       << "," << (peak.found() ? std::to_string(peak.x) : "") << ","
       << (peak.found() ? std::to_string(peak.y) : "") << "," << (lower_bound ? "true" : "false")
       << "," << fmt(truth_peak.c) << "," << fmt(truth_max_c) << "," << fmt(peak.c - truth_peak.c)
-      << "," << measurer.above_range() << "\n";
+      << "," << measurer.above_range() << ","
+      << fmt(lower_bound ? NAN : measurer.systematic_expanded_u_c(peak.c)) << "\n";
 }
 
 // A folder that holds a measurement (frames: stats.csv and an image per frame; a recording:
@@ -555,7 +557,9 @@ void add_measure_command(CLI::App& app, const GlobalOptions& global, Command& se
       "over the whole frame, peak_c, peak_x, peak_y as ratiotemp's peak-c, peak_lower_bound\n"
       "where a pixel without a reading has a saturated band or is hotter than the model's\n"
       "range, with true temperatures truth_peak_c, truth_max_c and peak_error_c = peak_c -\n"
-      "truth_peak_c, and above_range: pixels hotter than the model's range, as ratiotemp's).\n"
+      "truth_peak_c, above_range: pixels hotter than the model's range, as ratiotemp's, and\n"
+      "peak_u_sys_c: k=2 times the systematic uncertainty of a reading at peak_c, without noise,\n"
+      "as ratiotemp's peak-u-sys-c; none on a lower bound).\n"
       "stats.csv always has the same columns: those that do not apply are empty (without\n"
       "true temperatures truth_pixels and truth_valid are 0).\n"
       "A raw frame does not say which mosaic it was taken through: --pattern names it, or\n"

@@ -157,6 +157,13 @@ TEST(CliMeasureDefaults, stats_have_the_peak_and_the_truths) {
   EXPECT_NEAR(std::stod(good.at("peak_error_c")),
               std::stod(good.at("peak_c")) - std::stod(good.at("truth_peak_c")), 0.002);
   EXPECT_EQ(good.at("peak_lower_bound"), "false");
+  // What the model says a reading at the peak may be off by (ratiotemp's peak-u-sys-c): the
+  // error of this plate, near the datasheet, within it; none on a lower bound.
+  const double u_sys = std::stod(good.at("peak_u_sys_c"));
+  EXPECT_GT(u_sys, 0);
+  EXPECT_LT(u_sys, 50);
+  EXPECT_LT(std::abs(std::stod(good.at("median_c")) - 1000), u_sys);
+  EXPECT_TRUE(bright.at("peak_u_sys_c").empty());
   const int x = std::stoi(good.at("peak_x")), y = std::stoi(good.at("peak_y"));
   EXPECT_TRUE(x >= 2 && x < 62 && y >= 2 && y < 62) << x << "," << y;
   EXPECT_TRUE(bright.at("peak_c").empty());
@@ -173,6 +180,7 @@ TEST(CliMeasureDefaults, stats_have_the_peak_and_the_truths) {
   EXPECT_GE(std::stoi(hot.at("above_range")), 400);
   EXPECT_LE(std::stoi(hot.at("above_range")), 64 * 64 * 36 / 100 + 100);
   EXPECT_EQ(hot.at("peak_lower_bound"), "true");
+  EXPECT_TRUE(hot.at("peak_u_sys_c").empty());
 }
 
 TEST(CliMeasureDefaults, uncertainty_gives_the_rois_median_its_own) {

@@ -2,6 +2,7 @@
 // estimation (PlaneEstimator), for `pyrocam-calib measure`.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <map>
 #include <memory>
@@ -92,6 +93,13 @@ class FrameMeasurer {
   // NaN without a reading.
   double median_uncertainty_c(const cv::Mat& temperature_c, const cv::Mat& uncertainty_c,
                               const cv::Mat& mask) const;
+  // k times the systematic standard uncertainty of a reading at t_c (calibration, QE model,
+  // emissivity slope; no noise): ratiotemp's peak-u-sys-c. NaN for NaN.
+  double systematic_expanded_u_c(double t_c) const {
+    return std::isfinite(t_c) ? model_->uncertainty.coverage_factor *
+                                    planes_estimator_.estimator().systematic_u_c(t_c)
+                              : NAN;
+  }
   // With MeasureOptions::check_layout, what the frames measured so far say about their mosaic's
   // phase: a Bayer mosaic whose greens sit on the other diagonal (bayer_greens_elsewhere over
   // every frame's lit cells of every 4th cell row; decided from 256 such cells) or frames that
