@@ -518,8 +518,10 @@ double systematic_u_at(GstBuffer* buffer, double t_c) {
   if (!meta) return NAN;
   pyrocam::SystematicUncertaintyTable table;
   table.coverage_factor = meta->coverage_factor;
-  table.temperature_c.assign(meta->temperature_c, meta->temperature_c + meta->count);
-  table.expanded_u_c.assign(meta->expanded_u_c, meta->expanded_u_c + meta->count);
+  // A meta written by other code than pyrocam_buffer_set_uncertainty_meta may count more.
+  const guint count = std::min<guint>(meta->count, PYROCAM_UNCERTAINTY_META_SAMPLES);
+  table.temperature_c.assign(meta->temperature_c, meta->temperature_c + count);
+  table.expanded_u_c.assign(meta->expanded_u_c, meta->expanded_u_c + count);
   return table.at(t_c);
 }
 
