@@ -201,7 +201,6 @@ void weigh_four(const float* const* planes, int bands, std::size_t from, double 
                 double dim, const double* __restrict gain, const double* __restrict floor,
                 const double* __restrict fast, double* const* w, double* const* ws,
                 double* const* s, FourWeighed& out) {
-  typedef float Floats __attribute__((vector_size(16), aligned(4), may_alias));
   typedef std::int64_t Mask __attribute__((vector_size(32)));
   constexpr double kInf = std::numeric_limits<double>::infinity();
   const Lanes zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
@@ -217,7 +216,10 @@ void weigh_four(const float* const* planes, int bands, std::size_t from, double 
         wl[j] = wsl[j] = v[j] = zero;
         continue;
       }
-      v[j] = __builtin_convertvector(*reinterpret_cast<const Floats*>(planes[b] + from), Lanes);
+      // Element by element: GCC 12 converts a vector of four floats in two halves through the
+      // stack, these into one vcvtps2pd (the same values).
+      const float* at = planes[b] + from;
+      v[j] = Lanes{at[0], at[1], at[2], at[3]};
       const Mask below_inf = v[j] < inf;
       const Mask reads = (v[j] >= lows) & below_inf;
       bright_counted += (v[j] >= dims) & below_inf;

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
-#include <numeric>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -370,28 +369,47 @@ TEST(LikelihoodEstimator, a_rows_readings_are_its_pixels_readings) {
           std::count_if(s, s + bands, [&](double v) { return v >= dim && v < INFINITY; }))];
     }
     for (int k : {0, 1, 2, bands}) EXPECT_GT(reading_counts[static_cast<std::size_t>(k)], 0) << k;
-    const std::vector<cv::Mat> planes = as_planes(px);
-    std::vector<const float*> rows;
-    for (const cv::Mat& p : planes) rows.push_back(p.ptr<float>(0));
+    // Each fit reads the row as it is and rearranged in chunks of 256 pixels (estimate's) where
+    // the pixels 24-39 of every 64 read: estimate weighs such a chunk's pixels without counting
+    // their bands (it probes eight pixels in the middle of each quarter), and the rest of the
+    // chunk holds pixels that read, some that do not, and those with too few bands.
     for (auto partial :
          {TemperatureEstimator::PartialBands::kOff, TemperatureEstimator::PartialBands::kSafe,
           TemperatureEstimator::PartialBands::kAny}) {
       for (const auto& fit : {make_estimator(model, Method::kLikelihood),
                               make_exhaustive_likelihood_estimator(model)}) {
         fit->set_partial_bands(partial);
-        std::vector<float> row(px.size());
-        fit->estimate(rows.data(), px.size(), row.data());
-        std::size_t differ = 0, read = 0;
-        for (std::size_t i = 0; i < px.size(); ++i) {
-          std::vector<double> s(static_cast<std::size_t>(bands));
-          for (int b = 0; b < bands; ++b)
-            s[static_cast<std::size_t>(b)] = rows[static_cast<std::size_t>(b)][i];
-          const auto one = static_cast<float>(fit->temperature_c(s.data()));
-          differ += !(one == row[i] || (std::isnan(one) && std::isnan(row[i])));
-          read += std::isfinite(row[i]);
+        std::vector<std::size_t> reads;
+        for (std::size_t i = 0; i < px.size(); ++i)
+          if (std::isfinite(fit->temperature_c(px.pixel(i)))) reads.push_back(i);
+        ASSERT_FALSE(reads.empty());
+        NoisyPixels chunked = px;
+        chunked.signals.clear();
+        for (std::size_t next = 0, next_read = 0; next < px.size();)
+          for (std::size_t at = 0; at < 256; ++at) {
+            const std::size_t i = at % 64 >= 24 && at % 64 < 40 ? reads[next_read++ % reads.size()]
+                                                                : next++ % px.size();
+            chunked.signals.insert(chunked.signals.end(), px.pixel(i), px.pixel(i) + bands);
+          }
+        for (const NoisyPixels* row_of : {&px, &chunked}) {
+          const std::vector<cv::Mat> planes = as_planes(*row_of);
+          std::vector<const float*> rows;
+          for (const cv::Mat& p : planes) rows.push_back(p.ptr<float>(0));
+          const std::size_t n = row_of->size();
+          std::vector<float> row(n);
+          fit->estimate(rows.data(), n, row.data());
+          std::size_t differ = 0, read = 0;
+          for (std::size_t i = 0; i < n; ++i) {
+            std::vector<double> s(static_cast<std::size_t>(bands));
+            for (int b = 0; b < bands; ++b)
+              s[static_cast<std::size_t>(b)] = rows[static_cast<std::size_t>(b)][i];
+            const auto one = static_cast<float>(fit->temperature_c(s.data()));
+            differ += !(one == row[i] || (std::isnan(one) && std::isnan(row[i])));
+            read += std::isfinite(row[i]);
+          }
+          EXPECT_EQ(differ, 0u) << static_cast<int>(partial);
+          EXPECT_GT(read, n / 10) << static_cast<int>(partial);
         }
-        EXPECT_EQ(differ, 0u) << static_cast<int>(partial);
-        EXPECT_GT(read, px.size() / 10) << static_cast<int>(partial);
       }
     }
   }
