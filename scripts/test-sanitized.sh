@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Builds pyrocam with AddressSanitizer and UndefinedBehaviorSanitizer (g++, into ./build-sanitized,
 # configured once) and runs the `lib` and `elements` test suites there. Undefined behaviour fails
-# the test (-fno-sanitize-recover), so does any leak in pyrocam's own code; only what GStreamer and
-# GLib keep for the life of the process is suppressed (tests/sanitizers/lsan.supp).
+# the test (-fno-sanitize-recover), so does any leak in pyrocam's own code; only what GStreamer,
+# GLib and TBB keep for the life of the process is suppressed (tests/sanitizers/lsan.supp).
 # Usage: scripts/test-sanitized.sh [extra `meson test` arguments, e.g. a test name]
 # On a busy 2-core machine: about 40 min to build the first time, about 15 min of tests.
 set -euo pipefail
@@ -39,6 +39,8 @@ export GST_REGISTRY_FORK=no
 export ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1
 export LSAN_OPTIONS=suppressions=$src/tests/sanitizers/lsan.supp:print_suppressions=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+# The element tests' pipelines wait up to this many times as long for their end (element_support.h).
+export PYROCAM_TEST_TIME_FACTOR=${PYROCAM_TEST_TIME_FACTOR:-10}
 started=$(date +%s)
 set +e
 meson test -C "$dir" --no-rebuild --suite lib --suite elements --print-errorlogs --num-processes 2 \

@@ -8,6 +8,12 @@
 
 namespace pyrocam::test {
 
+GstClockTime scaled_timeout(GstClockTime timeout) {
+  const char* factor = g_getenv("PYROCAM_TEST_TIME_FACTOR");
+  const double f = factor ? g_ascii_strtod(factor, nullptr) : 1.0;
+  return f > 1 && f < 1000 ? static_cast<GstClockTime>(static_cast<double>(timeout) * f) : timeout;
+}
+
 bool have_element(const char* name) {
   GstElementFactory* f = gst_element_factory_find(name);
   if (!f) return false;
@@ -38,7 +44,7 @@ BusResult run_pipeline(const std::string& description, GstClockTime timeout, boo
   GstBus* bus = gst_element_get_bus(pipeline);
   gst_element_set_state(pipeline, GST_STATE_PLAYING);
   // Warnings are collected on the way to the end.
-  const GstClockTime deadline = gst_util_get_timestamp() + timeout;
+  const GstClockTime deadline = gst_util_get_timestamp() + scaled_timeout(timeout);
   GstMessage* msg = nullptr;
   for (;;) {
     const GstClockTime now = gst_util_get_timestamp();
@@ -213,8 +219,9 @@ std::vector<std::vector<std::uint8_t>> sink_frames(const std::string& descriptio
                    &frames);
   GstBus* bus = gst_element_get_bus(pipeline);
   gst_element_set_state(pipeline, GST_STATE_PLAYING);
-  GstMessage* msg = gst_bus_timed_pop_filtered(
-      bus, timeout, static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
+  GstMessage* msg =
+      gst_bus_timed_pop_filtered(bus, scaled_timeout(timeout),
+                                 static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
   EXPECT_TRUE(msg && GST_MESSAGE_TYPE(msg) == GST_MESSAGE_EOS) << description;
   if (msg) gst_message_unref(msg);
   gst_element_set_state(pipeline, GST_STATE_NULL);

@@ -43,7 +43,11 @@ struct BusResult {
   std::vector<std::string> warnings;  // the warning messages posted before the end
   int errors = 0;                     // error messages on the bus once the pipeline stopped
 };
-// Runs a gst-launch description to EOS or the first error, at most `timeout`; with
+// `timeout` times PYROCAM_TEST_TIME_FACTOR where that is set above 1 (scripts/test-sanitized.sh:
+// the sanitizers run pipelines several times slower).
+GstClockTime scaled_timeout(GstClockTime timeout);
+
+// Runs a gst-launch description to EOS or the first error, at most `timeout` (scaled); with
 // `until_warning`, also to the first warning (a source without end, for a warning that comes
 // when a thread of the element is ready).
 BusResult run_pipeline(const std::string& description, GstClockTime timeout = 20 * GST_SECOND,
@@ -101,7 +105,7 @@ void free_all(std::vector<GstStructure*>& v);
 std::size_t count_nonzero(const std::vector<std::uint16_t>& v);
 
 // The bytes of every buffer that reaches the fakesink named "sink" of a pipeline run to EOS
-// (a test failure when it ends otherwise or not within `timeout`).
+// (a test failure when it ends otherwise or not within `timeout`, scaled).
 std::vector<std::vector<std::uint8_t>> sink_frames(const std::string& description,
                                                    GstClockTime timeout = 30 * GST_SECOND);
 

@@ -57,7 +57,7 @@ PlateRun run_plate(const std::string& model, const std::string& table_cache,
   gst_element_set_state(pipeline, GST_STATE_PLAYING);
   while (
       GstMessage* m = gst_bus_timed_pop_filtered(
-          bus, 20 * GST_SECOND,
+          bus, scaled_timeout(20 * GST_SECOND),
           static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR | GST_MESSAGE_WARNING))) {
     const GstMessageType type = GST_MESSAGE_TYPE(m);
     if (type == GST_MESSAGE_WARNING) {
