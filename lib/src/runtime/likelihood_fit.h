@@ -81,8 +81,9 @@ class LikelihoodFit : public TemperatureEstimator {
   // without the per-pixel weights (which cost about as much again as the count of all bands).
   // A chunk whose probes (eight pixels at each of four places spread over it) all have enough
   // bands, as on a plate, is not counted: there the count is the weights' own work done twice
-  // (6-8 % of the 5x5 chain on a plate over 90 % of the frame). A thin hot line (a filament) meets
-  // at most one probe, so its chunks are still counted. The weights decide the same
+  // (6-8 % of the 5x5 chain on a plate over 90 % of the frame). A thin hot line across the rows
+  // (a filament) meets at most one probe of a chunk, so its chunks are still counted; one along a
+  // row may fill a chunk, which is then weighed whole, as it should be. The weights decide the same
   // (enough_bands needs at least `needed` bands), so the readings are the same either way.
   void estimate(const float* const* planes, std::size_t n, float* out) const override {
     constexpr std::size_t kChunk = 256, kProbe = 8;
