@@ -14,6 +14,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -214,6 +215,15 @@ std::vector<cv::Point> matched_footprint(const MosaicLayout& layout, int band, i
 
 namespace {
 
+// What MatchedBayer::run keeps from one call to the next: the ring of split input rows and their
+// flags, the row sums, the outputs' halves and a half row of zeros; next_row is the input row
+// the ring would load next.
+struct MatchedRing {
+  std::vector<float> buffer;
+  std::vector<std::uint8_t> lit, out_lit;
+  int next_row = std::numeric_limits<int>::min();
+};
+
 // Matched Bayer demosaicking of ranges of output rows, for a whole frame or a strip of one.
 //
 // The cold background around a melt pool or a filament is most of the frame: a block of output
@@ -239,28 +249,38 @@ class MatchedBayer {
   }
 
   int out_blocks() const { return out_blocks_; }
+  int width() const { return width_; }
 
   // Output rows [y0, y1): band b of row y into out(b, y) (a row of the mosaic's width). With
   // `stream` the stores bypass the cache and are fenced at the end. With `lit`, one flag per
   // row and output block from row y0 on: whether a sample its kernels reach has light; the
-  // blocks without are then left unwritten (their values are 0), else written as 0.
+  // blocks without are then left unwritten (their values are 0), else written as 0. `ring_state`
+  // carries the input rows from one call to the next: a call starting where the last one ended
+  // reads none of them again.
   template <class Out>
-  void run(int y0, int y1, const Out& out, bool stream, std::uint8_t* lit_out) const {
-    // The five input rows around the output row, split by parity: a ring, each row read once
-    // per range; then the row sums v and c and the outputs, split too.
+  void run(int y0, int y1, const Out& out, bool stream, std::uint8_t* lit_out,
+           MatchedRing& ring_state) const {
+    // The five input rows around the output row, split by parity: a ring, each row read once;
+    // then the row sums v and c and the outputs, split too.
     const int half = half_;
-    std::vector<float> buffer(static_cast<std::size_t>(2 * (5 + 2 + 2) * half + half));
+    std::vector<float>& buffer = ring_state.buffer;
+    // Per ring row and input block: whether a sample has light (all do without the level).
+    std::vector<std::uint8_t>& lit = ring_state.lit;
+    std::vector<std::uint8_t>& out_lit = ring_state.out_lit;
+    const auto floats = static_cast<std::size_t>(2 * (5 + 2 + 2) * half + half);
+    if (buffer.size() != floats || lit.size() != static_cast<std::size_t>(5 * blocks_)) {
+      buffer.assign(floats, 0.f);  // the last half row: band values of blocks without light
+      lit.assign(static_cast<std::size_t>(5 * blocks_), 1);
+      out_lit.assign(static_cast<std::size_t>(out_blocks_), 1);
+      ring_state.next_row = std::numeric_limits<int>::min();
+    }
     auto slot = [&](int yy) { return (yy + 2 * kReach) % 5; };
     auto ring = [&](int yy) { return buffer.data() + slot(yy) * 2 * half; };
     float* v = buffer.data() + 10 * half;  // even half, then odd half
     float* c = v + 2 * half;
     float* out_even = c + 2 * half;
     float* out_odd = out_even + half;
-    float* zeros = out_odd + half;  // band values of blocks without light
-    std::fill(zeros, zeros + half, 0.f);
-    // Per ring row and input block: whether a sample has light (all do without the level).
-    std::vector<std::uint8_t> lit(static_cast<std::size_t>(5 * blocks_), 1);
-    std::vector<std::uint8_t> out_lit(static_cast<std::size_t>(out_blocks_), 1);
+    const float* zeros = out_odd + half;
     // The row padded by kReach columns each side, split by parity straight from the mosaic:
     // padded column p is the mosaic's p - kReach (kReach is even, so the parities agree),
     // mirrored without repeating the edge, which keeps the pattern (as the bilinear method). A
@@ -291,9 +311,11 @@ class MatchedBayer {
             p0 < p1 && any_lit(even + p0 / 2, (p1 - p0 + 1) / 2, odd + p0 / 2, (p1 - p0) / 2);
       }
     };
-    for (int yy = y0 - kReach; yy < y0 + kReach; ++yy) load(yy);
+    if (ring_state.next_row != y0 + kReach)
+      for (int yy = y0 - kReach; yy < y0 + kReach; ++yy) load(yy);
     for (int y = y0; y < y1; ++y) {
       load(y + kReach);
+      ring_state.next_row = y + kReach + 1;
       if (mark_no_signal_) {
         std::fill(out_lit.begin(), out_lit.end(), 0);
         for (int s = 0; s < 5; ++s) {
@@ -364,34 +386,60 @@ void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, f
   // 12 CPU ms). Small ones stay in the cache for it.
   const bool stream = 3.0 * 4.0 * static_cast<double>(mosaic.total()) >= 16.0 * 1024 * 1024;
   const auto out = [&](int b, int y) { return planes[static_cast<std::size_t>(b)].ptr<float>(y); };
-  if (static_cast<double>(mosaic.total()) < 512.0 * 512.0)
-    matched.run(0, mosaic.rows, out, stream, nullptr);
-  else
+  if (static_cast<double>(mosaic.total()) < 512.0 * 512.0) {
+    MatchedRing ring;
+    matched.run(0, mosaic.rows, out, stream, nullptr, ring);
+  } else {
     cv::parallel_for_(
         cv::Range(0, mosaic.rows),
-        [&](const cv::Range& r) { matched.run(r.start, r.end, out, stream, nullptr); }, 2.0);
+        [&](const cv::Range& r) {
+          MatchedRing ring;
+          matched.run(r.start, r.end, out, stream, nullptr, ring);
+        },
+        2.0);
+  }
 }
 
 int matched_bayer_blocks(int width) {
   return ((width + 1) / 2 + MatchedBayer::kBlock - 1) / MatchedBayer::kBlock;
 }
 
-void demosaic_matched_bayer_rows(const cv::Mat& mosaic, const MosaicLayout& layout,
-                                 float no_signal_dn, int y0, int y1, std::vector<cv::Mat>& strip,
-                                 std::vector<std::uint8_t>& lit) {
+struct MatchedBayerRows::State {
+  State(const cv::Mat& mosaic, const MosaicLayout& layout, float no_signal_dn)
+      : matched(mosaic, layout, no_signal_dn) {}
+  MatchedBayer matched;
+  MatchedRing ring;
+};
+
+MatchedBayerRows::MatchedBayerRows(const cv::Mat& mosaic, const MosaicLayout& layout,
+                                   float no_signal_dn) {
   if (mosaic.type() != CV_32F || layout.kind != MosaicLayout::Kind::kBayer || mosaic.cols < 2 ||
       mosaic.rows < 2)
     throw InputError("matched demosaicking of rows takes a CV_32F Bayer mosaic of 2x2 or more");
-  if (!(0 <= y0 && y0 <= y1 && y1 <= mosaic.rows))
+  state_ = std::make_unique<State>(mosaic, layout, no_signal_dn);
+  rows_ = mosaic.rows;
+}
+
+MatchedBayerRows::~MatchedBayerRows() = default;
+
+void MatchedBayerRows::rows(int y0, int y1, std::vector<cv::Mat>& strip,
+                            std::vector<std::uint8_t>& lit) {
+  if (!(0 <= y0 && y0 <= y1 && y1 <= rows_))
     throw InputError("rows " + std::to_string(y0) + ".." + std::to_string(y1) +
-                     " are not rows of a mosaic of " + std::to_string(mosaic.rows));
-  const MatchedBayer matched(mosaic, layout, no_signal_dn);
+                     " are not rows of a mosaic of " + std::to_string(rows_));
+  const MatchedBayer& matched = state_->matched;
   strip.resize(3);
-  for (cv::Mat& plane : strip) plane.create(y1 - y0, mosaic.cols, CV_32F);
+  for (cv::Mat& plane : strip) plane.create(y1 - y0, matched.width(), CV_32F);
   lit.resize(static_cast<std::size_t>(y1 - y0) * static_cast<std::size_t>(matched.out_blocks()));
   matched.run(
       y0, y1, [&](int b, int y) { return strip[static_cast<std::size_t>(b)].ptr<float>(y - y0); },
-      false, lit.data());
+      false, lit.data(), state_->ring);
+}
+
+void demosaic_matched_bayer_rows(const cv::Mat& mosaic, const MosaicLayout& layout,
+                                 float no_signal_dn, int y0, int y1, std::vector<cv::Mat>& strip,
+                                 std::vector<std::uint8_t>& lit) {
+  MatchedBayerRows(mosaic, layout, no_signal_dn).rows(y0, y1, strip, lit);
 }
 
 namespace {

@@ -460,33 +460,41 @@ void PlaneEstimator::for_each_strip(const MatchedMosaic& source, const LitRun& l
   // 16 rows of three float planes: 0.4 MB at 2048 columns, within a core's cache.
   constexpr int kStripRows = 16;
   const int strips = (height + kStripRows - 1) / kStripRows;
-  cv::parallel_for_(cv::Range(0, strips), [&](const cv::Range& range) {
-    std::vector<cv::Mat> strip;
-    std::vector<std::uint8_t> lit;
-    std::vector<float> scratch(static_cast<std::size_t>(width));
-    std::vector<std::vector<float>> band_scratch;
-    for (int k = range.start; k < range.end; ++k) {
-      const int y0 = k * kStripRows, y1 = std::min(height, y0 + kStripRows);
-      demosaic_matched_bayer_rows(mosaic, source.layout, source.no_signal_dn, y0, y1, strip, lit);
-      for (int y = y0; y < y1; ++y) {
-        const std::uint8_t* row_lit = lit.data() + static_cast<std::ptrdiff_t>(y - y0) * blocks;
-        for (int b0 = 0; b0 < blocks;) {
-          int b1 = b0 + 1;
-          while (b1 < blocks && (row_lit[b1] != 0) == (row_lit[b0] != 0)) ++b1;
-          const int x0 = b0 * kMatchedBlockColumns, x1 = std::min(width, b1 * kMatchedBlockColumns);
-          if (row_lit[b0]) {
-            const float* rows[3] = {strip[0].ptr<float>(y - y0) + x0,
-                                    strip[1].ptr<float>(y - y0) + x0,
-                                    strip[2].ptr<float>(y - y0) + x0};
-            lit_run(y, x0, x1, rows, scratch.data(), band_scratch);
-          } else {
-            dark_run(y, x0, x1);
+  // Runs of strips, each strip demosaicked after the last without reading its rows again: a few
+  // runs a thread, so that a hot region's strips still spread over the threads.
+  const double runs = std::min<double>(strips, 4.0 * std::max(1, cv::getNumThreads()));
+  cv::parallel_for_(
+      cv::Range(0, strips),
+      [&](const cv::Range& range) {
+        MatchedBayerRows matched(mosaic, source.layout, source.no_signal_dn);
+        std::vector<cv::Mat> strip;
+        std::vector<std::uint8_t> lit;
+        std::vector<float> scratch(static_cast<std::size_t>(width));
+        std::vector<std::vector<float>> band_scratch;
+        for (int k = range.start; k < range.end; ++k) {
+          const int y0 = k * kStripRows, y1 = std::min(height, y0 + kStripRows);
+          matched.rows(y0, y1, strip, lit);
+          for (int y = y0; y < y1; ++y) {
+            const std::uint8_t* row_lit = lit.data() + static_cast<std::ptrdiff_t>(y - y0) * blocks;
+            for (int b0 = 0; b0 < blocks;) {
+              int b1 = b0 + 1;
+              while (b1 < blocks && (row_lit[b1] != 0) == (row_lit[b0] != 0)) ++b1;
+              const int x0 = b0 * kMatchedBlockColumns,
+                        x1 = std::min(width, b1 * kMatchedBlockColumns);
+              if (row_lit[b0]) {
+                const float* rows[3] = {strip[0].ptr<float>(y - y0) + x0,
+                                        strip[1].ptr<float>(y - y0) + x0,
+                                        strip[2].ptr<float>(y - y0) + x0};
+                lit_run(y, x0, x1, rows, scratch.data(), band_scratch);
+              } else {
+                dark_run(y, x0, x1);
+              }
+              b0 = b1;
+            }
           }
-          b0 = b1;
         }
-      }
-    }
-  });
+      },
+      runs);
 }
 
 void PlaneEstimator::estimate(const MatchedMosaic& source, cv::Mat& t, cv::Mat* u) const {

@@ -352,6 +352,70 @@ TEST(Demosaic, matched_strips_are_the_frames_rows) {
   EXPECT_THROW(demosaic_matched_bayer_rows(img, snapshot, 5.f, 0, 5, strip, lit), InputError);
 }
 
+// Strips taken one after another from one MatchedBayerRows (the rows its kernels reach carried
+// from strip to strip) are the frame's rows bit for bit, as are strips after a jump back or
+// ahead (the rows then read afresh); each block's flag follows its rule.
+TEST(Demosaic, matched_strips_in_sequence_are_the_frames_rows) {
+  const MosaicLayout m = MosaicLayout::bayer("GRBG");
+  cv::Mat img(70, 203, CV_32F);
+  cv::randu(img, 0, 5);  // below the no-light level
+  cv::Mat hot = img(cv::Rect(20, 3, 150, 60));
+  cv::randu(hot, 0, 250);
+  img.at<float>(30, 60) = kInf;
+  img.at<float>(66, 202) = 100;  // light at the right edge (its padding) ...
+  img.at<float>(69, 1) = 100;    // ... and at the left one
+  img.at<float>(68, 62) = 100;   // in the first pair of the second block (of padded columns)
+  std::vector<cv::Mat> frame;
+  demosaic(img, m, DemosaicMethod::kMatched, frame, 5.f);
+  const int blocks = matched_bayer_blocks(img.cols);
+  // A block is lit where a sample in the rows and columns its kernels can reach has light: two
+  // rows each way, from two columns left of the block to the end of the next block (mirrored
+  // without repeating the edge).
+  auto lit_by_rule = [&](int y, int block) {
+    for (int yy = y - 2; yy <= y + 2; ++yy)
+      for (int x = block * kMatchedBlockColumns - 2; x < (block + 2) * kMatchedBlockColumns - 2;
+           ++x) {
+        if (x > img.cols + 1) break;
+        const float v = img.at<float>(cv::borderInterpolate(yy, img.rows, cv::BORDER_REFLECT_101),
+                                      cv::borderInterpolate(x, img.cols, cv::BORDER_REFLECT_101));
+        if (!(v < 5.f)) return true;
+      }
+    return false;
+  };
+  MatchedBayerRows rows(img, m, 5.f);
+  std::vector<cv::Mat> strip;
+  std::vector<std::uint8_t> lit;
+  int compared = 0;
+  for (const auto& [y0, y1] : {std::pair{0, 16},
+                               {16, 32},
+                               {32, 33},
+                               {33, 50},
+                               {10, 26},
+                               {26, 40},
+                               {60, 70},
+                               {50, 60},
+                               {60, 70}}) {
+    for (cv::Mat& plane : strip) plane.setTo(-7);
+    rows.rows(y0, y1, strip, lit);
+    for (int y = y0; y < y1; ++y)
+      for (int k = 0; k < blocks; ++k)
+        EXPECT_EQ(lit[(y - y0) * blocks + k] != 0, lit_by_rule(y, k)) << y << " " << k;
+    for (int b = 0; b < 3; ++b)
+      for (int y = y0; y < y1; ++y)
+        for (int x = 0; x < img.cols; ++x) {
+          if (lit[(y - y0) * blocks + x / kMatchedBlockColumns] == 0) continue;
+          const float want = frame[b].at<float>(y, x), got = strip[b].at<float>(y - y0, x);
+          ++compared;
+          if (std::isnan(want))
+            EXPECT_TRUE(std::isnan(got)) << b << " " << y << "," << x;
+          else
+            ASSERT_EQ(std::memcmp(&got, &want, sizeof got), 0) << b << " " << y << "," << x;
+        }
+  }
+  EXPECT_GT(compared, 3 * 150 * 60);
+  EXPECT_THROW(rows.rows(60, 71, strip, lit), InputError);
+}
+
 // The fused pass (each block of rows checked as it is demosaicked, on the threads) marks what
 // the separate one marks: bit for bit, on a frame large enough to be split, with an odd width,
 // plates with sharp edges, saturated samples and a dim background left out by the skip level.

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -126,9 +127,10 @@ void demosaic_matched_bayer(const cv::Mat& mosaic, const MosaicLayout& layout, f
 // at a time, so that the band planes never leave the cache. Output rows [y0, y1) of
 // demosaic_matched_bayer's planes, the same values bit for bit, into `strip` (three planes of
 // y1 - y0 rows, (re)allocated when their size differs), and in `lit`, per row and block of
-// kMatchedBlockColumns columns (matched_bayer_blocks(width) a row), 0 where every sample the
-// block's kernels reach is below `no_signal_dn`, else 1. A block flagged 0 is left unwritten in
-// `strip`: its band values are all 0 (dim).
+// kMatchedBlockColumns columns (matched_bayer_blocks(width) a row), 0 where every sample its
+// kernels can reach is below `no_signal_dn` (within two rows, from two columns left of the block
+// to the end of the next block), else 1. A block flagged 0 is left unwritten in `strip`: its
+// band values are all 0 (dim).
 // Throws InputError for a mosaic that is not a CV_32F Bayer mosaic of 2x2 or more, or rows
 // outside it.
 inline constexpr int kMatchedBlockColumns = 64;
@@ -136,5 +138,22 @@ int matched_bayer_blocks(int width);
 void demosaic_matched_bayer_rows(const cv::Mat& mosaic, const MosaicLayout& layout,
                                  float no_signal_dn, int y0, int y1, std::vector<cv::Mat>& strip,
                                  std::vector<std::uint8_t>& lit);
+
+// The same, strip after strip of one mosaic (which must outlive it): a strip that starts where
+// the last one ended reads none of the mosaic's rows again (the kernels reach two rows each
+// way, a fifth of a 16-row strip's reading).
+class MatchedBayerRows {
+ public:
+  MatchedBayerRows(const cv::Mat& mosaic, const MosaicLayout& layout, float no_signal_dn);
+  ~MatchedBayerRows();
+  MatchedBayerRows(const MatchedBayerRows&) = delete;
+  MatchedBayerRows& operator=(const MatchedBayerRows&) = delete;
+  void rows(int y0, int y1, std::vector<cv::Mat>& strip, std::vector<std::uint8_t>& lit);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+  int rows_ = 0;
+};
 
 }  // namespace pyrocam
