@@ -22,7 +22,7 @@
 #   EXPOSURE_CONTROL autoexposure after the camera: the hottest region neither saturates nor goes dim (1) [0]
 #   EXPOSURE_LATENCY frames from setting an exposure to the first frame taken with it, for autoexposure [3]
 #   BRACKET          exposure factors the camera cycles through (autoexposure brackets it; one frame passes per EXPOSURE_LATENCY + 1), fused by thermalfuse (high dynamic range), e.g. 1,8 []
-#   BRACKET_FUSION   readings: thermalfuse after ratiotemp, each pixel from one frame; mosaics: mosaicfuse before demosaic25, each sample from one frame (more of a still pool reads; a moving one reads wild) [readings]
+#   BRACKET_FUSION   readings: thermalfuse after ratiotemp, each pixel from one frame; mosaics: mosaicfuse before demosaic25, each sample from one frame, following a pool that moves (more of the pool reads; where its brightness changes over the bracket some read wild) [readings]
 #   BLUR_CORRECTION ratiotemp blur-correction: steep sides read their footprint's mean temperature, not hotter (1; colour camera) [1 with BRACKET_FUSION=mosaics, else 0]
 #   BRIGHTNESS_RADIUS ratiotemp brightness-radius: each pixel read from its own brightness, scaled over a window (colour: (4r+1) pixels; 5x5: (2r+1) cells); only for surfaces of one emissivity over the window (0 = off, 1-8) [0]
 #   PEAK_MARKER  ring the frame's peak and write its temperature on the overlay (1) [0]

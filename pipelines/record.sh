@@ -34,7 +34,7 @@
 #   PEAK_MARKER      ring the frame's peak and write its temperature on the overlay (1) [0]
 #   ALARM_C          thermalalarm: a pyrocam-alarm message when the peak stays above this, degC []
 #   BRACKET          exposure factors the camera cycles through, fused by thermalfuse (high dynamic range), e.g. 9,3,1,0.333,0.111,0.037; a camera other than the simulated one is bracketed by autoexposure, one frame passing per EXPOSURE_LATENCY + 1 []
-#   BRACKET_FUSION   readings: thermalfuse after ratiotemp, each pixel from one frame; mosaics: mosaicfuse before demosaic25, each sample from one frame (more of a still pool reads; a moving one reads wild) [readings]
+#   BRACKET_FUSION   readings: thermalfuse after ratiotemp, each pixel from one frame; mosaics: mosaicfuse before demosaic25, each sample from one frame, following a pool that moves (more of the pool reads; where its brightness changes over the bracket some read wild) [readings]
 #   BLUR_CORRECTION ratiotemp blur-correction: steep sides read their footprint's mean temperature, not hotter (1; colour camera) [1 with BRACKET_FUSION=mosaics, else 0]
 #   BRIGHTNESS_RADIUS ratiotemp brightness-radius: each pixel read from its own brightness, scaled over a window (colour: (4r+1) pixels; 5x5: (2r+1) cells); only for surfaces of one emissivity over the window (0 = off, 1-8) [0]
 #   SEGMENT_SECONDS  length of one segment in seconds (decimals allowed) [10]

@@ -50,7 +50,8 @@ BRACKET=${BRACKET:-}
 # another camera (aravissrc, genicam-live) is bracketed by autoexposure, which holds each
 # exposure for EXPOSURE_LATENCY + 1 frames and passes the last frame of each, with its exposure.
 # BRACKET_FUSION=mosaics fuses the dark-subtracted mosaics instead (mosaicfuse before
-# demosaic25): more of a still pool's hot pixels read, but a moving pool's read wild.
+# demosaic25): more of the pool's hot pixels read (a moving pool followed as a shift), but where
+# its brightness changes over the bracket some read wild.
 BRACKET_FUSION=${BRACKET_FUSION:-readings}
 [[ $BRACKET_FUSION == readings || $BRACKET_FUSION == mosaics ]] || { echo "$name: BRACKET_FUSION must be readings or mosaics, not '$BRACKET_FUSION'" >&2; exit 2; }
 BLUR_CORRECTION=${BLUR_CORRECTION:-}

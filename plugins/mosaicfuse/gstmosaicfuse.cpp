@@ -23,20 +23,30 @@
  * A sample from a shorter exposure, scaled up, is noisier than the noise model of the longest
  * one says: ratiotemp's uncertainty output and misfit check are too confident on such pixels.
  * Samples of different frames meet in one footprint: over a pool that moves between the frames
- * of a bracket, the bands of a pixel near the boundary are from different moments, and its
- * reading may be of no temperature at all. So each frame is compared with the one before on the
- * samples both expose well, scaled to one exposure: once, over the stream, they disagree beyond
- * a bound on the noise several times a sensor's on at least 20 samples and 0.2 % of those
- * compared, one warning on the bus (STREAM FORMAT) says that the scene moves and to fuse with
- * thermalfuse instead; the fusion goes on as before (a still pool's frames disagree on none).
+ * of a bracket, the bands of a pixel near the boundary would be from different places, and its
+ * reading of no temperature at all. With #GstMosaicFuse:follow-motion (the default) the fusion
+ * follows a scene that moves as a whole at a steady velocity (a melt pool along its track): the
+ * velocity is the shift between the latest frame and the last one with the same exposure (the
+ * cycle before), found where both expose well, and each earlier frame's samples are taken from
+ * where the scene has moved since, interpolated along their band's samples. On a simulated pool
+ * moving 0.67 pixels a frame (targets suite, six exposures) 94 % of the pixels hotter than
+ * 1300 degC read instead of 81 %, and 12 % of the readings were more than max(150 degC, 10 %)
+ * off the latest frame's truth instead of 35 %; what is left there is mostly the pool's peak
+ * changing over the bracket (by up to 20 degC a frame), which a shift does not follow. A still
+ * scene, or one moving under about one cell of the mosaic a cycle, is fused as it is. Each frame
+ * is also compared with the one before on the samples both expose well, scaled to one exposure:
+ * once, over the stream, they disagree beyond a bound on the noise several times a sensor's on
+ * at least 20 samples and 0.2 % of those compared, one warning on the bus (STREAM FORMAT) says
+ * that the scene moves (and whether the fusion follows it); the fusion goes on (a still pool's
+ * frames disagree on none).
  *
  * A frame without exposure metadata passes unchanged and starts the fusion anew, with one
  * warning on the bus (STREAM FORMAT). A frame whose time is before the frame's before it
  * (frames out of order) starts anew too, with one warning. New caps or a flush start anew.
  *
  * ## Example launch line
- * (pyrocamsrc's melt pool moves, about 1.6 pixels a frame at 320x240: its boundaries read wild
- * here, and mosaicfuse warns that the scene moves; for a moving pool use thermalfuse)
+ * (pyrocamsrc's melt pool moves, about 1.6 pixels a frame at 320x240: mosaicfuse follows it
+ * and warns once that the scene moves)
  * |[
  * gst-launch-1.0 pyrocamsrc scene=melt-pool bracket=3,1,0.333,0.111,0.037,0.012,0.004 ! \
  *     darksub dark-level=50 ! mosaicfuse frames=7 ! demosaic25 ! \
@@ -65,12 +75,14 @@ namespace pg = pyrocam::gst;
 
 namespace {
 
-enum { PROP_0, PROP_FRAMES };
+enum { PROP_0, PROP_FRAMES, PROP_FOLLOW_MOTION };
 
 constexpr guint DEFAULT_FRAMES = 2;
+constexpr gboolean DEFAULT_FOLLOW_MOTION = TRUE;
 
 struct Settings {
   guint frames = DEFAULT_FRAMES;
+  gboolean follow_motion = DEFAULT_FOLLOW_MOTION;
 };
 
 // The exposure of a frame the fusion holds.
@@ -160,11 +172,13 @@ static GstFlowReturn gst_mosaic_fuse_transform_ip(GstBaseTransform* trans, GstBu
                        "transform called before set_caps");
     return GST_FLOW_NOT_NEGOTIATED;
   }
-  const int frames = static_cast<int>(pg::locked_copy(self, self->settings->frames));
+  const Settings settings = pg::locked_copy(self, *self->settings);
+  const int frames = static_cast<int>(settings.frames);
   if (!st.fusion || st.fusion->frames() != frames) {
     st.fusion = std::make_unique<pyrocam::MosaicBracketFusion>(frames, st.period);
     st.exposures.clear();
   }
+  st.fusion->set_follows_motion(settings.follow_motion);
   if (pg::frame_out_of_time_order(GST_ELEMENT(self), buffer, st.last_pts, st.warned_out_of_order))
     st.reset();
   PyrocamExposureMeta* meta = pyrocam_buffer_get_exposure_meta(buffer);
@@ -181,21 +195,38 @@ static GstFlowReturn gst_mosaic_fuse_transform_ip(GstBaseTransform* trans, GstBu
                      static_cast<GstMapFlags>(GST_MAP_READ | GST_MAP_WRITE));
     const double reference = st.fusion->add(mosaic.image(), now.light, mosaic.image());
     const pyrocam::MosaicBracketFusion::Agreement& agreement = st.fusion->last_agreement();
-    GST_LOG_OBJECT(self, "the frame before disagrees on %zu of %zu samples", agreement.disagreeing,
-                   agreement.compared);
+    const cv::Point2d& velocity = st.fusion->velocity();
+    GST_LOG_OBJECT(self,
+                   "the frame before disagrees on %zu of %zu samples; velocity followed %.2f, "
+                   "%.2f pixels a frame",
+                   agreement.disagreeing, agreement.compared, velocity.x, velocity.y);
     st.agreement += agreement;
     if (!st.warned_moving && st.agreement.moved()) {
       st.warned_moving = true;
-      GST_ELEMENT_WARNING(self, STREAM, FORMAT,
-                          ("The scene moves between the bracket's frames: consecutive frames "
-                           "disagree on %zu of %zu samples both expose well. Samples of different "
-                           "moments meet in one demosaicking footprint, whose reading may be of "
-                           "no temperature; fuse a moving scene's readings with thermalfuse after "
-                           "ratiotemp instead (or, if the scene holds still, the frames were not "
-                           "taken with the exposures their metadata say)",
-                           st.agreement.disagreeing, st.agreement.compared),
-                          ("beyond 4 standard deviations of a bound on the noise (1 DN of shot "
-                           "variance per DN, 4 DN^2 floor) and 5 %%"));
+      if (settings.follow_motion)
+        GST_ELEMENT_WARNING(
+            self, STREAM, FORMAT,
+            ("The scene moves between the bracket's frames: consecutive frames disagree on %zu "
+             "of %zu samples both expose well. mosaicfuse follows it as a shift at a steady "
+             "velocity (now %.2f, %.2f pixels a frame); where the scene changes otherwise (a "
+             "pool's brightness), samples of different moments still meet in one demosaicking "
+             "footprint: if its boundaries read wrong, fuse the readings with thermalfuse after "
+             "ratiotemp instead",
+             st.agreement.disagreeing, st.agreement.compared, velocity.x, velocity.y),
+            ("beyond 4 standard deviations of a bound on the noise (1 DN of shot variance per "
+             "DN, 4 DN^2 floor) and 5 %%"));
+      else
+        GST_ELEMENT_WARNING(
+            self, STREAM, FORMAT,
+            ("The scene moves between the bracket's frames: consecutive frames disagree on %zu "
+             "of %zu samples both expose well. Samples of different moments meet in one "
+             "demosaicking footprint, whose reading may be of no temperature; set "
+             "follow-motion=true, or fuse a moving scene's readings with thermalfuse after "
+             "ratiotemp instead (or, if the scene holds still, the frames were not taken with "
+             "the exposures their metadata say)",
+             st.agreement.disagreeing, st.agreement.compared),
+            ("beyond 4 standard deviations of a bound on the noise (1 DN of shot variance per "
+             "DN, 4 DN^2 floor) and 5 %%"));
     }
     // Saturated now only where no frame of the bracket read: say where, for the elements
     // downstream, in place of darksub's count for this frame alone.
@@ -221,6 +252,8 @@ static void gst_mosaic_fuse_set_property(GObject* object, guint prop_id, const G
   pg::ObjectLock lock(self);
   if (prop_id == PROP_FRAMES)
     self->settings->frames = g_value_get_uint(value);
+  else if (prop_id == PROP_FOLLOW_MOTION)
+    self->settings->follow_motion = g_value_get_boolean(value);
   else
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
 }
@@ -231,6 +264,8 @@ static void gst_mosaic_fuse_get_property(GObject* object, guint prop_id, GValue*
   pg::ObjectLock lock(self);
   if (prop_id == PROP_FRAMES)
     g_value_set_uint(value, self->settings->frames);
+  else if (prop_id == PROP_FOLLOW_MOTION)
+    g_value_set_boolean(value, self->settings->follow_motion);
   else
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
 }
@@ -255,6 +290,22 @@ static void gst_mosaic_fuse_class_init(GstMosaicFuseClass* klass) {
 
   g_object_class_install_property(gobject_class, PROP_FRAMES,
                                   pg::bracket_frames_param(DEFAULT_FRAMES));
+  /**
+   * GstMosaicFuse:follow-motion:
+   *
+   * Follow a scene that moves between the bracket's frames as a shift at a steady velocity,
+   * found between frames of the same exposure: earlier frames' samples are taken from where the
+   * scene has moved since. Off: every frame's samples where they are.
+   */
+  g_object_class_install_property(
+      gobject_class, PROP_FOLLOW_MOTION,
+      g_param_spec_boolean(
+          "follow-motion", "Follow motion",
+          "Take earlier frames' samples from where a moving scene has gone since (a steady "
+          "velocity, found between frames of the same exposure); false: where they are",
+          DEFAULT_FOLLOW_MOTION,
+          static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                   GST_PARAM_MUTABLE_PLAYING)));
 
   gst_element_class_add_static_pad_template(element_class, &sink_template);
   gst_element_class_add_static_pad_template(element_class, &src_template);

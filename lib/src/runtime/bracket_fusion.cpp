@@ -6,9 +6,11 @@
 #include <cstdlib>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pyrocam/core/error.h"
+#include "runtime/bracket_motion.h"
 
 namespace pyrocam {
 
@@ -94,6 +96,9 @@ constexpr int kNeighbourCells = 2;
 // more noise (without it the bracket targets' wild readings rose from 0.4 to 1.9 %).
 constexpr float kNearLevelFraction = 0.85f;
 
+// A frame whose content moved less than this since is fused where it is, not interpolated.
+constexpr double kLeastShiftPx = 0.25;
+
 // MosaicBracketFusion::Agreement's bound on a sample's noise (see there).
 constexpr double kMotionShotDnPerDn = 1;
 constexpr double kMotionFloorDn2 = 4;
@@ -173,31 +178,79 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
     throw InputError("mosaic bracket fusion: a frame's exposure must be above 0, not " +
                      std::to_string(light));
   if (!held_.empty() && held_.front().signal.size() != signal.size()) reset();
-  const Held now{signal.clone(), near_saturated(signal, period_, largest_), light};
+  Held now{signal.clone(), near_saturated(signal, period_, largest_), light, {}};
   agreement_ = held_.empty() ? Agreement{}
                              : agreement(now.signal, light, held_.back().signal, held_.back().light,
                                          kMotionLowDn, kNearLevelFraction * largest_);
-  // The frames by light, most first; among equals the latest first.
-  std::vector<const Held*> order;
-  order.push_back(&now);
-  for (auto it = held_.rbegin(); it != held_.rend(); ++it) order.push_back(&*it);
+  if (follows_motion_ && frames_ > 1) {
+    now.cells = bracket_motion::cell_logs(signal, period_, static_cast<float>(kMotionLowDn),
+                                          kNearLevelFraction * largest_);
+    // The last frame with the same light (exposures repeat exactly, cycle after cycle). A
+    // velocity found holds for a cycle: a short exposure's frame may show too little to find it.
+    ++frames_since_velocity_;
+    for (std::size_t age = 1; age <= held_.size(); ++age) {
+      const Held& h = held_[held_.size() - age];
+      if (std::abs(h.light - light) > 1e-9 * light) continue;
+      cv::Point2d shift;
+      if (bracket_motion::find_shift(now.cells, h.cells, period_, shift)) {
+        velocity_ = shift / static_cast<double>(age);
+        frames_since_velocity_ = 0;
+      }
+      break;
+    }
+    if (frames_since_velocity_ >= frames_) velocity_ = {};
+  }
+  // The frames fused by light, most first; among equals the latest first. Each with the shift
+  // of its content since (its age times the velocity).
+  struct Fused {
+    const Held* held;
+    bracket_motion::Displacement displacement;
+    bool displaced;
+  };
+  std::vector<Fused> order{{&now, {{}, period_}, false}};
+  const std::size_t fused = std::min<std::size_t>(held_.size(), frames_ - 1);
+  for (std::size_t age = 1; age <= fused; ++age) {
+    const cv::Point2d shift = velocity_ * static_cast<double>(age);
+    order.push_back({&held_[held_.size() - age],
+                     {shift, period_},
+                     std::hypot(shift.x, shift.y) >= kLeastShiftPx});
+  }
   std::stable_sort(order.begin(), order.end(),
-                   [](const Held* a, const Held* b) { return a->light > b->light; });
-  const double reference = order.front()->light;
+                   [](const Fused& a, const Fused& b) { return a.held->light > b.held->light; });
+  const double reference = order.front().held->light;
   std::vector<float> scale;
-  for (const Held* h : order) scale.push_back(static_cast<float>(reference / h->light));
+  for (const Fused& f : order) scale.push_back(static_cast<float>(reference / f.held->light));
   out.create(signal.size(), CV_32F);
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  std::vector<bracket_motion::DisplacedRow> rows;
+  rows.reserve(order.size());
+  std::vector<const float*> values(order.size());
+  std::vector<const std::uint8_t*> near_level(order.size());
   for (int y = 0; y < out.rows; ++y) {
+    // Each frame's row, a displaced frame's read where its content was.
+    rows.clear();
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const Held& h = *order[k].held;
+      rows.emplace_back(h.signal, h.near_saturated, order[k].displacement, y);
+      values[k] = h.signal.ptr<float>(y);
+      near_level[k] = h.near_saturated.ptr<std::uint8_t>(y);
+    }
     float* o = out.ptr<float>(y);
     for (int x = 0; x < out.cols; ++x) {
       float first_number = kNaN;  // the first frame's whose sample is a number, scaled
       bool missing = false, taken = false;
       for (std::size_t k = 0; k < order.size() && !taken; ++k) {
-        const float v = order[k]->signal.ptr<float>(y)[x];
+        bool near;
+        float v;
+        if (order[k].displaced) {
+          v = rows[k].at(x, &near);
+        } else {
+          v = values[k][x];
+          near = near_level[k][x] != 0;
+        }
         if (std::isfinite(v)) {
           if (std::isnan(first_number)) first_number = v * scale[k];
-          if (order[k]->near_saturated.ptr<std::uint8_t>(y)[x] == 0) {
+          if (!near) {
             o[x] = v * scale[k];
             taken = true;
           }
@@ -209,8 +262,9 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
       o[x] = !std::isnan(first_number) ? first_number : missing ? kNaN : INFINITY;
     }
   }
-  held_.push_back(now);
-  while (static_cast<int>(held_.size()) > frames_ - 1) held_.pop_front();
+  held_.push_back(std::move(now));
+  const int kept = follows_motion_ && frames_ > 1 ? frames_ : frames_ - 1;
+  while (static_cast<int>(held_.size()) > kept) held_.pop_front();
   return reference;
 }
 

@@ -69,7 +69,13 @@ class BracketFusion {
 // the reference assumes: uncertainties of such pixels are low. Samples from different frames
 // meet in one footprint, so over a pool that moves between the bracket's frames the bands of a
 // pixel near a boundary are from different moments: last_agreement() says how each frame agrees
-// with the one before, for a warning (mosaicfuse's).
+// with the one before, for a warning (mosaicfuse's). Unless set_follows_motion(false), the fusion
+// follows a scene that moves at a constant velocity (a melt pool along its track): the velocity
+// is the translation between the latest frame and the last one held with the same light (the
+// bracket's cycle before; bracket_motion::find_shift), and each earlier frame's samples are taken
+// from where the content moved since (its age times the velocity), interpolated along the band's
+// own samples. A still scene, or one moving less than about half a cell a cycle, is fused as
+// without it.
 class MosaicBracketFusion {
  public:
   // frames: 1..kMaxBracketFrames (1: no fusion); period: the mosaic's cell size, 1..16 (the
@@ -83,11 +89,16 @@ class MosaicBracketFusion {
   double add(const cv::Mat& signal, double light, cv::Mat& out);
   void reset() {
     held_.clear();
+    velocity_ = {};
+    frames_since_velocity_ = 0;
     largest_ = 0;
     agreement_ = {};
   }
   int frames() const { return frames_; }
-  std::size_t held() const { return held_.size(); }
+  void set_follows_motion(bool follows) { follows_motion_ = follows; }
+  bool follows_motion() const { return follows_motion_; }
+  // The velocity the last add() followed, pixels a frame (0, 0 where it found none).
+  const cv::Point2d& velocity() const { return velocity_; }
 
   // How the last frame added agrees with the one before it, sample by sample, scaled to one
   // exposure: of the samples well exposed in both (at least kMotionLowDn and below the level's
@@ -119,9 +130,15 @@ class MosaicBracketFusion {
     cv::Mat signal;
     cv::Mat near_saturated;  // CV_8U: 1 where a sample of its band `period_` away saturates
     double light;
+    cv::Mat cells;  // bracket_motion::cell_logs, where the fusion follows motion
   };
   int frames_, period_;
-  std::deque<Held> held_;  // oldest first, at most frames_ - 1 before the new one
+  // Oldest first, at most frames_ before the new one: the last frames_ - 1 are fused, and the
+  // one before them may have the new one's light (the bracket's cycle before).
+  std::deque<Held> held_;
+  bool follows_motion_ = true;
+  cv::Point2d velocity_;           // pixels a frame
+  int frames_since_velocity_ = 0;  // frames added since velocity_ was found
   // The largest number of any frame since the start, each in its own DN: at most the
   // saturation level less the dark, and close to it once something has been near the level.
   float largest_ = 0;

@@ -1,0 +1,129 @@
+#include "runtime/bracket_motion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace pyrocam::bracket_motion {
+
+cv::Mat cell_logs(const cv::Mat& signal, int period, float low, float high) {
+  const int rows = signal.rows / period, cols = signal.cols / period;
+  cv::Mat out(rows, cols, CV_32F);
+  const double per_cell = 1.0 / (period * period);
+  for (int cy = 0; cy < rows; ++cy) {
+    float* o = out.ptr<float>(cy);
+    for (int cx = 0; cx < cols; ++cx) {
+      double sum = 0;
+      bool usable = true;
+      for (int dy = 0; dy < period && usable; ++dy) {
+        const float* v = signal.ptr<float>(cy * period + dy) + cx * period;
+        for (int dx = 0; dx < period; ++dx) {
+          usable = usable && v[dx] >= low && v[dx] <= high;  // NaN, +INF fail
+          sum += v[dx];
+        }
+      }
+      o[cx] = usable ? static_cast<float>(std::log(sum * per_cell))
+                     : std::numeric_limits<float>::quiet_NaN();
+    }
+  }
+  return out;
+}
+
+namespace {
+
+struct Cell {
+  int x, y;
+  float v;
+};
+
+// Mean squared difference of the cells of `now` (listed) and `before` shifted by (sx, sy)
+// cells; +INF where fewer than `least` are shared.
+double mean_difference(const std::vector<Cell>& now, const cv::Mat& before, int sx, int sy,
+                       std::size_t least) {
+  double sum = 0, sum2 = 0;
+  std::size_t shared = 0;
+  for (const Cell& c : now) {
+    const int x = c.x - sx, y = c.y - sy;
+    if (x < 0 || y < 0 || x >= before.cols || y >= before.rows) continue;
+    const float b = before.ptr<float>(y)[x];
+    if (!std::isfinite(b)) continue;
+    const double d = c.v - b;
+    sum += d;
+    sum2 += d * d;
+    ++shared;
+  }
+  if (shared < least || shared == 0) return std::numeric_limits<double>::infinity();
+  const double mean = sum / static_cast<double>(shared);
+  return sum2 / static_cast<double>(shared) - mean * mean;
+}
+
+// The vertex of the parabola through (-1, a), (0, b), (1, c), within +-0.5; 0 where it does
+// not open upwards or a value is not finite.
+double vertex(double a, double b, double c) {
+  const double curvature = a - 2 * b + c;
+  if (!std::isfinite(curvature) || !(curvature > 0)) return 0;
+  return std::clamp(0.5 * (a - c) / curvature, -0.5, 0.5);
+}
+
+}  // namespace
+
+bool find_shift(const cv::Mat& now, const cv::Mat& before, int period, cv::Point2d& shift) {
+  if (now.size() != before.size() || now.empty()) return false;
+  std::vector<Cell> all;
+  for (int y = 0; y < now.rows; ++y) {
+    const float* v = now.ptr<float>(y);
+    for (int x = 0; x < now.cols; ++x)
+      if (std::isfinite(v[x])) all.push_back({x, y, v[x]});
+  }
+  // Evenly spread over the frame's usable cells, so a frame full of them costs no more.
+  std::vector<Cell> cells;
+  const std::size_t step = (all.size() + kMaxCompared - 1) / kMaxCompared;
+  for (std::size_t i = 0; i < all.size(); i += std::max<std::size_t>(step, 1))
+    cells.push_back(all[i]);
+  if (static_cast<int>(cells.size()) < kMinSharedCells) return false;
+  // The content moved, so at the right shift about as many cells are shared as `now` has.
+  const std::size_t least = std::max<std::size_t>(kMinSharedCells, cells.size() / 2);
+  constexpr int kR = kMaxShiftCells, kSide = 2 * kR + 1;
+  std::vector<double> d(kSide * kSide);
+  auto at = [&](int sx, int sy) -> double& { return d[(sy + kR) * kSide + (sx + kR)]; };
+  for (int sy = -kR; sy <= kR; ++sy)
+    for (int sx = -kR; sx <= kR; ++sx) at(sx, sy) = mean_difference(cells, before, sx, sy, least);
+  int best_x = 0, best_y = 0;
+  for (int sy = -kR; sy <= kR; ++sy)
+    for (int sx = -kR; sx <= kR; ++sx)
+      if (at(sx, sy) < at(best_x, best_y)) best_x = sx, best_y = sy;
+  const double best = at(best_x, best_y);
+  if (!std::isfinite(best) || (best_x == 0 && best_y == 0)) return false;
+  if (std::abs(best_x) == kR || std::abs(best_y) == kR) return false;
+  if (!(best <= kMinGain * at(0, 0))) return false;  // +INF at none: not shared enough there
+  const double fx = vertex(at(best_x - 1, best_y), best, at(best_x + 1, best_y));
+  const double fy = vertex(at(best_x, best_y - 1), best, at(best_x, best_y + 1));
+  shift = cv::Point2d((best_x + fx) * period, (best_y + fy) * period);
+  return true;
+}
+
+Displacement::Displacement(const cv::Point2d& shift, int period) : period(period) {
+  // Along each axis the band's samples at offsets period * m and period * (m + 1) from the
+  // pixel, m = floor(-shift / period).
+  const double ux = -shift.x / period, uy = -shift.y / period;
+  const double mx = std::floor(ux), my = std::floor(uy);
+  dx = period * static_cast<int>(mx), dy = period * static_cast<int>(my);
+  wx[0] = 1 - (ux - mx), wx[1] = ux - mx;
+  wy[0] = 1 - (uy - my), wy[1] = uy - my;
+}
+
+DisplacedRow::DisplacedRow(const cv::Mat& signal, const cv::Mat& near_level, const Displacement& d,
+                           int y)
+    : d_(d), width_(signal.cols) {
+  for (int j = 0; j < 2; ++j) {
+    if (d.wy[j] == 0) continue;
+    const int sy = y + d.dy + j * d.period;
+    inside_ = inside_ && sy >= 0 && sy < signal.rows;
+    if (!inside_) return;
+    rows_[j] = signal.ptr<float>(sy);
+    flags_[j] = near_level.ptr<std::uint8_t>(sy);
+  }
+}
+
+}  // namespace pyrocam::bracket_motion

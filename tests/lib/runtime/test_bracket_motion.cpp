@@ -1,0 +1,147 @@
+// Following a moving scene over an exposure bracket: the shift between two frames of one
+// exposure, and samples taken from where the content moved.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <opencv2/core.hpp>
+
+#include "pyrocam/runtime/bracket_fusion.h"
+#include "runtime/bracket_motion.h"
+
+namespace pyrocam {
+namespace {
+
+using bracket_motion::cell_logs;
+using bracket_motion::find_shift;
+
+constexpr int kW = 96, kH = 64;
+
+// Sample (x, y) of a frame whose content moved since (d).
+float displaced_sample(const cv::Mat& signal, const cv::Mat& near_level,
+                       const bracket_motion::Displacement& d, int x, int y, bool* near) {
+  return bracket_motion::DisplacedRow(signal, near_level, d, y).at(x, near);
+}
+
+// A mosaic whose every sample is `field` at its position (a band's scale makes no difference
+// to the interpolation along its own samples).
+template <typename F>
+cv::Mat mosaic(F field) {
+  cv::Mat m(kH, kW, CV_32F);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) m.at<float>(y, x) = static_cast<float>(field(x, y));
+  return m;
+}
+
+// A hot spot of 160 DN at (cx, cy), 2 sigma (12 pixels by default) across, on a background of
+// 2 DN.
+cv::Mat spot(double cx, double cy, double scale = 1, double sigma = 6) {
+  return mosaic([&](double x, double y) {
+    const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+    return 2 + scale * 160 * std::exp(-r2 / (2 * sigma * sigma));
+  });
+}
+
+TEST(BracketMotion, ADisplacedSampleIsTheFieldWhereTheContentWas) {
+  // Brightness exponential in position (a steep side): interpolated in the logarithm, exact.
+  auto side = [](double x, double y) { return 40 * std::exp(0.04 * x - 0.03 * y); };
+  const cv::Mat signal = mosaic(side);
+  const cv::Mat none = cv::Mat::zeros(kH, kW, CV_8U);
+  for (const cv::Point2d shift : {cv::Point2d(1.3, -0.7), cv::Point2d(-3.6, 2.2),
+                                  cv::Point2d(4.0, 0.0), cv::Point2d(0.5, 0.5)})
+    for (const cv::Point p : {cv::Point(40, 30), cv::Point(41, 31), cv::Point(20, 45)}) {
+      bool near = true;
+      const float v = displaced_sample(signal, none, {shift, 2}, p.x, p.y, &near);
+      EXPECT_NEAR(v, side(p.x - shift.x, p.y - shift.y), 1e-4 * v) << shift << " at " << p;
+      EXPECT_FALSE(near);
+    }
+  // Under the log's floor (a cold background's noise) linearly: a plane stays a plane.
+  const cv::Mat dim = mosaic([](double x, double y) { return 3 + 0.05 * x + 0.02 * y; });
+  bool near;
+  EXPECT_NEAR(displaced_sample(dim, none, {cv::Point2d(1.5, -0.5), 2}, 40, 30, &near),
+              3 + 0.05 * 38.5 + 0.02 * 30.5, 1e-5);
+}
+
+TEST(BracketMotion, ADisplacedSampleKeepsNoReadingSaturationAndTheLevelsNeighbourhood) {
+  cv::Mat signal(kH, kW, CV_32F, cv::Scalar(50));
+  cv::Mat near_level = cv::Mat::zeros(kH, kW, CV_8U);
+  signal.at<float>(30, 38) = std::numeric_limits<float>::infinity();
+  signal.at<float>(10, 38) = std::numeric_limits<float>::quiet_NaN();
+  near_level.at<std::uint8_t>(50, 40) = 1;
+  bool near;
+  // (40, 30) shifted by (1, 0) takes its band's samples at x = 38 and 40.
+  EXPECT_EQ(displaced_sample(signal, near_level, {cv::Point2d(1, 0), 2}, 40, 30, &near),
+            std::numeric_limits<float>::infinity());
+  EXPECT_TRUE(
+      std::isnan(displaced_sample(signal, near_level, {cv::Point2d(1, 0), 2}, 40, 10, &near)));
+  EXPECT_EQ(displaced_sample(signal, near_level, {cv::Point2d(1, 0), 2}, 40, 50, &near), 50);
+  EXPECT_TRUE(near);
+  // A whole cell's shift takes the one sample: the one at 38 is not part of (42, 50)'s.
+  EXPECT_EQ(displaced_sample(signal, near_level, {cv::Point2d(2, 0), 2}, 42, 50, &near), 50);
+  EXPECT_TRUE(near);
+  EXPECT_EQ(displaced_sample(signal, near_level, {cv::Point2d(2, 0), 2}, 44, 50, &near), 50);
+  EXPECT_FALSE(near);
+  // From outside the frame: no reading.
+  EXPECT_TRUE(
+      std::isnan(displaced_sample(signal, near_level, {cv::Point2d(2.5, 0), 2}, 1, 30, &near)));
+}
+
+TEST(BracketMotion, TheShiftBetweenTwoFramesOfOneExposure) {
+  const float low = 16, high = 150;
+  const cv::Mat now = cell_logs(spot(50, 30), 2, low, high);
+  cv::Point2d shift;
+  ASSERT_TRUE(find_shift(now, cell_logs(spot(44.8, 33.0), 2, low, high), 2, shift));
+  EXPECT_NEAR(shift.x, 5.2, 0.3);
+  EXPECT_NEAR(shift.y, -3.0, 0.3);
+  // The spot brighter then (a pool's peak changes): the same shift.
+  ASSERT_TRUE(find_shift(now, cell_logs(spot(44.8, 33.0, 0.8), 2, low, high), 2, shift));
+  EXPECT_NEAR(shift.x, 5.2, 0.3);
+  EXPECT_NEAR(shift.y, -3.0, 0.3);
+  // Still, or too little in view: none.
+  EXPECT_FALSE(find_shift(now, now, 2, shift));
+  EXPECT_FALSE(find_shift(now, cell_logs(spot(50.6, 30), 2, low, high), 2, shift));
+  const cv::Mat dark(kH, kW, CV_32F, cv::Scalar(2));
+  EXPECT_FALSE(find_shift(cell_logs(dark, 2, low, high), cell_logs(dark, 2, low, high), 2, shift));
+  // Farther than the search reaches: none.
+  EXPECT_FALSE(find_shift(cell_logs(spot(72, 30), 2, low, high),
+                          cell_logs(spot(24, 30), 2, low, high), 2, shift));
+  // A 5x5 mosaic's cells (a larger spot, so that whole cells of 25 samples are well exposed).
+  ASSERT_TRUE(find_shift(cell_logs(spot(50, 30, 1, 15), 5, low, high),
+                         cell_logs(spot(41.5, 35.0, 1, 15), 5, low, high), 5, shift));
+  EXPECT_NEAR(shift.x, 8.5, 0.75);
+  EXPECT_NEAR(shift.y, -5.0, 0.75);
+}
+
+// Two exposures a factor 4 apart, the spot moving 1.5 pixels a frame: after a cycle the fusion
+// knows the velocity, and the fused sample at the spot's front is the latest frame's (scaled),
+// where without following it is the long exposure's of a frame before, when the front was
+// behind.
+TEST(BracketMotion, TheFusionFollowsASpotMovingAtAConstantVelocity) {
+  const double lights[2] = {4, 1};
+  for (bool follows : {true, false}) {
+    MosaicBracketFusion fusion(2, 2);
+    fusion.set_follows_motion(follows);
+    cv::Mat out;
+    for (int frame = 0; frame < 6; ++frame) {
+      const double light = lights[frame % 2];
+      fusion.add(spot(30 + 1.5 * frame, 32, light / 4), light, out);
+    }
+    // The spot where it is now, as the long exposure would see it.
+    const cv::Mat now_long = spot(30 + 1.5 * 5, 32);
+    if (!follows) {
+      EXPECT_EQ(fusion.velocity(), cv::Point2d());
+      // The front's long-exposure sample from a frame before: too dim for where the front is.
+      EXPECT_LT(out.at<float>(32, 45), 0.8f * now_long.at<float>(32, 45));
+      continue;
+    }
+    EXPECT_NEAR(fusion.velocity().x, 1.5, 0.15);
+    EXPECT_NEAR(fusion.velocity().y, 0, 0.15);
+    for (int x = 38; x <= 46; ++x)  // the spot's front
+      EXPECT_NEAR(out.at<float>(32, x), now_long.at<float>(32, x), 0.03 * now_long.at<float>(32, x))
+          << x;
+  }
+}
+
+}  // namespace
+}  // namespace pyrocam
