@@ -178,7 +178,7 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
     throw InputError("mosaic bracket fusion: a frame's exposure must be above 0, not " +
                      std::to_string(light));
   if (!held_.empty() && held_.front().signal.size() != signal.size()) reset();
-  Held now{signal.clone(), near_saturated(signal, period_, largest_), light, {}};
+  Held now{signal.clone(), near_saturated(signal, period_, largest_), light, {}, {}};
   agreement_ = held_.empty() ? Agreement{}
                              : agreement(now.signal, light, held_.back().signal, held_.back().light,
                                          kMotionLowDn, kNearLevelFraction * largest_);
@@ -188,17 +188,29 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
     // The last frame with the same light (exposures repeat exactly, cycle after cycle). A
     // velocity found holds for a cycle: a short exposure's frame may show too little to find it.
     ++frames_since_velocity_;
-    for (std::size_t age = 1; age <= held_.size(); ++age) {
+    const Held* same = nullptr;  // the last frame with the same light, `same_age` frames ago
+    std::size_t same_age = 0;
+    bool found = false, still = false;
+    cv::Point2d shift;
+    for (std::size_t age = 1; age <= held_.size() && !same; ++age) {
       const Held& h = held_[held_.size() - age];
       if (std::abs(h.light - light) > 1e-9 * light) continue;
-      cv::Point2d shift;
-      if (bracket_motion::find_shift(now.cells, h.cells, period_, shift)) {
+      same = &h, same_age = age;
+      found = bracket_motion::find_shift(now.cells, h.cells, period_, shift, &still);
+      if (found) {
         velocity_ = shift / static_cast<double>(age);
         frames_since_velocity_ = 0;
       }
-      break;
     }
     if (frames_since_velocity_ >= frames_) velocity_ = {};
+    // How the brightness changed since, where the content's move is known (found, still, or
+    // the velocity held from a frame before).
+    if (same && (found || still || velocity_ != cv::Point2d()))
+      now.rates = bracket_motion::log_rates(now.cells, same->cells,
+                                            found   ? shift
+                                            : still ? cv::Point2d()
+                                                    : velocity_ * static_cast<double>(same_age),
+                                            period_, static_cast<int>(same_age));
   }
   // The frames fused by light, most first; among equals the latest first. Each with the shift
   // of its content since (its age times the velocity).
@@ -206,15 +218,25 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
     const Held* held;
     bracket_motion::Displacement displacement;
     bool displaced;
+    float age;
   };
-  std::vector<Fused> order{{&now, {{}, period_}, false}};
+  std::vector<Fused> order{{&now, {{}, period_}, false, 0}};
   const std::size_t fused = std::min<std::size_t>(held_.size(), frames_ - 1);
+  std::vector<cv::Mat> rates{now.rates};
+  std::vector<cv::Point2d> shifts{cv::Point2d()};
   for (std::size_t age = 1; age <= fused; ++age) {
     const cv::Point2d shift = velocity_ * static_cast<double>(age);
-    order.push_back({&held_[held_.size() - age],
+    const Held& h = held_[held_.size() - age];
+    order.push_back({&h,
                      {shift, period_},
-                     std::hypot(shift.x, shift.y) >= kLeastShiftPx});
+                     std::hypot(shift.x, shift.y) >= kLeastShiftPx,
+                     static_cast<float>(age)});
+    rates.push_back(h.rates), shifts.push_back(shift);
   }
+  // A log brightness change a frame at each of the latest frame's cells (0: none known); an
+  // earlier frame's samples are brought forward by their age's worth of it.
+  const cv::Mat change =
+      follows_motion_ ? bracket_motion::brightness_change(rates, shifts, period_) : cv::Mat();
   std::stable_sort(order.begin(), order.end(),
                    [](const Fused& a, const Fused& b) { return a.held->light > b.held->light; });
   const double reference = order.front().held->light;
@@ -236,7 +258,10 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
       near_level[k] = h.near_saturated.ptr<std::uint8_t>(y);
     }
     float* o = out.ptr<float>(y);
+    const float* change_row =
+        !change.empty() && y / period_ < change.rows ? change.ptr<float>(y / period_) : nullptr;
     for (int x = 0; x < out.cols; ++x) {
+      const float rate = change_row && x / period_ < change.cols ? change_row[x / period_] : 0.0f;
       float first_number = kNaN;  // the first frame's whose sample is a number, scaled
       bool missing = false, taken = false;
       for (std::size_t k = 0; k < order.size() && !taken; ++k) {
@@ -249,9 +274,11 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
           near = near_level[k][x] != 0;
         }
         if (std::isfinite(v)) {
-          if (std::isnan(first_number)) first_number = v * scale[k];
+          const float brought =
+              rate != 0 && order[k].age > 0 ? v * std::exp(rate * order[k].age) : v;
+          if (std::isnan(first_number)) first_number = brought * scale[k];
           if (!near) {
-            o[x] = v * scale[k];
+            o[x] = brought * scale[k];
             taken = true;
           }
         }

@@ -68,7 +68,9 @@ double vertex(double a, double b, double c) {
 
 }  // namespace
 
-bool find_shift(const cv::Mat& now, const cv::Mat& before, int period, cv::Point2d& shift) {
+bool find_shift(const cv::Mat& now, const cv::Mat& before, int period, cv::Point2d& shift,
+                bool* still) {
+  if (still) *still = false;
   if (now.size() != before.size() || now.empty()) return false;
   std::vector<Cell> all;
   for (int y = 0; y < now.rows; ++y) {
@@ -94,6 +96,7 @@ bool find_shift(const cv::Mat& now, const cv::Mat& before, int period, cv::Point
     for (int sx = -kR; sx <= kR; ++sx)
       if (at(sx, sy) < at(best_x, best_y)) best_x = sx, best_y = sy;
   const double best = at(best_x, best_y);
+  if (still) *still = std::isfinite(best) && best_x == 0 && best_y == 0;
   if (!std::isfinite(best) || (best_x == 0 && best_y == 0)) return false;
   if (std::abs(best_x) == kR || std::abs(best_y) == kR) return false;
   if (!(best <= kMinGain * at(0, 0))) return false;  // +INF at none: not shared enough there
@@ -101,6 +104,92 @@ bool find_shift(const cv::Mat& now, const cv::Mat& before, int period, cv::Point
   const double fy = vertex(at(best_x, best_y - 1), best, at(best_x, best_y + 1));
   shift = cv::Point2d((best_x + fx) * period, (best_y + fy) * period);
   return true;
+}
+
+cv::Mat log_rates(const cv::Mat& now, const cv::Mat& before, const cv::Point2d& shift, int period,
+                  int age) {
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  cv::Mat out(now.size(), CV_32FC2, cv::Scalar(kNaN, kNaN));
+  if (now.size() != before.size() || now.empty() || age < 1) return out;
+  const double samples = static_cast<double>(period) * period;
+  // The variance of a cell's log at `log_mean` (the log of the mean of its samples, in DN).
+  auto log_variance = [&](double log_mean) {
+    const double mean = std::exp(log_mean);
+    return (kRateShotDnPerDn * mean + kRateFloorDn2) / (samples * mean * mean);
+  };
+  // Cell (cx, cy) of now was at (cx, cy) - shift / period in `before`: between four cells.
+  const double ux = -shift.x / period, uy = -shift.y / period;
+  const int mx = static_cast<int>(std::floor(ux)), my = static_cast<int>(std::floor(uy));
+  const double fx = ux - mx, fy = uy - my;
+  const double w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+  for (int cy = 0; cy < now.rows; ++cy) {
+    const float* n = now.ptr<float>(cy);
+    cv::Vec2f* o = out.ptr<cv::Vec2f>(cy);
+    const int by = cy + my;
+    if (by < 0 || by + 1 >= before.rows) continue;
+    const float *b0 = before.ptr<float>(by), *b1 = before.ptr<float>(by + 1);
+    for (int cx = 0; cx < now.cols; ++cx) {
+      const int bx = cx + mx;
+      if (!std::isfinite(n[cx]) || bx < 0 || bx + 1 >= before.cols) continue;
+      const double v[4] = {b0[bx], b0[bx + 1], b1[bx], b1[bx + 1]};
+      double then = 0, variance = 0;
+      bool known = true;
+      for (int k = 0; k < 4; ++k) {
+        if (w[k] == 0) continue;
+        known = known && std::isfinite(v[k]);
+        if (!known) break;
+        then += w[k] * v[k];
+        variance += w[k] * w[k] * log_variance(v[k]);
+      }
+      if (!known) continue;
+      variance += log_variance(n[cx]);
+      o[cx] = cv::Vec2f(static_cast<float>((n[cx] - then) / age),
+                        static_cast<float>(variance / (static_cast<double>(age) * age)));
+    }
+  }
+  return out;
+}
+
+cv::Mat brightness_change(const std::vector<cv::Mat>& rates, const std::vector<cv::Point2d>& shifts,
+                          int period) {
+  // The latest frame's may be unknown (no frame of its light before it): the cells' size from
+  // any that is known.
+  const auto any =
+      std::find_if(rates.begin(), rates.end(), [](const cv::Mat& r) { return !r.empty(); });
+  if (any == rates.end()) return {};
+  const cv::Size size = any->size();
+  // Each cell's most recent rate, the older frames' read where their content was.
+  cv::Mat known(size, CV_32FC2, cv::Scalar(0, 0));  // rate / variance, 1 / variance; 0: none
+  for (int cy = 0; cy < size.height; ++cy) {
+    cv::Vec2f* k = known.ptr<cv::Vec2f>(cy);
+    for (int cx = 0; cx < size.width; ++cx)
+      for (std::size_t j = 0; j < rates.size(); ++j) {
+        const int x = cx - static_cast<int>(std::lround(shifts[j].x / period));
+        const int y = cy - static_cast<int>(std::lround(shifts[j].y / period));
+        if (x < 0 || y < 0 || x >= size.width || y >= size.height || rates[j].size() != size)
+          continue;
+        const cv::Vec2f r = rates[j].ptr<cv::Vec2f>(y)[x];
+        if (!std::isfinite(r[0]) || !(r[1] > 0)) continue;
+        k[cx] = cv::Vec2f(r[0] / r[1], 1 / r[1]);
+        break;
+      }
+  }
+  cv::Mat out(size, CV_32F, cv::Scalar(0));
+  for (int cy = 0; cy < size.height; ++cy) {
+    float* o = out.ptr<float>(cy);
+    for (int cx = 0; cx < size.width; ++cx) {
+      double weighted = 0, weight = 0;
+      for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, size.height - 1); ++y) {
+        const cv::Vec2f* k = known.ptr<cv::Vec2f>(y);
+        for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, size.width - 1); ++x)
+          weighted += k[x][0], weight += k[x][1];
+      }
+      if (!(weight > 0)) continue;
+      const double mean = weighted / weight;  // its variance: 1 / weight
+      if (std::abs(mean) * std::sqrt(weight) > kRateDeviations) o[cx] = static_cast<float>(mean);
+    }
+  }
+  return out;
 }
 
 Displacement::Displacement(const cv::Point2d& shift, int period) : period(period) {

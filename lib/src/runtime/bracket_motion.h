@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <limits>
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace pyrocam::bracket_motion {
 
@@ -24,11 +25,33 @@ cv::Mat cell_logs(const cv::Mat& signal, int period, float low, float high);
 // cells, refined by a parabola along each axis. False where no shift fits clearly better than
 // none (a still scene: the least difference at no shift, or under kMinGain of the difference at
 // none) or the best lies at the search's edge, or too few cells are shared.
-bool find_shift(const cv::Mat& now, const cv::Mat& before, int period, cv::Point2d& shift);
+// *still (optional): set where the least difference lies at no shift (the content held still).
+bool find_shift(const cv::Mat& now, const cv::Mat& before, int period, cv::Point2d& shift,
+                bool* still = nullptr);
 inline constexpr int kMaxShiftCells = 16;
 inline constexpr int kMinSharedCells = 16;
 inline constexpr double kMinGain = 0.5;    // the best's mean difference at most half of none's
 inline constexpr int kMaxCompared = 2048;  // cells of `now` compared, evenly spread
+
+// The change of log brightness a frame at each cell of `now` since `before`, two frames' cell_logs
+// taken with the same light `age` frames apart, `before`'s content having moved by `shift` pixels
+// since (read where it was, interpolated between its cells): (now - before) / age, with its
+// variance from the samples' noise (kRateShotDnPerDn DN of shot variance per DN, a floor of
+// kRateFloorDn2, over the cell's period^2 samples). CV_32FC2 (rate, variance), NaN where either
+// cell is unknown.
+cv::Mat log_rates(const cv::Mat& now, const cv::Mat& before, const cv::Point2d& shift, int period,
+                  int age);
+inline constexpr double kRateShotDnPerDn = 1;
+inline constexpr double kRateFloorDn2 = 4;
+
+// The brightness change a frame to apply at each cell of the latest frame, from the log_rates of
+// the frames held (`rates[j]`, its content moved by `shifts[j]` pixels since; the latest's first:
+// each cell takes the most recent that knows it): their inverse-variance weighted mean over 3 x 3
+// cells where it lies beyond kRateDeviations of its standard deviation, else 0 (a steady scene's
+// noise is no change). CV_32F, the latest's cells.
+cv::Mat brightness_change(const std::vector<cv::Mat>& rates, const std::vector<cv::Point2d>& shifts,
+                          int period);
+inline constexpr double kRateDeviations = 3;
 
 // Where a frame's samples are read from once its content moved by `shift` (pixels): along each
 // axis two of the band's own samples (`period` pixels apart) on either side of (x, y) - shift,
@@ -42,11 +65,14 @@ struct Displacement {
 
 // Row y of a frame whose content moved since (d): at(x) is the sample at x from the band's
 // samples around where it was, interpolated in the logarithm (a steep side's brightness is close
-// to exponential in position) or linearly where one is under kLogFromDn (a cold background's
-// noise, where the logarithm means nothing). NaN where one is NaN or outside the frame; +INF
-// where one is saturated (and none NaN); *near: whether `near_level` (CV_8U) is set at one of
-// them. Holds pointers into the frames.
-inline constexpr float kLogFromDn = 16;
+// to exponential in position) or linearly where one is under kLogFromDn (noise about no light,
+// where the logarithm means nothing). The floor is low: a ratio of bands whose samples were
+// interpolated one in the logarithm and one linearly (each off the other way on a curved side)
+// read a moving pool's front 150-200 degC high, where both in the logarithm read it within 100
+// (scratch study: 1.8 times as many wild readings with the floor at 16 DN). NaN where one is NaN or
+// outside the frame; +INF where one is saturated (and none NaN); *near: whether `near_level`
+// (CV_8U) is set at one of them. Holds pointers into the frames.
+inline constexpr float kLogFromDn = 1;
 class DisplacedRow {
  public:
   DisplacedRow(const cv::Mat& signal, const cv::Mat& near_level, const Displacement& d, int y);

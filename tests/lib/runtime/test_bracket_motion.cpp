@@ -56,11 +56,16 @@ TEST(BracketMotion, ADisplacedSampleIsTheFieldWhereTheContentWas) {
       EXPECT_NEAR(v, side(p.x - shift.x, p.y - shift.y), 1e-4 * v) << shift << " at " << p;
       EXPECT_FALSE(near);
     }
-  // Under the log's floor (a cold background's noise) linearly: a plane stays a plane.
-  const cv::Mat dim = mosaic([](double x, double y) { return 3 + 0.05 * x + 0.02 * y; });
+  // Under the log's floor (noise about no light) linearly: a plane stays a plane.
+  const cv::Mat dim = mosaic([](double x, double y) { return 0.2 + 0.005 * x + 0.002 * y; });
   bool near;
   EXPECT_NEAR(displaced_sample(dim, none, {cv::Point2d(1.5, -0.5), 2}, 40, 30, &near),
-              3 + 0.05 * 38.5 + 0.02 * 30.5, 1e-5);
+              0.2 + 0.005 * 38.5 + 0.002 * 30.5, 1e-6);
+  // A dim side (2-6 DN, under the dim threshold) still in the logarithm, as its brighter
+  // neighbours are: bands interpolated in different ways would meet in one footprint.
+  auto faint = [](double x, double y) { return 2 * std::exp(0.01 * x + 0.005 * y); };
+  EXPECT_NEAR(displaced_sample(mosaic(faint), none, {cv::Point2d(1.5, -0.5), 2}, 40, 30, &near),
+              faint(38.5, 30.5), 1e-5);
 }
 
 TEST(BracketMotion, ADisplacedSampleKeepsNoReadingSaturationAndTheLevelsNeighbourhood) {
@@ -141,6 +146,77 @@ TEST(BracketMotion, TheFusionFollowsASpotMovingAtAConstantVelocity) {
       EXPECT_NEAR(out.at<float>(32, x), now_long.at<float>(32, x), 0.03 * now_long.at<float>(32, x))
           << x;
   }
+}
+
+// The brightness change a frame between two frames of one exposure, where the content moved:
+// a steep side (brightness exponential in position, which cells interpolate exactly in the
+// logarithm) 20 % brighter over two frames reads log(1.2) / 2 a frame; where the frames differ
+// by their noise only, the change is 0 on nearly every cell (the 3-sigma gate).
+TEST(BracketMotion, TheBrightnessChangeBetweenTwoFramesOfOneExposure) {
+  using bracket_motion::brightness_change;
+  using bracket_motion::log_rates;
+  const float low = 16, high = 1e6;
+  auto side = [](double scale) {
+    return mosaic([=](double x, double y) { return scale * 40 * std::exp(0.04 * x - 0.03 * y); });
+  };
+  const cv::Point2d shift(5.2, -3.0);
+  const cv::Mat now = cell_logs(side(1.2), 2, low, high);
+  // The content moved by `shift`: what is at x now was at x - shift.
+  const cv::Mat before =
+      cell_logs(mosaic([&](double x, double y) {
+                  return 40 * std::exp(0.04 * (x + shift.x) - 0.03 * (y + shift.y));
+                }),
+                2, low, high);
+  const cv::Mat rates = log_rates(now, before, shift, 2, 2);
+  const cv::Mat change = brightness_change({rates}, {cv::Point2d()}, 2);
+  ASSERT_EQ(change.size(), now.size());
+  for (const cv::Point c : {cv::Point(10, 5), cv::Point(30, 10), cv::Point(40, 20)}) {
+    EXPECT_NEAR(rates.at<cv::Vec2f>(c)[0], std::log(1.2) / 2, 1e-4) << c;
+    EXPECT_NEAR(change.at<float>(c), std::log(1.2) / 2, 1e-4) << c;
+  }
+  // Too dim (under 16 DN: the lower left) or outside `before`: no rate; no change far from one.
+  EXPECT_TRUE(std::isnan(rates.at<cv::Vec2f>(31, 0)[0]));
+  EXPECT_TRUE(std::isnan(rates.at<cv::Vec2f>(30, 40)[0]));
+  EXPECT_EQ(change.at<float>(31, 0), 0.0f);
+  // A frame's rates from an older frame are read where its content is now: 6 pixels (3 cells)
+  // further along x, and none in the 3 columns of cells it has not reached.
+  const cv::Mat moved =
+      brightness_change({cv::Mat(), rates}, {cv::Point2d(), cv::Point2d(6, 0)}, 2);
+  EXPECT_NEAR(moved.at<float>(10, 30), std::log(1.2) / 2, 1e-4);
+  EXPECT_EQ(moved.at<float>(10, 0), 0.0f);
+  // A steady scene with each sample's noise as the rates assume (cv::RNG: the same draws on
+  // every machine): of its 1536 cells a few may pass the gate by chance (each about 0.3 %).
+  cv::RNG rng(7);
+  auto noisy = [&](double level) {
+    cv::Mat m(kH, kW, CV_32F);
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x)
+        m.at<float>(y, x) = static_cast<float>(
+            level + rng.gaussian(std::sqrt(bracket_motion::kRateShotDnPerDn * level +
+                                           bracket_motion::kRateFloorDn2)));
+    return m;
+  };
+  const cv::Mat steady = brightness_change(
+      {log_rates(cell_logs(noisy(60), 2, low, high), cell_logs(noisy(60), 2, low, high), {}, 2, 2)},
+      {cv::Point2d()}, 2);
+  EXPECT_LE(cv::countNonZero(steady), 1536 / 20);
+}
+
+// A spot brightening 10 % a frame while it moves: the long exposure's samples, a frame older,
+// are brought forward by the brightness change as well as by the shift.
+TEST(BracketMotion, TheFusionFollowsASpotThatBrightens) {
+  const double lights[2] = {4, 1};
+  MosaicBracketFusion fusion(2, 2);
+  cv::Mat out;
+  for (int frame = 0; frame < 6; ++frame) {
+    const double light = lights[frame % 2];
+    fusion.add(spot(30 + 1.5 * frame, 32, light / 4 * std::pow(1.1, frame)), light, out);
+  }
+  const cv::Mat now_long = spot(30 + 1.5 * 5, 32, std::pow(1.1, 5));
+  EXPECT_NEAR(fusion.velocity().x, 1.5, 0.15);
+  for (int x = 38; x <= 44; ++x)  // the spot's front, which the long exposure sees well
+    EXPECT_NEAR(out.at<float>(32, x), now_long.at<float>(32, x), 0.03 * now_long.at<float>(32, x))
+        << x;
 }
 
 }  // namespace

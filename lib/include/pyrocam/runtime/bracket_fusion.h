@@ -74,8 +74,9 @@ class BracketFusion {
 // is the translation between the latest frame and the last one held with the same light (the
 // bracket's cycle before; bracket_motion::find_shift), and each earlier frame's samples are taken
 // from where the content moved since (its age times the velocity), interpolated along the band's
-// own samples. A still scene, or one moving less than about half a cell a cycle, is fused as
-// without it.
+// own samples, and brought forward by the change of brightness a frame found between the same
+// frames (bracket_motion::brightness_change: a pool's peak rises and falls as it moves). A still
+// scene, or one moving less than about half a cell a cycle, is fused as without it.
 class MosaicBracketFusion {
  public:
   // frames: 1..kMaxBracketFrames (1: no fusion); period: the mosaic's cell size, 1..16 (the
@@ -131,6 +132,7 @@ class MosaicBracketFusion {
     cv::Mat near_saturated;  // CV_8U: 1 where a sample of its band `period_` away saturates
     double light;
     cv::Mat cells;  // bracket_motion::cell_logs, where the fusion follows motion
+    cv::Mat rates;  // bracket_motion::log_rates since the last frame of its light, where known
   };
   int frames_, period_;
   // Oldest first, at most frames_ before the new one: the last frames_ - 1 are fused, and the
