@@ -122,6 +122,7 @@ cv::Mat log_rates(const cv::Mat& now, const cv::Mat& before, const cv::Point2d& 
   const int mx = static_cast<int>(std::floor(ux)), my = static_cast<int>(std::floor(uy));
   const double fx = ux - mx, fy = uy - my;
   const double w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+  const double weights2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + w[3] * w[3];
   for (int cy = 0; cy < now.rows; ++cy) {
     const float* n = now.ptr<float>(cy);
     cv::Vec2f* o = out.ptr<cv::Vec2f>(cy);
@@ -132,17 +133,17 @@ cv::Mat log_rates(const cv::Mat& now, const cv::Mat& before, const cv::Point2d& 
       const int bx = cx + mx;
       if (!std::isfinite(n[cx]) || bx < 0 || bx + 1 >= before.cols) continue;
       const double v[4] = {b0[bx], b0[bx + 1], b1[bx], b1[bx + 1]};
-      double then = 0, variance = 0;
+      double then = 0;
       bool known = true;
       for (int k = 0; k < 4; ++k) {
         if (w[k] == 0) continue;
         known = known && std::isfinite(v[k]);
         if (!known) break;
         then += w[k] * v[k];
-        variance += w[k] * w[k] * log_variance(v[k]);
       }
       if (!known) continue;
-      variance += log_variance(n[cx]);
+      // The four cells' variances taken at their interpolated level (one exponential, not four).
+      const double variance = weights2 * log_variance(then) + log_variance(n[cx]);
       o[cx] = cv::Vec2f(static_cast<float>((n[cx] - then) / age),
                         static_cast<float>(variance / (static_cast<double>(age) * age)));
     }
@@ -160,12 +161,15 @@ cv::Mat brightness_change(const std::vector<cv::Mat>& rates, const std::vector<c
   const cv::Size size = any->size();
   // Each cell's most recent rate, the older frames' read where their content was.
   cv::Mat known(size, CV_32FC2, cv::Scalar(0, 0));  // rate / variance, 1 / variance; 0: none
+  std::vector<cv::Point> cells_moved;
+  for (const cv::Point2d& s : shifts)
+    cells_moved.emplace_back(static_cast<int>(std::lround(s.x / period)),
+                             static_cast<int>(std::lround(s.y / period)));
   for (int cy = 0; cy < size.height; ++cy) {
     cv::Vec2f* k = known.ptr<cv::Vec2f>(cy);
     for (int cx = 0; cx < size.width; ++cx)
       for (std::size_t j = 0; j < rates.size(); ++j) {
-        const int x = cx - static_cast<int>(std::lround(shifts[j].x / period));
-        const int y = cy - static_cast<int>(std::lround(shifts[j].y / period));
+        const int x = cx - cells_moved[j].x, y = cy - cells_moved[j].y;
         if (x < 0 || y < 0 || x >= size.width || y >= size.height || rates[j].size() != size)
           continue;
         const cv::Vec2f r = rates[j].ptr<cv::Vec2f>(y)[x];
