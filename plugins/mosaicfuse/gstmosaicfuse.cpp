@@ -32,7 +32,7 @@
  * by the change of brightness found between the same two frames (a pool's peak that rises or
  * falls). On a simulated pool moving 0.67 pixels a frame, its peak changing by up to 20 degC a
  * frame (targets suite, six exposures) 93 % of the pixels hotter than 1300 degC read instead of
- * 81 %, and 8.5 % of the readings were more than max(150 degC, 10 %) off the latest frame's
+ * 81 %, and 8.2 % of the readings were more than max(150 degC, 10 %) off the latest frame's
  * truth instead of 35 %; what is left reads high at the pool's steep front. A still
  * scene, or one moving under about one cell of the mosaic a cycle, is fused as it is. Each frame
  * is also compared with the one before on the samples both expose well, scaled to one exposure:

@@ -178,7 +178,7 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
     throw InputError("mosaic bracket fusion: a frame's exposure must be above 0, not " +
                      std::to_string(light));
   if (!held_.empty() && held_.front().signal.size() != signal.size()) reset();
-  Held now{signal.clone(), near_saturated(signal, period_, largest_), light, {}, {}};
+  Held now{signal.clone(), near_saturated(signal, period_, largest_), light, {}, {}, {}};
   agreement_ = held_.empty() ? Agreement{}
                              : agreement(now.signal, light, held_.back().signal, held_.back().light,
                                          kMotionLowDn, kNearLevelFraction * largest_);
@@ -226,11 +226,10 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
   std::vector<cv::Point2d> shifts{cv::Point2d()};
   for (std::size_t age = 1; age <= fused; ++age) {
     const cv::Point2d shift = velocity_ * static_cast<double>(age);
-    const Held& h = held_[held_.size() - age];
-    order.push_back({&h,
-                     {shift, period_},
-                     std::hypot(shift.x, shift.y) >= kLeastShiftPx,
-                     static_cast<float>(age)});
+    Held& h = held_[held_.size() - age];
+    const bool displaced = std::hypot(shift.x, shift.y) >= kLeastShiftPx;
+    if (displaced && h.logs.empty()) h.logs = bracket_motion::sample_logs(h.signal);
+    order.push_back({&h, {shift, period_}, displaced, static_cast<float>(age)});
     rates.push_back(h.rates), shifts.push_back(shift);
   }
   // A log brightness change a frame at each of the latest frame's cells (0: none known); an
@@ -253,7 +252,7 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
     rows.clear();
     for (std::size_t k = 0; k < order.size(); ++k) {
       const Held& h = *order[k].held;
-      rows.emplace_back(h.signal, h.near_saturated, order[k].displacement, y);
+      rows.emplace_back(h.signal, h.near_saturated, h.logs, order[k].displacement, y);
       values[k] = h.signal.ptr<float>(y);
       near_level[k] = h.near_saturated.ptr<std::uint8_t>(y);
     }

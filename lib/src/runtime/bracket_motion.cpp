@@ -196,6 +196,31 @@ cv::Mat brightness_change(const std::vector<cv::Mat>& rates, const std::vector<c
   return out;
 }
 
+namespace {
+
+// Lagrange's polynomials' weights at t in [0, 1) of nodes -1 .. 2 (0 for a node not used): the
+// cubic on all four, the quadratics on 0..2 and on -1..1. At t = 0 node 0 alone.
+void curved_weights(double t, double (&w)[kCurvedKinds][4]) {
+  if (t == 0) {
+    for (auto& k : w) k[0] = 0, k[1] = 1, k[2] = 0, k[3] = 0;
+    return;
+  }
+  w[0][0] = -t * (t - 1) * (t - 2) / 6;
+  w[0][1] = (t + 1) * (t - 1) * (t - 2) / 2;
+  w[0][2] = -(t + 1) * t * (t - 2) / 2;
+  w[0][3] = (t + 1) * t * (t - 1) / 6;
+  w[1][0] = 0;
+  w[1][1] = (t - 1) * (t - 2) / 2;
+  w[1][2] = -t * (t - 2);
+  w[1][3] = t * (t - 1) / 2;
+  w[2][0] = t * (t - 1) / 2;
+  w[2][1] = (1 - t) * (1 + t);
+  w[2][2] = t * (t + 1) / 2;
+  w[2][3] = 0;
+}
+
+}  // namespace
+
 Displacement::Displacement(const cv::Point2d& shift, int period) : period(period) {
   // Along each axis the band's samples at offsets period * m and period * (m + 1) from the
   // pixel, m = floor(-shift / period).
@@ -204,10 +229,25 @@ Displacement::Displacement(const cv::Point2d& shift, int period) : period(period
   dx = period * static_cast<int>(mx), dy = period * static_cast<int>(my);
   wx[0] = 1 - (ux - mx), wx[1] = ux - mx;
   wy[0] = 1 - (uy - my), wy[1] = uy - my;
+  curved_weights(ux - mx, curved_x);
+  curved_weights(uy - my, curved_y);
 }
 
-DisplacedRow::DisplacedRow(const cv::Mat& signal, const cv::Mat& near_level, const Displacement& d,
-                           int y)
+cv::Mat sample_logs(const cv::Mat& signal) {
+  cv::Mat out(signal.size(), CV_32F);
+  for (int y = 0; y < signal.rows; ++y) {
+    const float* v = signal.ptr<float>(y);
+    float* o = out.ptr<float>(y);
+    for (int x = 0; x < signal.cols; ++x)
+      o[x] = v[x] >= kLogFromDn && v[x] < std::numeric_limits<float>::infinity()
+                 ? std::log(v[x])
+                 : std::numeric_limits<float>::quiet_NaN();
+  }
+  return out;
+}
+
+DisplacedRow::DisplacedRow(const cv::Mat& signal, const cv::Mat& near_level, const cv::Mat& logs,
+                           const Displacement& d, int y)
     : d_(d), width_(signal.cols) {
   for (int j = 0; j < 2; ++j) {
     if (d.wy[j] == 0) continue;
@@ -216,6 +256,11 @@ DisplacedRow::DisplacedRow(const cv::Mat& signal, const cv::Mat& near_level, con
     if (!inside_) return;
     rows_[j] = signal.ptr<float>(sy);
     flags_[j] = near_level.ptr<std::uint8_t>(sy);
+  }
+  if (logs.size() != signal.size()) return;  // no curved kinds
+  for (int j = 0; j < 4; ++j) {
+    const int sy = y + d.dy + (j - 1) * d.period;
+    if (sy >= 0 && sy < logs.rows) logs_[j] = logs.ptr<float>(sy);
   }
 }
 

@@ -54,36 +54,54 @@ cv::Mat brightness_change(const std::vector<cv::Mat>& rates, const std::vector<c
 inline constexpr double kRateDeviations = 3;
 
 // Where a frame's samples are read from once its content moved by `shift` (pixels): along each
-// axis two of the band's own samples (`period` pixels apart) on either side of (x, y) - shift,
-// with their weights.
+// axis the band's own samples (`period` pixels apart) around (x, y) - shift, with their weights:
+// the two on either side for linear interpolation, and for the curved kinds (Lagrange's
+// polynomials, in kCurvedKinds) nodes -1 .. 2, node 0 being the first of those two.
+inline constexpr int kCurvedKinds = 3;  // cubic on nodes -1..2, quadratic on 0..2, on -1..1
 struct Displacement {
   Displacement(const cv::Point2d& shift, int period);
-  int dx, dy;  // from (x, y) to the first sample along each axis, pixels
+  int dx, dy;  // from (x, y) to node 0 along each axis, pixels
   int period;
   double wx[2], wy[2];
+  double curved_x[kCurvedKinds][4], curved_y[kCurvedKinds][4];  // weights of nodes -1 .. 2
 };
 
-// Row y of a frame whose content moved since (d): at(x) is the sample at x from the band's
-// samples around where it was, interpolated in the logarithm (a steep side's brightness is close
-// to exponential in position) or linearly where one is under kLogFromDn (noise about no light,
-// where the logarithm means nothing). The floor is low: a ratio of bands whose samples were
-// interpolated one in the logarithm and one linearly (each off the other way on a curved side)
-// read a moving pool's front 150-200 degC high, where both in the logarithm read it within 100
-// (scratch study: 1.8 times as many wild readings with the floor at 16 DN). NaN where one is NaN or
-// outside the frame; +INF where one is saturated (and none NaN); *near: whether `near_level`
-// (CV_8U) is set at one of them. Holds pointers into the frames.
+// Samples under this are interpolated linearly: noise about no light, where the logarithm means
+// nothing. Others in the logarithm: a steep side's brightness is close to exponential in position.
 inline constexpr float kLogFromDn = 1;
+
+// The logarithm of each sample of a dark-subtracted mosaic (CV_32F) that is a number at least
+// kLogFromDn, NaN elsewhere: computed once a frame for DisplacedRow, not for every sample of
+// every later frame that reads it.
+cv::Mat sample_logs(const cv::Mat& signal);
+
+// Row y of a frame whose content moved since (d): at(x) is the sample at x from the band's
+// samples around where it was. Where the nearest (2 x 2) are all at least kLogFromDn, in the
+// logarithm by the first curved kind whose nodes all are (`logs`: sample_logs of the frame):
+// across a melt pool's peak and steep front the brightness's logarithm curves, and the nearest
+// two's chord there is 4-11 % low, more in the bands of shorter wavelength (on the targets
+// suite's moving pool, bands from frames of different ages then read its front 150-200 degC
+// high); the quadratics serve where the cubic's farthest node is saturated (the next exposure's
+// zone) or dim. Else by the nearest two in the logarithm, or linearly where one is under
+// kLogFromDn (a ratio of bands interpolated one in the logarithm and one linearly, each off the
+// other way on a curved side, read wrong too: the floor was 16 DN). NaN where one of the nearest
+// is NaN or outside the frame; +INF where one is saturated (and none NaN); *near: whether
+// `near_level` (CV_8U) is set at one of the nearest. Holds pointers into the frames.
 class DisplacedRow {
  public:
-  DisplacedRow(const cv::Mat& signal, const cv::Mat& near_level, const Displacement& d, int y);
+  DisplacedRow(const cv::Mat& signal, const cv::Mat& near_level, const cv::Mat& logs,
+               const Displacement& d, int y);
   float at(int x, bool* near) const;
 
  private:
+  double curved(int x, double nearest) const;
+
   Displacement d_;
   int width_;
   bool inside_ = true;
   const float* rows_[2] = {nullptr, nullptr};
   const std::uint8_t* flags_[2] = {nullptr, nullptr};
+  const float* logs_[4] = {nullptr, nullptr, nullptr, nullptr};  // nodes -1 .. 2 along y
 };
 
 inline float DisplacedRow::at(int x, bool* near) const {
@@ -108,11 +126,36 @@ inline float DisplacedRow::at(int x, bool* near) const {
       }
       linear += w * v;
       well_exposed = well_exposed && v >= kLogFromDn;
-      if (well_exposed) logs += w * std::log(static_cast<double>(v));
+      if (well_exposed)
+        logs += w * (logs_[j + 1] ? static_cast<double>(logs_[j + 1][sx])
+                                  : std::log(static_cast<double>(v)));
     }
   }
   if (saturated) return kInf;
-  return static_cast<float>(well_exposed ? std::exp(logs) : linear);
+  if (!well_exposed) return static_cast<float>(linear);
+  return static_cast<float>(std::exp(curved(x, logs)));
+}
+
+// The first curved kind's interpolation of the logarithm whose nodes all have one, or `nearest`.
+inline double DisplacedRow::curved(int x, double nearest) const {
+  if (logs_[1] == nullptr) return nearest;
+  for (int kind = 0; kind < kCurvedKinds; ++kind) {
+    const double *cx = d_.curved_x[kind], *cy = d_.curved_y[kind];
+    double sum = 0;
+    bool known = true;
+    for (int j = 0; j < 4 && known; ++j) {
+      if (cy[j] == 0) continue;
+      known = logs_[j] != nullptr;
+      for (int i = 0; i < 4 && known; ++i) {
+        if (cx[i] == 0) continue;
+        const int sx = x + d_.dx + (i - 1) * d_.period;
+        known = sx >= 0 && sx < width_ && !std::isnan(logs_[j][sx]);
+        if (known) sum += cx[i] * cy[j] * static_cast<double>(logs_[j][sx]);
+      }
+    }
+    if (known) return sum;
+  }
+  return nearest;
 }
 
 }  // namespace pyrocam::bracket_motion

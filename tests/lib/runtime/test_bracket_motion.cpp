@@ -21,7 +21,8 @@ constexpr int kW = 96, kH = 64;
 // Sample (x, y) of a frame whose content moved since (d).
 float displaced_sample(const cv::Mat& signal, const cv::Mat& near_level,
                        const bracket_motion::Displacement& d, int x, int y, bool* near) {
-  return bracket_motion::DisplacedRow(signal, near_level, d, y).at(x, near);
+  return bracket_motion::DisplacedRow(signal, near_level, bracket_motion::sample_logs(signal), d, y)
+      .at(x, near);
 }
 
 // A mosaic whose every sample is `field` at its position (a band's scale makes no difference
@@ -68,6 +69,35 @@ TEST(BracketMotion, ADisplacedSampleIsTheFieldWhereTheContentWas) {
               faint(38.5, 30.5), 1e-5);
 }
 
+// Across a peak, and beside a saturated zone, the logarithm curves: a field whose logarithm is
+// quadratic (a melt pool's peak) is interpolated exactly, by the cubic where all four nodes
+// along each axis are known, by a quadratic where the inner one saturates; the nearest two's
+// chord alone would be several percent low.
+TEST(BracketMotion, ACurvedLogarithmIsInterpolatedAlongItsCurve) {
+  auto peak = [](double x, double y) {
+    return 150 * std::exp(-((x - 40) * (x - 40) + 0.5 * (y - 30) * (y - 30)) / 60);
+  };
+  cv::Mat signal = mosaic(peak);
+  const cv::Mat none = cv::Mat::zeros(kH, kW, CV_8U);
+  const cv::Point2d shift(1.4, -0.6);
+  bool near;
+  for (const cv::Point p : {cv::Point(40, 30), cv::Point(42, 31), cv::Point(46, 28)}) {
+    const double truth = peak(p.x - shift.x, p.y - shift.y);
+    EXPECT_NEAR(displaced_sample(signal, none, {shift, 2}, p.x, p.y, &near), truth, 1e-4 * truth)
+        << p;
+    // The nearest two's chord, without the frame's logarithms: off by more than 1 %.
+    const float chord =
+        bracket_motion::DisplacedRow(signal, none, cv::Mat(), {shift, 2}, p.y).at(p.x, &near);
+    EXPECT_GT(std::abs(chord - truth), 0.01 * truth) << p;
+  }
+  // Pixel (47, 30) shifted by (1.4, 0) lies between samples 45 and 47; the cubic's inner node,
+  // 43, saturated: the quadratic on 45, 47, 49 is exact too.
+  signal.at<float>(30, 43) = std::numeric_limits<float>::infinity();
+  const double truth = peak(47 - 1.4, 30);
+  EXPECT_NEAR(displaced_sample(signal, none, {cv::Point2d(1.4, 0), 2}, 47, 30, &near), truth,
+              1e-4 * truth);
+}
+
 TEST(BracketMotion, ADisplacedSampleKeepsNoReadingSaturationAndTheLevelsNeighbourhood) {
   cv::Mat signal(kH, kW, CV_32F, cv::Scalar(50));
   cv::Mat near_level = cv::Mat::zeros(kH, kW, CV_8U);
@@ -80,12 +110,13 @@ TEST(BracketMotion, ADisplacedSampleKeepsNoReadingSaturationAndTheLevelsNeighbou
             std::numeric_limits<float>::infinity());
   EXPECT_TRUE(
       std::isnan(displaced_sample(signal, near_level, {cv::Point2d(1, 0), 2}, 40, 10, &near)));
-  EXPECT_EQ(displaced_sample(signal, near_level, {cv::Point2d(1, 0), 2}, 40, 50, &near), 50);
+  EXPECT_FLOAT_EQ(displaced_sample(signal, near_level, {cv::Point2d(1, 0), 2}, 40, 50, &near), 50);
   EXPECT_TRUE(near);
-  // A whole cell's shift takes the one sample: the one at 38 is not part of (42, 50)'s.
-  EXPECT_EQ(displaced_sample(signal, near_level, {cv::Point2d(2, 0), 2}, 42, 50, &near), 50);
+  // (Equal to float rounding: a sample's logarithm is kept in single precision.) A whole cell's
+  // shift takes the one sample: the one at 38 is not part of (42, 50)'s.
+  EXPECT_FLOAT_EQ(displaced_sample(signal, near_level, {cv::Point2d(2, 0), 2}, 42, 50, &near), 50);
   EXPECT_TRUE(near);
-  EXPECT_EQ(displaced_sample(signal, near_level, {cv::Point2d(2, 0), 2}, 44, 50, &near), 50);
+  EXPECT_FLOAT_EQ(displaced_sample(signal, near_level, {cv::Point2d(2, 0), 2}, 44, 50, &near), 50);
   EXPECT_FALSE(near);
   // From outside the frame: no reading.
   EXPECT_TRUE(

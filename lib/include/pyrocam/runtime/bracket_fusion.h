@@ -133,6 +133,7 @@ class MosaicBracketFusion {
     double light;
     cv::Mat cells;  // bracket_motion::cell_logs, where the fusion follows motion
     cv::Mat rates;  // bracket_motion::log_rates since the last frame of its light, where known
+    cv::Mat logs;   // bracket_motion::sample_logs, once its samples are read displaced
   };
   int frames_, period_;
   // Oldest first, at most frames_ before the new one: the last frames_ - 1 are fused, and the
