@@ -99,6 +99,12 @@ constexpr float kNearLevelFraction = 0.85f;
 // A frame whose content moved less than this since is fused where it is, not interpolated.
 constexpr double kLeastShiftPx = 0.25;
 
+// An earlier frame's sample whose brightness changed by more than this (in the logarithm: a
+// factor 2) since is not fused: a change found as a steady rate over a cycle is no measure of
+// one that large (a light switched on, an arc struck), and a sample brought forward that far
+// could read anything.
+constexpr float kMostLogChange = 0.6931472f;
+
 // MosaicBracketFusion::Agreement's bound on a sample's noise (see there).
 constexpr double kMotionShotDnPerDn = 1;
 constexpr double kMotionFloorDn2 = 4;
@@ -272,9 +278,13 @@ double MosaicBracketFusion::add(const cv::Mat& signal, double light, cv::Mat& ou
           v = values[k][x];
           near = near_level[k][x] != 0;
         }
+        const float change_since = rate * order[k].age;
+        if (std::isfinite(v) && std::abs(change_since) > kMostLogChange) {
+          missing = true;  // no reading rather than a guess at what it shows now
+          continue;
+        }
         if (std::isfinite(v)) {
-          const float brought =
-              rate != 0 && order[k].age > 0 ? v * std::exp(rate * order[k].age) : v;
+          const float brought = change_since != 0 ? v * std::exp(change_since) : v;
           if (std::isnan(first_number)) first_number = brought * scale[k];
           if (!near) {
             o[x] = brought * scale[k];

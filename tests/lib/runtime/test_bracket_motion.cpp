@@ -248,6 +248,20 @@ TEST(BracketMotion, TheFusionFollowsASpotThatBrightens) {
   for (int x = 38; x <= 44; ++x)  // the spot's front, which the long exposure sees well
     EXPECT_NEAR(out.at<float>(32, x), now_long.at<float>(32, x), 0.03 * now_long.at<float>(32, x))
         << x;
+  // Brightening 2.5 times a frame (more than the factor 2 a sample may be brought forward):
+  // the earlier frame's samples are not fused; the latest frame's own, scaled, where it has one.
+  MosaicBracketFusion sudden(2, 2);
+  cv::Mat latest;
+  for (int frame = 0; frame < 6; ++frame) {
+    const double light = lights[frame % 2];
+    latest = spot(30 + 1.5 * frame, 32, light / 4 * std::pow(2.5, frame));
+    sudden.add(latest, light, out);
+  }
+  for (int x = 30; x <= 50; ++x) {
+    const float own = latest.at<float>(32, x);
+    if (std::isnan(own)) continue;
+    EXPECT_FLOAT_EQ(out.at<float>(32, x), 4 * own) << x;
+  }
 }
 
 }  // namespace

@@ -75,7 +75,8 @@ class BracketFusion {
 // bracket's cycle before; bracket_motion::find_shift), and each earlier frame's samples are taken
 // from where the content moved since (its age times the velocity), interpolated along the band's
 // own samples, and brought forward by the change of brightness a frame found between the same
-// frames (bracket_motion::brightness_change: a pool's peak rises and falls as it moves). A still
+// frames (bracket_motion::brightness_change: a pool's peak rises and falls as it moves; a
+// sample whose brightness changed by more than a factor 2 since is not fused). A still
 // scene, or one moving less than about half a cell a cycle, is fused as without it.
 class MosaicBracketFusion {
  public:
